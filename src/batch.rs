@@ -1,0 +1,303 @@
+//! Batches: every ray of a scene in parallel, in ray order, in flat storage, with warm starts.
+
+use rayon::prelude::*;
+
+use crate::geom::Point;
+use crate::solver::Workspace;
+use crate::trace::{Ray, Reason, Status, Tracer};
+
+/// How to run a batch.
+#[derive(Clone, Copy)]
+pub struct BatchOptions<'a> {
+    /// Solve receivers in a spatial order (a Morton curve over their positions) and start each
+    /// ray from the previous receiver's converged solution of the same path when that has the
+    /// smaller residual than the default initial guess.
+    pub warm_start: bool,
+    /// Receivers per work unit (one workspace and one warm-start chain per unit).
+    pub chunk: usize,
+    /// Called from the worker threads with the number of rays each finished unit solved.
+    pub progress: Option<&'a (dyn Fn(usize) + Sync)>,
+}
+
+impl Default for BatchOptions<'_> {
+    fn default() -> Self {
+        BatchOptions { warm_start: true, chunk: 256, progress: None }
+    }
+}
+
+/// The result of one ray of a batch, without its points (see [`Batch::points`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayRecord {
+    /// How it ended.
+    pub status: Status,
+    /// Travel time (meaningful when `status.has_time()`, NaN otherwise).
+    pub time: f64,
+    /// Solver iterations.
+    pub iterations: u32,
+    /// Final relative residual (NaN when the solver did not run).
+    pub residual: f64,
+    /// Why it is not `converged`, when it is not.
+    pub reason: Option<Reason>,
+}
+
+impl Default for RayRecord {
+    fn default() -> Self {
+        RayRecord { status: Status::NotConverged, time: f64::NAN, iterations: 0, residual: f64::NAN, reason: None }
+    }
+}
+
+/// Every ray of a scene, in the contract's ray order, in flat arrays: one record per ray and,
+/// per (source, receiver) pair, one block holding the points (and leg media) of all paths.
+///
+/// ```
+/// use eigenray::{BatchOptions, Scene, Status, Tracer};
+/// let scene = Scene::from_spec(&eigenray::demo::air_water(100, 7)).unwrap();
+/// let batch = Tracer::new(&scene).unwrap().trace_batch(&BatchOptions::default());
+/// assert_eq!(batch.len(), 100);
+/// assert!((0..batch.len()).all(|i| batch.record(i).status == Status::Converged));
+/// assert_eq!(batch.points(0).len(), 3); // source, interaction, receiver
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct Batch {
+    receivers: usize,
+    paths: usize,
+    records: Vec<RayRecord>,
+    points: Vec<Point>,
+    media: Vec<u32>,
+    /// Offset of each path's points within a block, and the block size (last entry).
+    point_offsets: Vec<usize>,
+    /// Offset of each path's leg media within a block, and the block size (last entry).
+    media_offsets: Vec<usize>,
+}
+
+/// Marks a leg medium that was not determined.
+const NO_MEDIUM: u32 = u32::MAX;
+
+impl Batch {
+    /// Number of rays.
+    pub fn len(&self) -> usize {
+        self.records.len()
+    }
+    /// Whether there are no rays.
+    pub fn is_empty(&self) -> bool {
+        self.records.is_empty()
+    }
+    /// The record of ray `ray`.
+    pub fn record(&self, ray: usize) -> &RayRecord {
+        &self.records[ray]
+    }
+    /// All records, in ray order.
+    pub fn records(&self) -> &[RayRecord] {
+        &self.records
+    }
+    /// `(source, receiver, path)` of ray `ray`.
+    pub fn triple(&self, ray: usize) -> (usize, usize, usize) {
+        let p = ray % self.paths;
+        let r = (ray / self.paths) % self.receivers;
+        (ray / (self.paths * self.receivers), r, p)
+    }
+    fn block(&self, ray: usize) -> (usize, usize) {
+        (ray / self.paths, ray % self.paths)
+    }
+    /// Source, interaction points and receiver of ray `ray` (NaN when it has no time).
+    pub fn points(&self, ray: usize) -> &[Point] {
+        let (b, p) = self.block(ray);
+        let base = b * self.point_offsets[self.paths];
+        &self.points[base + self.point_offsets[p]..base + self.point_offsets[p + 1]]
+    }
+    /// Leg media of ray `ray` (indices into [`crate::Scene::media`]), when known.
+    pub fn media(&self, ray: usize) -> Option<impl Iterator<Item = usize> + '_> {
+        let (b, p) = self.block(ray);
+        let base = b * self.media_offsets[self.paths];
+        let legs = &self.media[base + self.media_offsets[p]..base + self.media_offsets[p + 1]];
+        (legs.first() != Some(&NO_MEDIUM)).then(|| legs.iter().map(|&m| m as usize))
+    }
+    /// Total solver iterations over all rays.
+    pub fn total_iterations(&self) -> u64 {
+        self.records.iter().map(|r| r.iterations as u64).sum()
+    }
+    /// Ray `ray` as an owned [`Ray`].
+    pub fn ray(&self, ray: usize) -> Ray {
+        let rec = self.records[ray];
+        let (source, receiver, path) = self.triple(ray);
+        let has = rec.status.has_time();
+        Ray {
+            source,
+            receiver,
+            path,
+            status: rec.status,
+            time: has.then_some(rec.time),
+            points: if has { self.points(ray).to_vec() } else { Vec::new() },
+            iterations: rec.iterations as usize,
+            residual: rec.residual,
+            media: self.media(ray).map(|m| m.collect()).unwrap_or_default(),
+            reason: rec.reason,
+        }
+    }
+    /// Every ray as an owned [`Ray`], in ray order.
+    pub fn to_rays(&self) -> Vec<Ray> {
+        (0..self.len()).map(|i| self.ray(i)).collect()
+    }
+    /// Bytes held by the batch's arrays.
+    pub fn memory_bytes(&self) -> usize {
+        self.records.capacity() * std::mem::size_of::<RayRecord>()
+            + self.points.capacity() * std::mem::size_of::<Point>()
+            + self.media.capacity() * std::mem::size_of::<u32>()
+    }
+}
+
+/// Interleaves the bits of two 32-bit integers (Morton / Z-order code).
+fn morton(x: u32, y: u32) -> u64 {
+    fn spread(v: u32) -> u64 {
+        let mut v = v as u64;
+        v = (v | (v << 16)) & 0x0000_FFFF_0000_FFFF;
+        v = (v | (v << 8)) & 0x00FF_00FF_00FF_00FF;
+        v = (v | (v << 4)) & 0x0F0F_0F0F_0F0F_0F0F;
+        v = (v | (v << 2)) & 0x3333_3333_3333_3333;
+        v = (v | (v << 1)) & 0x5555_5555_5555_5555;
+        v
+    }
+    spread(x) | (spread(y) << 1)
+}
+
+/// Receiver indices sorted along a Morton curve over their bounding box.
+fn spatial_order(points: &[Point]) -> Vec<usize> {
+    let bbox = points.iter().fold(crate::geom::Aabb::EMPTY, |b, p| b.union(crate::geom::Aabb::from_points(*p, *p)));
+    let (w, h) = ((bbox.max.x - bbox.min.x).max(f64::MIN_POSITIVE), (bbox.max.y - bbox.min.y).max(f64::MIN_POSITIVE));
+    let q = |v: f64| (v.clamp(0.0, 1.0) * 65535.0) as u32;
+    let mut keyed: Vec<(u64, usize)> = points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (morton(q((p.x - bbox.min.x) / w), q((p.y - bbox.min.y) / h)), i))
+        .collect();
+    keyed.sort_unstable();
+    keyed.into_iter().map(|(_, i)| i).collect()
+}
+
+impl Tracer<'_> {
+    /// Solves every ray of the scene in parallel (rayon, one workspace per work unit), with
+    /// the same results as solving them one by one (up to the start each ray is solved from
+    /// when `warm_start` is on), in ray order.
+    pub fn trace_batch(&self, opts: &BatchOptions) -> Batch {
+        let scene = self.scene();
+        let (ns, nr, np) = (scene.sources().len(), scene.receivers().len(), scene.paths().len());
+        let mut point_offsets = vec![0];
+        let mut media_offsets = vec![0];
+        let mut param_offsets = vec![0];
+        for p in scene.paths() {
+            let k = p.steps.len();
+            point_offsets.push(point_offsets.last().unwrap() + k + 2);
+            media_offsets.push(media_offsets.last().unwrap() + k + 1);
+            param_offsets.push(param_offsets.last().unwrap() + k);
+        }
+        let (pts_block, media_block, params_block) =
+            (point_offsets[np], media_offsets[np], param_offsets[np]);
+        let blocks = ns * nr;
+        let mut batch = Batch {
+            receivers: nr,
+            paths: np,
+            records: vec![RayRecord::default(); blocks * np],
+            points: vec![Point::new(f64::NAN, f64::NAN); blocks * pts_block],
+            media: vec![NO_MEDIUM; blocks * media_block],
+            point_offsets,
+            media_offsets,
+        };
+        if blocks == 0 || np == 0 {
+            return batch;
+        }
+        let order = if opts.warm_start { spatial_order(scene.receivers()) } else { (0..nr).collect() };
+        let identity = order.iter().enumerate().all(|(i, &r)| i == r);
+        let chunk = opts.chunk.max(1);
+
+        // Solve in (source, spatial position) block order; each unit is `chunk` blocks.
+        let mut records = vec![RayRecord::default(); blocks * np];
+        let mut points = vec![Point::new(f64::NAN, f64::NAN); blocks * pts_block];
+        let mut media = vec![NO_MEDIUM; blocks * media_block];
+        let (po, mo) = (&batch.point_offsets, &batch.media_offsets);
+        records
+            .par_chunks_mut(chunk * np)
+            .zip(points.par_chunks_mut(chunk * pts_block))
+            .zip(media.par_chunks_mut(chunk * media_block))
+            .enumerate()
+            .for_each_init(
+                || (Workspace::new(), vec![0.0; params_block], vec![false; np]),
+                |(ws, prev, have), (unit, ((rec, pts), med))| {
+                    have.iter_mut().for_each(|h| *h = false);
+                    let first = unit * chunk;
+                    let n = rec.len() / np;
+                    for b in 0..n {
+                        let block = first + b;
+                        let (source, receiver) = (block / nr, order[block % nr]);
+                        if b > 0 && (block % nr) == 0 {
+                            have.iter_mut().for_each(|h| *h = false);
+                        }
+                        for p in 0..np {
+                            let params = &mut prev[param_offsets[p]..param_offsets[p + 1]];
+                            let guess = (opts.warm_start && have[p]).then_some(&*params);
+                            let s = self.solve_indexed_from(source, receiver, p, guess, ws);
+                            rec[b * np + p] = RayRecord {
+                                status: s.status,
+                                time: if s.status.has_time() { s.time } else { f64::NAN },
+                                iterations: s.iterations as u32,
+                                residual: s.residual,
+                                reason: s.reason,
+                            };
+                            if s.status.has_time() {
+                                pts[b * pts_block + po[p]..b * pts_block + po[p + 1]].copy_from_slice(ws.points());
+                            }
+                            if ws.media().len() == mo[p + 1] - mo[p] {
+                                for (dst, &m) in med[b * media_block + mo[p]..].iter_mut().zip(ws.media()) {
+                                    *dst = m as u32;
+                                }
+                            }
+                            have[p] = s.status == Status::Converged;
+                            if have[p] {
+                                params.copy_from_slice(ws.parameters());
+                            }
+                        }
+                    }
+                    if let Some(progress) = opts.progress {
+                        progress(n * np);
+                    }
+                },
+            );
+
+        if identity {
+            batch.records = records;
+            batch.points = points;
+            batch.media = media;
+            return batch;
+        }
+        // Back from spatial order to ray order (a parallel gather of whole blocks).
+        let src_block = |block: usize, inverse: &[usize]| (block / nr) * nr + inverse[block % nr];
+        let mut inverse = vec![0; nr];
+        for (pos, &r) in order.iter().enumerate() {
+            inverse[r] = pos;
+        }
+        batch.records.par_chunks_mut(np).enumerate().for_each(|(block, out)| {
+            let from = src_block(block, &inverse) * np;
+            out.copy_from_slice(&records[from..from + np]);
+        });
+        batch.points.par_chunks_mut(pts_block).enumerate().for_each(|(block, out)| {
+            let from = src_block(block, &inverse) * pts_block;
+            out.copy_from_slice(&points[from..from + pts_block]);
+        });
+        batch.media.par_chunks_mut(media_block).enumerate().for_each(|(block, out)| {
+            let from = src_block(block, &inverse) * media_block;
+            out.copy_from_slice(&media[from..from + media_block]);
+        });
+        batch
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn morton_orders_quadrants() {
+        assert!(morton(0, 0) < morton(1, 0));
+        assert!(morton(1, 0) < morton(0, 1));
+        assert!(morton(65535, 65535) > morton(65535, 0));
+    }
+}

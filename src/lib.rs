@@ -1,0 +1,54 @@
+//! eigenray: eigenrays through prescribed reflections and refractions on 2-D piecewise-linear
+//! interfaces.
+//!
+//! A path runs source → interaction points → receiver. Each interaction point lives on one
+//! interface polyline and is one arclength parameter. Travel time is
+//! `T = Σ slowness × leg length`; a ray makes `T` stationary (Fermat), so the unknowns solve
+//! `∂T/∂sᵢ = 0`: Snell's law in tangential form at every interaction. eigenray solves these
+//! equations by damped Newton iteration on the analytic, symmetric tridiagonal Hessian of `T`
+//! (an `O(k)` step for `k` interactions), then classifies each ray.
+//!
+//! Dependency direction (each module uses only those to its left):
+//! `geom ← bvh ← polyline ← scene ← regions ← problem ← solver ← trace ← output`.
+//!
+//! ```
+//! use eigenray::{Scene, Status, Tracer};
+//! let scene = Scene::from_json(r#"{
+//!     "media": { "air": { "index": 1.0 }, "water": { "index": 1.333 } },
+//!     "interfaces": { "surface": { "points": [[-1, 0], [2, 0]] } },
+//!     "sources": [[0, 1]], "receivers": [[1, -1]],
+//!     "paths": [{ "steps": [{ "refract": "surface" }], "media": ["air", "water"] }]
+//! }"#).unwrap();
+//! let tracer = Tracer::new(&scene).unwrap();
+//! let rays = tracer.trace_all();
+//! assert_eq!(rays[0].status, Status::Converged);
+//! assert!((rays[0].time.unwrap() - 2.6017642).abs() < 1e-6);
+//! ```
+
+mod batch;
+mod bvh;
+pub mod demo;
+mod geom;
+mod output;
+mod polyline;
+mod problem;
+mod regions;
+mod scene;
+mod solver;
+mod trace;
+
+#[cfg(feature = "argmin")]
+pub mod argmin_bridge;
+
+pub use batch::{Batch, BatchOptions, RayRecord};
+pub use geom::{Aabb, Point, SegmentContact, Vec2, orient, segment_contact};
+pub use output::{write_rays_json, RaysDocument};
+pub use polyline::{Polyline, PolylineError};
+pub use problem::{PathProblem, Tridiagonal};
+pub use regions::Regions;
+pub use scene::{
+    DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, Interface, InterfaceSpec, MAX_ITERATIONS_LIMIT, Medium, MediumSpec,
+    Path, PathSpec, Scene, SceneError, SceneSpec, SegmentRef, SolverOptions, SolverSpec, Step, StepKind, StepSpec,
+};
+pub use solver::{Solution, Workspace};
+pub use trace::{Ray, RaySummary, Reason, Status, Tracer, ray_index};

@@ -1,0 +1,402 @@
+//! Open and closed polylines parametrised by arclength.
+
+use crate::bvh::Bvh;
+use crate::geom::{Aabb, Point, Vec2, orient};
+
+/// Turning angles above this (radians) are corners, not a digitised smooth curve: they add
+/// nothing to the curvature estimate that guides the solver across vertices.
+const SMOOTH_TURN: f64 = 0.35;
+
+/// Why a list of vertices is not a valid polyline.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PolylineError {
+    /// Fewer than two distinct vertices (or three for a closed polyline).
+    TooFewPoints {
+        /// Vertices needed.
+        needed: usize,
+    },
+    /// A coordinate is NaN or infinite. How to fix: give finite numbers.
+    NotFinite {
+        /// Index of the vertex.
+        index: usize,
+    },
+    /// Vertex `index` repeats the vertex before it (a zero-length segment). How to fix: drop it;
+    /// a closed polyline does not repeat its first vertex at the end.
+    ZeroLengthSegment {
+        /// Index of the vertex that ends the zero-length segment.
+        index: usize,
+    },
+    /// All vertices of a closed polyline lie on one line: it encloses nothing.
+    Collinear,
+}
+
+impl std::fmt::Display for PolylineError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PolylineError::TooFewPoints { needed } => write!(f, "needs at least {needed} distinct points"),
+            PolylineError::NotFinite { index } => write!(f, "point {index} is not finite"),
+            PolylineError::ZeroLengthSegment { index } => {
+                write!(f, "point {index} repeats the point before it (zero-length segment)")
+            }
+            PolylineError::Collinear => write!(f, "a closed polyline needs points that are not all on one line"),
+        }
+    }
+}
+
+/// A polyline: the shape of one interface.
+///
+/// A point on it is one number, its arclength `s` from the first vertex. Segment `j` runs from
+/// vertex `j` to vertex `j + 1` (for a closed polyline the last segment returns to vertex 0) and
+/// covers `s ∈ [start(j), start(j + 1)]`; finding the segment of a parameter is a binary search
+/// on the cumulative lengths, `O(log M)` for `M` segments.
+///
+/// ```
+/// use eigenray::{Point, Polyline};
+/// let p = Polyline::new(vec![Point::new(0.0, 0.0), Point::new(3.0, 0.0), Point::new(3.0, 4.0)], false).unwrap();
+/// assert_eq!(p.length(), 7.0);
+/// assert_eq!(p.segment_at(4.0), 1);
+/// assert_eq!(p.point_at(5.0), Point::new(3.0, 2.0));
+/// ```
+#[derive(Clone, Debug)]
+pub struct Polyline {
+    vertices: Vec<Point>,
+    closed: bool,
+    /// Arclength at the start of each segment, plus the total length at the end.
+    cum: Vec<f64>,
+    /// Unit direction of each segment.
+    dirs: Vec<Vec2>,
+    /// Curvature estimate of each segment (from small turning angles only).
+    curv: Vec<f64>,
+    bbox: Aabb,
+    bvh: Bvh,
+}
+
+impl Polyline {
+    /// Builds a polyline from its vertices; `closed` joins the last vertex to the first.
+    pub fn new(vertices: Vec<Point>, closed: bool) -> Result<Polyline, PolylineError> {
+        if let Some(index) = vertices.iter().position(|p| !p.is_finite()) {
+            return Err(PolylineError::NotFinite { index });
+        }
+        let needed = if closed { 3 } else { 2 };
+        let mut distinct = vertices.clone();
+        distinct.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+        distinct.dedup();
+        if distinct.len() < needed {
+            return Err(PolylineError::TooFewPoints { needed });
+        }
+        for i in 1..vertices.len() {
+            if vertices[i] == vertices[i - 1] {
+                return Err(PolylineError::ZeroLengthSegment { index: i });
+            }
+        }
+        if closed {
+            if vertices[0] == vertices[vertices.len() - 1] {
+                return Err(PolylineError::ZeroLengthSegment { index: 0 });
+            }
+            let (a, b) = (vertices[0], vertices[1]);
+            if vertices.iter().all(|&c| orient(a, b, c) == 0.0) {
+                return Err(PolylineError::Collinear);
+            }
+        }
+        let n = vertices.len();
+        let nseg = if closed { n } else { n - 1 };
+        let mut cum = Vec::with_capacity(nseg + 1);
+        let mut dirs = Vec::with_capacity(nseg);
+        let mut boxes = Vec::with_capacity(nseg);
+        let mut total = 0.0;
+        for j in 0..nseg {
+            let (a, b) = (vertices[j], vertices[(j + 1) % n]);
+            let d = b - a;
+            let len = d.length();
+            cum.push(total);
+            total += len;
+            dirs.push(d * (1.0 / len));
+            boxes.push(Aabb::from_points(a, b));
+        }
+        cum.push(total);
+        let bbox = boxes.iter().fold(Aabb::EMPTY, |acc, b| acc.union(*b));
+        let bvh = Bvh::build(&boxes);
+        let mut line = Polyline { vertices, closed, cum, dirs, curv: Vec::new(), bbox, bvh };
+        line.curv = line.curvature_estimates();
+        Ok(line)
+    }
+
+    fn curvature_estimates(&self) -> Vec<f64> {
+        let nseg = self.num_segments();
+        // Curvature at each vertex: turning angle over the mean of the adjacent lengths.
+        let vertex_k = |v: usize| -> f64 {
+            let (prev, next) = if self.closed {
+                ((v + nseg - 1) % nseg, v % nseg)
+            } else if v == 0 || v == nseg {
+                return 0.0;
+            } else {
+                (v - 1, v)
+            };
+            let (a, b) = (self.dirs[prev], self.dirs[next]);
+            let turn = a.cross(b).atan2(a.dot(b));
+            if turn.abs() > SMOOTH_TURN {
+                return 0.0;
+            }
+            turn / (0.5 * (self.segment_length(prev) + self.segment_length(next)))
+        };
+        (0..nseg).map(|j| 0.5 * (vertex_k(j) + vertex_k(j + 1))).collect()
+    }
+
+    /// Whether the last vertex joins the first.
+    #[inline]
+    pub fn is_closed(&self) -> bool {
+        self.closed
+    }
+    /// The vertices (a closed polyline does not repeat the first at the end).
+    #[inline]
+    pub fn vertices(&self) -> &[Point] {
+        &self.vertices
+    }
+    /// Number of segments.
+    #[inline]
+    pub fn num_segments(&self) -> usize {
+        self.dirs.len()
+    }
+    /// Total arclength.
+    #[inline]
+    pub fn length(&self) -> f64 {
+        self.cum[self.dirs.len()]
+    }
+    /// Bounding box.
+    #[inline]
+    pub fn bbox(&self) -> Aabb {
+        self.bbox
+    }
+    /// Arclength where segment `j` starts (`start(num_segments())` is the total length).
+    #[inline]
+    pub fn start(&self, j: usize) -> f64 {
+        self.cum[j]
+    }
+    /// Length of segment `j`.
+    #[inline]
+    pub fn segment_length(&self, j: usize) -> f64 {
+        self.cum[j + 1] - self.cum[j]
+    }
+    /// End points of segment `j`.
+    #[inline]
+    pub fn segment(&self, j: usize) -> (Point, Point) {
+        let n = self.vertices.len();
+        (self.vertices[j], self.vertices[(j + 1) % n])
+    }
+    /// Unit tangent of segment `j` (the direction of increasing arclength).
+    #[inline]
+    pub fn tangent(&self, j: usize) -> Vec2 {
+        self.dirs[j]
+    }
+    /// Unit normal of segment `j`: the tangent turned a quarter turn counter-clockwise (left).
+    #[inline]
+    pub fn normal(&self, j: usize) -> Vec2 {
+        self.dirs[j].perp()
+    }
+    /// Curvature estimate on segment `j` (signed, positive turning left), from the turning
+    /// angles at its ends that are small enough to belong to a digitised smooth curve; zero
+    /// for a straight segment between corners.
+    #[inline]
+    pub fn curvature(&self, j: usize) -> f64 {
+        self.curv[j]
+    }
+
+    /// Maps `s` into `[0, length)` on a closed polyline; returns it unchanged on an open one.
+    #[inline]
+    pub fn wrap(&self, s: f64) -> f64 {
+        if self.closed {
+            let l = self.length();
+            let w = s.rem_euclid(l);
+            if w >= l { 0.0 } else { w }
+        } else {
+            s
+        }
+    }
+
+    /// Segment holding parameter `s` (binary search; a vertex belongs to the segment it starts;
+    /// `s` outside `[0, length]` gives the first or last segment).
+    #[inline]
+    pub fn segment_at(&self, s: f64) -> usize {
+        let nseg = self.dirs.len();
+        self.cum[1..nseg].partition_point(|&c| c <= s)
+    }
+
+    /// [`segment_at`](Self::segment_at), trying segment `hint` and its neighbours first.
+    #[inline]
+    pub fn segment_at_hint(&self, s: f64, hint: usize) -> usize {
+        let nseg = self.dirs.len();
+        if hint < nseg {
+            let inside = |j: usize| {
+                (j == 0 || self.cum[j] <= s) && (j + 1 == nseg || s < self.cum[j + 1])
+            };
+            if inside(hint) {
+                return hint;
+            }
+            if hint + 1 < nseg && inside(hint + 1) {
+                return hint + 1;
+            }
+            if hint > 0 && inside(hint - 1) {
+                return hint - 1;
+            }
+        }
+        self.segment_at(s)
+    }
+
+    /// Point at parameter `s` on segment `j`, interpolated from the nearer end of the segment
+    /// so that `s` at a vertex gives that vertex exactly.
+    #[inline]
+    pub fn point_on(&self, j: usize, s: f64) -> Point {
+        let (a, b) = self.segment(j);
+        let from_start = s - self.cum[j];
+        let from_end = self.cum[j + 1] - s;
+        if from_start <= from_end { a + self.dirs[j] * from_start } else { b - self.dirs[j] * from_end }
+    }
+
+    /// `point_on(j, s) - origin`, computed as (vertex − origin) + offset, which keeps full
+    /// relative precision for paths far from the coordinate origin.
+    #[inline]
+    pub fn offset_on(&self, j: usize, s: f64, origin: Point) -> Vec2 {
+        let (a, b) = self.segment(j);
+        let from_start = s - self.cum[j];
+        let from_end = self.cum[j + 1] - s;
+        if from_start <= from_end {
+            (a - origin) + self.dirs[j] * from_start
+        } else {
+            (b - origin) - self.dirs[j] * from_end
+        }
+    }
+
+    /// Point at parameter `s` (wrapped on a closed polyline, clamped to the ends of an open one).
+    pub fn point_at(&self, s: f64) -> Point {
+        let s = if self.closed { self.wrap(s) } else { s.clamp(0.0, self.length()) };
+        self.point_on(self.segment_at(s), s)
+    }
+
+    /// The point of the polyline nearest to `p`: `(parameter, segment, distance)`.
+    /// `O(log M)` for well-spread segments (a BVH query).
+    pub fn nearest(&self, p: Point) -> (f64, usize, f64) {
+        let (seg, d2) = self
+            .bvh
+            .nearest(p, |j| {
+                let (_, q) = self.project(j as usize, p);
+                (q - p).dot(q - p)
+            })
+            .expect("a polyline has at least one segment");
+        let (s, _) = self.project(seg as usize, p);
+        (s, seg as usize, d2.sqrt())
+    }
+
+    /// The parameters where segment `a–b` crosses or touches this polyline, reported to `f`
+    /// as `(parameter, fraction along a–b)`.
+    pub fn crossings(&self, a: Point, b: Point, mut f: impl FnMut(f64, f64)) {
+        self.bvh.any_near_segment(a, b, |j| {
+            let j = j as usize;
+            let (p, q) = self.segment(j);
+            if let Some((t, u)) = segment_intersection(a, b, p, q) {
+                f(self.cum[j] + u * self.segment_length(j), t);
+            }
+            false
+        });
+    }
+
+    /// Orthogonal projection of `p` on segment `j`, clamped: `(parameter, point)`.
+    fn project(&self, j: usize, p: Point) -> (f64, Point) {
+        let (a, _) = self.segment(j);
+        let len = self.segment_length(j);
+        let t = (p - a).dot(self.dirs[j]).clamp(0.0, len);
+        let s = self.cum[j] + t;
+        (s, self.point_on(j, s))
+    }
+}
+
+/// Where segments `a–b` and `p–q` meet, as fractions `(t along a–b, u along p–q)`, both in
+/// `[0, 1]`; `None` when they do not meet or are parallel.
+pub(crate) fn segment_intersection(a: Point, b: Point, p: Point, q: Point) -> Option<(f64, f64)> {
+    let d = b - a;
+    let e = q - p;
+    let den = d.cross(e);
+    if den == 0.0 {
+        return None;
+    }
+    let w = p - a;
+    let t = w.cross(e) / den;
+    let u = w.cross(d) / den;
+    ((0.0..=1.0).contains(&t) && (0.0..=1.0).contains(&u)).then_some((t, u))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square() -> Polyline {
+        let p = Point::new;
+        Polyline::new(vec![p(0., 0.), p(1., 0.), p(1., 1.), p(0., 1.)], true).unwrap()
+    }
+
+    #[test]
+    fn closed_wraps() {
+        let sq = square();
+        assert_eq!(sq.length(), 4.0);
+        assert_eq!(sq.num_segments(), 4);
+        assert_eq!(sq.point_at(3.5), Point::new(0.0, 0.5));
+        assert_eq!(sq.point_at(-0.5), Point::new(0.0, 0.5));
+        assert_eq!(sq.point_at(4.25), Point::new(0.25, 0.0));
+        assert_eq!(sq.segment_at(2.0), 2);
+        assert_eq!(sq.normal(0), Vec2::new(0.0, 1.0));
+    }
+
+    #[test]
+    fn errors() {
+        let p = Point::new;
+        assert_eq!(Polyline::new(vec![p(0., 0.)], false).unwrap_err(), PolylineError::TooFewPoints { needed: 2 });
+        assert_eq!(
+            Polyline::new(vec![p(0., 0.), p(0., 0.)], false).unwrap_err(),
+            PolylineError::TooFewPoints { needed: 2 }
+        );
+        assert_eq!(
+            Polyline::new(vec![p(0., 0.), p(1., 0.), p(1., 0.)], false).unwrap_err(),
+            PolylineError::ZeroLengthSegment { index: 2 }
+        );
+        assert_eq!(
+            Polyline::new(vec![p(0., 0.), p(1., 0.), p(2., 0.)], true).unwrap_err(),
+            PolylineError::Collinear
+        );
+        assert_eq!(
+            Polyline::new(vec![p(0., 0.), p(f64::NAN, 0.)], false).unwrap_err(),
+            PolylineError::NotFinite { index: 1 }
+        );
+    }
+
+    #[test]
+    fn hint_search_agrees_with_binary_search() {
+        let pts: Vec<Point> = (0..200).map(|i| Point::new(i as f64, (i as f64 * 0.1).sin())).collect();
+        let line = Polyline::new(pts, false).unwrap();
+        for k in 0..1000 {
+            let s = k as f64 * line.length() / 999.0;
+            let j = line.segment_at(s);
+            assert!(line.start(j) <= s || j == 0);
+            for hint in [0, j.saturating_sub(1), j, j + 1, 150] {
+                assert_eq!(line.segment_at_hint(s, hint), j);
+            }
+        }
+    }
+
+    #[test]
+    fn nearest_point() {
+        let sq = square();
+        let (s, seg, d) = sq.nearest(Point::new(0.5, -2.0));
+        assert_eq!((s, seg, d), (0.5, 0, 2.0));
+        let (s, _, d) = sq.nearest(Point::new(2.0, 0.5));
+        assert_eq!((s, d), (1.5, 1.0));
+    }
+
+    #[test]
+    fn vertex_is_exact() {
+        let p = Point::new;
+        let line = Polyline::new(vec![p(0.1, 0.7), p(0.3, 0.9), p(1.7, -0.2)], false).unwrap();
+        let s1 = line.start(1);
+        assert_eq!(line.point_on(0, s1), p(0.3, 0.9));
+        assert_eq!(line.point_on(1, s1), p(0.3, 0.9));
+        assert_eq!(line.point_on(1, line.length()), p(1.7, -0.2));
+    }
+}

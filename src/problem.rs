@@ -1,0 +1,268 @@
+//! The path problem: travel time, its gradient (the residual) and its tridiagonal Hessian.
+//!
+//! For interaction points `xᵢ = Pᵢ(sᵢ)` on polylines, legs `ℓⱼ = |xⱼ − xⱼ₋₁|` with unit
+//! directions `uⱼ` and slownesses `wⱼ` (leg `j` arrives at point `j`), and unit tangents `tᵢ`:
+//!
+//! ```text
+//! T      = Σⱼ wⱼ ℓⱼ
+//! rᵢ     = ∂T/∂sᵢ     = (wᵢ uᵢ − wᵢ₊₁ uᵢ₊₁) · tᵢ          (Snell's law, tangential form)
+//! Hᵢᵢ    = wᵢ (uᵢ × tᵢ)² / ℓᵢ + wᵢ₊₁ (uᵢ₊₁ × tᵢ)² / ℓᵢ₊₁  [+ κᵢ (wᵢ uᵢ − wᵢ₊₁ uᵢ₊₁) · nᵢ]
+//! Hᵢ,ᵢ₊₁ = −wᵢ₊₁ (uᵢ₊₁ × tᵢ)(uᵢ₊₁ × tᵢ₊₁) / ℓᵢ₊₁
+//! ```
+//!
+//! (0-based in the code: point `i` sits between leg `i` and leg `i + 1`.) Each leg adds the
+//! rank-one matrix `(w/ℓ) g gᵀ` with `g = (−u × tᵢ, u × tᵢ₊₁)`, so on fixed segments `T` is
+//! convex and `H` positive semi-definite. The bracketed curvature term is zero on a straight
+//! segment; the solver adds an estimate of it only while points travel across the vertices
+//! of a digitised smooth curve, where the true `T` (of the smooth curve) may have maxima and
+//! saddles that the segment-wise Hessian cannot see.
+
+use crate::geom::{Point, Vec2};
+use crate::polyline::Polyline;
+use crate::scene::{Scene, Step};
+
+/// A symmetric tridiagonal matrix: `diag[i] = Hᵢᵢ`, `off[i] = Hᵢ,ᵢ₊₁`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Tridiagonal {
+    /// Diagonal, length `k`.
+    pub diag: Vec<f64>,
+    /// Super-diagonal (= sub-diagonal), length `k − 1` (0 when `k == 0`).
+    pub off: Vec<f64>,
+}
+
+impl Tridiagonal {
+    /// The dense `k × k` matrix, row-major.
+    pub fn to_dense(&self) -> Vec<Vec<f64>> {
+        let k = self.diag.len();
+        let mut m = vec![vec![0.0; k]; k];
+        for i in 0..k {
+            m[i][i] = self.diag[i];
+            if i + 1 < k {
+                m[i][i + 1] = self.off[i];
+                m[i + 1][i] = self.off[i];
+            }
+        }
+        m
+    }
+}
+
+/// Scratch buffers of one evaluation (reused: evaluating allocates nothing once sized).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Eval {
+    /// Positions relative to the source: `k + 2` (source, interactions, receiver).
+    pub rel: Vec<Vec2>,
+    /// Unit leg directions, `k + 1`.
+    pub u: Vec<Vec2>,
+    /// Leg lengths, `k + 1`.
+    pub len: Vec<f64>,
+    /// Unit tangents at the interactions, `k`.
+    pub tan: Vec<Vec2>,
+    /// Residual `∂T/∂sᵢ`, `k`.
+    pub r: Vec<f64>,
+    /// Hessian diagonal, `k`.
+    pub diag: Vec<f64>,
+    /// Hessian off-diagonal, `k − 1`.
+    pub off: Vec<f64>,
+    /// Travel time.
+    pub time: f64,
+}
+
+impl Eval {
+    pub fn resize(&mut self, k: usize) {
+        self.rel.resize(k + 2, Vec2::default());
+        self.u.resize(k + 1, Vec2::default());
+        self.len.resize(k + 1, 0.0);
+        self.tan.resize(k, Vec2::default());
+        self.r.resize(k, 0.0);
+        self.diag.resize(k, 0.0);
+        self.off.resize(k.saturating_sub(1), 0.0);
+    }
+}
+
+/// The geometry of one ray: which polylines, which slownesses, which end points.
+#[derive(Clone, Copy)]
+pub(crate) struct Geometry<'a> {
+    pub scene: &'a Scene,
+    pub steps: &'a [Step],
+    pub slowness: &'a [f64],
+    pub source: Point,
+    pub receiver: Point,
+}
+
+impl<'a> Geometry<'a> {
+    #[inline]
+    pub fn line(&self, i: usize) -> &'a Polyline {
+        &self.scene.interfaces()[self.steps[i].interface].polyline
+    }
+    #[inline]
+    pub fn k(&self) -> usize {
+        self.steps.len()
+    }
+
+    /// Positions, legs, time and residual at parameters `s` on segments `seg`; with
+    /// `hessian`, also the tridiagonal Hessian (with the curvature estimate when `curvature`).
+    pub fn evaluate(&self, s: &[f64], seg: &[usize], e: &mut Eval, hessian: bool, curvature: bool) {
+        let k = self.k();
+        let w = self.slowness;
+        e.rel[0] = Vec2::default();
+        for i in 0..k {
+            let line = self.line(i);
+            e.rel[i + 1] = line.offset_on(seg[i], s[i], self.source);
+            e.tan[i] = line.tangent(seg[i]);
+        }
+        e.rel[k + 1] = self.receiver - self.source;
+        let mut time = 0.0;
+        for j in 0..=k {
+            let d = e.rel[j + 1] - e.rel[j];
+            let l = leg_length(d);
+            e.len[j] = l;
+            e.u[j] = if l > 0.0 { d * (1.0 / l) } else { Vec2::default() };
+            time += w[j] * l;
+        }
+        e.time = time;
+        for i in 0..k {
+            let t = e.tan[i];
+            e.r[i] = (e.u[i] * w[i] - e.u[i + 1] * w[i + 1]).dot(t);
+        }
+        if !hessian {
+            return;
+        }
+        for i in 0..k {
+            let t = e.tan[i];
+            let (ua, ub) = (e.u[i], e.u[i + 1]);
+            let ca = ua.cross(t);
+            let cb = ub.cross(t);
+            let mut h = w[i] * ca * ca * inv(e.len[i]) + w[i + 1] * cb * cb * inv(e.len[i + 1]);
+            if curvature {
+                let kappa = self.line(i).curvature(seg[i]);
+                if kappa != 0.0 {
+                    h += kappa * (ua * w[i] - ub * w[i + 1]).dot(t.perp());
+                }
+            }
+            e.diag[i] = h;
+            if i + 1 < k {
+                let t2 = e.tan[i + 1];
+                e.off[i] = -w[i + 1] * cb * ub.cross(t2) * inv(e.len[i + 1]);
+            }
+        }
+    }
+}
+
+/// `|d|`: a plain square root where the squares neither overflow nor lose precision to
+/// underflow, `hypot` otherwise.
+#[inline]
+fn leg_length(d: Vec2) -> f64 {
+    let l2 = d.x * d.x + d.y * d.y;
+    if l2.is_normal() && l2 < 1e300 { l2.sqrt() } else { d.length() }
+}
+
+/// `1/ℓ`, with a zero-length leg contributing nothing (its direction is undefined).
+#[inline]
+fn inv(l: f64) -> f64 {
+    if l > 0.0 { 1.0 / l } else { 0.0 }
+}
+
+/// One path's travel-time function of the interaction parameters, for inspection, tests and
+/// other solvers (the argmin bridge).
+///
+/// ```
+/// use eigenray::{PathProblem, Scene};
+/// let scene = Scene::from_json(r#"{
+///     "media": { "a": { "speed": 1.0 }, "b": { "speed": 0.5 } },
+///     "interfaces": { "flat": { "points": [[-10, 0], [10, 0]] } },
+///     "sources": [[0, 1]], "receivers": [[2, -1]],
+///     "paths": [{ "steps": [{ "refract": "flat" }], "media": ["a", "b"] }]
+/// }"#).unwrap();
+/// let p = PathProblem::new(&scene, 0, scene.sources()[0], scene.receivers()[0]).unwrap();
+/// // s is arclength from the polyline's first vertex (-10, 0): s = 11 is the point (1, 0).
+/// let t = p.time(&[11.0]);
+/// assert!((t - (2f64.sqrt() + 2.0 * 2f64.sqrt())).abs() < 1e-12);
+/// ```
+#[derive(Clone, Debug)]
+pub struct PathProblem<'a> {
+    scene: &'a Scene,
+    path: usize,
+    slowness: Vec<f64>,
+    source: Point,
+    receiver: Point,
+}
+
+impl<'a> PathProblem<'a> {
+    /// The problem of path `path` between two points, with the path's own leg media.
+    /// `None` when the path has no `media` (its media come from region lookup: use
+    /// [`PathProblem::with_slowness`]).
+    pub fn new(scene: &'a Scene, path: usize, source: Point, receiver: Point) -> Option<PathProblem<'a>> {
+        let media = scene.paths().get(path)?.media.as_ref()?;
+        let slowness = media.iter().map(|&m| scene.media()[m].slowness).collect();
+        Some(PathProblem { scene, path, slowness, source, receiver })
+    }
+
+    /// The problem with explicit leg slownesses (`steps + 1` of them).
+    ///
+    /// # Panics
+    /// If `path` is out of range or `slowness` has the wrong length.
+    pub fn with_slowness(scene: &'a Scene, path: usize, slowness: Vec<f64>, source: Point, receiver: Point) -> Self {
+        assert_eq!(slowness.len(), scene.paths()[path].steps.len() + 1, "one slowness per leg");
+        PathProblem { scene, path, slowness, source, receiver }
+    }
+
+    /// Number of unknowns (interactions).
+    pub fn len(&self) -> usize {
+        self.scene.paths()[self.path].steps.len()
+    }
+    /// Whether the path is the direct ray (no unknowns).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Leg slownesses.
+    pub fn slowness(&self) -> &[f64] {
+        &self.slowness
+    }
+
+    pub(crate) fn geometry(&self) -> Geometry<'_> {
+        Geometry {
+            scene: self.scene,
+            steps: &self.scene.paths()[self.path].steps,
+            slowness: &self.slowness,
+            source: self.source,
+            receiver: self.receiver,
+        }
+    }
+
+    fn eval(&self, s: &[f64], hessian: bool) -> Eval {
+        let g = self.geometry();
+        let k = g.k();
+        assert_eq!(s.len(), k, "one parameter per interaction");
+        let mut e = Eval::default();
+        e.resize(k);
+        let mut ss = vec![0.0; k];
+        let mut seg = vec![0; k];
+        for i in 0..k {
+            let line = g.line(i);
+            ss[i] = line.wrap(s[i]);
+            seg[i] = line.segment_at(ss[i]);
+        }
+        g.evaluate(&ss, &seg, &mut e, hessian, false);
+        e
+    }
+
+    /// Travel time at parameters `s` (wrapped on closed polylines; on open ones a parameter
+    /// outside `[0, length]` extends the end segment).
+    pub fn time(&self, s: &[f64]) -> f64 {
+        self.eval(s, false).time
+    }
+    /// The residual `∂T/∂sᵢ`.
+    pub fn gradient(&self, s: &[f64]) -> Vec<f64> {
+        self.eval(s, false).r
+    }
+    /// The analytic Hessian of `T` (symmetric tridiagonal; segment-wise, no curvature term).
+    pub fn hessian(&self, s: &[f64]) -> Tridiagonal {
+        let e = self.eval(s, true);
+        Tridiagonal { diag: e.diag, off: e.off }
+    }
+    /// Source, interaction points and receiver.
+    pub fn points(&self, s: &[f64]) -> Vec<Point> {
+        let e = self.eval(s, false);
+        e.rel.iter().map(|v| self.source + *v).collect()
+    }
+}

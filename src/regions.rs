@@ -1,0 +1,1098 @@
+//! Regions of the plane cut out by the interfaces (and the domain box), and the medium filling each.
+//!
+//! A constrained Delaunay triangulation (`spade`) holds every interface segment as a constraint
+//! edge, plus the domain box's edges when the scene has a domain. Its faces are flood-filled into
+//! regions that constraint edges separate; every medium's `at` point claims the region holding it
+//! and the other regions take the background medium.
+//!
+//! Region 0 is always the unbounded one: the outer face of the triangulation and, with a domain,
+//! everything outside the domain box.
+//!
+//! Which medium lies on each side of an interface is precomputed at build time from the
+//! triangulation's own edges, so [`Regions::sides`] needs no geometric tolerance: every segment
+//! keeps the list of its pieces (a segment is split where another interface's vertex lies on it,
+//! a T-junction, and where it crosses the domain's edge) with the region on each side.
+
+use std::collections::VecDeque;
+use std::fmt;
+
+use spade::handles::{FixedDirectedEdgeHandle, FixedFaceHandle, FixedVertexHandle, PossiblyOuterTag};
+use spade::{
+    ConstrainedDelaunayTriangulation, HasPosition, HintGenerator, MAX_ALLOWED_VALUE, MIN_ALLOWED_VALUE, Point2,
+    PositionInTriangulation, Triangulation,
+};
+
+use crate::geom::{Aabb, Point, orient};
+use crate::scene::{Scene, SceneError};
+
+type Cdt = ConstrainedDelaunayTriangulation<Point2<f64>, (), (), (), QuietHint>;
+
+/// "No region" marker in the compact tables.
+const NONE: u32 = u32::MAX;
+
+/// The media on the two sides of an interface at one point (medium indices into
+/// [`Scene::media`]; `None` where the region there has no medium).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Sides {
+    /// Medium on the side the segment's normal points to (its tangent turned counter-clockwise).
+    pub left: Option<usize>,
+    /// Medium on the other side.
+    pub right: Option<usize>,
+}
+
+/// Where the previous point lookup of one caller ended, to start the next one nearby.
+///
+/// Each thread (or each ray) keeps its own, so lookups share no mutable state. The default hint
+/// knows nothing and starts from a coarse grid over the triangulation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LocateHint {
+    /// Index of a triangulation vertex near the last query (`u32::MAX`: none).
+    vertex: u32,
+}
+
+impl Default for LocateHint {
+    fn default() -> Self {
+        LocateHint { vertex: NONE }
+    }
+}
+
+/// One piece of an interface segment between two consecutive triangulation vertices.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Piece {
+    /// Arclength (the polyline's own parameter) where the piece starts.
+    start: f64,
+    /// Region on the left of the segment.
+    left: u32,
+    /// Region on the right.
+    right: u32,
+}
+
+/// The regions of a scene and their media: point lookup and the media on both sides of every
+/// interface segment.
+///
+/// Build it once with [`Regions::build`]; it is read-only afterwards and `Send + Sync`, so rayon
+/// threads can share it (each with its own [`LocateHint`]).
+///
+/// A point exactly on a boundary between two different regions (an interface, or the domain's
+/// edge) belongs to no region: [`region_at`](Regions::region_at) and
+/// [`medium_at`](Regions::medium_at) return `None` there. On a curve that separates nothing (a
+/// dangling open polyline) the point belongs to the one region around it.
+#[derive(Clone)]
+pub struct Regions {
+    cdt: Cdt,
+    scale: Scale,
+    /// Region of every triangulation face, by face index (the outer face is region 0).
+    face_region: Vec<u32>,
+    /// Medium of every region.
+    region_medium: Vec<Option<usize>>,
+    grid: HintGrid,
+    /// Interface vertices, all interfaces one after the other.
+    verts: Vec<Point>,
+    /// Index in `verts` of each interface's first vertex (one more entry at the end).
+    vert_offset: Vec<usize>,
+    /// Scene-wide index of each interface's first segment (one more entry at the end).
+    seg_offset: Vec<usize>,
+    /// Index in `pieces` of each scene-wide segment's first piece (one more entry at the end).
+    piece_offset: Vec<usize>,
+    pieces: Vec<Piece>,
+}
+
+impl fmt::Debug for Regions {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Regions")
+            .field("regions", &self.region_medium.len())
+            .field("region_medium", &self.region_medium)
+            .field("vertices", &self.cdt.num_vertices())
+            .field("faces", &self.cdt.num_all_faces())
+            .field("pieces", &self.pieces.len())
+            .finish()
+    }
+}
+
+impl Regions {
+    /// Triangulates the scene's interfaces (and its domain box) and assigns the media.
+    ///
+    /// `O(M log M)` for `M` interface segments. The scene must come from
+    /// [`Scene::from_spec`] (interfaces that neither cross nor overlap); any finite
+    /// coordinates work, however large or small.
+    ///
+    /// # Errors
+    /// `media.NAME.at` when two `at` points lie in one region, or an `at` point lies exactly on
+    /// the domain's edge; `interfaces` if the triangulation fails (which a valid scene does not
+    /// cause).
+    pub fn build(scene: &Scene) -> Result<Regions, SceneError> {
+        let built = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| Regions::build_inner(scene)));
+        let mut regions = built
+            .map_err(|_| SceneError::new("interfaces", "the region triangulation failed (internal error)"))??;
+        regions.assign_media(scene)?;
+        Ok(regions)
+    }
+
+    fn build_inner(scene: &Scene) -> Result<Regions, SceneError> {
+        let interfaces = scene.interfaces();
+        let t0 = std::time::Instant::now();
+
+        // Every interface vertex, flattened, with per-interface offsets.
+        let mut verts = Vec::new();
+        let mut vert_offset = Vec::with_capacity(interfaces.len() + 1);
+        let mut seg_offset = Vec::with_capacity(interfaces.len() + 1);
+        let mut nseg = 0;
+        for iface in interfaces {
+            vert_offset.push(verts.len());
+            seg_offset.push(nseg);
+            verts.extend_from_slice(iface.polyline.vertices());
+            nseg += iface.polyline.num_segments();
+        }
+        vert_offset.push(verts.len());
+        seg_offset.push(nseg);
+
+        // An exact power-of-two scale brings every coordinate into the range spade accepts.
+        let geometry = verts.iter().fold(Aabb::EMPTY, |b, p| b.union(Aabb::from_points(*p, *p)));
+        let extent = match scene.domain() {
+            Some(d) => geometry.union(d),
+            None => geometry,
+        };
+        let scale = Scale::for_box(extent);
+
+        // Box corners, counter-clockwise from the lower left: the domain's, or a margin box around
+        // the interfaces (in spade's coordinates) that keeps every interface off the convex hull.
+        let domain = scene.domain().map(|d| scale.aabb(d));
+        let corners = match domain {
+            Some(d) => d,
+            None => {
+                let b = if geometry.min.x <= geometry.max.x {
+                    scale.aabb(geometry)
+                } else {
+                    Aabb::from_points(Point::new(-1.0, -1.0), Point::new(1.0, 1.0))
+                };
+                let margin = 0.1 * b.diagonal() + 1.0;
+                Aabb {
+                    min: Point::new(b.min.x - margin, b.min.y - margin),
+                    max: Point::new(b.max.x + margin, b.max.y + margin),
+                }
+            }
+        };
+        let corner_points = [
+            Point::new(corners.min.x, corners.min.y),
+            Point::new(corners.max.x, corners.min.y),
+            Point::new(corners.max.x, corners.max.y),
+            Point::new(corners.min.x, corners.max.y),
+        ];
+
+        // Deduplicate (interfaces share vertices) so that vertex `i` of the triangulation is
+        // `unique[i]`; `vid` maps every interface vertex, then the 4 corners, to it.
+        let mut scaled: Vec<Point2<f64>> = verts.iter().map(|&p| scale.to_spade(p)).collect();
+        scaled.extend(corner_points.iter().map(|p| Point2::new(p.x, p.y)));
+        if scaled.len() >= NONE as usize {
+            return Err(SceneError::new("interfaces", "too many interface vertices"));
+        }
+        let mut order: Vec<u32> = (0..scaled.len() as u32).collect();
+        order.sort_unstable_by(|&a, &b| {
+            let (p, q) = (scaled[a as usize], scaled[b as usize]);
+            p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y))
+        });
+        let mut vid = vec![0u32; scaled.len()];
+        let mut unique: Vec<Point2<f64>> = Vec::with_capacity(scaled.len());
+        // Original coordinates of each unique vertex (corners: spade's coordinates, unscaled).
+        let mut original: Vec<Point> = Vec::with_capacity(scaled.len());
+        for &k in &order {
+            let p = scaled[k as usize];
+            if unique.last() != Some(&p) {
+                unique.push(p);
+                original.push(verts.get(k as usize).copied().unwrap_or_else(|| scale.from_spade(p)));
+            }
+            vid[k as usize] = (unique.len() - 1) as u32;
+        }
+        let num_input_vertices = unique.len();
+
+        eprintln!("prep {:?}", t0.elapsed());
+        let mut cdt = Cdt::bulk_load_cdt(unique.clone(), Vec::new())
+            .map_err(|e| SceneError::new("interfaces", format!("cannot triangulate the interfaces: {e:?}")))?;
+        if cdt.num_vertices() != unique.len()
+            || cdt.vertices().zip(&unique).any(|(v, p)| v.position() != *p)
+        {
+            return Err(SceneError::new("interfaces", "the triangulation did not keep the vertex order (internal error)"));
+        }
+        let vertex = |k: usize| FixedVertexHandle::from_index(vid[k] as usize);
+        let corner = |c: usize| vertex(verts.len() + c);
+
+        // The domain's edges first, so that each interface segment's insertion below returns its
+        // complete chain of edges (split where it crosses the domain's edge).
+        eprintln!("bulk {:?}", t0.elapsed());
+        if domain.is_some() {
+            for c in 0..4 {
+                cdt.add_constraint_and_split(corner(c), corner((c + 1) % 4), |p| p);
+            }
+        }
+
+        // Interface segments: the chain of triangulation vertices along each.
+        let mut chain: Vec<u32> = Vec::with_capacity(nseg + verts.len());
+        let mut chain_offset: Vec<usize> = Vec::with_capacity(nseg + 1);
+        for (i, iface) in interfaces.iter().enumerate() {
+            let n = iface.polyline.vertices().len();
+            for j in 0..iface.polyline.num_segments() {
+                chain_offset.push(chain.len());
+        eprintln!("constraints {:?}", t0.elapsed());
+                let (u, w) = (vertex(vert_offset[i] + j), vertex(vert_offset[i] + (j + 1) % n));
+                let edges = cdt.add_constraint_and_split(u, w, |p| p);
+                chain.push(u.index() as u32);
+                if u == w {
+                    continue;
+                }
+                let mut at = u;
+                let mut connected = true;
+                for e in &edges {
+                    let e = cdt.directed_edge(*e);
+                    connected &= e.from().fix() == at;
+                    at = e.to().fix();
+                }
+                if connected && at == w {
+                    chain.extend(edges.iter().map(|e| cdt.directed_edge(*e).to().fix().index() as u32));
+                } else {
+                    chain.push(w.index() as u32);
+                }
+            }
+        }
+        chain_offset.push(chain.len());
+
+        let face_region = flood_regions(&cdt, domain);
+        let num_regions = face_region.iter().filter(|&&r| r != NONE).max().map_or(1, |&r| r as usize + 1);
+
+        // Pieces of every segment with the regions on their two sides; consecutive pieces with
+        // the same regions merge.
+        let mut pieces = Vec::with_capacity(nseg);
+        let mut piece_offset = Vec::with_capacity(nseg + 1);
+        let position = |v: u32| -> Point {
+            let v = v as usize;
+            if v < num_input_vertices {
+                original[v]
+            } else {
+                scale.from_spade(cdt.vertex(FixedVertexHandle::from_index(v)).position())
+            }
+        };
+        for (i, iface) in interfaces.iter().enumerate() {
+            let line = &iface.polyline;
+            for j in 0..line.num_segments() {
+                let g = seg_offset[i] + j;
+                let first = pieces.len();
+                piece_offset.push(first);
+                let links = &chain[chain_offset[g]..chain_offset[g + 1]];
+                let (a, _) = line.segment(j);
+                let (s0, s1) = (line.start(j), line.start(j + 1));
+                let tangent = line.tangent(j);
+                for pair in links.windows(2) {
+                    let (x, y) = (pair[0], pair[1]);
+                    let (left, right) = piece_regions(&cdt, &face_region, x, y);
+                    let start = if pieces.len() == first {
+                        s0
+                    } else {
+                        let prev: &Piece = &pieces[pieces.len() - 1];
+                        (s0 + (position(x) - a).dot(tangent)).clamp(prev.start, s1)
+                    };
+                    match pieces.last() {
+                        Some(p) if pieces.len() > first && p.left == left && p.right == right => {}
+                        _ => pieces.push(Piece { start, left, right }),
+                    }
+                }
+                if pieces.len() == first {
+                    pieces.push(Piece { start: s0, left: NONE, right: NONE });
+                }
+            }
+        }
+        piece_offset.push(pieces.len());
+
+        eprintln!("pieces {:?}", t0.elapsed());
+        let grid = HintGrid::build(&cdt);
+        eprintln!("grid {:?}", t0.elapsed());
+        Ok(Regions {
+            cdt,
+            scale,
+            face_region,
+            region_medium: vec![None; num_regions],
+            grid,
+            verts,
+            vert_offset,
+            seg_offset,
+            piece_offset,
+            pieces,
+        })
+    }
+
+    /// Every `at` claims its region; every other region gets the background.
+    fn assign_media(&mut self, scene: &Scene) -> Result<(), SceneError> {
+        let mut claimed: Vec<Option<usize>> = vec![None; self.region_medium.len()];
+        for (m, medium) in scene.media().iter().enumerate() {
+            let Some(at) = medium.at else { continue };
+            let key = format!("media.{}.at", medium.name);
+            let region = self.region_at(at).ok_or_else(|| {
+                SceneError::new(&key, "lies on the edge of the domain; it must be strictly inside a region")
+            })?;
+            if let Some(other) = claimed[region] {
+                return Err(SceneError::new(
+                    key,
+                    format!("lies in the same region as media.{}.at", scene.media()[other].name),
+                ));
+            }
+            claimed[region] = Some(m);
+        }
+        for (medium, claim) in self.region_medium.iter_mut().zip(claimed) {
+            *medium = claim.or(scene.background());
+        }
+        Ok(())
+    }
+
+    /// Number of regions (region 0 is the unbounded one).
+    pub fn num_regions(&self) -> usize {
+        self.region_medium.len()
+    }
+
+    /// Medium of region `region` (`None`: no medium there, or no such region).
+    pub fn region_medium(&self, region: usize) -> Option<usize> {
+        self.region_medium.get(region).copied().flatten()
+    }
+
+    /// The region holding `p`; `None` when `p` lies exactly on a boundary between two different
+    /// regions (an interface or the domain's edge).
+    pub fn region_at(&self, p: Point) -> Option<usize> {
+        self.region_at_with_hint(p, &mut LocateHint::default())
+    }
+
+    /// [`region_at`](Self::region_at), starting the search where `hint` points and leaving it
+    /// near `p` for the next query.
+    pub fn region_at_with_hint(&self, p: Point, hint: &mut LocateHint) -> Option<usize> {
+        let Some(q) = self.scale.query(p) else {
+            // Far beyond every vertex: outside everything.
+            return Some(0);
+        };
+        let start = if (hint.vertex as usize) < self.cdt.num_vertices() {
+            FixedVertexHandle::from_index(hint.vertex as usize)
+        } else {
+            self.grid.hint(q)
+        };
+        let (region, near) = match self.cdt.locate_with_hint(q, start) {
+            PositionInTriangulation::OnFace(f) => {
+                let face = self.cdt.face(f);
+                (self.face_region[f.index()], face.vertices()[0].fix())
+            }
+            PositionInTriangulation::OnEdge(e) => {
+                let e = self.cdt.directed_edge(e);
+                let (l, r) = (self.region_of(e.face().fix()), self.region_of(e.rev().face().fix()));
+                (if l == r { l } else { NONE }, e.from().fix())
+            }
+            PositionInTriangulation::OnVertex(v) => {
+                let mut region = None;
+                for e in self.cdt.vertex(v).out_edges() {
+                    let r = self.region_of(e.face().fix());
+                    match region {
+                        None => region = Some(r),
+                        Some(q) if q != r => region = Some(NONE),
+                        Some(_) => {}
+                    }
+                }
+                (region.unwrap_or(0), v)
+            }
+            PositionInTriangulation::OutsideOfConvexHull(e) => (0, self.cdt.directed_edge(e).from().fix()),
+            PositionInTriangulation::NoTriangulation => (0, start),
+        };
+        hint.vertex = near.index() as u32;
+        (region != NONE).then_some(region as usize)
+    }
+
+    /// Medium index of the region holding `p`; `None` when that region has no medium or `p`
+    /// lies exactly on a boundary between two regions (see [`region_at`](Self::region_at)).
+    pub fn medium_at(&self, p: Point) -> Option<usize> {
+        self.region_at(p).and_then(|r| self.region_medium(r))
+    }
+
+    /// [`medium_at`](Self::medium_at) with a per-caller search hint (see [`LocateHint`]).
+    pub fn medium_at_with_hint(&self, p: Point, hint: &mut LocateHint) -> Option<usize> {
+        self.region_at_with_hint(p, hint).and_then(|r| self.region_medium(r))
+    }
+
+    /// The media on both sides of segment `segment` of interface `interface` at arclength `s`
+    /// (the polyline's own parameter). Exact and `O(log k)` for a segment split into `k`
+    /// pieces (usually 1). `left` is the side that `polyline.normal(segment)` points to.
+    ///
+    /// An invalid interface or segment index gives `Sides { left: None, right: None }`.
+    pub fn sides(&self, interface: usize, segment: usize, s: f64) -> Sides {
+        let Some(g) = self.segment_index(interface, segment) else {
+            return Sides::default();
+        };
+        let pieces = &self.pieces[self.piece_offset[g]..self.piece_offset[g + 1]];
+        let k = match pieces.get(1..) {
+            Some(rest) => rest.partition_point(|p| p.start <= s),
+            None => 0,
+        };
+        match pieces.get(k) {
+            Some(p) => Sides { left: self.medium_of_region(p.left), right: self.medium_of_region(p.right) },
+            None => Sides::default(),
+        }
+    }
+
+    /// The medium on the side of the segment opposite to `from` at arclength `s`: what a ray
+    /// coming from `from` refracts into. The side of `from` is decided exactly against the
+    /// segment's line; `None` when `from` lies on that line (or the index is invalid).
+    pub fn medium_across(&self, interface: usize, segment: usize, s: f64, from: Point) -> Option<usize> {
+        let g = self.segment_index(interface, segment)?;
+        let first = self.vert_offset[interface];
+        let n = self.vert_offset[interface + 1] - first;
+        let local = g - self.seg_offset[interface];
+        let (a, b) = (self.verts[first + local], self.verts[first + (local + 1) % n]);
+        let side = orient(a, b, from);
+        let sides = self.sides(interface, segment, s);
+        if side > 0.0 {
+            sides.right
+        } else if side < 0.0 {
+            sides.left
+        } else {
+            None
+        }
+    }
+
+    /// Scene-wide index of a segment, if it exists.
+    fn segment_index(&self, interface: usize, segment: usize) -> Option<usize> {
+        let (&first, &end) = (self.seg_offset.get(interface)?, self.seg_offset.get(interface + 1)?);
+        (segment < end - first).then_some(first + segment)
+    }
+
+    fn region_of(&self, face: FixedFaceHandle<PossiblyOuterTag>) -> u32 {
+        self.face_region.get(face.index()).copied().unwrap_or(NONE)
+    }
+
+    fn medium_of_region(&self, region: u32) -> Option<usize> {
+        self.region_medium(region as usize)
+    }
+}
+
+/// Regions of the two faces along the triangulation edge `x → y` (left, right), or `NONE`
+/// when that edge is missing.
+fn piece_regions(cdt: &Cdt, face_region: &[u32], x: u32, y: u32) -> (u32, u32) {
+    let (x, y) = (FixedVertexHandle::from_index(x as usize), FixedVertexHandle::from_index(y as usize));
+    let regions = |e: spade::handles::DirectedEdgeHandle<'_, Point2<f64>, (), spade::CdtEdge<()>, ()>| {
+        (face_region[e.face().fix().index()], face_region[e.rev().face().fix().index()])
+    };
+    if let Some(e) = cdt.get_edge_from_neighbors(x, y) {
+        return regions(e);
+    }
+    // Split after it was inserted (only where interfaces come within rounding of each other):
+    // take the bend through the vertex nearest to the line x–y.
+    let (px, py) = (cdt.vertex(x).position(), cdt.vertex(y).position());
+    let line = |p: Point2<f64>| Point::new(p.x, p.y);
+    let mut best: Option<(f64, FixedDirectedEdgeHandle)> = None;
+    for e in cdt.vertex(x).out_edges().filter(|e| e.is_constraint_edge()) {
+        let z = e.to();
+        if z.fix() == y || cdt.get_edge_from_neighbors(z.fix(), y).is_none_or(|f| !f.is_constraint_edge()) {
+            continue;
+        }
+        let off = orient(line(px), line(py), line(z.position())).abs();
+        if best.is_none_or(|(b, _)| off < b) {
+            best = Some((off, e.fix()));
+        }
+    }
+    best.map_or((NONE, NONE), |(_, e)| regions(cdt.directed_edge(e)))
+}
+
+/// Flood-fills the faces into regions separated by constraint edges. Region 0 holds the outer
+/// face and, with a domain, every face outside the domain box.
+fn flood_regions(cdt: &Cdt, domain: Option<Aabb>) -> Vec<u32> {
+    let n = cdt.num_all_faces();
+    let outer = cdt.outer_face().fix();
+    let mut handles = vec![outer; n];
+    for f in cdt.fixed_all_faces() {
+        if let Some(slot) = handles.get_mut(f.index()) {
+            *slot = f;
+        }
+    }
+    let mut region = vec![NONE; n];
+    let mut stack = Vec::new();
+    region[outer.index()] = 0;
+    stack.push(outer);
+    if let Some(d) = domain {
+        let outside = |p: Point2<f64>| p.x < d.min.x || p.x > d.max.x || p.y < d.min.y || p.y > d.max.y;
+        for f in cdt.inner_faces() {
+            let k = f.fix().index();
+            if f.positions().into_iter().any(outside) && region[k] == NONE {
+                region[k] = 0;
+                stack.push(handles[k]);
+            }
+        }
+    }
+    let mut current = 0;
+    let mut next_seed = 0;
+    loop {
+        while let Some(f) = stack.pop() {
+            let Some(start) = cdt.face(f).adjacent_edge() else { continue };
+            let mut e = start;
+            loop {
+                if !e.is_constraint_edge() {
+                    let g = e.rev().face().fix();
+                    if region[g.index()] == NONE {
+                        region[g.index()] = current;
+                        stack.push(g);
+                    }
+                }
+                e = e.next();
+                if e == start {
+                    break;
+                }
+            }
+        }
+        while next_seed < n && region[next_seed] != NONE {
+            next_seed += 1;
+        }
+        if next_seed == n {
+            break;
+        }
+        current += 1;
+        region[next_seed] = current;
+        stack.push(handles[next_seed]);
+    }
+    region
+}
+
+/// An exact power-of-two scale between scene coordinates and spade's (which must lie within
+/// `[MIN_ALLOWED_VALUE, MAX_ALLOWED_VALUE]` in magnitude, or be zero).
+#[derive(Clone, Copy, Debug)]
+struct Scale {
+    /// Exponents `e0 + e1 = e`: scene = spade × 2^e, applied in two steps to stay in range.
+    e: [i32; 2],
+}
+
+/// `2^n` for `n` in `[-1022, 1023]`.
+fn pow2(n: i32) -> f64 {
+    f64::from_bits(((n.clamp(-1022, 1023) + 1023) as u64) << 52)
+}
+
+impl Scale {
+    /// The scale that maps the largest coordinate magnitude of `b` to `[1, 2)`.
+    fn for_box(b: Aabb) -> Scale {
+        let m = [b.min.x, b.min.y, b.max.x, b.max.y].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if !(m.is_finite() && m > 0.0) {
+            return Scale { e: [0, 0] };
+        }
+        // The unbiased exponent, also for subnormal numbers.
+        let e = if m >= f64::MIN_POSITIVE {
+            ((m.to_bits() >> 52) & 0x7ff) as i32 - 1023
+        } else {
+            -1023 - (m.to_bits().leading_zeros() as i32 - 12)
+        };
+        Scale { e: [e / 2, e - e / 2] }
+    }
+
+    fn down(self, v: f64) -> f64 {
+        let w = v * pow2(-self.e[0]) * pow2(-self.e[1]);
+        // Flush what spade cannot represent (at most 2^-142 of the largest coordinate) and -0.
+        if w.abs() < MIN_ALLOWED_VALUE { 0.0 } else { w }
+    }
+
+    fn to_spade(self, p: Point) -> Point2<f64> {
+        Point2::new(self.down(p.x), self.down(p.y))
+    }
+
+    fn from_spade(self, p: Point2<f64>) -> Point {
+        let up = |v: f64| v * pow2(self.e[0]) * pow2(self.e[1]);
+        Point::new(up(p.x), up(p.y))
+    }
+
+    fn aabb(self, b: Aabb) -> Aabb {
+        Aabb::from_points(
+            Point::new(self.down(b.min.x), self.down(b.min.y)),
+            Point::new(self.down(b.max.x), self.down(b.max.y)),
+        )
+    }
+
+    /// A query point in spade's coordinates; `None` when it is not finite or lies far outside
+    /// every vertex (beyond spade's range, while every vertex is within a few units).
+    fn query(self, p: Point) -> Option<Point2<f64>> {
+        let q = self.to_spade(p);
+        (q.x.abs() <= MAX_ALLOWED_VALUE && q.y.abs() <= MAX_ALLOWED_VALUE).then_some(q)
+    }
+}
+
+/// Spade's hint generator for the build: the last inserted vertex. It records no lookups, so
+/// queries from several threads write nothing.
+#[derive(Clone, Copy, Debug, Default)]
+struct QuietHint {
+    last: usize,
+}
+
+impl HintGenerator<f64> for QuietHint {
+    fn get_hint(&self, _: Point2<f64>) -> FixedVertexHandle {
+        FixedVertexHandle::from_index(self.last)
+    }
+
+    fn notify_vertex_lookup(&self, _: FixedVertexHandle) {}
+
+    fn notify_vertex_inserted(&mut self, vertex: FixedVertexHandle, _: Point2<f64>) {
+        self.last = vertex.index();
+    }
+
+    fn notify_vertex_removed(&mut self, _: Option<Point2<f64>>, vertex: FixedVertexHandle, _: Point2<f64>) {
+        self.last = vertex.index().saturating_sub(1);
+    }
+
+    fn initialize_from_triangulation<TR, V>(triangulation: &TR) -> Self
+    where
+        TR: Triangulation,
+        V: HasPosition<Scalar = f64>,
+    {
+        QuietHint { last: triangulation.num_vertices().saturating_sub(1) }
+    }
+}
+
+/// A coarse grid of starting vertices for lookups without a hint: each cell names a vertex in
+/// or near it, so a walk starts close to its target.
+#[derive(Clone, Debug)]
+struct HintGrid {
+    min: Point2<f64>,
+    inv_cell: [f64; 2],
+    n: [usize; 2],
+    cells: Vec<u32>,
+}
+
+impl HintGrid {
+    fn build(cdt: &Cdt) -> HintGrid {
+        let mut min = Point2::new(f64::INFINITY, f64::INFINITY);
+        let mut max = Point2::new(f64::NEG_INFINITY, f64::NEG_INFINITY);
+        for v in cdt.vertices() {
+            let p = v.position();
+            min = Point2::new(min.x.min(p.x), min.y.min(p.y));
+            max = Point2::new(max.x.max(p.x), max.y.max(p.y));
+        }
+        let side = ((cdt.num_vertices() as f64 / 4.0).sqrt().ceil() as usize).clamp(1, 1024);
+        let span = |lo: f64, hi: f64| if hi > lo { side as f64 / (hi - lo) } else { 0.0 };
+        let mut grid = HintGrid {
+            min,
+            inv_cell: [span(min.x, max.x), span(min.y, max.y)],
+            n: [side, side],
+            cells: vec![NONE; side * side],
+        };
+        for v in cdt.vertices() {
+            let c = grid.cell(v.position());
+            if grid.cells[c] == NONE {
+                grid.cells[c] = v.fix().index() as u32;
+            }
+        }
+        // Empty cells take the vertex of the nearest filled cell (breadth-first).
+        let mut queue: VecDeque<usize> = (0..grid.cells.len()).filter(|&c| grid.cells[c] != NONE).collect();
+        if queue.is_empty() {
+            grid.cells.fill(0);
+        }
+        while let Some(c) = queue.pop_front() {
+            let (cx, cy) = (c % side, c / side);
+            let near = [
+                (cx > 0).then(|| c - 1),
+                (cx + 1 < side).then(|| c + 1),
+                (cy > 0).then(|| c - side),
+                (cy + 1 < side).then(|| c + side),
+            ];
+            for d in near.into_iter().flatten() {
+                if grid.cells[d] == NONE {
+                    grid.cells[d] = grid.cells[c];
+                    queue.push_back(d);
+                }
+            }
+        }
+        grid
+    }
+
+    fn cell(&self, p: Point2<f64>) -> usize {
+        // `as usize` saturates (negative and NaN give 0).
+        let cx = (((p.x - self.min.x) * self.inv_cell[0]) as usize).min(self.n[0] - 1);
+        let cy = (((p.y - self.min.y) * self.inv_cell[1]) as usize).min(self.n[1] - 1);
+        cy * self.n[0] + cx
+    }
+
+    fn hint(&self, p: Point2<f64>) -> FixedVertexHandle {
+        FixedVertexHandle::from_index(self.cells[self.cell(p)] as usize)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn p(x: f64, y: f64) -> Point {
+        Point::new(x, y)
+    }
+
+    fn regions(json: &str) -> (Scene, Regions) {
+        let scene = Scene::from_json(json).unwrap();
+        let regions = Regions::build(&scene).unwrap();
+        (scene, regions)
+    }
+
+    fn medium(scene: &Scene, name: &str) -> Option<usize> {
+        Some(scene.medium_index(name).unwrap())
+    }
+
+    #[test]
+    fn layered_domain() {
+        let (scene, r) = regions(
+            r#"{
+            "media": {
+                "a": { "speed": 1, "at": [5, 9] },
+                "b": { "speed": 2, "at": [5, 5] },
+                "c": { "speed": 3, "at": [5, 1] },
+                "d": { "speed": 4, "at": [5, -5] }
+            },
+            "domain": [[0, -10], [10, 10]],
+            "interfaces": {
+                "top":    { "points": [[0, 8], [4, 7], [10, 8]] },
+                "middle": { "points": [[0, 3], [6, 4], [10, 3]] },
+                "bottom": { "points": [[0, 0], [10, 0]] }
+            },
+            "sources": [], "receivers": [], "paths": []
+        }"#,
+        );
+        // 4 layers inside the domain plus the outside.
+        assert_eq!(r.num_regions(), 5);
+        assert_eq!(r.medium_at(p(1.0, 9.5)), medium(&scene, "a"));
+        assert_eq!(r.medium_at(p(9.0, 7.0)), medium(&scene, "b"));
+        assert_eq!(r.medium_at(p(2.0, 2.0)), medium(&scene, "c"));
+        assert_eq!(r.medium_at(p(0.5, -9.9)), medium(&scene, "d"));
+        // Outside the domain: no medium (no background).
+        assert_eq!(r.region_at(p(-1.0, 5.0)), Some(0));
+        assert_eq!(r.medium_at(p(-1.0, 5.0)), None);
+        assert_eq!(r.medium_at(p(5.0, 50.0)), None);
+        // On an interface and on the domain's edge: no region.
+        assert_eq!(r.region_at(p(5.0, 0.0)), None);
+        assert_eq!(r.region_at(p(0.0, 5.0)), None);
+        // Sides: the normal of a left-to-right segment points up.
+        let bottom = scene.interface_index("bottom").unwrap();
+        let s = r.sides(bottom, 0, 3.0);
+        assert_eq!(s, Sides { left: medium(&scene, "c"), right: medium(&scene, "d") });
+        let top = scene.interface_index("top").unwrap();
+        let line = &scene.interfaces()[top].polyline;
+        let s = r.sides(top, 1, line.start(1) + 1.0);
+        assert_eq!(s, Sides { left: medium(&scene, "a"), right: medium(&scene, "b") });
+        // A hint carried from query to query gives the same answers.
+        let mut hint = LocateHint::default();
+        for k in 0..200 {
+            let y = -9.95 + 0.1 * k as f64;
+            let q = p(3.3, y);
+            assert_eq!(r.medium_at_with_hint(q, &mut hint), r.medium_at(q), "y = {y}");
+        }
+        // Invalid indices.
+        assert_eq!(r.sides(99, 0, 0.0), Sides::default());
+        assert_eq!(r.sides(bottom, 1, 0.0), Sides::default());
+        assert_eq!(r.medium_across(bottom, 5, 0.0, p(0.0, 1.0)), None);
+    }
+
+    #[test]
+    fn interfaces_beyond_the_domain() {
+        // Polylines that stick out of the domain are cut by its edges.
+        let (scene, r) = regions(
+            r#"{
+            "media": {
+                "up": { "speed": 1, "at": [0, 1] },
+                "down": { "speed": 2, "at": [0, -1] },
+                "out": { "speed": 3, "at": [0, 5] }
+            },
+            "domain": [[-2, -2], [2, 2]],
+            "interfaces": { "s": { "points": [[-3, 0.1], [3, -0.1]] } },
+            "sources": [], "receivers": [], "paths": []
+        }"#,
+        );
+        assert_eq!(r.num_regions(), 3);
+        assert_eq!(r.medium_at(p(1.9, 1.9)), medium(&scene, "up"));
+        assert_eq!(r.medium_at(p(-1.9, -1.9)), medium(&scene, "down"));
+        assert_eq!(r.medium_at(p(2.5, 1.0)), medium(&scene, "out"));
+        assert_eq!(r.medium_at(p(2.5, -1.0)), medium(&scene, "out"));
+        let sides = |s| r.sides(0, 0, s);
+        let len = scene.interfaces()[0].polyline.length();
+        assert_eq!(sides(0.5), Sides { left: medium(&scene, "out"), right: medium(&scene, "out") });
+        assert_eq!(sides(len / 2.0), Sides { left: medium(&scene, "up"), right: medium(&scene, "down") });
+        assert_eq!(sides(len - 0.5), Sides { left: medium(&scene, "out"), right: medium(&scene, "out") });
+        assert_eq!(r.medium_across(0, 0, len / 2.0, p(0.0, 1.0)), medium(&scene, "down"));
+    }
+
+    #[test]
+    fn format_example() {
+        let (scene, r) = regions(
+            r#"{
+            "media": {
+                "air":   { "speed": 1.0 },
+                "water": { "speed": 0.75, "at": [0.5, -0.5] }
+            },
+            "background": "air",
+            "domain": [[-2.0, -3.0], [5.0, 3.0]],
+            "interfaces": {
+                "surface": { "points": [[-2.0, 0.0], [5.0, 0.0]] },
+                "lens":    { "points": [[3, 0.5], [4, 0.5], [4, 1.5]], "closed": true }
+            },
+            "sources":   [[0.0, 1.0]],
+            "receivers": [[1.0, -1.0], [0.5, -1.0]],
+            "paths": [{ "name": "transmitted", "steps": [{ "refract": "surface" }] }]
+        }"#,
+        );
+        let (air, water) = (medium(&scene, "air"), medium(&scene, "water"));
+        // Outside, above the surface, in the (unclaimed) lens, below the surface.
+        assert_eq!(r.num_regions(), 4);
+        assert_eq!(r.medium_at(p(0.0, 1.0)), air);
+        assert_eq!(r.medium_at(p(3.9, 0.6)), air);
+        assert_ne!(r.region_at(p(3.9, 0.6)), r.region_at(p(0.0, 1.0)));
+        assert_eq!(r.medium_at(p(1.0, -1.0)), water);
+        assert_eq!(r.medium_at(p(10.0, 10.0)), air);
+        let surface = scene.interface_index("surface").unwrap();
+        assert_eq!(r.sides(surface, 0, 2.0), Sides { left: air, right: water });
+        assert_eq!(r.medium_across(surface, 0, 2.0, p(0.0, 1.0)), water);
+        assert_eq!(r.medium_across(surface, 0, 2.0, p(1.0, -1.0)), air);
+        assert_eq!(r.medium_across(surface, 0, 2.0, p(7.0, 0.0)), None);
+    }
+
+    #[test]
+    fn two_at_in_one_region() {
+        let scene = Scene::from_json(
+            r#"{
+            "media": {
+                "a": { "speed": 1, "at": [0, 1] },
+                "b": { "speed": 2, "at": [3, 2] }
+            },
+            "interfaces": { "s": { "points": [[-1, 0], [1, 0]] } },
+            "sources": [], "receivers": [], "paths": []
+        }"#,
+        )
+        .unwrap();
+        let e = Regions::build(&scene).unwrap_err();
+        assert_eq!(e.key, "media.b.at");
+        assert_eq!(e.message, "lies in the same region as media.a.at");
+    }
+
+    #[test]
+    fn at_on_the_domain_edge() {
+        let scene = Scene::from_json(
+            r#"{
+            "media": { "a": { "speed": 1, "at": [0, 1] } },
+            "domain": [[0, 0], [1, 1]],
+            "sources": [], "receivers": [], "paths": []
+        }"#,
+        )
+        .unwrap();
+        assert_eq!(Regions::build(&scene).unwrap_err().key, "media.a.at");
+    }
+
+    #[test]
+    fn t_junction() {
+        // A vertical fault ends on the interior of a horizontal layer boundary.
+        let (scene, r) = regions(
+            r#"{
+            "media": {
+                "top": { "speed": 1, "at": [0, 5] },
+                "left": { "speed": 2, "at": [-3, -5] },
+                "right": { "speed": 3, "at": [3, -5] }
+            },
+            "domain": [[-10, -10], [10, 10]],
+            "interfaces": {
+                "layer": { "points": [[-10, 0], [10, 0]] },
+                "fault": { "points": [[0, 0], [0, -10]] }
+            },
+            "sources": [], "receivers": [], "paths": []
+        }"#,
+        );
+        let (top, left, right) = (medium(&scene, "top"), medium(&scene, "left"), medium(&scene, "right"));
+        assert_eq!(r.num_regions(), 4);
+        assert_eq!(r.medium_at(p(-9.0, -1.0)), left);
+        assert_eq!(r.medium_at(p(9.0, -9.0)), right);
+        assert_eq!(r.medium_at(p(0.0, 0.5)), top);
+        assert_eq!(r.region_at(p(0.0, -5.0)), None);
+        assert_eq!(r.region_at(p(0.0, 0.0)), None);
+        let layer = scene.interface_index("layer").unwrap();
+        // The one segment is two pieces, split at arclength 10 by the fault's end.
+        assert_eq!(r.sides(layer, 0, 3.0), Sides { left: top, right: left });
+        assert_eq!(r.sides(layer, 0, 9.999), Sides { left: top, right: left });
+        assert_eq!(r.sides(layer, 0, 10.001), Sides { left: top, right: right });
+        assert_eq!(r.sides(layer, 0, 17.0), Sides { left: top, right: right });
+        assert_eq!(r.medium_across(layer, 0, 3.0, p(-3.0, 4.0)), left);
+        assert_eq!(r.medium_across(layer, 0, 13.0, p(-3.0, 4.0)), right);
+        assert_eq!(r.medium_across(layer, 0, 13.0, p(-3.0, -4.0)), top);
+        let fault = scene.interface_index("fault").unwrap();
+        // Downwards: the normal points to +x.
+        assert_eq!(r.sides(fault, 0, 4.0), Sides { left: right, right: left });
+        assert_eq!(r.medium_across(fault, 0, 4.0, p(-1.0, 0.0)), right);
+        assert_eq!(r.medium_across(fault, 0, 4.0, p(1.0, -20.0)), left);
+    }
+
+    #[test]
+    fn t_junction_inserted_the_other_way() {
+        // Without a domain: a bar (running right to left, with a vertex of its own) and an open
+        // box close a rectangle; a stem joins the interiors of a box segment and a bar segment.
+        let (scene, r) = regions(
+            r#"{
+            "media": {
+                "above": { "speed": 1, "at": [0, 1] },
+                "west": { "speed": 2, "at": [-1, -1] },
+                "east": { "speed": 3, "at": [1, -1] }
+            },
+            "interfaces": {
+                "a_bar": { "points": [[2, 0], [0.5, 0], [-2, 0]] },
+                "b_box": { "points": [[-2, 0], [-2, -3], [2, -3], [2, 0]] },
+                "c_stem": { "points": [[0, -3], [0, 0]] }
+            },
+            "sources": [], "receivers": [], "paths": []
+        }"#,
+        );
+        let m = |n| medium(&scene, n);
+        assert_eq!(r.num_regions(), 3);
+        assert_eq!(r.medium_at(p(-0.1, -0.1)), m("west"));
+        assert_eq!(r.medium_at(p(0.1, -2.9)), m("east"));
+        assert_eq!(r.medium_at(p(0.0, 0.1)), m("above"));
+        assert_eq!(r.medium_at(p(0.0, -5.0)), m("above"));
+        let bar = scene.interface_index("a_bar").unwrap();
+        // Segment 1 runs from (0.5, 0) to (-2, 0), leftwards: its normal points down.
+        let line = &scene.interfaces()[bar].polyline;
+        assert_eq!(r.sides(bar, 1, line.start(1) + 0.25), Sides { left: m("east"), right: m("above") });
+        assert_eq!(r.sides(bar, 1, line.start(1) + 1.0), Sides { left: m("west"), right: m("above") });
+        assert_eq!(r.sides(bar, 0, 1.0), Sides { left: m("east"), right: m("above") });
+        let bx = scene.interface_index("b_box").unwrap();
+        // Segment 1 runs from (-2, -3) to (2, -3): its normal points up, into the box.
+        assert_eq!(r.sides(bx, 1, 3.0 + 1.0), Sides { left: m("west"), right: m("above") });
+        assert_eq!(r.sides(bx, 1, 3.0 + 3.0), Sides { left: m("east"), right: m("above") });
+    }
+
+    #[test]
+    fn closed_polygon_without_domain() {
+        let (scene, r) = regions(
+            r#"{
+            "media": {
+                "glass": { "index": 1.5, "at": [0.2, 0.2] },
+                "air": { "index": 1.0 }
+            },
+            "background": "air",
+            "interfaces": { "lens": { "points": [[0, 0], [1, 0], [1, 1], [0, 1]], "closed": true } },
+            "sources": [[-5, 0.5]], "receivers": [], "paths": []
+        }"#,
+        );
+        let (glass, air) = (medium(&scene, "glass"), medium(&scene, "air"));
+        assert_eq!(r.num_regions(), 2);
+        assert_eq!(r.medium_at(p(0.5, 0.5)), glass);
+        assert_eq!(r.medium_at(p(0.99, 0.01)), glass);
+        assert_eq!(r.medium_at(p(1.01, 0.5)), air);
+        assert_eq!(r.medium_at(p(-5.0, 0.5)), air);
+        assert_eq!(r.medium_at(p(1e6, -1e9)), air);
+        assert_eq!(r.medium_at(p(1e300, 1e300)), air);
+        assert_eq!(r.medium_at(p(1.0, 0.5)), None);
+        // Counter-clockwise polygon: the normal points inwards.
+        for j in 0..4 {
+            let s = j as f64 + 0.5;
+            assert_eq!(r.sides(0, j, s), Sides { left: glass, right: air });
+        }
+        assert_eq!(r.medium_across(0, 3, 3.5, p(-1.0, 0.5)), glass);
+        assert_eq!(r.medium_across(0, 3, 3.5, p(0.5, 0.5)), air);
+    }
+
+    #[test]
+    fn open_polyline_without_domain_divides_nothing() {
+        let (scene, r) = regions(
+            r#"{
+            "media": { "a": { "speed": 1, "at": [0, 1] } },
+            "interfaces": { "s": { "points": [[-1, 0], [1, 0]] } },
+            "sources": [], "receivers": [], "paths": []
+        }"#,
+        );
+        assert_eq!(r.num_regions(), 1);
+        assert_eq!(r.medium_at(p(0.0, -1.0)), medium(&scene, "a"));
+        // On the polyline, but it separates nothing.
+        assert_eq!(r.medium_at(p(0.0, 0.0)), medium(&scene, "a"));
+        assert_eq!(r.sides(0, 0, 1.0), Sides { left: medium(&scene, "a"), right: medium(&scene, "a") });
+    }
+
+    #[test]
+    fn shared_vertices_and_extreme_coordinates() {
+        // Two interfaces share both end vertices, and coordinates spade cannot take directly.
+        for k in [1e-100, 1e-30, 1.0, 1e100, 1e150] {
+            let json = format!(
+                r#"{{
+                "media": {{ "in": {{ "speed": 1, "at": [{a}, {b}] }}, "out": {{ "speed": 2 }} }},
+                "background": "out",
+                "interfaces": {{
+                    "upper": {{ "points": [[0, 0], [{k}, {k}], [{two}, 0]] }},
+                    "lower": {{ "points": [[0, 0], [{k}, {mk}], [{two}, 0]] }}
+                }},
+                "sources": [], "receivers": [], "paths": []
+            }}"#,
+                a = k,
+                b = 0.1 * k,
+                two = 2.0 * k,
+                mk = -k,
+            );
+            let (scene, r) = regions(&json);
+            let (inside, outside) = (medium(&scene, "in"), medium(&scene, "out"));
+            assert_eq!(r.num_regions(), 2, "k = {k}");
+            assert_eq!(r.medium_at(p(k, -0.5 * k)), inside, "k = {k}");
+            assert_eq!(r.medium_at(p(k, 1.5 * k)), outside, "k = {k}");
+            assert_eq!(r.medium_at(p(-k, 0.0)), outside, "k = {k}");
+            let upper = scene.interface_index("upper").unwrap();
+            let s = 0.5 * scene.interfaces()[upper].polyline.start(1);
+            assert_eq!(r.sides(upper, 0, s), Sides { left: outside, right: inside }, "k = {k}");
+        }
+    }
+
+    #[test]
+    fn no_interfaces() {
+        let (_, r) = regions(r#"{ "media": { "a": { "speed": 1 } }, "sources": [], "receivers": [], "paths": [] }"#);
+        assert_eq!(r.num_regions(), 1);
+        assert_eq!(r.medium_at(p(0.0, 0.0)), None);
+        let (scene, r) = regions(
+            r#"{ "media": { "a": { "speed": 1, "at": [0.5, 0.5] } }, "domain": [[0, 0], [1, 1]],
+                 "sources": [], "receivers": [], "paths": [] }"#,
+        );
+        assert_eq!(r.num_regions(), 2);
+        assert_eq!(r.medium_at(p(0.2, 0.9)), medium(&scene, "a"));
+        assert_eq!(r.medium_at(p(2.0, 0.9)), None);
+    }
+
+    #[test]
+    fn sea_floor_100k_segments() {
+        let n = 100_000;
+        let pts: Vec<String> = (0..=n)
+            .map(|i| {
+                let x = -50.0 + 100.0 * i as f64 / n as f64;
+                format!("[{x}, {}]", 0.1 * (x * 7.3).sin())
+            })
+            .collect();
+        let json = format!(
+            r#"{{
+            "media": {{ "water": {{ "speed": 1.5, "at": [3, 5] }}, "rock": {{ "speed": 3, "at": [3, -5] }} }},
+            "domain": [[-50, -10], [50, 10]],
+            "interfaces": {{ "floor": {{ "points": [{}] }} }},
+            "sources": [], "receivers": [], "paths": []
+        }}"#,
+            pts.join(",")
+        );
+        let scene = Scene::from_json(&json).unwrap();
+        let t = std::time::Instant::now();
+        let r = Regions::build(&scene).unwrap();
+        let elapsed = t.elapsed();
+        eprintln!("100k segments: built in {elapsed:?}");
+        let (water, rock) = (medium(&scene, "water"), medium(&scene, "rock"));
+        assert_eq!(r.num_regions(), 3);
+        let mut hint = LocateHint::default();
+        for k in 0..1000 {
+            let x = -49.9 + 0.0998 * k as f64;
+            let y = 0.1 * (x * 7.3).sin();
+            assert_eq!(r.medium_at(p(x, y + 0.01)), water, "x = {x}");
+            assert_eq!(r.medium_at(p(x, y - 0.01)), rock, "x = {x}");
+            assert_eq!(r.medium_at_with_hint(p(x, 9.0), &mut hint), water, "x = {x}");
+            assert_eq!(r.medium_at_with_hint(p(x, -9.0), &mut hint), rock, "x = {x}");
+        }
+        let line = &scene.interfaces()[0].polyline;
+        for j in (0..n).step_by(997) {
+            let s = 0.5 * (line.start(j) + line.start(j + 1));
+            assert_eq!(r.sides(0, j, s), Sides { left: water, right: rock }, "segment {j}");
+            let q = line.point_on(j, s) + line.normal(j);
+            assert_eq!(r.medium_across(0, j, s, q), rock);
+            assert_eq!(r.medium_across(0, j, s, line.point_on(j, s) - line.normal(j)), water);
+        }
+        if !cfg!(debug_assertions) {
+            assert!(elapsed.as_secs_f64() < 1.0, "took {elapsed:?}");
+        }
+    }
+
+    #[test]
+    fn send_sync() {
+        fn check<T: Send + Sync>() {}
+        check::<Regions>();
+        check::<LocateHint>();
+    }
+}

@@ -1,0 +1,506 @@
+//! Damped Newton iteration on the stationarity residual, with vertex pinning and polyline ends.
+//!
+//! One iteration: evaluate `r = ∂T/∂s` and the tridiagonal Hessian `H` (the analytic one of
+//! `problem`), solve `H δ = −r` by the Thomas algorithm in `O(k)`, cap the step so that no
+//! point moves further than its longer leg, and backtrack on the merit function
+//! `φ = Σ (rᵢ / (wᵢ + wᵢ₊₁))²`, not on `T`: every Newton direction is a descent direction of
+//! `φ`, whether the path is a minimum, a saddle or a maximum of `T`.
+//!
+//! Points move along their polylines across vertices. A point that the line search sees
+//! jump across exactly one vertex with its residual changing sign is pinned on that vertex;
+//! while pinned it stays put if the one-sided residuals `r⁻`, `r⁺` bracket zero (a kink of
+//! `T`: an edge-diffracted path, reported as `vertex`) and is released to the side where `T`
+//! decreases otherwise. A point pushed past the end of an open polyline is held at the end and
+//! released when its residual points back inside; held there at convergence, the ray has no
+//! path.
+//!
+//! Stopping rule: every free point has `|rᵢ| ≤ tol · (wᵢ + wᵢ₊₁)` (a relative, dimensionless
+//! residual: the difference of the sines in Snell's law), or the full Newton step is below
+//! round-off (`|δᵢ| ≤ 4ε (|sᵢ| + ℓᵢ + ℓᵢ₊₁)`: no representable parameter is closer).
+
+use crate::geom::Point;
+use crate::problem::{Eval, Geometry};
+
+/// How far one point is from moving freely.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Pin {
+    /// Inside a segment (or at a vertex, moving through it).
+    Free,
+    /// Held on the vertex where its segment `seg` starts.
+    Vertex,
+    /// Held at the first vertex of an open polyline.
+    Start,
+    /// Held at the last vertex of an open polyline.
+    End,
+}
+
+/// How the iteration ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Outcome {
+    /// Stationary with every point free.
+    Converged,
+    /// Stationary with at least one point held on a vertex.
+    Vertex,
+    /// The others are stationary but a point is held at an open polyline's end: no path.
+    LeftEnd(usize),
+    /// Gave up (iteration limit).
+    NotConverged,
+}
+
+/// The summary of one solve (the points are in the [`Workspace`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Solution {
+    /// Travel time at the final points.
+    pub time: f64,
+    /// Iterations used.
+    pub iterations: usize,
+    /// Final relative residual: `maxᵢ |∂T/∂sᵢ| / (wᵢ + wᵢ₊₁)` over free points.
+    pub residual: f64,
+}
+
+/// Reusable scratch space for solving rays: once it has grown to the longest path, solving
+/// allocates nothing. Use one per thread.
+#[derive(Clone, Debug, Default)]
+pub struct Workspace {
+    pub(crate) s: Vec<f64>,
+    pub(crate) seg: Vec<usize>,
+    pub(crate) pin: Vec<Pin>,
+    s_try: Vec<f64>,
+    seg_try: Vec<usize>,
+    pin_try: Vec<Pin>,
+    pub(crate) eval: Eval,
+    eval_try: Eval,
+    delta: Vec<f64>,
+    rhs: Vec<f64>,
+    diag: Vec<f64>,
+    off: Vec<f64>,
+    scratch: Vec<f64>,
+    pub(crate) slowness: Vec<f64>,
+    pub(crate) media: Vec<usize>,
+    pub(crate) media_prev: Vec<usize>,
+    pub(crate) s_alt: Vec<f64>,
+    pub(crate) seg_alt: Vec<usize>,
+    pub(crate) points: Vec<Point>,
+}
+
+impl Workspace {
+    /// An empty workspace.
+    pub fn new() -> Workspace {
+        Workspace::default()
+    }
+
+    /// Source, interaction points and receiver of the last solved ray.
+    pub fn points(&self) -> &[Point] {
+        &self.points
+    }
+
+    /// Interaction parameters (arclengths) of the last solved ray.
+    pub fn parameters(&self) -> &[f64] {
+        &self.s
+    }
+
+    /// Leg media of the last solved ray (empty when they were not looked up or given).
+    pub fn media(&self) -> &[usize] {
+        &self.media
+    }
+
+    pub(crate) fn resize(&mut self, k: usize) {
+        self.s.resize(k, 0.0);
+        self.seg.resize(k, 0);
+        self.pin.resize(k, Pin::Free);
+        self.s_try.resize(k, 0.0);
+        self.seg_try.resize(k, 0);
+        self.pin_try.resize(k, Pin::Free);
+        self.eval.resize(k);
+        self.eval_try.resize(k);
+        self.delta.resize(k, 0.0);
+        self.rhs.resize(k, 0.0);
+        self.diag.resize(k, 0.0);
+        self.off.resize(k.saturating_sub(1), 0.0);
+        self.scratch.resize(k, 0.0);
+        self.s_alt.resize(k, 0.0);
+        self.seg_alt.resize(k, 0);
+        // Room for the classification and the media lookups, so that no ray allocates.
+        self.media.reserve(k + 1);
+        self.media_prev.reserve(k + 1);
+        self.slowness.reserve(k + 1);
+        self.points.reserve(k + 2);
+    }
+}
+
+/// Solves `A x = d` for symmetric tridiagonal `A` (`diag`, `off`) by the Thomas algorithm.
+/// Returns `false` on a pivot that is zero, not finite, or tiny against the row scale.
+pub(crate) fn thomas(diag: &[f64], off: &[f64], d: &[f64], x: &mut [f64], cp: &mut [f64]) -> bool {
+    let n = diag.len();
+    if n == 0 {
+        return true;
+    }
+    let mut prev_c = 0.0;
+    let mut prev_x = 0.0;
+    for i in 0..n {
+        let sub = if i > 0 { off[i - 1] } else { 0.0 };
+        let den = diag[i] - sub * prev_c;
+        let scale = diag[i].abs() + sub.abs() + if i + 1 < n { off[i].abs() } else { 0.0 };
+        if !(den.is_finite() && den.abs() > 1e-14 * scale && scale > 0.0) {
+            return false;
+        }
+        let c = if i + 1 < n { off[i] / den } else { 0.0 };
+        let xi = (d[i] - sub * prev_x) / den;
+        cp[i] = c;
+        x[i] = xi;
+        prev_c = c;
+        prev_x = xi;
+    }
+    for i in (0..n - 1).rev() {
+        x[i] -= cp[i] * x[i + 1];
+    }
+    x.iter().all(|v| v.is_finite())
+}
+
+/// Moves point `i` to parameter `s` (wrapping or holding at an end), updating its segment.
+#[inline]
+fn place(g: &Geometry, i: usize, s: f64, hint: usize) -> (f64, usize, Pin) {
+    let line = g.line(i);
+    if line.is_closed() {
+        let w = line.wrap(s);
+        return (w, line.segment_at_hint(w, hint), Pin::Free);
+    }
+    let l = line.length();
+    if s <= 0.0 {
+        (0.0, 0, Pin::Start)
+    } else if s >= l {
+        (l, line.num_segments() - 1, Pin::End)
+    } else {
+        (s, line.segment_at_hint(s, hint), Pin::Free)
+    }
+}
+
+/// The segment before the vertex where segment `j` starts, if any.
+#[inline]
+fn segment_before(g: &Geometry, i: usize, j: usize) -> Option<usize> {
+    let line = g.line(i);
+    if j > 0 {
+        Some(j - 1)
+    } else if line.is_closed() {
+        Some(line.num_segments() - 1)
+    } else {
+        None
+    }
+}
+
+/// Residual of point `i` as if its tangent were that of segment `j`.
+#[inline]
+fn residual_on(g: &Geometry, e: &Eval, i: usize, j: usize) -> f64 {
+    let t = g.line(i).tangent(j);
+    (e.u[i] * g.slowness[i] - e.u[i + 1] * g.slowness[i + 1]).dot(t)
+}
+
+/// If `from → to` crosses exactly one vertex of polyline `i`, the segment that starts there.
+#[inline]
+fn single_vertex_between(g: &Geometry, i: usize, from: usize, to: usize) -> Option<usize> {
+    let line = g.line(i);
+    let n = line.num_segments();
+    if to == from + 1 || (line.is_closed() && from == n - 1 && to == 0) {
+        Some(to)
+    } else if from == to + 1 || (line.is_closed() && to == n - 1 && from == 0) {
+        Some(from)
+    } else {
+        None
+    }
+}
+
+/// Whether a leg next to point `i` has vanished (relative to the whole path): there the
+/// residual is undefined and the point sits on a corner shared with its neighbour.
+#[inline]
+fn leg_vanished(e: &Eval, i: usize) -> bool {
+    let total: f64 = e.len.iter().sum();
+    let tiny = 1e-12 * total;
+    e.len[i] <= tiny || e.len[i + 1] <= tiny
+}
+
+/// Whether point `i`, held at an end, stays held: its residual points outside, or a leg next
+/// to it has vanished (two interactions meeting at a corner are no specular path).
+#[inline]
+fn stays_at_end(e: &Eval, i: usize, pin: Pin, margin: f64) -> bool {
+    match pin {
+        Pin::Start => e.r[i] > margin || leg_vanished(e, i),
+        Pin::End => e.r[i] < -margin || leg_vanished(e, i),
+        _ => false,
+    }
+}
+
+fn merit(g: &Geometry, e: &Eval, pin: &[Pin]) -> f64 {
+    let w = g.slowness;
+    let mut phi = 0.0;
+    for i in 0..g.k() {
+        // A point held at an end violates stationarity only by the part of its residual
+        // that points back inside; one held on a vertex is judged by the kink test instead.
+        let r = match pin[i] {
+            Pin::Free => e.r[i],
+            Pin::Start | Pin::End if stays_at_end(e, i, pin[i], 0.0) => 0.0,
+            Pin::Start => e.r[i].min(0.0),
+            Pin::End => e.r[i].max(0.0),
+            Pin::Vertex => 0.0,
+        } / (w[i] + w[i + 1]);
+        phi += r * r;
+    }
+    phi
+}
+
+/// The merit `Σ (rᵢ / (wᵢ + wᵢ₊₁))²` at the parameters in `ws` (all points free).
+pub(crate) fn merit_at(g: &Geometry, ws: &mut Workspace) -> f64 {
+    g.evaluate(&ws.s, &ws.seg, &mut ws.eval, false, false);
+    let w = g.slowness;
+    (0..g.k()).map(|i| (ws.eval.r[i] / (w[i] + w[i + 1])).powi(2)).sum()
+}
+
+/// Runs the iteration from the parameters, segments and pins already in `ws` (set by the
+/// initial guess). Leaves the final state in `ws` (`s`, `seg`, `pin`, `eval`).
+pub(crate) fn solve(g: &Geometry, ws: &mut Workspace, tol: f64, max_iterations: usize) -> (Outcome, Solution) {
+    let k = g.k();
+    let w = g.slowness;
+    let mut iterations = 0;
+    let mut curvature = true;
+    // Releases and pins do not move the others; bound them so that a ring of releases and
+    // re-pins cannot spin for ever between counted iterations.
+    let mut free_moves = 0;
+    // Whether `ws.eval` already holds the evaluation at `ws.s` (the accepted trial).
+    let mut evaluated = false;
+    loop {
+        if !evaluated {
+            g.evaluate(&ws.s, &ws.seg, &mut ws.eval, true, curvature);
+        }
+        evaluated = false;
+        let e = &ws.eval;
+
+        // Held points: keep, or release towards decreasing T.
+        let mut released = false;
+        for i in 0..k {
+            let scale = tol * (w[i] + w[i + 1]);
+            match ws.pin[i] {
+                Pin::Free => {}
+                Pin::Vertex => {
+                    let Some(before) = segment_before(g, i, ws.seg[i]) else {
+                        ws.pin[i] = Pin::Free;
+                        released = true;
+                        continue;
+                    };
+                    let rp = e.r[i];
+                    let rm = residual_on(g, e, i, before);
+                    if rp < -scale && rm < -scale {
+                        ws.pin[i] = Pin::Free;
+                        released = true;
+                    } else if rp > scale && rm > scale {
+                        ws.pin[i] = Pin::Free;
+                        ws.seg[i] = before;
+                        released = true;
+                    }
+                }
+                Pin::Start | Pin::End => {
+                    if !stays_at_end(e, i, ws.pin[i], scale) {
+                        ws.pin[i] = Pin::Free;
+                        released = true;
+                    }
+                }
+            }
+        }
+        if released && free_moves < 4 * max_iterations {
+            free_moves += 1;
+            continue;
+        }
+
+        let mut residual: f64 = 0.0;
+        for i in 0..k {
+            if ws.pin[i] == Pin::Free {
+                residual = residual.max(e.r[i].abs() / (w[i] + w[i + 1]));
+            }
+        }
+        let solution = |iterations| Solution { time: e.time, iterations, residual };
+        let finished = |iterations| {
+            let outcome = if let Some(i) = ws.pin.iter().position(|p| matches!(p, Pin::Start | Pin::End)) {
+                Outcome::LeftEnd(i)
+            } else if ws.pin.contains(&Pin::Vertex) {
+                Outcome::Vertex
+            } else {
+                Outcome::Converged
+            };
+            (outcome, solution(iterations))
+        };
+        if residual <= tol || !residual.is_finite() && k == 0 {
+            return finished(iterations);
+        }
+        if !residual.is_finite() {
+            return (Outcome::NotConverged, solution(iterations));
+        }
+        if iterations >= max_iterations {
+            return (Outcome::NotConverged, solution(iterations));
+        }
+        iterations += 1;
+
+        // Newton system on the free points.
+        for i in 0..k {
+            let free = ws.pin[i] == Pin::Free;
+            ws.rhs[i] = if free { -e.r[i] } else { 0.0 };
+            ws.diag[i] = if free { e.diag[i] } else { 1.0 };
+            if i + 1 < k {
+                ws.off[i] = if free && ws.pin[i + 1] == Pin::Free { e.off[i] } else { 0.0 };
+            }
+        }
+        let mut ok = thomas(&ws.diag, &ws.off, &ws.rhs, &mut ws.delta, &mut ws.scratch);
+        let mut mu = 1e-10;
+        while !ok && mu <= 1.0 {
+            // Levenberg damping, relative to the Hessian's natural scale w/ℓ.
+            for i in 0..k {
+                if ws.pin[i] == Pin::Free {
+                    let nat = w[i] / e.len[i].max(f64::MIN_POSITIVE) + w[i + 1] / e.len[i + 1].max(f64::MIN_POSITIVE);
+                    let d = e.diag[i];
+                    ws.diag[i] = d + mu * nat.min(1e300) * if d < 0.0 { -1.0 } else { 1.0 };
+                }
+            }
+            ok = thomas(&ws.diag, &ws.off, &ws.rhs, &mut ws.delta, &mut ws.scratch);
+            mu *= 1e3;
+        }
+        if !ok {
+            // Scaled steepest descent on the residual.
+            for i in 0..k {
+                ws.delta[i] = if ws.pin[i] == Pin::Free {
+                    -e.r[i] / (w[i] + w[i + 1]) * e.len[i].min(e.len[i + 1]).max(f64::MIN_POSITIVE) * 0.5
+                } else {
+                    0.0
+                };
+            }
+        }
+
+        // Round-off floor: the full step cannot move any point to another float.
+        let tiny = (0..k).all(|i| {
+            ws.pin[i] != Pin::Free || ws.delta[i].abs() <= 4.0 * f64::EPSILON * (ws.s[i].abs() + e.len[i] + e.len[i + 1])
+        });
+        if tiny {
+            return finished(iterations);
+        }
+
+        // Cap: no point moves further than its longer leg.
+        let mut cap: f64 = 1.0;
+        for i in 0..k {
+            if ws.pin[i] == Pin::Free {
+                let limit = e.len[i].max(e.len[i + 1]);
+                if ws.delta[i].abs() > limit && limit > 0.0 {
+                    cap = cap.min(limit / ws.delta[i].abs());
+                }
+            }
+        }
+
+        let phi0 = merit(g, e, &ws.pin);
+        let mut alpha = cap;
+        let mut accepted = false;
+        let mut pinned = false;
+        let mut best: Option<(f64, f64)> = None;
+        for attempt in 0..40 {
+            for i in 0..k {
+                if ws.pin[i] == Pin::Free {
+                    let (s, seg, pin) = place(g, i, ws.s[i] + alpha * ws.delta[i], ws.seg[i]);
+                    ws.s_try[i] = s;
+                    ws.seg_try[i] = seg;
+                    ws.pin_try[i] = pin;
+                } else {
+                    ws.s_try[i] = ws.s[i];
+                    ws.seg_try[i] = ws.seg[i];
+                    ws.pin_try[i] = ws.pin[i];
+                }
+            }
+            let crossed = (0..k).any(|i| ws.seg_try[i] != ws.seg[i]);
+            g.evaluate(&ws.s_try, &ws.seg_try, &mut ws.eval_try, true, crossed);
+            let phi = merit(g, &ws.eval_try, &ws.pin_try);
+            if phi.is_finite() && phi <= (1.0 - 1e-4 * alpha) * phi0 {
+                accepted = true;
+                break;
+            }
+            if phi.is_finite() && best.is_none_or(|(_, b)| phi < b) {
+                best = Some((alpha, phi));
+            }
+            // A point that jumped across one vertex and now wants to go back: pin it there.
+            for i in 0..k {
+                if ws.pin[i] != Pin::Free || ws.pin_try[i] != Pin::Free {
+                    continue;
+                }
+                if let Some(v) = single_vertex_between(g, i, ws.seg[i], ws.seg_try[i]) {
+                    if ws.eval_try.r[i] * ws.eval.r[i] < 0.0 {
+                        ws.s[i] = g.line(i).start(v);
+                        ws.seg[i] = v;
+                        ws.pin[i] = Pin::Vertex;
+                        pinned = true;
+                    }
+                }
+            }
+            if pinned {
+                break;
+            }
+            if attempt == 39 {
+                break;
+            }
+            alpha *= 0.5;
+        }
+        if pinned {
+            curvature = false;
+            continue;
+        }
+        if !accepted {
+            if curvature {
+                // The curvature model misled the step; retry on the exact segment-wise model.
+                curvature = false;
+                continue;
+            }
+            // Non-monotone fallback: take the best trial so that the iteration moves on.
+            let Some((a, _)) = best else {
+                return (Outcome::NotConverged, Solution { time: e.time, iterations, residual });
+            };
+            for i in 0..k {
+                if ws.pin[i] == Pin::Free {
+                    let (s, seg, pin) = place(g, i, ws.s[i] + a * ws.delta[i], ws.seg[i]);
+                    ws.s_try[i] = s;
+                    ws.seg_try[i] = seg;
+                    ws.pin_try[i] = pin;
+                }
+            }
+        }
+        let crossed = (0..k).any(|i| ws.seg_try[i] != ws.seg[i]);
+        curvature = crossed;
+        if accepted {
+            // The trial was evaluated with this same curvature flag: reuse it.
+            std::mem::swap(&mut ws.eval, &mut ws.eval_try);
+            evaluated = true;
+        }
+        std::mem::swap(&mut ws.s, &mut ws.s_try);
+        std::mem::swap(&mut ws.seg, &mut ws.seg_try);
+        std::mem::swap(&mut ws.pin, &mut ws.pin_try);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thomas_solves_tridiagonal() {
+        let diag = [4.0, 5.0, 6.0, 7.0];
+        let off = [1.0, -2.0, 0.5];
+        let x_true = [1.0, -2.0, 3.0, 0.25];
+        let mut d = [0.0; 4];
+        for i in 0..4 {
+            d[i] = diag[i] * x_true[i];
+            if i > 0 {
+                d[i] += off[i - 1] * x_true[i - 1];
+            }
+            if i < 3 {
+                d[i] += off[i] * x_true[i + 1];
+            }
+        }
+        let mut x = [0.0; 4];
+        let mut cp = [0.0; 4];
+        assert!(thomas(&diag, &off, &d, &mut x, &mut cp));
+        for i in 0..4 {
+            assert!((x[i] - x_true[i]).abs() < 1e-14);
+        }
+        assert!(!thomas(&[0.0], &[], &[1.0], &mut x[..1], &mut cp[..1]));
+    }
+}

@@ -1,0 +1,498 @@
+//! Rays: initial guess, leg media, the solve, and the classification of the result.
+
+use std::fmt;
+
+use rayon::prelude::*;
+
+use crate::geom::Point;
+use crate::polyline::segment_intersection;
+use crate::problem::Geometry;
+use crate::regions::Regions;
+use crate::scene::{Scene, SceneError, StepKind};
+use crate::solver::{Outcome, Pin, Workspace, solve};
+
+/// How a ray ended (the contract's `status`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    /// A stationary-time path: every interaction strictly inside a segment, every leg on the
+    /// side its step demands, no leg crossing an interface.
+    Converged,
+    /// Time is stationary only with an interaction held on a polyline vertex (a kink: an
+    /// edge-diffracted path, not a specular one).
+    Vertex,
+    /// No such path exists from the solver's start: it would leave an open polyline's end, or
+    /// the side conditions cannot hold.
+    NoPath,
+    /// The stationary path exists but a leg crosses another interface.
+    Obstructed,
+    /// The solver gave up.
+    NotConverged,
+}
+
+impl Status {
+    /// The contract's name: `converged`, `vertex`, `no_path`, `obstructed`, `not_converged`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Status::Converged => "converged",
+            Status::Vertex => "vertex",
+            Status::NoPath => "no_path",
+            Status::Obstructed => "obstructed",
+            Status::NotConverged => "not_converged",
+        }
+    }
+    /// Whether the ray has a travel time and points (`converged`, `vertex`, `obstructed`).
+    pub fn has_time(self) -> bool {
+        matches!(self, Status::Converged | Status::Vertex | Status::Obstructed)
+    }
+}
+
+impl fmt::Display for Status {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Why a ray is not `converged`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reason {
+    /// Interaction `step` was pushed to the end of its open polyline.
+    LeavesEnd {
+        /// Index of the step.
+        step: usize,
+    },
+    /// At interaction `step` the legs are not on the sides the step demands.
+    WrongSide {
+        /// Index of the step.
+        step: usize,
+    },
+    /// Interaction `step` is held on a vertex of its polyline.
+    AtVertex {
+        /// Index of the step.
+        step: usize,
+    },
+    /// Leg `leg` crosses interface `interface`.
+    Crosses {
+        /// Index of the leg (0: the one leaving the source).
+        leg: usize,
+        /// Index of the interface it crosses.
+        interface: usize,
+    },
+    /// No medium fills the region of leg `leg` (no `at` claims it and there is no background).
+    NoMedium {
+        /// Index of the leg.
+        leg: usize,
+    },
+    /// The leg media found at the solution differ from those it was solved with, again and
+    /// again.
+    MediaUnsettled,
+    /// The iteration limit was reached.
+    IterationLimit,
+}
+
+impl fmt::Display for Reason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Reason::LeavesEnd { step } => write!(f, "step {step} would leave the end of its open interface"),
+            Reason::WrongSide { step } => write!(f, "at step {step} the legs are not on the sides the step demands"),
+            Reason::AtVertex { step } => write!(f, "step {step} is held on a polyline vertex"),
+            Reason::Crosses { leg, interface } => write!(f, "leg {leg} crosses interface {interface}"),
+            Reason::NoMedium { leg } => write!(f, "no medium fills the region of leg {leg}"),
+            Reason::MediaUnsettled => f.write_str("the leg media change with the solution"),
+            Reason::IterationLimit => f.write_str("iteration limit reached"),
+        }
+    }
+}
+
+/// The result of solving one ray without its points (they stay in the [`Workspace`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RaySummary {
+    /// How it ended.
+    pub status: Status,
+    /// Travel time (meaningful when `status.has_time()`).
+    pub time: f64,
+    /// Solver iterations.
+    pub iterations: usize,
+    /// Final relative residual.
+    pub residual: f64,
+    /// Why it is not `converged`, when it is not.
+    pub reason: Option<Reason>,
+}
+
+/// One solved ray: a (source, receiver, path) triple and its result.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Ray {
+    /// Source index.
+    pub source: usize,
+    /// Receiver index.
+    pub receiver: usize,
+    /// Path index.
+    pub path: usize,
+    /// How it ended.
+    pub status: Status,
+    /// Travel time, for `converged`, `vertex` and `obstructed`.
+    pub time: Option<f64>,
+    /// Source, interaction points and receiver, whenever `time` is present (else empty).
+    pub points: Vec<Point>,
+    /// Solver iterations.
+    pub iterations: usize,
+    /// Final relative residual `maxᵢ |∂T/∂sᵢ| / (wᵢ + wᵢ₊₁)`.
+    pub residual: f64,
+    /// Leg media (indices into [`Scene::media`]), when known.
+    pub media: Vec<usize>,
+    /// Why it is not `converged`, when it is not.
+    pub reason: Option<Reason>,
+}
+
+/// The contract's ray numbering: source-major, then receiver, then path.
+#[inline]
+pub fn ray_index(source: usize, receiver: usize, path: usize, receivers: usize, paths: usize) -> usize {
+    (source * receivers + receiver) * paths + path
+}
+
+/// Solves the rays of a scene. Holds the region lookup when the scene needs one.
+///
+/// Initial guess (documented, deterministic): interaction `i` of `k` starts at the point of
+/// its interface nearest to `S + (i + 1)/(k + 1) · (R − S)` on the straight line from source
+/// to receiver; a refraction whose interface that line crosses starts at the crossing nearest
+/// that point instead.
+pub struct Tracer<'s> {
+    scene: &'s Scene,
+    regions: Option<Regions>,
+    /// Medium at each source (when regions exist).
+    source_media: Vec<Option<usize>>,
+}
+
+impl<'s> Tracer<'s> {
+    /// Prepares a scene for tracing: builds the region lookup only if some path needs it.
+    ///
+    /// # Errors
+    /// A scene whose regions are inconsistent (two `at` points in one region).
+    pub fn new(scene: &'s Scene) -> Result<Tracer<'s>, SceneError> {
+        let regions = if scene.needs_regions() { Some(Regions::build(scene)?) } else { None };
+        let source_media = match &regions {
+            Some(r) => scene.sources().iter().map(|&p| r.medium_at(p)).collect(),
+            None => Vec::new(),
+        };
+        Ok(Tracer { scene, regions, source_media })
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> &'s Scene {
+        self.scene
+    }
+
+    /// The region lookup, if the scene needed one.
+    pub fn regions(&self) -> Option<&Regions> {
+        self.regions.as_ref()
+    }
+
+    /// Solves one ray of the scene.
+    pub fn trace(&self, source: usize, receiver: usize, path: usize, ws: &mut Workspace) -> Ray {
+        let s = self.solve_indexed(source, receiver, path, ws);
+        self.to_ray(source, receiver, path, &s, ws)
+    }
+
+    /// Solves every ray of the scene, in parallel, in the contract's ray order.
+    pub fn trace_all(&self) -> Vec<Ray> {
+        let (r, p) = (self.scene.receivers().len(), self.scene.paths().len());
+        (0..self.scene.num_rays())
+            .into_par_iter()
+            .map_init(Workspace::new, |ws, idx| {
+                let path = idx % p;
+                let receiver = (idx / p) % r;
+                let source = idx / (p * r);
+                self.trace(source, receiver, path, ws)
+            })
+            .collect()
+    }
+
+    fn to_ray(&self, source: usize, receiver: usize, path: usize, s: &RaySummary, ws: &Workspace) -> Ray {
+        let has = s.status.has_time();
+        Ray {
+            source,
+            receiver,
+            path,
+            status: s.status,
+            time: has.then_some(s.time),
+            points: if has { ws.points.clone() } else { Vec::new() },
+            iterations: s.iterations,
+            residual: s.residual,
+            media: ws.media.clone(),
+            reason: s.reason,
+        }
+    }
+
+    fn solve_indexed(&self, source: usize, receiver: usize, path: usize, ws: &mut Workspace) -> RaySummary {
+        self.solve_indexed_from(source, receiver, path, None, ws)
+    }
+
+    /// Solves path `path` between two arbitrary points. The points of the ray are left in
+    /// `ws` ([`Workspace::points`]); nothing is allocated once `ws` has grown.
+    pub fn solve(&self, source: Point, receiver: Point, path: usize, ws: &mut Workspace) -> RaySummary {
+        let src_medium = self.regions.as_ref().and_then(|r| r.medium_at(source));
+        self.solve_inner(source, src_medium, receiver, path, None, ws)
+    }
+
+    /// [`solve`](Self::solve) with a warm start: `guess` holds interaction parameters (for
+    /// example those of a neighbouring receiver's solution, [`Workspace::parameters`]); the
+    /// solver starts from whichever of `guess` and the default initial guess has the smaller
+    /// residual.
+    ///
+    /// # Panics
+    /// If `guess` does not have one parameter per step of the path.
+    pub fn solve_from(&self, source: Point, receiver: Point, path: usize, guess: &[f64], ws: &mut Workspace) -> RaySummary {
+        assert_eq!(guess.len(), self.scene.paths()[path].steps.len(), "one parameter per step");
+        let src_medium = self.regions.as_ref().and_then(|r| r.medium_at(source));
+        self.solve_inner(source, src_medium, receiver, path, Some(guess), ws)
+    }
+
+    /// Solves ray (`source`, `receiver`, `path`) of the scene, optionally warm-started
+    /// (see [`solve_from`](Self::solve_from)); the points stay in `ws`.
+    pub fn solve_indexed_from(
+        &self,
+        source: usize,
+        receiver: usize,
+        path: usize,
+        guess: Option<&[f64]>,
+        ws: &mut Workspace,
+    ) -> RaySummary {
+        let src_medium = self.source_media.get(source).copied().flatten();
+        self.solve_inner(self.scene.sources()[source], src_medium, self.scene.receivers()[receiver], path, guess, ws)
+    }
+
+    fn solve_inner(
+        &self,
+        source: Point,
+        src_medium: Option<usize>,
+        receiver: Point,
+        path: usize,
+        guess: Option<&[f64]>,
+        ws: &mut Workspace,
+    ) -> RaySummary {
+        let scene = self.scene;
+        let spec = &scene.paths()[path];
+        let k = spec.steps.len();
+        let opts = scene.solver();
+        ws.resize(k);
+        ws.slowness.clear();
+        ws.media.clear();
+        ws.points.clear();
+        let fail = |status, reason| RaySummary { status, time: f64::NAN, iterations: 0, residual: f64::NAN, reason: Some(reason) };
+
+        initial_guess(scene, &spec.steps, source, receiver, ws);
+        let lookup = spec.media.is_none();
+        if let Some(m) = &spec.media {
+            ws.media.extend_from_slice(m);
+        } else if let Err(reason) = self.lookup_media(source, src_medium, &spec.steps, ws) {
+            return fail(Status::NoPath, reason);
+        }
+        ws.slowness.extend(ws.media.iter().map(|&m| scene.media()[m].slowness));
+        if let Some(guess) = guess {
+            let slowness = std::mem::take(&mut ws.slowness);
+            let g = Geometry { scene, steps: &spec.steps, slowness: &slowness, source, receiver };
+            warm_start(&g, guess, ws);
+            ws.slowness = slowness;
+        }
+
+        let mut total_iterations = 0;
+        let mut rounds = 0;
+        let (outcome, mut sol) = loop {
+            let slowness = std::mem::take(&mut ws.slowness);
+            let g = Geometry { scene, steps: &spec.steps, slowness: &slowness, source, receiver };
+            let (outcome, mut sol) = solve(&g, ws, opts.tolerance, opts.max_iterations.saturating_sub(total_iterations));
+            ws.slowness = slowness;
+            total_iterations += sol.iterations;
+            sol.iterations = total_iterations;
+            if !lookup || outcome == Outcome::NotConverged {
+                break (outcome, sol);
+            }
+            // Media must match the solution's geometry: look them up again at the final points.
+            std::mem::swap(&mut ws.media, &mut ws.media_prev);
+            if let Err(reason) = self.lookup_media(source, src_medium, &spec.steps, ws) {
+                std::mem::swap(&mut ws.media, &mut ws.media_prev);
+                return RaySummary { reason: Some(reason), status: Status::NoPath, ..summary(sol) };
+            }
+            if ws.media == ws.media_prev {
+                break (outcome, sol);
+            }
+            rounds += 1;
+            if rounds >= 3 {
+                return RaySummary { reason: Some(Reason::MediaUnsettled), status: Status::NoPath, ..summary(sol) };
+            }
+            ws.slowness.clear();
+            ws.slowness.extend(ws.media.iter().map(|&m| scene.media()[m].slowness));
+        };
+
+        ws.points.push(source);
+        for v in &ws.eval.rel[1..=k + 1] {
+            ws.points.push(source + *v);
+        }
+        if let Some(t) = recompute_time(ws) {
+            sol.time = t;
+        }
+        let base = summary(sol);
+        match outcome {
+            Outcome::NotConverged => {
+                return RaySummary { status: Status::NotConverged, reason: Some(Reason::IterationLimit), ..base };
+            }
+            Outcome::LeftEnd(step) => {
+                return RaySummary { status: Status::NoPath, reason: Some(Reason::LeavesEnd { step }), ..base };
+            }
+            Outcome::Converged | Outcome::Vertex => {}
+        }
+        if let Some(step) = self.wrong_side(&spec.steps, ws) {
+            return RaySummary { status: Status::NoPath, reason: Some(Reason::WrongSide { step }), ..base };
+        }
+        if let Some((leg, interface)) = self.obstruction(ws) {
+            return RaySummary { status: Status::Obstructed, reason: Some(Reason::Crosses { leg, interface }), ..base };
+        }
+        if let Some(step) = ws.pin.iter().position(|p| *p == Pin::Vertex) {
+            return RaySummary { status: Status::Vertex, reason: Some(Reason::AtVertex { step }), ..base };
+        }
+        RaySummary { status: Status::Converged, reason: None, ..base }
+    }
+
+    /// Leg media from the regions at the current points: the source's region for leg 0; a
+    /// reflection keeps the medium, a refraction takes the one across the interface.
+    fn lookup_media(
+        &self,
+        source: Point,
+        src_medium: Option<usize>,
+        steps: &[crate::scene::Step],
+        ws: &mut Workspace,
+    ) -> Result<(), Reason> {
+        let regions = self.regions.as_ref().ok_or(Reason::NoMedium { leg: 0 })?;
+        ws.media.clear();
+        let mut m = src_medium.ok_or(Reason::NoMedium { leg: 0 })?;
+        ws.media.push(m);
+        let mut prev = source;
+        for (i, step) in steps.iter().enumerate() {
+            let line = &self.scene.interfaces()[step.interface].polyline;
+            let here = line.point_on(ws.seg[i], ws.s[i]);
+            if step.kind == StepKind::Refract {
+                m = regions
+                    .medium_across(step.interface, ws.seg[i], ws.s[i], prev)
+                    .ok_or(Reason::NoMedium { leg: i + 1 })?;
+            }
+            ws.media.push(m);
+            prev = here;
+        }
+        Ok(())
+    }
+
+    /// First step whose legs are not on the sides it demands.
+    fn wrong_side(&self, steps: &[crate::scene::Step], ws: &Workspace) -> Option<usize> {
+        let rel = &ws.eval.rel;
+        for (i, step) in steps.iter().enumerate() {
+            let line = &self.scene.interfaces()[step.interface].polyline;
+            let j = ws.seg[i];
+            let mut n = line.normal(j);
+            if ws.pin[i] == Pin::Vertex {
+                let before = if j > 0 { j - 1 } else { line.num_segments() - 1 };
+                n = n + line.normal(before);
+            }
+            let a = n.dot(rel[i] - rel[i + 1]);
+            let b = n.dot(rel[i + 2] - rel[i + 1]);
+            let ok = match step.kind {
+                StepKind::Reflect => (a > 0.0 && b > 0.0) || (a < 0.0 && b < 0.0),
+                StepKind::Refract => (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0),
+            };
+            if !ok {
+                return Some(i);
+            }
+        }
+        None
+    }
+
+    /// First leg that crosses an interface strictly between its ends: `(leg, interface)`.
+    fn obstruction(&self, ws: &Workspace) -> Option<(usize, usize)> {
+        let pts = &ws.points;
+        let k = pts.len() - 2;
+        for leg in 0..=k {
+            let (a, b) = (pts[leg], pts[leg + 1]);
+            if a == b {
+                continue;
+            }
+            let mut hit = None;
+            self.scene.any_segment_near(a, b, |sref| {
+                let (p, q) = self.scene.segment_points(sref);
+                if let Some((t, _)) = segment_intersection(a, b, p, q) {
+                    // The leg's own end points sit on interfaces: only interior crossings count.
+                    if t > END_MARGIN && t < 1.0 - END_MARGIN {
+                        hit = Some(sref.interface as usize);
+                        return true;
+                    }
+                }
+                false
+            });
+            if let Some(interface) = hit {
+                return Some((leg, interface));
+            }
+        }
+        None
+    }
+}
+
+/// Crossings closer than this fraction of a leg to its ends are the leg's own end points.
+const END_MARGIN: f64 = 1e-10;
+
+fn summary(sol: crate::solver::Solution) -> RaySummary {
+    RaySummary { status: Status::NotConverged, time: sol.time, iterations: sol.iterations, residual: sol.residual, reason: None }
+}
+
+/// The time from the final legs, summed in order (the solver's last evaluation already holds
+/// it; this keeps it tied to the reported points).
+fn recompute_time(ws: &Workspace) -> Option<f64> {
+    let e = &ws.eval;
+    let t: f64 = e.len.iter().zip(&ws.slowness).map(|(l, w)| l * w).sum();
+    t.is_finite().then_some(t)
+}
+
+/// Replaces the default guess already in `ws` by `guess` if the residual is smaller there.
+fn warm_start(g: &Geometry, guess: &[f64], ws: &mut Workspace) {
+    let k = g.k();
+    let default_merit = crate::solver::merit_at(g, ws);
+    for i in 0..k {
+        ws.s_alt[i] = ws.s[i];
+        ws.seg_alt[i] = ws.seg[i];
+        let line = g.line(i);
+        let s = if line.is_closed() { line.wrap(guess[i]) } else { guess[i].clamp(0.0, line.length()) };
+        ws.s[i] = s;
+        ws.seg[i] = line.segment_at_hint(s, ws.seg[i]);
+    }
+    let warm_merit = crate::solver::merit_at(g, ws);
+    if !(warm_merit < default_merit) {
+        for i in 0..k {
+            ws.s[i] = ws.s_alt[i];
+            ws.seg[i] = ws.seg_alt[i];
+        }
+    }
+}
+
+/// The documented initial guess (see [`Tracer`]).
+fn initial_guess(scene: &Scene, steps: &[crate::scene::Step], source: Point, receiver: Point, ws: &mut Workspace) {
+    let k = steps.len();
+    for (i, step) in steps.iter().enumerate() {
+        let line = &scene.interfaces()[step.interface].polyline;
+        let frac = (i + 1) as f64 / (k + 1) as f64;
+        let target = source.lerp(receiver, frac);
+        let mut best: Option<(f64, f64)> = None;
+        if step.kind == StepKind::Refract {
+            line.crossings(source, receiver, |s, t| {
+                let d = (t - frac).abs();
+                if best.is_none_or(|(_, bd)| d < bd) {
+                    best = Some((s, d));
+                }
+            });
+        }
+        let s = match best {
+            Some((s, _)) => s,
+            None => line.nearest(target).0,
+        };
+        let s = line.wrap(s);
+        ws.s[i] = s;
+        ws.seg[i] = line.segment_at(s);
+        ws.pin[i] = Pin::Free;
+    }
+}
