@@ -30,6 +30,7 @@ struct Node {
 pub(crate) struct Bvh {
     nodes: Vec<Node>,
     items: Vec<u32>,
+    boxes: Vec<Aabb>,
 }
 
 impl Bvh {
@@ -40,7 +41,7 @@ impl Bvh {
         if !boxes.is_empty() {
             build_node(boxes, &mut items, 0, boxes.len(), &mut nodes);
         }
-        Bvh { nodes, items }
+        Bvh { nodes, items, boxes: boxes.to_vec() }
     }
 
     /// The item minimising `dist_sq(item)`, a squared distance that must be at least the
@@ -97,7 +98,7 @@ impl Bvh {
             }
             if node.count > 0 {
                 for &it in &self.items[node.start as usize..(node.start + node.count) as usize] {
-                    if visit(it) {
+                    if self.boxes[it as usize].overlaps(query) && visit(it) {
                         return true;
                     }
                 }
@@ -129,7 +130,7 @@ impl Bvh {
             }
             if node.count > 0 {
                 for &it in &self.items[node.start as usize..(node.start + node.count) as usize] {
-                    if visit(it) {
+                    if self.boxes[it as usize].overlaps(sbox) && visit(it) {
                         return true;
                     }
                 }
