@@ -21,7 +21,11 @@ pub struct BatchOptions<'a> {
 
 impl Default for BatchOptions<'_> {
     fn default() -> Self {
-        BatchOptions { warm_start: true, chunk: 256, progress: None }
+        BatchOptions {
+            warm_start: true,
+            chunk: 256,
+            progress: None,
+        }
     }
 }
 
@@ -42,7 +46,13 @@ pub struct RayRecord {
 
 impl Default for RayRecord {
     fn default() -> Self {
-        RayRecord { status: Status::NotConverged, time: f64::NAN, iterations: 0, residual: f64::NAN, reason: None }
+        RayRecord {
+            status: Status::NotConverged,
+            time: f64::NAN,
+            iterations: 0,
+            residual: f64::NAN,
+            reason: None,
+        }
     }
 }
 
@@ -127,7 +137,11 @@ impl Batch {
             path,
             status: rec.status,
             time: has.then_some(rec.time),
-            points: if has { self.points(ray).to_vec() } else { Vec::new() },
+            points: if has {
+                self.points(ray).to_vec()
+            } else {
+                Vec::new()
+            },
             iterations: rec.iterations as usize,
             residual: rec.residual,
             media: self.media(ray).map(|m| m.collect()).unwrap_or_default(),
@@ -162,13 +176,23 @@ fn morton(x: u32, y: u32) -> u64 {
 
 /// Receiver indices sorted along a Morton curve over their bounding box.
 fn spatial_order(points: &[Point]) -> Vec<usize> {
-    let bbox = points.iter().fold(crate::geom::Aabb::EMPTY, |b, p| b.union(crate::geom::Aabb::from_points(*p, *p)));
-    let (w, h) = ((bbox.max.x - bbox.min.x).max(f64::MIN_POSITIVE), (bbox.max.y - bbox.min.y).max(f64::MIN_POSITIVE));
+    let bbox = points.iter().fold(crate::geom::Aabb::EMPTY, |b, p| {
+        b.union(crate::geom::Aabb::from_points(*p, *p))
+    });
+    let (w, h) = (
+        (bbox.max.x - bbox.min.x).max(f64::MIN_POSITIVE),
+        (bbox.max.y - bbox.min.y).max(f64::MIN_POSITIVE),
+    );
     let q = |v: f64| (v.clamp(0.0, 1.0) * 65535.0) as u32;
     let mut keyed: Vec<(u64, usize)> = points
         .iter()
         .enumerate()
-        .map(|(i, p)| (morton(q((p.x - bbox.min.x) / w), q((p.y - bbox.min.y) / h)), i))
+        .map(|(i, p)| {
+            (
+                morton(q((p.x - bbox.min.x) / w), q((p.y - bbox.min.y) / h)),
+                i,
+            )
+        })
         .collect();
     keyed.sort_unstable();
     keyed.into_iter().map(|(_, i)| i).collect()
@@ -180,7 +204,11 @@ impl Tracer<'_> {
     /// when `warm_start` is on), in ray order.
     pub fn trace_batch(&self, opts: &BatchOptions) -> Batch {
         let scene = self.scene();
-        let (ns, nr, np) = (scene.sources().len(), scene.receivers().len(), scene.paths().len());
+        let (ns, nr, np) = (
+            scene.sources().len(),
+            scene.receivers().len(),
+            scene.paths().len(),
+        );
         let mut point_offsets = vec![0];
         let mut media_offsets = vec![0];
         let mut param_offsets = vec![0];
@@ -205,7 +233,11 @@ impl Tracer<'_> {
         if blocks == 0 || np == 0 {
             return batch;
         }
-        let order = if opts.warm_start { spatial_order(scene.receivers()) } else { (0..nr).collect() };
+        let order = if opts.warm_start {
+            spatial_order(scene.receivers())
+        } else {
+            (0..nr).collect()
+        };
         let identity = order.iter().enumerate().all(|(i, &r)| i == r);
         let chunk = opts.chunk.max(1);
 
@@ -237,16 +269,23 @@ impl Tracer<'_> {
                             let s = self.solve_indexed_from(source, receiver, p, guess, ws);
                             rec[b * np + p] = RayRecord {
                                 status: s.status,
-                                time: if s.status.has_time() { s.time } else { f64::NAN },
+                                time: if s.status.has_time() {
+                                    s.time
+                                } else {
+                                    f64::NAN
+                                },
                                 iterations: s.iterations as u32,
                                 residual: s.residual,
                                 reason: s.reason,
                             };
                             if s.status.has_time() {
-                                pts[b * pts_block + po[p]..b * pts_block + po[p + 1]].copy_from_slice(ws.points());
+                                pts[b * pts_block + po[p]..b * pts_block + po[p + 1]]
+                                    .copy_from_slice(ws.points());
                             }
                             if ws.media().len() == mo[p + 1] - mo[p] {
-                                for (dst, &m) in med[b * media_block + mo[p]..].iter_mut().zip(ws.media()) {
+                                for (dst, &m) in
+                                    med[b * media_block + mo[p]..].iter_mut().zip(ws.media())
+                                {
                                     *dst = m as u32;
                                 }
                             }
@@ -274,18 +313,30 @@ impl Tracer<'_> {
         for (pos, &r) in order.iter().enumerate() {
             inverse[r] = pos;
         }
-        batch.records.par_chunks_mut(np).enumerate().for_each(|(block, out)| {
-            let from = src_block(block, &inverse) * np;
-            out.copy_from_slice(&records[from..from + np]);
-        });
-        batch.points.par_chunks_mut(pts_block).enumerate().for_each(|(block, out)| {
-            let from = src_block(block, &inverse) * pts_block;
-            out.copy_from_slice(&points[from..from + pts_block]);
-        });
-        batch.media.par_chunks_mut(media_block).enumerate().for_each(|(block, out)| {
-            let from = src_block(block, &inverse) * media_block;
-            out.copy_from_slice(&media[from..from + media_block]);
-        });
+        batch
+            .records
+            .par_chunks_mut(np)
+            .enumerate()
+            .for_each(|(block, out)| {
+                let from = src_block(block, &inverse) * np;
+                out.copy_from_slice(&records[from..from + np]);
+            });
+        batch
+            .points
+            .par_chunks_mut(pts_block)
+            .enumerate()
+            .for_each(|(block, out)| {
+                let from = src_block(block, &inverse) * pts_block;
+                out.copy_from_slice(&points[from..from + pts_block]);
+            });
+        batch
+            .media
+            .par_chunks_mut(media_block)
+            .enumerate()
+            .for_each(|(block, out)| {
+                let from = src_block(block, &inverse) * media_block;
+                out.copy_from_slice(&media[from..from + media_block]);
+            });
         batch
     }
 }

@@ -41,12 +41,20 @@ impl Bvh {
         if !boxes.is_empty() {
             build_node(boxes, &mut items, 0, boxes.len(), &mut nodes);
         }
-        Bvh { nodes, items, boxes: boxes.to_vec() }
+        Bvh {
+            nodes,
+            items,
+            boxes: boxes.to_vec(),
+        }
     }
 
     /// The item minimising `dist_sq(item)`, a squared distance that must be at least the
     /// squared distance from `p` to the item's box. Returns `(item, dist_sq)`.
-    pub(crate) fn nearest(&self, p: Point, mut dist_sq: impl FnMut(u32) -> f64) -> Option<(u32, f64)> {
+    pub(crate) fn nearest(
+        &self,
+        p: Point,
+        mut dist_sq: impl FnMut(u32) -> f64,
+    ) -> Option<(u32, f64)> {
         if self.nodes.is_empty() {
             return None;
         }
@@ -114,7 +122,12 @@ impl Bvh {
     /// Calls `visit(item)` for every item whose box the segment `a–b` may touch (boxes that
     /// overlap the segment's box and are not strictly on one side of its line), until `visit`
     /// returns `true`. Returns whether it was stopped.
-    pub(crate) fn any_near_segment(&self, a: Point, b: Point, mut visit: impl FnMut(u32) -> bool) -> bool {
+    pub(crate) fn any_near_segment(
+        &self,
+        a: Point,
+        b: Point,
+        mut visit: impl FnMut(u32) -> bool,
+    ) -> bool {
         if self.nodes.is_empty() {
             return false;
         }
@@ -148,11 +161,17 @@ impl Bvh {
 /// direction `d` (with a small relative margin so that rounding never prunes a true hit).
 #[inline]
 fn box_beside_line(b: Aabb, a: Point, d: crate::geom::Vec2) -> bool {
-    let corners = [b.min, Point::new(b.max.x, b.min.y), b.max, Point::new(b.min.x, b.max.y)];
+    let corners = [
+        b.min,
+        Point::new(b.max.x, b.min.y),
+        b.max,
+        Point::new(b.min.x, b.max.y),
+    ];
     let mut pos = 0;
     let mut neg = 0;
     // Bounds |d × (c − a)| for every corner (L1 norms: no square roots).
-    let far = (b.max.x - a.x).abs().max((b.min.x - a.x).abs()) + (b.max.y - a.y).abs().max((b.min.y - a.y).abs());
+    let far = (b.max.x - a.x).abs().max((b.min.x - a.x).abs())
+        + (b.max.y - a.y).abs().max((b.min.y - a.y).abs());
     let margin = 1e-12 * (d.x.abs() + d.y.abs()) * far;
     for c in corners {
         let s = d.cross(c - a);
@@ -165,10 +184,23 @@ fn box_beside_line(b: Aabb, a: Point, d: crate::geom::Vec2) -> bool {
     pos == 4 || neg == 4
 }
 
-fn build_node(boxes: &[Aabb], items: &mut [u32], lo: usize, hi: usize, nodes: &mut Vec<Node>) -> u32 {
+fn build_node(
+    boxes: &[Aabb],
+    items: &mut [u32],
+    lo: usize,
+    hi: usize,
+    nodes: &mut Vec<Node>,
+) -> u32 {
     let me = nodes.len() as u32;
-    let bbox = items[lo..hi].iter().fold(Aabb::EMPTY, |acc, &i| acc.union(boxes[i as usize]));
-    nodes.push(Node { bbox, start: lo as u32, count: (hi - lo) as u32, right: 0 });
+    let bbox = items[lo..hi]
+        .iter()
+        .fold(Aabb::EMPTY, |acc, &i| acc.union(boxes[i as usize]));
+    nodes.push(Node {
+        bbox,
+        start: lo as u32,
+        count: (hi - lo) as u32,
+        right: 0,
+    });
     if hi - lo <= LEAF {
         return me;
     }
@@ -201,7 +233,10 @@ mod tests {
             .map(|i| {
                 let x = i as f64;
                 let y = (x * 0.37).sin();
-                Aabb::from_points(Point::new(x, y), Point::new(x + 1.0, (x * 0.37 + 0.37).sin()))
+                Aabb::from_points(
+                    Point::new(x, y),
+                    Point::new(x + 1.0, (x * 0.37 + 0.37).sin()),
+                )
             })
             .collect()
     }
@@ -213,7 +248,10 @@ mod tests {
         for k in 0..50 {
             let p = Point::new(k as f64 * 21.3 - 30.0, (k as f64).cos() * 3.0);
             let (it, d) = bvh.nearest(p, |i| b[i as usize].distance_sq(p)).unwrap();
-            let brute = b.iter().map(|bb| bb.distance_sq(p)).fold(f64::INFINITY, f64::min);
+            let brute = b
+                .iter()
+                .map(|bb| bb.distance_sq(p))
+                .fold(f64::INFINITY, f64::min);
             assert_eq!(d, brute);
             assert_eq!(b[it as usize].distance_sq(p), brute);
         }

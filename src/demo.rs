@@ -36,7 +36,10 @@ pub fn jittered_grid(n: usize, x: [f64; 2], y: [f64; 2], seed: u64) -> Vec<[f64;
     (0..n)
         .map(|i| {
             let (c, r) = (i % cols, i / cols);
-            [x[0] + (c as f64 + rng.next_f64()) * dx, y[0] + (r as f64 + rng.next_f64()) * dy]
+            [
+                x[0] + (c as f64 + rng.next_f64()) * dx,
+                y[0] + (r as f64 + rng.next_f64()) * dy,
+            ]
         })
         .collect()
 }
@@ -53,12 +56,32 @@ pub fn jittered_grid(n: usize, x: [f64; 2], y: [f64; 2], seed: u64) -> Vec<[f64;
 /// ```
 pub fn air_water(receivers: usize, seed: u64) -> SceneSpec {
     let mut spec = SceneSpec {
-        description: Some("Air over water: index 1.0 above y = 0, 1.333 below; source (0, 1).".into()),
+        description: Some(
+            "Air over water: index 1.0 above y = 0, 1.333 below; source (0, 1).".into(),
+        ),
         ..SceneSpec::default()
     };
-    spec.media.insert("air".into(), MediumSpec { index: Some(1.0), ..MediumSpec::default() });
-    spec.media.insert("water".into(), MediumSpec { index: Some(1.333), ..MediumSpec::default() });
-    spec.interfaces.insert("surface".into(), InterfaceSpec { points: vec![[-1.0, 0.0], [2.0, 0.0]], closed: false });
+    spec.media.insert(
+        "air".into(),
+        MediumSpec {
+            index: Some(1.0),
+            ..MediumSpec::default()
+        },
+    );
+    spec.media.insert(
+        "water".into(),
+        MediumSpec {
+            index: Some(1.333),
+            ..MediumSpec::default()
+        },
+    );
+    spec.interfaces.insert(
+        "surface".into(),
+        InterfaceSpec {
+            points: vec![[-1.0, 0.0], [2.0, 0.0]],
+            closed: false,
+        },
+    );
     spec.sources = vec![[0.0, 1.0]];
     spec.receivers = jittered_grid(receivers, [0.0, 1.0], [-1.0, -0.2], seed);
     spec.paths = vec![PathSpec {
@@ -66,6 +89,9 @@ pub fn air_water(receivers: usize, seed: u64) -> SceneSpec {
         steps: vec![StepSpec::Refract("surface".into())],
         media: Some(vec!["air".into(), "water".into()]),
     }];
-    spec.solver = Some(SolverSpec { tolerance: Some(1e-12), max_iterations: Some(50) });
+    spec.solver = Some(SolverSpec {
+        tolerance: Some(1e-12),
+        max_iterations: Some(50),
+    });
     spec
 }

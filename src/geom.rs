@@ -31,7 +31,10 @@ impl Point {
     /// The displacement from the origin to this point.
     #[inline]
     pub const fn to_vec2(self) -> Vec2 {
-        Vec2 { x: self.x, y: self.y }
+        Vec2 {
+            x: self.x,
+            y: self.y,
+        }
     }
     /// Euclidean distance to `other`.
     #[inline]
@@ -79,7 +82,10 @@ impl Vec2 {
     /// The point at this displacement from the origin.
     #[inline]
     pub const fn to_point(self) -> Point {
-        Point { x: self.x, y: self.y }
+        Point {
+            x: self.x,
+            y: self.y,
+        }
     }
 }
 
@@ -184,7 +190,10 @@ impl Aabb {
     /// Whether the closed boxes share a point.
     #[inline]
     pub fn overlaps(self, o: Aabb) -> bool {
-        self.min.x <= o.max.x && o.min.x <= self.max.x && self.min.y <= o.max.y && o.min.y <= self.max.y
+        self.min.x <= o.max.x
+            && o.min.x <= self.max.x
+            && self.min.y <= o.max.y
+            && o.min.y <= self.max.y
     }
     /// Squared distance from `p` to the box (0 inside).
     #[inline]
@@ -262,7 +271,8 @@ pub fn segment_contact(a0: Point, a1: Point, b0: Point, b1: Point) -> SegmentCon
     if opposite(d1, d2) && opposite(d3, d4) {
         return SegmentContact::Cross;
     }
-    let on = |d: f64, p: Point, s0: Point, s1: Point| d == 0.0 && Aabb::from_points(s0, s1).contains(p);
+    let on =
+        |d: f64, p: Point, s0: Point, s1: Point| d == 0.0 && Aabb::from_points(s0, s1).contains(p);
     if on(d1, b0, a0, a1) || on(d2, b1, a0, a1) || on(d3, a0, b0, b1) || on(d4, a1, b0, b1) {
         SegmentContact::Touch
     } else {
@@ -282,13 +292,34 @@ mod tests {
     #[test]
     fn contact_cases() {
         let p = Point::new;
-        assert_eq!(segment_contact(p(0., 0.), p(2., 0.), p(1., -1.), p(1., 1.)), SegmentContact::Cross);
-        assert_eq!(segment_contact(p(0., 0.), p(2., 0.), p(1., 0.), p(1., 1.)), SegmentContact::Touch);
-        assert_eq!(segment_contact(p(0., 0.), p(2., 0.), p(2., 0.), p(3., 1.)), SegmentContact::Touch);
-        assert_eq!(segment_contact(p(0., 0.), p(2., 0.), p(1., 0.), p(3., 0.)), SegmentContact::Overlap);
-        assert_eq!(segment_contact(p(0., 0.), p(2., 0.), p(2., 0.), p(3., 0.)), SegmentContact::Touch);
-        assert_eq!(segment_contact(p(0., 0.), p(2., 0.), p(3., 0.), p(4., 0.)), SegmentContact::Disjoint);
-        assert_eq!(segment_contact(p(0., 0.), p(2., 0.), p(0., 1.), p(2., 1.)), SegmentContact::Disjoint);
+        assert_eq!(
+            segment_contact(p(0., 0.), p(2., 0.), p(1., -1.), p(1., 1.)),
+            SegmentContact::Cross
+        );
+        assert_eq!(
+            segment_contact(p(0., 0.), p(2., 0.), p(1., 0.), p(1., 1.)),
+            SegmentContact::Touch
+        );
+        assert_eq!(
+            segment_contact(p(0., 0.), p(2., 0.), p(2., 0.), p(3., 1.)),
+            SegmentContact::Touch
+        );
+        assert_eq!(
+            segment_contact(p(0., 0.), p(2., 0.), p(1., 0.), p(3., 0.)),
+            SegmentContact::Overlap
+        );
+        assert_eq!(
+            segment_contact(p(0., 0.), p(2., 0.), p(2., 0.), p(3., 0.)),
+            SegmentContact::Touch
+        );
+        assert_eq!(
+            segment_contact(p(0., 0.), p(2., 0.), p(3., 0.), p(4., 0.)),
+            SegmentContact::Disjoint
+        );
+        assert_eq!(
+            segment_contact(p(0., 0.), p(2., 0.), p(0., 1.), p(2., 1.)),
+            SegmentContact::Disjoint
+        );
         // Nearly collinear but exactly decided.
         assert_eq!(
             segment_contact(p(0., 0.), p(1., 1e-300), p(0.5, -1.0), p(0.5, 1.0)),

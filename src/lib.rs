@@ -42,13 +42,14 @@ pub mod argmin_bridge;
 
 pub use batch::{Batch, BatchOptions, RayRecord};
 pub use geom::{Aabb, Point, SegmentContact, Vec2, orient, segment_contact};
-pub use output::{write_rays_json, RaysDocument};
+pub use output::{Format, write_batch, write_rays, write_rays_json};
 pub use polyline::{Polyline, PolylineError};
 pub use problem::{PathProblem, Tridiagonal};
 pub use regions::Regions;
 pub use scene::{
-    DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, Interface, InterfaceSpec, MAX_ITERATIONS_LIMIT, Medium, MediumSpec,
-    Path, PathSpec, Scene, SceneError, SceneSpec, SegmentRef, SolverOptions, SolverSpec, Step, StepKind, StepSpec,
+    DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, Interface, InterfaceSpec, MAX_COORDINATE,
+    MAX_ITERATIONS_LIMIT, MAX_SPEED_RATIO, Medium, MediumSpec, Path, PathSpec, Scene, SceneError,
+    SceneSpec, SegmentRef, SolverOptions, SolverSpec, Step, StepKind, StepSpec,
 };
 pub use solver::{Solution, Workspace};
 pub use trace::{Ray, RaySummary, Reason, Status, Tracer, ray_index};

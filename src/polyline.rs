@@ -33,12 +33,20 @@ pub enum PolylineError {
 impl std::fmt::Display for PolylineError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            PolylineError::TooFewPoints { needed } => write!(f, "needs at least {needed} distinct points"),
+            PolylineError::TooFewPoints { needed } => {
+                write!(f, "needs at least {needed} distinct points")
+            }
             PolylineError::NotFinite { index } => write!(f, "point {index} is not finite"),
             PolylineError::ZeroLengthSegment { index } => {
-                write!(f, "point {index} repeats the point before it (zero-length segment)")
+                write!(
+                    f,
+                    "point {index} repeats the point before it (zero-length segment)"
+                )
             }
-            PolylineError::Collinear => write!(f, "a closed polyline needs points that are not all on one line"),
+            PolylineError::Collinear => write!(
+                f,
+                "a closed polyline needs points that are not all on one line"
+            ),
         }
     }
 }
@@ -116,7 +124,15 @@ impl Polyline {
         cum.push(total);
         let bbox = boxes.iter().fold(Aabb::EMPTY, |acc, b| acc.union(*b));
         let bvh = Bvh::build(&boxes);
-        let mut line = Polyline { vertices, closed, cum, dirs, curv: Vec::new(), bbox, bvh };
+        let mut line = Polyline {
+            vertices,
+            closed,
+            cum,
+            dirs,
+            curv: Vec::new(),
+            bbox,
+            bvh,
+        };
         line.curv = line.curvature_estimates();
         Ok(line)
     }
@@ -139,7 +155,9 @@ impl Polyline {
             }
             turn / (0.5 * (self.segment_length(prev) + self.segment_length(next)))
         };
-        (0..nseg).map(|j| 0.5 * (vertex_k(j) + vertex_k(j + 1))).collect()
+        (0..nseg)
+            .map(|j| 0.5 * (vertex_k(j) + vertex_k(j + 1)))
+            .collect()
     }
 
     /// Whether the last vertex joins the first.
@@ -226,9 +244,8 @@ impl Polyline {
     pub fn segment_at_hint(&self, s: f64, hint: usize) -> usize {
         let nseg = self.dirs.len();
         if hint < nseg {
-            let inside = |j: usize| {
-                (j == 0 || self.cum[j] <= s) && (j + 1 == nseg || s < self.cum[j + 1])
-            };
+            let inside =
+                |j: usize| (j == 0 || self.cum[j] <= s) && (j + 1 == nseg || s < self.cum[j + 1]);
             if inside(hint) {
                 return hint;
             }
@@ -249,7 +266,11 @@ impl Polyline {
         let (a, b) = self.segment(j);
         let from_start = s - self.cum[j];
         let from_end = self.cum[j + 1] - s;
-        if from_start <= from_end { a + self.dirs[j] * from_start } else { b - self.dirs[j] * from_end }
+        if from_start <= from_end {
+            a + self.dirs[j] * from_start
+        } else {
+            b - self.dirs[j] * from_end
+        }
     }
 
     /// `point_on(j, s) - origin`, computed as (vertex − origin) + offset, which keeps full
@@ -268,7 +289,11 @@ impl Polyline {
 
     /// Point at parameter `s` (wrapped on a closed polyline, clamped to the ends of an open one).
     pub fn point_at(&self, s: f64) -> Point {
-        let s = if self.closed { self.wrap(s) } else { s.clamp(0.0, self.length()) };
+        let s = if self.closed {
+            self.wrap(s)
+        } else {
+            s.clamp(0.0, self.length())
+        };
         self.point_on(self.segment_at(s), s)
     }
 
@@ -348,7 +373,10 @@ mod tests {
     #[test]
     fn errors() {
         let p = Point::new;
-        assert_eq!(Polyline::new(vec![p(0., 0.)], false).unwrap_err(), PolylineError::TooFewPoints { needed: 2 });
+        assert_eq!(
+            Polyline::new(vec![p(0., 0.)], false).unwrap_err(),
+            PolylineError::TooFewPoints { needed: 2 }
+        );
         assert_eq!(
             Polyline::new(vec![p(0., 0.), p(0., 0.)], false).unwrap_err(),
             PolylineError::TooFewPoints { needed: 2 }
@@ -369,7 +397,9 @@ mod tests {
 
     #[test]
     fn hint_search_agrees_with_binary_search() {
-        let pts: Vec<Point> = (0..200).map(|i| Point::new(i as f64, (i as f64 * 0.1).sin())).collect();
+        let pts: Vec<Point> = (0..200)
+            .map(|i| Point::new(i as f64, (i as f64 * 0.1).sin()))
+            .collect();
         let line = Polyline::new(pts, false).unwrap();
         for k in 0..1000 {
             let s = k as f64 * line.length() / 999.0;

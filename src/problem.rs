@@ -116,7 +116,11 @@ impl<'a> Geometry<'a> {
             let d = e.rel[j + 1] - e.rel[j];
             let l = leg_length(d);
             e.len[j] = l;
-            e.u[j] = if l > 0.0 { d * (1.0 / l) } else { Vec2::default() };
+            e.u[j] = if l > 0.0 {
+                d * (1.0 / l)
+            } else {
+                Vec2::default()
+            };
             time += w[j] * l;
         }
         e.time = time;
@@ -153,7 +157,11 @@ impl<'a> Geometry<'a> {
 #[inline]
 fn leg_length(d: Vec2) -> f64 {
     let l2 = d.x * d.x + d.y * d.y;
-    if l2.is_normal() && l2 < 1e300 { l2.sqrt() } else { d.length() }
+    if l2.is_normal() && l2 < 1e300 {
+        l2.sqrt()
+    } else {
+        d.length()
+    }
 }
 
 /// `1/ℓ`, with a zero-length leg contributing nothing (its direction is undefined).
@@ -191,19 +199,46 @@ impl<'a> PathProblem<'a> {
     /// The problem of path `path` between two points, with the path's own leg media.
     /// `None` when the path has no `media` (its media come from region lookup: use
     /// [`PathProblem::with_slowness`]).
-    pub fn new(scene: &'a Scene, path: usize, source: Point, receiver: Point) -> Option<PathProblem<'a>> {
+    pub fn new(
+        scene: &'a Scene,
+        path: usize,
+        source: Point,
+        receiver: Point,
+    ) -> Option<PathProblem<'a>> {
         let media = scene.paths().get(path)?.media.as_ref()?;
         let slowness = media.iter().map(|&m| scene.media()[m].slowness).collect();
-        Some(PathProblem { scene, path, slowness, source, receiver })
+        Some(PathProblem {
+            scene,
+            path,
+            slowness,
+            source,
+            receiver,
+        })
     }
 
     /// The problem with explicit leg slownesses (`steps + 1` of them).
     ///
     /// # Panics
     /// If `path` is out of range or `slowness` has the wrong length.
-    pub fn with_slowness(scene: &'a Scene, path: usize, slowness: Vec<f64>, source: Point, receiver: Point) -> Self {
-        assert_eq!(slowness.len(), scene.paths()[path].steps.len() + 1, "one slowness per leg");
-        PathProblem { scene, path, slowness, source, receiver }
+    pub fn with_slowness(
+        scene: &'a Scene,
+        path: usize,
+        slowness: Vec<f64>,
+        source: Point,
+        receiver: Point,
+    ) -> Self {
+        assert_eq!(
+            slowness.len(),
+            scene.paths()[path].steps.len() + 1,
+            "one slowness per leg"
+        );
+        PathProblem {
+            scene,
+            path,
+            slowness,
+            source,
+            receiver,
+        }
     }
 
     /// Number of unknowns (interactions).
@@ -258,7 +293,10 @@ impl<'a> PathProblem<'a> {
     /// The analytic Hessian of `T` (symmetric tridiagonal; segment-wise, no curvature term).
     pub fn hessian(&self, s: &[f64]) -> Tridiagonal {
         let e = self.eval(s, true);
-        Tridiagonal { diag: e.diag, off: e.off }
+        Tridiagonal {
+            diag: e.diag,
+            off: e.off,
+        }
     }
     /// Source, interaction points and receiver.
     pub fn points(&self, s: &[f64]) -> Vec<Point> {

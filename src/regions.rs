@@ -16,10 +16,12 @@
 use std::collections::VecDeque;
 use std::fmt;
 
-use spade::handles::{FixedDirectedEdgeHandle, FixedFaceHandle, FixedVertexHandle, PossiblyOuterTag};
+use spade::handles::{
+    FixedDirectedEdgeHandle, FixedFaceHandle, FixedVertexHandle, PossiblyOuterTag,
+};
 use spade::{
-    ConstrainedDelaunayTriangulation, HasPosition, HintGenerator, MAX_ALLOWED_VALUE, MIN_ALLOWED_VALUE, Point2,
-    PositionInTriangulation, Triangulation,
+    ConstrainedDelaunayTriangulation, HasPosition, HintGenerator, MAX_ALLOWED_VALUE,
+    MIN_ALLOWED_VALUE, Point2, PositionInTriangulation, Triangulation,
 };
 
 use crate::geom::{Aabb, Point, orient};
@@ -121,16 +123,20 @@ impl Regions {
     /// the domain's edge; `interfaces` if the triangulation fails (which a valid scene does not
     /// cause).
     pub fn build(scene: &Scene) -> Result<Regions, SceneError> {
-        let built = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| Regions::build_inner(scene)));
-        let mut regions = built
-            .map_err(|_| SceneError::new("interfaces", "the region triangulation failed (internal error)"))??;
+        let built =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| Regions::build_inner(scene)));
+        let mut regions = built.map_err(|_| {
+            SceneError::new(
+                "interfaces",
+                "the region triangulation failed (internal error)",
+            )
+        })??;
         regions.assign_media(scene)?;
         Ok(regions)
     }
 
     fn build_inner(scene: &Scene) -> Result<Regions, SceneError> {
         let interfaces = scene.interfaces();
-        let t0 = std::time::Instant::now();
 
         // Every interface vertex, flattened, with per-interface offsets.
         let mut verts = Vec::new();
@@ -147,7 +153,9 @@ impl Regions {
         seg_offset.push(nseg);
 
         // An exact power-of-two scale brings every coordinate into the range spade accepts.
-        let geometry = verts.iter().fold(Aabb::EMPTY, |b, p| b.union(Aabb::from_points(*p, *p)));
+        let geometry = verts
+            .iter()
+            .fold(Aabb::EMPTY, |b, p| b.union(Aabb::from_points(*p, *p)));
         let extent = match scene.domain() {
             Some(d) => geometry.union(d),
             None => geometry,
@@ -199,26 +207,36 @@ impl Regions {
             let p = scaled[k as usize];
             if unique.last() != Some(&p) {
                 unique.push(p);
-                original.push(verts.get(k as usize).copied().unwrap_or_else(|| scale.from_spade(p)));
+                original.push(
+                    verts
+                        .get(k as usize)
+                        .copied()
+                        .unwrap_or_else(|| scale.from_spade(p)),
+                );
             }
             vid[k as usize] = (unique.len() - 1) as u32;
         }
         let num_input_vertices = unique.len();
 
-        eprintln!("prep {:?}", t0.elapsed());
-        let mut cdt = Cdt::bulk_load_cdt(unique.clone(), Vec::new())
-            .map_err(|e| SceneError::new("interfaces", format!("cannot triangulate the interfaces: {e:?}")))?;
+        let mut cdt = Cdt::bulk_load_cdt(unique.clone(), Vec::new()).map_err(|e| {
+            SceneError::new(
+                "interfaces",
+                format!("cannot triangulate the interfaces: {e:?}"),
+            )
+        })?;
         if cdt.num_vertices() != unique.len()
             || cdt.vertices().zip(&unique).any(|(v, p)| v.position() != *p)
         {
-            return Err(SceneError::new("interfaces", "the triangulation did not keep the vertex order (internal error)"));
+            return Err(SceneError::new(
+                "interfaces",
+                "the triangulation did not keep the vertex order (internal error)",
+            ));
         }
         let vertex = |k: usize| FixedVertexHandle::from_index(vid[k] as usize);
         let corner = |c: usize| vertex(verts.len() + c);
 
         // The domain's edges first, so that each interface segment's insertion below returns its
         // complete chain of edges (split where it crosses the domain's edge).
-        eprintln!("bulk {:?}", t0.elapsed());
         if domain.is_some() {
             for c in 0..4 {
                 cdt.add_constraint_and_split(corner(c), corner((c + 1) % 4), |p| p);
@@ -232,8 +250,10 @@ impl Regions {
             let n = iface.polyline.vertices().len();
             for j in 0..iface.polyline.num_segments() {
                 chain_offset.push(chain.len());
-        eprintln!("constraints {:?}", t0.elapsed());
-                let (u, w) = (vertex(vert_offset[i] + j), vertex(vert_offset[i] + (j + 1) % n));
+                let (u, w) = (
+                    vertex(vert_offset[i] + j),
+                    vertex(vert_offset[i] + (j + 1) % n),
+                );
                 let edges = cdt.add_constraint_and_split(u, w, |p| p);
                 chain.push(u.index() as u32);
                 if u == w {
@@ -247,7 +267,11 @@ impl Regions {
                     at = e.to().fix();
                 }
                 if connected && at == w {
-                    chain.extend(edges.iter().map(|e| cdt.directed_edge(*e).to().fix().index() as u32));
+                    chain.extend(
+                        edges
+                            .iter()
+                            .map(|e| cdt.directed_edge(*e).to().fix().index() as u32),
+                    );
                 } else {
                     chain.push(w.index() as u32);
                 }
@@ -256,7 +280,11 @@ impl Regions {
         chain_offset.push(chain.len());
 
         let face_region = flood_regions(&cdt, domain);
-        let num_regions = face_region.iter().filter(|&&r| r != NONE).max().map_or(1, |&r| r as usize + 1);
+        let num_regions = face_region
+            .iter()
+            .filter(|&&r| r != NONE)
+            .max()
+            .map_or(1, |&r| r as usize + 1);
 
         // Pieces of every segment with the regions on their two sides; consecutive pieces with
         // the same regions merge.
@@ -295,15 +323,17 @@ impl Regions {
                     }
                 }
                 if pieces.len() == first {
-                    pieces.push(Piece { start: s0, left: NONE, right: NONE });
+                    pieces.push(Piece {
+                        start: s0,
+                        left: NONE,
+                        right: NONE,
+                    });
                 }
             }
         }
         piece_offset.push(pieces.len());
 
-        eprintln!("pieces {:?}", t0.elapsed());
         let grid = HintGrid::build(&cdt);
-        eprintln!("grid {:?}", t0.elapsed());
         Ok(Regions {
             cdt,
             scale,
@@ -325,12 +355,18 @@ impl Regions {
             let Some(at) = medium.at else { continue };
             let key = format!("media.{}.at", medium.name);
             let region = self.region_at(at).ok_or_else(|| {
-                SceneError::new(&key, "lies on the edge of the domain; it must be strictly inside a region")
+                SceneError::new(
+                    &key,
+                    "lies on the edge of the domain; it must be strictly inside a region",
+                )
             })?;
             if let Some(other) = claimed[region] {
                 return Err(SceneError::new(
                     key,
-                    format!("lies in the same region as media.{}.at", scene.media()[other].name),
+                    format!(
+                        "lies in the same region as media.{}.at",
+                        scene.media()[other].name
+                    ),
                 ));
             }
             claimed[region] = Some(m);
@@ -376,7 +412,10 @@ impl Regions {
             }
             PositionInTriangulation::OnEdge(e) => {
                 let e = self.cdt.directed_edge(e);
-                let (l, r) = (self.region_of(e.face().fix()), self.region_of(e.rev().face().fix()));
+                let (l, r) = (
+                    self.region_of(e.face().fix()),
+                    self.region_of(e.rev().face().fix()),
+                );
                 (if l == r { l } else { NONE }, e.from().fix())
             }
             PositionInTriangulation::OnVertex(v) => {
@@ -391,7 +430,9 @@ impl Regions {
                 }
                 (region.unwrap_or(0), v)
             }
-            PositionInTriangulation::OutsideOfConvexHull(e) => (0, self.cdt.directed_edge(e).from().fix()),
+            PositionInTriangulation::OutsideOfConvexHull(e) => {
+                (0, self.cdt.directed_edge(e).from().fix())
+            }
             PositionInTriangulation::NoTriangulation => (0, start),
         };
         hint.vertex = near.index() as u32;
@@ -406,7 +447,8 @@ impl Regions {
 
     /// [`medium_at`](Self::medium_at) with a per-caller search hint (see [`LocateHint`]).
     pub fn medium_at_with_hint(&self, p: Point, hint: &mut LocateHint) -> Option<usize> {
-        self.region_at_with_hint(p, hint).and_then(|r| self.region_medium(r))
+        self.region_at_with_hint(p, hint)
+            .and_then(|r| self.region_medium(r))
     }
 
     /// The media on both sides of segment `segment` of interface `interface` at arclength `s`
@@ -424,7 +466,10 @@ impl Regions {
             None => 0,
         };
         match pieces.get(k) {
-            Some(p) => Sides { left: self.medium_of_region(p.left), right: self.medium_of_region(p.right) },
+            Some(p) => Sides {
+                left: self.medium_of_region(p.left),
+                right: self.medium_of_region(p.right),
+            },
             None => Sides::default(),
         }
     }
@@ -432,12 +477,21 @@ impl Regions {
     /// The medium on the side of the segment opposite to `from` at arclength `s`: what a ray
     /// coming from `from` refracts into. The side of `from` is decided exactly against the
     /// segment's line; `None` when `from` lies on that line (or the index is invalid).
-    pub fn medium_across(&self, interface: usize, segment: usize, s: f64, from: Point) -> Option<usize> {
+    pub fn medium_across(
+        &self,
+        interface: usize,
+        segment: usize,
+        s: f64,
+        from: Point,
+    ) -> Option<usize> {
         let g = self.segment_index(interface, segment)?;
         let first = self.vert_offset[interface];
         let n = self.vert_offset[interface + 1] - first;
         let local = g - self.seg_offset[interface];
-        let (a, b) = (self.verts[first + local], self.verts[first + (local + 1) % n]);
+        let (a, b) = (
+            self.verts[first + local],
+            self.verts[first + (local + 1) % n],
+        );
         let side = orient(a, b, from);
         let sides = self.sides(interface, segment, s);
         if side > 0.0 {
@@ -451,7 +505,10 @@ impl Regions {
 
     /// Scene-wide index of a segment, if it exists.
     fn segment_index(&self, interface: usize, segment: usize) -> Option<usize> {
-        let (&first, &end) = (self.seg_offset.get(interface)?, self.seg_offset.get(interface + 1)?);
+        let (&first, &end) = (
+            self.seg_offset.get(interface)?,
+            self.seg_offset.get(interface + 1)?,
+        );
         (segment < end - first).then_some(first + segment)
     }
 
@@ -467,10 +524,17 @@ impl Regions {
 /// Regions of the two faces along the triangulation edge `x → y` (left, right), or `NONE`
 /// when that edge is missing.
 fn piece_regions(cdt: &Cdt, face_region: &[u32], x: u32, y: u32) -> (u32, u32) {
-    let (x, y) = (FixedVertexHandle::from_index(x as usize), FixedVertexHandle::from_index(y as usize));
-    let regions = |e: spade::handles::DirectedEdgeHandle<'_, Point2<f64>, (), spade::CdtEdge<()>, ()>| {
-        (face_region[e.face().fix().index()], face_region[e.rev().face().fix().index()])
-    };
+    let (x, y) = (
+        FixedVertexHandle::from_index(x as usize),
+        FixedVertexHandle::from_index(y as usize),
+    );
+    let regions =
+        |e: spade::handles::DirectedEdgeHandle<'_, Point2<f64>, (), spade::CdtEdge<()>, ()>| {
+            (
+                face_region[e.face().fix().index()],
+                face_region[e.rev().face().fix().index()],
+            )
+        };
     if let Some(e) = cdt.get_edge_from_neighbors(x, y) {
         return regions(e);
     }
@@ -481,7 +545,11 @@ fn piece_regions(cdt: &Cdt, face_region: &[u32], x: u32, y: u32) -> (u32, u32) {
     let mut best: Option<(f64, FixedDirectedEdgeHandle)> = None;
     for e in cdt.vertex(x).out_edges().filter(|e| e.is_constraint_edge()) {
         let z = e.to();
-        if z.fix() == y || cdt.get_edge_from_neighbors(z.fix(), y).is_none_or(|f| !f.is_constraint_edge()) {
+        if z.fix() == y
+            || cdt
+                .get_edge_from_neighbors(z.fix(), y)
+                .is_none_or(|f| !f.is_constraint_edge())
+        {
             continue;
         }
         let off = orient(line(px), line(py), line(z.position())).abs();
@@ -508,7 +576,8 @@ fn flood_regions(cdt: &Cdt, domain: Option<Aabb>) -> Vec<u32> {
     region[outer.index()] = 0;
     stack.push(outer);
     if let Some(d) = domain {
-        let outside = |p: Point2<f64>| p.x < d.min.x || p.x > d.max.x || p.y < d.min.y || p.y > d.max.y;
+        let outside =
+            |p: Point2<f64>| p.x < d.min.x || p.x > d.max.x || p.y < d.min.y || p.y > d.max.y;
         for f in cdt.inner_faces() {
             let k = f.fix().index();
             if f.positions().into_iter().any(outside) && region[k] == NONE {
@@ -521,7 +590,9 @@ fn flood_regions(cdt: &Cdt, domain: Option<Aabb>) -> Vec<u32> {
     let mut next_seed = 0;
     loop {
         while let Some(f) = stack.pop() {
-            let Some(start) = cdt.face(f).adjacent_edge() else { continue };
+            let Some(start) = cdt.face(f).adjacent_edge() else {
+                continue;
+            };
             let mut e = start;
             loop {
                 if !e.is_constraint_edge() {
@@ -566,7 +637,9 @@ fn pow2(n: i32) -> f64 {
 impl Scale {
     /// The scale that maps the largest coordinate magnitude of `b` to `[1, 2)`.
     fn for_box(b: Aabb) -> Scale {
-        let m = [b.min.x, b.min.y, b.max.x, b.max.y].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let m = [b.min.x, b.min.y, b.max.x, b.max.y]
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs()));
         if !(m.is_finite() && m > 0.0) {
             return Scale { e: [0, 0] };
         }
@@ -576,7 +649,9 @@ impl Scale {
         } else {
             -1023 - (m.to_bits().leading_zeros() as i32 - 12)
         };
-        Scale { e: [e / 2, e - e / 2] }
+        Scale {
+            e: [e / 2, e - e / 2],
+        }
     }
 
     fn down(self, v: f64) -> f64 {
@@ -627,7 +702,12 @@ impl HintGenerator<f64> for QuietHint {
         self.last = vertex.index();
     }
 
-    fn notify_vertex_removed(&mut self, _: Option<Point2<f64>>, vertex: FixedVertexHandle, _: Point2<f64>) {
+    fn notify_vertex_removed(
+        &mut self,
+        _: Option<Point2<f64>>,
+        vertex: FixedVertexHandle,
+        _: Point2<f64>,
+    ) {
         self.last = vertex.index().saturating_sub(1);
     }
 
@@ -636,7 +716,9 @@ impl HintGenerator<f64> for QuietHint {
         TR: Triangulation,
         V: HasPosition<Scalar = f64>,
     {
-        QuietHint { last: triangulation.num_vertices().saturating_sub(1) }
+        QuietHint {
+            last: triangulation.num_vertices().saturating_sub(1),
+        }
     }
 }
 
@@ -660,7 +742,13 @@ impl HintGrid {
             max = Point2::new(max.x.max(p.x), max.y.max(p.y));
         }
         let side = ((cdt.num_vertices() as f64 / 4.0).sqrt().ceil() as usize).clamp(1, 1024);
-        let span = |lo: f64, hi: f64| if hi > lo { side as f64 / (hi - lo) } else { 0.0 };
+        let span = |lo: f64, hi: f64| {
+            if hi > lo {
+                side as f64 / (hi - lo)
+            } else {
+                0.0
+            }
+        };
         let mut grid = HintGrid {
             min,
             inv_cell: [span(min.x, max.x), span(min.y, max.y)],
@@ -674,7 +762,9 @@ impl HintGrid {
             }
         }
         // Empty cells take the vertex of the nearest filled cell (breadth-first).
-        let mut queue: VecDeque<usize> = (0..grid.cells.len()).filter(|&c| grid.cells[c] != NONE).collect();
+        let mut queue: VecDeque<usize> = (0..grid.cells.len())
+            .filter(|&c| grid.cells[c] != NONE)
+            .collect();
         if queue.is_empty() {
             grid.cells.fill(0);
         }
@@ -761,17 +851,33 @@ mod tests {
         // Sides: the normal of a left-to-right segment points up.
         let bottom = scene.interface_index("bottom").unwrap();
         let s = r.sides(bottom, 0, 3.0);
-        assert_eq!(s, Sides { left: medium(&scene, "c"), right: medium(&scene, "d") });
+        assert_eq!(
+            s,
+            Sides {
+                left: medium(&scene, "c"),
+                right: medium(&scene, "d")
+            }
+        );
         let top = scene.interface_index("top").unwrap();
         let line = &scene.interfaces()[top].polyline;
         let s = r.sides(top, 1, line.start(1) + 1.0);
-        assert_eq!(s, Sides { left: medium(&scene, "a"), right: medium(&scene, "b") });
+        assert_eq!(
+            s,
+            Sides {
+                left: medium(&scene, "a"),
+                right: medium(&scene, "b")
+            }
+        );
         // A hint carried from query to query gives the same answers.
         let mut hint = LocateHint::default();
         for k in 0..200 {
             let y = -9.95 + 0.1 * k as f64;
             let q = p(3.3, y);
-            assert_eq!(r.medium_at_with_hint(q, &mut hint), r.medium_at(q), "y = {y}");
+            assert_eq!(
+                r.medium_at_with_hint(q, &mut hint),
+                r.medium_at(q),
+                "y = {y}"
+            );
         }
         // Invalid indices.
         assert_eq!(r.sides(99, 0, 0.0), Sides::default());
@@ -801,10 +907,31 @@ mod tests {
         assert_eq!(r.medium_at(p(2.5, -1.0)), medium(&scene, "out"));
         let sides = |s| r.sides(0, 0, s);
         let len = scene.interfaces()[0].polyline.length();
-        assert_eq!(sides(0.5), Sides { left: medium(&scene, "out"), right: medium(&scene, "out") });
-        assert_eq!(sides(len / 2.0), Sides { left: medium(&scene, "up"), right: medium(&scene, "down") });
-        assert_eq!(sides(len - 0.5), Sides { left: medium(&scene, "out"), right: medium(&scene, "out") });
-        assert_eq!(r.medium_across(0, 0, len / 2.0, p(0.0, 1.0)), medium(&scene, "down"));
+        assert_eq!(
+            sides(0.5),
+            Sides {
+                left: medium(&scene, "out"),
+                right: medium(&scene, "out")
+            }
+        );
+        assert_eq!(
+            sides(len / 2.0),
+            Sides {
+                left: medium(&scene, "up"),
+                right: medium(&scene, "down")
+            }
+        );
+        assert_eq!(
+            sides(len - 0.5),
+            Sides {
+                left: medium(&scene, "out"),
+                right: medium(&scene, "out")
+            }
+        );
+        assert_eq!(
+            r.medium_across(0, 0, len / 2.0, p(0.0, 1.0)),
+            medium(&scene, "down")
+        );
     }
 
     #[test]
@@ -835,7 +962,13 @@ mod tests {
         assert_eq!(r.medium_at(p(1.0, -1.0)), water);
         assert_eq!(r.medium_at(p(10.0, 10.0)), air);
         let surface = scene.interface_index("surface").unwrap();
-        assert_eq!(r.sides(surface, 0, 2.0), Sides { left: air, right: water });
+        assert_eq!(
+            r.sides(surface, 0, 2.0),
+            Sides {
+                left: air,
+                right: water
+            }
+        );
         assert_eq!(r.medium_across(surface, 0, 2.0, p(0.0, 1.0)), water);
         assert_eq!(r.medium_across(surface, 0, 2.0, p(1.0, -1.0)), air);
         assert_eq!(r.medium_across(surface, 0, 2.0, p(7.0, 0.0)), None);
@@ -890,7 +1023,11 @@ mod tests {
             "sources": [], "receivers": [], "paths": []
         }"#,
         );
-        let (top, left, right) = (medium(&scene, "top"), medium(&scene, "left"), medium(&scene, "right"));
+        let (top, left, right) = (
+            medium(&scene, "top"),
+            medium(&scene, "left"),
+            medium(&scene, "right"),
+        );
         assert_eq!(r.num_regions(), 4);
         assert_eq!(r.medium_at(p(-9.0, -1.0)), left);
         assert_eq!(r.medium_at(p(9.0, -9.0)), right);
@@ -899,16 +1036,46 @@ mod tests {
         assert_eq!(r.region_at(p(0.0, 0.0)), None);
         let layer = scene.interface_index("layer").unwrap();
         // The one segment is two pieces, split at arclength 10 by the fault's end.
-        assert_eq!(r.sides(layer, 0, 3.0), Sides { left: top, right: left });
-        assert_eq!(r.sides(layer, 0, 9.999), Sides { left: top, right: left });
-        assert_eq!(r.sides(layer, 0, 10.001), Sides { left: top, right: right });
-        assert_eq!(r.sides(layer, 0, 17.0), Sides { left: top, right: right });
+        assert_eq!(
+            r.sides(layer, 0, 3.0),
+            Sides {
+                left: top,
+                right: left
+            }
+        );
+        assert_eq!(
+            r.sides(layer, 0, 9.999),
+            Sides {
+                left: top,
+                right: left
+            }
+        );
+        assert_eq!(
+            r.sides(layer, 0, 10.001),
+            Sides {
+                left: top,
+                right: right
+            }
+        );
+        assert_eq!(
+            r.sides(layer, 0, 17.0),
+            Sides {
+                left: top,
+                right: right
+            }
+        );
         assert_eq!(r.medium_across(layer, 0, 3.0, p(-3.0, 4.0)), left);
         assert_eq!(r.medium_across(layer, 0, 13.0, p(-3.0, 4.0)), right);
         assert_eq!(r.medium_across(layer, 0, 13.0, p(-3.0, -4.0)), top);
         let fault = scene.interface_index("fault").unwrap();
         // Downwards: the normal points to +x.
-        assert_eq!(r.sides(fault, 0, 4.0), Sides { left: right, right: left });
+        assert_eq!(
+            r.sides(fault, 0, 4.0),
+            Sides {
+                left: right,
+                right: left
+            }
+        );
         assert_eq!(r.medium_across(fault, 0, 4.0, p(-1.0, 0.0)), right);
         assert_eq!(r.medium_across(fault, 0, 4.0, p(1.0, -20.0)), left);
     }
@@ -941,13 +1108,43 @@ mod tests {
         let bar = scene.interface_index("a_bar").unwrap();
         // Segment 1 runs from (0.5, 0) to (-2, 0), leftwards: its normal points down.
         let line = &scene.interfaces()[bar].polyline;
-        assert_eq!(r.sides(bar, 1, line.start(1) + 0.25), Sides { left: m("east"), right: m("above") });
-        assert_eq!(r.sides(bar, 1, line.start(1) + 1.0), Sides { left: m("west"), right: m("above") });
-        assert_eq!(r.sides(bar, 0, 1.0), Sides { left: m("east"), right: m("above") });
+        assert_eq!(
+            r.sides(bar, 1, line.start(1) + 0.25),
+            Sides {
+                left: m("east"),
+                right: m("above")
+            }
+        );
+        assert_eq!(
+            r.sides(bar, 1, line.start(1) + 1.0),
+            Sides {
+                left: m("west"),
+                right: m("above")
+            }
+        );
+        assert_eq!(
+            r.sides(bar, 0, 1.0),
+            Sides {
+                left: m("east"),
+                right: m("above")
+            }
+        );
         let bx = scene.interface_index("b_box").unwrap();
         // Segment 1 runs from (-2, -3) to (2, -3): its normal points up, into the box.
-        assert_eq!(r.sides(bx, 1, 3.0 + 1.0), Sides { left: m("west"), right: m("above") });
-        assert_eq!(r.sides(bx, 1, 3.0 + 3.0), Sides { left: m("east"), right: m("above") });
+        assert_eq!(
+            r.sides(bx, 1, 3.0 + 1.0),
+            Sides {
+                left: m("west"),
+                right: m("above")
+            }
+        );
+        assert_eq!(
+            r.sides(bx, 1, 3.0 + 3.0),
+            Sides {
+                left: m("east"),
+                right: m("above")
+            }
+        );
     }
 
     #[test]
@@ -975,7 +1172,13 @@ mod tests {
         // Counter-clockwise polygon: the normal points inwards.
         for j in 0..4 {
             let s = j as f64 + 0.5;
-            assert_eq!(r.sides(0, j, s), Sides { left: glass, right: air });
+            assert_eq!(
+                r.sides(0, j, s),
+                Sides {
+                    left: glass,
+                    right: air
+                }
+            );
         }
         assert_eq!(r.medium_across(0, 3, 3.5, p(-1.0, 0.5)), glass);
         assert_eq!(r.medium_across(0, 3, 3.5, p(0.5, 0.5)), air);
@@ -994,7 +1197,13 @@ mod tests {
         assert_eq!(r.medium_at(p(0.0, -1.0)), medium(&scene, "a"));
         // On the polyline, but it separates nothing.
         assert_eq!(r.medium_at(p(0.0, 0.0)), medium(&scene, "a"));
-        assert_eq!(r.sides(0, 0, 1.0), Sides { left: medium(&scene, "a"), right: medium(&scene, "a") });
+        assert_eq!(
+            r.sides(0, 0, 1.0),
+            Sides {
+                left: medium(&scene, "a"),
+                right: medium(&scene, "a")
+            }
+        );
     }
 
     #[test]
@@ -1024,13 +1233,22 @@ mod tests {
             assert_eq!(r.medium_at(p(-k, 0.0)), outside, "k = {k}");
             let upper = scene.interface_index("upper").unwrap();
             let s = 0.5 * scene.interfaces()[upper].polyline.start(1);
-            assert_eq!(r.sides(upper, 0, s), Sides { left: outside, right: inside }, "k = {k}");
+            assert_eq!(
+                r.sides(upper, 0, s),
+                Sides {
+                    left: outside,
+                    right: inside
+                },
+                "k = {k}"
+            );
         }
     }
 
     #[test]
     fn no_interfaces() {
-        let (_, r) = regions(r#"{ "media": { "a": { "speed": 1 } }, "sources": [], "receivers": [], "paths": [] }"#);
+        let (_, r) = regions(
+            r#"{ "media": { "a": { "speed": 1 } }, "sources": [], "receivers": [], "paths": [] }"#,
+        );
         assert_eq!(r.num_regions(), 1);
         assert_eq!(r.medium_at(p(0.0, 0.0)), None);
         let (scene, r) = regions(
@@ -1073,16 +1291,34 @@ mod tests {
             let y = 0.1 * (x * 7.3).sin();
             assert_eq!(r.medium_at(p(x, y + 0.01)), water, "x = {x}");
             assert_eq!(r.medium_at(p(x, y - 0.01)), rock, "x = {x}");
-            assert_eq!(r.medium_at_with_hint(p(x, 9.0), &mut hint), water, "x = {x}");
-            assert_eq!(r.medium_at_with_hint(p(x, -9.0), &mut hint), rock, "x = {x}");
+            assert_eq!(
+                r.medium_at_with_hint(p(x, 9.0), &mut hint),
+                water,
+                "x = {x}"
+            );
+            assert_eq!(
+                r.medium_at_with_hint(p(x, -9.0), &mut hint),
+                rock,
+                "x = {x}"
+            );
         }
         let line = &scene.interfaces()[0].polyline;
         for j in (0..n).step_by(997) {
             let s = 0.5 * (line.start(j) + line.start(j + 1));
-            assert_eq!(r.sides(0, j, s), Sides { left: water, right: rock }, "segment {j}");
+            assert_eq!(
+                r.sides(0, j, s),
+                Sides {
+                    left: water,
+                    right: rock
+                },
+                "segment {j}"
+            );
             let q = line.point_on(j, s) + line.normal(j);
             assert_eq!(r.medium_across(0, j, s, q), rock);
-            assert_eq!(r.medium_across(0, j, s, line.point_on(j, s) - line.normal(j)), water);
+            assert_eq!(
+                r.medium_across(0, j, s, line.point_on(j, s) - line.normal(j)),
+                water
+            );
         }
         if !cfg!(debug_assertions) {
             assert!(elapsed.as_secs_f64() < 1.0, "took {elapsed:?}");

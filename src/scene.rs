@@ -31,7 +31,10 @@ pub struct SceneError {
 impl SceneError {
     /// A new error at `key`.
     pub fn new(key: impl Into<String>, message: impl Into<String>) -> SceneError {
-        SceneError { key: key.into(), message: message.into() }
+        SceneError {
+            key: key.into(),
+            message: message.into(),
+        }
     }
 }
 
@@ -209,7 +212,10 @@ pub struct SolverOptions {
 
 impl Default for SolverOptions {
     fn default() -> Self {
-        SolverOptions { tolerance: DEFAULT_TOLERANCE, max_iterations: DEFAULT_MAX_ITERATIONS }
+        SolverOptions {
+            tolerance: DEFAULT_TOLERANCE,
+            max_iterations: DEFAULT_MAX_ITERATIONS,
+        }
     }
 }
 
@@ -238,11 +244,37 @@ pub struct Scene {
     segment_bvh: Bvh,
 }
 
+/// Largest coordinate magnitude accepted: beyond it distances and times could overflow.
+pub const MAX_COORDINATE: f64 = 1e100;
+/// Speeds and indices must lie in `[1 / MAX_SPEED_RATIO, MAX_SPEED_RATIO]`.
+pub const MAX_SPEED_RATIO: f64 = 1e100;
+
 fn point(key: &str, p: [f64; 2]) -> Result<Point, SceneError> {
-    if p[0].is_finite() && p[1].is_finite() {
-        Ok(Point::new(p[0], p[1]))
-    } else {
+    if !(p[0].is_finite() && p[1].is_finite()) {
         Err(SceneError::new(key, "coordinates must be finite numbers"))
+    } else if p[0].abs() > MAX_COORDINATE || p[1].abs() > MAX_COORDINATE {
+        Err(SceneError::new(
+            key,
+            format!("coordinates must lie within ±{MAX_COORDINATE:e} (distances would overflow)"),
+        ))
+    } else {
+        Ok(Point::new(p[0], p[1]))
+    }
+}
+
+fn positive(key: String, v: f64) -> Result<f64, SceneError> {
+    if !(v.is_finite() && v > 0.0) {
+        Err(SceneError::new(key, "must be a finite number > 0"))
+    } else if !(1.0 / MAX_SPEED_RATIO..=MAX_SPEED_RATIO).contains(&v) {
+        Err(SceneError::new(
+            key,
+            format!(
+                "must lie between {:e} and {MAX_SPEED_RATIO:e}",
+                1.0 / MAX_SPEED_RATIO
+            ),
+        ))
+    } else {
+        Ok(v)
     }
 }
 
@@ -268,29 +300,31 @@ impl Scene {
         for (name, m) in &spec.media {
             let key = format!("media.{name}");
             let slowness = match (m.speed, m.index) {
-                (Some(v), None) => {
-                    if !(v.is_finite() && v > 0.0) {
-                        return Err(SceneError::new(format!("{key}.speed"), "must be a finite number > 0"));
-                    }
-                    1.0 / v
+                (Some(v), None) => 1.0 / positive(format!("{key}.speed"), v)?,
+                (None, Some(n)) => positive(format!("{key}.index"), n)?,
+                (Some(_), Some(_)) => {
+                    return Err(SceneError::new(
+                        key,
+                        "give exactly one of `speed` or `index`, not both",
+                    ));
                 }
-                (None, Some(n)) => {
-                    if !(n.is_finite() && n > 0.0) {
-                        return Err(SceneError::new(format!("{key}.index"), "must be a finite number > 0"));
-                    }
-                    n
-                }
-                (Some(_), Some(_)) => return Err(SceneError::new(key, "give exactly one of `speed` or `index`, not both")),
                 (None, None) => return Err(SceneError::new(key, "needs `speed` or `index`")),
             };
             if !(slowness.is_finite() && slowness > 0.0) {
-                return Err(SceneError::new(key, "slowness (1 / speed) is not a finite positive number"));
+                return Err(SceneError::new(
+                    key,
+                    "slowness (1 / speed) is not a finite positive number",
+                ));
             }
             let at = match m.at {
                 Some(p) => Some(point(&format!("{key}.at"), p)?),
                 None => None,
             };
-            media.push(Medium { name: name.clone(), slowness, at });
+            media.push(Medium {
+                name: name.clone(),
+                slowness,
+                at,
+            });
         }
         let medium_index = |key: &str, name: &str| -> Result<usize, SceneError> {
             media
@@ -306,7 +340,10 @@ impl Scene {
             Some([lo, hi]) => {
                 let (lo, hi) = (point("domain", lo)?, point("domain", hi)?);
                 if !(lo.x < hi.x && lo.y < hi.y) {
-                    return Err(SceneError::new("domain", "needs [[xmin, ymin], [xmax, ymax]] with xmin < xmax and ymin < ymax"));
+                    return Err(SceneError::new(
+                        "domain",
+                        "needs [[xmin, ymin], [xmax, ymax]] with xmin < xmax and ymin < ymax",
+                    ));
                 }
                 Some(Aabb { min: lo, max: hi })
             }
@@ -324,9 +361,14 @@ impl Scene {
                 PolylineError::NotFinite { index } | PolylineError::ZeroLengthSegment { index } => {
                     SceneError::new(format!("{key}[{index}]"), e.to_string())
                 }
-                PolylineError::TooFewPoints { .. } | PolylineError::Collinear => SceneError::new(&key, e.to_string()),
+                PolylineError::TooFewPoints { .. } | PolylineError::Collinear => {
+                    SceneError::new(&key, e.to_string())
+                }
             })?;
-            interfaces.push(Interface { name: name.clone(), polyline });
+            interfaces.push(Interface {
+                name: name.clone(),
+                polyline,
+            });
         }
         let (segments, segment_bvh) = index_segments(&interfaces);
         check_crossings(&interfaces, &segments, &segment_bvh)?;
@@ -334,13 +376,19 @@ impl Scene {
         for m in &media {
             if let Some(at) = m.at {
                 if on_interface(&interfaces, &segments, &segment_bvh, at).is_some() {
-                    return Err(SceneError::new(format!("media.{}.at", m.name), "lies on an interface; it must be strictly inside a region"));
+                    return Err(SceneError::new(
+                        format!("media.{}.at", m.name),
+                        "lies on an interface; it must be strictly inside a region",
+                    ));
                 }
             }
         }
 
         let points = |key: &str, list: &[[f64; 2]]| -> Result<Vec<Point>, SceneError> {
-            list.iter().enumerate().map(|(k, p)| point(&format!("{key}[{k}]"), *p)).collect()
+            list.iter()
+                .enumerate()
+                .map(|(k, p)| point(&format!("{key}[{k}]"), *p))
+                .collect()
         };
         let sources = points("sources", &spec.sources)?;
         let receivers = points("receivers", &spec.receivers)?;
@@ -354,9 +402,16 @@ impl Scene {
                     StepSpec::Reflect(n) => (StepKind::Reflect, n, "reflect"),
                     StepSpec::Refract(n) => (StepKind::Refract, n, "refract"),
                 };
-                let interface = interfaces.iter().position(|i| &i.name == name).ok_or_else(|| {
-                    SceneError::new(format!("{key}.steps[{j}].{which}"), format!("unknown interface `{name}`"))
-                })?;
+                let interface =
+                    interfaces
+                        .iter()
+                        .position(|i| &i.name == name)
+                        .ok_or_else(|| {
+                            SceneError::new(
+                                format!("{key}.steps[{j}].{which}"),
+                                format!("unknown interface `{name}`"),
+                            )
+                        })?;
                 steps.push(Step { kind, interface });
             }
             let media = match &p.media {
@@ -364,7 +419,11 @@ impl Scene {
                     if names.len() != steps.len() + 1 {
                         return Err(SceneError::new(
                             format!("{key}.media"),
-                            format!("needs one medium per leg: {} (steps + 1), got {}", steps.len() + 1, names.len()),
+                            format!(
+                                "needs one medium per leg: {} (steps + 1), got {}",
+                                steps.len() + 1,
+                                names.len()
+                            ),
                         ));
                     }
                     let mut idx = Vec::with_capacity(names.len());
@@ -375,14 +434,21 @@ impl Scene {
                 }
                 None => None,
             };
-            paths.push(Path { name: p.name.clone(), steps, media });
+            paths.push(Path {
+                name: p.name.clone(),
+                steps,
+                media,
+            });
         }
 
         let mut solver = SolverOptions::default();
         if let Some(s) = &spec.solver {
             if let Some(t) = s.tolerance {
                 if !(t.is_finite() && t > 0.0 && t < 1.0) {
-                    return Err(SceneError::new("solver.tolerance", "must be a number in (0, 1)"));
+                    return Err(SceneError::new(
+                        "solver.tolerance",
+                        "must be a number in (0, 1)",
+                    ));
                 }
                 solver.tolerance = t;
             }
@@ -397,7 +463,18 @@ impl Scene {
             }
         }
 
-        Ok(Scene { media, background, domain, interfaces, sources, receivers, paths, solver, segments, segment_bvh })
+        Ok(Scene {
+            media,
+            background,
+            domain,
+            interfaces,
+            sources,
+            receivers,
+            paths,
+            solver,
+            segments,
+            segment_bvh,
+        })
     }
 
     /// The media, in name order.
@@ -459,7 +536,12 @@ impl Scene {
         for i in &self.interfaces {
             b = b.union(i.polyline.bbox());
         }
-        for p in self.sources.iter().chain(&self.receivers).chain(self.media.iter().filter_map(|m| m.at.as_ref())) {
+        for p in self
+            .sources
+            .iter()
+            .chain(&self.receivers)
+            .chain(self.media.iter().filter_map(|m| m.at.as_ref()))
+        {
             b = b.union(Aabb::from_points(*p, *p));
         }
         if let Some(d) = self.domain {
@@ -475,14 +557,22 @@ impl Scene {
 
     /// Calls `visit` with every scene segment whose box the segment `a–b` may meet; stops
     /// when `visit` returns `true` and returns whether it did.
-    pub(crate) fn any_segment_near(&self, a: Point, b: Point, mut visit: impl FnMut(SegmentRef) -> bool) -> bool {
-        self.segment_bvh.any_near_segment(a, b, |i| visit(self.segments[i as usize]))
+    pub(crate) fn any_segment_near(
+        &self,
+        a: Point,
+        b: Point,
+        mut visit: impl FnMut(SegmentRef) -> bool,
+    ) -> bool {
+        self.segment_bvh
+            .any_near_segment(a, b, |i| visit(self.segments[i as usize]))
     }
 
     /// End points of a scene segment.
     #[inline]
     pub fn segment_points(&self, s: SegmentRef) -> (Point, Point) {
-        self.interfaces[s.interface as usize].polyline.segment(s.segment as usize)
+        self.interfaces[s.interface as usize]
+            .polyline
+            .segment(s.segment as usize)
     }
 
     /// The interface segment that `p` lies on exactly, if any.
@@ -497,17 +587,43 @@ impl SceneSpec {
     /// # Errors
     /// Bad JSON, or a value of the wrong type, with the key that holds it.
     pub fn from_json(text: &str) -> Result<SceneSpec, SceneError> {
+        // serde would also accept a struct written as an array: a scene is an object.
+        if !text.trim_start().starts_with('{') {
+            let msg = if text.trim().is_empty() {
+                "empty document: expected a JSON object"
+            } else {
+                "expected a JSON object"
+            };
+            return Err(SceneError::new("scene", msg));
+        }
         let de = &mut serde_json::Deserializer::from_str(text);
         let spec: SceneSpec = serde_path_to_error::deserialize(de).map_err(|e| {
             let path = e.path().to_string();
             let inner = e.into_inner();
-            let key = if path == "." || path.is_empty() { "scene".to_string() } else { path };
-            let msg = if inner.is_syntax() || inner.is_eof() {
-                format!("invalid JSON: {inner}")
-            } else {
-                inner.to_string()
-            };
-            SceneError::new(key, msg)
+            let root = path == "." || path.is_empty() || path == "?";
+            let text = inner.to_string();
+            if inner.is_syntax() || inner.is_eof() {
+                if text.starts_with("trailing characters") && !root {
+                    // An array with too many elements, such as a point with 3 coordinates.
+                    return SceneError::new(path, format!("too many elements ({text})"));
+                }
+                return SceneError::new(
+                    if root { "scene".to_string() } else { path },
+                    format!("invalid JSON: {text}"),
+                );
+            }
+            if let Some(field) = text
+                .strip_prefix("missing field `")
+                .and_then(|r| r.split('`').next())
+            {
+                let key = if root {
+                    field.to_string()
+                } else {
+                    format!("{path}.{field}")
+                };
+                return SceneError::new(key, "missing (this key is required)");
+            }
+            SceneError::new(if root { "scene".to_string() } else { path }, text)
         })?;
         Ok(spec)
     }
@@ -518,7 +634,10 @@ fn index_segments(interfaces: &[Interface]) -> (Vec<SegmentRef>, Bvh) {
     let mut boxes = Vec::new();
     for (i, iface) in interfaces.iter().enumerate() {
         for j in 0..iface.polyline.num_segments() {
-            segments.push(SegmentRef { interface: i as u32, segment: j as u32 });
+            segments.push(SegmentRef {
+                interface: i as u32,
+                segment: j as u32,
+            });
             let (a, b) = iface.polyline.segment(j);
             boxes.push(Aabb::from_points(a, b));
         }
@@ -527,11 +646,18 @@ fn index_segments(interfaces: &[Interface]) -> (Vec<SegmentRef>, Bvh) {
     (segments, bvh)
 }
 
-fn on_interface(interfaces: &[Interface], segments: &[SegmentRef], bvh: &Bvh, p: Point) -> Option<SegmentRef> {
+fn on_interface(
+    interfaces: &[Interface],
+    segments: &[SegmentRef],
+    bvh: &Bvh,
+    p: Point,
+) -> Option<SegmentRef> {
     let mut found = None;
     bvh.any_overlapping(Aabb::from_points(p, p), |i| {
         let s = segments[i as usize];
-        let (a, b) = interfaces[s.interface as usize].polyline.segment(s.segment as usize);
+        let (a, b) = interfaces[s.interface as usize]
+            .polyline
+            .segment(s.segment as usize);
         if orient(a, b, p) == 0.0 && Aabb::from_points(a, b).contains(p) {
             found = Some(s);
             return true;
@@ -544,7 +670,11 @@ fn on_interface(interfaces: &[Interface], segments: &[SegmentRef], bvh: &Bvh, p:
 /// Rejects segments that cross or overlap, and polylines that touch themselves away from a
 /// shared vertex of neighbouring segments. Touching at a vertex is allowed between interfaces
 /// (also a vertex of one on a segment of another, as where a fault ends on a layer).
-fn check_crossings(interfaces: &[Interface], segments: &[SegmentRef], bvh: &Bvh) -> Result<(), SceneError> {
+fn check_crossings(
+    interfaces: &[Interface],
+    segments: &[SegmentRef],
+    bvh: &Bvh,
+) -> Result<(), SceneError> {
     for (k, s) in segments.iter().enumerate() {
         let line = &interfaces[s.interface as usize].polyline;
         let (a0, a1) = line.segment(s.segment as usize);
@@ -560,17 +690,33 @@ fn check_crossings(interfaces: &[Interface], segments: &[SegmentRef], bvh: &Bvh)
             let same = o.interface == s.interface;
             let nseg = line.num_segments() as u32;
             let adjacent = same
-                && (o.segment == s.segment + 1 || (line.is_closed() && s.segment == 0 && o.segment == nseg - 1));
+                && (o.segment == s.segment + 1
+                    || (line.is_closed() && s.segment == 0 && o.segment == nseg - 1));
             let name = &interfaces[s.interface as usize].name;
             let oname = &interfaces[o.interface as usize].name;
             let msg = match contact {
                 SegmentContact::Disjoint => return false,
                 SegmentContact::Touch if !same || adjacent => return false,
-                SegmentContact::Touch => format!("the polyline touches itself (segments {} and {})", s.segment, o.segment),
-                SegmentContact::Overlap if same => format!("the polyline overlaps itself (segments {} and {})", s.segment, o.segment),
-                SegmentContact::Cross if same => format!("the polyline crosses itself (segments {} and {})", s.segment, o.segment),
-                SegmentContact::Overlap => format!("overlaps interface `{oname}` (segment {} on segment {})", s.segment, o.segment),
-                SegmentContact::Cross => format!("crosses interface `{oname}` (segment {} crosses segment {})", s.segment, o.segment),
+                SegmentContact::Touch => format!(
+                    "the polyline touches itself (segments {} and {})",
+                    s.segment, o.segment
+                ),
+                SegmentContact::Overlap if same => format!(
+                    "the polyline overlaps itself (segments {} and {})",
+                    s.segment, o.segment
+                ),
+                SegmentContact::Cross if same => format!(
+                    "the polyline crosses itself (segments {} and {})",
+                    s.segment, o.segment
+                ),
+                SegmentContact::Overlap => format!(
+                    "overlaps interface `{oname}` (segment {} on segment {})",
+                    s.segment, o.segment
+                ),
+                SegmentContact::Cross => format!(
+                    "crosses interface `{oname}` (segment {} crosses segment {})",
+                    s.segment, o.segment
+                ),
             };
             problem = Some(SceneError::new(format!("interfaces.{name}.points"), msg));
             true

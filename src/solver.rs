@@ -251,12 +251,19 @@ fn merit(g: &Geometry, e: &Eval, pin: &[Pin]) -> f64 {
 pub(crate) fn merit_at(g: &Geometry, ws: &mut Workspace) -> f64 {
     g.evaluate(&ws.s, &ws.seg, &mut ws.eval, false, false);
     let w = g.slowness;
-    (0..g.k()).map(|i| (ws.eval.r[i] / (w[i] + w[i + 1])).powi(2)).sum()
+    (0..g.k())
+        .map(|i| (ws.eval.r[i] / (w[i] + w[i + 1])).powi(2))
+        .sum()
 }
 
 /// Runs the iteration from the parameters, segments and pins already in `ws` (set by the
 /// initial guess). Leaves the final state in `ws` (`s`, `seg`, `pin`, `eval`).
-pub(crate) fn solve(g: &Geometry, ws: &mut Workspace, tol: f64, max_iterations: usize) -> (Outcome, Solution) {
+pub(crate) fn solve(
+    g: &Geometry,
+    ws: &mut Workspace,
+    tol: f64,
+    max_iterations: usize,
+) -> (Outcome, Solution) {
     let k = g.k();
     let w = g.slowness;
     let mut iterations = 0;
@@ -272,6 +279,12 @@ pub(crate) fn solve(g: &Geometry, ws: &mut Workspace, tol: f64, max_iterations: 
         }
         evaluated = false;
         let e = &ws.eval;
+        if cfg!(debug_assertions) && std::env::var_os("EIGENRAY_DEBUG").is_some() {
+            eprintln!(
+                "it {iterations} s={:?} seg={:?} pin={:?} r={:?} diag={:?}",
+                ws.s, ws.seg, ws.pin, e.r, e.diag
+            );
+        }
 
         // Held points: keep, or release towards decreasing T.
         let mut released = false;
@@ -315,9 +328,17 @@ pub(crate) fn solve(g: &Geometry, ws: &mut Workspace, tol: f64, max_iterations: 
                 residual = residual.max(e.r[i].abs() / (w[i] + w[i + 1]));
             }
         }
-        let solution = |iterations| Solution { time: e.time, iterations, residual };
+        let solution = |iterations| Solution {
+            time: e.time,
+            iterations,
+            residual,
+        };
         let finished = |iterations| {
-            let outcome = if let Some(i) = ws.pin.iter().position(|p| matches!(p, Pin::Start | Pin::End)) {
+            let outcome = if let Some(i) = ws
+                .pin
+                .iter()
+                .position(|p| matches!(p, Pin::Start | Pin::End))
+            {
                 Outcome::LeftEnd(i)
             } else if ws.pin.contains(&Pin::Vertex) {
                 Outcome::Vertex
@@ -343,7 +364,11 @@ pub(crate) fn solve(g: &Geometry, ws: &mut Workspace, tol: f64, max_iterations: 
             ws.rhs[i] = if free { -e.r[i] } else { 0.0 };
             ws.diag[i] = if free { e.diag[i] } else { 1.0 };
             if i + 1 < k {
-                ws.off[i] = if free && ws.pin[i + 1] == Pin::Free { e.off[i] } else { 0.0 };
+                ws.off[i] = if free && ws.pin[i + 1] == Pin::Free {
+                    e.off[i]
+                } else {
+                    0.0
+                };
             }
         }
         let mut ok = thomas(&ws.diag, &ws.off, &ws.rhs, &mut ws.delta, &mut ws.scratch);
@@ -352,7 +377,8 @@ pub(crate) fn solve(g: &Geometry, ws: &mut Workspace, tol: f64, max_iterations: 
             // Levenberg damping, relative to the Hessian's natural scale w/ℓ.
             for i in 0..k {
                 if ws.pin[i] == Pin::Free {
-                    let nat = w[i] / e.len[i].max(f64::MIN_POSITIVE) + w[i + 1] / e.len[i + 1].max(f64::MIN_POSITIVE);
+                    let nat = w[i] / e.len[i].max(f64::MIN_POSITIVE)
+                        + w[i + 1] / e.len[i + 1].max(f64::MIN_POSITIVE);
                     let d = e.diag[i];
                     ws.diag[i] = d + mu * nat.min(1e300) * if d < 0.0 { -1.0 } else { 1.0 };
                 }
@@ -364,7 +390,9 @@ pub(crate) fn solve(g: &Geometry, ws: &mut Workspace, tol: f64, max_iterations: 
             // Scaled steepest descent on the residual.
             for i in 0..k {
                 ws.delta[i] = if ws.pin[i] == Pin::Free {
-                    -e.r[i] / (w[i] + w[i + 1]) * e.len[i].min(e.len[i + 1]).max(f64::MIN_POSITIVE) * 0.5
+                    -e.r[i] / (w[i] + w[i + 1])
+                        * e.len[i].min(e.len[i + 1]).max(f64::MIN_POSITIVE)
+                        * 0.5
                 } else {
                     0.0
                 };
@@ -373,17 +401,24 @@ pub(crate) fn solve(g: &Geometry, ws: &mut Workspace, tol: f64, max_iterations: 
 
         // Round-off floor: the full step cannot move any point to another float.
         let tiny = (0..k).all(|i| {
-            ws.pin[i] != Pin::Free || ws.delta[i].abs() <= 4.0 * f64::EPSILON * (ws.s[i].abs() + e.len[i] + e.len[i + 1])
+            ws.pin[i] != Pin::Free
+                || ws.delta[i].abs()
+                    <= 4.0 * f64::EPSILON * (ws.s[i].abs() + e.len[i] + e.len[i + 1])
         });
         if tiny {
             return finished(iterations);
         }
 
-        // Cap: no point moves further than its longer leg.
+        // Cap: no point moves further than its longer leg, nor half way round a closed
+        // polyline.
         let mut cap: f64 = 1.0;
         for i in 0..k {
             if ws.pin[i] == Pin::Free {
-                let limit = e.len[i].max(e.len[i + 1]);
+                let line = g.line(i);
+                let mut limit = e.len[i].max(e.len[i + 1]);
+                if line.is_closed() {
+                    limit = limit.min(0.25 * line.length());
+                }
                 if ws.delta[i].abs() > limit && limit > 0.0 {
                     cap = cap.min(limit / ws.delta[i].abs());
                 }
@@ -411,6 +446,12 @@ pub(crate) fn solve(g: &Geometry, ws: &mut Workspace, tol: f64, max_iterations: 
             let crossed = (0..k).any(|i| ws.seg_try[i] != ws.seg[i]);
             g.evaluate(&ws.s_try, &ws.seg_try, &mut ws.eval_try, true, crossed);
             let phi = merit(g, &ws.eval_try, &ws.pin_try);
+            if cfg!(debug_assertions) && std::env::var_os("EIGENRAY_DEBUG").is_some() {
+                eprintln!(
+                    "   try alpha={alpha} s={:?} seg={:?} r={:?} phi={phi} phi0={phi0}",
+                    ws.s_try, ws.seg_try, ws.eval_try.r
+                );
+            }
             if phi.is_finite() && phi <= (1.0 - 1e-4 * alpha) * phi0 {
                 accepted = true;
                 break;
@@ -418,18 +459,23 @@ pub(crate) fn solve(g: &Geometry, ws: &mut Workspace, tol: f64, max_iterations: 
             if phi.is_finite() && best.is_none_or(|(_, b)| phi < b) {
                 best = Some((alpha, phi));
             }
-            // A point that jumped across one vertex and now wants to go back: pin it there.
+            // A point that jumped across one vertex: if it now wants to go back, hold it on
+            // the vertex; if it wants to go on, put it on the vertex in the new segment. The
+            // merit is discontinuous at a vertex, so backtracking alone would only creep
+            // towards it.
             for i in 0..k {
                 if ws.pin[i] != Pin::Free || ws.pin_try[i] != Pin::Free {
                     continue;
                 }
                 if let Some(v) = single_vertex_between(g, i, ws.seg[i], ws.seg_try[i]) {
+                    ws.s[i] = g.line(i).start(v);
                     if ws.eval_try.r[i] * ws.eval.r[i] < 0.0 {
-                        ws.s[i] = g.line(i).start(v);
                         ws.seg[i] = v;
                         ws.pin[i] = Pin::Vertex;
-                        pinned = true;
+                    } else {
+                        ws.seg[i] = ws.seg_try[i];
                     }
+                    pinned = true;
                 }
             }
             if pinned {
@@ -452,7 +498,14 @@ pub(crate) fn solve(g: &Geometry, ws: &mut Workspace, tol: f64, max_iterations: 
             }
             // Non-monotone fallback: take the best trial so that the iteration moves on.
             let Some((a, _)) = best else {
-                return (Outcome::NotConverged, Solution { time: e.time, iterations, residual });
+                return (
+                    Outcome::NotConverged,
+                    Solution {
+                        time: e.time,
+                        iterations,
+                        residual,
+                    },
+                );
             };
             for i in 0..k {
                 if ws.pin[i] == Pin::Free {

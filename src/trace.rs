@@ -43,7 +43,10 @@ impl Status {
     }
     /// Whether the ray has a travel time and points (`converged`, `vertex`, `obstructed`).
     pub fn has_time(self) -> bool {
-        matches!(self, Status::Converged | Status::Vertex | Status::Obstructed)
+        matches!(
+            self,
+            Status::Converged | Status::Vertex | Status::Obstructed
+        )
     }
 }
 
@@ -90,13 +93,33 @@ pub enum Reason {
     IterationLimit,
 }
 
+impl Reason {
+    /// The reason in words, naming interfaces by their names in `scene`.
+    pub fn describe(&self, scene: &Scene) -> String {
+        match *self {
+            Reason::Crosses { leg, interface } => match scene.interfaces().get(interface) {
+                Some(i) => format!("leg {leg} crosses interface `{}`", i.name),
+                None => self.to_string(),
+            },
+            _ => self.to_string(),
+        }
+    }
+}
+
 impl fmt::Display for Reason {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Reason::LeavesEnd { step } => write!(f, "step {step} would leave the end of its open interface"),
-            Reason::WrongSide { step } => write!(f, "at step {step} the legs are not on the sides the step demands"),
+            Reason::LeavesEnd { step } => {
+                write!(f, "step {step} would leave the end of its open interface")
+            }
+            Reason::WrongSide { step } => write!(
+                f,
+                "at step {step} the legs are not on the sides the step demands"
+            ),
             Reason::AtVertex { step } => write!(f, "step {step} is held on a polyline vertex"),
-            Reason::Crosses { leg, interface } => write!(f, "leg {leg} crosses interface {interface}"),
+            Reason::Crosses { leg, interface } => {
+                write!(f, "leg {leg} crosses interface {interface}")
+            }
             Reason::NoMedium { leg } => write!(f, "no medium fills the region of leg {leg}"),
             Reason::MediaUnsettled => f.write_str("the leg media change with the solution"),
             Reason::IterationLimit => f.write_str("iteration limit reached"),
@@ -146,7 +169,13 @@ pub struct Ray {
 
 /// The contract's ray numbering: source-major, then receiver, then path.
 #[inline]
-pub fn ray_index(source: usize, receiver: usize, path: usize, receivers: usize, paths: usize) -> usize {
+pub fn ray_index(
+    source: usize,
+    receiver: usize,
+    path: usize,
+    receivers: usize,
+    paths: usize,
+) -> usize {
     (source * receivers + receiver) * paths + path
 }
 
@@ -169,12 +198,20 @@ impl<'s> Tracer<'s> {
     /// # Errors
     /// A scene whose regions are inconsistent (two `at` points in one region).
     pub fn new(scene: &'s Scene) -> Result<Tracer<'s>, SceneError> {
-        let regions = if scene.needs_regions() { Some(Regions::build(scene)?) } else { None };
+        let regions = if scene.needs_regions() {
+            Some(Regions::build(scene)?)
+        } else {
+            None
+        };
         let source_media = match &regions {
             Some(r) => scene.sources().iter().map(|&p| r.medium_at(p)).collect(),
             None => Vec::new(),
         };
-        Ok(Tracer { scene, regions, source_media })
+        Ok(Tracer {
+            scene,
+            regions,
+            source_media,
+        })
     }
 
     /// The scene.
@@ -207,7 +244,14 @@ impl<'s> Tracer<'s> {
             .collect()
     }
 
-    fn to_ray(&self, source: usize, receiver: usize, path: usize, s: &RaySummary, ws: &Workspace) -> Ray {
+    fn to_ray(
+        &self,
+        source: usize,
+        receiver: usize,
+        path: usize,
+        s: &RaySummary,
+        ws: &Workspace,
+    ) -> Ray {
         let has = s.status.has_time();
         Ray {
             source,
@@ -223,13 +267,25 @@ impl<'s> Tracer<'s> {
         }
     }
 
-    fn solve_indexed(&self, source: usize, receiver: usize, path: usize, ws: &mut Workspace) -> RaySummary {
+    fn solve_indexed(
+        &self,
+        source: usize,
+        receiver: usize,
+        path: usize,
+        ws: &mut Workspace,
+    ) -> RaySummary {
         self.solve_indexed_from(source, receiver, path, None, ws)
     }
 
     /// Solves path `path` between two arbitrary points. The points of the ray are left in
     /// `ws` ([`Workspace::points`]); nothing is allocated once `ws` has grown.
-    pub fn solve(&self, source: Point, receiver: Point, path: usize, ws: &mut Workspace) -> RaySummary {
+    pub fn solve(
+        &self,
+        source: Point,
+        receiver: Point,
+        path: usize,
+        ws: &mut Workspace,
+    ) -> RaySummary {
         let src_medium = self.regions.as_ref().and_then(|r| r.medium_at(source));
         self.solve_inner(source, src_medium, receiver, path, None, ws)
     }
@@ -241,8 +297,19 @@ impl<'s> Tracer<'s> {
     ///
     /// # Panics
     /// If `guess` does not have one parameter per step of the path.
-    pub fn solve_from(&self, source: Point, receiver: Point, path: usize, guess: &[f64], ws: &mut Workspace) -> RaySummary {
-        assert_eq!(guess.len(), self.scene.paths()[path].steps.len(), "one parameter per step");
+    pub fn solve_from(
+        &self,
+        source: Point,
+        receiver: Point,
+        path: usize,
+        guess: &[f64],
+        ws: &mut Workspace,
+    ) -> RaySummary {
+        assert_eq!(
+            guess.len(),
+            self.scene.paths()[path].steps.len(),
+            "one parameter per step"
+        );
         let src_medium = self.regions.as_ref().and_then(|r| r.medium_at(source));
         self.solve_inner(source, src_medium, receiver, path, Some(guess), ws)
     }
@@ -258,7 +325,14 @@ impl<'s> Tracer<'s> {
         ws: &mut Workspace,
     ) -> RaySummary {
         let src_medium = self.source_media.get(source).copied().flatten();
-        self.solve_inner(self.scene.sources()[source], src_medium, self.scene.receivers()[receiver], path, guess, ws)
+        self.solve_inner(
+            self.scene.sources()[source],
+            src_medium,
+            self.scene.receivers()[receiver],
+            path,
+            guess,
+            ws,
+        )
     }
 
     fn solve_inner(
@@ -278,7 +352,13 @@ impl<'s> Tracer<'s> {
         ws.slowness.clear();
         ws.media.clear();
         ws.points.clear();
-        let fail = |status, reason| RaySummary { status, time: f64::NAN, iterations: 0, residual: f64::NAN, reason: Some(reason) };
+        let fail = |status, reason| RaySummary {
+            status,
+            time: f64::NAN,
+            iterations: 0,
+            residual: f64::NAN,
+            reason: Some(reason),
+        };
 
         initial_guess(scene, &spec.steps, source, receiver, ws);
         let lookup = spec.media.is_none();
@@ -287,10 +367,17 @@ impl<'s> Tracer<'s> {
         } else if let Err(reason) = self.lookup_media(source, src_medium, &spec.steps, ws) {
             return fail(Status::NoPath, reason);
         }
-        ws.slowness.extend(ws.media.iter().map(|&m| scene.media()[m].slowness));
+        ws.slowness
+            .extend(ws.media.iter().map(|&m| scene.media()[m].slowness));
         if let Some(guess) = guess {
             let slowness = std::mem::take(&mut ws.slowness);
-            let g = Geometry { scene, steps: &spec.steps, slowness: &slowness, source, receiver };
+            let g = Geometry {
+                scene,
+                steps: &spec.steps,
+                slowness: &slowness,
+                source,
+                receiver,
+            };
             warm_start(&g, guess, ws);
             ws.slowness = slowness;
         }
@@ -299,8 +386,19 @@ impl<'s> Tracer<'s> {
         let mut rounds = 0;
         let (outcome, mut sol) = loop {
             let slowness = std::mem::take(&mut ws.slowness);
-            let g = Geometry { scene, steps: &spec.steps, slowness: &slowness, source, receiver };
-            let (outcome, mut sol) = solve(&g, ws, opts.tolerance, opts.max_iterations.saturating_sub(total_iterations));
+            let g = Geometry {
+                scene,
+                steps: &spec.steps,
+                slowness: &slowness,
+                source,
+                receiver,
+            };
+            let (outcome, mut sol) = solve(
+                &g,
+                ws,
+                opts.tolerance,
+                opts.max_iterations.saturating_sub(total_iterations),
+            );
             ws.slowness = slowness;
             total_iterations += sol.iterations;
             sol.iterations = total_iterations;
@@ -311,46 +409,84 @@ impl<'s> Tracer<'s> {
             std::mem::swap(&mut ws.media, &mut ws.media_prev);
             if let Err(reason) = self.lookup_media(source, src_medium, &spec.steps, ws) {
                 std::mem::swap(&mut ws.media, &mut ws.media_prev);
-                return RaySummary { reason: Some(reason), status: Status::NoPath, ..summary(sol) };
+                return RaySummary {
+                    reason: Some(reason),
+                    status: Status::NoPath,
+                    ..summary(sol)
+                };
             }
             if ws.media == ws.media_prev {
                 break (outcome, sol);
             }
             rounds += 1;
             if rounds >= 3 {
-                return RaySummary { reason: Some(Reason::MediaUnsettled), status: Status::NoPath, ..summary(sol) };
+                return RaySummary {
+                    reason: Some(Reason::MediaUnsettled),
+                    status: Status::NoPath,
+                    ..summary(sol)
+                };
             }
             ws.slowness.clear();
-            ws.slowness.extend(ws.media.iter().map(|&m| scene.media()[m].slowness));
+            ws.slowness
+                .extend(ws.media.iter().map(|&m| scene.media()[m].slowness));
         };
 
         ws.points.push(source);
-        for v in &ws.eval.rel[1..=k + 1] {
-            ws.points.push(source + *v);
+        for (i, step) in spec.steps.iter().enumerate() {
+            ws.points.push(
+                scene.interfaces()[step.interface]
+                    .polyline
+                    .point_on(ws.seg[i], ws.s[i]),
+            );
         }
+        ws.points.push(receiver);
         if let Some(t) = recompute_time(ws) {
             sol.time = t;
         }
         let base = summary(sol);
         match outcome {
             Outcome::NotConverged => {
-                return RaySummary { status: Status::NotConverged, reason: Some(Reason::IterationLimit), ..base };
+                return RaySummary {
+                    status: Status::NotConverged,
+                    reason: Some(Reason::IterationLimit),
+                    ..base
+                };
             }
             Outcome::LeftEnd(step) => {
-                return RaySummary { status: Status::NoPath, reason: Some(Reason::LeavesEnd { step }), ..base };
+                return RaySummary {
+                    status: Status::NoPath,
+                    reason: Some(Reason::LeavesEnd { step }),
+                    ..base
+                };
             }
             Outcome::Converged | Outcome::Vertex => {}
         }
         if let Some(step) = self.wrong_side(&spec.steps, ws) {
-            return RaySummary { status: Status::NoPath, reason: Some(Reason::WrongSide { step }), ..base };
+            return RaySummary {
+                status: Status::NoPath,
+                reason: Some(Reason::WrongSide { step }),
+                ..base
+            };
         }
         if let Some((leg, interface)) = self.obstruction(ws) {
-            return RaySummary { status: Status::Obstructed, reason: Some(Reason::Crosses { leg, interface }), ..base };
+            return RaySummary {
+                status: Status::Obstructed,
+                reason: Some(Reason::Crosses { leg, interface }),
+                ..base
+            };
         }
         if let Some(step) = ws.pin.iter().position(|p| *p == Pin::Vertex) {
-            return RaySummary { status: Status::Vertex, reason: Some(Reason::AtVertex { step }), ..base };
+            return RaySummary {
+                status: Status::Vertex,
+                reason: Some(Reason::AtVertex { step }),
+                ..base
+            };
         }
-        RaySummary { status: Status::Converged, reason: None, ..base }
+        RaySummary {
+            status: Status::Converged,
+            reason: None,
+            ..base
+        }
     }
 
     /// Leg media from the regions at the current points: the source's region for leg 0; a
@@ -389,7 +525,11 @@ impl<'s> Tracer<'s> {
             let j = ws.seg[i];
             let mut n = line.normal(j);
             if ws.pin[i] == Pin::Vertex {
-                let before = if j > 0 { j - 1 } else { line.num_segments() - 1 };
+                let before = if j > 0 {
+                    j - 1
+                } else {
+                    line.num_segments() - 1
+                };
                 n = n + line.normal(before);
             }
             let a = n.dot(rel[i] - rel[i + 1]);
@@ -438,7 +578,13 @@ impl<'s> Tracer<'s> {
 const END_MARGIN: f64 = 1e-10;
 
 fn summary(sol: crate::solver::Solution) -> RaySummary {
-    RaySummary { status: Status::NotConverged, time: sol.time, iterations: sol.iterations, residual: sol.residual, reason: None }
+    RaySummary {
+        status: Status::NotConverged,
+        time: sol.time,
+        iterations: sol.iterations,
+        residual: sol.residual,
+        reason: None,
+    }
 }
 
 /// The time from the final legs, summed in order (the solver's last evaluation already holds
@@ -457,7 +603,11 @@ fn warm_start(g: &Geometry, guess: &[f64], ws: &mut Workspace) {
         ws.s_alt[i] = ws.s[i];
         ws.seg_alt[i] = ws.seg[i];
         let line = g.line(i);
-        let s = if line.is_closed() { line.wrap(guess[i]) } else { guess[i].clamp(0.0, line.length()) };
+        let s = if line.is_closed() {
+            line.wrap(guess[i])
+        } else {
+            guess[i].clamp(0.0, line.length())
+        };
         ws.s[i] = s;
         ws.seg[i] = line.segment_at_hint(s, ws.seg[i]);
     }
@@ -471,7 +621,13 @@ fn warm_start(g: &Geometry, guess: &[f64], ws: &mut Workspace) {
 }
 
 /// The documented initial guess (see [`Tracer`]).
-fn initial_guess(scene: &Scene, steps: &[crate::scene::Step], source: Point, receiver: Point, ws: &mut Workspace) {
+fn initial_guess(
+    scene: &Scene,
+    steps: &[crate::scene::Step],
+    source: Point,
+    receiver: Point,
+    ws: &mut Workspace,
+) {
     let k = steps.len();
     for (i, step) in steps.iter().enumerate() {
         let line = &scene.interfaces()[step.interface].polyline;

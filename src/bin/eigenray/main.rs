@@ -1,0 +1,372 @@
+//! `eigenray`: the command-line tool: solve a scene file to JSON, or run the built-in demo.
+//!
+//! A thin layer over the library: read, validate, trace, write. Exit status 0 on success
+//! (also when some rays find no path), 2 for an invalid scene, an unreadable input or a usage
+//! error, 1 when the output cannot be written (a closed pipe exits 1 without a message).
+
+mod svg;
+
+use std::fmt::Write as _;
+use std::fs;
+use std::io::{self, Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use eigenray::{Batch, BatchOptions, Ray, Scene, SceneError, Status, Tracer, write_batch};
+use indicatif::{ProgressBar, ProgressStyle};
+
+/// Receivers of the demo scene by default.
+const DEMO_RECEIVERS: u64 = 500;
+/// Largest `demo --receivers` accepted.
+const DEMO_MAX_RECEIVERS: u64 = 10_000_000;
+/// Seed of the demo's receiver grid by default.
+const DEMO_SEED: u64 = 1;
+/// Where the demo writes its picture by default.
+const DEMO_SVG: &str = "eigenray-demo.svg";
+/// At most this many rays are drawn in a picture (every k-th ray beyond it), so that a big
+/// batch does not make a picture no viewer can open.
+const SVG_MAX_RAYS: usize = 20_000;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "eigenray",
+    version,
+    about = "Eigenrays through prescribed reflections and refractions on 2-D piecewise-linear interfaces",
+    long_about = "Eigenrays through prescribed reflections and refractions on 2-D piecewise-linear \
+                  interfaces.\n\nWithout a command, runs the built-in demo (`eigenray demo`).\n\n\
+                  Exit status: 0 success (also when some rays find no path); 2 invalid scene, \
+                  unreadable input or usage error; 1 output could not be written."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Solve every (source, receiver, path) ray of a scene file; write the rays as JSON to
+    /// standard output, in ray order.
+    Solve(SolveArgs),
+    /// Solve the built-in air-over-water scene, print a summary and draw it (the default).
+    Demo(DemoArgs),
+}
+
+#[derive(Args, Debug)]
+struct SolveArgs {
+    /// Scene file (JSON); `-` reads standard input.
+    #[arg(value_name = "SCENE.json")]
+    scene: PathBuf,
+    /// Output format: `json`, one `{"rays": [...]}` document; `jsonl`, one ray per line;
+    /// `csv`, a header and one line per ray.
+    #[arg(long, value_enum, default_value_t = Format::Json)]
+    format: Format,
+    /// Start every ray from the default initial guess instead of a neighbouring receiver's
+    /// solution.
+    #[arg(long)]
+    no_warm_start: bool,
+    /// Also draw the scene and its rays, coloured by travel time, to this SVG file.
+    #[arg(long, value_name = "PATH")]
+    svg: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+struct DemoArgs {
+    /// Number of receivers (on a jittered grid under the water surface).
+    #[arg(long, value_name = "N", default_value_t = DEMO_RECEIVERS,
+          value_parser = clap::value_parser!(u64).range(0..=DEMO_MAX_RECEIVERS))]
+    receivers: u64,
+    /// Where to write the picture.
+    #[arg(long, value_name = "PATH", default_value = DEMO_SVG)]
+    svg: PathBuf,
+    /// Do not write the picture.
+    #[arg(long)]
+    no_svg: bool,
+    /// Seed of the receivers' jitter.
+    #[arg(long, value_name = "S", default_value_t = DEMO_SEED)]
+    seed: u64,
+}
+
+impl Default for DemoArgs {
+    fn default() -> Self {
+        DemoArgs {
+            receivers: DEMO_RECEIVERS,
+            svg: PathBuf::from(DEMO_SVG),
+            no_svg: false,
+            seed: DEMO_SEED,
+        }
+    }
+}
+
+/// Output formats of `solve`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Format {
+    /// The contract's document: `{"rays": [...]}`.
+    Json,
+    /// One ray object per line (JSON Lines), in ray order.
+    Jsonl,
+    /// Comma-separated values: one line per ray, points as `x y;x y;…`.
+    Csv,
+}
+
+impl From<Format> for eigenray::Format {
+    fn from(f: Format) -> Self {
+        match f {
+            Format::Json => eigenray::Format::Json,
+            Format::Jsonl => eigenray::Format::Jsonl,
+            Format::Csv => eigenray::Format::Csv,
+        }
+    }
+}
+
+/// Why the program stops early.
+#[derive(Debug)]
+enum Failure {
+    /// Invalid scene or unreadable input (exit status 2); the message is `key: what`.
+    Input(String),
+    /// An output could not be written (exit status 1).
+    Output(String),
+    /// Standard output was closed by the reader (exit status 1, no message).
+    BrokenPipe,
+}
+
+impl Failure {
+    fn exit(self) -> ExitCode {
+        let (code, message) = match self {
+            Failure::Input(m) => (2, Some(m)),
+            Failure::Output(m) => (1, Some(m)),
+            Failure::BrokenPipe => (1, None),
+        };
+        if let Some(m) = message {
+            // One line, whatever the message holds; a failing stderr has nowhere to report to.
+            let line = m.replace(['\r', '\n'], " ");
+            let _ = writeln!(io::stderr().lock(), "error: {line}");
+        }
+        ExitCode::from(code)
+    }
+
+    fn scene(e: SceneError) -> Failure {
+        Failure::Input(e.to_string())
+    }
+
+    /// A failed write to standard output.
+    fn stdout(e: io::Error) -> Failure {
+        if is_broken_pipe(&e) {
+            Failure::BrokenPipe
+        } else {
+            Failure::Output(format!("standard output: {}", io_message(&e)))
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Some(Command::Solve(args)) => solve(&args),
+        Some(Command::Demo(args)) => demo(&args),
+        None => demo(&DemoArgs::default()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(f) => f.exit(),
+    }
+}
+
+/// `eigenray solve`: everything is computed before anything is written.
+fn solve(args: &SolveArgs) -> Result<(), Failure> {
+    let text = read_scene_text(&args.scene)?;
+    let scene = Scene::from_json(&text).map_err(Failure::scene)?;
+    let tracer = Tracer::new(&scene).map_err(Failure::scene)?;
+    let batch = trace(&tracer, !args.no_warm_start);
+
+    if let Some(path) = &args.svg {
+        let title = format!("{}: {}", display_name(&args.scene), batch_summary(&batch));
+        write_svg(path, &scene, &batch, &title)?;
+    }
+    write_batch(&scene, &batch, args.format.into(), io::stdout().lock()).map_err(Failure::stdout)
+}
+
+/// Rays expected to take about a second to solve: beyond this a progress bar is shown.
+const PROGRESS_RAYS: usize = 1_000_000;
+
+/// Solves every ray; a progress bar on standard error for big batches when it is a terminal.
+fn trace(tracer: &Tracer, warm_start: bool) -> Batch {
+    let n = tracer.scene().num_rays();
+    let bar = (n >= PROGRESS_RAYS && std::io::IsTerminal::is_terminal(&io::stderr())).then(|| {
+        let bar = ProgressBar::new(n as u64);
+        if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} rays, {eta} left") {
+            bar.set_style(style);
+        }
+        bar
+    });
+    let progress = |done: usize| {
+        if let Some(bar) = &bar {
+            bar.inc(done as u64);
+        }
+    };
+    let opts = BatchOptions {
+        warm_start,
+        progress: Some(&progress),
+        ..BatchOptions::default()
+    };
+    let batch = tracer.trace_batch(&opts);
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    batch
+}
+
+/// The scene file as text: `-` is standard input; errors name the path.
+fn read_scene_text(path: &Path) -> Result<String, Failure> {
+    let name = display_name(path);
+    let bytes = if path.as_os_str() == "-" {
+        let mut buf = Vec::new();
+        io::stdin().lock().read_to_end(&mut buf).map(|_| buf)
+    } else {
+        fs::read(path)
+    }
+    .map_err(|e| Failure::Input(format!("{name}: cannot read: {}", io_message(&e))))?;
+    let mut text = String::from_utf8(bytes).map_err(|e| {
+        Failure::Input(format!(
+            "{name}: not UTF-8 text (invalid byte at offset {})",
+            e.utf8_error().valid_up_to()
+        ))
+    })?;
+    // A byte-order mark is not part of the JSON document.
+    if text.starts_with('\u{feff}') {
+        text.drain(..'\u{feff}'.len_utf8());
+    }
+    Ok(text)
+}
+
+/// `eigenray demo`: the air-over-water scene, a one-line summary and a picture.
+fn demo(args: &DemoArgs) -> Result<(), Failure> {
+    // The range check on `--receivers` keeps this conversion exact.
+    let n = usize::try_from(args.receivers)
+        .map_err(|_| Failure::Input("--receivers: too large".into()))?;
+    let spec = eigenray::demo::air_water(n, args.seed);
+    let scene = Scene::from_spec(&spec).map_err(Failure::scene)?;
+    let tracer = Tracer::new(&scene).map_err(Failure::scene)?;
+    // Start the worker threads first: the wall time is the solve's, not the pool's start-up.
+    rayon::broadcast(|_| ());
+    let start = Instant::now();
+    let batch = trace(&tracer, true);
+    let wall = start.elapsed().as_secs_f64();
+
+    let index = |name: &str| scene.medium_index(name).map(|i| scene.media()[i].slowness);
+    let media = match (index("air"), index("water")) {
+        (Some(a), Some(w)) => format!("air over water (index {a:?} / {w:?})"),
+        _ => "air over water".to_string(),
+    };
+    let mut summary = format!("demo: {media}, {}", batch_summary(&batch));
+    if let Some((lo, hi)) = time_range(&batch) {
+        let _ = write!(summary, "; time {lo:.2}..{hi:.2}");
+    }
+    let _ = write!(summary, "; {:.1} ms wall", wall * 1e3);
+    if !batch.is_empty() {
+        let _ = write!(summary, " ({:.2} µs/ray)", wall * 1e6 / batch.len() as f64);
+    }
+
+    let mut lines = vec![summary];
+    if !args.no_svg {
+        let title = format!("eigenray demo: {media}, {} rays", batch.len());
+        write_svg(&args.svg, &scene, &batch, &title)?;
+        lines.push(format!("wrote {}", args.svg.display()));
+    }
+    let mut out = io::stdout().lock();
+    for line in lines {
+        writeln!(out, "{line}").map_err(Failure::stdout)?;
+    }
+    out.flush().map_err(Failure::stdout)
+}
+
+/// `500 rays: 498 converged, 2 no_path` (statuses in the contract's order, zeros left out).
+fn batch_summary(batch: &Batch) -> String {
+    const ORDER: [Status; 5] = [
+        Status::Converged,
+        Status::Vertex,
+        Status::NoPath,
+        Status::Obstructed,
+        Status::NotConverged,
+    ];
+    let mut counts = [0usize; 5];
+    for r in batch.records() {
+        if let Some(i) = ORDER.iter().position(|&s| s == r.status) {
+            counts[i] += 1;
+        }
+    }
+    let parts: Vec<String> = ORDER
+        .iter()
+        .zip(counts)
+        .filter(|(_, n)| *n > 0)
+        .map(|(s, n)| format!("{n} {s}"))
+        .collect();
+    let plural = if batch.len() == 1 { "ray" } else { "rays" };
+    if parts.is_empty() {
+        format!("{} {plural}", batch.len())
+    } else {
+        format!("{} {plural}: {}", batch.len(), parts.join(", "))
+    }
+}
+
+/// Smallest and largest travel time of the rays that have one.
+fn time_range(batch: &Batch) -> Option<(f64, f64)> {
+    batch
+        .records()
+        .iter()
+        .filter(|r| r.status.has_time() && r.time.is_finite())
+        .fold(None, |acc, r| match acc {
+            None => Some((r.time, r.time)),
+            Some((lo, hi)) => Some((lo.min(r.time), hi.max(r.time))),
+        })
+}
+
+/// Draws the picture and writes it to `path` (at most [`SVG_MAX_RAYS`] rays drawn).
+fn write_svg(path: &Path, scene: &Scene, batch: &Batch, title: &str) -> Result<(), Failure> {
+    let step = batch.len().div_ceil(SVG_MAX_RAYS).max(1);
+    let rays: Vec<Ray> = (0..batch.len())
+        .step_by(step)
+        .map(|i| batch.ray(i))
+        .collect();
+    let svg = if step > 1 {
+        svg::scene_svg(scene, &rays, &format!("{title} (1 ray in {step} drawn)"))
+    } else {
+        svg::scene_svg(scene, &rays, title)
+    };
+    fs::write(path, svg).map_err(|e| {
+        Failure::Output(format!(
+            "{}: cannot write: {}",
+            path.display(),
+            io_message(&e)
+        ))
+    })
+}
+
+/// Whether a write failed because the reader closed the pipe (also when the error comes
+/// wrapped in a `serde_json` error, as `write_rays_json` returns it).
+fn is_broken_pipe(e: &io::Error) -> bool {
+    let inner = e
+        .get_ref()
+        .and_then(|i| i.downcast_ref::<serde_json::Error>())
+        .and_then(serde_json::Error::io_error_kind);
+    e.kind() == io::ErrorKind::BrokenPipe || inner == Some(io::ErrorKind::BrokenPipe)
+}
+
+/// The name of an input in messages.
+fn display_name(path: &Path) -> String {
+    if path.as_os_str() == "-" {
+        "<stdin>".to_string()
+    } else {
+        path.display().to_string()
+    }
+}
+
+/// An I/O error's description without the ` (os error N)` suffix.
+fn io_message(e: &io::Error) -> String {
+    let s = e.to_string();
+    match s.rfind(" (os error ") {
+        Some(i) if s.ends_with(')') => s[..i].to_string(),
+        _ => s,
+    }
+}

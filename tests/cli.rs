@@ -1,0 +1,504 @@
+//! Integration tests of the `eigenray` command line: the `solve` contract, invalid scenes, the demo.
+
+use std::ffi::OsStr;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use serde_json::Value;
+
+const BIN: &str = env!("CARGO_BIN_EXE_eigenray");
+
+/// Snell's law for source (0, 1), receiver (1, −1), indices 1 and 1.333 across y = 0.
+const SNELL_TIME: f64 = 2.601764023084769;
+
+/// A file in the temporary directory, removed when dropped.
+struct TempFile(PathBuf);
+
+impl TempFile {
+    /// A unique path (nothing written yet).
+    fn path_only(name: &str) -> TempFile {
+        static COUNTER: AtomicUsize = AtomicUsize::new(0);
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        TempFile(
+            std::env::temp_dir().join(format!("eigenray-cli-{}-{n}-{name}", std::process::id())),
+        )
+    }
+    fn with(name: &str, contents: impl AsRef<[u8]>) -> TempFile {
+        let f = TempFile::path_only(name);
+        std::fs::write(&f.0, contents).expect("write temp file");
+        f
+    }
+    fn path(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+fn run<I, S>(args: I) -> Output
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<OsStr>,
+{
+    Command::new(BIN).args(args).output().expect("run eigenray")
+}
+
+fn text(bytes: &[u8]) -> &str {
+    std::str::from_utf8(bytes).expect("UTF-8 output")
+}
+
+/// Runs `eigenray solve` on `scene` (written to a temp file); asserts success; returns the
+/// document.
+fn solve(scene: &str) -> Value {
+    let file = TempFile::with("scene.json", scene);
+    let out = run([OsStr::new("solve"), file.path().as_os_str()]);
+    assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
+    assert!(out.stderr.is_empty(), "stderr: {}", text(&out.stderr));
+    serde_json::from_slice(&out.stdout).expect("stdout is one JSON document")
+}
+
+/// Checks the contract's shape of every ray: count, order, indices, and `time`/`points`
+/// present exactly for `converged`, `vertex` and `obstructed` (with steps + 2 points).
+fn check_rays(doc: &Value, sources: usize, receivers: usize, steps: &[usize]) -> Vec<Value> {
+    let rays = doc["rays"].as_array().expect("`rays` is an array").clone();
+    assert_eq!(rays.len(), sources * receivers * steps.len());
+    for (idx, ray) in rays.iter().enumerate() {
+        let path = idx % steps.len();
+        let receiver = (idx / steps.len()) % receivers;
+        let source = idx / (steps.len() * receivers);
+        assert_eq!(ray["source"], source, "ray {idx}");
+        assert_eq!(ray["receiver"], receiver, "ray {idx}");
+        assert_eq!(ray["path"], path, "ray {idx}");
+        assert!(ray["iterations"].is_u64(), "ray {idx}: iterations");
+        let status = ray["status"].as_str().expect("status is a string");
+        assert!(
+            [
+                "converged",
+                "vertex",
+                "no_path",
+                "obstructed",
+                "not_converged"
+            ]
+            .contains(&status),
+            "ray {idx}: status {status}"
+        );
+        let has_time = matches!(status, "converged" | "vertex" | "obstructed");
+        assert_eq!(
+            ray.get("time").is_some(),
+            has_time,
+            "ray {idx}: time with status {status}"
+        );
+        assert_eq!(
+            ray.get("points").is_some(),
+            has_time,
+            "ray {idx}: points with status {status}"
+        );
+        if has_time {
+            assert!(
+                ray["time"]
+                    .as_f64()
+                    .is_some_and(|t| t.is_finite() && t > 0.0),
+                "ray {idx}: time"
+            );
+            let points = ray["points"].as_array().expect("points is an array");
+            assert_eq!(
+                points.len(),
+                steps[path] + 2,
+                "ray {idx}: source, interactions, receiver"
+            );
+            for p in points {
+                let p = p.as_array().expect("a point is an array");
+                assert_eq!(p.len(), 2);
+                assert!(p.iter().all(|c| c.as_f64().is_some_and(f64::is_finite)));
+            }
+        }
+    }
+    rays
+}
+
+fn point(v: &Value) -> [f64; 2] {
+    [v[0].as_f64().expect("x"), v[1].as_f64().expect("y")]
+}
+
+fn close(a: f64, b: f64, rel: f64) -> bool {
+    (a - b).abs() <= rel * b.abs()
+}
+
+const AIR_WATER: &str = r#"{
+    "media": { "air": { "index": 1.0 }, "water": { "index": 1.333 } },
+    "interfaces": { "surface": { "points": [[-1, 0], [2, 0]] } },
+    "sources": [[0, 1]],
+    "receivers": [[1, -1], [0.5, -1]],
+    "paths": [
+        { "name": "transmitted", "steps": [{ "refract": "surface" }], "media": ["air", "water"] },
+        { "name": "bounce", "steps": [{ "reflect": "surface" }], "media": ["air", "air"] }
+    ]
+}"#;
+
+/// The minimiser of `n1·√(x² + 1) + n2·√((1 − x)² + 1)` by bisection on its derivative.
+fn snell_time(n1: f64, n2: f64) -> (f64, f64) {
+    let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
+    for _ in 0..200 {
+        let x = 0.5 * (lo + hi);
+        let d = n1 * x / (x * x + 1.0).sqrt() - n2 * (1.0 - x) / ((1.0 - x).powi(2) + 1.0).sqrt();
+        if d > 0.0 { hi = x } else { lo = x }
+    }
+    let x = 0.5 * (lo + hi);
+    (
+        x,
+        n1 * (x * x + 1.0).sqrt() + n2 * ((1.0 - x).powi(2) + 1.0).sqrt(),
+    )
+}
+
+#[test]
+fn solve_refraction_matches_snell_and_reflection_below_has_no_path() {
+    let doc = solve(AIR_WATER);
+    let rays = check_rays(&doc, 1, 2, &[1, 1]);
+    let (x, t) = snell_time(1.0, 1.333);
+    assert!(close(t, SNELL_TIME, 1e-14), "closed form {t}");
+
+    // Ray 0: source 0, receiver (1, −1), transmitted.
+    assert_eq!(rays[0]["status"], "converged");
+    let time = rays[0]["time"].as_f64().expect("time");
+    assert!(
+        close(time, SNELL_TIME, 1e-12),
+        "time {time} vs {SNELL_TIME}"
+    );
+    let pts: Vec<[f64; 2]> = rays[0]["points"]
+        .as_array()
+        .expect("points")
+        .iter()
+        .map(point)
+        .collect();
+    assert_eq!(pts[0], [0.0, 1.0]);
+    assert_eq!(pts[2], [1.0, -1.0]);
+    assert!(
+        (pts[1][0] - x).abs() < 1e-9 && pts[1][1].abs() < 1e-12,
+        "interaction {:?}",
+        pts[1]
+    );
+
+    // Ray 1: the reflection with the receiver under the surface.
+    assert_eq!(rays[1]["status"], "no_path");
+    // Rays 2 and 3: receiver (0.5, −1).
+    assert_eq!(rays[2]["status"], "converged");
+    assert_eq!(rays[3]["status"], "no_path");
+}
+
+#[test]
+fn batch_with_failures_writes_every_ray_in_order() {
+    let scene = r#"{
+        "media": { "air": { "index": 1.0 }, "water": { "index": 1.333 } },
+        "interfaces": { "surface": { "points": [[-1, 0], [2, 0]] } },
+        "sources": [[0, 1], [0.3, 2]],
+        "receivers": [[1, -1], [0.5, 0.5], [3, -1]],
+        "paths": [
+            { "name": "transmitted", "steps": [{ "refract": "surface" }], "media": ["air", "water"] },
+            { "name": "bounce", "steps": [{ "reflect": "surface" }], "media": ["air", "air"] },
+            { "name": "direct", "steps": [], "media": ["air"] }
+        ]
+    }"#;
+    let doc = solve(scene);
+    let rays = check_rays(&doc, 2, 3, &[1, 1, 0]);
+    // [source][receiver][path]
+    let expected = [
+        [
+            ["converged", "no_path", "obstructed"], // (1, −1) under the surface
+            ["no_path", "converged", "converged"],  // (0.5, 0.5) above it
+            ["no_path", "no_path", "obstructed"],   // (3, −1): the refraction point is past x = 2
+        ],
+        [
+            ["converged", "no_path", "obstructed"],
+            ["no_path", "converged", "converged"],
+            ["no_path", "no_path", "converged"], // the straight line passes beyond the end
+        ],
+    ];
+    for (s, per_source) in expected.iter().enumerate() {
+        for (r, per_receiver) in per_source.iter().enumerate() {
+            for (p, status) in per_receiver.iter().enumerate() {
+                let idx = (s * 3 + r) * 3 + p;
+                assert_eq!(
+                    rays[idx]["status"], *status,
+                    "ray {idx}: source {s}, receiver {r}, path {p}"
+                );
+            }
+        }
+    }
+    // Direct rays take the straight-line time; the bounce takes the mirror image's distance.
+    let direct = rays[(3 + 2) * 3 + 2]["time"].as_f64().expect("time");
+    assert!(
+        close(direct, (2.7_f64.powi(2) + 9.0).sqrt(), 1e-12),
+        "direct {direct}"
+    );
+    let bounce = rays[3 + 1]["time"].as_f64().expect("time");
+    assert!(close(bounce, 2.5_f64.sqrt(), 1e-12), "bounce {bounce}");
+}
+
+#[test]
+fn solve_reads_standard_input_and_writes_json_lines() {
+    let file = TempFile::with("scene.json", AIR_WATER);
+    let from_file = run([OsStr::new("solve"), file.path().as_os_str()]);
+    assert_eq!(from_file.status.code(), Some(0));
+
+    let mut child = Command::new(BIN)
+        .args(["solve", "-"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn eigenray");
+    child
+        .stdin
+        .take()
+        .expect("stdin")
+        .write_all(AIR_WATER.as_bytes())
+        .expect("write stdin");
+    let from_stdin = child.wait_with_output().expect("wait");
+    assert_eq!(
+        from_stdin.status.code(),
+        Some(0),
+        "stderr: {}",
+        text(&from_stdin.stderr)
+    );
+    assert_eq!(from_stdin.stdout, from_file.stdout);
+
+    let lines = run([
+        OsStr::new("solve"),
+        OsStr::new("--format"),
+        OsStr::new("jsonl"),
+        file.path().as_os_str(),
+    ]);
+    assert_eq!(lines.status.code(), Some(0));
+    let doc: Value = serde_json::from_slice(&from_file.stdout).expect("JSON");
+    let rays = doc["rays"].as_array().expect("rays");
+    let per_line: Vec<Value> = text(&lines.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("one JSON object per line"))
+        .collect();
+    assert_eq!(&per_line, rays);
+}
+
+#[test]
+fn solve_svg_option_draws_the_scene_and_keeps_stdout() {
+    let file = TempFile::with("scene.json", AIR_WATER);
+    let svg = TempFile::path_only("solve.svg");
+    let plain = run([OsStr::new("solve"), file.path().as_os_str()]);
+    let drawn = run([
+        OsStr::new("solve"),
+        file.path().as_os_str(),
+        OsStr::new("--svg"),
+        svg.path().as_os_str(),
+    ]);
+    assert_eq!(
+        drawn.status.code(),
+        Some(0),
+        "stderr: {}",
+        text(&drawn.stderr)
+    );
+    assert_eq!(drawn.stdout, plain.stdout);
+    let picture = std::fs::read_to_string(svg.path()).expect("SVG written");
+    assert!(picture.starts_with("<?xml") || picture.starts_with("<svg"));
+    assert!(picture.contains("<polyline"));
+    assert!(picture.trim_end().ends_with("</svg>"));
+
+    // An SVG that cannot be written: exit 1, nothing on stdout.
+    let bad = std::env::temp_dir()
+        .join("eigenray-no-such-dir-for-cli-test")
+        .join("x.svg");
+    let out = run([
+        OsStr::new("solve"),
+        file.path().as_os_str(),
+        OsStr::new("--svg"),
+        bad.as_os_str(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(out.stdout.is_empty());
+    assert!(text(&out.stderr).starts_with("error: "));
+}
+
+#[test]
+fn invalid_scenes_exit_2_and_name_the_key() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures")
+        .join("invalid");
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("fixtures/invalid")
+        .map(|e| e.expect("dir entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    scenes.sort();
+    assert!(scenes.len() >= 12, "only {} invalid scenes", scenes.len());
+    let mut failures = Vec::new();
+    for scene in &scenes {
+        let key_file = scene.with_extension("key");
+        let key = std::fs::read_to_string(&key_file)
+            .unwrap_or_else(|_| panic!("{} has no .key", scene.display()));
+        let key = key.trim();
+        assert!(!key.is_empty(), "{} is empty", key_file.display());
+        let out = run([OsStr::new("solve"), scene.as_os_str()]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let name = scene
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let ok = out.status.code() == Some(2)
+            && out.stdout.is_empty()
+            && stderr.starts_with("error: ")
+            && stderr.ends_with('\n')
+            && stderr.lines().count() == 1
+            && stderr.contains(key);
+        if !ok {
+            failures.push(format!(
+                "{name}: status {:?}, stdout {} bytes, expected key `{key}`, stderr: {stderr:?}",
+                out.status.code(),
+                out.stdout.len()
+            ));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} of {} invalid scenes:\n{}",
+        failures.len(),
+        scenes.len(),
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn missing_file_exits_2_and_names_the_path() {
+    let missing = TempFile::path_only("missing.json");
+    let out = run([OsStr::new("solve"), missing.path().as_os_str()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.is_empty());
+    let stderr = text(&out.stderr);
+    let expected = format!("error: {}: cannot read: ", missing.path().display());
+    assert!(stderr.starts_with(&expected), "stderr: {stderr}");
+    assert_eq!(stderr.lines().count(), 1, "stderr: {stderr}");
+}
+
+#[test]
+fn unreadable_inputs_exit_2() {
+    // Not UTF-8.
+    let binary = TempFile::with("binary.json", b"{\"media\": \xff\xfe}");
+    let out = run([OsStr::new("solve"), binary.path().as_os_str()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.is_empty());
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.contains(&binary.path().display().to_string()) && stderr.contains("UTF-8"),
+        "stderr: {stderr}"
+    );
+    assert_eq!(stderr.lines().count(), 1);
+
+    // A directory.
+    let out = run([OsStr::new("solve"), std::env::temp_dir().as_os_str()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.is_empty());
+    assert_eq!(text(&out.stderr).lines().count(), 1);
+}
+
+#[test]
+fn usage_errors_exit_2() {
+    for args in [
+        &["solve"][..],
+        &["frobnicate"],
+        &["solve", "a.json", "--format", "xml"],
+        &["demo", "--receivers", "-1"],
+    ] {
+        let out = run(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(out.stdout.is_empty(), "{args:?}");
+    }
+    let help = run(["--help"]);
+    assert_eq!(help.status.code(), Some(0));
+    assert!(text(&help.stdout).contains("solve"));
+}
+
+#[test]
+fn demo_prints_a_summary_and_writes_an_svg() {
+    let svg = TempFile::path_only("demo.svg");
+    let out = run([
+        OsStr::new("demo"),
+        OsStr::new("--svg"),
+        svg.path().as_os_str(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines.len(), 2, "stdout: {stdout}");
+    assert!(
+        lines[0].starts_with("demo: ") && lines[0].contains("500 rays"),
+        "summary: {}",
+        lines[0]
+    );
+    assert!(lines[0].contains("500 converged"), "summary: {}", lines[0]);
+    assert_eq!(lines[1], format!("wrote {}", svg.path().display()));
+    let picture = std::fs::read_to_string(svg.path()).expect("SVG written");
+    assert!(picture.starts_with("<?xml") || picture.starts_with("<svg"));
+    assert!(
+        picture.matches("<polyline").count() >= 500,
+        "one polyline per ray"
+    );
+    assert!(picture.trim_end().ends_with("</svg>"));
+}
+
+#[test]
+fn demo_options_and_no_arguments() {
+    let out = run(["demo", "--receivers", "7", "--seed", "3", "--no-svg"]);
+    assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    assert_eq!(stdout.lines().count(), 1, "stdout: {stdout}");
+    assert!(stdout.contains("7 rays"), "stdout: {stdout}");
+
+    // No arguments: the demo, with its picture in the current directory.
+    let dir = TempFile::path_only("demo-dir");
+    std::fs::create_dir(dir.path()).expect("create dir");
+    let out = Command::new(BIN)
+        .current_dir(dir.path())
+        .output()
+        .expect("run eigenray");
+    let svg = dir.path().join("eigenray-demo.svg");
+    let written = std::fs::read_to_string(&svg);
+    let _ = std::fs::remove_file(&svg);
+    let _ = std::fs::remove_dir(dir.path());
+    assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("500 rays"));
+    assert!(text(&out.stdout).contains("wrote eigenray-demo.svg"));
+    assert!(
+        written
+            .expect("eigenray-demo.svg written")
+            .contains("<polyline")
+    );
+}
+
+#[test]
+fn closed_stdout_exits_quietly() {
+    // Enough rays that the output cannot fit in a pipe's buffer.
+    let receivers: Vec<String> = (0..4000)
+        .map(|i| format!("[{}, -1]", f64::from(i) * 0.001))
+        .collect();
+    let scene = format!(
+        r#"{{ "media": {{ "air": {{ "speed": 1 }} }}, "sources": [[0, 1]], "receivers": [{}],
+              "paths": [{{ "steps": [], "media": ["air"] }}] }}"#,
+        receivers.join(", ")
+    );
+    let file = TempFile::with("big.json", scene);
+    let mut child = Command::new(BIN)
+        .args([OsStr::new("solve"), file.path().as_os_str()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn eigenray");
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("wait");
+    let stderr = text(&out.stderr);
+    assert!(!stderr.contains("panicked"), "stderr: {stderr}");
+    assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
+    assert!(stderr.is_empty(), "stderr: {stderr}");
+}

@@ -1,0 +1,274 @@
+//! Vertices, polyline ends, obstructions and stationary paths that are not minima.
+
+use eigenray::{Reason, Status};
+use serde_json::json;
+
+use crate::common::*;
+
+const TOL: f64 = 1e-12;
+
+/// The specular point of a reflection off the line through segment `a–b` by the image method,
+/// as the fraction along `a–b` (inside the segment iff in `(0, 1)`).
+fn specular_fraction(s: P, r: P, a: P, b: P) -> f64 {
+    intersect(reflect(s, a, b), r, a, b).1
+}
+
+/// `∂T/∂s` of a reflection at `v` with the point moving along the unit tangent `t` (slowness 1).
+fn one_sided(s: P, v: P, r: P, t: P) -> f64 {
+    dot(sub(unit(sub(v, s)), unit(sub(r, v))), t)
+}
+
+fn reflection_scene(points: &[P], closed: bool, s: P, r: P) -> eigenray::Scene {
+    scene(&json!({
+        "media": { "m": { "speed": 1.0 } },
+        "interfaces": { "mirror": { "points": points, "closed": closed } },
+        "sources": [s], "receivers": [r],
+        "paths": [{ "steps": [{ "reflect": "mirror" }], "media": ["m", "m"] }]
+    }))
+}
+
+#[test]
+fn roof_reflection_is_pinned_on_its_vertex() {
+    let roof = [[-2.0, 0.0], [0.0, 0.5], [2.0, 0.0]];
+    let v = roof[1];
+    for (s, r) in [
+        ([-1.0, 1.0], [1.0, 1.0]),
+        ([-1.2, 1.1], [0.9, 0.95]),
+        ([-0.5, 2.0], [0.7, 1.6]),
+    ] {
+        let case = format!("roof {roof:?}, source {s:?}, receiver {r:?}");
+        // Neither slope has a specular point strictly inside it …
+        for seg in roof.windows(2) {
+            let u = specular_fraction(s, r, seg[0], seg[1]);
+            assert!(
+                !(0.0..=1.0).contains(&u),
+                "{case}: specular point inside {seg:?} at {u}"
+            );
+        }
+        // … and the vertex is a kink of T with one-sided derivatives of opposite signs.
+        let left = one_sided(s, v, r, unit(sub(roof[1], roof[0])));
+        let right = one_sided(s, v, r, unit(sub(roof[2], roof[1])));
+        assert!(
+            left < 0.0 && right > 0.0,
+            "{case}: one-sided derivatives {left}, {right}"
+        );
+
+        let ray = &trace_all(&reflection_scene(&roof, false, s, r))[0];
+        assert_eq!(ray.status, Status::Vertex, "{case}: {ray:?}");
+        assert_eq!(
+            ray.reason,
+            Some(Reason::AtVertex { step: 0 }),
+            "{case}: {ray:?}"
+        );
+        let got = pt(ray.points[1]);
+        assert!(
+            dist(got, v) <= TOL,
+            "{case}: interaction at {got:?}, vertex {v:?}"
+        );
+        let want = dist(s, v) + dist(v, r);
+        let time = ray.time.unwrap();
+        assert!(
+            rel_err(time, want) <= TOL,
+            "{case}: time {time}, |S−V| + |V−R| = {want}"
+        );
+    }
+}
+
+#[test]
+fn specular_point_beyond_polyline_end_is_no_path() {
+    let mirror = [[-1.0, 0.0], [0.0, 0.0], [1.0, 0.1]];
+    let (s, r) = ([2.0, 1.0], [3.5, 1.0]);
+    for seg in mirror.windows(2) {
+        let u = specular_fraction(s, r, seg[0], seg[1]);
+        assert!(
+            u > 1.0,
+            "specular point on {seg:?} at fraction {u}: not beyond the end"
+        );
+    }
+    let ray = &trace_all(&reflection_scene(&mirror, false, s, r))[0];
+    assert_eq!(ray.status, Status::NoPath, "{ray:?}");
+    assert_eq!(ray.reason, Some(Reason::LeavesEnd { step: 0 }), "{ray:?}");
+    assert!(ray.time.is_none() && ray.points.is_empty(), "{ray:?}");
+}
+
+#[test]
+fn refraction_blocked_by_another_interface_is_obstructed() {
+    let (s, r) = ([0.0, 1.0], [1.0, -1.0]);
+    let (shelf0, shelf1) = ([0.6, -0.5], [1.0, -0.5]);
+    let sc = scene(&json!({
+        "media": { "air": { "index": 1.0 }, "water": { "index": 1.333 } },
+        "interfaces": {
+            "surface": { "points": [[-5.0, 0.0], [5.0, 0.0]] },
+            "shelf": { "points": [shelf0, shelf1] }
+        },
+        "sources": [s], "receivers": [r],
+        "paths": [{ "steps": [{ "refract": "surface" }], "media": ["air", "water"] }]
+    }));
+    let (xc, want) = snell_reference(1.0, 0.0, 1.0, 1.333, 1.0, 1.0);
+    // The second leg, from (xc, 0) to (1, −1), crosses y = −0.5 inside the shelf.
+    let (t, u) = intersect([xc, 0.0], r, shelf0, shelf1);
+    assert!(
+        t > 0.0 && t < 1.0 && u > 0.0 && u < 1.0,
+        "reference leg misses the shelf: {t}, {u}"
+    );
+
+    let ray = &trace_all(&sc)[0];
+    assert_eq!(ray.status, Status::Obstructed, "{ray:?}");
+    let shelf = sc.interface_index("shelf").unwrap();
+    assert_eq!(
+        ray.reason,
+        Some(Reason::Crosses {
+            leg: 1,
+            interface: shelf
+        }),
+        "{ray:?}"
+    );
+    let time = ray.time.expect("an obstructed ray has a time");
+    assert!(
+        rel_err(time, want) <= TOL,
+        "time {time}, Snell reference {want}"
+    );
+    assert_eq!(ray.points.len(), 3, "{ray:?}");
+    assert!(
+        (ray.points[1].x - xc).abs() <= 1e-9 && ray.points[1].y == 0.0,
+        "{ray:?}, crossing at x = {xc}"
+    );
+}
+
+/// A circle of radius 1 as a closed polygon of `N` segments, symmetric about the y axis, with
+/// segment `N/2 − 1` centred on the negative y axis.
+const N: usize = 720;
+
+fn circle() -> Vec<P> {
+    let step = std::f64::consts::TAU / N as f64;
+    (0..N)
+        .map(|k| {
+            let phi = (k as f64 + 0.5 - (N / 2) as f64) * step;
+            [phi.sin(), -phi.cos()]
+        })
+        .collect()
+}
+
+fn segment(c: &[P], j: usize) -> (P, P) {
+    (c[j % N], c[(j + 1) % N])
+}
+
+#[test]
+fn concave_circle_reflection_at_a_maximum() {
+    let c = circle();
+    let bottom = N / 2 - 1;
+    let (b0, b1) = segment(&c, bottom);
+    assert_eq!(b0[0], -b1[0], "bottom segment symmetric");
+    // Source and receiver inside, near the centre and a little below it, so that the
+    // documented initial guess (the polygon point nearest to the chord's midpoint) is the
+    // bottom, not the top.
+    let s = [-0.4, -0.05];
+    let t_at = |r: P, q: P| dist(s, q) + dist(q, r);
+    let mut max_err = 0.0f64;
+    let step = std::f64::consts::TAU / N as f64;
+    for r in [[0.4, -0.05], [0.41, -0.04], [0.43, -0.02], [0.38, -0.07]] {
+        let case = format!("circle of {N} segments, source {s:?}, receiver {r:?}");
+        // The stationary point of the smooth circle, P(φ) = (sin φ, −cos φ): a maximum, so
+        // dT/dφ = (u₁ − u₂) · P′(φ) falls through zero (bisection on −dT/dφ).
+        let dt = |phi: f64| {
+            let p = [phi.sin(), -phi.cos()];
+            -one_sided(s, p, r, [phi.cos(), phi.sin()])
+        };
+        assert!(
+            dt(-0.3) < 0.0 && dt(0.3) > 0.0,
+            "{case}: no stationary point near the bottom"
+        );
+        let phi = bisect(-0.3, 0.3, dt);
+        let near = (bottom as f64 + (phi / step).round()) as usize;
+        // It is a maximum, and so it is on the polygon: T is lower some segments away.
+        let (m0, m1) = segment(&c, near);
+        let mid = lerp(m0, m1, 0.5);
+        let ks: &[usize] = if near == bottom {
+            &[3, 5, 20]
+        } else {
+            &[15, 30]
+        };
+        for &k in ks {
+            for j in [near - k, near + k] {
+                let (a, b) = segment(&c, j);
+                assert!(
+                    t_at(r, lerp(a, b, 0.5)) < t_at(r, mid),
+                    "{case}: T is not lower at segment {j}"
+                );
+            }
+        }
+
+        let ray = &trace_all(&reflection_scene(&c, true, s, r))[0];
+        let got = pt(ray.points.get(1).copied().unwrap_or_default());
+        let time = ray.time.unwrap_or(f64::NAN);
+        // The segment holding the point (the nearest one).
+        let j = (0..N)
+            .min_by(|&a, &b| {
+                let d = |j: usize| {
+                    let (p, q) = segment(&c, j);
+                    dist(got, lerp(p, q, fraction(got, p, q).clamp(0.0, 1.0)))
+                };
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap();
+        // The polygon has specular points on the segments within about ±4.6 of the smooth
+        // maximum (where |dT/ds| of the circle is below half the kink at a vertex).
+        let far = j.abs_diff(near);
+        assert!(
+            far <= 5,
+            "{case}: interaction {got:?} on segment {j}, smooth maximum on {near}: {ray:?}"
+        );
+        let (a, b) = segment(&c, j);
+        match ray.status {
+            Status::Converged => {
+                // A specular point strictly inside segment j: the image method on it.
+                let u = specular_fraction(s, r, a, b);
+                assert!(
+                    u > 0.0 && u < 1.0,
+                    "{case}: segment {j} has no specular point ({u})"
+                );
+                let want = dist(reflect(s, a, b), r);
+                let ug = fraction(got, a, b);
+                assert!(
+                    ug > 0.0 && ug < 1.0 && dist_to_line(got, a, b) <= TOL,
+                    "{case}: {got:?} not inside segment {j}"
+                );
+                let law = one_sided(s, got, r, unit(sub(b, a))).abs();
+                assert!(law <= TOL, "{case}: reflection law residual {law:e}");
+                let err = rel_err(time, want);
+                assert!(
+                    err <= TOL,
+                    "{case}: time {time}, image method {want}, relative error {err:e}"
+                );
+                max_err = max_err.max(err);
+            }
+            Status::Vertex => {
+                // Pinned on a vertex: one of the ends of segment j, where T has a kink whose
+                // one-sided derivatives bracket zero.
+                let v = if dist(got, a) <= dist(got, b) { a } else { b };
+                let i = if v == a { j } else { (j + 1) % N };
+                assert!(
+                    dist(got, v) <= TOL,
+                    "{case}: vertex status but {got:?} is not a vertex"
+                );
+                let before = unit(sub(c[i], c[(i + N - 1) % N]));
+                let after = unit(sub(c[(i + 1) % N], c[i]));
+                let (rm, rp) = (one_sided(s, v, r, before), one_sided(s, v, r, after));
+                assert!(
+                    rm * rp <= 0.0,
+                    "{case}: vertex {i} is not a kink of T ({rm}, {rp})"
+                );
+                let want = t_at(r, v);
+                let err = rel_err(time, want);
+                assert!(err <= TOL, "{case}: time {time}, |S−V| + |V−R| = {want}");
+                max_err = max_err.max(err);
+            }
+            other => panic!("{case}: status {other}, expected converged or vertex: {ray:?}"),
+        }
+        println!(
+            "kinks circle: receiver {r:?}: {} on segment {j} (smooth maximum on {near})",
+            ray.status
+        );
+    }
+    println!("kinks circle: max relative time error {max_err:.2e}");
+}

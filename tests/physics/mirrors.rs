@@ -1,0 +1,252 @@
+//! Flat mirrors against the image method: one, two and three reflections, and a finite end.
+
+use eigenray::{Reason, Status};
+use serde_json::{Value, json};
+
+use crate::common::*;
+
+const TOL: f64 = 1e-12;
+
+/// The image-method path from `s` to `r` off `mirrors` in order: the unfolded length, the
+/// reflection points, and whether the path is valid (every point strictly inside its mirror
+/// segment and between its neighbours on the unfolded line).
+fn image_path(s: P, r: P, mirrors: &[(P, P)]) -> (f64, Vec<P>, bool) {
+    let k = mirrors.len();
+    // images[i]: the receiver reflected across mirrors k−1, …, i (the last one first).
+    let mut images = vec![r; k + 1];
+    for i in (0..k).rev() {
+        images[i] = reflect(images[i + 1], mirrors[i].0, mirrors[i].1);
+    }
+    let mut points = Vec::with_capacity(k);
+    let mut valid = true;
+    let mut prev = s;
+    for (i, &(a, b)) in mirrors.iter().enumerate() {
+        let (t, u) = intersect(prev, images[i], a, b);
+        valid &= t > 0.0 && t < 1.0 && u > 1e-9 && u < 1.0 - 1e-9;
+        prev = lerp(a, b, u);
+        points.push(prev);
+    }
+    (dist(s, images[0]), points, valid)
+}
+
+/// Solves every ray of `scene` (one medium of slowness `w`) and checks each against the image
+/// method on `mirrors[path]`; returns the largest relative time error and the number of rays
+/// checked (those whose image path is valid).
+fn check_against_images(v: &Value, w: f64, mirrors: &[Vec<(P, P)>]) -> (f64, usize) {
+    let sc = scene(v);
+    let rays = trace_all(&sc);
+    let (mut max, mut checked) = (0.0f64, 0);
+    for ray in &rays {
+        let s = pt(sc.sources()[ray.source]);
+        let r = pt(sc.receivers()[ray.receiver]);
+        let ms = &mirrors[ray.path];
+        let (len, pts, valid) = image_path(s, r, ms);
+        if !valid {
+            continue;
+        }
+        checked += 1;
+        let case = format!("source {s:?}, receiver {r:?}, mirrors {ms:?}");
+        assert_eq!(ray.status, Status::Converged, "{case}: {ray:?}");
+        let time = ray.time.unwrap();
+        let err = rel_err(time, w * len);
+        assert!(
+            err <= TOL,
+            "{case}: time {time}, image method {}, relative error {err:e}",
+            w * len
+        );
+        assert_eq!(ray.points.len(), ms.len() + 2, "{case}");
+        for (i, (&(a, b), q)) in ms.iter().zip(&pts).enumerate() {
+            let got = pt(ray.points[i + 1]);
+            assert!(
+                dist_to_line(got, a, b) <= TOL * dist(a, b),
+                "{case}: point {i} {got:?} off its mirror"
+            );
+            let u = fraction(got, a, b);
+            assert!(
+                u > 0.0 && u < 1.0,
+                "{case}: point {i} {got:?} outside its mirror segment"
+            );
+            assert!(
+                dist(got, *q) <= 1e-9,
+                "{case}: point {i} {got:?}, image method {q:?}"
+            );
+        }
+        max = max.max(err);
+    }
+    (max, checked)
+}
+
+/// A scene of named two-point mirrors, one medium of index `w`, and paths of reflections.
+fn mirror_scene(
+    mirrors: &[(&str, P, P)],
+    w: f64,
+    sources: &[P],
+    receivers: &[P],
+    paths: &[&[&str]],
+) -> Value {
+    let interfaces: serde_json::Map<String, Value> = mirrors
+        .iter()
+        .map(|(name, a, b)| (name.to_string(), json!({ "points": [a, b] })))
+        .collect();
+    let paths: Vec<Value> = paths
+        .iter()
+        .map(|steps| {
+            let st: Vec<Value> = steps.iter().map(|m| json!({ "reflect": m })).collect();
+            json!({ "steps": st, "media": vec!["m"; steps.len() + 1] })
+        })
+        .collect();
+    json!({
+        "media": { "m": { "index": w } },
+        "interfaces": interfaces,
+        "sources": sources, "receivers": receivers, "paths": paths
+    })
+}
+
+#[test]
+fn single_reflection_random_mirrors() {
+    let mut rng = Rng::new(0x0111_22AA);
+    let mut max = 0.0f64;
+    let mut checked = 0;
+    for _ in 0..200 {
+        let angle = rng.uniform(0.0, std::f64::consts::TAU);
+        let offset = [rng.uniform(-10.0, 10.0), rng.uniform(-10.0, 10.0)];
+        let w = rng.log_uniform(0.2, 5.0);
+        let a = rng.uniform(-5.0, 5.0);
+        let b = a + rng.uniform(-4.0, 4.0);
+        let p0 = place([-30.0, 0.0], angle, offset);
+        let p1 = place([30.0, 0.0], angle, offset);
+        let s = place([a, rng.uniform(0.3, 3.0)], angle, offset);
+        let r = place([b, rng.uniform(0.3, 3.0)], angle, offset);
+        let v = mirror_scene(&[("mirror", p0, p1)], w, &[s], &[r], &[&["mirror"]]);
+        let (e, n) = check_against_images(&v, w, &[vec![(p0, p1)]]);
+        max = max.max(e);
+        checked += n;
+    }
+    assert_eq!(
+        checked, 200,
+        "every random single reflection has a valid image path"
+    );
+    println!("mirrors single: {checked} rays, max relative time error {max:.2e}");
+}
+
+#[test]
+fn parallel_mirrors_two_and_three_bounces() {
+    let (b0, b1) = ([-20.0, 0.0], [20.0, 0.0]);
+    let (t0, t1) = ([20.0, 1.0], [-20.0, 1.0]);
+    let sources = [[0.0, 0.3], [-1.0, 0.75]];
+    let receivers = [[2.5, 0.6], [0.4, 0.2], [-3.0, 0.9], [6.0, 0.5], [0.0, 0.3]];
+    let v = mirror_scene(
+        &[("bottom", b0, b1), ("top", t0, t1)],
+        1.5,
+        &sources,
+        &receivers,
+        &[
+            &["bottom", "top"],
+            &["bottom", "top", "bottom"],
+            &["top", "bottom", "top"],
+        ],
+    );
+    let mirrors = [
+        vec![(b0, b1), (t0, t1)],
+        vec![(b0, b1), (t0, t1), (b0, b1)],
+        vec![(t0, t1), (b0, b1), (t0, t1)],
+    ];
+    let (max, checked) = check_against_images(&v, 1.5, &mirrors);
+    assert_eq!(
+        checked,
+        sources.len() * receivers.len() * 3,
+        "all parallel-mirror paths are valid"
+    );
+    println!("mirrors parallel: {checked} rays, max relative time error {max:.2e}");
+}
+
+#[test]
+fn wedge_two_and_three_bounces() {
+    let alpha = 50f64.to_radians();
+    let dir = [alpha.cos(), alpha.sin()];
+    let (a0, a1) = ([0.2, 0.0], [8.0, 0.0]);
+    let (c0, c1) = (scale(dir, 8.0), scale(dir, 0.2));
+    let s = [3.0, 0.8];
+    let mut rng = Rng::new(0x3ED6_E000);
+    let receivers: Vec<P> = (0..60)
+        .map(|_| {
+            let (rad, phi) = (rng.uniform(1.0, 5.0), rng.uniform(0.1, 0.9) * alpha);
+            [rad * phi.cos(), rad * phi.sin()]
+        })
+        .collect();
+    let v = mirror_scene(
+        &[("a", a0, a1), ("b", c0, c1)],
+        1.0,
+        &[s],
+        &receivers,
+        &[&["a", "b"], &["b", "a"], &["a", "b", "a"], &["b", "a", "b"]],
+    );
+    let (ma, mb) = ((a0, a1), (c0, c1));
+    let mirrors = [
+        vec![ma, mb],
+        vec![mb, ma],
+        vec![ma, mb, ma],
+        vec![mb, ma, mb],
+    ];
+    let (max, checked) = check_against_images(&v, 1.0, &mirrors);
+    // Count the three-bounce paths that exist, so that the test cannot pass on two-bounce ones.
+    let triples = receivers
+        .iter()
+        .flat_map(|&r| {
+            [
+                image_path(s, r, &mirrors[2]).2,
+                image_path(s, r, &mirrors[3]).2,
+            ]
+        })
+        .filter(|&ok| ok)
+        .count();
+    assert!(
+        checked >= 60 && triples >= 10,
+        "too few valid wedge paths: {checked}, of them 3-bounce {triples}"
+    );
+    println!(
+        "mirrors wedge: {checked} rays ({triples} with three bounces), max relative time error {max:.2e}"
+    );
+}
+
+#[test]
+fn reflection_point_beyond_finite_mirror_is_no_path() {
+    // Image method: the source (2, 1) images to (2, −1); the line to (4, 1) meets y = 0 at
+    // x = 3, beyond the mirror's end at x = 1.
+    let (m0, m1, s, r) = ([0.0, 0.0], [1.0, 0.0], [2.0, 1.0], [4.0, 1.0]);
+    let (_, pts, valid) = image_path(s, r, &[(m0, m1)]);
+    assert!(
+        !valid && (pts[0][0] - 3.0).abs() < 1e-15,
+        "reference {pts:?}"
+    );
+    let sc = scene(&mirror_scene(
+        &[("short", m0, m1)],
+        1.0,
+        &[s],
+        &[r],
+        &[&["short"]],
+    ));
+    let ray = &trace_all(&sc)[0];
+    assert_eq!(ray.status, Status::NoPath, "{ray:?}");
+    assert_eq!(ray.reason, Some(Reason::LeavesEnd { step: 0 }), "{ray:?}");
+    assert!(ray.time.is_none() && ray.points.is_empty(), "{ray:?}");
+
+    // Two bounces between parallel mirrors where the top one is too short for the second.
+    let (b0, b1, t0, t1) = ([-5.0, 0.0], [5.0, 0.0], [-5.0, 1.0], [0.5, 1.0]);
+    let (s, r) = ([0.0, 0.5], [3.0, 0.5]);
+    let (_, pts, valid) = image_path(s, r, &[(b0, b1), (t0, t1)]);
+    assert!(!valid && pts[1][0] > 0.5, "reference {pts:?}");
+    let v = mirror_scene(
+        &[("bottom", b0, b1), ("top", t0, t1)],
+        1.0,
+        &[s],
+        &[r],
+        &[&["bottom", "top"]],
+    );
+    let ray = &trace_all(&scene(&v))[0];
+    assert_eq!(ray.status, Status::NoPath, "{ray:?}");
+    assert!(
+        matches!(ray.reason, Some(Reason::LeavesEnd { .. })),
+        "{ray:?}"
+    );
+}
