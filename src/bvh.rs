@@ -132,6 +132,13 @@ impl Bvh {
             return false;
         }
         let sbox = Aabb::from_points(a, b);
+        if self.nodes.len() == 1 {
+            // A single leaf: test the few items directly.
+            return self
+                .items
+                .iter()
+                .any(|&it| self.boxes[it as usize].overlaps(sbox) && visit(it));
+        }
         let d = b - a;
         let mut stack = [0u32; STACK];
         let mut top = 1;

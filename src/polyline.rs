@@ -198,8 +198,12 @@ impl Polyline {
     /// End points of segment `j`.
     #[inline]
     pub fn segment(&self, j: usize) -> (Point, Point) {
-        let n = self.vertices.len();
-        (self.vertices[j], self.vertices[(j + 1) % n])
+        let next = if j + 1 == self.vertices.len() {
+            0
+        } else {
+            j + 1
+        };
+        (self.vertices[j], self.vertices[next])
     }
     /// Unit tangent of segment `j` (the direction of increasing arclength).
     #[inline]

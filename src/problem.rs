@@ -46,6 +46,19 @@ impl Tridiagonal {
     }
 }
 
+/// How far one interaction point is from moving freely (solver state that the merit needs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Pin {
+    /// Inside a segment (or at a vertex, moving through it).
+    Free,
+    /// Held on the vertex where its segment `seg` starts.
+    Vertex,
+    /// Held at the first vertex of an open polyline.
+    Start,
+    /// Held at the last vertex of an open polyline.
+    End,
+}
+
 /// Scratch buffers of one evaluation (reused: evaluating allocates nothing once sized).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Eval {
@@ -65,6 +78,12 @@ pub(crate) struct Eval {
     pub off: Vec<f64>,
     /// Travel time.
     pub time: f64,
+    /// Merit `Σ (rᵢ / (wᵢ + wᵢ₊₁))²` over the points as held (see [`Geometry::evaluate`]).
+    pub phi: f64,
+    /// Largest relative residual `|rᵢ| / (wᵢ + wᵢ₊₁)` of the free points.
+    pub rmax: f64,
+    /// Number of held points.
+    pub held: usize,
 }
 
 impl Eval {
@@ -101,7 +120,20 @@ impl<'a> Geometry<'a> {
 
     /// Positions, legs, time and residual at parameters `s` on segments `seg`; with
     /// `hessian`, also the tridiagonal Hessian (with the curvature estimate when `curvature`).
-    pub fn evaluate(&self, s: &[f64], seg: &[usize], e: &mut Eval, hessian: bool, curvature: bool) {
+    ///
+    /// Also the merit over the points as `pin` holds them: a free point counts its residual,
+    /// a point held at an end only the part pointing back inside (none if a leg next to it has
+    /// vanished: it sits on a corner), a point held on a vertex nothing (the kink test judges
+    /// it).
+    pub fn evaluate(
+        &self,
+        s: &[f64],
+        seg: &[usize],
+        pin: &[Pin],
+        e: &mut Eval,
+        hessian: bool,
+        curvature: bool,
+    ) {
         let k = self.k();
         let w = self.slowness;
         e.rel[0] = Vec2::default();
@@ -124,10 +156,28 @@ impl<'a> Geometry<'a> {
             time += w[j] * l;
         }
         e.time = time;
+        let (mut phi, mut rmax, mut held) = (0.0, 0.0f64, 0);
         for i in 0..k {
             let t = e.tan[i];
-            e.r[i] = (e.u[i] * w[i] - e.u[i + 1] * w[i + 1]).dot(t);
+            let r = (e.u[i] * w[i] - e.u[i + 1] * w[i + 1]).dot(t);
+            e.r[i] = r;
+            let rel = r / (w[i] + w[i + 1]);
+            let m = match pin[i] {
+                Pin::Free => {
+                    rmax = rmax.max(rel.abs());
+                    rel
+                }
+                Pin::Vertex => 0.0,
+                Pin::Start | Pin::End if leg_vanished(e, i) => 0.0,
+                Pin::Start => rel.min(0.0),
+                Pin::End => rel.max(0.0),
+            };
+            held += (pin[i] != Pin::Free) as usize;
+            phi += m * m;
         }
+        e.phi = phi;
+        e.rmax = rmax;
+        e.held = held;
         if !hessian {
             return;
         }
@@ -150,6 +200,16 @@ impl<'a> Geometry<'a> {
             }
         }
     }
+}
+
+/// Whether a leg next to point `i` has vanished (shorter than 1e-12 of the whole path's
+/// length): there the residual is undefined and the point sits on a corner it shares with its
+/// neighbour.
+#[inline]
+pub(crate) fn leg_vanished(e: &Eval, i: usize) -> bool {
+    let total: f64 = e.len.iter().sum();
+    let tiny = 1e-12 * total;
+    e.len[i] <= tiny || e.len[i + 1] <= tiny
 }
 
 /// `|d|`: a plain square root where the squares neither overflow nor lose precision to
@@ -272,12 +332,13 @@ impl<'a> PathProblem<'a> {
         e.resize(k);
         let mut ss = vec![0.0; k];
         let mut seg = vec![0; k];
+        let pin = vec![Pin::Free; k];
         for i in 0..k {
             let line = g.line(i);
             ss[i] = line.wrap(s[i]);
             seg[i] = line.segment_at(ss[i]);
         }
-        g.evaluate(&ss, &seg, &mut e, hessian, false);
+        g.evaluate(&ss, &seg, &pin, &mut e, hessian, false);
         e
     }
 

@@ -19,20 +19,8 @@
 //! round-off (`|δᵢ| ≤ 4ε (|sᵢ| + ℓᵢ + ℓᵢ₊₁)`: no representable parameter is closer).
 
 use crate::geom::Point;
-use crate::problem::{Eval, Geometry};
-
-/// How far one point is from moving freely.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Pin {
-    /// Inside a segment (or at a vertex, moving through it).
-    Free,
-    /// Held on the vertex where its segment `seg` starts.
-    Vertex,
-    /// Held at the first vertex of an open polyline.
-    Start,
-    /// Held at the last vertex of an open polyline.
-    End,
-}
+pub(crate) use crate::problem::Pin;
+use crate::problem::{Eval, Geometry, leg_vanished};
 
 /// How the iteration ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -105,6 +93,9 @@ impl Workspace {
     }
 
     pub(crate) fn resize(&mut self, k: usize) {
+        if self.s.len() == k && self.eval.rel.len() == k + 2 {
+            return;
+        }
         self.s.resize(k, 0.0);
         self.seg.resize(k, 0);
         self.pin.resize(k, Pin::Free);
@@ -209,15 +200,6 @@ fn single_vertex_between(g: &Geometry, i: usize, from: usize, to: usize) -> Opti
     }
 }
 
-/// Whether a leg next to point `i` has vanished (relative to the whole path): there the
-/// residual is undefined and the point sits on a corner shared with its neighbour.
-#[inline]
-fn leg_vanished(e: &Eval, i: usize) -> bool {
-    let total: f64 = e.len.iter().sum();
-    let tiny = 1e-12 * total;
-    e.len[i] <= tiny || e.len[i + 1] <= tiny
-}
-
 /// Whether point `i`, held at an end, stays held: its residual points outside, or a leg next
 /// to it has vanished (two interactions meeting at a corner are no specular path).
 #[inline]
@@ -229,31 +211,10 @@ fn stays_at_end(e: &Eval, i: usize, pin: Pin, margin: f64) -> bool {
     }
 }
 
-fn merit(g: &Geometry, e: &Eval, pin: &[Pin]) -> f64 {
-    let w = g.slowness;
-    let mut phi = 0.0;
-    for i in 0..g.k() {
-        // A point held at an end violates stationarity only by the part of its residual
-        // that points back inside; one held on a vertex is judged by the kink test instead.
-        let r = match pin[i] {
-            Pin::Free => e.r[i],
-            Pin::Start | Pin::End if stays_at_end(e, i, pin[i], 0.0) => 0.0,
-            Pin::Start => e.r[i].min(0.0),
-            Pin::End => e.r[i].max(0.0),
-            Pin::Vertex => 0.0,
-        } / (w[i] + w[i + 1]);
-        phi += r * r;
-    }
-    phi
-}
-
 /// The merit `Σ (rᵢ / (wᵢ + wᵢ₊₁))²` at the parameters in `ws` (all points free).
 pub(crate) fn merit_at(g: &Geometry, ws: &mut Workspace) -> f64 {
-    g.evaluate(&ws.s, &ws.seg, &mut ws.eval, false, false);
-    let w = g.slowness;
-    (0..g.k())
-        .map(|i| (ws.eval.r[i] / (w[i] + w[i + 1])).powi(2))
-        .sum()
+    g.evaluate(&ws.s, &ws.seg, &ws.pin, &mut ws.eval, false, false);
+    ws.eval.phi
 }
 
 /// Runs the iteration from the parameters, segments and pins already in `ws` (set by the
@@ -275,185 +236,145 @@ pub(crate) fn solve(
     let mut evaluated = false;
     loop {
         if !evaluated {
-            g.evaluate(&ws.s, &ws.seg, &mut ws.eval, true, curvature);
+            g.evaluate(&ws.s, &ws.seg, &ws.pin, &mut ws.eval, true, curvature);
         }
         evaluated = false;
         let e = &ws.eval;
-        if cfg!(debug_assertions) && std::env::var_os("EIGENRAY_DEBUG").is_some() {
-            eprintln!(
-                "it {iterations} s={:?} seg={:?} pin={:?} r={:?} diag={:?}",
-                ws.s, ws.seg, ws.pin, e.r, e.diag
-            );
-        }
 
         // Held points: keep, or release towards decreasing T.
-        let mut released = false;
-        for i in 0..k {
-            let scale = tol * (w[i] + w[i + 1]);
-            match ws.pin[i] {
-                Pin::Free => {}
-                Pin::Vertex => {
-                    let Some(before) = segment_before(g, i, ws.seg[i]) else {
-                        ws.pin[i] = Pin::Free;
-                        released = true;
-                        continue;
-                    };
-                    let rp = e.r[i];
-                    let rm = residual_on(g, e, i, before);
-                    if rp < -scale && rm < -scale {
-                        ws.pin[i] = Pin::Free;
-                        released = true;
-                    } else if rp > scale && rm > scale {
-                        ws.pin[i] = Pin::Free;
-                        ws.seg[i] = before;
-                        released = true;
+        if e.held > 0 {
+            let mut released = false;
+            for i in 0..k {
+                let scale = tol * (w[i] + w[i + 1]);
+                match ws.pin[i] {
+                    Pin::Free => {}
+                    Pin::Vertex => {
+                        let Some(before) = segment_before(g, i, ws.seg[i]) else {
+                            ws.pin[i] = Pin::Free;
+                            released = true;
+                            continue;
+                        };
+                        let rp = e.r[i];
+                        let rm = residual_on(g, e, i, before);
+                        if rp < -scale && rm < -scale {
+                            ws.pin[i] = Pin::Free;
+                            released = true;
+                        } else if rp > scale && rm > scale {
+                            ws.pin[i] = Pin::Free;
+                            ws.seg[i] = before;
+                            released = true;
+                        }
                     }
-                }
-                Pin::Start | Pin::End => {
-                    if !stays_at_end(e, i, ws.pin[i], scale) {
-                        ws.pin[i] = Pin::Free;
-                        released = true;
+                    Pin::Start | Pin::End => {
+                        if !stays_at_end(e, i, ws.pin[i], scale) {
+                            ws.pin[i] = Pin::Free;
+                            released = true;
+                        }
                     }
                 }
             }
-        }
-        if released && free_moves < 4 * max_iterations {
-            free_moves += 1;
-            continue;
+            if released && free_moves < 4 * max_iterations {
+                free_moves += 1;
+                continue;
+            }
         }
 
-        let mut residual: f64 = 0.0;
-        for i in 0..k {
-            if ws.pin[i] == Pin::Free {
-                residual = residual.max(e.r[i].abs() / (w[i] + w[i + 1]));
-            }
+        let residual = e.rmax;
+        if residual <= tol {
+            return finished(ws, iterations);
         }
-        let solution = |iterations| Solution {
-            time: e.time,
-            iterations,
-            residual,
-        };
-        let finished = |iterations| {
-            let outcome = if let Some(i) = ws
-                .pin
-                .iter()
-                .position(|p| matches!(p, Pin::Start | Pin::End))
-            {
-                Outcome::LeftEnd(i)
-            } else if ws.pin.contains(&Pin::Vertex) {
-                Outcome::Vertex
-            } else {
-                Outcome::Converged
-            };
-            (outcome, solution(iterations))
-        };
-        if residual <= tol || !residual.is_finite() && k == 0 {
-            return finished(iterations);
-        }
-        if !residual.is_finite() {
-            return (Outcome::NotConverged, solution(iterations));
-        }
-        if iterations >= max_iterations {
-            return (Outcome::NotConverged, solution(iterations));
+        if !residual.is_finite() || iterations >= max_iterations {
+            return (
+                Outcome::NotConverged,
+                Solution {
+                    time: e.time,
+                    iterations,
+                    residual,
+                },
+            );
         }
         iterations += 1;
 
-        // Newton system on the free points.
-        for i in 0..k {
-            let free = ws.pin[i] == Pin::Free;
-            ws.rhs[i] = if free { -e.r[i] } else { 0.0 };
-            ws.diag[i] = if free { e.diag[i] } else { 1.0 };
-            if i + 1 < k {
-                ws.off[i] = if free && ws.pin[i + 1] == Pin::Free {
-                    e.off[i]
-                } else {
-                    0.0
-                };
-            }
-        }
-        let mut ok = thomas(&ws.diag, &ws.off, &ws.rhs, &mut ws.delta, &mut ws.scratch);
-        let mut mu = 1e-10;
-        while !ok && mu <= 1.0 {
-            // Levenberg damping, relative to the Hessian's natural scale w/ℓ.
+        // Newton system H δ = −r on the free points (solved as H x = r, δ = −x).
+        let ok = if e.held == 0 {
+            thomas(&e.diag, &e.off, &e.r, &mut ws.delta, &mut ws.scratch)
+        } else {
             for i in 0..k {
-                if ws.pin[i] == Pin::Free {
-                    let nat = w[i] / e.len[i].max(f64::MIN_POSITIVE)
-                        + w[i + 1] / e.len[i + 1].max(f64::MIN_POSITIVE);
-                    let d = e.diag[i];
-                    ws.diag[i] = d + mu * nat.min(1e300) * if d < 0.0 { -1.0 } else { 1.0 };
+                let free = ws.pin[i] == Pin::Free;
+                ws.rhs[i] = if free { e.r[i] } else { 0.0 };
+                ws.diag[i] = if free { e.diag[i] } else { 1.0 };
+                if i + 1 < k {
+                    ws.off[i] = if free && ws.pin[i + 1] == Pin::Free {
+                        e.off[i]
+                    } else {
+                        0.0
+                    };
                 }
             }
-            ok = thomas(&ws.diag, &ws.off, &ws.rhs, &mut ws.delta, &mut ws.scratch);
-            mu *= 1e3;
-        }
+            thomas(&ws.diag, &ws.off, &ws.rhs, &mut ws.delta, &mut ws.scratch)
+        };
         if !ok {
-            // Scaled steepest descent on the residual.
-            for i in 0..k {
-                ws.delta[i] = if ws.pin[i] == Pin::Free {
-                    -e.r[i] / (w[i] + w[i + 1])
-                        * e.len[i].min(e.len[i + 1]).max(f64::MIN_POSITIVE)
-                        * 0.5
-                } else {
-                    0.0
-                };
-            }
+            damped_step(g, ws);
         }
 
-        // Round-off floor: the full step cannot move any point to another float.
-        let tiny = (0..k).all(|i| {
-            ws.pin[i] != Pin::Free
-                || ws.delta[i].abs()
-                    <= 4.0 * f64::EPSILON * (ws.s[i].abs() + e.len[i] + e.len[i + 1])
-        });
-        if tiny {
-            return finished(iterations);
-        }
-
-        // Cap: no point moves further than its longer leg, nor half way round a closed
-        // polyline.
+        // Negate; round-off floor (the full step cannot move any point to another float);
+        // cap (no point moves further than its longer leg, nor a quarter way round a closed
+        // polyline).
+        let e = &ws.eval;
+        let mut tiny = true;
         let mut cap: f64 = 1.0;
         for i in 0..k {
-            if ws.pin[i] == Pin::Free {
-                let line = g.line(i);
-                let mut limit = e.len[i].max(e.len[i + 1]);
-                if line.is_closed() {
-                    limit = limit.min(0.25 * line.length());
-                }
-                if ws.delta[i].abs() > limit && limit > 0.0 {
-                    cap = cap.min(limit / ws.delta[i].abs());
-                }
+            let d = -ws.delta[i];
+            ws.delta[i] = d;
+            if ws.pin[i] != Pin::Free {
+                continue;
+            }
+            tiny &= d.abs() <= 4.0 * f64::EPSILON * (ws.s[i].abs() + e.len[i] + e.len[i + 1]);
+            let line = g.line(i);
+            let mut limit = e.len[i].max(e.len[i + 1]);
+            if line.is_closed() {
+                limit = limit.min(0.25 * line.length());
+            }
+            if d.abs() > limit && limit > 0.0 {
+                cap = cap.min(limit / d.abs());
             }
         }
+        if tiny {
+            return finished(ws, iterations);
+        }
 
-        let phi0 = merit(g, e, &ws.pin);
+        let phi0 = e.phi;
         let mut alpha = cap;
         let mut accepted = false;
         let mut pinned = false;
         let mut best: Option<(f64, f64)> = None;
         for attempt in 0..40 {
+            let mut crossed = false;
             for i in 0..k {
                 if ws.pin[i] == Pin::Free {
                     let (s, seg, pin) = place(g, i, ws.s[i] + alpha * ws.delta[i], ws.seg[i]);
                     ws.s_try[i] = s;
                     ws.seg_try[i] = seg;
                     ws.pin_try[i] = pin;
+                    crossed |= seg != ws.seg[i];
                 } else {
                     ws.s_try[i] = ws.s[i];
                     ws.seg_try[i] = ws.seg[i];
                     ws.pin_try[i] = ws.pin[i];
                 }
             }
-            let crossed = (0..k).any(|i| ws.seg_try[i] != ws.seg[i]);
-            g.evaluate(&ws.s_try, &ws.seg_try, &mut ws.eval_try, true, crossed);
-            let phi = merit(g, &ws.eval_try, &ws.pin_try);
-            if cfg!(debug_assertions) && std::env::var_os("EIGENRAY_DEBUG").is_some() {
-                eprintln!(
-                    "   try alpha={alpha} s={:?} seg={:?} r={:?} phi={phi} phi0={phi0}",
-                    ws.s_try, ws.seg_try, ws.eval_try.r
-                );
-            }
+            g.evaluate(
+                &ws.s_try,
+                &ws.seg_try,
+                &ws.pin_try,
+                &mut ws.eval_try,
+                true,
+                crossed,
+            );
+            let phi = ws.eval_try.phi;
             if phi.is_finite() && phi <= (1.0 - 1e-4 * alpha) * phi0 {
                 accepted = true;
+                curvature = crossed;
                 break;
             }
             if phi.is_finite() && best.is_none_or(|(_, b)| phi < b) {
@@ -478,10 +399,7 @@ pub(crate) fn solve(
                     pinned = true;
                 }
             }
-            if pinned {
-                break;
-            }
-            if attempt == 39 {
+            if pinned || attempt == 39 {
                 break;
             }
             alpha *= 0.5;
@@ -490,7 +408,11 @@ pub(crate) fn solve(
             curvature = false;
             continue;
         }
-        if !accepted {
+        if accepted {
+            // The trial was evaluated with the curvature flag of the next iteration: reuse it.
+            std::mem::swap(&mut ws.eval, &mut ws.eval_try);
+            evaluated = true;
+        } else {
             if curvature {
                 // The curvature model misled the step; retry on the exact segment-wise model.
                 curvature = false;
@@ -498,34 +420,98 @@ pub(crate) fn solve(
             }
             // Non-monotone fallback: take the best trial so that the iteration moves on.
             let Some((a, _)) = best else {
+                let e = &ws.eval;
                 return (
                     Outcome::NotConverged,
                     Solution {
                         time: e.time,
                         iterations,
-                        residual,
+                        residual: e.rmax,
                     },
                 );
             };
+            let mut crossed = false;
             for i in 0..k {
                 if ws.pin[i] == Pin::Free {
                     let (s, seg, pin) = place(g, i, ws.s[i] + a * ws.delta[i], ws.seg[i]);
                     ws.s_try[i] = s;
                     ws.seg_try[i] = seg;
                     ws.pin_try[i] = pin;
+                    crossed |= seg != ws.seg[i];
                 }
             }
-        }
-        let crossed = (0..k).any(|i| ws.seg_try[i] != ws.seg[i]);
-        curvature = crossed;
-        if accepted {
-            // The trial was evaluated with this same curvature flag: reuse it.
-            std::mem::swap(&mut ws.eval, &mut ws.eval_try);
-            evaluated = true;
+            curvature = crossed;
         }
         std::mem::swap(&mut ws.s, &mut ws.s_try);
         std::mem::swap(&mut ws.seg, &mut ws.seg_try);
         std::mem::swap(&mut ws.pin, &mut ws.pin_try);
+    }
+}
+
+/// The outcome once the free points are stationary.
+fn finished(ws: &Workspace, iterations: usize) -> (Outcome, Solution) {
+    let e = &ws.eval;
+    let outcome = if e.held == 0 {
+        Outcome::Converged
+    } else if let Some(i) = ws
+        .pin
+        .iter()
+        .position(|p| matches!(p, Pin::Start | Pin::End))
+    {
+        Outcome::LeftEnd(i)
+    } else {
+        Outcome::Vertex
+    };
+    (
+        outcome,
+        Solution {
+            time: e.time,
+            iterations,
+            residual: e.rmax,
+        },
+    )
+}
+
+/// Fallback when the Newton system is singular: Levenberg damping relative to the
+/// Hessian's natural scale `w/ℓ`, and failing that a scaled steepest-descent step. Leaves
+/// `x` with `H x ≈ r` in `ws.delta` (the caller negates it).
+#[cold]
+fn damped_step(g: &Geometry, ws: &mut Workspace) {
+    let k = g.k();
+    let w = g.slowness;
+    let e = &ws.eval;
+    let mut mu = 1e-10;
+    while mu <= 1.0 {
+        for i in 0..k {
+            let free = ws.pin[i] == Pin::Free;
+            ws.rhs[i] = if free { e.r[i] } else { 0.0 };
+            let d = if free { e.diag[i] } else { 1.0 };
+            let nat = w[i] / e.len[i].max(f64::MIN_POSITIVE)
+                + w[i + 1] / e.len[i + 1].max(f64::MIN_POSITIVE);
+            ws.diag[i] = if free {
+                d + mu * nat.min(1e300) * if d < 0.0 { -1.0 } else { 1.0 }
+            } else {
+                1.0
+            };
+            if i + 1 < k {
+                ws.off[i] = if free && ws.pin[i + 1] == Pin::Free {
+                    e.off[i]
+                } else {
+                    0.0
+                };
+            }
+        }
+        if thomas(&ws.diag, &ws.off, &ws.rhs, &mut ws.delta, &mut ws.scratch) {
+            return;
+        }
+        mu *= 1e3;
+    }
+    for i in 0..k {
+        ws.delta[i] = if ws.pin[i] == Pin::Free {
+            e.r[i] / (w[i] + w[i + 1]) * e.len[i].min(e.len[i + 1]).max(f64::MIN_POSITIVE) * 0.5
+        } else {
+            0.0
+        };
     }
 }
 
