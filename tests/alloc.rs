@@ -1,0 +1,102 @@
+//! The per-ray hot path allocates nothing once a workspace has grown (a counting allocator).
+
+use eigenray::{Scene, Tracer, Workspace, demo};
+
+/// Solves every ray of `scene` twice with one workspace (cold start, then warm-started from
+/// the previous ray's parameters) and counts the allocations of the second sweep.
+fn allocations_per_sweep(scene: &Scene) -> u64 {
+    let tracer = Tracer::new(scene).unwrap();
+    let mut ws = Workspace::new();
+    let mut guess = Vec::new();
+    let (ns, nr, np) = (
+        scene.sources().len(),
+        scene.receivers().len(),
+        scene.paths().len(),
+    );
+    let sweep = |ws: &mut Workspace, guess: &mut Vec<f64>| {
+        let mut converged = 0;
+        for s in 0..ns {
+            for r in 0..nr {
+                for p in 0..np {
+                    let k = scene.paths()[p].steps.len();
+                    let warm = (guess.len() == k).then_some(guess.as_slice());
+                    let out = tracer.solve_indexed_from(s, r, p, warm, ws);
+                    if out.status == eigenray::Status::Converged {
+                        converged += 1;
+                    }
+                    if guess.len() == k {
+                        guess.copy_from_slice(ws.parameters());
+                    }
+                }
+            }
+        }
+        converged
+    };
+    // Grow the workspace and the guess buffer to the longest path.
+    let longest = scene
+        .paths()
+        .iter()
+        .map(|p| p.steps.len())
+        .max()
+        .unwrap_or(0);
+    guess.resize(longest, 0.0);
+    guess.clear();
+    let warm_up = sweep(&mut ws, &mut guess);
+    assert!(
+        warm_up > 0,
+        "the scene must have converging rays for the test to mean anything"
+    );
+    let info = allocation_counter::measure(|| {
+        sweep(&mut ws, &mut guess);
+    });
+    info.count_total
+}
+
+fn bench_scene(name: &str) -> Scene {
+    let path = format!("{}/fixtures/bench/{name}.json", env!("CARGO_MANIFEST_DIR"));
+    Scene::from_json(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+#[test]
+fn single_refraction_allocates_nothing() {
+    let scene = Scene::from_spec(&demo::air_water(200, 3)).unwrap();
+    assert_eq!(allocations_per_sweep(&scene), 0);
+}
+
+#[test]
+fn layer_stack_allocates_nothing() {
+    assert_eq!(allocations_per_sweep(&bench_scene("layers10")), 0);
+}
+
+#[test]
+fn room_reflections_allocate_nothing() {
+    // Converged, no_path (open ends, corners) and every branch of the classification.
+    assert_eq!(allocations_per_sweep(&bench_scene("room2d")), 0);
+}
+
+#[test]
+fn region_lookup_allocates_nothing() {
+    // Leg media from region lookup (the triangulation), a lens crossed twice, obstruction.
+    let scene = Scene::from_json(
+        r#"{
+        "media": { "air": { "speed": 1.0 }, "water": { "speed": 0.75, "at": [0.5, -0.5] },
+                   "glass": { "speed": 0.6, "at": [3.5, 0.6] } },
+        "background": "air",
+        "domain": [[-2.0, -3.0], [5.0, 3.0]],
+        "interfaces": {
+            "surface": { "points": [[-2.0, 0.0], [5.0, 0.0]] },
+            "lens": { "points": [[3, 0.5], [4, 0.5], [4, 1.5]], "closed": true }
+        },
+        "sources": [[0.0, 1.0], [3.2, 2.0]],
+        "receivers": [[1.0, -1.0], [0.5, -1.0], [3.9, 0.3], [4.5, 2.5]],
+        "paths": [
+            { "steps": [] },
+            { "steps": [{ "refract": "surface" }] },
+            { "steps": [{ "reflect": "surface" }] },
+            { "steps": [{ "refract": "lens" }, { "refract": "lens" }] }
+        ]
+    }"#,
+    )
+    .unwrap();
+    assert_eq!(allocations_per_sweep(&scene), 0);
+}
