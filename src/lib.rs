@@ -45,7 +45,7 @@ pub use geom::{Aabb, Point, SegmentContact, Vec2, orient, segment_contact};
 pub use output::{Format, write_batch, write_rays, write_rays_json};
 pub use polyline::{Polyline, PolylineError};
 pub use problem::{PathProblem, Tridiagonal};
-pub use regions::Regions;
+pub use regions::{LocateHint, Regions, Sides};
 pub use scene::{
     DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, Interface, InterfaceSpec, MAX_COORDINATE,
     MAX_ITERATIONS_LIMIT, MAX_SPEED_RATIO, Medium, MediumSpec, Path, PathSpec, Scene, SceneError,

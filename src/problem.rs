@@ -135,40 +135,51 @@ impl<'a> Geometry<'a> {
         curvature: bool,
     ) {
         let k = self.k();
-        let w = self.slowness;
-        e.rel[0] = Vec2::default();
+        // Exact-length views: the loops below then index without bounds checks.
+        let (s, seg, pin, w) = (&s[..k], &seg[..k], &pin[..k], &self.slowness[..k + 1]);
+        let (rel, u, len, tan) = (
+            &mut e.rel[..k + 2],
+            &mut e.u[..k + 1],
+            &mut e.len[..k + 1],
+            &mut e.tan[..k],
+        );
+        let interfaces = self.scene.interfaces();
+        rel[0] = Vec2::default();
         for i in 0..k {
-            let line = self.line(i);
-            e.rel[i + 1] = line.offset_on(seg[i], s[i], self.source);
-            e.tan[i] = line.tangent(seg[i]);
+            let line = &interfaces[self.steps[i].interface].polyline;
+            rel[i + 1] = line.offset_on(seg[i], s[i], self.source);
+            tan[i] = line.tangent(seg[i]);
         }
-        e.rel[k + 1] = self.receiver - self.source;
+        rel[k + 1] = self.receiver - self.source;
         let mut time = 0.0;
+        let mut total = 0.0;
         for j in 0..=k {
-            let d = e.rel[j + 1] - e.rel[j];
+            let d = rel[j + 1] - rel[j];
             let l = leg_length(d);
-            e.len[j] = l;
-            e.u[j] = if l > 0.0 {
+            len[j] = l;
+            u[j] = if l > 0.0 {
                 d * (1.0 / l)
             } else {
                 Vec2::default()
             };
             time += w[j] * l;
+            total += l;
         }
         e.time = time;
+        let r = &mut e.r[..k];
         let (mut phi, mut rmax, mut held) = (0.0, 0.0f64, 0);
         for i in 0..k {
-            let t = e.tan[i];
-            let r = (e.u[i] * w[i] - e.u[i + 1] * w[i + 1]).dot(t);
-            e.r[i] = r;
-            let rel = r / (w[i] + w[i + 1]);
+            let t = tan[i];
+            let ri = (u[i] * w[i] - u[i + 1] * w[i + 1]).dot(t);
+            r[i] = ri;
+            let rel = ri / (w[i] + w[i + 1]);
             let m = match pin[i] {
                 Pin::Free => {
                     rmax = rmax.max(rel.abs());
                     rel
                 }
                 Pin::Vertex => 0.0,
-                Pin::Start | Pin::End if leg_vanished(e, i) => 0.0,
+                Pin::Start | Pin::End if leg_vanished(len, i, total) => 0.0,
                 Pin::Start => rel.min(0.0),
                 Pin::End => rel.max(0.0),
             };
@@ -181,35 +192,36 @@ impl<'a> Geometry<'a> {
         if !hessian {
             return;
         }
+        let (diag, off) = (&mut e.diag[..k], &mut e.off[..k.saturating_sub(1)]);
         for i in 0..k {
-            let t = e.tan[i];
-            let (ua, ub) = (e.u[i], e.u[i + 1]);
+            let t = tan[i];
+            let (ua, ub) = (u[i], u[i + 1]);
             let ca = ua.cross(t);
             let cb = ub.cross(t);
-            let mut h = w[i] * ca * ca * inv(e.len[i]) + w[i + 1] * cb * cb * inv(e.len[i + 1]);
+            let mut h = w[i] * ca * ca * inv(len[i]) + w[i + 1] * cb * cb * inv(len[i + 1]);
             if curvature {
-                let kappa = self.line(i).curvature(seg[i]);
+                let kappa = interfaces[self.steps[i].interface]
+                    .polyline
+                    .curvature(seg[i]);
                 if kappa != 0.0 {
                     h += kappa * (ua * w[i] - ub * w[i + 1]).dot(t.perp());
                 }
             }
-            e.diag[i] = h;
+            diag[i] = h;
             if i + 1 < k {
-                let t2 = e.tan[i + 1];
-                e.off[i] = -w[i + 1] * cb * ub.cross(t2) * inv(e.len[i + 1]);
+                off[i] = -w[i + 1] * cb * ub.cross(tan[i + 1]) * inv(len[i + 1]);
             }
         }
     }
 }
 
-/// Whether a leg next to point `i` has vanished (shorter than 1e-12 of the whole path's
-/// length): there the residual is undefined and the point sits on a corner it shares with its
-/// neighbour.
+/// Whether a leg next to point `i` has vanished (shorter than 1e-12 of the path's total
+/// length `total`): there the residual is undefined and the point sits on a corner it shares
+/// with its neighbour.
 #[inline]
-pub(crate) fn leg_vanished(e: &Eval, i: usize) -> bool {
-    let total: f64 = e.len.iter().sum();
+pub(crate) fn leg_vanished(len: &[f64], i: usize, total: f64) -> bool {
     let tiny = 1e-12 * total;
-    e.len[i] <= tiny || e.len[i + 1] <= tiny
+    len[i] <= tiny || len[i + 1] <= tiny
 }
 
 /// `|d|`: a plain square root where the squares neither overflow nor lose precision to

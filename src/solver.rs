@@ -205,8 +205,8 @@ fn single_vertex_between(g: &Geometry, i: usize, from: usize, to: usize) -> Opti
 #[inline]
 fn stays_at_end(e: &Eval, i: usize, pin: Pin, margin: f64) -> bool {
     match pin {
-        Pin::Start => e.r[i] > margin || leg_vanished(e, i),
-        Pin::End => e.r[i] < -margin || leg_vanished(e, i),
+        Pin::Start => e.r[i] > margin || leg_vanished(&e.len, i, e.len.iter().sum()),
+        Pin::End => e.r[i] < -margin || leg_vanished(&e.len, i, e.len.iter().sum()),
         _ => false,
     }
 }

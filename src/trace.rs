@@ -530,7 +530,7 @@ impl<'s> Tracer<'s> {
                 } else {
                     line.num_segments() - 1
                 };
-                n = n + line.normal(before);
+                n += line.normal(before);
             }
             let a = n.dot(rel[i] - rel[i + 1]);
             let b = n.dot(rel[i + 2] - rel[i + 1]);
@@ -597,26 +597,24 @@ fn recompute_time(ws: &Workspace) -> Option<f64> {
 
 /// Replaces the default guess already in `ws` by `guess` if the residual is smaller there.
 fn warm_start(g: &Geometry, guess: &[f64], ws: &mut Workspace) {
-    let k = g.k();
     let default_merit = crate::solver::merit_at(g, ws);
-    for i in 0..k {
-        ws.s_alt[i] = ws.s[i];
-        ws.seg_alt[i] = ws.seg[i];
+    ws.s_alt.copy_from_slice(&ws.s);
+    ws.seg_alt.copy_from_slice(&ws.seg);
+    for (i, &wanted) in guess.iter().enumerate() {
         let line = g.line(i);
         let s = if line.is_closed() {
-            line.wrap(guess[i])
+            line.wrap(wanted)
         } else {
-            guess[i].clamp(0.0, line.length())
+            wanted.clamp(0.0, line.length())
         };
         ws.s[i] = s;
         ws.seg[i] = line.segment_at_hint(s, ws.seg[i]);
     }
     let warm_merit = crate::solver::merit_at(g, ws);
-    if !(warm_merit < default_merit) {
-        for i in 0..k {
-            ws.s[i] = ws.s_alt[i];
-            ws.seg[i] = ws.seg_alt[i];
-        }
+    // Keep the default guess unless the warm one is better (NaN counts as worse).
+    if warm_merit.partial_cmp(&default_merit) != Some(std::cmp::Ordering::Less) {
+        ws.s.copy_from_slice(&ws.s_alt);
+        ws.seg.copy_from_slice(&ws.seg_alt);
     }
 }
 
