@@ -53,3 +53,8 @@ pub use scene::{
 };
 pub use solver::{Solution, Workspace};
 pub use trace::{Ray, RaySummary, Reason, Status, Tracer, ray_index};
+
+/// The README's examples, compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

@@ -57,6 +57,9 @@ pub(crate) enum Pin {
     Start,
     /// Held at the last vertex of an open polyline.
     End,
+    /// Held inside a segment where a leg next to it has vanished (a source, receiver or
+    /// neighbouring interaction lies on the interface there): `T` has a kink at the point.
+    Kink,
 }
 
 /// Scratch buffers of one evaluation (reused: evaluating allocates nothing once sized).
@@ -84,6 +87,10 @@ pub(crate) struct Eval {
     pub rmax: f64,
     /// Number of held points.
     pub held: usize,
+    /// Number of free points next to a vanished leg.
+    pub vanished: usize,
+    /// Total length of the legs.
+    pub total: f64,
 }
 
 impl Eval {
@@ -167,18 +174,23 @@ impl<'a> Geometry<'a> {
         }
         e.time = time;
         let r = &mut e.r[..k];
-        let (mut phi, mut rmax, mut held) = (0.0, 0.0f64, 0);
+        let (mut phi, mut rmax, mut held, mut vanished) = (0.0, 0.0f64, 0, 0);
         for i in 0..k {
             let t = tan[i];
             let ri = (u[i] * w[i] - u[i + 1] * w[i + 1]).dot(t);
             r[i] = ri;
             let rel = ri / (w[i] + w[i + 1]);
             let m = match pin[i] {
+                Pin::Free if leg_vanished(len, i, total) => {
+                    // The residual is undefined here; the solver judges the kink.
+                    vanished += 1;
+                    0.0
+                }
                 Pin::Free => {
                     rmax = rmax.max(rel.abs());
                     rel
                 }
-                Pin::Vertex => 0.0,
+                Pin::Vertex | Pin::Kink => 0.0,
                 Pin::Start | Pin::End if leg_vanished(len, i, total) => 0.0,
                 Pin::Start => rel.min(0.0),
                 Pin::End => rel.max(0.0),
@@ -189,6 +201,8 @@ impl<'a> Geometry<'a> {
         e.phi = phi;
         e.rmax = rmax;
         e.held = held;
+        e.vanished = vanished;
+        e.total = total;
         if !hessian {
             return;
         }

@@ -186,6 +186,64 @@ fn residual_on(g: &Geometry, e: &Eval, i: usize, j: usize) -> f64 {
     (e.u[i] * g.slowness[i] - e.u[i + 1] * g.slowness[i + 1]).dot(t)
 }
 
+/// One-sided residuals `(r⁻, r⁺)` of point `i` next to a vanished leg: moving the point
+/// along its tangent `t` makes the vanished leg reappear pointing along `±t`.
+#[inline]
+fn kink_residuals(g: &Geometry, e: &Eval, i: usize) -> (f64, f64) {
+    let w = g.slowness;
+    let t = e.tan[i];
+    let tiny = 1e-12 * e.total;
+    // Arriving leg i: its direction becomes +t moving forward, −t moving back.
+    let (a_minus, a_plus) = if e.len[i] <= tiny {
+        (-w[i], w[i])
+    } else {
+        let a = w[i] * e.u[i].dot(t);
+        (a, a)
+    };
+    // Leaving leg i + 1: −t moving forward, +t moving back.
+    let (b_minus, b_plus) = if e.len[i + 1] <= tiny {
+        (w[i + 1], -w[i + 1])
+    } else {
+        let b = w[i + 1] * e.u[i + 1].dot(t);
+        (b, b)
+    };
+    (a_minus - b_minus, a_plus - b_plus)
+}
+
+/// If point `i` is the first or last interaction, the source or receiver lies on the line of
+/// its segment, and the trial step passes over that end point's parameter: the parameter.
+#[inline]
+fn end_point_between(g: &Geometry, ws: &Workspace, i: usize) -> Option<f64> {
+    let k = g.k();
+    let line = g.line(i);
+    let j = ws.seg[i];
+    let (a, b) = line.segment(j);
+    let tiny = 1e-12 * ws.eval.total;
+    let on_segment = |p: crate::geom::Point| -> Option<f64> {
+        let t = line.tangent(j);
+        let along = (p - a).dot(t);
+        let off = (p - a).cross(t).abs();
+        (off <= tiny && along >= 0.0 && along <= (b - a).length()).then(|| line.start(j) + along)
+    };
+    let candidates = [
+        (i == 0).then_some(g.source),
+        (i + 1 == k).then_some(g.receiver),
+    ];
+    for p in candidates.into_iter().flatten() {
+        if let Some(sp) = on_segment(p) {
+            let (lo, hi) = if ws.s[i] <= ws.s_try[i] {
+                (ws.s[i], ws.s_try[i])
+            } else {
+                (ws.s_try[i], ws.s[i])
+            };
+            if sp > lo && sp < hi {
+                return Some(sp);
+            }
+        }
+    }
+    None
+}
+
 /// If `from → to` crosses exactly one vertex of polyline `i`, the segment that starts there.
 #[inline]
 fn single_vertex_between(g: &Geometry, i: usize, from: usize, to: usize) -> Option<usize> {
@@ -205,8 +263,8 @@ fn single_vertex_between(g: &Geometry, i: usize, from: usize, to: usize) -> Opti
 #[inline]
 fn stays_at_end(e: &Eval, i: usize, pin: Pin, margin: f64) -> bool {
     match pin {
-        Pin::Start => e.r[i] > margin || leg_vanished(&e.len, i, e.len.iter().sum()),
-        Pin::End => e.r[i] < -margin || leg_vanished(&e.len, i, e.len.iter().sum()),
+        Pin::Start => e.r[i] > margin || leg_vanished(&e.len, i, e.total),
+        Pin::End => e.r[i] < -margin || leg_vanished(&e.len, i, e.total),
         _ => false,
     }
 }
@@ -234,6 +292,8 @@ pub(crate) fn solve(
     let mut free_moves = 0;
     // Whether `ws.eval` already holds the evaluation at `ws.s` (the accepted trial).
     let mut evaluated = false;
+    // Newton steps taken after the residual met the tolerance (see below).
+    let mut polishes = 0;
     loop {
         if !evaluated {
             g.evaluate(&ws.s, &ws.seg, &ws.pin, &mut ws.eval, true, curvature);
@@ -271,6 +331,16 @@ pub(crate) fn solve(
                             released = true;
                         }
                     }
+                    Pin::Kink => {
+                        let keep = leg_vanished(&e.len, i, e.total) && {
+                            let (rm, rp) = kink_residuals(g, e, i);
+                            rm <= scale && rp >= -scale
+                        };
+                        if !keep {
+                            ws.pin[i] = Pin::Free;
+                            released = true;
+                        }
+                    }
                 }
             }
             if released && free_moves < 4 * max_iterations {
@@ -279,8 +349,34 @@ pub(crate) fn solve(
             }
         }
 
+        // Free points next to a vanished leg sit on a kink of T: hold them if the one-sided
+        // residuals bracket zero, else let them move by the residual of the way down.
+        if ws.eval.vanished > 0 {
+            let mut pinned = false;
+            for i in 0..k {
+                if ws.pin[i] != Pin::Free || !leg_vanished(&ws.eval.len, i, ws.eval.total) {
+                    continue;
+                }
+                let scale = tol * (w[i] + w[i + 1]);
+                let (rm, rp) = kink_residuals(g, &ws.eval, i);
+                if rm <= scale && rp >= -scale {
+                    ws.pin[i] = Pin::Kink;
+                    pinned = true;
+                } else {
+                    let r = if rp < 0.0 { rp } else { rm };
+                    ws.eval.r[i] = r;
+                    ws.eval.rmax = ws.eval.rmax.max(r.abs() / (w[i] + w[i + 1]));
+                }
+            }
+            if pinned && free_moves < 4 * max_iterations {
+                free_moves += 1;
+                continue;
+            }
+        }
+        let e = &ws.eval;
+
         let residual = e.rmax;
-        if residual <= tol {
+        if residual <= tol && e.held == k {
             return finished(ws, iterations);
         }
         if !residual.is_finite() || iterations >= max_iterations {
@@ -293,7 +389,6 @@ pub(crate) fn solve(
                 },
             );
         }
-        iterations += 1;
 
         // Newton system H δ = −r on the free points (solved as H x = r, δ = −x).
         let ok = if e.held == 0 {
@@ -342,6 +437,21 @@ pub(crate) fn solve(
         if tiny {
             return finished(ws, iterations);
         }
+        if residual <= tol {
+            // Stationary to tolerance. Where T is flat along the solution (grazing legs, a
+            // nearly singular H) the residual allows a point error of about tol / λmin; stop
+            // only if the Newton correction is small against the legs, else take it (once
+            // more at most: Newton converges quadratically from here).
+            let small = (0..k).all(|i| {
+                ws.pin[i] != Pin::Free
+                    || ws.delta[i].abs() <= tol.sqrt() * (e.len[i] + e.len[i + 1])
+            });
+            if small || polishes >= 2 {
+                return finished(ws, iterations);
+            }
+            polishes += 1;
+        }
+        iterations += 1;
 
         let phi0 = e.phi;
         let mut alpha = cap;
@@ -397,6 +507,13 @@ pub(crate) fn solve(
                         ws.seg[i] = ws.seg_try[i];
                     }
                     pinned = true;
+                } else if ws.seg_try[i] == ws.seg[i] {
+                    // Likewise an end point of the ray lying on this segment: T has a kink
+                    // where the point reaches it; put the point there.
+                    if let Some(sp) = end_point_between(g, ws, i) {
+                        ws.s[i] = sp;
+                        pinned = true;
+                    }
                 }
             }
             if pinned || attempt == 39 {
@@ -459,8 +576,11 @@ fn finished(ws: &Workspace, iterations: usize) -> (Outcome, Solution) {
         .position(|p| matches!(p, Pin::Start | Pin::End))
     {
         Outcome::LeftEnd(i)
-    } else {
+    } else if ws.pin.contains(&Pin::Vertex) {
         Outcome::Vertex
+    } else {
+        // Held only on kinks of vanished legs: inside segments, stationary.
+        Outcome::Converged
     };
     (
         outcome,

@@ -534,6 +534,12 @@ impl<'s> Tracer<'s> {
             }
             let a = n.dot(rel[i] - rel[i + 1]);
             let b = n.dot(rel[i + 2] - rel[i + 1]);
+            // A vanished leg (an end point or a neighbour on the interface there) lies on
+            // both sides: only the other leg's side is checked.
+            let tiny = 1e-12 * ws.eval.total;
+            if ws.eval.len[i] <= tiny || ws.eval.len[i + 1] <= tiny {
+                continue;
+            }
             let ok = match step.kind {
                 StepKind::Reflect => (a > 0.0 && b > 0.0) || (a < 0.0 && b < 0.0),
                 StepKind::Refract => (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0),
