@@ -302,17 +302,20 @@ impl Polyline {
     }
 
     /// The point of the polyline nearest to `p`: `(parameter, segment, distance)`.
-    /// `O(log M)` for well-spread segments (a BVH query).
+    /// `O(log M)` for well-spread segments (a BVH query). A point with a NaN coordinate gets
+    /// the first vertex, at distance NaN.
     pub fn nearest(&self, p: Point) -> (f64, usize, f64) {
-        let (seg, d2) = self
-            .bvh
-            .nearest(p, |j| {
-                let (_, q) = self.project(j as usize, p);
-                (q - p).dot(q - p)
-            })
-            .expect("a polyline has at least one segment");
-        let (s, _) = self.project(seg as usize, p);
-        (s, seg as usize, d2.sqrt())
+        let found = self.bvh.nearest(p, |j| {
+            let (_, q) = self.project(j as usize, p);
+            (q - p).dot(q - p)
+        });
+        match found {
+            Some((seg, d2)) => {
+                let (s, _) = self.project(seg as usize, p);
+                (s, seg as usize, d2.sqrt())
+            }
+            None => (0.0, 0, f64::NAN),
+        }
     }
 
     /// The parameters where segment `a–b` crosses or touches this polyline, reported to `f`
@@ -422,6 +425,9 @@ mod tests {
         assert_eq!((s, seg, d), (0.5, 0, 2.0));
         let (s, _, d) = sq.nearest(Point::new(2.0, 0.5));
         assert_eq!((s, d), (1.5, 1.0));
+        let (s, seg, d) = sq.nearest(Point::new(f64::NAN, 0.5));
+        assert_eq!((s, seg), (0.0, 0));
+        assert!(d.is_nan());
     }
 
     #[test]
