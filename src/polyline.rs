@@ -75,6 +75,12 @@ pub struct Polyline {
     dirs: Vec<Vec2>,
     /// Curvature estimate of each segment (from small turning angles only).
     curv: Vec<f64>,
+    /// Per segment: parameter of the first corner at or after its end vertex (beyond the
+    /// length on a closed polyline when it wraps; infinite if there is none).
+    corner_ahead: Vec<f64>,
+    /// Per segment: parameter of the last corner at or before its start vertex (negative on a
+    /// closed polyline when it wraps; minus infinity if there is none).
+    corner_behind: Vec<f64>,
     bbox: Aabb,
     bvh: Bvh,
 }
@@ -130,11 +136,94 @@ impl Polyline {
             cum,
             dirs,
             curv: Vec::new(),
+            corner_ahead: Vec::new(),
+            corner_behind: Vec::new(),
             bbox,
             bvh,
         };
         line.curv = line.curvature_estimates();
+        line.find_corners();
         Ok(line)
+    }
+
+    /// Whether vertex `v` is a corner: a turn sharper than a digitised smooth curve's (the
+    /// ends of an open polyline are not: the solver holds points there by projection).
+    fn is_corner(&self, v: usize) -> bool {
+        let nseg = self.num_segments();
+        let (prev, next) = if self.closed {
+            ((v + nseg - 1) % nseg, v % nseg)
+        } else if v == 0 || v == nseg {
+            return false;
+        } else {
+            (v - 1, v)
+        };
+        let (a, b) = (self.dirs[prev], self.dirs[next]);
+        a.cross(b).atan2(a.dot(b)).abs() > SMOOTH_TURN
+    }
+
+    fn find_corners(&mut self) {
+        let nseg = self.num_segments();
+        let l = self.length();
+        let corners: Vec<bool> = (0..nseg + usize::from(!self.closed))
+            .map(|v| self.is_corner(v))
+            .collect();
+        let nv = corners.len();
+        self.corner_ahead = vec![f64::INFINITY; nseg];
+        self.corner_behind = vec![f64::NEG_INFINITY; nseg];
+        // Sweep twice round a closed polyline so that wrapped corners are found.
+        let rounds = if self.closed { 2 } else { 1 };
+        let mut next = f64::INFINITY;
+        for u in (1..=rounds * nseg).rev() {
+            let v = u % nv.max(1);
+            let wraps = if self.closed {
+                (u / nseg) as f64 * l
+            } else {
+                0.0
+            };
+            if corners[if self.closed { u % nseg } else { v.min(nv - 1) }] {
+                next = self.cum[if self.closed { u % nseg } else { u.min(nseg) }] + wraps;
+            }
+            if u - 1 < nseg {
+                self.corner_ahead[u - 1] = next;
+            }
+        }
+        let mut last = f64::NEG_INFINITY;
+        let start = if self.closed { -(nseg as isize) } else { 0 };
+        for u in start..nseg as isize {
+            let v = u.rem_euclid(nseg as isize) as usize;
+            let wraps = if u < 0 { -l } else { 0.0 };
+            if corners[v] {
+                last = self.cum[v] + wraps;
+            }
+            if u >= 0 {
+                self.corner_behind[u as usize] = last;
+            }
+        }
+    }
+
+    /// How far a point at parameter `s` on segment `j` can move by `delta` before it reaches a
+    /// corner (a vertex the segment-wise model of the travel time cannot see past): the
+    /// largest `|step| ≤ |delta|` in the direction of `delta`.
+    #[inline]
+    pub fn reach(&self, j: usize, s: f64, delta: f64) -> f64 {
+        if delta > 0.0 {
+            delta.min(self.corner_ahead[j] - s).max(0.0)
+        } else {
+            -((-delta).min(s - self.corner_behind[j]).max(0.0))
+        }
+    }
+
+    /// [`reach`](Self::reach) plus a hair (1e-7 of the segment): a step limited by it ends
+    /// just past the corner, in the next segment, so that the corner is seen as crossed.
+    #[inline]
+    pub(crate) fn reach_past(&self, j: usize, s: f64, delta: f64) -> f64 {
+        let hair = 1e-7 * self.segment_length(j);
+        let r = self.reach(j, s, delta);
+        if r.abs() < delta.abs() {
+            (r.abs() + hair).min(delta.abs()).copysign(delta)
+        } else {
+            r
+        }
     }
 
     fn curvature_estimates(&self) -> Vec<f64> {
@@ -428,6 +517,36 @@ mod tests {
         let (s, seg, d) = sq.nearest(Point::new(f64::NAN, 0.5));
         assert_eq!((s, seg), (0.0, 0));
         assert!(d.is_nan());
+    }
+
+    #[test]
+    fn corners_limit_the_reach() {
+        let p = Point::new;
+        // A square: every vertex is a corner.
+        let sq = square();
+        assert_eq!(sq.reach(0, 0.25, 2.0), 0.75);
+        assert_eq!(sq.reach(0, 0.25, -2.0), -0.25);
+        assert_eq!(sq.reach(3, 3.5, 2.0), 0.5);
+        assert_eq!(sq.reach(0, 0.0, -2.0), -0.0);
+        // An open polyline with a gentle bend (not a corner) and a sharp one.
+        let line =
+            Polyline::new(vec![p(0., 0.), p(1., 0.), p(2., 0.1), p(2., 1.1)], false).unwrap();
+        let l1 = line.start(1);
+        let l2 = line.start(2);
+        assert_eq!(line.reach(0, 0.5, 5.0), l2 - 0.5);
+        assert_eq!(line.reach(1, l1 + 0.1, -5.0), -5.0);
+        assert_eq!(line.reach(2, l2 + 0.5, 5.0), 5.0);
+        assert_eq!(line.reach(2, l2 + 0.5, -5.0), -0.5);
+        // A fine circle has no corners.
+        let circle: Vec<Point> = (0..360)
+            .map(|i| {
+                let t = i as f64 * std::f64::consts::TAU / 360.0;
+                p(t.cos(), t.sin())
+            })
+            .collect();
+        let c = Polyline::new(circle, true).unwrap();
+        assert_eq!(c.reach(10, 0.2, 3.0), 3.0);
+        assert_eq!(c.reach(10, 0.2, -3.0), -3.0);
     }
 
     #[test]

@@ -244,6 +244,26 @@ fn end_point_between(g: &Geometry, ws: &Workspace, i: usize) -> Option<f64> {
     None
 }
 
+/// The parameter of vertex `v` (where segment `v` starts) seen from segment `seg` (`v` or the
+/// segment before it): on a closed polyline vertex 0 is at `length` from the last segment.
+#[inline]
+fn vertex_param(g: &Geometry, i: usize, v: usize, seg: usize) -> f64 {
+    let line = g.line(i);
+    if seg == v {
+        line.start(v)
+    } else {
+        line.start(seg + 1)
+    }
+}
+
+/// Whether a vanished leg next to point `i` joins it to another interaction (not to the
+/// source or the receiver): two interactions on one spot are no path.
+#[inline]
+pub(crate) fn interior_leg_vanished(e: &Eval, i: usize, k: usize) -> bool {
+    let tiny = 1e-12 * e.total;
+    (i > 0 && e.len[i] <= tiny) || (i + 1 < k && e.len[i + 1] <= tiny)
+}
+
 /// If `from → to` crosses exactly one vertex of polyline `i`, the segment that starts there.
 #[inline]
 fn single_vertex_between(g: &Geometry, i: usize, from: usize, to: usize) -> Option<usize> {
@@ -287,6 +307,9 @@ pub(crate) fn solve(
     let w = g.slowness;
     let mut iterations = 0;
     let mut curvature = true;
+    // Set once a vertex or an end point was met: from then on the exact segment-wise model
+    // (no curvature estimate), which is right near a kink of T.
+    let mut near_kink = false;
     // Releases and pins do not move the others; bound them so that a ring of releases and
     // re-pins cannot spin for ever between counted iterations.
     let mut free_moves = 0;
@@ -300,6 +323,12 @@ pub(crate) fn solve(
         }
         evaluated = false;
         let e = &ws.eval;
+        if cfg!(debug_assertions) && std::env::var_os("EIGENRAY_DEBUG").is_some() {
+            eprintln!(
+                "it {iterations} s={:?} seg={:?} pin={:?} r={:?} phi={}",
+                ws.s, ws.seg, ws.pin, e.r, e.phi
+            );
+        }
 
         // Held points: keep, or release towards decreasing T.
         if e.held > 0 {
@@ -321,6 +350,7 @@ pub(crate) fn solve(
                             released = true;
                         } else if rp > scale && rm > scale {
                             ws.pin[i] = Pin::Free;
+                            ws.s[i] = vertex_param(g, i, ws.seg[i], before);
                             ws.seg[i] = before;
                             released = true;
                         }
@@ -332,10 +362,11 @@ pub(crate) fn solve(
                         }
                     }
                     Pin::Kink => {
-                        let keep = leg_vanished(&e.len, i, e.total) && {
-                            let (rm, rp) = kink_residuals(g, e, i);
-                            rm <= scale && rp >= -scale
-                        };
+                        let keep = leg_vanished(&e.len, i, e.total)
+                            && (interior_leg_vanished(e, i, k) || {
+                                let (rm, rp) = kink_residuals(g, e, i);
+                                rm <= scale && rp >= -scale
+                            });
                         if !keep {
                             ws.pin[i] = Pin::Free;
                             released = true;
@@ -359,7 +390,7 @@ pub(crate) fn solve(
                 }
                 let scale = tol * (w[i] + w[i + 1]);
                 let (rm, rp) = kink_residuals(g, &ws.eval, i);
-                if rm <= scale && rp >= -scale {
+                if interior_leg_vanished(&ws.eval, i, k) || (rm <= scale && rp >= -scale) {
                     ws.pin[i] = Pin::Kink;
                     pinned = true;
                 } else {
@@ -430,6 +461,8 @@ pub(crate) fn solve(
             if line.is_closed() {
                 limit = limit.min(0.25 * line.length());
             }
+            // The segment-wise model of T holds up to the next corner, not past it.
+            limit = limit.min(line.reach_past(ws.seg[i], ws.s[i], d).abs());
             if d.abs() > limit && limit > 0.0 {
                 cap = cap.min(limit / d.abs());
             }
@@ -482,37 +515,96 @@ pub(crate) fn solve(
                 crossed,
             );
             let phi = ws.eval_try.phi;
-            if phi.is_finite() && phi <= (1.0 - 1e-4 * alpha) * phi0 {
-                accepted = true;
-                curvature = crossed;
-                break;
+            if cfg!(debug_assertions) && std::env::var_os("EIGENRAY_DEBUG").is_some() {
+                eprintln!(
+                    "   try a={alpha} s={:?} seg={:?} pin={:?} r={:?} phi={phi}",
+                    ws.s_try, ws.seg_try, ws.pin_try, ws.eval_try.r
+                );
             }
-            if phi.is_finite() && best.is_none_or(|(_, b)| phi < b) {
-                best = Some((alpha, phi));
-            }
-            // A point that jumped across one vertex: if it now wants to go back, hold it on
-            // the vertex; if it wants to go on, put it on the vertex in the new segment. The
-            // merit is discontinuous at a vertex, so backtracking alone would only creep
-            // towards it.
+            // A residual that changes sign while its point crosses vertices has jumped a
+            // kink of T or a root: never accepted on the merit alone. Across several
+            // vertices: backtrack. Across one: look at the vertex itself.
+            let (mut flip_far, mut flip_one) = (false, None);
             for i in 0..k {
-                if ws.pin[i] != Pin::Free || ws.pin_try[i] != Pin::Free {
+                if ws.pin[i] != Pin::Free
+                    || ws.pin_try[i] != Pin::Free
+                    || ws.seg_try[i] == ws.seg[i]
+                {
                     continue;
                 }
-                if let Some(v) = single_vertex_between(g, i, ws.seg[i], ws.seg_try[i]) {
-                    ws.s[i] = g.line(i).start(v);
-                    if ws.eval_try.r[i] * ws.eval.r[i] < 0.0 {
+                if ws.eval_try.r[i] * ws.eval.r[i] < 0.0 {
+                    if single_vertex_between(g, i, ws.seg[i], ws.seg_try[i]).is_some() {
+                        flip_one.get_or_insert(i);
+                    } else {
+                        flip_far = true;
+                    }
+                }
+            }
+            let merit_ok = phi.is_finite() && phi <= (1.0 - 1e-4 * alpha) * phi0;
+            if merit_ok && !flip_far && flip_one.is_none() {
+                accepted = true;
+                curvature = crossed && !near_kink;
+                break;
+            }
+            if phi.is_finite() && !flip_far && best.is_none_or(|(_, b)| phi < b) {
+                best = Some((alpha, phi));
+            }
+            // The vertex: if the residual does not change sign before it on the current
+            // segment, the point goes onto the vertex, held there if the residual changes sign
+            // across it (a kink of T) and moved on into the new segment otherwise. The merit
+            // is discontinuous at a vertex, so backtracking alone would only creep towards it.
+            let crosser = if flip_far {
+                None
+            } else {
+                flip_one.or_else(|| {
+                    (0..k).find(|&i| {
+                        ws.pin[i] == Pin::Free
+                            && ws.pin_try[i] == Pin::Free
+                            && single_vertex_between(g, i, ws.seg[i], ws.seg_try[i]).is_some()
+                    })
+                })
+            };
+            if let Some(i) = crosser {
+                let v =
+                    single_vertex_between(g, i, ws.seg[i], ws.seg_try[i]).unwrap_or(ws.seg_try[i]);
+                let (s_new, seg_new) = (ws.s_try[i], ws.seg_try[i]);
+                let residual_at = |seg: usize, ws: &mut Workspace| {
+                    ws.s_try[i] = vertex_param(g, i, v, seg);
+                    ws.seg_try[i] = seg;
+                    g.evaluate(
+                        &ws.s_try,
+                        &ws.seg_try,
+                        &ws.pin_try,
+                        &mut ws.eval_try,
+                        false,
+                        false,
+                    );
+                    ws.eval_try.r[i]
+                };
+                let r_before = residual_at(ws.seg[i], ws);
+                let r_after = residual_at(seg_new, ws);
+                (ws.s_try[i], ws.seg_try[i]) = (s_new, seg_new);
+                if r_before * ws.eval.r[i] > 0.0 {
+                    if r_after * r_before <= 0.0 {
+                        ws.s[i] = vertex_param(g, i, v, v);
                         ws.seg[i] = v;
                         ws.pin[i] = Pin::Vertex;
                     } else {
-                        ws.seg[i] = ws.seg_try[i];
+                        ws.s[i] = vertex_param(g, i, v, seg_new);
+                        ws.seg[i] = seg_new;
                     }
                     pinned = true;
-                } else if ws.seg_try[i] == ws.seg[i] {
-                    // Likewise an end point of the ray lying on this segment: T has a kink
-                    // where the point reaches it; put the point there.
-                    if let Some(sp) = end_point_between(g, ws, i) {
-                        ws.s[i] = sp;
-                        pinned = true;
+                }
+            } else if !flip_far {
+                // Likewise an end point of the ray lying on a point's segment: T has a kink
+                // where the point reaches it; put the point there.
+                for i in 0..k {
+                    if ws.pin[i] == Pin::Free && ws.seg_try[i] == ws.seg[i] {
+                        if let Some(sp) = end_point_between(g, ws, i) {
+                            ws.s[i] = sp;
+                            pinned = true;
+                            break;
+                        }
                     }
                 }
             }
@@ -523,6 +615,7 @@ pub(crate) fn solve(
         }
         if pinned {
             curvature = false;
+            near_kink = true;
             continue;
         }
         if accepted {
@@ -557,7 +650,7 @@ pub(crate) fn solve(
                     crossed |= seg != ws.seg[i];
                 }
             }
-            curvature = crossed;
+            curvature = crossed && !near_kink;
         }
         std::mem::swap(&mut ws.s, &mut ws.s_try);
         std::mem::swap(&mut ws.seg, &mut ws.seg_try);

@@ -89,6 +89,12 @@ pub enum Reason {
     /// The leg media found at the solution differ from those it was solved with, again and
     /// again.
     MediaUnsettled,
+    /// Interaction `step` and the next one fell on one spot (the leg between them vanished):
+    /// the path degenerates to fewer interactions.
+    Coincident {
+        /// Index of the step.
+        step: usize,
+    },
     /// The iteration limit was reached.
     IterationLimit,
 }
@@ -122,6 +128,13 @@ impl fmt::Display for Reason {
             }
             Reason::NoMedium { leg } => write!(f, "no medium fills the region of leg {leg}"),
             Reason::MediaUnsettled => f.write_str("the leg media change with the solution"),
+            Reason::Coincident { step } => {
+                write!(
+                    f,
+                    "steps {step} and {} fall on one spot (the leg between them vanished)",
+                    step + 1
+                )
+            }
             Reason::IterationLimit => f.write_str("iteration limit reached"),
         }
     }
@@ -461,6 +474,13 @@ impl<'s> Tracer<'s> {
             }
             Outcome::Converged | Outcome::Vertex => {}
         }
+        if let Some(step) = (0..k).find(|&i| crate::solver::interior_leg_vanished(&ws.eval, i, k)) {
+            return RaySummary {
+                status: Status::NoPath,
+                reason: Some(Reason::Coincident { step }),
+                ..base
+            };
+        }
         if let Some(step) = self.wrong_side(&spec.steps, ws) {
             return RaySummary {
                 status: Status::NoPath,
@@ -540,6 +560,18 @@ impl<'s> Tracer<'s> {
             if ws.eval.len[i] <= tiny || ws.eval.len[i + 1] <= tiny {
                 continue;
             }
+            // A leg within 1e-10 rad of the interface runs along it: on neither side.
+            let (la, lb) = (ws.eval.len[i], ws.eval.len[i + 1]);
+            let a = if a.abs() <= SIDE_MARGIN * la * n.length() {
+                0.0
+            } else {
+                a
+            };
+            let b = if b.abs() <= SIDE_MARGIN * lb * n.length() {
+                0.0
+            } else {
+                b
+            };
             let ok = match step.kind {
                 StepKind::Reflect => (a > 0.0 && b > 0.0) || (a < 0.0 && b < 0.0),
                 StepKind::Refract => (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0),
@@ -579,6 +611,9 @@ impl<'s> Tracer<'s> {
         None
     }
 }
+
+/// A leg whose sine with the interface is below this runs along it, on neither side.
+const SIDE_MARGIN: f64 = 1e-10;
 
 /// Crossings closer than this fraction of a leg to its ends are the leg's own end points.
 const END_MARGIN: f64 = 1e-10;

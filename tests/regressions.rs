@@ -1,0 +1,132 @@
+//! Frozen inputs that made the library panic, hang or answer wrongly: one named test each.
+//!
+//! Each input is `fixtures/fuzz/NAME.json` (its `description` says where it came from and what
+//! went wrong) or inline; each test asserts the correct behaviour.
+
+use std::path::Path;
+
+use eigenray::{Point, Ray, Scene, Status, Tracer};
+
+/// The text of `fixtures/fuzz/NAME.json`.
+fn fixture(name: &str) -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures/fuzz")
+        .join(format!("{name}.json"));
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// Parses, validates and traces a scene document.
+fn trace(text: &str) -> Vec<Ray> {
+    let scene = Scene::from_json(text).unwrap_or_else(|e| panic!("scene rejected: {e}"));
+    let tracer = Tracer::new(&scene).unwrap_or_else(|e| panic!("Tracer::new: {e}"));
+    tracer.trace_all()
+}
+
+/// Distance from `p` to segment `a–b`.
+fn segment_distance(p: Point, a: Point, b: Point) -> f64 {
+    let (dx, dy) = (b.x - a.x, b.y - a.y);
+    let t = (((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
+    (p.x - (a.x + t * dx)).hypot(p.y - (a.y + t * dy))
+}
+
+/// Every interaction point of every ray with points lies on its interface.
+fn assert_points_on_interfaces(name: &str, scene: &Scene, rays: &[Ray]) {
+    let size = scene.bbox().diagonal();
+    for ray in rays.iter().filter(|r| !r.points.is_empty()) {
+        for (i, step) in scene.paths()[ray.path].steps.iter().enumerate() {
+            let line = &scene.interfaces()[step.interface].polyline;
+            let p = ray.points[i + 1];
+            let d = (0..line.num_segments())
+                .map(|j| {
+                    let (a, b) = line.segment(j);
+                    segment_distance(p, a, b)
+                })
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                d <= 1e-9 * size,
+                "{name}: ray {} ({}): interaction {i} at {p:?} is {d:e} from interface `{}`",
+                ray.path,
+                ray.status,
+                scene.interfaces()[step.interface].name
+            );
+        }
+    }
+}
+
+/// The only ray of a one-ray fixture (after checking that its points lie on the interfaces).
+fn only_ray(name: &str) -> Ray {
+    let text = fixture(name);
+    let scene = Scene::from_json(&text).unwrap_or_else(|e| panic!("scene rejected: {e}"));
+    let rays = trace(&text);
+    assert_eq!(rays.len(), 1, "{name}: one ray");
+    assert_points_on_interfaces(name, &scene, &rays);
+    rays.into_iter().next().expect("one ray")
+}
+
+/// An impossible path (the source and receiver are on the wrong sides for its steps) must
+/// not be reported as a specular or edge-diffracted path. `no_path` is the contract's answer;
+/// `obstructed` would also be honest (a stationary path whose leg crosses an interface).
+fn assert_impossible(name: &str) {
+    let ray = only_ray(name);
+    assert!(
+        matches!(ray.status, Status::NoPath | Status::Obstructed),
+        "{name}: an impossible path reported as {} ({:?}), points {:?}, residual {}",
+        ray.status,
+        ray.reason,
+        ray.points,
+        ray.residual
+    );
+}
+
+/// Two refractions through one interface with the source above and the receiver below: the
+/// solver collapsed both interaction points onto one spot (a zero-length middle leg, where
+/// Snell's law is undefined) and reported `converged`.
+#[test]
+fn refract_twice_vanished_middle_leg_is_no_path() {
+    assert_impossible("refract_twice_vanished_middle_leg");
+}
+
+/// The same with region lookup for the leg media (`converged` with the residual at 0.4).
+#[test]
+fn refract_twice_vanished_middle_leg_lookup_is_no_path() {
+    assert_impossible("refract_twice_vanished_middle_leg_lookup");
+}
+
+/// Two reflections with the source above and the receiver below: the middle leg of the
+/// stationary path runs inside the interface (on neither side) and was reported `converged`.
+#[test]
+fn reflect_twice_middle_leg_along_segment_is_no_path() {
+    assert_impossible("reflect_twice_middle_leg_along_segment");
+}
+
+/// Two refractions with the source above and the receiver below: the middle leg runs inside
+/// the interface (a head wave at the critical angle) and was reported `converged`.
+#[test]
+fn refract_twice_middle_leg_along_segment_is_no_path() {
+    assert_impossible("refract_twice_middle_leg_along_segment");
+}
+
+/// One refraction with the source and the receiver on the same side: the specular point at
+/// s = 0.798 inside segment 0 is stationary with the legs on one side, so `no_path`; the
+/// Newton iteration cycled between the open end and vertex 1 until the iteration limit.
+#[test]
+fn single_refraction_same_side_is_no_path_not_a_cycle() {
+    let ray = only_ray("single_refraction_same_side_cycles");
+    assert_eq!(
+        ray.status,
+        Status::NoPath,
+        "{:?} after {} iterations, residual {}",
+        ray.reason,
+        ray.iterations,
+        ray.residual
+    );
+}
+
+/// Two refractions through a closed polygon that the straight source–receiver line misses, one
+/// medium everywhere: no path. The solver ended at s = 0 on the polygon's closing segment, so
+/// the reported interaction points were extrapolated 1.2 away from the polygon, and called the
+/// ray `converged`.
+#[test]
+fn lens_pass_points_stay_on_polygon() {
+    assert_impossible("lens_pass_points_off_polygon");
+}
