@@ -512,7 +512,7 @@ pub(crate) fn solve(
                 &ws.pin_try,
                 &mut ws.eval_try,
                 true,
-                crossed,
+                crossed && !near_kink,
             );
             let phi = ws.eval_try.phi;
             if cfg!(debug_assertions) && std::env::var_os("EIGENRAY_DEBUG").is_some() {
