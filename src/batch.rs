@@ -4,14 +4,15 @@ use rayon::prelude::*;
 
 use crate::geom::Point;
 use crate::solver::Workspace;
-use crate::trace::{Ray, Reason, Status, Tracer};
+use crate::trace::{Ray, Reason, Start, Status, Tracer};
 
 /// How to run a batch.
 #[derive(Clone, Copy)]
 pub struct BatchOptions<'a> {
     /// Solve receivers in a spatial order (a Morton curve over their positions) and start each
-    /// ray from the previous receiver's converged solution of the same path when that has the
-    /// smaller residual than the default initial guess.
+    /// ray from the previous receiver's converged solution of the same path when that receiver
+    /// is near (closer than a quarter of the source–receiver distance) instead of the default
+    /// initial guess.
     pub warm_start: bool,
     /// Receivers per work unit (one workspace and one warm-start chain per unit).
     pub chunk: usize,
@@ -174,6 +175,16 @@ fn morton(x: u32, y: u32) -> u64 {
     spread(x) | (spread(y) << 1)
 }
 
+/// Whether at least 90 % of consecutive receivers are near each other (closer than a quarter
+/// of the distance to `source`), so that warm starts work in the given order.
+fn coherent(receivers: &[Point], source: Point) -> bool {
+    let near = receivers
+        .windows(2)
+        .filter(|w| (w[1] - w[0]).length() <= 0.25 * (w[1] - source).length())
+        .count();
+    near * 10 >= receivers.len().saturating_sub(1) * 9
+}
+
 /// Receiver indices sorted along a Morton curve over their bounding box.
 fn spatial_order(points: &[Point]) -> Vec<usize> {
     let bbox = points.iter().fold(crate::geom::Aabb::EMPTY, |b, p| {
@@ -233,7 +244,9 @@ impl Tracer<'_> {
         if blocks == 0 || np == 0 {
             return batch;
         }
-        let order = if opts.warm_start {
+        // Receivers already in a coherent order (a grid, a survey line) keep it: sorting and
+        // putting the rays back would cost more than the warm starts save.
+        let order = if opts.warm_start && !coherent(scene.receivers(), scene.sources()[0]) {
             spatial_order(scene.receivers())
         } else {
             (0..nr).collect()
@@ -252,8 +265,15 @@ impl Tracer<'_> {
             .zip(media.par_chunks_mut(chunk * media_block))
             .enumerate()
             .for_each_init(
-                || (Workspace::new(), vec![0.0; params_block], vec![false; np]),
-                |(ws, prev, have), (unit, ((rec, pts), med))| {
+                || {
+                    (
+                        Workspace::new(),
+                        vec![0.0; params_block],
+                        vec![false; np],
+                        Point::new(0.0, 0.0),
+                    )
+                },
+                |(ws, prev, have, last), (unit, ((rec, pts), med))| {
                     have.iter_mut().for_each(|h| *h = false);
                     let first = unit * chunk;
                     let n = rec.len() / np;
@@ -263,10 +283,21 @@ impl Tracer<'_> {
                         if b > 0 && (block % nr) == 0 {
                             have.iter_mut().for_each(|h| *h = false);
                         }
+                        // The previous receiver's solution is the start when that receiver is
+                        // near: closer than a quarter of this receiver's distance to the source.
+                        let here = scene.receivers()[receiver];
+                        let near = b > 0
+                            && (here - *last).length()
+                                <= 0.25 * (here - scene.sources()[source]).length();
+                        *last = here;
                         for p in 0..np {
                             let params = &mut prev[param_offsets[p]..param_offsets[p + 1]];
-                            let guess = (opts.warm_start && have[p]).then_some(&*params);
-                            let s = self.solve_indexed_from(source, receiver, p, guess, ws);
+                            let start = if opts.warm_start && have[p] && near {
+                                Start::Given(params)
+                            } else {
+                                Start::Default
+                            };
+                            let s = self.solve_indexed_start(source, receiver, p, start, ws);
                             rec[b * np + p] = RayRecord {
                                 status: s.status,
                                 time: if s.status.has_time() {

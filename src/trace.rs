@@ -180,6 +180,17 @@ pub struct Ray {
     pub reason: Option<Reason>,
 }
 
+/// Where a solve starts.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Start<'a> {
+    /// The documented initial guess.
+    Default,
+    /// Whichever of these parameters and the default guess has the smaller residual.
+    Compare(&'a [f64]),
+    /// These parameters (a neighbouring receiver's solution in a batch).
+    Given(&'a [f64]),
+}
+
 /// The contract's ray numbering: source-major, then receiver, then path.
 #[inline]
 pub fn ray_index(
@@ -300,7 +311,7 @@ impl<'s> Tracer<'s> {
         ws: &mut Workspace,
     ) -> RaySummary {
         let src_medium = self.regions.as_ref().and_then(|r| r.medium_at(source));
-        self.solve_inner(source, src_medium, receiver, path, None, ws)
+        self.solve_inner(source, src_medium, receiver, path, Start::Default, ws)
     }
 
     /// [`solve`](Self::solve) with a warm start: `guess` holds interaction parameters (for
@@ -324,7 +335,14 @@ impl<'s> Tracer<'s> {
             "one parameter per step"
         );
         let src_medium = self.regions.as_ref().and_then(|r| r.medium_at(source));
-        self.solve_inner(source, src_medium, receiver, path, Some(guess), ws)
+        self.solve_inner(
+            source,
+            src_medium,
+            receiver,
+            path,
+            Start::Compare(guess),
+            ws,
+        )
     }
 
     /// Solves ray (`source`, `receiver`, `path`) of the scene, optionally warm-started
@@ -337,13 +355,30 @@ impl<'s> Tracer<'s> {
         guess: Option<&[f64]>,
         ws: &mut Workspace,
     ) -> RaySummary {
+        self.solve_indexed_start(
+            source,
+            receiver,
+            path,
+            guess.map_or(Start::Default, Start::Compare),
+            ws,
+        )
+    }
+
+    pub(crate) fn solve_indexed_start(
+        &self,
+        source: usize,
+        receiver: usize,
+        path: usize,
+        start: Start,
+        ws: &mut Workspace,
+    ) -> RaySummary {
         let src_medium = self.source_media.get(source).copied().flatten();
         self.solve_inner(
             self.scene.sources()[source],
             src_medium,
             self.scene.receivers()[receiver],
             path,
-            guess,
+            start,
             ws,
         )
     }
@@ -354,7 +389,7 @@ impl<'s> Tracer<'s> {
         src_medium: Option<usize>,
         receiver: Point,
         path: usize,
-        guess: Option<&[f64]>,
+        start: Start,
         ws: &mut Workspace,
     ) -> RaySummary {
         let scene = self.scene;
@@ -373,7 +408,12 @@ impl<'s> Tracer<'s> {
             reason: Some(reason),
         };
 
-        initial_guess(scene, &spec.steps, source, receiver, ws);
+        match start {
+            Start::Given(params) => given_start(scene, &spec.steps, params, ws),
+            Start::Default | Start::Compare(_) => {
+                initial_guess(scene, &spec.steps, source, receiver, ws)
+            }
+        }
         let lookup = spec.media.is_none();
         if let Some(m) = &spec.media {
             ws.media.extend_from_slice(m);
@@ -382,7 +422,7 @@ impl<'s> Tracer<'s> {
         }
         ws.slowness
             .extend(ws.media.iter().map(|&m| scene.media()[m].slowness));
-        if let Some(guess) = guess {
+        if let Start::Compare(guess) = start {
             let slowness = std::mem::take(&mut ws.slowness);
             let g = Geometry {
                 scene,
@@ -656,6 +696,21 @@ fn warm_start(g: &Geometry, guess: &[f64], ws: &mut Workspace) {
     if warm_merit.partial_cmp(&default_merit) != Some(std::cmp::Ordering::Less) {
         ws.s.copy_from_slice(&ws.s_alt);
         ws.seg.copy_from_slice(&ws.seg_alt);
+    }
+}
+
+/// Starts from given parameters (wrapped on closed polylines, clamped to open ones).
+fn given_start(scene: &Scene, steps: &[crate::scene::Step], params: &[f64], ws: &mut Workspace) {
+    for (i, (step, &wanted)) in steps.iter().zip(params).enumerate() {
+        let line = &scene.interfaces()[step.interface].polyline;
+        let s = if line.is_closed() {
+            line.wrap(wanted)
+        } else {
+            wanted.clamp(0.0, line.length())
+        };
+        ws.s[i] = s;
+        ws.seg[i] = line.segment_at_hint(s, ws.seg[i]);
+        ws.pin[i] = Pin::Free;
     }
 }
 
