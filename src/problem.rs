@@ -89,8 +89,9 @@ pub(crate) struct Eval {
     pub held: usize,
     /// Number of free points next to a vanished leg.
     pub vanished: usize,
-    /// Total length of the legs.
-    pub total: f64,
+    /// Length below which a leg counts as vanished: 1e-12 of the path's length, or the
+    /// round-off of the coordinates, whichever is larger.
+    pub vanish: f64,
 }
 
 impl Eval {
@@ -173,6 +174,14 @@ impl<'a> Geometry<'a> {
             total += l;
         }
         e.time = time;
+        let coord = self
+            .source
+            .x
+            .abs()
+            .max(self.source.y.abs())
+            .max(self.receiver.x.abs())
+            .max(self.receiver.y.abs());
+        let vanish = 1e-12 * total + 8.0 * f64::EPSILON * coord;
         let r = &mut e.r[..k];
         let (mut phi, mut rmax, mut held, mut vanished) = (0.0, 0.0f64, 0, 0);
         for i in 0..k {
@@ -181,7 +190,7 @@ impl<'a> Geometry<'a> {
             r[i] = ri;
             let rel = ri / (w[i] + w[i + 1]);
             let m = match pin[i] {
-                Pin::Free if leg_vanished(len, i, total) => {
+                Pin::Free if leg_vanished(len, i, vanish) => {
                     // The residual is undefined here; the solver judges the kink.
                     vanished += 1;
                     0.0
@@ -191,7 +200,7 @@ impl<'a> Geometry<'a> {
                     rel
                 }
                 Pin::Vertex | Pin::Kink => 0.0,
-                Pin::Start | Pin::End if leg_vanished(len, i, total) => 0.0,
+                Pin::Start | Pin::End if leg_vanished(len, i, vanish) => 0.0,
                 Pin::Start => rel.min(0.0),
                 Pin::End => rel.max(0.0),
             };
@@ -202,7 +211,7 @@ impl<'a> Geometry<'a> {
         e.rmax = rmax;
         e.held = held;
         e.vanished = vanished;
-        e.total = total;
+        e.vanish = vanish;
         if !hessian {
             return;
         }
@@ -229,13 +238,12 @@ impl<'a> Geometry<'a> {
     }
 }
 
-/// Whether a leg next to point `i` has vanished (shorter than 1e-12 of the path's total
-/// length `total`): there the residual is undefined and the point sits on a corner it shares
-/// with its neighbour.
+/// Whether a leg next to point `i` has vanished (is not longer than `vanish`, see
+/// [`Eval::vanish`]): there the residual is undefined and the point sits on a corner it
+/// shares with its neighbour.
 #[inline]
-pub(crate) fn leg_vanished(len: &[f64], i: usize, total: f64) -> bool {
-    let tiny = 1e-12 * total;
-    len[i] <= tiny || len[i + 1] <= tiny
+pub(crate) fn leg_vanished(len: &[f64], i: usize, vanish: f64) -> bool {
+    len[i] <= vanish || len[i + 1] <= vanish
 }
 
 /// `|d|`: a plain square root where the squares neither overflow nor lose precision to

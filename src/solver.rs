@@ -18,7 +18,7 @@
 //! residual: the difference of the sines in Snell's law), or the full Newton step is below
 //! round-off (`|δᵢ| ≤ 4ε (|sᵢ| + ℓᵢ + ℓᵢ₊₁)`: no representable parameter is closer).
 
-use crate::geom::Point;
+use crate::geom::{Point, Vec2};
 pub(crate) use crate::problem::Pin;
 use crate::problem::{Eval, Geometry, leg_vanished};
 
@@ -189,25 +189,27 @@ fn residual_on(g: &Geometry, e: &Eval, i: usize, j: usize) -> f64 {
 /// One-sided residuals `(r⁻, r⁺)` of point `i` next to a vanished leg: moving the point
 /// along its tangent `t` makes the vanished leg reappear pointing along `±t`.
 #[inline]
-fn kink_residuals(g: &Geometry, e: &Eval, i: usize) -> (f64, f64) {
+fn kink_residuals(g: &Geometry, e: &Eval, i: usize, back: Vec2) -> (f64, f64) {
     let w = g.slowness;
-    let t = e.tan[i];
-    let tiny = 1e-12 * e.total;
-    // Arriving leg i: its direction becomes +t moving forward, −t moving back.
-    let (a_minus, a_plus) = if e.len[i] <= tiny {
-        (-w[i], w[i])
-    } else {
-        let a = w[i] * e.u[i].dot(t);
-        (a, a)
+    let tiny = e.vanish;
+    // Moving forward the point follows its segment's tangent `t`, moving back `back` (the
+    // same, or the previous segment's tangent when the point sits on a vertex).
+    let one_sided = |t: Vec2, forward: bool| {
+        let sign = if forward { 1.0 } else { -1.0 };
+        // Arriving leg i: its direction becomes ±t; leaving leg i + 1: ∓t.
+        let a = if e.len[i] <= tiny {
+            sign * w[i]
+        } else {
+            w[i] * e.u[i].dot(t)
+        };
+        let b = if e.len[i + 1] <= tiny {
+            -sign * w[i + 1]
+        } else {
+            w[i + 1] * e.u[i + 1].dot(t)
+        };
+        a - b
     };
-    // Leaving leg i + 1: −t moving forward, +t moving back.
-    let (b_minus, b_plus) = if e.len[i + 1] <= tiny {
-        (w[i + 1], -w[i + 1])
-    } else {
-        let b = w[i + 1] * e.u[i + 1].dot(t);
-        (b, b)
-    };
-    (a_minus - b_minus, a_plus - b_plus)
+    (one_sided(back, false), one_sided(e.tan[i], true))
 }
 
 /// If point `i` is the first or last interaction, the source or receiver lies on the line of
@@ -218,7 +220,7 @@ fn end_point_between(g: &Geometry, ws: &Workspace, i: usize) -> Option<f64> {
     let line = g.line(i);
     let j = ws.seg[i];
     let (a, b) = line.segment(j);
-    let tiny = 1e-12 * ws.eval.total;
+    let tiny = ws.eval.vanish;
     let on_segment = |p: crate::geom::Point| -> Option<f64> {
         let t = line.tangent(j);
         let along = (p - a).dot(t);
@@ -260,7 +262,7 @@ fn vertex_param(g: &Geometry, i: usize, v: usize, seg: usize) -> f64 {
 /// source or the receiver): two interactions on one spot are no path.
 #[inline]
 pub(crate) fn interior_leg_vanished(e: &Eval, i: usize, k: usize) -> bool {
-    let tiny = 1e-12 * e.total;
+    let tiny = e.vanish;
     (i > 0 && e.len[i] <= tiny) || (i + 1 < k && e.len[i + 1] <= tiny)
 }
 
@@ -283,8 +285,8 @@ fn single_vertex_between(g: &Geometry, i: usize, from: usize, to: usize) -> Opti
 #[inline]
 fn stays_at_end(e: &Eval, i: usize, pin: Pin, margin: f64) -> bool {
     match pin {
-        Pin::Start => e.r[i] > margin || leg_vanished(&e.len, i, e.total),
-        Pin::End => e.r[i] < -margin || leg_vanished(&e.len, i, e.total),
+        Pin::Start => e.r[i] > margin || leg_vanished(&e.len, i, e.vanish),
+        Pin::End => e.r[i] < -margin || leg_vanished(&e.len, i, e.vanish),
         _ => false,
     }
 }
@@ -362,9 +364,17 @@ pub(crate) fn solve(
                         }
                     }
                     Pin::Kink => {
-                        let keep = leg_vanished(&e.len, i, e.total)
+                        let keep = leg_vanished(&e.len, i, e.vanish)
                             && (interior_leg_vanished(e, i, k) || {
-                                let (rm, rp) = kink_residuals(g, e, i);
+                                let line = g.line(i);
+                                let on_vertex = ws.s[i] == line.start(ws.seg[i]);
+                                let back = (if on_vertex {
+                                    segment_before(g, i, ws.seg[i])
+                                } else {
+                                    None
+                                })
+                                .map_or(e.tan[i], |j| line.tangent(j));
+                                let (rm, rp) = kink_residuals(g, e, i, back);
                                 rm <= scale && rp >= -scale
                             });
                         if !keep {
@@ -385,18 +395,35 @@ pub(crate) fn solve(
         if ws.eval.vanished > 0 {
             let mut pinned = false;
             for i in 0..k {
-                if ws.pin[i] != Pin::Free || !leg_vanished(&ws.eval.len, i, ws.eval.total) {
+                if ws.pin[i] != Pin::Free || !leg_vanished(&ws.eval.len, i, ws.eval.vanish) {
                     continue;
                 }
                 let scale = tol * (w[i] + w[i + 1]);
-                let (rm, rp) = kink_residuals(g, &ws.eval, i);
+                let line = g.line(i);
+                let on_vertex = ws.s[i] == line.start(ws.seg[i]);
+                let before = if on_vertex {
+                    segment_before(g, i, ws.seg[i])
+                } else {
+                    None
+                };
+                let back = before.map_or(ws.eval.tan[i], |j| line.tangent(j));
+                let (rm, rp) = kink_residuals(g, &ws.eval, i, back);
                 if interior_leg_vanished(&ws.eval, i, k) || (rm <= scale && rp >= -scale) {
                     ws.pin[i] = Pin::Kink;
                     pinned = true;
+                } else if rp >= 0.0
+                    && let Some(j) = before
+                {
+                    // The way down leaves the vertex backwards, into the previous segment.
+                    ws.s[i] = vertex_param(g, i, ws.seg[i], j);
+                    ws.seg[i] = j;
+                    pinned = true;
                 } else {
                     let r = if rp < 0.0 { rp } else { rm };
+                    let rel = r / (w[i] + w[i + 1]);
                     ws.eval.r[i] = r;
-                    ws.eval.rmax = ws.eval.rmax.max(r.abs() / (w[i] + w[i + 1]));
+                    ws.eval.rmax = ws.eval.rmax.max(rel.abs());
+                    ws.eval.phi += rel * rel;
                 }
             }
             if pinned && free_moves < 4 * max_iterations {
@@ -582,9 +609,17 @@ pub(crate) fn solve(
                     ws.eval_try.r[i]
                 };
                 let r_before = residual_at(ws.seg[i], ws);
+                // The source or receiver sits on this vertex: go there; the kink test of a
+                // vanished leg decides the rest.
+                let end_point_here = leg_vanished(&ws.eval_try.len, i, ws.eval_try.vanish);
                 let r_after = residual_at(seg_new, ws);
                 (ws.s_try[i], ws.seg_try[i]) = (s_new, seg_new);
-                if r_before * ws.eval.r[i] > 0.0 {
+                let at_vertex = vertex_param(g, i, v, ws.seg[i]);
+                if end_point_here && ws.s[i] != at_vertex {
+                    ws.s[i] = at_vertex;
+                    pinned = true;
+                } else if end_point_here {
+                } else if r_before * ws.eval.r[i] > 0.0 {
                     if r_after * r_before <= 0.0 {
                         ws.s[i] = vertex_param(g, i, v, v);
                         ws.seg[i] = v;

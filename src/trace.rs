@@ -521,6 +521,27 @@ impl<'s> Tracer<'s> {
                 ..base
             };
         }
+        // A point held where a leg to the source or receiver vanished must still be strictly
+        // inside a segment: at an open end there is no path, at a vertex it is a kink there.
+        let mut at_vertex = None;
+        for (i, step) in spec.steps.iter().enumerate() {
+            if ws.pin[i] != Pin::Kink {
+                continue;
+            }
+            let line = &scene.interfaces()[step.interface].polyline;
+            let (s, j) = (ws.s[i], ws.seg[i]);
+            if s > line.start(j) && s < line.start(j + 1) {
+                continue;
+            }
+            if !line.is_closed() && (s <= 0.0 || s >= line.length()) {
+                return RaySummary {
+                    status: Status::NoPath,
+                    reason: Some(Reason::LeavesEnd { step: i }),
+                    ..base
+                };
+            }
+            at_vertex.get_or_insert(i);
+        }
         if let Some(step) = self.wrong_side(&spec.steps, ws) {
             return RaySummary {
                 status: Status::NoPath,
@@ -535,7 +556,7 @@ impl<'s> Tracer<'s> {
                 ..base
             };
         }
-        if let Some(step) = ws.pin.iter().position(|p| *p == Pin::Vertex) {
+        if let Some(step) = ws.pin.iter().position(|p| *p == Pin::Vertex).or(at_vertex) {
             return RaySummary {
                 status: Status::Vertex,
                 reason: Some(Reason::AtVertex { step }),
@@ -594,12 +615,6 @@ impl<'s> Tracer<'s> {
             }
             let a = n.dot(rel[i] - rel[i + 1]);
             let b = n.dot(rel[i + 2] - rel[i + 1]);
-            // A vanished leg (an end point or a neighbour on the interface there) lies on
-            // both sides: only the other leg's side is checked.
-            let tiny = 1e-12 * ws.eval.total;
-            if ws.eval.len[i] <= tiny || ws.eval.len[i + 1] <= tiny {
-                continue;
-            }
             // A leg within 1e-10 rad of the interface runs along it: on neither side.
             let (la, lb) = (ws.eval.len[i], ws.eval.len[i + 1]);
             let a = if a.abs() <= SIDE_MARGIN * la * n.length() {
@@ -612,6 +627,16 @@ impl<'s> Tracer<'s> {
             } else {
                 b
             };
+            // A vanished leg (an end point on the interface there) lies on both sides: the
+            // other leg must still lie on one.
+            let tiny = ws.eval.vanish;
+            let (gone_a, gone_b) = (la <= tiny, lb <= tiny);
+            if gone_a || gone_b {
+                if (gone_a && gone_b) || (gone_a && b == 0.0) || (gone_b && a == 0.0) {
+                    return Some(i);
+                }
+                continue;
+            }
             let ok = match step.kind {
                 StepKind::Reflect => (a > 0.0 && b > 0.0) || (a < 0.0 && b < 0.0),
                 StepKind::Refract => (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0),

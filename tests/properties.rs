@@ -65,11 +65,13 @@ struct RawPolygon {
     cx: f64,
 }
 
-/// A source or receiver: anywhere around the domain, or inside slot `slot`.
+/// A source or receiver: anywhere around the domain, inside slot `slot`, or exactly on a
+/// vertex of an interface (a receiver on the sea floor).
 #[derive(Clone, Copy, Debug)]
 enum RawPoint {
     Anywhere(f64, f64),
     InSlot(usize, f64, f64),
+    OnVertex(f64),
 }
 
 /// The steps of a path.
@@ -132,6 +134,7 @@ fn raw_scene() -> impl Strategy<Value = RawScene> {
     let point = prop_oneof![
         1 => (-0.1..1.1f64, -0.1..1.1f64).prop_map(|(u, v)| RawPoint::Anywhere(u, v)),
         2 => (0..5usize, unit.clone(), unit.clone()).prop_map(|(s, u, v)| RawPoint::InSlot(s, u, v)),
+        1 => unit.clone().prop_map(RawPoint::OnVertex),
     ];
     let steps = prop_oneof![
         prop::collection::vec((any::<bool>(), 0..5usize), 0..7).prop_map(RawSteps::Random),
@@ -365,7 +368,15 @@ fn build(raw: &RawScene) -> SceneSpec {
         .map(|b| medium_names[b % medium_names.len()].clone());
     spec.domain = Some([map(0.0, 0.0), map(W, H)]);
 
+    let vertices: Vec<[f64; 2]> = spec
+        .interfaces
+        .values()
+        .flat_map(|i| i.points.iter().copied())
+        .collect();
     let place = |p: &RawPoint| match *p {
+        RawPoint::OnVertex(u) => {
+            vertices[((u * vertices.len() as f64) as usize).min(vertices.len() - 1)]
+        }
         RawPoint::Anywhere(u, v) => map(W * u, H * v),
         RawPoint::InSlot(slot, u, v) => {
             let (lo, hi) = slot_bounds(slot % (nlines + 1));
@@ -374,7 +385,7 @@ fn build(raw: &RawScene) -> SceneSpec {
     };
     let slot_of = |p: &RawPoint, default: usize| match *p {
         RawPoint::InSlot(slot, ..) => slot % (nlines + 1),
-        RawPoint::Anywhere(..) => default,
+        RawPoint::Anywhere(..) | RawPoint::OnVertex(..) => default,
     };
     spec.sources = raw.sources.iter().map(place).collect();
     spec.receivers = raw.receivers.iter().map(place).collect();
@@ -569,6 +580,15 @@ fn check_ray(scene: &Scene, tracer: &Tracer, ray: &Ray) -> Result<(), String> {
     if ray.status != Status::Converged {
         return Ok(());
     }
+    // A leg between two interactions never vanishes on a converged ray. The first or last
+    // leg does when the source or receiver lies on the interface there: `T` has a kink, and
+    // only the other leg's side is defined.
+    let vanished: Vec<bool> = (0..=k)
+        .map(|l| ray.points[l].distance(ray.points[l + 1]) <= 1e-9 * size)
+        .collect();
+    if let Some(l) = (1..k).find(|&l| vanished[l]) {
+        return Err(format!("leg {l} between two interactions vanished"));
+    }
 
     for (i, step) in path.steps.iter().enumerate() {
         let line = &scene.interfaces()[step.interface].polyline;
@@ -591,11 +611,18 @@ fn check_ray(scene: &Scene, tracer: &Tracer, ray: &Ray) -> Result<(), String> {
                 let u1 = unit(p, next);
                 let lhs = w[i] * (u0.0 * t.x + u0.1 * t.y);
                 let rhs = w[i + 1] * (u1.0 * t.x + u1.1 * t.y);
-                let snell = (lhs - rhs).abs() <= 1e-9 * (w[i] + w[i + 1]);
                 let (sa, sb) = (orient(a, b, prev), orient(a, b, next));
-                let side = match step.kind {
-                    StepKind::Reflect => sa * sb > 0.0,
-                    StepKind::Refract => sa * sb < 0.0,
+                let (snell, side) = if vanished[i] {
+                    (true, sb != 0.0)
+                } else if vanished[i + 1] {
+                    (true, sa != 0.0)
+                } else {
+                    let snell = (lhs - rhs).abs() <= 1e-9 * (w[i] + w[i + 1]);
+                    let side = match step.kind {
+                        StepKind::Reflect => sa * sb > 0.0,
+                        StepKind::Refract => sa * sb < 0.0,
+                    };
+                    (snell, side)
                 };
                 if !(snell && side) {
                     why = format!(
@@ -653,7 +680,7 @@ fn check_ray(scene: &Scene, tracer: &Tracer, ray: &Ray) -> Result<(), String> {
         let inside =
             |p: Point| p.x > dom.min.x && p.x < dom.max.x && p.y > dom.min.y && p.y < dom.max.y;
         if ray.points.iter().all(|&p| inside(p)) {
-            for leg in 0..=k {
+            for leg in (0..=k).filter(|&l| !vanished[l]) {
                 let mid = ray.points[leg].lerp(ray.points[leg + 1], 0.5);
                 let m = regions.medium_at(mid);
                 if m != Some(ray.media[leg]) {

@@ -130,3 +130,60 @@ fn single_refraction_same_side_is_no_path_not_a_cycle() {
 fn lens_pass_points_stay_on_polygon() {
     assert_impossible("lens_pass_points_off_polygon");
 }
+
+/// A reflection whose receiver is the valley vertex of the mirror: the iteration crept towards
+/// the kink at the receiver and stalled just short of it until the iteration limit.
+#[test]
+fn reflect_receiver_on_vertex_terminates() {
+    let ray = only_ray("reflect_receiver_on_vertex_stalls");
+    assert_ne!(ray.status, Status::NotConverged, "{ray:?}");
+}
+
+/// The same with a refraction and region lookup.
+#[test]
+fn refract_receiver_on_vertex_terminates() {
+    let ray = only_ray("refract_receiver_on_vertex_stalls");
+    assert_ne!(ray.status, Status::NotConverged, "{ray:?}");
+}
+
+/// Source and receiver both on a straight interface: every leg lies in its line, so whatever
+/// the leg media, neither a reflection nor a refraction (some cycled to the iteration limit,
+/// some were reported `converged` with time 1).
+#[test]
+fn ends_on_a_straight_interface_is_no_path() {
+    let text = fixture("ends_on_a_straight_interface");
+    let scene = Scene::from_json(&text).unwrap_or_else(|e| panic!("scene rejected: {e}"));
+    let rays = trace(&text);
+    assert_points_on_interfaces("ends_on_a_straight_interface", &scene, &rays);
+    for ray in &rays {
+        assert_eq!(ray.status, Status::NoPath, "path {}: {ray:?}", ray.path);
+    }
+}
+
+/// Source and receiver at one point on an interface (its end vertex, or inside a segment):
+/// both legs vanish, no leg is on any side, so neither a reflection nor a refraction exists.
+/// At the end vertex both were reported `converged` with time 0; inside the segment both ran
+/// to the iteration limit.
+#[test]
+fn source_equals_receiver_on_interface_is_no_path() {
+    let text = r#"{
+        "media": { "m": { "speed": 1.0 } },
+        "interfaces": { "line": { "points": [[0.3, 5.0], [9.7, 5.0]] } },
+        "sources": [[0.3, 5.0], [5.0, 5.0]],
+        "receivers": [[0.3, 5.0], [5.0, 5.0]],
+        "paths": [
+            { "steps": [{ "reflect": "line" }], "media": ["m", "m"] },
+            { "steps": [{ "refract": "line" }], "media": ["m", "m"] }
+        ]
+    }"#;
+    for ray in trace(text) {
+        assert_eq!(
+            ray.status,
+            Status::NoPath,
+            "source {} receiver {} path {}: {ray:?}",
+            ray.source,
+            ray.receiver,
+            ray.path
+        );
+    }
+}
