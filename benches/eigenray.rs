@@ -1,0 +1,174 @@
+//! Criterion benchmarks: single rays, a 100,000-segment reflector, batches, and argmin's solvers.
+//!
+//! `cargo bench` runs everything but the argmin comparison; `cargo bench --features argmin`
+//! adds it. Every benchmark shares one short configuration ([`config`]) so that the whole run
+//! takes a few minutes. A "single ray" iteration solves the next receiver of the scene in turn
+//! (one thread, one reused `Workspace`), so the figure is a mean over many different rays.
+
+use std::hint::black_box;
+use std::time::Duration;
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use eigenray::{BatchOptions, Point, Scene, Tracer, Workspace, demo};
+
+/// The shared configuration: short warm-up and measurement, few samples.
+fn config() -> Criterion {
+    Criterion::default()
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(2))
+        .sample_size(20)
+}
+
+fn scene(spec: &eigenray::SceneSpec) -> Scene {
+    Scene::from_spec(spec).expect("valid benchmark scene")
+}
+
+/// Benchmarks `Tracer::solve` on path 0, one receiver after the other.
+fn bench_rays(c: &mut Criterion, group: &str, name: &str, scene: &Scene) {
+    let tracer = Tracer::new(scene).expect("tracer");
+    let source: Point = scene.sources()[0];
+    let receivers = scene.receivers();
+    let mut ws = Workspace::new();
+    let mut next = 0;
+    c.benchmark_group(group)
+        .throughput(Throughput::Elements(1))
+        .bench_function(name, |b| {
+            b.iter(|| {
+                next = (next + 1) % receivers.len();
+                black_box(tracer.solve(source, receivers[next], 0, &mut ws))
+            })
+        });
+}
+
+/// One ray through 1, 8 and 100 interactions.
+fn single_ray(c: &mut Criterion) {
+    bench_rays(
+        c,
+        "single_ray",
+        "1_interaction",
+        &scene(&demo::air_water(500, 1)),
+    );
+    bench_rays(
+        c,
+        "single_ray",
+        "8_interactions",
+        &scene(&demo::layer_stack(8, 500)),
+    );
+    bench_rays(
+        c,
+        "single_ray",
+        "100_interactions",
+        &scene(&demo::layer_stack(100, 500)),
+    );
+}
+
+/// One reflection off a sea floor digitised with 100,000 segments.
+fn reflector(c: &mut Criterion) {
+    bench_rays(
+        c,
+        "reflector",
+        "100k_segments",
+        &scene(&demo::sea_floor(100_000, 500)),
+    );
+}
+
+/// `trace_batch` over 100,000 receivers of the air-over-water scene on 1 and 2 threads.
+fn batch(c: &mut Criterion) {
+    const N: usize = 100_000;
+    let scene = scene(&demo::air_water(N, 1));
+    let tracer = Tracer::new(&scene).expect("tracer");
+    let mut group = c.benchmark_group("batch_100k");
+    group
+        .throughput(Throughput::Elements(N as u64))
+        .sample_size(10);
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("thread pool");
+        group.bench_function(
+            format!("{threads}_thread{}", if threads == 1 { "" } else { "s" }),
+            |b| b.iter(|| pool.install(|| black_box(tracer.trace_batch(&BatchOptions::default())))),
+        );
+    }
+    group.finish();
+}
+
+/// eigenray's Newton solver against argmin's Gauss-Newton and BFGS on the same paths, from the
+/// same start (eigenray's default initial guess), to the same relative residual, 1e-12.
+#[cfg(feature = "argmin")]
+fn versus_argmin(c: &mut Criterion) {
+    use eigenray::argmin_bridge::{solve_bfgs, solve_gauss_newton};
+    use eigenray::{PathProblem, SolverOptions};
+
+    const TOL: f64 = 1e-12;
+    for (name, spec) in [
+        ("1_interaction", demo::air_water(500, 1)),
+        ("8_interactions", demo::layer_stack(8, 500)),
+    ] {
+        let mut scene = scene(&spec);
+        scene.set_solver(SolverOptions {
+            tolerance: TOL,
+            max_iterations: 100,
+        });
+        let source = scene.sources()[0];
+        let receivers = scene.receivers().to_vec();
+        // The default initial guess: the solver stopped after 0 iterations.
+        let mut start = scene.clone();
+        start.set_solver(SolverOptions {
+            tolerance: TOL,
+            max_iterations: 0,
+        });
+        let guesses: Vec<Vec<f64>> = {
+            let tracer = Tracer::new(&start).expect("tracer");
+            let mut ws = Workspace::new();
+            receivers
+                .iter()
+                .map(|&r| {
+                    tracer.solve(source, r, 0, &mut ws);
+                    ws.parameters().to_vec()
+                })
+                .collect()
+        };
+        let problems: Vec<PathProblem> = receivers
+            .iter()
+            .map(|&r| PathProblem::new(&scene, 0, source, r).expect("media given"))
+            .collect();
+        let tracer = Tracer::new(&scene).expect("tracer");
+        let mut group = c.benchmark_group(format!("versus_argmin/{name}"));
+        group.throughput(Throughput::Elements(1));
+        let mut ws = Workspace::new();
+        let mut next = 0;
+        group.bench_function("eigenray_newton", |b| {
+            b.iter(|| {
+                next = (next + 1) % receivers.len();
+                black_box(tracer.solve(source, receivers[next], 0, &mut ws))
+            })
+        });
+        group.bench_function("argmin_gauss_newton", |b| {
+            b.iter(|| {
+                next = (next + 1) % receivers.len();
+                black_box(solve_gauss_newton(&problems[next], &guesses[next], 100, TOL).ok())
+            })
+        });
+        group.bench_function("argmin_bfgs", |b| {
+            b.iter(|| {
+                next = (next + 1) % receivers.len();
+                black_box(solve_bfgs(&problems[next], &guesses[next], 200, TOL).ok())
+            })
+        });
+        group.finish();
+    }
+}
+
+#[cfg(not(feature = "argmin"))]
+fn versus_argmin(_c: &mut Criterion) {
+    eprintln!("versus_argmin: skipped (run `cargo bench --features argmin` to include it)");
+}
+
+criterion_group! {
+    name = benches;
+    config = config();
+    targets = single_ray, reflector, batch, versus_argmin
+}
+criterion_main!(benches);

@@ -1,0 +1,80 @@
+//! What both fuzz targets check on a valid scene: tracing and writing it neither panics nor
+//! produces non-finite times or points, and the output is valid JSON.
+
+use eigenray::{Point, Scene, SolverOptions, Tracer, write_rays_json};
+
+/// Largest scene traced (beyond these only validation runs, to keep executions fast).
+const MAX_RAYS: usize = 64;
+const MAX_STEPS: usize = 16;
+const MAX_SEGMENTS: usize = 2000;
+/// Iteration cap per ray, so that a timeout means a hang rather than a large legitimate limit.
+const MAX_ITERATIONS: usize = 200;
+
+/// Traces every ray of `scene` (if it is small enough) and checks the results.
+pub fn trace_and_check(mut scene: Scene) {
+    let steps: usize = scene.paths().iter().map(|p| p.steps.len()).sum();
+    if scene.num_rays() > MAX_RAYS || steps > MAX_STEPS || scene.segments().len() > MAX_SEGMENTS {
+        return;
+    }
+    let opts = scene.solver();
+    scene.set_solver(SolverOptions {
+        max_iterations: opts.max_iterations.min(MAX_ITERATIONS),
+        ..opts
+    });
+    let tracer = match Tracer::new(&scene) {
+        Ok(t) => t,
+        Err(e) => {
+            assert!(!e.key.is_empty(), "Tracer::new error without a key: {e:?}");
+            return;
+        }
+    };
+    let rays = tracer.trace_all();
+    assert_eq!(rays.len(), scene.num_rays());
+    for r in &rays {
+        let k = scene.paths()[r.path].steps.len();
+        assert!(r.iterations <= scene.solver().max_iterations, "{r:?}");
+        if r.status.has_time() {
+            let t = r.time.expect("a status with a time has one");
+            assert!(t.is_finite() && t >= 0.0, "time {t}: {r:?}");
+            assert_eq!(r.points.len(), k + 2, "{r:?}");
+            assert!(r.points.iter().all(|p| p.is_finite()), "{r:?}");
+            assert_eq!(r.media.len(), k + 1, "{r:?}");
+            // Every interaction point lies on its interface.
+            let size = scene.bbox().diagonal();
+            for (i, step) in scene.paths()[r.path].steps.iter().enumerate() {
+                let line = &scene.interfaces()[step.interface].polyline;
+                let p = r.points[i + 1];
+                let d = (0..line.num_segments())
+                    .map(|j| {
+                        let (a, b) = line.segment(j);
+                        segment_distance(p, a, b)
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                assert!(
+                    d <= 1e-9 * size,
+                    "interaction {i} at {p:?} is {d:e} from its interface (scene size {size:e}): {r:?}"
+                );
+            }
+        } else {
+            assert!(r.time.is_none() && r.points.is_empty(), "{r:?}");
+        }
+    }
+    let mut out = Vec::new();
+    write_rays_json(&scene, &rays, &mut out).expect("writing to a Vec");
+    let doc: serde_json::Value = serde_json::from_slice(&out).expect("the output is valid JSON");
+    assert_eq!(
+        doc["rays"].as_array().map(Vec::len),
+        Some(rays.len()),
+        "one output entry per ray"
+    );
+}
+
+/// Distance from `p` to segment `a–b` (computed on coordinates scaled to the segment, so that
+/// tiny and huge scenes neither underflow nor overflow).
+fn segment_distance(p: Point, a: Point, b: Point) -> f64 {
+    let scale = (b.x - a.x).abs().max((b.y - a.y).abs());
+    let (dx, dy) = ((b.x - a.x) / scale, (b.y - a.y) / scale);
+    let (px, py) = ((p.x - a.x) / scale, (p.y - a.y) / scale);
+    let t = ((px * dx + py * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
+    (px - t * dx).hypot(py - t * dy) * scale
+}
