@@ -9,7 +9,7 @@
 //! (an `O(k)` step for `k` interactions), then classifies each ray.
 //!
 //! Dependency direction (each module uses only those to its left):
-//! `geom ← bvh ← polyline ← scene ← regions ← problem ← solver ← trace ← output`.
+//! `geom ← bvh ← polyline ← scene ← regions ← problem ← solver ← trace ← batch ← output`.
 //!
 //! ```
 //! use eigenray::{Scene, Status, Tracer};

@@ -324,6 +324,18 @@ impl Polyline {
         }
     }
 
+    /// `s` made a valid parameter: wrapped on a closed polyline, clamped to `[0, length]` on an
+    /// open one (a non-finite value gives 0).
+    #[inline]
+    pub fn clamp_param(&self, s: f64) -> f64 {
+        let s = if s.is_finite() { s } else { 0.0 };
+        if self.closed {
+            self.wrap(s)
+        } else {
+            s.clamp(0.0, self.length())
+        }
+    }
+
     /// Segment holding parameter `s` (binary search; a vertex belongs to the segment it starts;
     /// `s` outside `[0, length]` gives the first or last segment).
     #[inline]

@@ -632,7 +632,12 @@ impl<'s> Tracer<'s> {
             let tiny = ws.eval.vanish;
             let (gone_a, gone_b) = (la <= tiny, lb <= tiny);
             if gone_a || gone_b {
-                if (gone_a && gone_b) || (gone_a && b == 0.0) || (gone_b && a == 0.0) {
+                let other_on_a_side = if gone_a {
+                    !gone_b && b != 0.0
+                } else {
+                    a != 0.0
+                };
+                if !other_on_a_side {
                     return Some(i);
                 }
                 continue;
@@ -706,16 +711,7 @@ fn warm_start(g: &Geometry, guess: &[f64], ws: &mut Workspace) {
     let default_merit = crate::solver::merit_at(g, ws);
     ws.s_alt.copy_from_slice(&ws.s);
     ws.seg_alt.copy_from_slice(&ws.seg);
-    for (i, &wanted) in guess.iter().enumerate() {
-        let line = g.line(i);
-        let s = if line.is_closed() {
-            line.wrap(wanted)
-        } else {
-            wanted.clamp(0.0, line.length())
-        };
-        ws.s[i] = s;
-        ws.seg[i] = line.segment_at_hint(s, ws.seg[i]);
-    }
+    given_start(g.scene, g.steps, guess, ws);
     let warm_merit = crate::solver::merit_at(g, ws);
     // Keep the default guess unless the warm one is better (NaN counts as worse).
     if warm_merit.partial_cmp(&default_merit) != Some(std::cmp::Ordering::Less) {
@@ -728,11 +724,7 @@ fn warm_start(g: &Geometry, guess: &[f64], ws: &mut Workspace) {
 fn given_start(scene: &Scene, steps: &[crate::scene::Step], params: &[f64], ws: &mut Workspace) {
     for (i, (step, &wanted)) in steps.iter().zip(params).enumerate() {
         let line = &scene.interfaces()[step.interface].polyline;
-        let s = if line.is_closed() {
-            line.wrap(wanted)
-        } else {
-            wanted.clamp(0.0, line.length())
-        };
+        let s = line.clamp_param(wanted);
         ws.s[i] = s;
         ws.seg[i] = line.segment_at_hint(s, ws.seg[i]);
         ws.pin[i] = Pin::Free;
