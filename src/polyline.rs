@@ -213,6 +213,21 @@ impl Polyline {
         }
     }
 
+    /// Whether no corner lies between segments `a` and `b` (the vertices a step from `a` to
+    /// `b` crosses, taken without wrapping round a closed polyline; a wrap counts as a corner).
+    #[inline]
+    pub(crate) fn smooth_between(&self, a: usize, b: usize) -> bool {
+        if self.closed && a.abs_diff(b) > self.num_segments() / 2 {
+            false
+        } else if b > a {
+            self.corner_ahead[a] > self.cum[b]
+        } else if b < a {
+            self.corner_behind[a] < self.cum[b + 1]
+        } else {
+            true
+        }
+    }
+
     /// [`reach`](Self::reach) plus a hair (1e-7 of the segment): a step limited by it ends
     /// just past the corner, in the next segment, so that the corner is seen as crossed.
     #[inline]
@@ -559,6 +574,10 @@ mod tests {
         let c = Polyline::new(circle, true).unwrap();
         assert_eq!(c.reach(10, 0.2, 3.0), 3.0);
         assert_eq!(c.reach(10, 0.2, -3.0), -3.0);
+        assert!(c.smooth_between(10, 40) && c.smooth_between(40, 10));
+        assert!(!c.smooth_between(1, 359), "a wrap counts as a corner");
+        assert!(!sq.smooth_between(0, 2) && sq.smooth_between(1, 1));
+        assert!(line.smooth_between(0, 1) && !line.smooth_between(0, 2));
     }
 
     #[test]

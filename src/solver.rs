@@ -550,7 +550,8 @@ pub(crate) fn solve(
             }
             // A residual that changes sign while its point crosses vertices has jumped a
             // kink of T or a root: never accepted on the merit alone. Across several
-            // vertices: backtrack. Across one: look at the vertex itself.
+            // vertices with a corner among them: backtrack (across the small turns of a
+            // digitised curve, on the merit). Across one: look at the vertex itself.
             let (mut flip_far, mut flip_one) = (false, None);
             for i in 0..k {
                 if ws.pin[i] != Pin::Free
@@ -562,7 +563,7 @@ pub(crate) fn solve(
                 if ws.eval_try.r[i] * ws.eval.r[i] < 0.0 {
                     if single_vertex_between(g, i, ws.seg[i], ws.seg_try[i]).is_some() {
                         flip_one.get_or_insert(i);
-                    } else {
+                    } else if !g.line(i).smooth_between(ws.seg[i], ws.seg_try[i]) {
                         flip_far = true;
                     }
                 }
