@@ -325,12 +325,6 @@ pub(crate) fn solve(
         }
         evaluated = false;
         let e = &ws.eval;
-        if cfg!(debug_assertions) && std::env::var_os("EIGENRAY_DEBUG").is_some() {
-            eprintln!(
-                "it {iterations} s={:?} seg={:?} pin={:?} r={:?} phi={}",
-                ws.s, ws.seg, ws.pin, e.r, e.phi
-            );
-        }
 
         // Held points: keep, or release towards decreasing T.
         if e.held > 0 {
@@ -542,12 +536,6 @@ pub(crate) fn solve(
                 crossed && !near_kink,
             );
             let phi = ws.eval_try.phi;
-            if cfg!(debug_assertions) && std::env::var_os("EIGENRAY_DEBUG").is_some() {
-                eprintln!(
-                    "   try a={alpha} s={:?} seg={:?} pin={:?} r={:?} phi={phi}",
-                    ws.s_try, ws.seg_try, ws.pin_try, ws.eval_try.r
-                );
-            }
             // A residual that changes sign while its point crosses vertices has jumped a
             // kink of T or a root: never accepted on the merit alone. Across several
             // vertices with a corner among them: backtrack (across the small turns of a
