@@ -358,19 +358,18 @@ pub(crate) fn solve(
                         }
                     }
                     Pin::Kink => {
-                        let keep = leg_vanished(&e.len, i, e.vanish)
-                            && (interior_leg_vanished(e, i, k) || {
-                                let line = g.line(i);
-                                let on_vertex = ws.s[i] == line.start(ws.seg[i]);
-                                let back = (if on_vertex {
-                                    segment_before(g, i, ws.seg[i])
-                                } else {
-                                    None
-                                })
-                                .map_or(e.tan[i], |j| line.tangent(j));
-                                let (rm, rp) = kink_residuals(g, e, i, back);
-                                rm <= scale && rp >= -scale
-                            });
+                        let keep = leg_vanished(&e.len, i, e.vanish) && {
+                            let line = g.line(i);
+                            let on_vertex = ws.s[i] == line.start(ws.seg[i]);
+                            let back = (if on_vertex {
+                                segment_before(g, i, ws.seg[i])
+                            } else {
+                                None
+                            })
+                            .map_or(e.tan[i], |j| line.tangent(j));
+                            let (rm, rp) = kink_residuals(g, e, i, back);
+                            rm <= scale && rp >= -scale
+                        };
                         if !keep {
                             ws.pin[i] = Pin::Free;
                             released = true;
@@ -402,7 +401,7 @@ pub(crate) fn solve(
                 };
                 let back = before.map_or(ws.eval.tan[i], |j| line.tangent(j));
                 let (rm, rp) = kink_residuals(g, &ws.eval, i, back);
-                if interior_leg_vanished(&ws.eval, i, k) || (rm <= scale && rp >= -scale) {
+                if rm <= scale && rp >= -scale {
                     ws.pin[i] = Pin::Kink;
                     pinned = true;
                 } else if rp >= 0.0
