@@ -36,7 +36,7 @@ mod report {
     };
 
     use super::plot::{Marker, Plot, Scale, Series};
-    use super::timing::{Timing, fmt_seconds, time_per_call};
+    use super::timing::{Timing, cpu_model, fmt_seconds, load_average, time_per_call};
 
     /// Each timed run lasts at least this long (seconds).
     const MIN_RUN: f64 = 0.1;
@@ -693,26 +693,6 @@ mod report {
             p.y_range = Some((1e-17, ERROR_CEILING));
         }
         p.to_svg()
-    }
-
-    /// The 1-minute load average, as text.
-    fn load_average() -> String {
-        std::fs::read_to_string("/proc/loadavg")
-            .ok()
-            .and_then(|t| t.split_whitespace().next().map(str::to_string))
-            .unwrap_or_else(|| "unknown".to_string())
-    }
-
-    fn cpu_model() -> String {
-        std::fs::read_to_string("/proc/cpuinfo")
-            .ok()
-            .and_then(|t| {
-                t.lines()
-                    .find(|l| l.starts_with("model name"))
-                    .and_then(|l| l.split(':').nth(1))
-                    .map(|s| s.trim().to_string())
-            })
-            .unwrap_or_else(|| "unknown CPU".to_string())
     }
 
     fn cases() -> Vec<Case> {

@@ -16,7 +16,7 @@ use eigenray::{
     BatchOptions, Format, Scene, SceneSpec, Status, Tracer, Workspace, demo, write_batch,
 };
 use plot::{Plot, Scale, Series};
-use timing::{fmt_seconds, median, process_cpu_seconds, time_per_call};
+use timing::{cpu_model, fmt_seconds, load_average, median, process_cpu_seconds, time_per_call};
 
 /// Receivers per scene in the per-ray measurements.
 const RECEIVERS: usize = 200;
@@ -105,25 +105,6 @@ fn mib_kb(kb: Option<u64>) -> String {
         || "—".to_string(),
         |k| format!("{:.0} MiB", k as f64 / 1024.0),
     )
-}
-
-fn load_average() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .ok()
-        .and_then(|t| t.split_whitespace().next().map(str::to_string))
-        .unwrap_or_else(|| "unknown".to_string())
-}
-
-fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|t| {
-            t.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|s| s.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".to_string())
 }
 
 /// Wall-clock and process CPU time (all threads) of one measurement, seconds.

@@ -118,16 +118,7 @@ impl<'a> ArgminPath<'a> {
 
     /// `Ok(s)` as a slice when it has one finite entry per interaction.
     fn check<'s>(&self, s: &'s DVector<f64>) -> Result<&'s [f64], Error> {
-        let k = self.problem.len();
-        if s.len() != k {
-            return Err(invalid(format!(
-                "expected {k} parameters (one per interaction), got {}",
-                s.len()
-            )));
-        }
-        if s.iter().any(|v| !v.is_finite()) {
-            return Err(invalid("parameters must be finite".to_string()));
-        }
+        check_parameters(&self.problem, s.as_slice(), "parameters")?;
         Ok(s.as_slice())
     }
 }
@@ -451,17 +442,23 @@ fn max_relative(r: &[f64], scale: &[f64]) -> f64 {
 
 /// Checks the inputs of a `solve_*` function; returns the absolute tolerance on `‖r‖₂` that
 /// implies the relative one.
-fn check_inputs(problem: &PathProblem, s0: &[f64], tol: f64) -> Result<f64, Error> {
+/// `Ok` when `s` has one finite entry per interaction; `what` names it in the error.
+fn check_parameters(problem: &PathProblem, s: &[f64], what: &str) -> Result<(), Error> {
     let k = problem.len();
-    if s0.len() != k {
+    if s.len() != k {
         return Err(invalid(format!(
-            "expected {k} start parameters (one per interaction), got {}",
-            s0.len()
+            "expected {k} {what} (one per interaction), got {}",
+            s.len()
         )));
     }
-    if s0.iter().any(|v| !v.is_finite()) {
-        return Err(invalid("start parameters must be finite".to_string()));
+    if s.iter().any(|v| !v.is_finite()) {
+        return Err(invalid(format!("{what} must be finite")));
     }
+    Ok(())
+}
+
+fn check_inputs(problem: &PathProblem, s0: &[f64], tol: f64) -> Result<f64, Error> {
+    check_parameters(problem, s0, "start parameters")?;
     if !(tol > 0.0 && tol.is_finite()) {
         return Err(invalid(format!(
             "tolerance must be positive and finite, got {tol}"

@@ -179,6 +179,17 @@ fn segment_before(g: &Geometry, i: usize, j: usize) -> Option<usize> {
     }
 }
 
+/// The segment before point `i` when the point sits exactly on the vertex where its segment
+/// starts (moving back it follows that segment), else `None`.
+#[inline]
+fn segment_behind_vertex(g: &Geometry, s: &[f64], seg: &[usize], i: usize) -> Option<usize> {
+    if s[i] == g.line(i).start(seg[i]) {
+        segment_before(g, i, seg[i])
+    } else {
+        None
+    }
+}
+
 /// Residual of point `i` as if its tangent were that of segment `j`.
 #[inline]
 fn residual_on(g: &Geometry, e: &Eval, i: usize, j: usize) -> f64 {
@@ -359,14 +370,8 @@ pub(crate) fn solve(
                     }
                     Pin::Kink => {
                         let keep = leg_vanished(&e.len, i, e.vanish) && {
-                            let line = g.line(i);
-                            let on_vertex = ws.s[i] == line.start(ws.seg[i]);
-                            let back = (if on_vertex {
-                                segment_before(g, i, ws.seg[i])
-                            } else {
-                                None
-                            })
-                            .map_or(e.tan[i], |j| line.tangent(j));
+                            let before = segment_behind_vertex(g, &ws.s, &ws.seg, i);
+                            let back = before.map_or(e.tan[i], |j| g.line(i).tangent(j));
                             let (rm, rp) = kink_residuals(g, e, i, back);
                             rm <= scale && rp >= -scale
                         };
@@ -392,14 +397,8 @@ pub(crate) fn solve(
                     continue;
                 }
                 let scale = tol * (w[i] + w[i + 1]);
-                let line = g.line(i);
-                let on_vertex = ws.s[i] == line.start(ws.seg[i]);
-                let before = if on_vertex {
-                    segment_before(g, i, ws.seg[i])
-                } else {
-                    None
-                };
-                let back = before.map_or(ws.eval.tan[i], |j| line.tangent(j));
+                let before = segment_behind_vertex(g, &ws.s, &ws.seg, i);
+                let back = before.map_or(ws.eval.tan[i], |j| g.line(i).tangent(j));
                 let (rm, rp) = kink_residuals(g, &ws.eval, i, back);
                 if rm <= scale && rp >= -scale {
                     ws.pin[i] = Pin::Kink;

@@ -437,7 +437,7 @@ impl<'s> Tracer<'s> {
 
         let mut total_iterations = 0;
         let mut rounds = 0;
-        let (outcome, mut sol) = loop {
+        let (outcome, sol) = loop {
             let slowness = std::mem::take(&mut ws.slowness);
             let g = Geometry {
                 scene,
@@ -493,9 +493,6 @@ impl<'s> Tracer<'s> {
             );
         }
         ws.points.push(receiver);
-        if let Some(t) = recompute_time(ws) {
-            sol.time = t;
-        }
         let base = summary(sol);
         match outcome {
             Outcome::NotConverged => {
@@ -696,14 +693,6 @@ fn summary(sol: crate::solver::Solution) -> RaySummary {
         residual: sol.residual,
         reason: None,
     }
-}
-
-/// The time from the final legs, summed in order (the solver's last evaluation already holds
-/// it; this keeps it tied to the reported points).
-fn recompute_time(ws: &Workspace) -> Option<f64> {
-    let e = &ws.eval;
-    let t: f64 = e.len.iter().zip(&ws.slowness).map(|(l, w)| l * w).sum();
-    t.is_finite().then_some(t)
 }
 
 /// Replaces the default guess already in `ws` by `guess` if the residual is smaller there.
