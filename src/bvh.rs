@@ -126,12 +126,23 @@ impl Bvh {
         &self,
         a: Point,
         b: Point,
+        visit: impl FnMut(u32) -> bool,
+    ) -> bool {
+        self.any_near_segment_in(Aabb::from_points(a, b), a, b, visit)
+    }
+
+    /// [`any_near_segment`](Self::any_near_segment) with the query box `sbox` given (a part of
+    /// the segment's box: items outside it are not visited).
+    pub(crate) fn any_near_segment_in(
+        &self,
+        sbox: Aabb,
+        a: Point,
+        b: Point,
         mut visit: impl FnMut(u32) -> bool,
     ) -> bool {
         if self.nodes.is_empty() {
             return false;
         }
-        let sbox = Aabb::from_points(a, b);
         if self.nodes.len() == 1 {
             // A single leaf: test the few items directly.
             return self
@@ -140,27 +151,52 @@ impl Bvh {
                 .any(|&it| self.boxes[it as usize].overlaps(sbox) && visit(it));
         }
         let d = b - a;
+        let wanted = |n: &Node| n.bbox.overlaps(sbox) && !box_beside_line(n.bbox, a, d);
+        let mut node = &self.nodes[0];
+        if !wanted(node) {
+            return false;
+        }
+        // Children are tested before they are entered: a node on the stack is wanted.
         let mut stack = [0u32; STACK];
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let node = &self.nodes[stack[top] as usize];
-            if !node.bbox.overlaps(sbox) || box_beside_line(node.bbox, a, d) {
-                continue;
-            }
+        let mut top = 0;
+        loop {
             if node.count > 0 {
                 for &it in &self.items[node.start as usize..(node.start + node.count) as usize] {
                     if self.boxes[it as usize].overlaps(sbox) && visit(it) {
                         return true;
                     }
                 }
-            } else if top + 2 <= STACK {
-                stack[top] = node.start;
-                stack[top + 1] = node.right;
-                top += 2;
+            } else {
+                let (l, r) = (
+                    &self.nodes[node.start as usize],
+                    &self.nodes[node.right as usize],
+                );
+                match (wanted(l), wanted(r)) {
+                    (true, true) => {
+                        if top < STACK {
+                            stack[top] = node.right;
+                            top += 1;
+                        }
+                        node = l;
+                        continue;
+                    }
+                    (true, false) => {
+                        node = l;
+                        continue;
+                    }
+                    (false, true) => {
+                        node = r;
+                        continue;
+                    }
+                    (false, false) => {}
+                }
             }
+            if top == 0 {
+                return false;
+            }
+            top -= 1;
+            node = &self.nodes[stack[top] as usize];
         }
-        false
     }
 }
 
@@ -168,27 +204,17 @@ impl Bvh {
 /// direction `d` (with a small relative margin so that rounding never prunes a true hit).
 #[inline]
 fn box_beside_line(b: Aabb, a: Point, d: crate::geom::Vec2) -> bool {
-    let corners = [
-        b.min,
-        Point::new(b.max.x, b.min.y),
-        b.max,
-        Point::new(b.min.x, b.max.y),
-    ];
-    let mut pos = 0;
-    let mut neg = 0;
+    // `d × (c − a)` over the corners `c` is `d.x (c.y − a.y) − d.y (c.x − a.x)`: its extremes
+    // take each term's extreme over the box's two x and two y values.
+    let (y0, y1) = (d.x * (b.min.y - a.y), d.x * (b.max.y - a.y));
+    let (x0, x1) = (d.y * (a.x - b.min.x), d.y * (a.x - b.max.x));
+    let lo = y0.min(y1) + x0.min(x1);
+    let hi = y0.max(y1) + x0.max(x1);
     // Bounds |d × (c − a)| for every corner (L1 norms: no square roots).
     let far = (b.max.x - a.x).abs().max((b.min.x - a.x).abs())
         + (b.max.y - a.y).abs().max((b.min.y - a.y).abs());
     let margin = 1e-12 * (d.x.abs() + d.y.abs()) * far;
-    for c in corners {
-        let s = d.cross(c - a);
-        if s > margin {
-            pos += 1;
-        } else if s < -margin {
-            neg += 1;
-        }
-    }
-    pos == 4 || neg == 4
+    lo > margin || hi < -margin
 }
 
 fn build_node(
@@ -261,6 +287,40 @@ mod tests {
                 .fold(f64::INFINITY, f64::min);
             assert_eq!(d, brute);
             assert_eq!(b[it as usize].distance_sq(p), brute);
+        }
+    }
+
+    #[test]
+    fn segment_query_visits_every_crossed_item() {
+        // Segments as items; every one that a query segment crosses must be visited.
+        let mut rng = crate::demo::SplitMix64(7);
+        let segs: Vec<(Point, Point)> = (0..2000)
+            .map(|_| {
+                let a = Point::new(rng.next_f64() * 100.0, rng.next_f64() * 100.0);
+                let b = Point::new(
+                    a.x + rng.next_f64() * 6.0 - 3.0,
+                    a.y + rng.next_f64() * 6.0 - 3.0,
+                );
+                (a, b)
+            })
+            .collect();
+        let b: Vec<Aabb> = segs.iter().map(|&(p, q)| Aabb::from_points(p, q)).collect();
+        let bvh = Bvh::build(&b);
+        for _ in 0..200 {
+            let a = Point::new(rng.next_f64() * 100.0, rng.next_f64() * 100.0);
+            let e = Point::new(rng.next_f64() * 100.0, rng.next_f64() * 100.0);
+            let mut seen = vec![false; segs.len()];
+            bvh.any_near_segment(a, e, |i| {
+                seen[i as usize] = true;
+                false
+            });
+            for (i, &(p, q)) in segs.iter().enumerate() {
+                if crate::polyline::segment_intersection(a, e, p, q).is_some() {
+                    assert!(seen[i], "segment {i} crossed but not visited");
+                }
+            }
+            // And the pruning does prune: far fewer visits than items.
+            assert!(seen.iter().filter(|&&v| v).count() < segs.len() / 4);
         }
     }
 

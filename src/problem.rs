@@ -71,6 +71,8 @@ pub(crate) struct Eval {
     pub u: Vec<Vec2>,
     /// Leg lengths, `k + 1`.
     pub len: Vec<f64>,
+    /// Their reciprocals (0 for a zero-length leg), `k + 1`.
+    pub inv_len: Vec<f64>,
     /// Unit tangents at the interactions, `k`.
     pub tan: Vec<Vec2>,
     /// Residual `∂T/∂sᵢ`, `k`.
@@ -89,6 +91,14 @@ pub(crate) struct Eval {
     pub held: usize,
     /// Number of free points next to a vanished leg.
     pub vanished: usize,
+    /// Forward sweep of the Thomas algorithm on `H x = r` (see
+    /// [`Geometry::evaluate_fused`]): modified super-diagonal `cp` and right-hand side `y`, `k`
+    /// each, valid when `factored`.
+    pub cp: Vec<f64>,
+    /// See `cp`.
+    pub y: Vec<f64>,
+    /// Whether `cp` and `y` hold a forward sweep with no tiny or non-finite pivot.
+    pub factored: bool,
     /// Length below which a leg counts as vanished: 1e-12 of the path's length, or the
     /// round-off of the coordinates, whichever is larger.
     pub vanish: f64,
@@ -99,10 +109,13 @@ impl Eval {
         self.rel.resize(k + 2, Vec2::default());
         self.u.resize(k + 1, Vec2::default());
         self.len.resize(k + 1, 0.0);
+        self.inv_len.resize(k + 1, 0.0);
         self.tan.resize(k, Vec2::default());
         self.r.resize(k, 0.0);
         self.diag.resize(k, 0.0);
         self.off.resize(k.saturating_sub(1), 0.0);
+        self.cp.resize(k, 0.0);
+        self.y.resize(k, 0.0);
     }
 }
 
@@ -143,45 +156,219 @@ impl<'a> Geometry<'a> {
         curvature: bool,
     ) {
         let k = self.k();
+        let (s, seg, pin) = (&s[..k], &seg[..k], &pin[..k]);
+        let interfaces = self.scene.interfaces();
+        {
+            let (rel, tan) = (&mut e.rel[..k + 2], &mut e.tan[..k]);
+            rel[0] = Vec2::default();
+            for i in 0..k {
+                let line = &interfaces[self.steps[i].interface].polyline;
+                rel[i + 1] = line.offset_on(seg[i], s[i], self.source);
+                tan[i] = line.tangent(seg[i]);
+            }
+            rel[k + 1] = self.receiver - self.source;
+        }
+        let kappa = |i: usize| {
+            interfaces[self.steps[i].interface]
+                .polyline
+                .curvature(seg[i])
+        };
+        self.derive(e, |i| pin[i], hessian, curvature.then_some(kappa));
+    }
+
+    /// [`evaluate`](Self::evaluate) with every point free, on the segments described by
+    /// `frames` (the fast path of the solver: no polyline lookups), Hessian included. Gives the
+    /// same numbers as `evaluate` on those segments.
+    pub fn evaluate_framed(&self, s: &[f64], frames: &[Frame], e: &mut Eval, curvature: bool) {
+        let k = self.k();
+        let (s, frames) = (&s[..k], &frames[..k]);
+        {
+            let (rel, tan) = (&mut e.rel[..k + 2], &mut e.tan[..k]);
+            rel[0] = Vec2::default();
+            for i in 0..k {
+                rel[i + 1] = frames[i].offset(s[i]);
+                tan[i] = frames[i].t;
+            }
+            rel[k + 1] = self.receiver - self.source;
+        }
+        self.derive(
+            e,
+            |_| Pin::Free,
+            true,
+            curvature.then_some(|i: usize| frames[i].kappa),
+        );
+    }
+
+    /// [`evaluate_framed`](Self::evaluate_framed) in one pass over the points (`k ≥ 1`), with
+    /// the forward sweep of the Thomas algorithm on `H x = r` folded in: leaves `e.cp` and
+    /// `e.y` (see [`Eval::factored`]) for the back substitution. The same numbers as
+    /// `evaluate_framed` followed by `thomas`, bit for bit, except that it leaves `e.tan` (the
+    /// frames' tangents: the caller stores them once) and `e.inv_len` (scratch) alone. When a
+    /// leg has vanished it falls back to `evaluate_framed` (and `e.factored` is `false`).
+    pub fn evaluate_fused(&self, s: &[f64], frames: &[Frame], e: &mut Eval, curvature: bool) {
+        let k = self.k();
+        let (s, frames, w) = (&s[..k], &frames[..k], &self.slowness[..k + 1]);
+        let (rel, u, len) = (&mut e.rel[..k + 2], &mut e.u[..k + 1], &mut e.len[..k + 1]);
+        let (r, diag, off, cp, y) = (
+            &mut e.r[..k],
+            &mut e.diag[..k],
+            &mut e.off[..k - 1],
+            &mut e.cp[..k],
+            &mut e.y[..k],
+        );
+        rel[0] = Vec2::default();
+        // Leg 0, then per point i: leg i + 1 and everything of point i.
+        let p0 = frames[0].offset(s[0]);
+        rel[1] = p0;
+        let l = leg_length(p0 - Vec2::default());
+        let il = inv(l);
+        let ua = (p0 - Vec2::default()) * il;
+        (len[0], u[0]) = (l, ua);
+        let mut acc = Sweep {
+            p: p0,
+            ua,
+            il,
+            time: 0.0 + w[0] * l,
+            total: 0.0 + l,
+            shortest: l,
+            phi: 0.0,
+            rmax: 0.0,
+            prev_c: 0.0,
+            prev_y: 0.0,
+            sub: 0.0,
+            ok: true,
+        };
+        for i in 0..k - 1 {
+            let f = &frames[i + 1];
+            let q = f.offset(s[i + 1]);
+            rel[i + 2] = q;
+            let (l, ub, ri, h, o, c, yi) =
+                fused_point(w, frames, curvature, i, q, Some(f.t), &mut acc);
+            (len[i + 1], u[i + 1], r[i], diag[i], off[i], cp[i], y[i]) = (l, ub, ri, h, o, c, yi);
+        }
+        let q = self.receiver - self.source;
+        rel[k + 1] = q;
+        let (l, ub, ri, h, _, c, yi) = fused_point(w, frames, curvature, k - 1, q, None, &mut acc);
+        (len[k], u[k], r[k - 1], diag[k - 1], cp[k - 1], y[k - 1]) = (l, ub, ri, h, c, yi);
+
+        let vanish = 1e-12 * acc.total + 8.0 * f64::EPSILON * self.coord();
+        if acc.shortest <= vanish || acc.shortest.is_nan() {
+            // Points next to a vanished leg count differently in the merit.
+            self.evaluate_framed(s, frames, e, curvature);
+            e.factored = false;
+            return;
+        }
+        e.time = acc.time;
+        e.phi = acc.phi;
+        e.rmax = acc.rmax;
+        e.held = 0;
+        e.vanished = 0;
+        e.vanish = vanish;
+        e.factored = acc.ok;
+    }
+
+    /// The largest coordinate of the end points (the scale of their round-off).
+    #[inline]
+    pub fn coord(&self) -> f64 {
+        self.source
+            .x
+            .abs()
+            .max(self.source.y.abs())
+            .max(self.receiver.x.abs())
+            .max(self.receiver.y.abs())
+    }
+
+    /// [`evaluate_framed`](Self::evaluate_framed) for a path of one interaction, bit for bit,
+    /// in registers: `w` the two slownesses, `to_receiver` the receiver minus the source,
+    /// `coord` [`Geometry::coord`].
+    #[inline(always)]
+    pub fn evaluate_single(
+        s: f64,
+        f: &Frame,
+        w: [f64; 2],
+        to_receiver: Vec2,
+        coord: f64,
+        curvature: bool,
+    ) -> Single {
+        let p = f.offset(s);
+        let legs = [p - Vec2::default(), to_receiver - p];
+        let mut len = [0.0; 2];
+        let mut inv_len = [0.0; 2];
+        let mut u = [Vec2::default(); 2];
+        for j in 0..2 {
+            let l = leg_length(legs[j]);
+            len[j] = l;
+            inv_len[j] = inv(l);
+            u[j] = legs[j] * inv_len[j];
+        }
+        let time = 0.0 + w[0] * len[0] + w[1] * len[1];
+        let total = 0.0 + len[0] + len[1];
+        let vanish = 1e-12 * total + 8.0 * f64::EPSILON * coord;
+        let t = f.t;
+        let r = (u[0] * w[0] - u[1] * w[1]).dot(t);
+        let rel = r / (w[0] + w[1]);
+        let vanished = len[0] <= vanish || len[1] <= vanish;
+        let (phi, rmax) = if vanished {
+            (0.0, 0.0)
+        } else {
+            (0.0 + rel * rel, max_num(0.0, rel.abs()))
+        };
+        let ca = u[0].cross(t);
+        let cb = u[1].cross(t);
+        let mut h = w[0] * ca * ca * inv_len[0] + w[1] * cb * cb * inv_len[1];
+        if curvature && f.kappa != 0.0 {
+            h += f.kappa * (u[0] * w[0] - u[1] * w[1]).dot(t.perp());
+        }
+        Single {
+            p,
+            u,
+            len,
+            inv_len,
+            time,
+            r,
+            h,
+            phi,
+            rmax,
+            vanished,
+            vanish,
+        }
+    }
+
+    /// Legs, time, residual, merit and (with `hessian`) the Hessian from the positions and
+    /// tangents already in `e`.
+    #[inline(always)]
+    fn derive(
+        &self,
+        e: &mut Eval,
+        pin: impl Fn(usize) -> Pin,
+        hessian: bool,
+        kappa: Option<impl Fn(usize) -> f64>,
+    ) {
+        let k = self.k();
         // Exact-length views: the loops below then index without bounds checks.
-        let (s, seg, pin, w) = (&s[..k], &seg[..k], &pin[..k], &self.slowness[..k + 1]);
-        let (rel, u, len, tan) = (
-            &mut e.rel[..k + 2],
+        let w = &self.slowness[..k + 1];
+        let (rel, u, len, inv_len, tan) = (
+            &e.rel[..k + 2],
             &mut e.u[..k + 1],
             &mut e.len[..k + 1],
-            &mut e.tan[..k],
+            &mut e.inv_len[..k + 1],
+            &e.tan[..k],
         );
-        let interfaces = self.scene.interfaces();
-        rel[0] = Vec2::default();
-        for i in 0..k {
-            let line = &interfaces[self.steps[i].interface].polyline;
-            rel[i + 1] = line.offset_on(seg[i], s[i], self.source);
-            tan[i] = line.tangent(seg[i]);
-        }
-        rel[k + 1] = self.receiver - self.source;
         let mut time = 0.0;
         let mut total = 0.0;
         for j in 0..=k {
             let d = rel[j + 1] - rel[j];
             let l = leg_length(d);
+            let il = inv(l);
             len[j] = l;
-            u[j] = if l > 0.0 {
-                d * (1.0 / l)
-            } else {
-                Vec2::default()
-            };
+            inv_len[j] = il;
+            // `inv` gives 0 for a zero-length leg, whose `d` is zero: `u` is then zero too.
+            u[j] = d * il;
             time += w[j] * l;
             total += l;
         }
         e.time = time;
-        let coord = self
-            .source
-            .x
-            .abs()
-            .max(self.source.y.abs())
-            .max(self.receiver.x.abs())
-            .max(self.receiver.y.abs());
-        let vanish = 1e-12 * total + 8.0 * f64::EPSILON * coord;
+        let vanish = 1e-12 * total + 8.0 * f64::EPSILON * self.coord();
         let r = &mut e.r[..k];
         let (mut phi, mut rmax, mut held, mut vanished) = (0.0, 0.0f64, 0, 0);
         for i in 0..k {
@@ -189,14 +376,15 @@ impl<'a> Geometry<'a> {
             let ri = (u[i] * w[i] - u[i + 1] * w[i + 1]).dot(t);
             r[i] = ri;
             let rel = ri / (w[i] + w[i + 1]);
-            let m = match pin[i] {
+            let p = pin(i);
+            let m = match p {
                 Pin::Free if leg_vanished(len, i, vanish) => {
                     // The residual is undefined here; the solver judges the kink.
                     vanished += 1;
                     0.0
                 }
                 Pin::Free => {
-                    rmax = rmax.max(rel.abs());
+                    rmax = max_num(rmax, rel.abs());
                     rel
                 }
                 Pin::Vertex | Pin::Kink => 0.0,
@@ -204,7 +392,7 @@ impl<'a> Geometry<'a> {
                 Pin::Start => rel.min(0.0),
                 Pin::End => rel.max(0.0),
             };
-            held += (pin[i] != Pin::Free) as usize;
+            held += (p != Pin::Free) as usize;
             phi += m * m;
         }
         e.phi = phi;
@@ -221,19 +409,193 @@ impl<'a> Geometry<'a> {
             let (ua, ub) = (u[i], u[i + 1]);
             let ca = ua.cross(t);
             let cb = ub.cross(t);
-            let mut h = w[i] * ca * ca * inv(len[i]) + w[i + 1] * cb * cb * inv(len[i + 1]);
-            if curvature {
-                let kappa = interfaces[self.steps[i].interface]
-                    .polyline
-                    .curvature(seg[i]);
+            let mut h = w[i] * ca * ca * inv_len[i] + w[i + 1] * cb * cb * inv_len[i + 1];
+            if let Some(kappa) = &kappa {
+                let kappa = kappa(i);
                 if kappa != 0.0 {
                     h += kappa * (ua * w[i] - ub * w[i + 1]).dot(t.perp());
                 }
             }
             diag[i] = h;
             if i + 1 < k {
-                off[i] = -w[i + 1] * cb * ub.cross(tan[i + 1]) * inv(len[i + 1]);
+                off[i] = -w[i + 1] * cb * ub.cross(tan[i + 1]) * inv_len[i + 1];
             }
+        }
+    }
+}
+
+/// One step of [`Geometry::evaluate_fused`]: point `i`, given the next point `q` (minus the
+/// source) and its tangent (`None` for the receiver). Returns the leg after the point (length,
+/// direction), its residual, Hessian diagonal and off-diagonal, and its row of the forward
+/// sweep.
+#[inline(always)]
+#[allow(
+    clippy::type_complexity,
+    reason = "one tuple of the values the caller stores"
+)]
+fn fused_point(
+    w: &[f64],
+    frames: &[Frame],
+    curvature: bool,
+    i: usize,
+    q: Vec2,
+    t_next: Option<Vec2>,
+    acc: &mut Sweep,
+) -> (f64, Vec2, f64, f64, f64, f64, f64) {
+    let d = q - acc.p;
+    let l = leg_length(d);
+    let il_b = inv(l);
+    // `inv` gives 0 for a zero-length leg, whose `d` is zero: `u` is then zero too.
+    let ub = d * il_b;
+    acc.time += w[i + 1] * l;
+    acc.total += l;
+    acc.shortest = min_num(acc.shortest, l);
+    let ua = acc.ua;
+    let t = frames[i].t;
+    let ri = (ua * w[i] - ub * w[i + 1]).dot(t);
+    let rel_r = ri / (w[i] + w[i + 1]);
+    acc.rmax = max_num(acc.rmax, rel_r.abs());
+    acc.phi += rel_r * rel_r;
+    let ca = ua.cross(t);
+    let cb = ub.cross(t);
+    let mut h = w[i] * ca * ca * acc.il + w[i + 1] * cb * cb * il_b;
+    if curvature && frames[i].kappa != 0.0 {
+        h += frames[i].kappa * (ua * w[i] - ub * w[i + 1]).dot(t.perp());
+    }
+    let o = match t_next {
+        Some(t_next) => -w[i + 1] * cb * ub.cross(t_next) * il_b,
+        None => 0.0,
+    };
+    // Forward sweep of `thomas`, row i.
+    let den = h - acc.sub * acc.prev_c;
+    let scale = h.abs() + acc.sub.abs() + o.abs();
+    acc.ok &= den.is_finite() & (den.abs() > 1e-14 * scale);
+    let inv_den = 1.0 / den;
+    let c = o * inv_den;
+    let yi = (ri - acc.sub * acc.prev_y) * inv_den;
+    (acc.prev_c, acc.prev_y, acc.sub) = (c, yi, o);
+    (acc.p, acc.ua, acc.il) = (q, ub, il_b);
+    (l, ub, ri, h, o, c, yi)
+}
+
+/// The running state of [`Geometry::evaluate_fused`].
+struct Sweep {
+    /// The current point minus the source.
+    p: Vec2,
+    /// Direction and reciprocal length of the leg arriving at it.
+    ua: Vec2,
+    il: f64,
+    time: f64,
+    total: f64,
+    shortest: f64,
+    phi: f64,
+    rmax: f64,
+    /// Thomas forward sweep: previous modified super-diagonal and right-hand side, and the
+    /// previous row's super-diagonal (this row's sub-diagonal).
+    prev_c: f64,
+    prev_y: f64,
+    sub: f64,
+    ok: bool,
+}
+
+/// [`Eval`] of a one-interaction path, in registers (see [`Geometry::evaluate_single`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Single {
+    /// The interaction point minus the source.
+    pub p: Vec2,
+    /// Unit directions of the two legs.
+    pub u: [Vec2; 2],
+    /// Leg lengths.
+    pub len: [f64; 2],
+    /// Their reciprocals (0 for a zero-length leg).
+    pub inv_len: [f64; 2],
+    /// Travel time.
+    pub time: f64,
+    /// Residual.
+    pub r: f64,
+    /// Hessian.
+    pub h: f64,
+    /// Merit.
+    pub phi: f64,
+    /// Relative residual (0 when a leg vanished).
+    pub rmax: f64,
+    /// Whether a leg vanished.
+    pub vanished: bool,
+    /// See [`Eval::vanish`].
+    pub vanish: f64,
+}
+
+impl Single {
+    /// Writes this evaluation into `e` (sized for one interaction on the segment `f`), as
+    /// [`Geometry::evaluate_framed`] would have left it.
+    pub fn store(&self, f: &Frame, to_receiver: Vec2, e: &mut Eval) {
+        e.rel[..3].copy_from_slice(&[Vec2::default(), self.p, to_receiver]);
+        e.u[..2].copy_from_slice(&self.u);
+        e.len[..2].copy_from_slice(&self.len);
+        e.inv_len[..2].copy_from_slice(&self.inv_len);
+        e.tan[0] = f.t;
+        e.r[0] = self.r;
+        e.diag[0] = self.h;
+        e.time = self.time;
+        e.phi = self.phi;
+        e.rmax = self.rmax;
+        e.held = 0;
+        e.vanished = self.vanished as usize;
+        e.vanish = self.vanish;
+    }
+}
+
+/// One interaction point's segment, as the solver's fast path needs it: the segment's end
+/// points relative to the ray's source, its tangent, the parameters of its ends and its
+/// curvature estimate.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Frame {
+    /// Start vertex minus the source.
+    pub a: Vec2,
+    /// End vertex minus the source.
+    pub b: Vec2,
+    /// Unit tangent.
+    pub t: Vec2,
+    /// Parameter of the start vertex.
+    pub lo: f64,
+    /// Parameter of the end vertex.
+    pub hi: f64,
+    /// [`Polyline::curvature`] of the segment.
+    pub kappa: f64,
+    /// Largest step along the polyline the solver takes at once (a quarter of a closed
+    /// polyline's length; infinite on an open one).
+    pub quarter: f64,
+}
+
+impl Frame {
+    /// The frame of segment `j` of `line`, relative to `origin`.
+    #[inline]
+    pub fn new(line: &Polyline, j: usize, origin: Point) -> Frame {
+        let (a, b) = line.segment(j);
+        Frame {
+            a: a - origin,
+            b: b - origin,
+            t: line.tangent(j),
+            lo: line.start(j),
+            hi: line.start(j + 1),
+            kappa: line.curvature(j),
+            quarter: if line.is_closed() {
+                0.25 * line.length()
+            } else {
+                f64::INFINITY
+            },
+        }
+    }
+
+    /// [`Polyline::offset_on`] on this segment (bit for bit).
+    #[inline]
+    pub fn offset(&self, s: f64) -> Vec2 {
+        let from_start = s - self.lo;
+        let from_end = self.hi - s;
+        if from_start <= from_end {
+            self.a + self.t * from_start
+        } else {
+            self.b - self.t * from_end
         }
     }
 }
@@ -256,6 +618,19 @@ fn leg_length(d: Vec2) -> f64 {
     } else {
         d.length()
     }
+}
+
+/// `f64::max` for a first argument that is never NaN: the larger, or `a` when `b` is NaN
+/// (the same result, as one compare and select).
+#[inline(always)]
+fn max_num(a: f64, b: f64) -> f64 {
+    if b > a { b } else { a }
+}
+
+/// `f64::min` for a first argument that is never NaN (see [`max_num`]).
+#[inline(always)]
+fn min_num(a: f64, b: f64) -> f64 {
+    if b < a { b } else { a }
 }
 
 /// `1/ℓ`, with a zero-length leg contributing nothing (its direction is undefined).

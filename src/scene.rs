@@ -241,6 +241,8 @@ pub struct Scene {
     paths: Vec<Path>,
     solver: SolverOptions,
     segments: Vec<SegmentRef>,
+    /// End points of `segments`, in the same order.
+    segment_ends: Vec<(Point, Point)>,
     segment_bvh: Bvh,
 }
 
@@ -463,6 +465,14 @@ impl Scene {
             }
         }
 
+        let segment_ends = segments
+            .iter()
+            .map(|r| {
+                interfaces[r.interface as usize]
+                    .polyline
+                    .segment(r.segment as usize)
+            })
+            .collect();
         Ok(Scene {
             media,
             background,
@@ -472,6 +482,7 @@ impl Scene {
             receivers,
             paths,
             solver,
+            segment_ends,
             segments,
             segment_bvh,
         })
@@ -555,16 +566,38 @@ impl Scene {
         &self.segments
     }
 
-    /// Calls `visit` with every scene segment whose box the segment `a–b` may meet; stops
-    /// when `visit` returns `true` and returns whether it did.
-    pub(crate) fn any_segment_near(
-        &self,
-        a: Point,
-        b: Point,
-        mut visit: impl FnMut(SegmentRef) -> bool,
-    ) -> bool {
-        self.segment_bvh
-            .any_near_segment(a, b, |i| visit(self.segments[i as usize]))
+    /// The first interface segment that the segment `a–b` crosses or touches strictly inside,
+    /// at a fraction `t ∈ (margin, 1 − margin)` of the way from `a` to `b` (its end points
+    /// may lie on interfaces: touching there does not count).
+    ///
+    /// Only boxes that meet the middle part of `a–b` (`t` from about `margin / 2` to `1 −
+    /// margin / 2`, less round-off) are visited: a leg between two interfaces then does not
+    /// even look at the segments its end points lie on when they are axis-parallel.
+    pub(crate) fn first_crossing(&self, a: Point, b: Point, margin: f64) -> Option<SegmentRef> {
+        let d = b - a;
+        let cut = |lo: f64, hi: f64, along: f64| {
+            let slack = 4.0 * f64::EPSILON * (lo.abs() + hi.abs());
+            let c = (0.5 * margin * along.abs() - slack).max(0.0);
+            (lo + c, hi - c)
+        };
+        let (x0, x1) = cut(a.x.min(b.x), a.x.max(b.x), d.x);
+        let (y0, y1) = cut(a.y.min(b.y), a.y.max(b.y), d.y);
+        let sbox = Aabb {
+            min: Point::new(x0, y0),
+            max: Point::new(x1, y1),
+        };
+        let mut hit = None;
+        self.segment_bvh.any_near_segment_in(sbox, a, b, |i| {
+            let (p, q) = self.segment_ends[i as usize];
+            match crate::polyline::segment_intersection(a, b, p, q) {
+                Some((t, _)) if t > margin && t < 1.0 - margin => {
+                    hit = Some(self.segments[i as usize]);
+                    true
+                }
+                _ => false,
+            }
+        });
+        hit
     }
 
     /// End points of a scene segment.

@@ -20,7 +20,7 @@
 
 use crate::geom::{Point, Vec2};
 pub(crate) use crate::problem::Pin;
-use crate::problem::{Eval, Geometry, leg_vanished};
+use crate::problem::{Eval, Frame, Geometry, leg_vanished};
 
 /// How the iteration ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -69,6 +69,7 @@ pub struct Workspace {
     pub(crate) s_alt: Vec<f64>,
     pub(crate) seg_alt: Vec<usize>,
     pub(crate) points: Vec<Point>,
+    frames: Vec<Frame>,
 }
 
 impl Workspace {
@@ -116,6 +117,7 @@ impl Workspace {
         self.media_prev.reserve(k + 1);
         self.slowness.reserve(k + 1);
         self.points.reserve(k + 2);
+        self.frames.reserve(k);
     }
 }
 
@@ -126,26 +128,33 @@ pub(crate) fn thomas(diag: &[f64], off: &[f64], d: &[f64], x: &mut [f64], cp: &m
     if n == 0 {
         return true;
     }
-    let mut prev_c = 0.0;
-    let mut prev_x = 0.0;
+    // Exact-length views (no bounds checks below); the last row has no super-diagonal.
+    let (diag, off, d) = (&diag[..n], &off[..n - 1], &d[..n]);
+    let (x, cp) = (&mut x[..n], &mut cp[..n]);
+    let (mut prev_c, mut prev_x, mut sub) = (0.0, 0.0, 0.0);
+    let mut ok = true;
     for i in 0..n {
-        let sub = if i > 0 { off[i - 1] } else { 0.0 };
+        let sup = if i + 1 < n { off[i] } else { 0.0 };
         let den = diag[i] - sub * prev_c;
-        let scale = diag[i].abs() + sub.abs() + if i + 1 < n { off[i].abs() } else { 0.0 };
-        if !(den.is_finite() && den.abs() > 1e-14 * scale && scale > 0.0) {
-            return false;
-        }
-        let c = if i + 1 < n { off[i] / den } else { 0.0 };
-        let xi = (d[i] - sub * prev_x) / den;
+        let scale = diag[i].abs() + sub.abs() + sup.abs();
+        // Non-short-circuiting: one branch after the loop instead of one per row.
+        ok &= den.is_finite() & (den.abs() > 1e-14 * scale);
+        let inv = 1.0 / den;
+        let c = sup * inv;
+        let xi = (d[i] - sub * prev_x) * inv;
         cp[i] = c;
         x[i] = xi;
-        prev_c = c;
-        prev_x = xi;
+        (prev_c, prev_x, sub) = (c, xi, sup);
     }
+    if !ok {
+        return false;
+    }
+    let mut finite = x[n - 1].is_finite();
     for i in (0..n - 1).rev() {
         x[i] -= cp[i] * x[i + 1];
+        finite &= x[i].is_finite();
     }
-    x.iter().all(|v| v.is_finite())
+    finite
 }
 
 /// Moves point `i` to parameter `s` (wrapping or holding at an end), updating its segment.
@@ -318,18 +327,38 @@ pub(crate) fn solve(
 ) -> (Outcome, Solution) {
     let k = g.k();
     let w = g.slowness;
-    let mut iterations = 0;
-    let mut curvature = true;
+    let mut fast = Fast {
+        iterations: 0,
+        curvature: true,
+        evaluated: false,
+        polishes: 0,
+    };
+    #[cfg(test)]
+    let general_only = tests::GENERAL_ONLY.with(|c| c.get());
+    #[cfg(not(test))]
+    let general_only = false;
+    if !general_only && ws.pin[..k].iter().all(|&p| p == Pin::Free) {
+        let done = match k {
+            0 => None,
+            1 => fast_newton_single(g, ws, tol, max_iterations, &mut fast),
+            _ => fast_newton(g, ws, tol, max_iterations, &mut fast),
+        };
+        if let Some(done) = done {
+            return done;
+        }
+    }
+    let Fast {
+        mut iterations,
+        mut curvature,
+        mut evaluated,
+        mut polishes,
+    } = fast;
     // Set once a vertex or an end point was met: from then on the exact segment-wise model
     // (no curvature estimate), which is right near a kink of T.
     let mut near_kink = false;
     // Releases and pins do not move the others; bound them so that a ring of releases and
     // re-pins cannot spin for ever between counted iterations.
     let mut free_moves = 0;
-    // Whether `ws.eval` already holds the evaluation at `ws.s` (the accepted trial).
-    let mut evaluated = false;
-    // Newton steps taken after the residual met the tolerance (see below).
-    let mut polishes = 0;
     loop {
         if !evaluated {
             g.evaluate(&ws.s, &ws.seg, &ws.pin, &mut ws.eval, true, curvature);
@@ -680,6 +709,177 @@ pub(crate) fn solve(
     }
 }
 
+/// The iteration state that the fast path hands on to the general loop.
+struct Fast {
+    /// Newton steps taken.
+    iterations: usize,
+    /// Whether the next evaluation adds the curvature estimate.
+    curvature: bool,
+    /// Whether `ws.eval` holds the evaluation at `ws.s`.
+    evaluated: bool,
+    /// Newton steps taken after the residual met the tolerance.
+    polishes: usize,
+}
+
+/// The common case of [`solve`], without its bookkeeping: every point free and every full
+/// Newton step staying inside the segments the points are on, with no leg vanishing. Takes
+/// exactly the steps the general loop would take there (same arithmetic, same tests), on
+/// segment frames prepared once, and hands over (`None`, with `fast` updated) at the first
+/// iteration that needs more: a step leaving a segment or capped, a rejected full step, a
+/// vanished leg, a singular Hessian.
+fn fast_newton(
+    g: &Geometry,
+    ws: &mut Workspace,
+    tol: f64,
+    max_iterations: usize,
+    fast: &mut Fast,
+) -> Option<(Outcome, Solution)> {
+    let k = g.k();
+    ws.frames.clear();
+    ws.frames
+        .extend((0..k).map(|i| Frame::new(g.line(i), ws.seg[i], g.source)));
+    // `evaluate_fused` leaves the tangents to us: they are the frames'.
+    for (i, f) in ws.frames.iter().enumerate() {
+        ws.eval.tan[i] = f.t;
+        ws.eval_try.tan[i] = f.t;
+    }
+    loop {
+        if !fast.evaluated {
+            g.evaluate_fused(&ws.s, &ws.frames, &mut ws.eval, fast.curvature);
+            fast.evaluated = true;
+        }
+        let e = &ws.eval;
+        if e.vanished > 0 {
+            return None;
+        }
+        let residual = e.rmax;
+        if !residual.is_finite() || fast.iterations >= max_iterations {
+            return Some((
+                Outcome::NotConverged,
+                Solution {
+                    time: e.time,
+                    iterations: fast.iterations,
+                    residual,
+                },
+            ));
+        }
+        if !e.factored {
+            // A tiny pivot: the general loop takes the damped step.
+            return None;
+        }
+        // Back substitution of `thomas` (x = H⁻¹ r, the step is −x), fused with the step's
+        // tests: round-off floor, and whether the full step stays inside every segment.
+        let (s, delta, frames) = (&ws.s[..k], &mut ws.delta[..k], &ws.frames[..k]);
+        let (len, s_try, cp, y) = (&e.len[..k + 1], &mut ws.s_try[..k], &e.cp[..k], &e.y[..k]);
+        let mut finite = true;
+        let mut tiny = true;
+        let mut inside = true;
+        let mut x = 0.0;
+        for i in (0..k).rev() {
+            x = if i + 1 == k { y[i] } else { y[i] - cp[i] * x };
+            finite &= x.is_finite();
+            let d = -x;
+            delta[i] = d;
+            tiny &= d.abs() <= 4.0 * f64::EPSILON * (s[i].abs() + len[i] + len[i + 1]);
+            let to = s[i] + d;
+            s_try[i] = to;
+            let f = &frames[i];
+            inside &= to > f.lo && to < f.hi && d.abs() <= len[i].max(len[i + 1]).min(f.quarter);
+        }
+        if !finite {
+            return None;
+        }
+        if tiny {
+            return Some(finished(ws, fast.iterations));
+        }
+        if !inside {
+            return None;
+        }
+        let polish = residual <= tol;
+        if polish {
+            let small = (0..k).all(|i| delta[i].abs() <= tol.sqrt() * (len[i] + len[i + 1]));
+            if small || fast.polishes >= 2 {
+                return Some(finished(ws, fast.iterations));
+            }
+        }
+        let phi0 = e.phi;
+        g.evaluate_fused(&ws.s_try, &ws.frames, &mut ws.eval_try, false);
+        let phi = ws.eval_try.phi;
+        if !(phi.is_finite() && phi <= (1.0 - 1e-4) * phi0) {
+            // The general loop backtracks from here (it evaluates this trial again).
+            return None;
+        }
+        fast.polishes += polish as usize;
+        fast.iterations += 1;
+        fast.curvature = false;
+        std::mem::swap(&mut ws.eval, &mut ws.eval_try);
+        std::mem::swap(&mut ws.s, &mut ws.s_try);
+    }
+}
+
+/// [`fast_newton`] for a path of one interaction, in registers: the same steps and tests.
+fn fast_newton_single(
+    g: &Geometry,
+    ws: &mut Workspace,
+    tol: f64,
+    max_iterations: usize,
+    fast: &mut Fast,
+) -> Option<(Outcome, Solution)> {
+    let f = Frame::new(g.line(0), ws.seg[0], g.source);
+    let w = [g.slowness[0], g.slowness[1]];
+    let to_receiver = g.receiver - g.source;
+    let coord = g.coord();
+    let mut s = ws.s[0];
+    let mut e = Geometry::evaluate_single(s, &f, w, to_receiver, coord, fast.curvature);
+    let done = loop {
+        if e.vanished {
+            break None;
+        }
+        let residual = e.rmax;
+        if !residual.is_finite() || fast.iterations >= max_iterations {
+            break Some(Outcome::NotConverged);
+        }
+        // `thomas` on one row.
+        let x = e.r * (1.0 / e.h);
+        if !(e.h.is_finite() && e.h.abs() > 1e-14 * e.h.abs() && x.is_finite()) {
+            break None;
+        }
+        let d = -x;
+        if d.abs() <= 4.0 * f64::EPSILON * (s.abs() + e.len[0] + e.len[1]) {
+            break Some(Outcome::Converged);
+        }
+        let to = s + d;
+        if !(to > f.lo && to < f.hi && d.abs() <= e.len[0].max(e.len[1]).min(f.quarter)) {
+            break None;
+        }
+        let polish = residual <= tol;
+        if polish && (d.abs() <= tol.sqrt() * (e.len[0] + e.len[1]) || fast.polishes >= 2) {
+            break Some(Outcome::Converged);
+        }
+        let trial = Geometry::evaluate_single(to, &f, w, to_receiver, coord, false);
+        if !(trial.phi.is_finite() && trial.phi <= (1.0 - 1e-4) * e.phi) {
+            break None;
+        }
+        fast.polishes += polish as usize;
+        fast.iterations += 1;
+        fast.curvature = false;
+        (s, e) = (to, trial);
+    };
+    ws.s[0] = s;
+    e.store(&f, to_receiver, &mut ws.eval);
+    fast.evaluated = true;
+    done.map(|outcome| {
+        (
+            outcome,
+            Solution {
+                time: e.time,
+                iterations: fast.iterations,
+                residual: e.rmax,
+            },
+        )
+    })
+}
+
 /// The outcome once the free points are stationary.
 fn finished(ws: &Workspace, iterations: usize) -> (Outcome, Solution) {
     let e = &ws.eval;
@@ -751,8 +951,74 @@ fn damped_step(g: &Geometry, ws: &mut Workspace) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+    use crate::{Scene, Tracer};
+    use std::cell::Cell;
+
+    thread_local! {
+        /// Set: `solve` skips its fast paths (to compare them with the general loop).
+        pub(crate) static GENERAL_ONLY: Cell<bool> = const { Cell::new(false) };
+    }
+
+    /// Every ray of `scene`, solved with and without the fast paths: the same rays, bit for
+    /// bit (status, time, iterations, residual, points, reason).
+    fn fast_paths_agree(scene: &Scene) -> usize {
+        let tracer = Tracer::new(scene).unwrap();
+        let mut ws = Workspace::new();
+        let mut fast_rays = Vec::new();
+        for general in [false, true] {
+            GENERAL_ONLY.with(|c| c.set(general));
+            let rays: Vec<_> = (0..scene.sources().len())
+                .flat_map(|s| (0..scene.receivers().len()).map(move |r| (s, r)))
+                .flat_map(|(s, r)| (0..scene.paths().len()).map(move |p| (s, r, p)))
+                .map(|(s, r, p)| tracer.trace(s, r, p, &mut ws))
+                .collect();
+            if general {
+                for (a, b) in fast_rays.iter().zip(&rays) {
+                    let a: &crate::Ray = a;
+                    assert_eq!(a.status, b.status, "{a:?} vs {b:?}");
+                    assert_eq!(
+                        a.time.map(f64::to_bits),
+                        b.time.map(f64::to_bits),
+                        "{a:?} vs {b:?}"
+                    );
+                    assert_eq!(a.iterations, b.iterations, "{a:?} vs {b:?}");
+                    assert_eq!(a.residual.to_bits(), b.residual.to_bits(), "{a:?} vs {b:?}");
+                    assert_eq!(a.points, b.points, "{a:?} vs {b:?}");
+                    assert_eq!(a.reason, b.reason, "{a:?} vs {b:?}");
+                }
+            } else {
+                fast_rays = rays;
+            }
+        }
+        GENERAL_ONLY.with(|c| c.set(false));
+        fast_rays.len()
+    }
+
+    #[test]
+    fn fast_paths_take_the_general_steps() {
+        let demo = |spec: crate::SceneSpec| Scene::from_spec(&spec).unwrap();
+        assert_eq!(fast_paths_agree(&demo(crate::demo::air_water(300, 3))), 300);
+        assert_eq!(
+            fast_paths_agree(&demo(crate::demo::layer_stack(8, 100))),
+            100
+        );
+        assert_eq!(
+            fast_paths_agree(&demo(crate::demo::layer_stack(40, 30))),
+            30
+        );
+        assert_eq!(
+            fast_paths_agree(&demo(crate::demo::sea_floor(3000, 100))),
+            100
+        );
+        let root = env!("CARGO_MANIFEST_DIR");
+        for name in ["room2d", "seed500", "layers10"] {
+            let text =
+                std::fs::read_to_string(format!("{root}/fixtures/bench/{name}.json")).unwrap();
+            assert!(fast_paths_agree(&Scene::from_json(&text).unwrap()) > 0);
+        }
+    }
 
     #[test]
     fn thomas_solves_tridiagonal() {

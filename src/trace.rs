@@ -5,7 +5,6 @@ use std::fmt;
 use rayon::prelude::*;
 
 use crate::geom::Point;
-use crate::polyline::segment_intersection;
 use crate::problem::Geometry;
 use crate::regions::Regions;
 use crate::scene::{Scene, SceneError, StepKind};
@@ -602,6 +601,8 @@ impl<'s> Tracer<'s> {
             let line = &self.scene.interfaces()[step.interface].polyline;
             let j = ws.seg[i];
             let mut n = line.normal(j);
+            // |n|: 1 for a segment's unit normal; at a vertex, of the sum of the two.
+            let mut n_len = 1.0;
             if ws.pin[i] == Pin::Vertex {
                 let before = if j > 0 {
                     j - 1
@@ -609,17 +610,18 @@ impl<'s> Tracer<'s> {
                     line.num_segments() - 1
                 };
                 n += line.normal(before);
+                n_len = n.length();
             }
             let a = n.dot(rel[i] - rel[i + 1]);
             let b = n.dot(rel[i + 2] - rel[i + 1]);
             // A leg within 1e-10 rad of the interface runs along it: on neither side.
             let (la, lb) = (ws.eval.len[i], ws.eval.len[i + 1]);
-            let a = if a.abs() <= SIDE_MARGIN * la * n.length() {
+            let a = if a.abs() <= SIDE_MARGIN * la * n_len {
                 0.0
             } else {
                 a
             };
-            let b = if b.abs() <= SIDE_MARGIN * lb * n.length() {
+            let b = if b.abs() <= SIDE_MARGIN * lb * n_len {
                 0.0
             } else {
                 b
@@ -659,18 +661,10 @@ impl<'s> Tracer<'s> {
             if a == b {
                 continue;
             }
-            let mut hit = None;
-            self.scene.any_segment_near(a, b, |sref| {
-                let (p, q) = self.scene.segment_points(sref);
-                if let Some((t, _)) = segment_intersection(a, b, p, q) {
-                    // The leg's own end points sit on interfaces: only interior crossings count.
-                    if t > END_MARGIN && t < 1.0 - END_MARGIN {
-                        hit = Some(sref.interface as usize);
-                        return true;
-                    }
-                }
-                false
-            });
+            let hit = self
+                .scene
+                .first_crossing(a, b, END_MARGIN)
+                .map(|sref| sref.interface as usize);
             if let Some(interface) = hit {
                 return Some((leg, interface));
             }
