@@ -2,9 +2,9 @@
 
 use rayon::prelude::*;
 
-use crate::geom::Point;
-use crate::solver::Workspace;
-use crate::trace::{Ray, Reason, Start, Status, Tracer};
+use crate::geom::{Point, Vec2};
+use crate::solver::{Workspace, receiver_sensitivity};
+use crate::trace::{Ray, RaySummary, Reason, Start, Status, Tracer};
 
 /// How to run a batch.
 #[derive(Clone, Copy)]
@@ -12,7 +12,10 @@ pub struct BatchOptions<'a> {
     /// Solve receivers in a spatial order (a Morton curve over their positions) and start each
     /// ray from the previous receiver's converged solution of the same path when that receiver
     /// is near (closer than a quarter of the source–receiver distance) instead of the default
-    /// initial guess.
+    /// initial guess: that solution moved to first order in the receiver's displacement (one
+    /// tridiagonal solve with the converged Hessian, a continuation step), which typically
+    /// leaves one Newton step to do. A warm-started ray that does not converge is solved again
+    /// from the default start, so warm starts never lose a ray the default start finds.
     pub warm_start: bool,
     /// Receivers per work unit (one workspace and one warm-start chain per unit).
     pub chunk: usize,
@@ -175,12 +178,78 @@ fn morton(x: u32, y: u32) -> u64 {
     spread(x) | (spread(y) << 1)
 }
 
+/// The warm-start state of one worker: per path, the last converged solution and how it moves
+/// with the receiver ([`receiver_sensitivity`]), to predict the next receiver's solution.
+struct Warm {
+    /// Parameters of the last converged solution, per path (at the paths' parameter offsets).
+    params: Vec<f64>,
+    /// Their sensitivity `z` to the last residual.
+    z: Vec<f64>,
+    /// Per path: `∂rₖ₋₁/∂R`, or `None` (no prediction, the parameters as they are).
+    g: Vec<Option<Vec2>>,
+    /// The predicted start.
+    guess: Vec<f64>,
+    /// Scratch for the sensitivity solve.
+    unit: Vec<f64>,
+    cp: Vec<f64>,
+}
+
+impl Warm {
+    fn new(params: usize, paths: usize) -> Warm {
+        Warm {
+            params: vec![0.0; params],
+            z: vec![0.0; params],
+            g: vec![None; paths],
+            guess: vec![0.0; params],
+            unit: vec![0.0; params],
+            cp: vec![0.0; params],
+        }
+    }
+
+    /// Keeps the converged solution of path `p` in `ws` and its sensitivity.
+    fn store(&mut self, p: usize, range: std::ops::Range<usize>, ws: &Workspace) {
+        let k = range.len();
+        self.params[range.clone()].copy_from_slice(ws.parameters());
+        self.g[p] = receiver_sensitivity(
+            ws,
+            &mut self.z[range],
+            &mut self.unit[..k],
+            &mut self.cp[..k],
+        );
+    }
+
+    /// The predicted start of path `p` for a receiver `moved` from the last one: the last
+    /// solution moved by `−z (g · moved)` (a first-order continuation step).
+    fn predict(&mut self, p: usize, range: std::ops::Range<usize>, moved: Vec2) -> &[f64] {
+        let guess = &mut self.guess[range.clone()];
+        let (params, z) = (&self.params[range.clone()], &self.z[range]);
+        match self.g[p] {
+            Some(g) => {
+                let shift = g.dot(moved);
+                for ((out, &s), &zi) in guess.iter_mut().zip(params).zip(z) {
+                    *out = s - zi * shift;
+                }
+            }
+            None => guess.copy_from_slice(params),
+        }
+        guess
+    }
+}
+
+/// Whether receiver `here` is near receiver `last`: closer than a quarter of its distance to
+/// `source` (compared squared: no square roots).
+#[inline]
+fn near(here: Point, last: Point, source: Point) -> bool {
+    let (a, b) = (here - last, here - source);
+    a.dot(a) <= 0.0625 * b.dot(b)
+}
+
 /// Whether at least 90 % of consecutive receivers are near each other (closer than a quarter
 /// of the distance to `source`), so that warm starts work in the given order.
 fn coherent(receivers: &[Point], source: Point) -> bool {
     let near = receivers
         .windows(2)
-        .filter(|w| (w[1] - w[0]).length() <= 0.25 * (w[1] - source).length())
+        .filter(|w| near(w[1], w[0], source))
         .count();
     near * 10 >= receivers.len().saturating_sub(1) * 9
 }
@@ -235,9 +304,9 @@ impl Tracer<'_> {
         let mut batch = Batch {
             receivers: nr,
             paths: np,
-            records: vec![RayRecord::default(); blocks * np],
-            points: vec![Point::new(f64::NAN, f64::NAN); blocks * pts_block],
-            media: vec![NO_MEDIUM; blocks * media_block],
+            records: Vec::new(),
+            points: Vec::new(),
+            media: Vec::new(),
             point_offsets,
             media_offsets,
         };
@@ -268,12 +337,12 @@ impl Tracer<'_> {
                 || {
                     (
                         Workspace::new(),
-                        vec![0.0; params_block],
+                        Warm::new(params_block, np),
                         vec![false; np],
                         Point::new(0.0, 0.0),
                     )
                 },
-                |(ws, prev, have, last), (unit, ((rec, pts), med))| {
+                |(ws, warm, have, last), (unit, ((rec, pts), med))| {
                     have.iter_mut().for_each(|h| *h = false);
                     let first = unit * chunk;
                     let n = rec.len() / np;
@@ -286,18 +355,32 @@ impl Tracer<'_> {
                         // The previous receiver's solution is the start when that receiver is
                         // near: closer than a quarter of this receiver's distance to the source.
                         let here = scene.receivers()[receiver];
-                        let near = b > 0
-                            && (here - *last).length()
-                                <= 0.25 * (here - scene.sources()[source]).length();
+                        let near = b > 0 && near(here, *last, scene.sources()[source]);
+                        let moved = here - *last;
                         *last = here;
                         for p in 0..np {
-                            let params = &mut prev[param_offsets[p]..param_offsets[p + 1]];
+                            let (lo, hi) = (param_offsets[p], param_offsets[p + 1]);
                             let start = if opts.warm_start && have[p] && near {
-                                Start::Given(params)
+                                Start::Given(warm.predict(p, lo..hi, moved))
                             } else {
                                 Start::Default
                             };
-                            let s = self.solve_indexed_start(source, receiver, p, start, ws);
+                            let mut s = self.solve_indexed_start(source, receiver, p, start, ws);
+                            if matches!(start, Start::Given(_)) && s.status != Status::Converged {
+                                // The neighbour's path may lead elsewhere (off an end, onto a
+                                // vertex): the documented start decides.
+                                let cold = self.solve_indexed_start(
+                                    source,
+                                    receiver,
+                                    p,
+                                    Start::Default,
+                                    ws,
+                                );
+                                s = RaySummary {
+                                    iterations: s.iterations + cold.iterations,
+                                    ..cold
+                                };
+                            }
                             rec[b * np + p] = RayRecord {
                                 status: s.status,
                                 time: if s.status.has_time() {
@@ -321,8 +404,8 @@ impl Tracer<'_> {
                                 }
                             }
                             have[p] = s.status == Status::Converged;
-                            if have[p] {
-                                params.copy_from_slice(ws.parameters());
+                            if have[p] && opts.warm_start {
+                                warm.store(p, lo..hi, ws);
                             }
                         }
                     }
@@ -339,6 +422,9 @@ impl Tracer<'_> {
             return batch;
         }
         // Back from spatial order to ray order (a parallel gather of whole blocks).
+        batch.records = vec![RayRecord::default(); blocks * np];
+        batch.points = vec![Point::new(f64::NAN, f64::NAN); blocks * pts_block];
+        batch.media = vec![NO_MEDIUM; blocks * media_block];
         let src_block = |block: usize, inverse: &[usize]| (block / nr) * nr + inverse[block % nr];
         let mut inverse = vec![0; nr];
         for (pos, &r) in order.iter().enumerate() {

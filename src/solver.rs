@@ -880,6 +880,45 @@ fn fast_newton_single(
     })
 }
 
+/// How the solution in `ws` moves with the receiver, to first order: after a solve that ended
+/// with every point free, writes `z = H⁻¹ eₖ₋₁` into `z` and returns `g = ∂rₖ₋₁/∂R` (only the
+/// last residual depends on the receiver), so that moving the receiver by `ΔR` moves the
+/// parameters by `−z (g · ΔR)` (differentiating `r(s, R) = 0`). `None` when a point is held,
+/// there are no interactions, or `H` is singular there. `unit` and `cp` are scratch, `k` long.
+pub(crate) fn receiver_sensitivity(
+    ws: &Workspace,
+    z: &mut [f64],
+    unit: &mut [f64],
+    cp: &mut [f64],
+) -> Option<Vec2> {
+    let k = ws.s.len();
+    let e = &ws.eval;
+    if k == 0 || e.held > 0 || e.vanished > 0 || ws.slowness.len() != k + 1 {
+        return None;
+    }
+    let (t, u, l) = (e.tan[k - 1], e.u[k], e.len[k]);
+    if l.is_nan() || l <= 0.0 {
+        return None;
+    }
+    // r = (wₖ₋₁ uₖ₋₁ − wₖ uₖ) · t with uₖ = (R − xₖ₋₁) / ℓₖ: ∂(uₖ · t)/∂R = (t − (uₖ · t) uₖ) / ℓₖ.
+    let g = (t - u * u.dot(t)) * (-ws.slowness[k] / l);
+    if k == 1 {
+        let h = e.diag[0];
+        z[0] = 1.0 / h;
+        return (h.is_finite() && h != 0.0 && z[0].is_finite()).then_some(g);
+    }
+    unit[..k].fill(0.0);
+    unit[k - 1] = 1.0;
+    thomas(
+        &e.diag[..k],
+        &e.off[..k - 1],
+        &unit[..k],
+        &mut z[..k],
+        &mut cp[..k],
+    )
+    .then_some(g)
+}
+
 /// The outcome once the free points are stationary.
 fn finished(ws: &Workspace, iterations: usize) -> (Outcome, Solution) {
     let e = &ws.eval;
