@@ -236,6 +236,14 @@ impl Warm {
     }
 }
 
+/// `vec![value; n]`, written by the rayon pool (the first touch of a batch's hundreds of
+/// megabytes is then not a serial step before the parallel solve).
+fn filled<T: Copy + Send + Sync>(n: usize, value: T) -> Vec<T> {
+    let mut out = Vec::with_capacity(n);
+    out.par_extend(rayon::iter::repeat_n(value, n));
+    out
+}
+
 /// Whether receiver `here` is near receiver `last`: closer than a quarter of its distance to
 /// `source` (compared squared: no square roots).
 #[inline]
@@ -324,9 +332,9 @@ impl Tracer<'_> {
         let chunk = opts.chunk.max(1);
 
         // Solve in (source, spatial position) block order; each unit is `chunk` blocks.
-        let mut records = vec![RayRecord::default(); blocks * np];
-        let mut points = vec![Point::new(f64::NAN, f64::NAN); blocks * pts_block];
-        let mut media = vec![NO_MEDIUM; blocks * media_block];
+        let mut records = filled(blocks * np, RayRecord::default());
+        let mut points = filled(blocks * pts_block, Point::new(f64::NAN, f64::NAN));
+        let mut media = filled(blocks * media_block, NO_MEDIUM);
         let (po, mo) = (&batch.point_offsets, &batch.media_offsets);
         records
             .par_chunks_mut(chunk * np)
@@ -422,9 +430,9 @@ impl Tracer<'_> {
             return batch;
         }
         // Back from spatial order to ray order (a parallel gather of whole blocks).
-        batch.records = vec![RayRecord::default(); blocks * np];
-        batch.points = vec![Point::new(f64::NAN, f64::NAN); blocks * pts_block];
-        batch.media = vec![NO_MEDIUM; blocks * media_block];
+        batch.records = filled(blocks * np, RayRecord::default());
+        batch.points = filled(blocks * pts_block, Point::new(f64::NAN, f64::NAN));
+        batch.media = filled(blocks * media_block, NO_MEDIUM);
         let src_block = |block: usize, inverse: &[usize]| (block / nr) * nr + inverse[block % nr];
         let mut inverse = vec![0; nr];
         for (pos, &r) in order.iter().enumerate() {
