@@ -437,11 +437,21 @@ impl Polyline {
     /// The parameters where segment `a–b` crosses or touches this polyline, reported to `f`
     /// as `(parameter, fraction along a–b)`.
     pub fn crossings(&self, a: Point, b: Point, mut f: impl FnMut(f64, f64)) {
+        self.crossings_with_segment(a, b, |s, t, _| f(s, t));
+    }
+
+    /// [`crossings`](Self::crossings), also reporting the segment of each crossing.
+    pub(crate) fn crossings_with_segment(
+        &self,
+        a: Point,
+        b: Point,
+        mut f: impl FnMut(f64, f64, usize),
+    ) {
         self.bvh.any_near_segment(a, b, |j| {
             let j = j as usize;
             let (p, q) = self.segment(j);
             if let Some((t, u)) = segment_intersection(a, b, p, q) {
-                f(self.cum[j] + u * self.segment_length(j), t);
+                f(self.cum[j] + u * self.segment_length(j), t, j);
             }
             false
         });

@@ -220,9 +220,12 @@ impl<'a> Geometry<'a> {
         // Leg 0, then per point i: leg i + 1 and everything of point i.
         let p0 = frames[0].offset(s[0]);
         rel[1] = p0;
-        let l = leg_length(p0 - Vec2::default());
-        let il = inv(l);
-        let ua = (p0 - Vec2::default()) * il;
+        let d0 = p0 - Vec2::default();
+        let l2 = d0.x * d0.x + d0.y * d0.y;
+        let plain = (f64::MIN_POSITIVE..1e300).contains(&l2);
+        let l = l2.sqrt();
+        let il = 1.0 / l;
+        let ua = d0 * il;
         (len[0], u[0]) = (l, ua);
         let mut acc = Sweep {
             p: p0,
@@ -231,6 +234,7 @@ impl<'a> Geometry<'a> {
             time: 0.0 + w[0] * l,
             total: 0.0 + l,
             shortest: l,
+            plain,
             phi: 0.0,
             rmax: 0.0,
             prev_c: 0.0,
@@ -252,7 +256,7 @@ impl<'a> Geometry<'a> {
         (len[k], u[k], r[k - 1], diag[k - 1], cp[k - 1], y[k - 1]) = (l, ub, ri, h, c, yi);
 
         let vanish = 1e-12 * acc.total + 8.0 * f64::EPSILON * self.coord();
-        if acc.shortest <= vanish || acc.shortest.is_nan() {
+        if !acc.plain || acc.shortest <= vanish {
             // Points next to a vanished leg count differently in the merit.
             self.evaluate_framed(s, frames, e, curvature);
             e.factored = false;
@@ -443,9 +447,12 @@ fn fused_point(
     acc: &mut Sweep,
 ) -> (f64, Vec2, f64, f64, f64, f64, f64) {
     let d = q - acc.p;
-    let l = leg_length(d);
-    let il_b = inv(l);
-    // `inv` gives 0 for a zero-length leg, whose `d` is zero: `u` is then zero too.
+    // `leg_length` and `inv` without their branches: a square that is not a normal number
+    // below 1e300 sends the whole evaluation to `evaluate_framed` (see the caller).
+    let l2 = d.x * d.x + d.y * d.y;
+    acc.plain &= (f64::MIN_POSITIVE..1e300).contains(&l2);
+    let l = l2.sqrt();
+    let il_b = 1.0 / l;
     let ub = d * il_b;
     acc.time += w[i + 1] * l;
     acc.total += l;
@@ -488,6 +495,9 @@ struct Sweep {
     time: f64,
     total: f64,
     shortest: f64,
+    /// Whether every leg's squared length was a normal number below 1e300 (so that the plain
+    /// square root is `leg_length`, and the leg has not vanished to zero).
+    plain: bool,
     phi: f64,
     rmax: f64,
     /// Thomas forward sweep: previous modified super-diagonal and right-hand side, and the

@@ -727,22 +727,25 @@ fn initial_guess(
         let line = &scene.interfaces()[step.interface].polyline;
         let frac = (i + 1) as f64 / (k + 1) as f64;
         let target = source.lerp(receiver, frac);
-        let mut best: Option<(f64, f64)> = None;
+        let mut best: Option<(f64, f64, usize)> = None;
         if step.kind == StepKind::Refract {
-            line.crossings(source, receiver, |s, t| {
+            line.crossings_with_segment(source, receiver, |s, t, j| {
                 let d = (t - frac).abs();
-                if best.is_none_or(|(_, bd)| d < bd) {
-                    best = Some((s, d));
+                if best.is_none_or(|(_, bd, _)| d < bd) {
+                    best = Some((s, d, j));
                 }
             });
         }
-        let s = match best {
-            Some((s, _)) => s,
-            None => line.nearest(target).0,
+        let (s, hint) = match best {
+            Some((s, _, j)) => (s, j),
+            None => {
+                let (s, j, _) = line.nearest(target);
+                (s, j)
+            }
         };
         let s = line.wrap(s);
         ws.s[i] = s;
-        ws.seg[i] = line.segment_at(s);
+        ws.seg[i] = line.segment_at_hint(s, hint);
         ws.pin[i] = Pin::Free;
     }
 }

@@ -18,8 +18,20 @@ fn load(name: &str) -> (String, Value) {
 /// Solves every ray of benchmark `name` and compares it with the reference; returns the
 /// largest relative time error and point distance over converged rays.
 fn check(name: &str) -> (f64, f64) {
+    check_at(name, None, 1e-9)
+}
+
+/// [`check`] with the scene's tolerance replaced by `tolerance` (when given), and point
+/// distances bounded by `max_point`.
+fn check_at(name: &str, tolerance: Option<f64>, max_point: f64) -> (f64, f64) {
     let (text, reference) = load(name);
-    let sc = eigenray::Scene::from_json(&text).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let mut sc = eigenray::Scene::from_json(&text).unwrap_or_else(|e| panic!("{name}: {e}"));
+    if let Some(tolerance) = tolerance {
+        sc.set_solver(eigenray::SolverOptions {
+            tolerance,
+            ..sc.solver()
+        });
+    }
     let rays = trace_all(&sc);
     let status = reference["status"].as_array().expect("status");
     let times = reference["time"].as_array().expect("time");
@@ -73,7 +85,7 @@ fn check(name: &str) -> (f64, f64) {
         rays.len()
     );
     assert!(max_t <= 1e-12, "{name}: max relative time error {max_t:e}");
-    assert!(max_p <= 1e-9, "{name}: max point distance {max_p:e}");
+    assert!(max_p <= max_point, "{name}: max point distance {max_p:e}");
     (max_t, max_p)
 }
 
@@ -90,4 +102,16 @@ fn layers10() {
 #[test]
 fn room2d() {
     check("room2d");
+}
+
+/// The travel time is stationary: its error is of second order in the points' error, so a
+/// residual tolerance of 1e-6 (sines of angles equal to 1e-6) already gives times exact to
+/// 1e-12 on the refraction scenes — the setting the speed figures "at ≤ 1e-12 relative error"
+/// use. The room, with its grazing reflections, needs 1e-8.
+#[test]
+fn loose_tolerances_give_times_to_1e_12() {
+    for (name, tolerance) in [("seed500", 1e-6), ("layers10", 1e-6), ("room2d", 1e-8)] {
+        let (max_t, _) = check_at(name, Some(tolerance), 1e-5);
+        assert!(max_t <= 1e-12, "{name}: {max_t:e}");
+    }
 }
