@@ -205,9 +205,12 @@ pub fn ray_index(
 /// Solves the rays of a scene. Holds the region lookup when the scene needs one.
 ///
 /// Initial guess (documented, deterministic): interaction `i` of `k` starts at the point of
-/// its interface nearest to `S + (i + 1)/(k + 1) · (R − S)` on the straight line from source
-/// to receiver; a refraction whose interface that line crosses starts at the crossing nearest
-/// that point instead.
+/// its interface nearest to the target `S + (i + 1)/(k + 1) · (R − S)` on the straight line
+/// from source to receiver; a refraction whose interface that line crosses starts at the
+/// crossing nearest the target instead. On a polyline of more than 1,024 segments (a
+/// digitised sea floor, a measured profile) the nearest point is replaced by the crossing,
+/// nearest the target, of the line through the target perpendicular to `R − S`, when there is
+/// one: an `O(log M)` query where the nearest-point search grows about like `√M`.
 pub struct Tracer<'s> {
     scene: &'s Scene,
     regions: Option<Regions>,
@@ -714,6 +717,40 @@ fn given_start(scene: &Scene, steps: &[crate::scene::Step], params: &[f64], ws: 
     }
 }
 
+/// Polylines with more segments than this start a reflection at the crossing of the
+/// perpendicular through the target point (see [`Tracer`]) rather than at the nearest point.
+const LONG_POLYLINE: usize = 1024;
+
+/// Where the line through `target` perpendicular to `source → receiver` crosses `line`,
+/// nearest to `target`: `(parameter, distance, segment)`. An `O(log M)` query of the
+/// polyline's BVH (a line crosses a gently curved polyline a few times), where the
+/// nearest-point query from a target far from a long digitised curve opens about `√M` leaves.
+fn perpendicular_crossing(
+    line: &crate::polyline::Polyline,
+    source: Point,
+    receiver: Point,
+    target: Point,
+) -> Option<(f64, f64, usize)> {
+    let d = receiver - source;
+    let len = d.length();
+    if !(len > 0.0 && len.is_finite()) {
+        return None;
+    }
+    let n = d.perp() * (1.0 / len);
+    let b = line.bbox();
+    let reach = (b.max.x - target.x).abs().max((b.min.x - target.x).abs())
+        + (b.max.y - target.y).abs().max((b.min.y - target.y).abs());
+    let (a, e) = (target - n * reach, target + n * reach);
+    let mut best: Option<(f64, f64, usize)> = None;
+    line.crossings_with_segment(a, e, |s, t, j| {
+        let dist = (t - 0.5).abs() * 2.0 * reach;
+        if best.is_none_or(|(_, bd, _)| dist < bd) {
+            best = Some((s, dist, j));
+        }
+    });
+    best
+}
+
 /// The documented initial guess (see [`Tracer`]).
 fn initial_guess(
     scene: &Scene,
@@ -735,6 +772,9 @@ fn initial_guess(
                     best = Some((s, d, j));
                 }
             });
+        }
+        if best.is_none() && line.num_segments() > LONG_POLYLINE {
+            best = perpendicular_crossing(line, source, receiver, target);
         }
         let (s, hint) = match best {
             Some((s, _, j)) => (s, j),
