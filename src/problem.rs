@@ -92,7 +92,7 @@ pub(crate) struct Eval {
     /// Number of free points next to a vanished leg.
     pub vanished: usize,
     /// Forward sweep of the Thomas algorithm on `H x = r` (see
-    /// [`Geometry::evaluate_fused`]): modified super-diagonal `cp` and right-hand side `y`, `k`
+    /// [`Geometry::evaluate_passes`]): modified super-diagonal `cp` and right-hand side `y`, `k`
     /// each, valid when `factored`.
     pub cp: Vec<f64>,
     /// See `cp`.
@@ -199,16 +199,24 @@ impl<'a> Geometry<'a> {
         );
     }
 
-    /// [`evaluate_framed`](Self::evaluate_framed) in one pass over the points (`k ≥ 1`), with
-    /// the forward sweep of the Thomas algorithm on `H x = r` folded in: leaves `e.cp` and
-    /// `e.y` (see [`Eval::factored`]) for the back substitution. The same numbers as
-    /// `evaluate_framed` followed by `thomas`, bit for bit, except that it leaves `e.tan` (the
-    /// frames' tangents: the caller stores them once) and `e.inv_len` (scratch) alone. When a
-    /// leg has vanished it falls back to `evaluate_framed` (and `e.factored` is `false`).
-    pub fn evaluate_fused(&self, s: &[f64], frames: &[Frame], e: &mut Eval, curvature: bool) {
+    /// [`evaluate_framed`](Self::evaluate_framed) for `k ≥ 1` with the forward sweep of the
+    /// Thomas algorithm on `H x = r` folded in: leaves `e.cp` and `e.y` (see [`Eval::factored`])
+    /// for the back substitution. The same numbers as `evaluate_framed` followed by `thomas`,
+    /// bit for bit, except that it leaves `e.tan` (the frames' tangents: the caller stores them
+    /// once) alone. It works in passes (positions; legs, with plain square roots and
+    /// reciprocals; sums; per-point terms; merit and sweep), each with few live values: more
+    /// instructions than one fused pass, but less time. When a leg has vanished, or a squared
+    /// leg length is not a normal number below 1e300, it falls back to `evaluate_framed` (and
+    /// `e.factored` is `false`).
+    pub fn evaluate_passes(&self, s: &[f64], frames: &[Frame], e: &mut Eval, curvature: bool) {
         let k = self.k();
         let (s, frames, w) = (&s[..k], &frames[..k], &self.slowness[..k + 1]);
-        let (rel, u, len) = (&mut e.rel[..k + 2], &mut e.u[..k + 1], &mut e.len[..k + 1]);
+        let (rel, u, len, inv_len) = (
+            &mut e.rel[..k + 2],
+            &mut e.u[..k + 1],
+            &mut e.len[..k + 1],
+            &mut e.inv_len[..k + 1],
+        );
         let (r, diag, off, cp, y) = (
             &mut e.r[..k],
             &mut e.diag[..k],
@@ -217,58 +225,77 @@ impl<'a> Geometry<'a> {
             &mut e.y[..k],
         );
         rel[0] = Vec2::default();
-        // Leg 0, then per point i: leg i + 1 and everything of point i.
-        let p0 = frames[0].offset(s[0]);
-        rel[1] = p0;
-        let d0 = p0 - Vec2::default();
-        let l2 = d0.x * d0.x + d0.y * d0.y;
-        let plain = (f64::MIN_POSITIVE..1e300).contains(&l2);
-        let l = l2.sqrt();
-        let il = 1.0 / l;
-        let ua = d0 * il;
-        (len[0], u[0]) = (l, ua);
-        let mut acc = Sweep {
-            p: p0,
-            ua,
-            il,
-            time: 0.0 + w[0] * l,
-            total: 0.0 + l,
-            shortest: l,
-            plain,
-            phi: 0.0,
-            rmax: 0.0,
-            prev_c: 0.0,
-            prev_y: 0.0,
-            sub: 0.0,
-            ok: true,
-        };
-        for i in 0..k - 1 {
-            let f = &frames[i + 1];
-            let q = f.offset(s[i + 1]);
-            rel[i + 2] = q;
-            let (l, ub, ri, h, o, c, yi) =
-                fused_point(w, frames, curvature, i, q, Some(f.t), &mut acc);
-            (len[i + 1], u[i + 1], r[i], diag[i], off[i], cp[i], y[i]) = (l, ub, ri, h, o, c, yi);
+        for i in 0..k {
+            rel[i + 1] = frames[i].offset(s[i]);
         }
-        let q = self.receiver - self.source;
-        rel[k + 1] = q;
-        let (l, ub, ri, h, _, c, yi) = fused_point(w, frames, curvature, k - 1, q, None, &mut acc);
-        (len[k], u[k], r[k - 1], diag[k - 1], cp[k - 1], y[k - 1]) = (l, ub, ri, h, c, yi);
-
-        let vanish = 1e-12 * acc.total + 8.0 * f64::EPSILON * self.coord();
-        if !acc.plain || acc.shortest <= vanish {
+        rel[k + 1] = self.receiver - self.source;
+        // Legs: `leg_length` and `inv` without their branches (checked below).
+        let mut plain = true;
+        for j in 0..=k {
+            let d = rel[j + 1] - rel[j];
+            let l2 = d.x * d.x + d.y * d.y;
+            plain &= (f64::MIN_POSITIVE..1e300).contains(&l2);
+            let l = l2.sqrt();
+            let il = 1.0 / l;
+            len[j] = l;
+            inv_len[j] = il;
+            u[j] = d * il;
+        }
+        let (mut time, mut total, mut shortest) = (0.0, 0.0, f64::INFINITY);
+        for j in 0..=k {
+            time += w[j] * len[j];
+            total += len[j];
+            shortest = min_num(shortest, len[j]);
+        }
+        let vanish = 1e-12 * total + 8.0 * f64::EPSILON * self.coord();
+        if !plain || shortest <= vanish {
             // Points next to a vanished leg count differently in the merit.
             self.evaluate_framed(s, frames, e, curvature);
             e.factored = false;
             return;
         }
-        e.time = acc.time;
-        e.phi = acc.phi;
-        e.rmax = acc.rmax;
+        // Per point: residual, Hessian row.
+        for i in 0..k {
+            let t = frames[i].t;
+            let (ua, ub) = (u[i], u[i + 1]);
+            r[i] = (ua * w[i] - ub * w[i + 1]).dot(t);
+            let ca = ua.cross(t);
+            let cb = ub.cross(t);
+            let mut h = w[i] * ca * ca * inv_len[i] + w[i + 1] * cb * cb * inv_len[i + 1];
+            if curvature && frames[i].kappa != 0.0 {
+                h += frames[i].kappa * (ua * w[i] - ub * w[i + 1]).dot(t.perp());
+            }
+            diag[i] = h;
+            if i + 1 < k {
+                off[i] = -w[i + 1] * cb * ub.cross(frames[i + 1].t) * inv_len[i + 1];
+            }
+        }
+        // Merit, and the forward sweep of `thomas`.
+        let (mut phi, mut rmax) = (0.0, 0.0f64);
+        let (mut prev_c, mut prev_y, mut sub) = (0.0, 0.0, 0.0);
+        let mut ok = true;
+        for i in 0..k {
+            let rel_r = r[i] / (w[i] + w[i + 1]);
+            rmax = max_num(rmax, rel_r.abs());
+            phi += rel_r * rel_r;
+            let (h, o) = (diag[i], if i + 1 < k { off[i] } else { 0.0 });
+            let den = h - sub * prev_c;
+            let scale = h.abs() + sub.abs() + o.abs();
+            ok &= den.is_finite() & (den.abs() > 1e-14 * scale);
+            let inv_den = 1.0 / den;
+            let c = o * inv_den;
+            let yi = (r[i] - sub * prev_y) * inv_den;
+            cp[i] = c;
+            y[i] = yi;
+            (prev_c, prev_y, sub) = (c, yi, o);
+        }
+        e.time = time;
+        e.phi = phi;
+        e.rmax = rmax;
         e.held = 0;
         e.vanished = 0;
         e.vanish = vanish;
-        e.factored = acc.ok;
+        e.factored = ok;
     }
 
     /// The largest coordinate of the end points (the scale of their round-off).
@@ -426,86 +453,6 @@ impl<'a> Geometry<'a> {
             }
         }
     }
-}
-
-/// One step of [`Geometry::evaluate_fused`]: point `i`, given the next point `q` (minus the
-/// source) and its tangent (`None` for the receiver). Returns the leg after the point (length,
-/// direction), its residual, Hessian diagonal and off-diagonal, and its row of the forward
-/// sweep.
-#[inline(always)]
-#[allow(
-    clippy::type_complexity,
-    reason = "one tuple of the values the caller stores"
-)]
-fn fused_point(
-    w: &[f64],
-    frames: &[Frame],
-    curvature: bool,
-    i: usize,
-    q: Vec2,
-    t_next: Option<Vec2>,
-    acc: &mut Sweep,
-) -> (f64, Vec2, f64, f64, f64, f64, f64) {
-    let d = q - acc.p;
-    // `leg_length` and `inv` without their branches: a square that is not a normal number
-    // below 1e300 sends the whole evaluation to `evaluate_framed` (see the caller).
-    let l2 = d.x * d.x + d.y * d.y;
-    acc.plain &= (f64::MIN_POSITIVE..1e300).contains(&l2);
-    let l = l2.sqrt();
-    let il_b = 1.0 / l;
-    let ub = d * il_b;
-    acc.time += w[i + 1] * l;
-    acc.total += l;
-    acc.shortest = min_num(acc.shortest, l);
-    let ua = acc.ua;
-    let t = frames[i].t;
-    let ri = (ua * w[i] - ub * w[i + 1]).dot(t);
-    let rel_r = ri / (w[i] + w[i + 1]);
-    acc.rmax = max_num(acc.rmax, rel_r.abs());
-    acc.phi += rel_r * rel_r;
-    let ca = ua.cross(t);
-    let cb = ub.cross(t);
-    let mut h = w[i] * ca * ca * acc.il + w[i + 1] * cb * cb * il_b;
-    if curvature && frames[i].kappa != 0.0 {
-        h += frames[i].kappa * (ua * w[i] - ub * w[i + 1]).dot(t.perp());
-    }
-    let o = match t_next {
-        Some(t_next) => -w[i + 1] * cb * ub.cross(t_next) * il_b,
-        None => 0.0,
-    };
-    // Forward sweep of `thomas`, row i.
-    let den = h - acc.sub * acc.prev_c;
-    let scale = h.abs() + acc.sub.abs() + o.abs();
-    acc.ok &= den.is_finite() & (den.abs() > 1e-14 * scale);
-    let inv_den = 1.0 / den;
-    let c = o * inv_den;
-    let yi = (ri - acc.sub * acc.prev_y) * inv_den;
-    (acc.prev_c, acc.prev_y, acc.sub) = (c, yi, o);
-    (acc.p, acc.ua, acc.il) = (q, ub, il_b);
-    (l, ub, ri, h, o, c, yi)
-}
-
-/// The running state of [`Geometry::evaluate_fused`].
-struct Sweep {
-    /// The current point minus the source.
-    p: Vec2,
-    /// Direction and reciprocal length of the leg arriving at it.
-    ua: Vec2,
-    il: f64,
-    time: f64,
-    total: f64,
-    shortest: f64,
-    /// Whether every leg's squared length was a normal number below 1e300 (so that the plain
-    /// square root is `leg_length`, and the leg has not vanished to zero).
-    plain: bool,
-    phi: f64,
-    rmax: f64,
-    /// Thomas forward sweep: previous modified super-diagonal and right-hand side, and the
-    /// previous row's super-diagonal (this row's sub-diagonal).
-    prev_c: f64,
-    prev_y: f64,
-    sub: f64,
-    ok: bool,
 }
 
 /// [`Eval`] of a one-interaction path, in registers (see [`Geometry::evaluate_single`]).

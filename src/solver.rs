@@ -738,14 +738,14 @@ fn fast_newton(
     ws.frames.clear();
     ws.frames
         .extend((0..k).map(|i| Frame::new(g.line(i), ws.seg[i], g.source)));
-    // `evaluate_fused` leaves the tangents to us: they are the frames'.
+    // `evaluate_passes` leaves the tangents to us: they are the frames'.
     for (i, f) in ws.frames.iter().enumerate() {
         ws.eval.tan[i] = f.t;
         ws.eval_try.tan[i] = f.t;
     }
     loop {
         if !fast.evaluated {
-            g.evaluate_fused(&ws.s, &ws.frames, &mut ws.eval, fast.curvature);
+            g.evaluate_passes(&ws.s, &ws.frames, &mut ws.eval, fast.curvature);
             fast.evaluated = true;
         }
         let e = &ws.eval;
@@ -803,7 +803,7 @@ fn fast_newton(
             }
         }
         let phi0 = e.phi;
-        g.evaluate_fused(&ws.s_try, &ws.frames, &mut ws.eval_try, false);
+        g.evaluate_passes(&ws.s_try, &ws.frames, &mut ws.eval_try, false);
         let phi = ws.eval_try.phi;
         if !(phi.is_finite() && phi <= (1.0 - 1e-4) * phi0) {
             // The general loop backtracks from here (it evaluates this trial again).
