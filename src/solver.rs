@@ -56,8 +56,9 @@ pub struct Workspace {
     s_try: Vec<f64>,
     seg_try: Vec<usize>,
     pin_try: Vec<Pin>,
-    pub(crate) eval: Eval,
-    eval_try: Eval,
+    // Boxed, so that accepting a trial swaps two pointers, not two dozen vectors.
+    pub(crate) eval: Box<Eval>,
+    eval_try: Box<Eval>,
     delta: Vec<f64>,
     rhs: Vec<f64>,
     diag: Vec<f64>,
