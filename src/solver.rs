@@ -16,7 +16,10 @@
 //!
 //! Stopping rule: every free point has `|rᵢ| ≤ tol · (wᵢ + wᵢ₊₁)` (a relative, dimensionless
 //! residual: the difference of the sines in Snell's law), or the full Newton step is below
-//! round-off (`|δᵢ| ≤ 4ε (|sᵢ| + ℓᵢ + ℓᵢ₊₁)`: no representable parameter is closer).
+//! round-off (`|δᵢ| ≤ 4ε (|sᵢ| + ℓᵢ + ℓᵢ₊₁)`: no representable parameter is closer), or the
+//! line search has stalled with every residual within what round-off of its parameter produces
+//! (`|rᵢ| ≤ tol (wᵢ + wᵢ₊₁) + 8ε (|sᵢ| |Hᵢᵢ| + wᵢ + wᵢ₊₁)`, see `at_round_off_floor`: far from the
+//! origin or along grazing legs the tolerance itself may be out of reach).
 
 use crate::geom::{Point, Vec2};
 pub(crate) use crate::problem::Pin;
@@ -360,6 +363,9 @@ pub(crate) fn solve(
     // Releases and pins do not move the others; bound them so that a ring of releases and
     // re-pins cannot spin for ever between counted iterations.
     let mut free_moves = 0;
+    // Set when the last step was the non-monotone fallback (no trial lowered the merit): the
+    // iteration has stalled, perhaps at the round-off floor of the residual.
+    let mut stalled = false;
     loop {
         if !evaluated {
             g.evaluate(&ws.s, &ws.seg, &ws.pin, &mut ws.eval, true, curvature);
@@ -519,7 +525,7 @@ pub(crate) fn solve(
         if tiny {
             return finished(ws, iterations);
         }
-        if residual <= tol {
+        if residual <= tol || (stalled && at_round_off_floor(e, &ws.s, &ws.pin, w, tol)) {
             // Stationary to tolerance. Where T is flat along the solution (grazing legs, a
             // nearly singular H) the residual allows a point error of about tol / λmin; stop
             // only if the Newton correction is small against the legs, else take it (once
@@ -670,6 +676,7 @@ pub(crate) fn solve(
             near_kink = true;
             continue;
         }
+        stalled = false;
         if accepted {
             // The trial was evaluated with the curvature flag of the next iteration: reuse it.
             std::mem::swap(&mut ws.eval, &mut ws.eval_try);
@@ -681,6 +688,7 @@ pub(crate) fn solve(
                 continue;
             }
             // Non-monotone fallback: take the best trial so that the iteration moves on.
+            stalled = true;
             let Some((a, _)) = best else {
                 let e = &ws.eval;
                 return (
@@ -918,6 +926,20 @@ pub(crate) fn receiver_sensitivity(
         &mut cp[..k],
     )
     .then_some(g)
+}
+
+/// Whether every free point's residual is within the tolerance plus what round-off of its
+/// parameter alone produces: `|rᵢ| ≤ tol (wᵢ + wᵢ₊₁) + 8ε (|sᵢ| |Hᵢᵢ| + wᵢ + wᵢ₊₁)` (a change of
+/// `sᵢ` by a few units in the last place moves `rᵢ` by `|Hᵢᵢ|` times that). Far from the origin,
+/// or where `H` is nearly singular (grazing legs), no representable parameter may have a
+/// residual below the tolerance; there the iteration stops as it would at the tolerance.
+fn at_round_off_floor(e: &Eval, s: &[f64], pin: &[Pin], w: &[f64], tol: f64) -> bool {
+    (0..s.len()).all(|i| {
+        let scale = w[i] + w[i + 1];
+        pin[i] != Pin::Free
+            || e.r[i].abs()
+                <= tol * scale + 8.0 * f64::EPSILON * (s[i].abs() * e.diag[i].abs() + scale)
+    })
 }
 
 /// The outcome once the free points are stationary.

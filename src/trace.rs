@@ -207,7 +207,11 @@ pub fn ray_index(
 /// Initial guess (documented, deterministic): interaction `i` of `k` starts at the point of
 /// its interface nearest to the target `S + (i + 1)/(k + 1) · (R − S)` on the straight line
 /// from source to receiver; a refraction whose interface that line crosses starts at the
-/// crossing nearest the target instead. On a polyline of more than 1,024 segments (a
+/// crossing nearest the target instead; when every step is such a refraction, each point
+/// then moves along its interface to where a paraxial ray would
+/// cross: the crossings' fractions `tᵢ` of the way from `S` to `R` become lateral fractions
+/// `τᵢ = Σ_{j≤i} Δtⱼ/wⱼ / Σⱼ Δtⱼ/wⱼ` (`wⱼ` the legs' slownesses), the solution itself for small
+/// angles through parallel flat layers. On a polyline of more than 1,024 segments (a
 /// digitised sea floor, a measured profile) the nearest point is replaced by the crossing,
 /// nearest the target, of the line through the target perpendicular to `R − S`, when there is
 /// one: an `O(log M)` query where the nearest-point search grows about like `√M`.
@@ -424,6 +428,9 @@ impl<'s> Tracer<'s> {
         }
         ws.slowness
             .extend(ws.media.iter().map(|&m| scene.media()[m].slowness));
+        if !matches!(start, Start::Given(_)) {
+            paraxial_guess(scene, &spec.steps, source, receiver, ws);
+        }
         if let Start::Compare(guess) = start {
             let slowness = std::mem::take(&mut ws.slowness);
             let g = Geometry {
@@ -751,6 +758,48 @@ fn perpendicular_crossing(
     best
 }
 
+/// Refines the straight-line guess of a path of refractions only (every step crossed by the
+/// line `S → R`, at increasing fractions `tᵢ`, kept in `ws.s_alt`): each point slides along its
+/// segment to where a paraxial ray would cross (exact for small angles through parallel flat
+/// layers): the lateral fraction `τᵢ = Σ_{j≤i} Δtⱼ/wⱼ / Σ Δtⱼ/wⱼ` instead of `tᵢ`.
+fn paraxial_guess(
+    scene: &Scene,
+    steps: &[crate::scene::Step],
+    source: Point,
+    receiver: Point,
+    ws: &mut Workspace,
+) {
+    let k = steps.len();
+    let w = &ws.slowness;
+    if k == 0 || w.len() != k + 1 {
+        return;
+    }
+    let t = &ws.s_alt[..k];
+    let mut prev = 0.0;
+    let mut sum = 0.0;
+    for i in 0..=k {
+        let ti = if i < k { t[i] } else { 1.0 };
+        if !(ti > prev && ti <= 1.0) {
+            return;
+        }
+        sum += (ti - prev) / w[i];
+        prev = ti;
+    }
+    let d = receiver - source;
+    let mut acc = 0.0;
+    prev = 0.0;
+    for (i, step) in steps.iter().enumerate() {
+        acc += (t[i] - prev) / w[i];
+        prev = t[i];
+        let tau = acc / sum;
+        let line = &scene.interfaces()[step.interface].polyline;
+        let lateral = d.dot(line.tangent(ws.seg[i]));
+        let s = line.clamp_param(ws.s[i] + (tau - t[i]) * lateral);
+        ws.seg[i] = line.segment_at_hint(s, ws.seg[i]);
+        ws.s[i] = s;
+    }
+}
+
 /// The documented initial guess (see [`Tracer`]).
 fn initial_guess(
     scene: &Scene,
@@ -765,17 +814,21 @@ fn initial_guess(
         let frac = (i + 1) as f64 / (k + 1) as f64;
         let target = source.lerp(receiver, frac);
         let mut best: Option<(f64, f64, usize)> = None;
+        let mut crossing_t = f64::NAN;
         if step.kind == StepKind::Refract {
             line.crossings_with_segment(source, receiver, |s, t, j| {
                 let d = (t - frac).abs();
                 if best.is_none_or(|(_, bd, _)| d < bd) {
                     best = Some((s, d, j));
+                    crossing_t = t;
                 }
             });
         }
         if best.is_none() && line.num_segments() > LONG_POLYLINE {
             best = perpendicular_crossing(line, source, receiver, target);
         }
+        // The crossing's fraction along S → R, for `paraxial_guess` (NaN: no crossing).
+        ws.s_alt[i] = crossing_t;
         let (s, hint) = match best {
             Some((s, _, j)) => (s, j),
             None => {
