@@ -278,13 +278,9 @@ impl<'a> Geometry<'a> {
             let rel_r = r[i] / (w[i] + w[i + 1]);
             rmax = max_num(rmax, rel_r.abs());
             phi += rel_r * rel_r;
-            let (h, o) = (diag[i], if i + 1 < k { off[i] } else { 0.0 });
-            let den = h - sub * prev_c;
-            let scale = h.abs() + sub.abs() + o.abs();
-            ok &= den.is_finite() & (den.abs() > 1e-14 * scale);
-            let inv_den = 1.0 / den;
-            let c = o * inv_den;
-            let yi = (r[i] - sub * prev_y) * inv_den;
+            let o = if i + 1 < k { off[i] } else { 0.0 };
+            let (c, yi, pivot_ok) = sweep_row(diag[i], sub, o, r[i], prev_c, prev_y);
+            ok &= pivot_ok;
             cp[i] = c;
             y[i] = yi;
             (prev_c, prev_y, sub) = (c, yi, o);
@@ -555,6 +551,25 @@ impl Frame {
             self.b - self.t * from_end
         }
     }
+}
+
+/// One row of the Thomas forward sweep: row `(sub, diag, sup)` with right-hand side `rhs`,
+/// after a row that left `prev_c`, `prev_y`. Returns the row's modified super-diagonal and
+/// right-hand side, and whether its pivot is finite and not tiny against the row's scale.
+#[inline(always)]
+pub(crate) fn sweep_row(
+    diag: f64,
+    sub: f64,
+    sup: f64,
+    rhs: f64,
+    prev_c: f64,
+    prev_y: f64,
+) -> (f64, f64, bool) {
+    let den = diag - sub * prev_c;
+    let scale = diag.abs() + sub.abs() + sup.abs();
+    let ok = den.is_finite() & (den.abs() > 1e-14 * scale);
+    let inv = 1.0 / den;
+    (sup * inv, (rhs - sub * prev_y) * inv, ok)
 }
 
 /// Whether a leg next to point `i` has vanished (is not longer than `vanish`, see

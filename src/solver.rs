@@ -23,7 +23,7 @@
 
 use crate::geom::{Point, Vec2};
 pub(crate) use crate::problem::Pin;
-use crate::problem::{Eval, Frame, Geometry, leg_vanished};
+use crate::problem::{Eval, Frame, Geometry, leg_vanished, sweep_row};
 
 /// How the iteration ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -139,13 +139,9 @@ pub(crate) fn thomas(diag: &[f64], off: &[f64], d: &[f64], x: &mut [f64], cp: &m
     let mut ok = true;
     for i in 0..n {
         let sup = if i + 1 < n { off[i] } else { 0.0 };
-        let den = diag[i] - sub * prev_c;
-        let scale = diag[i].abs() + sub.abs() + sup.abs();
+        let (c, xi, pivot_ok) = sweep_row(diag[i], sub, sup, d[i], prev_c, prev_x);
         // Non-short-circuiting: one branch after the loop instead of one per row.
-        ok &= den.is_finite() & (den.abs() > 1e-14 * scale);
-        let inv = 1.0 / den;
-        let c = sup * inv;
-        let xi = (d[i] - sub * prev_x) * inv;
+        ok &= pivot_ok;
         cp[i] = c;
         x[i] = xi;
         (prev_c, prev_x, sub) = (c, xi, sup);

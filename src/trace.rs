@@ -759,8 +759,8 @@ fn perpendicular_crossing(
 }
 
 /// Refines the straight-line guess of a path of refractions only (every step crossed by the
-/// line `S → R`, at increasing fractions `tᵢ`, kept in `ws.s_alt`): each point slides along its
-/// segment to where a paraxial ray would cross (exact for small angles through parallel flat
+/// line `S → R`, at increasing fractions `tᵢ`, kept in `ws.s_alt`): each point moves along its
+/// interface to where a paraxial ray would cross (exact for small angles through parallel flat
 /// layers): the lateral fraction `τᵢ = Σ_{j≤i} Δtⱼ/wⱼ / Σ Δtⱼ/wⱼ` instead of `tᵢ`.
 fn paraxial_guess(
     scene: &Scene,
