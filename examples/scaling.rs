@@ -598,8 +598,9 @@ fn batch_section() -> io::Result<String> {
         md,
         "\nPeak resident memory (`VmHWM` of `/proc/self/status`): {} before the scene, {} with \
          the scene and tracer built, {} after the first batch on 2 threads (the batch's own \
-         arrays take {:.0} MiB, `Batch::memory_bytes`; `trace_batch` also holds a second copy \
-         in solve order while it puts the rays back in ray order), {} after writing it in the \
+         arrays take {:.0} MiB, `Batch::memory_bytes`; these receivers keep their grid order, so \
+         they are solved in place — receivers in an incoherent order are solved along a Morton \
+         curve into a second copy, then put back in ray order), {} after writing it in the \
          three formats (the writers stream through a 64 KiB buffer, single-threaded).\n",
         mib_kb(hwm_start),
         mib_kb(hwm_scene),
