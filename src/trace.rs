@@ -214,7 +214,9 @@ pub fn ray_index(
 /// angles through parallel flat layers. On a polyline of more than 1,024 segments (a
 /// digitised sea floor, a measured profile) the nearest point is replaced by the crossing,
 /// nearest the target, of the line through the target perpendicular to `R − S`, when there is
-/// one: an `O(log M)` query where the nearest-point search grows about like `√M`.
+/// one: an `O(log M)` query where the nearest-point search grows about like `√M`; a single
+/// reflection there then starts at the specular point of the tangent line at that crossing
+/// (the image method: exact on a straight mirror).
 pub struct Tracer<'s> {
     scene: &'s Scene,
     regions: Option<Regions>,
@@ -800,6 +802,33 @@ fn paraxial_guess(
     }
 }
 
+/// The image method on the tangent line of `line` at parameter `s` (segment `j`): the
+/// specular point of a mirror along that line between `source` and `receiver`, as a parameter
+/// of `line` (moved by the offset along the tangent, clamped). Exact for a straight mirror; a
+/// gently curved one starts close to its specular point. `s` itself when both are not on one
+/// side of the line.
+fn image_point(
+    line: &crate::polyline::Polyline,
+    s: f64,
+    j: usize,
+    source: Point,
+    receiver: Point,
+) -> f64 {
+    let t = line.tangent(j);
+    let p0 = line.point_on(j, s);
+    let (hs, hr) = ((source - p0).cross(t), (receiver - p0).cross(t));
+    let product = hs * hr;
+    if product.is_nan() || product <= 0.0 {
+        return s;
+    }
+    let (us, ur) = ((source - p0).dot(t), (receiver - p0).dot(t));
+    let u = us + (ur - us) * hs / (hs + hr);
+    if !u.is_finite() {
+        return s;
+    }
+    line.clamp_param(s + u)
+}
+
 /// The documented initial guess (see [`Tracer`]).
 fn initial_guess(
     scene: &Scene,
@@ -826,6 +855,12 @@ fn initial_guess(
         }
         if best.is_none() && line.num_segments() > LONG_POLYLINE {
             best = perpendicular_crossing(line, source, receiver, target);
+            if k == 1
+                && step.kind == StepKind::Reflect
+                && let Some((s, d, j)) = best
+            {
+                best = Some((image_point(line, s, j, source, receiver), d, j));
+            }
         }
         // The crossing's fraction along S → R, for `paraxial_guess` (NaN: no crossing).
         ws.s_alt[i] = crossing_t;
