@@ -71,6 +71,9 @@ pub struct Workspace {
     pub(crate) media: Vec<usize>,
     pub(crate) media_prev: Vec<usize>,
     pub(crate) s_alt: Vec<f64>,
+    /// Per step of the initial guess: the fraction of `S → R` where that line crosses the
+    /// step's interface (NaN where it does not, or for a reflection).
+    pub(crate) crossing_t: Vec<f64>,
     pub(crate) seg_alt: Vec<usize>,
     pub(crate) points: Vec<Point>,
     frames: Vec<Frame>,
@@ -115,6 +118,7 @@ impl Workspace {
         self.off.resize(k.saturating_sub(1), 0.0);
         self.scratch.resize(k, 0.0);
         self.s_alt.resize(k, 0.0);
+        self.crossing_t.resize(k, f64::NAN);
         self.seg_alt.resize(k, 0);
         // Room for the classification and the media lookups, so that no ray allocates.
         self.media.reserve(k + 1);

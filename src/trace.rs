@@ -761,7 +761,7 @@ fn perpendicular_crossing(
 }
 
 /// Refines the straight-line guess of a path of refractions only (every step crossed by the
-/// line `S → R`, at increasing fractions `tᵢ`, kept in `ws.s_alt`): each point moves along its
+/// line `S → R`, at increasing fractions `tᵢ`, kept in `ws.crossing_t`): each point moves along its
 /// interface to where a paraxial ray would cross (exact for small angles through parallel flat
 /// layers): the lateral fraction `τᵢ = Σ_{j≤i} Δtⱼ/wⱼ / Σ Δtⱼ/wⱼ` instead of `tᵢ`.
 fn paraxial_guess(
@@ -776,7 +776,7 @@ fn paraxial_guess(
     if k == 0 || w.len() != k + 1 {
         return;
     }
-    let t = &ws.s_alt[..k];
+    let t = &ws.crossing_t[..k];
     let mut prev = 0.0;
     let mut sum = 0.0;
     for i in 0..=k {
@@ -863,7 +863,7 @@ fn initial_guess(
             }
         }
         // The crossing's fraction along S → R, for `paraxial_guess` (NaN: no crossing).
-        ws.s_alt[i] = crossing_t;
+        ws.crossing_t[i] = crossing_t;
         let (s, hint) = match best {
             Some((s, _, j)) => (s, j),
             None => {

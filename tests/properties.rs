@@ -26,6 +26,10 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
 use serde_json::{Value, json};
 
+#[path = "support/interface.rs"]
+mod interface;
+use interface::{distance_to_polyline, segment_distance};
+
 /// Width and height of the unit layout before the random similarity.
 const W: f64 = 10.0;
 const H: f64 = 10.0;
@@ -442,13 +446,6 @@ fn build(raw: &RawScene) -> SceneSpec {
     spec
 }
 
-/// Distance from `p` to segment `a–b`.
-fn segment_distance(p: Point, a: Point, b: Point) -> f64 {
-    let (dx, dy) = (b.x - a.x, b.y - a.y);
-    let t = (((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
-    (p.x - (a.x + t * dx)).hypot(p.y - (a.y + t * dy))
-}
-
 /// Which side of interface `line` the point `p` is on, when that is clear: for an open
 /// polyline (the generator's are graphs over x) whether `p` is above it, for a closed one
 /// whether `p` is inside. `None` for a point beyond an open polyline's x-range or within
@@ -559,12 +556,7 @@ fn check_ray(scene: &Scene, tracer: &Tracer, ray: &Ray) -> Result<(), String> {
     for (i, step) in path.steps.iter().enumerate() {
         let line = &scene.interfaces()[step.interface].polyline;
         let p = ray.points[i + 1];
-        let d = (0..line.num_segments())
-            .map(|j| {
-                let (a, b) = line.segment(j);
-                segment_distance(p, a, b)
-            })
-            .fold(f64::INFINITY, f64::min);
+        let d = distance_to_polyline(line, p);
         if d > 1e-9 * size {
             return Err(format!(
                 "interaction {i} at {p:?} is {d:e} from its interface"

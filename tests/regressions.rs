@@ -5,7 +5,11 @@
 
 use std::path::Path;
 
-use eigenray::{Point, Ray, Scene, Status, Tracer};
+use eigenray::{Ray, Scene, Status, Tracer};
+
+#[path = "support/interface.rs"]
+mod interface;
+use interface::distance_to_polyline;
 
 /// The text of `fixtures/fuzz/NAME.json`.
 fn fixture(name: &str) -> String {
@@ -22,13 +26,6 @@ fn trace(text: &str) -> Vec<Ray> {
     tracer.trace_all()
 }
 
-/// Distance from `p` to segment `a–b`.
-fn segment_distance(p: Point, a: Point, b: Point) -> f64 {
-    let (dx, dy) = (b.x - a.x, b.y - a.y);
-    let t = (((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
-    (p.x - (a.x + t * dx)).hypot(p.y - (a.y + t * dy))
-}
-
 /// Every interaction point of every ray with points lies on its interface.
 fn assert_points_on_interfaces(name: &str, scene: &Scene, rays: &[Ray]) {
     let size = scene.bbox().diagonal();
@@ -36,12 +33,7 @@ fn assert_points_on_interfaces(name: &str, scene: &Scene, rays: &[Ray]) {
         for (i, step) in scene.paths()[ray.path].steps.iter().enumerate() {
             let line = &scene.interfaces()[step.interface].polyline;
             let p = ray.points[i + 1];
-            let d = (0..line.num_segments())
-                .map(|j| {
-                    let (a, b) = line.segment(j);
-                    segment_distance(p, a, b)
-                })
-                .fold(f64::INFINITY, f64::min);
+            let d = distance_to_polyline(line, p);
             assert!(
                 d <= 1e-9 * size,
                 "{name}: ray {} ({}): interaction {i} at {p:?} is {d:e} from interface `{}`",

@@ -1,7 +1,11 @@
 //! What both fuzz targets check on a valid scene: tracing and writing it neither panics nor
 //! produces non-finite times or points, and the output is valid JSON.
 
-use eigenray::{Point, Scene, SolverOptions, Tracer, write_rays_json};
+use eigenray::{Scene, SolverOptions, Tracer, write_rays_json};
+
+#[path = "../../tests/support/interface.rs"]
+mod interface;
+use interface::distance_to_polyline;
 
 /// Largest scene traced (beyond these only validation runs, to keep executions fast).
 const MAX_RAYS: usize = 64;
@@ -44,12 +48,7 @@ pub fn trace_and_check(mut scene: Scene) {
             for (i, step) in scene.paths()[r.path].steps.iter().enumerate() {
                 let line = &scene.interfaces()[step.interface].polyline;
                 let p = r.points[i + 1];
-                let d = (0..line.num_segments())
-                    .map(|j| {
-                        let (a, b) = line.segment(j);
-                        segment_distance(p, a, b)
-                    })
-                    .fold(f64::INFINITY, f64::min);
+                let d = distance_to_polyline(line, p);
                 assert!(
                     d <= 1e-9 * size,
                     "interaction {i} at {p:?} is {d:e} from its interface (scene size {size:e}): {r:?}"
@@ -69,12 +68,3 @@ pub fn trace_and_check(mut scene: Scene) {
     );
 }
 
-/// Distance from `p` to segment `a–b` (computed on coordinates scaled to the segment, so that
-/// tiny and huge scenes neither underflow nor overflow).
-fn segment_distance(p: Point, a: Point, b: Point) -> f64 {
-    let scale = (b.x - a.x).abs().max((b.y - a.y).abs());
-    let (dx, dy) = ((b.x - a.x) / scale, (b.y - a.y) / scale);
-    let (px, py) = ((p.x - a.x) / scale, (p.y - a.y) / scale);
-    let t = ((px * dx + py * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
-    (px - t * dx).hypot(py - t * dy) * scale
-}

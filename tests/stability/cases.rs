@@ -21,54 +21,13 @@ use eigenray::demo::SplitMix64;
 use eigenray::{PathProblem, Ray, Reason, Scene, Status, Tracer, Workspace, write_rays_json};
 use serde_json::{Map, Value, json};
 
-/// A point or vector as plain numbers, so that the references do not use the library's
-/// geometry.
-pub type P = [f64; 2];
-
-fn add(a: P, b: P) -> P {
-    [a[0] + b[0], a[1] + b[1]]
-}
-fn sub(a: P, b: P) -> P {
-    [a[0] - b[0], a[1] - b[1]]
-}
-fn scale(a: P, k: f64) -> P {
-    [a[0] * k, a[1] * k]
-}
-fn dot(a: P, b: P) -> f64 {
-    a[0] * b[0] + a[1] * b[1]
-}
-fn cross(a: P, b: P) -> f64 {
-    a[0] * b[1] - a[1] * b[0]
-}
-fn norm(a: P) -> f64 {
-    a[0].hypot(a[1])
-}
-fn dist(a: P, b: P) -> f64 {
-    norm(sub(a, b))
-}
-fn unit(a: P) -> P {
-    scale(a, 1.0 / norm(a))
-}
-fn lerp(a: P, b: P, t: f64) -> P {
-    add(a, scale(sub(b, a), t))
-}
-
-/// Mirror image of `p` across the line through `a` and `b`.
-fn reflect(p: P, a: P, b: P) -> P {
-    let d = sub(b, a);
-    let t = dot(sub(p, a), d) / dot(d, d);
-    let foot = add(a, scale(d, t));
-    sub(scale(foot, 2.0), p)
-}
-
-/// Where the lines `p–q` and `a–b` meet: `(t, u)` with `p + t (q − p) = a + u (b − a)`.
-fn intersect(p: P, q: P, a: P, b: P) -> (f64, f64) {
-    let r = sub(q, p);
-    let s = sub(b, a);
-    let den = cross(r, s);
-    let ap = sub(a, p);
-    (cross(ap, s) / den, cross(ap, r) / den)
-}
+#[path = "../support/reference.rs"]
+mod reference;
+use reference::snell_reference as snell;
+pub use reference::{
+    P, add, bisect, cross, dist, dot, intersect, lerp, norm, path_time, reflect, rel_err, scale,
+    sub, unit,
+};
 
 /// Whether `v` is not within `tol` (NaN is not within anything).
 fn exceeds(v: f64, tol: f64) -> bool {
@@ -76,47 +35,6 @@ fn exceeds(v: f64, tol: f64) -> bool {
         v.partial_cmp(&tol),
         Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
     )
-}
-
-/// `|got − want| / |want|`.
-pub fn rel_err(got: f64, want: f64) -> f64 {
-    ((got - want) / want).abs()
-}
-
-/// Σ slowness × leg length over consecutive points.
-fn path_time(points: &[P], slowness: &[f64]) -> f64 {
-    assert_eq!(points.len(), slowness.len() + 1);
-    points
-        .windows(2)
-        .zip(slowness)
-        .map(|(w, s)| s * dist(w[0], w[1]))
-        .sum()
-}
-
-/// Root of an increasing function on `[lo, hi]` (`f(lo) ≤ 0 ≤ f(hi)`) by bisection, to the
-/// last representable number.
-fn bisect(mut lo: f64, mut hi: f64, f: impl Fn(f64) -> f64) -> f64 {
-    assert!(lo <= hi);
-    loop {
-        let mid = 0.5 * (lo + hi);
-        if mid <= lo || mid >= hi {
-            return if f(lo).abs() <= f(hi).abs() { lo } else { hi };
-        }
-        if f(mid) < 0.0 {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-}
-
-/// Snell's law on the flat interface `y = 0`: source `(a, h1)` above (slowness `n1`),
-/// receiver `(b, −h2)` below (slowness `n2`). The crossing `x` solving
-/// `n1 (x−a)/√((x−a)²+h1²) = n2 (b−x)/√((b−x)²+h2²)` by bisection, and the time.
-fn snell(n1: f64, a: f64, h1: f64, n2: f64, b: f64, h2: f64) -> (f64, f64) {
-    let f = |x: f64| n1 * (x - a) / (x - a).hypot(h1) - n2 * (b - x) / (b - x).hypot(h2);
-    let x = bisect(a.min(b), a.max(b), f);
-    (x, n1 * (x - a).hypot(h1) + n2 * (b - x).hypot(h2))
 }
 
 /// Flat layers: the legs' vertical extents `h` and slownesses `w`. The ray parameter `p`
