@@ -151,7 +151,20 @@ impl Bvh {
                 .any(|&it| self.boxes[it as usize].overlaps(sbox) && visit(it));
         }
         let d = b - a;
-        let wanted = |n: &Node| n.bbox.overlaps(sbox) && !box_beside_line(n.bbox, a, d);
+        let (lo, hi) = (
+            Point::new(a.x.min(b.x), a.y.min(b.y)),
+            Point::new(a.x.max(b.x), a.y.max(b.y)),
+        );
+        // A box that overlaps the query and spans the segment's whole extent along x (or y)
+        // meets the segment (which takes every y, or x, of its extent inside the box's band):
+        // the line test could not prune it.
+        let wanted = |n: &Node| {
+            let bb = n.bbox;
+            bb.overlaps(sbox)
+                && ((bb.min.x <= lo.x && bb.max.x >= hi.x)
+                    || (bb.min.y <= lo.y && bb.max.y >= hi.y)
+                    || !box_beside_line(bb, a, d))
+        };
         let mut node = &self.nodes[0];
         if !wanted(node) {
             return false;
