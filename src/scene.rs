@@ -574,30 +574,62 @@ impl Scene {
     /// margin / 2`, less round-off) are visited: a leg between two interfaces then does not
     /// even look at the segments its end points lie on when they are axis-parallel.
     pub(crate) fn first_crossing(&self, a: Point, b: Point, margin: f64) -> Option<SegmentRef> {
-        let d = b - a;
-        let cut = |lo: f64, hi: f64, along: f64| {
-            let slack = 4.0 * f64::EPSILON * (lo.abs() + hi.abs());
-            let c = (0.5 * margin * along.abs() - slack).max(0.0);
-            (lo + c, hi - c)
-        };
-        let (x0, x1) = cut(a.x.min(b.x), a.x.max(b.x), d.x);
-        let (y0, y1) = cut(a.y.min(b.y), a.y.max(b.y), d.y);
-        let sbox = Aabb {
-            min: Point::new(x0, y0),
-            max: Point::new(x1, y1),
-        };
+        let sbox = middle_box(a, b, margin);
         let mut hit = None;
         self.segment_bvh.any_near_segment_in(sbox, a, b, |i| {
-            let (p, q) = self.segment_ends[i as usize];
-            match crate::polyline::segment_intersection(a, b, p, q) {
-                Some((t, _)) if t > margin && t < 1.0 - margin => {
-                    hit = Some(self.segments[i as usize]);
-                    true
-                }
-                _ => false,
+            let crossed = self.crosses(i, a, b, margin);
+            if crossed {
+                hit = Some(self.segments[i as usize]);
             }
+            crossed
         });
         hit
+    }
+
+    /// [`first_crossing`](Self::first_crossing) among `candidates` only (scene segment
+    /// indices, which must include every segment that can meet `a–b`, as
+    /// [`segments_in`](Self::segments_in) of a box holding it gives): the first one listed
+    /// that `a–b` crosses.
+    pub(crate) fn first_crossing_among(
+        &self,
+        a: Point,
+        b: Point,
+        margin: f64,
+        candidates: &[u32],
+    ) -> Option<SegmentRef> {
+        let sbox = middle_box(a, b, margin);
+        candidates
+            .iter()
+            .find(|&&i| {
+                let (p, q) = self.segment_ends[i as usize];
+                Aabb::from_points(p, q).overlaps(sbox) && self.crosses(i, a, b, margin)
+            })
+            .map(|&i| self.segments[i as usize])
+    }
+
+    /// Whether scene segment `i` meets `a–b` at a fraction `t ∈ (margin, 1 − margin)` of it.
+    #[inline]
+    fn crosses(&self, i: u32, a: Point, b: Point, margin: f64) -> bool {
+        let (p, q) = self.segment_ends[i as usize];
+        matches!(
+            crate::polyline::segment_intersection(a, b, p, q),
+            Some((t, _)) if t > margin && t < 1.0 - margin
+        )
+    }
+
+    /// The scene segments whose boxes overlap `bbox`, in index order, when there are at most
+    /// `max` of them.
+    pub(crate) fn segments_in(&self, bbox: Aabb, max: usize) -> Option<Vec<u32>> {
+        let mut found = Vec::new();
+        let too_many = self.segment_bvh.any_overlapping(bbox, |i| {
+            found.push(i);
+            found.len() > max
+        });
+        if too_many {
+            return None;
+        }
+        found.sort_unstable();
+        Some(found)
     }
 
     /// End points of a scene segment.
@@ -611,6 +643,24 @@ impl Scene {
     /// The interface segment that `p` lies on exactly, if any.
     pub fn on_interface(&self, p: Point) -> Option<SegmentRef> {
         on_interface(&self.interfaces, &self.segments, &self.segment_bvh, p)
+    }
+}
+
+/// The box of the middle part of `a–b` that [`Scene::first_crossing`] looks at: `t` from about
+/// `margin / 2` to `1 − margin / 2`, less round-off.
+#[inline]
+fn middle_box(a: Point, b: Point, margin: f64) -> Aabb {
+    let d = b - a;
+    let cut = |lo: f64, hi: f64, along: f64| {
+        let slack = 4.0 * f64::EPSILON * (lo.abs() + hi.abs());
+        let c = (0.5 * margin * along.abs() - slack).max(0.0);
+        (lo + c, hi - c)
+    };
+    let (x0, x1) = cut(a.x.min(b.x), a.x.max(b.x), d.x);
+    let (y0, y1) = cut(a.y.min(b.y), a.y.max(b.y), d.y);
+    Aabb {
+        min: Point::new(x0, y0),
+        max: Point::new(x1, y1),
     }
 }
 

@@ -222,6 +222,9 @@ pub struct Tracer<'s> {
     regions: Option<Regions>,
     /// Medium at each source (when regions exist).
     source_media: Vec<Option<usize>>,
+    /// Per path, per leg between two interactions (leg `i` at index `i − 1`): every scene
+    /// segment that can cross it, when there are few (see [`leg_candidates`]).
+    leg_candidates: Vec<Vec<Option<Box<[u32]>>>>,
 }
 
 impl<'s> Tracer<'s> {
@@ -243,6 +246,11 @@ impl<'s> Tracer<'s> {
             scene,
             regions,
             source_media,
+            leg_candidates: scene
+                .paths()
+                .iter()
+                .map(|p| leg_candidates(scene, &p.steps))
+                .collect(),
         })
     }
 
@@ -557,7 +565,7 @@ impl<'s> Tracer<'s> {
                 ..base
             };
         }
-        if let Some((leg, interface)) = self.obstruction(ws) {
+        if let Some((leg, interface)) = self.obstruction(path, ws) {
             return RaySummary {
                 status: Status::Obstructed,
                 reason: Some(Reason::Crosses { leg, interface }),
@@ -665,24 +673,63 @@ impl<'s> Tracer<'s> {
     }
 
     /// First leg that crosses an interface strictly between its ends: `(leg, interface)`.
-    fn obstruction(&self, ws: &Workspace) -> Option<(usize, usize)> {
+    fn obstruction(&self, path: usize, ws: &Workspace) -> Option<(usize, usize)> {
         let pts = &ws.points;
         let k = pts.len() - 2;
+        let candidates = &self.leg_candidates[path];
         for leg in 0..=k {
             let (a, b) = (pts[leg], pts[leg + 1]);
             if a == b {
                 continue;
             }
-            let hit = self
-                .scene
-                .first_crossing(a, b, END_MARGIN)
-                .map(|sref| sref.interface as usize);
-            if let Some(interface) = hit {
-                return Some((leg, interface));
+            let between = if leg > 0 && leg < k {
+                candidates[leg - 1].as_deref()
+            } else {
+                None
+            };
+            let hit = match between {
+                Some(c) => self.scene.first_crossing_among(a, b, END_MARGIN, c),
+                None => self.scene.first_crossing(a, b, END_MARGIN),
+            };
+            if let Some(sref) = hit {
+                return Some((leg, sref.interface as usize));
             }
         }
         None
     }
+}
+
+/// A leg between two interactions has its end points on their interfaces, so it lies in the
+/// box of the two interfaces: the scene segments whose boxes overlap that box (widened by
+/// round-off) are all it can cross. Where they are few (a leg between two layers of a stack:
+/// those two interfaces), the obstruction test checks just them instead of querying the
+/// scene's BVH. Per leg between interactions `i − 1` and `i` (at index `i − 1`).
+fn leg_candidates(scene: &Scene, steps: &[crate::scene::Step]) -> Vec<Option<Box<[u32]>>> {
+    /// More candidates than this: the BVH query is as quick.
+    const MAX: usize = 8;
+    steps
+        .windows(2)
+        .map(|w| {
+            let bbox = scene.interfaces()[w[0].interface]
+                .polyline
+                .bbox()
+                .union(scene.interfaces()[w[1].interface].polyline.bbox());
+            let pad = 1e-9
+                * (bbox.max.x - bbox.min.x
+                    + (bbox.max.y - bbox.min.y)
+                    + bbox.max.x.abs()
+                    + bbox.min.x.abs()
+                    + bbox.max.y.abs()
+                    + bbox.min.y.abs());
+            let grown = crate::geom::Aabb {
+                min: Point::new(bbox.min.x - pad, bbox.min.y - pad),
+                max: Point::new(bbox.max.x + pad, bbox.max.y + pad),
+            };
+            scene
+                .segments_in(grown, MAX)
+                .map(|found| found.into_boxed_slice())
+        })
+        .collect()
 }
 
 /// A leg whose sine with the interface is below this runs along it, on neither side.
@@ -875,5 +922,63 @@ fn initial_guess(
         ws.s[i] = s;
         ws.seg[i] = line.segment_at_hint(s, hint);
         ws.pin[i] = Pin::Free;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::demo::SplitMix64;
+
+    /// Between two wavy interfaces with a third reaching in between them, the candidate
+    /// segments of a leg find a crossing exactly when the scene's BVH query does.
+    #[test]
+    fn leg_candidates_find_every_crossing() {
+        let doc = r#"{
+            "media": { "m": { "speed": 1.0 } },
+            "interfaces": {
+                "a": { "points": [[0, 0], [1.3, 0.3], [2.6, -0.2], [4, 0.2]] },
+                "b": { "points": [[0, 2], [1.3, 1.6], [2.6, 2.3], [4, 1.9]] },
+                "c": { "points": [[1.5, 1.0], [2.5, 1.2]] },
+                "far": { "points": [[10, 10], [11, 10]] }
+            },
+            "sources": [[0, -1]], "receivers": [[0, 3]],
+            "paths": [{ "steps": [{ "refract": "a" }, { "refract": "b" }],
+                        "media": ["m", "m", "m"] }]
+        }"#;
+        let scene = Scene::from_json(doc).unwrap();
+        let steps = &scene.paths()[0].steps;
+        let cands = leg_candidates(&scene, steps);
+        let c = cands[0].as_deref().expect("few candidates");
+        // a, b and c, not the far one.
+        assert_eq!(c.len(), 3 + 3 + 1);
+        let (a, b) = (
+            &scene.interfaces()[steps[0].interface].polyline,
+            &scene.interfaces()[steps[1].interface].polyline,
+        );
+        let mut rng = SplitMix64(3);
+        let (mut hits, mut misses) = (0, 0);
+        for _ in 0..20_000 {
+            let p = a.point_at(rng.next_f64() * a.length());
+            let q = b.point_at(rng.next_f64() * b.length());
+            let bvh = scene.first_crossing(p, q, END_MARGIN).is_some();
+            let among = scene.first_crossing_among(p, q, END_MARGIN, c).is_some();
+            assert_eq!(bvh, among, "leg {p:?} → {q:?}");
+            if bvh { hits += 1 } else { misses += 1 }
+        }
+        assert!(hits > 1000 && misses > 1000, "{hits} hits, {misses} misses");
+    }
+
+    /// Legs between the layers of a stack have just the two layers' segments as candidates.
+    #[test]
+    fn stack_legs_have_two_candidates() {
+        let scene = Scene::from_spec(&crate::demo::layer_stack(20, 1)).unwrap();
+        let cands = leg_candidates(&scene, &scene.paths()[0].steps);
+        assert_eq!(cands.len(), 19);
+        assert!(
+            cands
+                .iter()
+                .all(|c| c.as_deref().map(<[u32]>::len) == Some(2))
+        );
     }
 }
