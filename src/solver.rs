@@ -75,6 +75,8 @@ pub struct Workspace {
     /// step's interface (NaN where it does not, or for a reflection).
     pub(crate) crossing_t: Vec<f64>,
     pub(crate) seg_alt: Vec<usize>,
+    /// Per layer of the initial guess's ray-parameter refinement: thickness and speed.
+    pub(crate) layers: Vec<(f64, f64)>,
     pub(crate) points: Vec<Point>,
     frames: Vec<Frame>,
 }
@@ -125,6 +127,7 @@ impl Workspace {
         self.media_prev.reserve(k + 1);
         self.slowness.reserve(k + 1);
         self.points.reserve(k + 2);
+        self.layers.reserve(k + 1);
         self.frames.reserve(k);
     }
 }

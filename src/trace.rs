@@ -4,7 +4,7 @@ use std::fmt;
 
 use rayon::prelude::*;
 
-use crate::geom::Point;
+use crate::geom::{Point, Vec2};
 use crate::problem::Geometry;
 use crate::regions::Regions;
 use crate::scene::{Scene, SceneError, StepKind};
@@ -808,9 +808,18 @@ fn perpendicular_crossing(
 }
 
 /// Refines the straight-line guess of a path of refractions only (every step crossed by the
-/// line `S → R`, at increasing fractions `tᵢ`, kept in `ws.crossing_t`): each point moves along its
-/// interface to where a paraxial ray would cross (exact for small angles through parallel flat
-/// layers): the lateral fraction `τᵢ = Σ_{j≤i} Δtⱼ/wⱼ / Σ Δtⱼ/wⱼ` instead of `tᵢ`.
+/// line `S → R`, at increasing fractions `tᵢ`, kept in `ws.crossing_t`): each point moves along
+/// its interface to the lateral fraction `τᵢ` where a ray through flat layers would cross.
+///
+/// The layers are taken as flat and parallel, `Δzⱼ = Δtⱼ Z` thick, where `Z` and `X` are the
+/// extents of `R − S` across and along them. When the interfaces' normals at the crossings agree
+/// to within [`PARALLEL`], the ray parameter `p` solves `Σⱼ Δzⱼ tan θⱼ = X` with
+/// `sin θⱼ = p / wⱼ` (Newton from the paraxial `p`, which lies above the root of this convex,
+/// increasing function: the iterates decrease monotonically to it), and
+/// `τᵢ = Σ_{j≤i} Δzⱼ tan θⱼ / X`: the exact solution for parallel flat layers, one refraction
+/// at a straight interface included. Otherwise, or when that equation has no root (a ray
+/// beyond the critical angle of a layer), the paraxial fractions
+/// `τᵢ = Σ_{j≤i} Δtⱼ/wⱼ / Σ Δtⱼ/wⱼ` (the small-angle limit).
 fn paraxial_guess(
     scene: &Scene,
     steps: &[crate::scene::Step],
@@ -835,18 +844,110 @@ fn paraxial_guess(
         prev = ti;
     }
     let d = receiver - source;
+    let tangent = |i: usize| {
+        scene.interfaces()[steps[i].interface]
+            .polyline
+            .tangent(ws.seg[i])
+    };
+    let p = ray_parameter(t, w, d, tangent, &mut ws.layers);
     let mut acc = 0.0;
     prev = 0.0;
     for (i, step) in steps.iter().enumerate() {
-        acc += (t[i] - prev) / w[i];
+        let tau = match p {
+            Some((p, x)) => {
+                let sin = p / w[i];
+                acc += (t[i] - prev) * sin / (1.0 - sin * sin).sqrt();
+                acc / x
+            }
+            None => {
+                acc += (t[i] - prev) / w[i];
+                acc / sum
+            }
+        };
         prev = t[i];
-        let tau = acc / sum;
         let line = &scene.interfaces()[step.interface].polyline;
         let lateral = d.dot(line.tangent(ws.seg[i]));
         let s = line.clamp_param(ws.s[i] + (tau - t[i]) * lateral);
         ws.seg[i] = line.segment_at_hint(s, ws.seg[i]);
         ws.s[i] = s;
     }
+}
+
+/// Largest angle between two interfaces' normals (as `1 − cos`) for which
+/// [`paraxial_guess`] treats the layers as parallel: about 8°.
+const PARALLEL: f64 = 0.01;
+
+/// The ray parameter of [`paraxial_guess`] for crossing fractions `t` (increasing, in
+/// `(0, 1]`), slownesses `w` and `d = R − S`, with `tangent(i)` the tangent of interface `i` at
+/// its crossing: `(p, X / Z)`, `p` solving `Σⱼ Δtⱼ tan θⱼ = X / Z` with `sin θⱼ = p / wⱼ`
+/// (thicknesses in units of `Z`). `None` when the interfaces are not parallel, `X` is zero (the
+/// straight line is the ray) or the equation has no root. `layers` is scratch.
+fn ray_parameter(
+    t: &[f64],
+    w: &[f64],
+    d: Vec2,
+    tangent: impl Fn(usize) -> Vec2,
+    layers: &mut Vec<(f64, f64)>,
+) -> Option<(f64, f64)> {
+    let k = t.len();
+    let m = tangent(0);
+    if (1..k).any(|i| tangent(i).dot(m).abs() < 1.0 - PARALLEL) {
+        return None;
+    }
+    // Across (`z`) and along (`x`) the first interface.
+    let (z, x) = (d.cross(m).abs(), d.dot(m).abs());
+    let x = x / z;
+    if !(x > 0.0 && x.is_finite()) {
+        return None;
+    }
+    // Per layer: thickness Δtⱼ (in units of Z) and speed 1/wⱼ.
+    layers.clear();
+    let (mut inv_sum, mut limit, mut prev) = (0.0, f64::INFINITY, 0.0);
+    for (j, &wj) in w[..=k].iter().enumerate() {
+        let hi = if j < k { t[j] } else { 1.0 };
+        let v = 1.0 / wj;
+        layers.push((hi - prev, v));
+        inv_sum += (hi - prev) * v;
+        prev = hi;
+        limit = limit.min(wj);
+    }
+    // f(p) = Σ Δtⱼ sⱼ / cⱼ − x with sⱼ = p / wⱼ, cⱼ = √(1 − sⱼ²); f' = Σ Δtⱼ / (wⱼ cⱼ³).
+    let f = |p: f64| {
+        let (mut f, mut df) = (-x, 0.0);
+        for &(dt, v) in layers.iter() {
+            let sin = p * v;
+            let r = 1.0 / (1.0 - sin * sin).sqrt();
+            let a = dt * r;
+            f += a * sin;
+            df += a * v * r * r;
+        }
+        (f, df)
+    };
+    // The paraxial p (tan θ ≈ sin θ): f(p) ≥ 0 there, as tan θ ≥ sin θ. Below the smallest
+    // slowness (a layer's critical angle) f is defined; just below it, it must be positive.
+    let mut p = (x / inv_sum).min(limit * (1.0 - 1e-9));
+    let (mut fp, mut dfp) = f(p);
+    if !(fp >= 0.0 && dfp > 0.0 && fp.is_finite() && dfp.is_finite()) {
+        return None;
+    }
+    // Near a critical angle f is steep (like 1/√(p_max − p)): from there the iterates first
+    // back away from the pole geometrically, then converge quadratically.
+    for _ in 0..60 {
+        let next = p - fp / dfp;
+        // Monotone from above: a step that does not decrease p is round-off.
+        if !(next < p && next >= 0.0) {
+            break;
+        }
+        p = next;
+        (fp, dfp) = f(p);
+        if !(fp.is_finite() && dfp.is_finite() && dfp > 0.0) {
+            return None;
+        }
+        if fp <= 4.0 * f64::EPSILON * x {
+            break;
+        }
+    }
+    Some((p, x))
 }
 
 /// The image method on the tangent line of `line` at parameter `s` (segment `j`): the

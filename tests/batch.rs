@@ -63,28 +63,32 @@ fn batch_without_warm_starts_is_one_by_one_solving() {
 
 #[test]
 fn warm_starts_keep_the_rays_and_save_iterations() {
-    // Receivers on a grid: each starts from its neighbour's solution moved to first order.
-    let (single, warm) = compare(&scene(&demo::air_water(3000, 5)), true);
+    // Reflections off a digitised floor: each receiver starts from its neighbour's solution
+    // moved to first order.
+    let (single, warm) = compare(&scene(&demo::sea_floor(5000, 3000)), true);
     assert!(
-        warm * 10 < single * 9,
-        "air over water: {warm} iterations warm vs {single} one by one"
+        warm * 10 < single * 8,
+        "sea floor: {warm} iterations warm vs {single} one by one"
     );
-    let (single, warm) = compare(&scene(&demo::layer_stack(8, 400)), true);
+    // Through flat layers the default start is already the solution: the batch keeps it.
+    for spec in [demo::air_water(3000, 5), demo::layer_stack(8, 400)] {
+        let (single, warm) = compare(&scene(&spec), true);
+        assert_eq!((single, warm), (0, 0), "flat layers");
+    }
+    // A room with all its reflection sequences: whatever the warm starts save, the rays stay
+    // the same.
+    let (single, warm) = compare(&bench("room2d"), true);
     assert!(
-        warm * 10 < single * 9,
-        "8 layers: {warm} iterations warm vs {single} one by one"
+        warm <= single,
+        "room: {warm} iterations warm vs {single} one by one"
     );
-    // A digitised floor with vertex rays, and a room with all its reflection sequences:
-    // whatever the warm starts save, the rays stay the same.
-    compare(&scene(&demo::sea_floor(5000, 300)), true);
-    compare(&bench("room2d"), true);
 }
 
 #[test]
 fn warm_starts_follow_a_shuffled_receiver_order() {
     // Receivers in random order: the batch solves them along a Morton curve and puts the
     // rays back in ray order.
-    let mut spec = demo::air_water(2000, 9);
+    let mut spec = demo::sea_floor(5000, 3000);
     let mut rng = demo::SplitMix64(3);
     for i in (1..spec.receivers.len()).rev() {
         let j = (rng.next_u64() % (i as u64 + 1)) as usize;
@@ -92,39 +96,61 @@ fn warm_starts_follow_a_shuffled_receiver_order() {
     }
     let (single, warm) = compare(&scene(&spec), true);
     assert!(
-        warm * 10 < single * 9,
+        warm * 10 < single * 8,
         "{warm} iterations warm vs {single} one by one"
     );
-    let tracer_scene = scene(&spec);
-    let tracer = Tracer::new(&tracer_scene).expect("tracer");
+    let shuffled = scene(&spec);
+    let tracer = Tracer::new(&shuffled).expect("tracer");
     let batch = tracer.trace_batch(&BatchOptions::default());
-    assert!(
-        batch
-            .records()
-            .iter()
-            .all(|r| r.status == Status::Converged)
-    );
+    let ordered = Tracer::new(&shuffled)
+        .expect("tracer")
+        .trace_batch(&BatchOptions {
+            warm_start: false,
+            ..BatchOptions::default()
+        });
+    for i in 0..batch.len() {
+        assert_eq!(batch.record(i).status, ordered.record(i).status, "ray {i}");
+    }
 }
 
 #[test]
 fn dense_receivers_need_fewer_newton_steps() {
-    // 40,000 receivers on a 0.005-spaced grid: the continuation step from the neighbour
-    // leaves 1.45 Newton steps per ray, against 2.43 from the default start (and 1.01 for the
-    // million receivers of the scaling report).
-    let sc = scene(&demo::air_water(40_000, 2));
+    // 40,000 receivers over the sea floor: the continuation step from the neighbour leaves
+    // about 2.2 Newton steps per ray, against 3.6 from the default start.
+    let sc = scene(&demo::sea_floor(5000, 40_000));
     let tracer = Tracer::new(&sc).expect("tracer");
     let per_ray = |warm_start| {
         let b = tracer.trace_batch(&BatchOptions {
             warm_start,
             ..BatchOptions::default()
         });
-        assert!(b.records().iter().all(|r| r.status == Status::Converged));
         b.total_iterations() as f64 / b.len() as f64
     };
     let (cold, warm) = (per_ray(false), per_ray(true));
-    assert!(cold > 2.0, "cold starts: {cold} iterations per ray");
+    assert!(cold > 3.0, "cold starts: {cold} iterations per ray");
     assert!(
         warm < 0.7 * cold,
         "warm starts: {warm} iterations per ray (cold {cold})"
     );
+}
+
+#[test]
+fn flat_layers_start_at_their_solution() {
+    // The initial guess solves the ray-parameter equation of flat parallel layers: no Newton
+    // step is left, and the times match the closed form (tests/physics checks them against
+    // 40-digit references).
+    for spec in [
+        demo::air_water(2000, 3),
+        demo::layer_stack(8, 300),
+        demo::layer_stack(100, 30),
+    ] {
+        let sc = scene(&spec);
+        let tracer = Tracer::new(&sc).expect("tracer");
+        let mut ws = Workspace::new();
+        for r in 0..sc.receivers().len() {
+            let ray = tracer.trace(0, r, 0, &mut ws);
+            assert_eq!(ray.status, Status::Converged);
+            assert_eq!(ray.iterations, 0, "receiver {r}: {ray:?}");
+        }
+    }
 }
