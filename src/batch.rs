@@ -15,10 +15,7 @@ pub struct BatchOptions<'a> {
     /// initial guess: that solution moved to first order in the receiver's displacement (one
     /// tridiagonal solve with the converged Hessian, a continuation step), which typically
     /// leaves one Newton step to do. A warm-started ray that does not converge is solved again
-    /// from the default start, so warm starts never lose a ray the default start finds. A path
-    /// whose default start needed no Newton step (refractions through flat parallel layers,
-    /// where the initial guess solves the ray-parameter equation) keeps the default start
-    /// while it needs none.
+    /// from the default start, so warm starts never lose a ray the default start finds.
     pub warm_start: bool,
     /// Receivers per work unit (one workspace and one warm-start chain per unit).
     pub chunk: usize,
@@ -350,13 +347,11 @@ impl Tracer<'_> {
                         Workspace::new(),
                         Warm::new(params_block, np),
                         vec![false; np],
-                        vec![false; np],
                         Point::new(0.0, 0.0),
                     )
                 },
-                |(ws, warm, have, exact, last), (unit, ((rec, pts), med))| {
+                |(ws, warm, have, last), (unit, ((rec, pts), med))| {
                     have.iter_mut().for_each(|h| *h = false);
-                    exact.iter_mut().for_each(|h| *h = false);
                     let first = unit * chunk;
                     let n = rec.len() / np;
                     for b in 0..n {
@@ -373,17 +368,12 @@ impl Tracer<'_> {
                         *last = here;
                         for p in 0..np {
                             let (lo, hi) = (param_offsets[p], param_offsets[p + 1]);
-                            let start = if opts.warm_start && have[p] && near && !exact[p] {
+                            let start = if opts.warm_start && have[p] && near {
                                 Start::Given(warm.predict(p, lo..hi, moved))
                             } else {
                                 Start::Default
                             };
                             let mut s = self.solve_indexed_start(source, receiver, p, start, ws);
-                            if matches!(start, Start::Default) {
-                                // Through flat layers the default start is the solution: no
-                                // neighbour's is closer. Keep it while it needs no Newton step.
-                                exact[p] = s.status == Status::Converged && s.iterations == 0;
-                            }
                             if matches!(start, Start::Given(_)) && s.status != Status::Converged {
                                 // The neighbour's path may lead elsewhere (off an end, onto a
                                 // vertex): the documented start decides.
