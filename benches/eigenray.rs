@@ -82,7 +82,8 @@ fn reflector(c: &mut Criterion) {
     );
 }
 
-/// `trace_batch` over 100,000 receivers of the air-over-water scene on 1 and 2 threads.
+/// `trace_batch` over 100,000 receivers of the air-over-water scene on 1 and 2 threads, into a
+/// new batch and into a reused one.
 fn batch(c: &mut Criterion) {
     const N: usize = 100_000;
     let scene = scene(&demo::air_water(N, 1));
@@ -96,10 +97,18 @@ fn batch(c: &mut Criterion) {
             .num_threads(threads)
             .build()
             .expect("thread pool");
-        group.bench_function(
-            format!("{threads}_thread{}", if threads == 1 { "" } else { "s" }),
-            |b| b.iter(|| pool.install(|| black_box(tracer.trace_batch(&BatchOptions::default())))),
-        );
+        let name = format!("{threads}_thread{}", if threads == 1 { "" } else { "s" });
+        group.bench_function(&name, |b| {
+            b.iter(|| pool.install(|| black_box(tracer.trace_batch(&BatchOptions::default()))))
+        });
+        // Into one reused batch (a layout tool tracing every change again).
+        let mut reused = eigenray::Batch::default();
+        group.bench_function(format!("{name}_reused"), |b| {
+            b.iter(|| {
+                pool.install(|| tracer.trace_batch_into(&BatchOptions::default(), &mut reused));
+                black_box(reused.len())
+            })
+        });
     }
     group.finish();
 }

@@ -82,7 +82,12 @@ pub struct Batch {
     point_offsets: Vec<usize>,
     /// Offset of each path's leg media within a block, and the block size (last entry).
     media_offsets: Vec<usize>,
+    /// Results in solving order when that is not ray order (kept for reuse).
+    spatial: Option<Box<Arrays>>,
 }
+
+/// A batch's three arrays: records, points, leg media.
+type Arrays = (Vec<RayRecord>, Vec<Point>, Vec<u32>);
 
 /// Marks a leg medium that was not determined.
 const NO_MEDIUM: u32 = u32::MAX;
@@ -158,9 +163,16 @@ impl Batch {
     }
     /// Bytes held by the batch's arrays.
     pub fn memory_bytes(&self) -> usize {
-        self.records.capacity() * std::mem::size_of::<RayRecord>()
-            + self.points.capacity() * std::mem::size_of::<Point>()
-            + self.media.capacity() * std::mem::size_of::<u32>()
+        let bytes = |r: &Vec<RayRecord>, p: &Vec<Point>, m: &Vec<u32>| {
+            r.capacity() * std::mem::size_of::<RayRecord>()
+                + p.capacity() * std::mem::size_of::<Point>()
+                + m.capacity() * std::mem::size_of::<u32>()
+        };
+        bytes(&self.records, &self.points, &self.media)
+            + self
+                .spatial
+                .as_deref()
+                .map_or(0, |(r, p, m)| bytes(r, p, m))
     }
 }
 
@@ -236,12 +248,16 @@ impl Warm {
     }
 }
 
-/// `vec![value; n]`, written by the rayon pool (the first touch of a batch's hundreds of
-/// megabytes is then not a serial step before the parallel solve).
-fn filled<T: Copy + Send + Sync>(n: usize, value: T) -> Vec<T> {
-    let mut out = Vec::with_capacity(n);
-    out.par_extend(rayon::iter::repeat_n(value, n));
-    out
+/// Gives `v` length `n`. Elements it already has keep their values (the caller overwrites
+/// them all); new ones are `value`, written by the rayon pool (the first touch of a batch's
+/// hundreds of megabytes is then not a serial step before the parallel solve).
+fn sized<T: Copy + Send + Sync>(v: &mut Vec<T>, n: usize, value: T) {
+    if v.len() >= n {
+        v.truncate(n);
+        return;
+    }
+    let have = v.len();
+    v.par_extend(rayon::iter::repeat_n(value, n - have));
 }
 
 /// Whether receiver `here` is near receiver `last`: closer than a quarter of its distance to
@@ -291,6 +307,26 @@ impl Tracer<'_> {
     /// the same results as solving them one by one (up to the start each ray is solved from
     /// when `warm_start` is on), in ray order.
     pub fn trace_batch(&self, opts: &BatchOptions) -> Batch {
+        let mut batch = Batch::default();
+        self.trace_batch_into(opts, &mut batch);
+        batch
+    }
+
+    /// [`trace_batch`](Self::trace_batch) into an existing batch, reusing its memory: a tool
+    /// that traces every layout change again keeps one `Batch` and pays for its hundreds of
+    /// megabytes (page faults, first writes) only once. The results are the same as those of
+    /// `trace_batch`.
+    ///
+    /// ```
+    /// use eigenray::{Batch, BatchOptions, Scene, Tracer};
+    /// let mut batch = Batch::default();
+    /// for receivers in [100, 200] {
+    ///     let scene = Scene::from_spec(&eigenray::demo::air_water(receivers, 7)).unwrap();
+    ///     Tracer::new(&scene).unwrap().trace_batch_into(&BatchOptions::default(), &mut batch);
+    ///     assert_eq!(batch.len(), receivers);
+    /// }
+    /// ```
+    pub fn trace_batch_into(&self, opts: &BatchOptions, batch: &mut Batch) {
         let scene = self.scene();
         let (ns, nr, np) = (
             scene.sources().len(),
@@ -309,17 +345,15 @@ impl Tracer<'_> {
         let (pts_block, media_block, params_block) =
             (point_offsets[np], media_offsets[np], param_offsets[np]);
         let blocks = ns * nr;
-        let mut batch = Batch {
-            receivers: nr,
-            paths: np,
-            records: Vec::new(),
-            points: Vec::new(),
-            media: Vec::new(),
-            point_offsets,
-            media_offsets,
-        };
+        batch.receivers = nr;
+        batch.paths = np;
+        batch.point_offsets = point_offsets;
+        batch.media_offsets = media_offsets;
         if blocks == 0 || np == 0 {
-            return batch;
+            batch.records.clear();
+            batch.points.clear();
+            batch.media.clear();
+            return;
         }
         // Receivers already in a coherent order (a grid, a survey line) keep it: sorting and
         // putting the rays back would cost more than the warm starts save.
@@ -331,10 +365,20 @@ impl Tracer<'_> {
         let identity = order.iter().enumerate().all(|(i, &r)| i == r);
         let chunk = opts.chunk.max(1);
 
-        // Solve in (source, spatial position) block order; each unit is `chunk` blocks.
-        let mut records = filled(blocks * np, RayRecord::default());
-        let mut points = filled(blocks * pts_block, Point::new(f64::NAN, f64::NAN));
-        let mut media = filled(blocks * media_block, NO_MEDIUM);
+        // Solve in (source, spatial position) block order; each unit is `chunk` blocks. Every
+        // element is written by the solve: the arrays need only the right lengths.
+        let mut spatial = if identity {
+            None
+        } else {
+            Some(batch.spatial.take().unwrap_or_default())
+        };
+        let (records, points, media) = match spatial.as_deref_mut() {
+            Some((r, p, m)) => (r, p, m),
+            None => (&mut batch.records, &mut batch.points, &mut batch.media),
+        };
+        sized(records, blocks * np, RayRecord::default());
+        sized(points, blocks * pts_block, Point::new(f64::NAN, f64::NAN));
+        sized(media, blocks * media_block, NO_MEDIUM);
         let (po, mo) = (&batch.point_offsets, &batch.media_offsets);
         records
             .par_chunks_mut(chunk * np)
@@ -400,16 +444,21 @@ impl Tracer<'_> {
                                 residual: s.residual,
                                 reason: s.reason,
                             };
+                            let ray_points =
+                                &mut pts[b * pts_block + po[p]..b * pts_block + po[p + 1]];
                             if s.status.has_time() {
-                                pts[b * pts_block + po[p]..b * pts_block + po[p + 1]]
-                                    .copy_from_slice(ws.points());
+                                ray_points.copy_from_slice(ws.points());
+                            } else {
+                                ray_points.fill(Point::new(f64::NAN, f64::NAN));
                             }
-                            if ws.media().len() == mo[p + 1] - mo[p] {
-                                for (dst, &m) in
-                                    med[b * media_block + mo[p]..].iter_mut().zip(ws.media())
-                                {
+                            let ray_media =
+                                &mut med[b * media_block + mo[p]..b * media_block + mo[p + 1]];
+                            if ws.media().len() == ray_media.len() {
+                                for (dst, &m) in ray_media.iter_mut().zip(ws.media()) {
                                     *dst = m as u32;
                                 }
+                            } else {
+                                ray_media.fill(NO_MEDIUM);
                             }
                             have[p] = s.status == Status::Converged;
                             if have[p] && opts.warm_start {
@@ -423,16 +472,18 @@ impl Tracer<'_> {
                 },
             );
 
-        if identity {
-            batch.records = records;
-            batch.points = points;
-            batch.media = media;
-            return batch;
-        }
+        let Some(spatial) = spatial else {
+            return;
+        };
         // Back from spatial order to ray order (a parallel gather of whole blocks).
-        batch.records = filled(blocks * np, RayRecord::default());
-        batch.points = filled(blocks * pts_block, Point::new(f64::NAN, f64::NAN));
-        batch.media = filled(blocks * media_block, NO_MEDIUM);
+        let (records, points, media) = &*spatial;
+        sized(&mut batch.records, blocks * np, RayRecord::default());
+        sized(
+            &mut batch.points,
+            blocks * pts_block,
+            Point::new(f64::NAN, f64::NAN),
+        );
+        sized(&mut batch.media, blocks * media_block, NO_MEDIUM);
         let src_block = |block: usize, inverse: &[usize]| (block / nr) * nr + inverse[block % nr];
         let mut inverse = vec![0; nr];
         for (pos, &r) in order.iter().enumerate() {
@@ -462,7 +513,7 @@ impl Tracer<'_> {
                 let from = src_block(block, &inverse) * media_block;
                 out.copy_from_slice(&media[from..from + media_block]);
             });
-        batch
+        batch.spatial = Some(spatial);
     }
 }
 

@@ -162,3 +162,51 @@ fn flat_layers_start_at_their_solution() {
         }
     }
 }
+
+#[test]
+fn a_reused_batch_gives_the_same_rays() {
+    // Into one batch: a shuffled scene (solved in spatial order and gathered back), then a
+    // larger one, then a smaller one with rays that have no time: each equal to a fresh batch.
+    let mut shuffled = demo::sea_floor(500, 400);
+    let mut rng = demo::SplitMix64(5);
+    for i in (1..shuffled.receivers.len()).rev() {
+        let j = (rng.next_u64() % (i as u64 + 1)) as usize;
+        shuffled.receivers.swap(i, j);
+    }
+    // Receivers beyond the end of the surface: their refraction point would be past it.
+    let mut beyond = demo::air_water(300, 4);
+    beyond
+        .receivers
+        .extend([[3.0, -1.0], [4.0, -0.5], [5.0, -0.3]]);
+    let mut reused = eigenray::Batch::default();
+    let mut timeless = 0;
+    for spec in [
+        shuffled,
+        demo::layer_stack(8, 900),
+        beyond,
+        demo::sea_floor(40, 200),
+    ] {
+        let sc = scene(&spec);
+        let tracer = Tracer::new(&sc).expect("tracer");
+        let opts = BatchOptions::default();
+        tracer.trace_batch_into(&opts, &mut reused);
+        let fresh = tracer.trace_batch(&opts);
+        assert_eq!(reused.len(), fresh.len());
+        timeless += (0..fresh.len())
+            .filter(|&i| !fresh.record(i).status.has_time())
+            .count();
+        for i in 0..fresh.len() {
+            // Debug strings: NaN residuals compare equal there.
+            assert_eq!(
+                format!("{:?}", reused.ray(i)),
+                format!("{:?}", fresh.ray(i)),
+                "ray {i}"
+            );
+            assert_eq!(
+                format!("{:?}", reused.points(i)),
+                format!("{:?}", fresh.points(i))
+            );
+        }
+    }
+    assert!(timeless > 0, "no ray without a time");
+}
