@@ -52,7 +52,8 @@ fn with_tolerance(mut scene: Scene, tolerance: f64) -> Scene {
 /// One ray through 1, 8 and 100 interactions: at the demo scenes' residual tolerance 1e-12
 /// (the solution to round-off), and at 1e-6, which already gives travel times exact to 1e-12
 /// (the time is stationary: its error is of second order; `tests/physics/benchmarks.rs`
-/// checks it against the 40-digit references of `seed500` and `layers10`).
+/// checks it against the 40-digit references of `seed500` and `layers10`); and through 8 and
+/// 100 dipping layers, where Newton steps remain.
 fn single_ray(c: &mut Criterion) {
     let scenes = [
         ("1_interaction", demo::air_water(500, 1)),
@@ -69,6 +70,14 @@ fn single_ray(c: &mut Criterion) {
             name,
             &with_tolerance(scene(spec), 1e-6),
         );
+    }
+    // Through flat layers the default start is the solution. Dipping layers are the general
+    // case: the start is approximate and Newton steps remain.
+    for (name, spec) in [
+        ("8_interactions", demo::dipping_stack(8, 500)),
+        ("100_interactions", demo::dipping_stack(100, 500)),
+    ] {
+        bench_rays(c, "single_ray_dipping", name, &scene(&spec));
     }
 }
 
@@ -114,11 +123,12 @@ fn batch(c: &mut Criterion) {
 }
 
 /// eigenray's Newton solver against argmin's Gauss-Newton and BFGS on the same paths, from the
-/// same start (eigenray's default initial guess), to the same relative residual, 1e-12.
+/// same start (eigenray's initial guess with the paraxial refinement, `InitialGuess::Paraxial`),
+/// to the same relative residual, 1e-12.
 #[cfg(feature = "argmin")]
 fn versus_argmin(c: &mut Criterion) {
     use eigenray::argmin_bridge::{solve_bfgs, solve_gauss_newton};
-    use eigenray::{PathProblem, SolverOptions};
+    use eigenray::{InitialGuess, PathProblem, SolverOptions};
 
     const TOL: f64 = 1e-12;
     for (name, spec) in [
@@ -132,14 +142,17 @@ fn versus_argmin(c: &mut Criterion) {
         });
         let source = scene.sources()[0];
         let receivers = scene.receivers().to_vec();
-        // The default initial guess: the solver stopped after 0 iterations.
+        // The paraxial start (the solver stopped after 0 iterations): the default start of
+        // these flat layers is their solution, which would leave no solver anything to do.
         let mut start = scene.clone();
         start.set_solver(SolverOptions {
             tolerance: TOL,
             max_iterations: 0,
         });
         let guesses: Vec<Vec<f64>> = {
-            let tracer = Tracer::new(&start).expect("tracer");
+            let tracer = Tracer::new(&start)
+                .expect("tracer")
+                .with_initial_guess(InitialGuess::Paraxial);
             let mut ws = Workspace::new();
             receivers
                 .iter()
@@ -153,7 +166,9 @@ fn versus_argmin(c: &mut Criterion) {
             .iter()
             .map(|&r| PathProblem::new(&scene, 0, source, r).expect("media given"))
             .collect();
-        let tracer = Tracer::new(&scene).expect("tracer");
+        let tracer = Tracer::new(&scene)
+            .expect("tracer")
+            .with_initial_guess(InitialGuess::Paraxial);
         let mut group = c.benchmark_group(format!("versus_argmin/{name}"));
         group.throughput(Throughput::Elements(1));
         let mut ws = Workspace::new();

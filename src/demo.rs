@@ -189,6 +189,39 @@ pub fn layer_stack(n_layers: usize, receivers: usize) -> SceneSpec {
     spec
 }
 
+/// [`layer_stack`] with dipping interfaces: interface `i` turned about `x = 0` to the slope
+/// `0.9 i / W` (`W` its half-width, so that neighbours never cross; the deepest dips about 5°),
+/// and the receivers lowered to `y = −1.1 n − 0.5`. The layers are not parallel, so the
+/// ray-parameter start is only approximate and Newton steps remain (benchmarks of the general
+/// case).
+///
+/// ```
+/// let scene = eigenray::Scene::from_spec(&eigenray::demo::dipping_stack(8, 5)).unwrap();
+/// let tracer = eigenray::Tracer::new(&scene).unwrap();
+/// let rays = tracer.trace_all();
+/// assert!(rays.iter().all(|r| r.status == eigenray::Status::Converged && r.iterations > 0));
+/// ```
+///
+/// # Panics
+/// If `n_layers` is 0.
+pub fn dipping_stack(n_layers: usize, receivers: usize) -> SceneSpec {
+    let mut spec = layer_stack(n_layers, receivers);
+    for (i, iface) in spec.interfaces.values_mut().enumerate() {
+        let (x0, x1, y) = (iface.points[0][0], iface.points[1][0], iface.points[0][1]);
+        let slope = 0.9 * i as f64 / x1;
+        iface.points = vec![[x0, y + slope * x0], [x1, y + slope * x1]];
+    }
+    for r in &mut spec.receivers {
+        r[1] = -1.1 * n_layers as f64 - 0.5;
+    }
+    spec.description = Some(format!(
+        "{} flat layers turned about x = 0 (interface i to slope 0.9 i / W); receivers lowered \
+         to y = -1.1 n - 0.5",
+        n_layers
+    ));
+    spec
+}
+
 /// The sea floor of [`sea_floor`]: `y = −2 + 0.1 sin(2π x / 5)` (km).
 pub fn sea_floor_depth(x: f64) -> f64 {
     -2.0 + 0.1 * (2.0 * std::f64::consts::PI * x / 5.0).sin()

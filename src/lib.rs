@@ -52,7 +52,7 @@ pub use scene::{
     SceneSpec, SegmentRef, SolverOptions, SolverSpec, Step, StepKind, StepSpec,
 };
 pub use solver::{Solution, Workspace};
-pub use trace::{Ray, RaySummary, Reason, Status, Tracer, ray_index};
+pub use trace::{InitialGuess, Ray, RaySummary, Reason, Status, Tracer, ray_index};
 
 /// The README's examples, compiled and run as doctests.
 #[cfg(doctest)]

@@ -190,6 +190,19 @@ pub(crate) enum Start<'a> {
     Given(&'a [f64]),
 }
 
+/// How a path made only of refractions crossed by the straight line `S → R` refines its start
+/// (see [`Tracer`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum InitialGuess {
+    /// The flat-layer ray-parameter solution where the interfaces are nearly parallel (the
+    /// solution itself for parallel flat layers), the paraxial one elsewhere.
+    #[default]
+    RayParameter,
+    /// The paraxial (small-angle) solution only: a start that leaves Newton steps to do even
+    /// through flat layers, for comparing solvers from one start.
+    Paraxial,
+}
+
 /// The contract's ray numbering: source-major, then receiver, then path.
 #[inline]
 pub fn ray_index(
@@ -207,11 +220,18 @@ pub fn ray_index(
 /// Initial guess (documented, deterministic): interaction `i` of `k` starts at the point of
 /// its interface nearest to the target `S + (i + 1)/(k + 1) · (R − S)` on the straight line
 /// from source to receiver; a refraction whose interface that line crosses starts at the
-/// crossing nearest the target instead; when every step is such a refraction, each point
-/// then moves along its interface to where a paraxial ray would
-/// cross: the crossings' fractions `tᵢ` of the way from `S` to `R` become lateral fractions
-/// `τᵢ = Σ_{j≤i} Δtⱼ/wⱼ / Σⱼ Δtⱼ/wⱼ` (`wⱼ` the legs' slownesses), the solution itself for small
-/// angles through parallel flat layers. On a polyline of more than 1,024 segments (a
+/// crossing nearest the target instead. When every step is such a refraction, each point
+/// then moves along its interface to where a ray through flat layers would cross: the layers
+/// are taken as parallel to the first interface at its crossing, `Δtⱼ Z` thick (`tᵢ` the
+/// crossings' fractions of the way from `S` to `R`, `Z` and `X` the extents of `R − S` across
+/// and along the layers, `wⱼ` the legs' slownesses). Where the interfaces' tangents at the
+/// crossings agree to within about 8°, the ray parameter `p` solves
+/// `Σⱼ Δtⱼ tan θⱼ = X / Z` with `sin θⱼ = p / wⱼ` (a 1-D Newton iteration from the paraxial
+/// `p`, monotone from above) and the lateral fractions become `τᵢ = Σ_{j≤i} Δtⱼ tan θⱼ · Z / X`:
+/// the solution itself for parallel flat layers (one refraction at a straight interface
+/// included), so the Newton solve that follows only confirms it. Elsewhere, or with
+/// [`InitialGuess::Paraxial`], the small-angle limit `τᵢ = Σ_{j≤i} Δtⱼ/wⱼ / Σⱼ Δtⱼ/wⱼ`.
+/// On a polyline of more than 1,024 segments (a
 /// digitised sea floor, a measured profile) the nearest point is replaced by the crossing,
 /// nearest the target, of the line through the target perpendicular to `R − S`, when there is
 /// one: an `O(log M)` query where the nearest-point search grows about like `√M`; a single
@@ -225,6 +245,7 @@ pub struct Tracer<'s> {
     /// Per path, per leg between two interactions (leg `i` at index `i − 1`): every scene
     /// segment that can cross it, when there are few (see [`leg_candidates`]).
     leg_candidates: Vec<Vec<Option<Box<[u32]>>>>,
+    guess: InitialGuess,
 }
 
 impl<'s> Tracer<'s> {
@@ -251,7 +272,30 @@ impl<'s> Tracer<'s> {
                 .iter()
                 .map(|p| leg_candidates(scene, &p.steps))
                 .collect(),
+            guess: InitialGuess::default(),
         })
+    }
+
+    /// The same tracer with another refinement of the start of refraction paths.
+    ///
+    /// ```
+    /// use eigenray::{InitialGuess, Scene, Tracer, Workspace};
+    /// let scene = Scene::from_spec(&eigenray::demo::layer_stack(8, 10)).unwrap();
+    /// let (src, rec) = (scene.sources()[0], scene.receivers()[9]);
+    /// let mut ws = Workspace::new();
+    /// // Through flat layers the default start is the solution; the paraxial one is not.
+    /// let exact = Tracer::new(&scene).unwrap().solve(src, rec, 0, &mut ws);
+    /// let paraxial = Tracer::new(&scene)
+    ///     .unwrap()
+    ///     .with_initial_guess(InitialGuess::Paraxial)
+    ///     .solve(src, rec, 0, &mut ws);
+    /// assert_eq!(exact.iterations, 0);
+    /// assert!(paraxial.iterations > 0);
+    /// assert!((exact.time - paraxial.time).abs() <= 1e-12 * exact.time);
+    /// ```
+    pub fn with_initial_guess(mut self, guess: InitialGuess) -> Self {
+        self.guess = guess;
+        self
     }
 
     /// The scene.
@@ -439,7 +483,7 @@ impl<'s> Tracer<'s> {
         ws.slowness
             .extend(ws.media.iter().map(|&m| scene.media()[m].slowness));
         if !matches!(start, Start::Given(_)) {
-            paraxial_guess(scene, &spec.steps, source, receiver, ws);
+            paraxial_guess(scene, &spec.steps, source, receiver, self.guess, ws);
         }
         if let Start::Compare(guess) = start {
             let slowness = std::mem::take(&mut ws.slowness);
@@ -825,6 +869,7 @@ fn paraxial_guess(
     steps: &[crate::scene::Step],
     source: Point,
     receiver: Point,
+    guess: InitialGuess,
     ws: &mut Workspace,
 ) {
     let k = steps.len();
@@ -849,7 +894,10 @@ fn paraxial_guess(
             .polyline
             .tangent(ws.seg[i])
     };
-    let p = ray_parameter(t, w, d, tangent, &mut ws.layers);
+    let p = match guess {
+        InitialGuess::RayParameter => ray_parameter(t, w, d, tangent, &mut ws.layers),
+        InitialGuess::Paraxial => None,
+    };
     let mut acc = 0.0;
     prev = 0.0;
     for (i, step) in steps.iter().enumerate() {
