@@ -607,6 +607,12 @@ impl Scene {
             .map(|&i| self.segments[i as usize])
     }
 
+    /// End points of scene segment `i` (an index into [`segments`](Self::segments)).
+    #[inline]
+    pub(crate) fn segment_end_points(&self, i: u32) -> (Point, Point) {
+        self.segment_ends[i as usize]
+    }
+
     /// Whether scene segment `i` meets `a–b` at a fraction `t ∈ (margin, 1 − margin)` of it.
     #[inline]
     fn crosses(&self, i: u32, a: Point, b: Point, margin: f64) -> bool {

@@ -744,20 +744,24 @@ impl<'s> Tracer<'s> {
 }
 
 /// A leg between two interactions has its end points on their interfaces, so it lies in the
-/// box of the two interfaces: the scene segments whose boxes overlap that box (widened by
-/// round-off) are all it can cross. Where they are few (a leg between two layers of a stack:
-/// those two interfaces), the obstruction test checks just them instead of querying the
-/// scene's BVH. Per leg between interactions `i − 1` and `i` (at index `i − 1`).
+/// convex hull of the two interfaces: the scene segments that meet that hull (widened by
+/// round-off) are all it can cross. Where they are few (a leg between two layers of a stack,
+/// flat or dipping: those two interfaces), the obstruction test checks just them instead of
+/// querying the scene's BVH, whose boxes of long slanted segments all overlap. Per leg between
+/// interactions `i − 1` and `i` (at index `i − 1`).
 fn leg_candidates(scene: &Scene, steps: &[crate::scene::Step]) -> Vec<Option<Box<[u32]>>> {
     /// More candidates than this: the BVH query is as quick.
     const MAX: usize = 8;
+    /// Segments in the hull's box beyond which the hull test is not worth making.
+    const BOX_LIMIT: usize = 4096;
     steps
         .windows(2)
         .map(|w| {
-            let bbox = scene.interfaces()[w[0].interface]
-                .polyline
-                .bbox()
-                .union(scene.interfaces()[w[1].interface].polyline.bbox());
+            let (a, b) = (
+                &scene.interfaces()[w[0].interface].polyline,
+                &scene.interfaces()[w[1].interface].polyline,
+            );
+            let bbox = a.bbox().union(b.bbox());
             let pad = 1e-9
                 * (bbox.max.x - bbox.min.x
                     + (bbox.max.y - bbox.min.y)
@@ -769,11 +773,75 @@ fn leg_candidates(scene: &Scene, steps: &[crate::scene::Step]) -> Vec<Option<Box
                 min: Point::new(bbox.min.x - pad, bbox.min.y - pad),
                 max: Point::new(bbox.max.x + pad, bbox.max.y + pad),
             };
-            scene
-                .segments_in(grown, MAX)
-                .map(|found| found.into_boxed_slice())
+            let in_box = scene.segments_in(grown, BOX_LIMIT)?;
+            let hull = convex_hull(a.vertices().iter().chain(b.vertices()).copied().collect());
+            let found: Vec<u32> = in_box
+                .into_iter()
+                .filter(|&i| {
+                    let (p, q) = scene.segment_end_points(i);
+                    meets_convex(p, q, &hull, pad)
+                })
+                .collect();
+            (found.len() <= MAX).then(|| found.into_boxed_slice())
         })
         .collect()
+}
+
+/// The convex hull of `points`, counter-clockwise (Andrew's monotone chain; collinear points
+/// dropped; fewer than three points as they are, sorted).
+fn convex_hull(mut points: Vec<Point>) -> Vec<Point> {
+    points.sort_by(|p, q| p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)));
+    points.dedup();
+    if points.len() < 3 {
+        return points;
+    }
+    let mut hull: Vec<Point> = Vec::with_capacity(2 * points.len());
+    for pass in 0..2 {
+        let floor = hull.len();
+        let iter: Box<dyn Iterator<Item = &Point>> = if pass == 0 {
+            Box::new(points.iter())
+        } else {
+            Box::new(points.iter().rev())
+        };
+        for &p in iter {
+            while hull.len() >= floor + 2
+                && crate::geom::orient(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(p);
+        }
+        hull.pop();
+    }
+    hull
+}
+
+/// Whether segment `p–q` meets the convex polygon `hull` (counter-clockwise, or up to two
+/// points: a segment or a point) grown by `pad`: no separating axis among the polygon's edge
+/// normals and the segment's normal.
+fn meets_convex(p: Point, q: Point, hull: &[Point], pad: f64) -> bool {
+    let separated = |n: Vec2| {
+        let len = n.length();
+        if len.is_nan() || len <= 0.0 {
+            return false;
+        }
+        let proj = |x: Point| (x - Point::new(0.0, 0.0)).dot(n);
+        let (s0, s1) = (proj(p).min(proj(q)), proj(p).max(proj(q)));
+        let (h0, h1) = hull
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &h| {
+                (lo.min(proj(h)), hi.max(proj(h)))
+            });
+        s1 < h0 - pad * len || s0 > h1 + pad * len
+    };
+    let n = hull.len();
+    let edges = (0..n).map(|i| hull[(i + 1) % n] - hull[i]);
+    let mut axes: Vec<Vec2> = edges.map(|e| e.perp()).collect();
+    axes.push((q - p).perp());
+    // Axis-aligned axes too: a degenerate hull (a segment) needs its own extent checked.
+    axes.push(Vec2::new(1.0, 0.0));
+    axes.push(Vec2::new(0.0, 1.0));
+    !axes.into_iter().any(separated)
 }
 
 /// A leg whose sine with the interface is below this runs along it, on neither side.
@@ -1118,16 +1186,59 @@ mod tests {
         assert!(hits > 1000 && misses > 1000, "{hits} hits, {misses} misses");
     }
 
-    /// Legs between the layers of a stack have just the two layers' segments as candidates.
+    /// Legs between the layers of a stack, flat or dipping (where the boxes of all layers
+    /// overlap), have just the two layers' segments as candidates.
     #[test]
     fn stack_legs_have_two_candidates() {
-        let scene = Scene::from_spec(&crate::demo::layer_stack(20, 1)).unwrap();
-        let cands = leg_candidates(&scene, &scene.paths()[0].steps);
-        assert_eq!(cands.len(), 19);
-        assert!(
-            cands
-                .iter()
-                .all(|c| c.as_deref().map(<[u32]>::len) == Some(2))
-        );
+        for spec in [
+            crate::demo::layer_stack(20, 1),
+            crate::demo::dipping_stack(20, 1),
+        ] {
+            let scene = Scene::from_spec(&spec).unwrap();
+            let cands = leg_candidates(&scene, &scene.paths()[0].steps);
+            assert_eq!(cands.len(), 19);
+            for (leg, c) in cands.iter().enumerate() {
+                let c = c.as_deref().expect("few candidates");
+                let mut ifaces: Vec<u32> = c
+                    .iter()
+                    .map(|&i| scene.segments()[i as usize].interface)
+                    .collect();
+                ifaces.sort_unstable();
+                assert_eq!(ifaces, [leg as u32, leg as u32 + 1], "leg {}", leg + 1);
+            }
+        }
+    }
+
+    /// The hull test against brute force: a segment meets the hull exactly when it crosses
+    /// one of its edges or has an end inside it.
+    #[test]
+    fn convex_hull_and_segment_test() {
+        let mut rng = SplitMix64(9);
+        let mut pt = |s: f64| Point::new(rng.next_f64() * s, rng.next_f64() * s);
+        for _ in 0..200 {
+            let cloud: Vec<Point> = (0..7).map(|_| pt(10.0)).collect();
+            let hull = convex_hull(cloud.clone());
+            let n = hull.len();
+            let inside = |p: Point| {
+                (0..n).all(|i| crate::geom::orient(hull[i], hull[(i + 1) % n], p) >= 0.0)
+            };
+            assert!(
+                cloud.iter().all(|&p| inside(p)),
+                "hull {hull:?} of {cloud:?}"
+            );
+            for _ in 0..50 {
+                let (p, q) = (pt(14.0), pt(14.0));
+                let crosses = (0..n).any(|i| {
+                    crate::polyline::segment_intersection(p, q, hull[i], hull[(i + 1) % n])
+                        .is_some()
+                });
+                let expected = crosses || inside(p) || inside(q);
+                assert_eq!(
+                    meets_convex(p, q, &hull, 0.0),
+                    expected,
+                    "{p:?}–{q:?} vs {hull:?}"
+                );
+            }
+        }
     }
 }
