@@ -274,8 +274,8 @@ fn main() -> io::Result<()> {
         md,
         "`demo::dipping_stack(k, {RECEIVERS})`: the same stacks with dipping interfaces (interface `i` turned about `x = 0` to the \
          slope `0.9 i / W`, `W` its half-width, so the deepest dip about 5°; receivers lowered \
-         to `y = −1.1 k − 0.5`): the layers are not parallel, the ray-parameter guess is only \
-         approximate, and Newton steps remain:\n"
+         to `y = −1.1 k − 0.5`): the layers are not parallel, the start is the paraxial one, and \
+         Newton steps remain:\n"
     );
     let _ = writeln!(
         md,

@@ -191,9 +191,8 @@ pub fn layer_stack(n_layers: usize, receivers: usize) -> SceneSpec {
 
 /// [`layer_stack`] with dipping interfaces: interface `i` turned about `x = 0` to the slope
 /// `0.9 i / W` (`W` its half-width, so that neighbours never cross; the deepest dips about 5°),
-/// and the receivers lowered to `y = −1.1 n − 0.5`. The layers are not parallel, so the
-/// ray-parameter start is only approximate and Newton steps remain (benchmarks of the general
-/// case).
+/// and the receivers lowered to `y = −1.1 n − 0.5`. The layers are not parallel, so the start
+/// is the paraxial one and Newton steps remain (benchmarks of the general case).
 ///
 /// ```
 /// let scene = eigenray::Scene::from_spec(&eigenray::demo::dipping_stack(8, 5)).unwrap();
