@@ -37,6 +37,34 @@ struct PerRay {
     other: usize,
 }
 
+/// Time per ray through `make(k, RECEIVERS)` for each `k`: the rows, the points (k, µs) and
+/// their least-squares line.
+#[allow(clippy::type_complexity, reason = "a one-off tuple of results")]
+fn interaction_curve(
+    label: &str,
+    ks: &[usize],
+    make: fn(usize, usize) -> SceneSpec,
+) -> (Vec<(usize, PerRay)>, Vec<(f64, f64)>, (f64, f64)) {
+    eprintln!("time per ray against interactions, {label}");
+    let mut rows = Vec::new();
+    for &k in ks {
+        let (scene, _) = build(&make(k, RECEIVERS));
+        let m = per_ray(&scene);
+        eprintln!(
+            "  k = {k:3}: {} per ray, {:.2} iterations",
+            fmt_seconds(m.seconds),
+            m.iterations
+        );
+        rows.push((k, m));
+    }
+    let pts: Vec<(f64, f64)> = rows
+        .iter()
+        .map(|(k, m)| (*k as f64, m.seconds * 1e6))
+        .collect();
+    let fit = fit_line(&pts);
+    (rows, pts, fit)
+}
+
 /// Solves every ray of the scene one by one on this thread with one reused workspace.
 fn per_ray(scene: &Scene) -> PerRay {
     let tracer = Tracer::new(scene).expect("tracer");
@@ -195,41 +223,10 @@ fn main() -> io::Result<()> {
     let batch_md = batch_section()?;
 
     // 1. Interactions.
-    eprintln!("time per ray against interactions");
     let ks = [1usize, 2, 4, 8, 16, 32, 64, 100, 200];
-    let mut rows = Vec::new();
-    for &k in &ks {
-        let (scene, _) = build(&demo::layer_stack(k, RECEIVERS));
-        let m = per_ray(&scene);
-        eprintln!(
-            "  k = {k:3}: {} per ray, {:.2} iterations",
-            fmt_seconds(m.seconds),
-            m.iterations
-        );
-        rows.push((k, m));
-    }
-    let pts: Vec<(f64, f64)> = rows
-        .iter()
-        .map(|(k, m)| (*k as f64, m.seconds * 1e6))
-        .collect();
-    let (a, b) = fit_line(&pts);
-    eprintln!("time per ray against interactions, dipping layers");
-    let mut wavy_rows = Vec::new();
-    for &k in &ks {
-        let (scene, _) = build(&demo::dipping_stack(k, RECEIVERS));
-        let m = per_ray(&scene);
-        eprintln!(
-            "  k = {k:3}: {} per ray, {:.2} iterations",
-            fmt_seconds(m.seconds),
-            m.iterations
-        );
-        wavy_rows.push((k, m));
-    }
-    let wavy_pts: Vec<(f64, f64)> = wavy_rows
-        .iter()
-        .map(|(k, m)| (*k as f64, m.seconds * 1e6))
-        .collect();
-    let (wa, wb) = fit_line(&wavy_pts);
+    let (rows, pts, (a, b)) = interaction_curve("flat layers", &ks, demo::layer_stack);
+    let (wavy_rows, wavy_pts, (wa, wb)) =
+        interaction_curve("dipping layers", &ks, demo::dipping_stack);
     let _ = writeln!(md, "## Time per ray against the number of interactions\n");
     let _ = writeln!(
         md,
@@ -239,65 +236,50 @@ fn main() -> io::Result<()> {
          tolerance 1e-12), time per ray including the classification (side and obstruction \
          tests).\n"
     );
-    let _ = writeln!(
-        md,
-        "| k | time per ray | wall clock | per interaction | iterations (mean) | per iteration and interaction | converged |"
-    );
-    let _ = writeln!(md, "| ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
-    for (k, m) in &rows {
-        let _ = writeln!(
-            md,
-            "| {k} | {} | {} | {} | {:.2} | {} | {}/{} |",
-            fmt_seconds(m.seconds),
-            fmt_seconds(m.wall),
-            fmt_seconds(m.seconds / *k as f64),
-            m.iterations,
-            fmt_seconds(m.seconds / (*k as f64 * m.iterations.max(1.0))),
-            m.converged,
-            RECEIVERS
+    let table = |rows: &[(usize, PerRay)]| {
+        let mut t = String::from(
+            "| k | time per ray | wall clock | per interaction | iterations (mean) | converged | vertex | other |\n\
+             | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
         );
-    }
+        for (k, m) in rows {
+            let _ = writeln!(
+                t,
+                "| {k} | {} | {} | {} | {:.2} | {} | {} | {} |",
+                fmt_seconds(m.seconds),
+                fmt_seconds(m.wall),
+                fmt_seconds(m.seconds / *k as f64),
+                m.iterations,
+                m.converged,
+                m.vertex,
+                m.other
+            );
+        }
+        t
+    };
+    let _ = write!(md, "{}", table(&rows));
     let _ = writeln!(
         md,
-        "\nLeast-squares line: time per ray ≈ {:.3} µs + {:.3} µs × k. Through flat parallel \
-         layers the initial guess solves the ray-parameter equation, so the mean iteration \
-         count is {:.2} at k = 1 and {:.2} at k = 200: what is left is the `O(k)` start (the \
-         crossings of `S → R` and the 1-D ray-parameter solve), one `O(k)` evaluation with its \
-         Thomas sweep, and the classification (the obstruction test checks each leg between \
-         two layers against the two layers' segments only).\n",
+        "\nLeast-squares line: time per ray ≈ {:.3} µs + {:.3} µs × k. From two layers on, the \
+         initial guess solves the ray-parameter equation of these parallel flat layers, so the \
+         mean iteration count is {:.2} at k = 2 and {:.2} at k = 200 (k = 1 keeps the paraxial \
+         start: {:.2}): what is left is the `O(k)` start (the crossings of `S → R` and the 1-D \
+         ray-parameter solve), one `O(k)` evaluation with its Thomas sweep, and the \
+         classification (the obstruction test checks each leg between two layers against the \
+         two layers' segments only).\n",
         a,
         b,
-        rows[0].1.iterations,
-        rows[rows.len() - 1].1.iterations
+        rows[1].1.iterations,
+        rows[rows.len() - 1].1.iterations,
+        rows[0].1.iterations
     );
     let _ = writeln!(
         md,
-        "`demo::dipping_stack(k, {RECEIVERS})`: the same stacks with dipping interfaces (interface `i` turned about `x = 0` to the \
-         slope `0.9 i / W`, `W` its half-width, so the deepest dip about 5°; receivers lowered \
-         to `y = −1.1 k − 0.5`): the layers are not parallel, the start is the paraxial one, and \
-         Newton steps remain:\n"
+        "`demo::dipping_stack(k, {RECEIVERS})`: the same stacks with dipping interfaces \
+         (interface `i` turned about `x = 0` to the slope `0.9 i / W`, `W` its half-width, so \
+         the deepest dip about 5°; receivers lowered to `y = −1.1 k − 0.5`): the layers are not \
+         parallel, the start is the paraxial one, and Newton steps remain:\n"
     );
-    let _ = writeln!(
-        md,
-        "| k | time per ray | wall clock | per interaction | iterations (mean) | converged | vertex | other |"
-    );
-    let _ = writeln!(
-        md,
-        "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
-    );
-    for (k, m) in &wavy_rows {
-        let _ = writeln!(
-            md,
-            "| {k} | {} | {} | {} | {:.2} | {} | {} | {} |",
-            fmt_seconds(m.seconds),
-            fmt_seconds(m.wall),
-            fmt_seconds(m.seconds / *k as f64),
-            m.iterations,
-            m.converged,
-            m.vertex,
-            m.other
-        );
-    }
+    let _ = write!(md, "{}", table(&wavy_rows));
     let _ = writeln!(
         md,
         "\nLeast-squares line: time per ray ≈ {wa:.3} µs + {wb:.3} µs × k.\n"

@@ -228,9 +228,10 @@ pub fn ray_index(
 /// crossings are parallel (to within 5e-5 rad), the ray parameter `p` solves
 /// `Σⱼ Δtⱼ tan θⱼ = X / Z` with `sin θⱼ = p / wⱼ` (a 1-D Newton iteration from the paraxial
 /// `p`, monotone from above) and the lateral fractions become `τᵢ = Σ_{j≤i} Δtⱼ tan θⱼ · Z / X`:
-/// the solution itself for parallel flat layers (one refraction at a straight interface
-/// included), so the Newton solve that follows only confirms it. Elsewhere, or with
-/// [`InitialGuess::Paraxial`], the small-angle limit `τᵢ = Σ_{j≤i} Δtⱼ/wⱼ / Σⱼ Δtⱼ/wⱼ`.
+/// the solution itself for parallel flat layers, so the Newton solve that follows only
+/// confirms it. Elsewhere, for a single refraction (whose 1-D ray-parameter solve would cost
+/// what its Newton steps do), or with [`InitialGuess::Paraxial`], the small-angle limit
+/// `τᵢ = Σ_{j≤i} Δtⱼ/wⱼ / Σⱼ Δtⱼ/wⱼ`.
 /// On a polyline of more than 1,024 segments (a
 /// digitised sea floor, a measured profile) the nearest point is replaced by the crossing,
 /// nearest the target, of the line through the target perpendicular to `R − S`, when there is
@@ -928,9 +929,9 @@ fn perpendicular_crossing(
 /// to within [`PARALLEL`], the ray parameter `p` solves `Σⱼ Δzⱼ tan θⱼ = X` with
 /// `sin θⱼ = p / wⱼ` (Newton from the paraxial `p`, which lies above the root of this convex,
 /// increasing function: the iterates decrease monotonically to it), and
-/// `τᵢ = Σ_{j≤i} Δzⱼ tan θⱼ / X`: the exact solution for parallel flat layers, one refraction
-/// at a straight interface included. Otherwise, or when that equation has no root (a ray
-/// beyond the critical angle of a layer), the paraxial fractions
+/// `τᵢ = Σ_{j≤i} Δzⱼ tan θⱼ / X`: the exact solution for parallel flat layers. Otherwise, for
+/// a single refraction, or when that equation has no root (a ray beyond the critical angle of
+/// a layer), the paraxial fractions
 /// `τᵢ = Σ_{j≤i} Δtⱼ/wⱼ / Σ Δtⱼ/wⱼ` (the small-angle limit).
 fn paraxial_guess(
     scene: &Scene,
@@ -962,9 +963,11 @@ fn paraxial_guess(
             .polyline
             .tangent(ws.seg[i])
     };
+    // One refraction: the 1-D ray-parameter solve is the Newton solve's own one-unknown
+    // problem and costs as much; it pays from two interactions on.
     let p = match guess {
-        InitialGuess::RayParameter => ray_parameter(t, w, d, tangent, &mut ws.layers),
-        InitialGuess::Paraxial => None,
+        InitialGuess::RayParameter if k >= 2 => ray_parameter(t, w, d, tangent, &mut ws.layers),
+        _ => None,
     };
     let mut acc = 0.0;
     prev = 0.0;
