@@ -796,24 +796,25 @@ fn convex_hull(mut points: Vec<Point>) -> Vec<Point> {
     if points.len() < 3 {
         return points;
     }
-    let mut hull: Vec<Point> = Vec::with_capacity(2 * points.len());
-    for pass in 0..2 {
-        let floor = hull.len();
-        let iter: Box<dyn Iterator<Item = &Point>> = if pass == 0 {
-            Box::new(points.iter())
-        } else {
-            Box::new(points.iter().rev())
-        };
-        for &p in iter {
-            while hull.len() >= floor + 2
-                && crate::geom::orient(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
-            {
-                hull.pop();
-            }
-            hull.push(p);
+    // Appends `p` to the chain that starts at `floor`, dropping the points it turns right at.
+    let push = |hull: &mut Vec<Point>, floor: usize, p: Point| {
+        while hull.len() >= floor + 2
+            && crate::geom::orient(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
+        {
+            hull.pop();
         }
-        hull.pop();
+        hull.push(p);
+    };
+    let mut hull = Vec::with_capacity(2 * points.len());
+    for &p in &points {
+        push(&mut hull, 0, p);
     }
+    hull.pop();
+    let floor = hull.len();
+    for &p in points.iter().rev() {
+        push(&mut hull, floor, p);
+    }
+    hull.pop();
     hull
 }
 
