@@ -264,6 +264,27 @@ impl Regions {
             }
         }
 
+        // Vertices lying exactly on a segment strictly between its ends (a fault ending on a
+        // layer, a domain corner on an interface): that segment's constraint goes in pieces
+        // through them, in order along it. (Spade's constraint splitting can fail on a
+        // constraint through such a vertex that also crosses others.) The scale is a power of
+        // two, so exactness in scene coordinates is exactness in spade's.
+        let mut through: Vec<Vec<(f64, u32)>> = vec![Vec::new(); nseg];
+        for (u, &h) in handle.iter().enumerate() {
+            let p = original_by_handle[h as usize];
+            scene.segments_through(p, |s| {
+                let (a, b) = interfaces[s.interface as usize]
+                    .polyline
+                    .segment(s.segment as usize);
+                let along = (p - a).dot(b - a);
+                through[seg_offset[s.interface as usize] + s.segment as usize]
+                    .push((along, u as u32));
+            });
+        }
+        for t in &mut through {
+            t.sort_by(|x, y| x.0.total_cmp(&y.0));
+        }
+
         // Interface segments: the chain of triangulation vertices along each.
         let mut chain: Vec<u32> = Vec::with_capacity(nseg + verts.len());
         let mut chain_offset: Vec<usize> = Vec::with_capacity(nseg + 1);
@@ -275,7 +296,19 @@ impl Regions {
                     vertex(vert_offset[i] + j),
                     vertex(vert_offset[i] + (j + 1) % n),
                 );
-                let edges = cdt.add_constraint_and_split(u, w, |p| p);
+                let stops = &through[seg_offset[i] + j];
+                let mut edges = Vec::new();
+                let mut from = u;
+                for to in stops
+                    .iter()
+                    .map(|&(_, v)| FixedVertexHandle::from_index(handle[v as usize] as usize))
+                    .chain([w])
+                {
+                    if to != from {
+                        edges.extend(cdt.add_constraint_and_split(from, to, |p| p));
+                        from = to;
+                    }
+                }
                 chain.push(u.index() as u32);
                 if u == w {
                     continue;

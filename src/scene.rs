@@ -646,6 +646,20 @@ impl Scene {
             .segment(s.segment as usize)
     }
 
+    /// Calls `visit` with every interface segment that passes exactly through `p` strictly
+    /// between its ends (a vertex of one interface on a segment of another).
+    pub(crate) fn segments_through(&self, p: Point, mut visit: impl FnMut(SegmentRef)) {
+        self.segment_bvh
+            .any_overlapping(Aabb::from_points(p, p), |i| {
+                let (a, b) = self.segment_ends[i as usize];
+                if a != p && b != p && orient(a, b, p) == 0.0 && Aabb::from_points(a, b).contains(p)
+                {
+                    visit(self.segments[i as usize]);
+                }
+                false
+            });
+    }
+
     /// The interface segment that `p` lies on exactly, if any.
     pub fn on_interface(&self, p: Point) -> Option<SegmentRef> {
         on_interface(&self.interfaces, &self.segments, &self.segment_bvh, p)

@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use eigenray::{Ray, Scene, Status, Tracer};
+use eigenray::{Point, Ray, Scene, Status, Tracer};
 
 #[path = "support/interface.rs"]
 mod interface;
@@ -178,4 +178,39 @@ fn source_equals_receiver_on_interface_is_no_path() {
             ray.path
         );
     }
+}
+
+/// Found by the `scene` fuzz target: a vertex of the lens lies exactly on the surface between
+/// its vertices, and both cross the domain's edge. Spade's constraint splitting asserted on it
+/// (`Regions::build` caught that and rejected the valid scene); the surface's constraint now
+/// goes in pieces through the lens's vertex.
+#[test]
+fn vertex_on_another_interface_across_the_domain_edge() {
+    let text = r#"{
+      "media": {"air": {"speed": 2.0}, "water": {"speed": 0.75, "at": [0.5, -0.5]}},
+      "background": "air",
+      "domain": [[-2.1, -4.0], [5.0, 3.4]],
+      "interfaces": {"surface": {"points": [[-3.0, 5.0], [7.0, 0.0]]},
+                     "lens": {"points": [[2, 4.5], [8, 0.5], [4, 1.5]], "closed": true}},
+      "sources": [[0.0, 1.0]],
+      "receivers": [[1.0, -1.0], [5.5, -0.0]],
+      "paths": [{"steps": [{"refract": "surface"}]}, {"steps": [{"reflect": "surface"}]}]
+    }"#;
+    let scene = Scene::from_json(text).expect("a valid scene");
+    let tracer = Tracer::new(&scene).expect("regions build");
+    let regions = tracer.regions().expect("lookup paths need regions");
+    let medium = |x: f64, y: f64| {
+        regions
+            .medium_at(Point::new(x, y))
+            .map(|m| scene.media()[m].name.clone())
+    };
+    // Below the surface: the `at` point's water; above it, outside and inside the lens: the
+    // background.
+    assert_eq!(medium(0.0, -3.0).as_deref(), Some("water"));
+    assert_eq!(medium(-2.0, 3.0).as_deref(), Some("water"));
+    assert_eq!(medium(4.9, 3.0).as_deref(), Some("air"));
+    assert_eq!(medium(4.9, 2.0).as_deref(), Some("air"));
+    let rays = tracer.trace_all();
+    assert_eq!(rays.len(), 4);
+    assert_points_on_interfaces("vertex on interface", &scene, &rays);
 }
