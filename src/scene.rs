@@ -607,12 +607,6 @@ impl Scene {
             .map(|&i| self.segments[i as usize])
     }
 
-    /// End points of scene segment `i` (an index into [`segments`](Self::segments)).
-    #[inline]
-    pub(crate) fn segment_end_points(&self, i: u32) -> (Point, Point) {
-        self.segment_ends[i as usize]
-    }
-
     /// Whether scene segment `i` meets `a–b` at a fraction `t ∈ (margin, 1 − margin)` of it.
     #[inline]
     fn crosses(&self, i: u32, a: Point, b: Point, margin: f64) -> bool {
@@ -649,15 +643,18 @@ impl Scene {
     /// Calls `visit` with every interface segment that passes exactly through `p` strictly
     /// between its ends (a vertex of one interface on a segment of another).
     pub(crate) fn segments_through(&self, p: Point, mut visit: impl FnMut(SegmentRef)) {
-        self.segment_bvh
-            .any_overlapping(Aabb::from_points(p, p), |i| {
-                let (a, b) = self.segment_ends[i as usize];
-                if a != p && b != p && orient(a, b, p) == 0.0 && Aabb::from_points(a, b).contains(p)
-                {
-                    visit(self.segments[i as usize]);
+        segments_on(
+            &self.interfaces,
+            &self.segments,
+            &self.segment_bvh,
+            p,
+            |s, a, b| {
+                if a != p && b != p {
+                    visit(s);
                 }
                 false
-            });
+            },
+        );
     }
 
     /// The interface segment that `p` lies on exactly, if any.
@@ -756,18 +753,29 @@ fn on_interface(
     p: Point,
 ) -> Option<SegmentRef> {
     let mut found = None;
+    segments_on(interfaces, segments, bvh, p, |s, _, _| {
+        found = Some(s);
+        true
+    });
+    found
+}
+
+/// Calls `visit(segment, start, end)` for the interface segments that `p` lies on exactly
+/// (robust orientation), until it returns `true` ("stop").
+fn segments_on(
+    interfaces: &[Interface],
+    segments: &[SegmentRef],
+    bvh: &Bvh,
+    p: Point,
+    mut visit: impl FnMut(SegmentRef, Point, Point) -> bool,
+) {
     bvh.any_overlapping(Aabb::from_points(p, p), |i| {
         let s = segments[i as usize];
         let (a, b) = interfaces[s.interface as usize]
             .polyline
             .segment(s.segment as usize);
-        if orient(a, b, p) == 0.0 && Aabb::from_points(a, b).contains(p) {
-            found = Some(s);
-            return true;
-        }
-        false
+        orient(a, b, p) == 0.0 && Aabb::from_points(a, b).contains(p) && visit(s, a, b)
     });
-    found
 }
 
 /// Rejects segments that cross or overlap, and polylines that touch themselves away from a

@@ -484,7 +484,7 @@ impl<'s> Tracer<'s> {
         ws.slowness
             .extend(ws.media.iter().map(|&m| scene.media()[m].slowness));
         if !matches!(start, Start::Given(_)) {
-            paraxial_guess(scene, &spec.steps, source, receiver, self.guess, ws);
+            refraction_guess(scene, &spec.steps, source, receiver, self.guess, ws);
         }
         if let Start::Compare(guess) = start {
             let slowness = std::mem::take(&mut ws.slowness);
@@ -779,7 +779,7 @@ fn leg_candidates(scene: &Scene, steps: &[crate::scene::Step]) -> Vec<Option<Box
             let found: Vec<u32> = in_box
                 .into_iter()
                 .filter(|&i| {
-                    let (p, q) = scene.segment_end_points(i);
+                    let (p, q) = scene.segment_points(scene.segments()[i as usize]);
                     meets_convex(p, q, &hull, pad)
                 })
                 .collect();
@@ -827,7 +827,7 @@ fn meets_convex(p: Point, q: Point, hull: &[Point], pad: f64) -> bool {
         if len.is_nan() || len <= 0.0 {
             return false;
         }
-        let proj = |x: Point| (x - Point::new(0.0, 0.0)).dot(n);
+        let proj = |x: Point| x.x * n.x + x.y * n.y;
         let (s0, s1) = (proj(p).min(proj(q)), proj(p).max(proj(q)));
         let (h0, h1) = hull
             .iter()
@@ -934,7 +934,7 @@ fn perpendicular_crossing(
 /// a single refraction, or when that equation has no root (a ray beyond the critical angle of
 /// a layer), the paraxial fractions
 /// `τᵢ = Σ_{j≤i} Δtⱼ/wⱼ / Σ Δtⱼ/wⱼ` (the small-angle limit).
-fn paraxial_guess(
+fn refraction_guess(
     scene: &Scene,
     steps: &[crate::scene::Step],
     source: Point,
@@ -967,7 +967,9 @@ fn paraxial_guess(
     // One refraction: the 1-D ray-parameter solve is the Newton solve's own one-unknown
     // problem and costs as much; it pays from two interactions on.
     let p = match guess {
-        InitialGuess::RayParameter if k >= 2 => ray_parameter(t, w, d, tangent, &mut ws.layers),
+        InitialGuess::RayParameter if k >= 2 => {
+            ray_parameter(t, w, sum, d, tangent, &mut ws.layers)
+        }
         _ => None,
     };
     let mut acc = 0.0;
@@ -994,20 +996,21 @@ fn paraxial_guess(
 }
 
 /// Largest angle between two interfaces' normals (as `1 − cos`) for which
-/// [`paraxial_guess`] treats the layers as parallel: about 5e-5 rad, round-off of digitised
+/// [`refraction_guess`] treats the layers as parallel: about 5e-5 rad, round-off of digitised
 /// coordinates. (With 8° the refinement also served nearly parallel layers: through the 5°
 /// dips of `demo::dipping_stack` it saved 0.1–0.3 of 3 Newton steps per ray but cost more
 /// time than it saved.)
 const PARALLEL: f64 = 1e-9;
 
-/// The ray parameter of [`paraxial_guess`] for crossing fractions `t` (increasing, in
-/// `(0, 1]`), slownesses `w` and `d = R − S`, with `tangent(i)` the tangent of interface `i` at
-/// its crossing: `(p, X / Z)`, `p` solving `Σⱼ Δtⱼ tan θⱼ = X / Z` with `sin θⱼ = p / wⱼ`
+/// The ray parameter of [`refraction_guess`] for crossing fractions `t` (increasing, in
+/// `(0, 1]`), slownesses `w`, the paraxial denominator `sum = Σⱼ Δtⱼ/wⱼ` and `d = R − S`, with
+/// `tangent(i)` the tangent of interface `i` at its crossing: `(p, X / Z)`, `p` solving `Σⱼ Δtⱼ tan θⱼ = X / Z` with `sin θⱼ = p / wⱼ`
 /// (thicknesses in units of `Z`). `None` when the interfaces are not parallel, `X` is zero (the
 /// straight line is the ray) or the equation has no root. `layers` is scratch.
 fn ray_parameter(
     t: &[f64],
     w: &[f64],
+    sum: f64,
     d: Vec2,
     tangent: impl Fn(usize) -> Vec2,
     layers: &mut Vec<(f64, f64)>,
@@ -1025,12 +1028,10 @@ fn ray_parameter(
     }
     // Per layer: thickness Δtⱼ (in units of Z) and speed 1/wⱼ.
     layers.clear();
-    let (mut inv_sum, mut limit, mut prev) = (0.0, f64::INFINITY, 0.0);
+    let (mut limit, mut prev) = (f64::INFINITY, 0.0);
     for (j, &wj) in w[..=k].iter().enumerate() {
         let hi = if j < k { t[j] } else { 1.0 };
-        let v = 1.0 / wj;
-        layers.push((hi - prev, v));
-        inv_sum += (hi - prev) * v;
+        layers.push((hi - prev, 1.0 / wj));
         prev = hi;
         limit = limit.min(wj);
     }
@@ -1048,7 +1049,7 @@ fn ray_parameter(
     };
     // The paraxial p (tan θ ≈ sin θ): f(p) ≥ 0 there, as tan θ ≥ sin θ. Below the smallest
     // slowness (a layer's critical angle) f is defined; just below it, it must be positive.
-    let mut p = (x / inv_sum).min(limit * (1.0 - 1e-9));
+    let mut p = (x / sum).min(limit * (1.0 - 1e-9));
     let (mut fp, mut dfp) = f(p);
     if !(fp >= 0.0 && dfp > 0.0 && fp.is_finite() && dfp.is_finite()) {
         return None;
@@ -1133,7 +1134,7 @@ fn initial_guess(
                 best = Some((image_point(line, s, j, source, receiver), d, j));
             }
         }
-        // The crossing's fraction along S → R, for `paraxial_guess` (NaN: no crossing).
+        // The crossing's fraction along S → R, for `refraction_guess` (NaN: no crossing).
         ws.crossing_t[i] = crossing_t;
         let (s, hint) = match best {
             Some((s, _, j)) => (s, j),

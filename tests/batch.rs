@@ -152,8 +152,9 @@ fn dense_receivers_need_fewer_newton_steps() {
 #[test]
 fn flat_layers_start_at_their_solution() {
     // The initial guess solves the ray-parameter equation of flat parallel layers: no Newton
-    // step is left, and the times match the closed form (tests/physics checks them against
-    // 40-digit references).
+    // step is left. (The times themselves are checked independently: tests/physics/layers.rs
+    // against a bisection on the ray parameter, tests/physics/benchmarks.rs on layers10
+    // against 40-digit references.)
     for spec in [
         demo::layer_stack(2, 300),
         demo::layer_stack(8, 300),
