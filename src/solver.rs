@@ -721,6 +721,26 @@ pub(crate) fn solve(
     }
 }
 
+/// [`solve`] for a path of one interaction when its fast path finishes on its own: `None`
+/// when the iteration needs the general loop (a step leaving the segment, a vanished leg, a
+/// rejected step) or reached the iteration limit there. The same steps, bit for bit, as
+/// [`solve`] takes from the same start.
+pub(crate) fn solve_single(
+    g: &Geometry,
+    ws: &mut Workspace,
+    tol: f64,
+    max_iterations: usize,
+) -> Option<(Outcome, Solution)> {
+    let mut fast = Fast {
+        iterations: 0,
+        curvature: true,
+        evaluated: false,
+        polishes: 0,
+    };
+    fast_newton_single(g, ws, tol, max_iterations, &mut fast)
+        .filter(|(outcome, _)| *outcome == Outcome::Converged)
+}
+
 /// The iteration state that the fast path hands on to the general loop.
 struct Fast {
     /// Newton steps taken.
@@ -1026,39 +1046,50 @@ pub(crate) mod tests {
         pub(crate) static GENERAL_ONLY: Cell<bool> = const { Cell::new(false) };
     }
 
-    /// Every ray of `scene`, solved with and without the fast paths: the same rays, bit for
-    /// bit (status, time, iterations, residual, points, reason).
+    /// Every ray of `scene`, solved with and without the fast paths, from the default start
+    /// and from a warm start compared with it (the previous receiver's solution, moved): the
+    /// same rays, bit for bit (status, time, iterations, residual, reason, points, media).
+    /// Returns the number of rays from the default start.
     fn fast_paths_agree(scene: &Scene) -> usize {
+        type Outcome = (crate::Status, u64, usize, u64, Option<crate::Reason>);
         let tracer = Tracer::new(scene).unwrap();
         let mut ws = Workspace::new();
-        let mut fast_rays = Vec::new();
-        for general in [false, true] {
-            GENERAL_ONLY.with(|c| c.set(general));
-            let rays: Vec<_> = (0..scene.sources().len())
-                .flat_map(|s| (0..scene.receivers().len()).map(move |r| (s, r)))
-                .flat_map(|(s, r)| (0..scene.paths().len()).map(move |p| (s, r, p)))
-                .map(|(s, r, p)| tracer.trace(s, r, p, &mut ws))
-                .collect();
-            if general {
-                for (a, b) in fast_rays.iter().zip(&rays) {
-                    let a: &crate::Ray = a;
-                    assert_eq!(a.status, b.status, "{a:?} vs {b:?}");
-                    assert_eq!(
-                        a.time.map(f64::to_bits),
-                        b.time.map(f64::to_bits),
-                        "{a:?} vs {b:?}"
-                    );
-                    assert_eq!(a.iterations, b.iterations, "{a:?} vs {b:?}");
-                    assert_eq!(a.residual.to_bits(), b.residual.to_bits(), "{a:?} vs {b:?}");
-                    assert_eq!(a.points, b.points, "{a:?} vs {b:?}");
-                    assert_eq!(a.reason, b.reason, "{a:?} vs {b:?}");
+        let mut results: [Vec<(Outcome, Vec<Point>, Vec<usize>)>; 2] = Default::default();
+        for (general, out) in results.iter_mut().enumerate() {
+            GENERAL_ONLY.with(|c| c.set(general == 1));
+            let mut last: Vec<Vec<f64>> = vec![Vec::new(); scene.paths().len()];
+            for s in 0..scene.sources().len() {
+                for r in 0..scene.receivers().len() {
+                    for p in 0..scene.paths().len() {
+                        let guess: Vec<f64> = last[p].iter().map(|x| x + 1e-3).collect();
+                        let mut keep = |sum: crate::RaySummary, ws: &Workspace| {
+                            let o = (
+                                sum.status,
+                                sum.time.to_bits(),
+                                sum.iterations,
+                                sum.residual.to_bits(),
+                                sum.reason,
+                            );
+                            out.push((o, ws.points().to_vec(), ws.media().to_vec()));
+                        };
+                        let cold = tracer.solve_indexed_from(s, r, p, None, &mut ws);
+                        keep(cold, &ws);
+                        last[p] = ws.parameters().to_vec();
+                        if !guess.is_empty() {
+                            let warm = tracer.solve_indexed_from(s, r, p, Some(&guess), &mut ws);
+                            keep(warm, &ws);
+                        }
+                    }
                 }
-            } else {
-                fast_rays = rays;
             }
         }
         GENERAL_ONLY.with(|c| c.set(false));
-        fast_rays.len()
+        let [fast, general] = &results;
+        assert_eq!(fast.len(), general.len());
+        for (a, b) in fast.iter().zip(general) {
+            assert_eq!(a, b);
+        }
+        scene.num_rays()
     }
 
     #[test]
@@ -1082,6 +1113,54 @@ pub(crate) mod tests {
             let text =
                 std::fs::read_to_string(format!("{root}/fixtures/bench/{name}.json")).unwrap();
             assert!(fast_paths_agree(&Scene::from_json(&text).unwrap()) > 0);
+        }
+        // The contract's cases and the fuzz finds: vertices, ends, wrong sides, degenerate legs.
+        for dir in ["cases", "fuzz"] {
+            for entry in std::fs::read_dir(format!("{root}/fixtures/{dir}")).unwrap() {
+                let path = entry.unwrap().path();
+                let name = path.to_string_lossy();
+                if name.ends_with(".json") && !name.ends_with(".expected.json") {
+                    let text = std::fs::read_to_string(&path).unwrap();
+                    assert!(
+                        fast_paths_agree(&Scene::from_json(&text).unwrap()) > 0,
+                        "{name}"
+                    );
+                }
+            }
+        }
+        // One refraction through an undulating surface of 6 and of 40 segments (searched
+        // segment by segment and through its BVH), one reflection inside a closed polygon, and
+        // receivers that put some rays on the wrong side or behind another interface.
+        for segments in [6, 40] {
+            let surface: Vec<String> = (0..=segments)
+                .map(|i| {
+                    let x = -4.0 + 8.0 * i as f64 / segments as f64;
+                    format!("[{x}, {}]", 0.3 * (1.7 * x).sin())
+                })
+                .collect();
+            let receivers: Vec<String> = (0..150)
+                .map(|i| format!("[{}, {}]", -3.5 + 0.047 * i as f64, -2.0 + 0.013 * i as f64))
+                .collect();
+            let text = format!(
+                r#"{{
+                "media": {{ "a": {{ "speed": 1.0 }}, "b": {{ "speed": 0.6 }} }},
+                "interfaces": {{
+                    "surface": {{ "points": [{}] }},
+                    "ring": {{ "points": [[-6, -6], [6, -6], [6, 6], [-6, 6], [-7, 0]],
+                               "closed": true }},
+                    "screen": {{ "points": [[1, -1.2], [2, -1.5]] }}
+                }},
+                "sources": [[0.3, 2.0], [-2.5, 1.1]], "receivers": [{}],
+                "paths": [
+                    {{ "steps": [{{ "refract": "surface" }}], "media": ["a", "b"] }},
+                    {{ "steps": [{{ "reflect": "ring" }}], "media": ["a", "a"] }},
+                    {{ "steps": [{{ "reflect": "surface" }}], "media": ["a", "a"] }}
+                ]
+            }}"#,
+                surface.join(", "),
+                receivers.join(", ")
+            );
+            assert_eq!(fast_paths_agree(&Scene::from_json(&text).unwrap()), 900);
         }
     }
 

@@ -10,6 +10,9 @@ use crate::regions::Regions;
 use crate::scene::{Scene, SceneError, StepKind};
 use crate::solver::{Outcome, Pin, Workspace, solve};
 
+mod single;
+use single::SinglePath;
+
 /// How a ray ended (the contract's `status`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -246,6 +249,8 @@ pub struct Tracer<'s> {
     /// Per path, per leg between two interactions (leg `i` at index `i − 1`): every scene
     /// segment that can cross it, when there are few (see [`leg_candidates`]).
     leg_candidates: Vec<Vec<Option<Box<[u32]>>>>,
+    /// Per path: its one-interaction data when it is one interaction with given media.
+    single: Vec<Option<SinglePath>>,
     guess: InitialGuess,
 }
 
@@ -272,6 +277,9 @@ impl<'s> Tracer<'s> {
                 .paths()
                 .iter()
                 .map(|p| leg_candidates(scene, &p.steps))
+                .collect(),
+            single: (0..scene.paths().len())
+                .map(|p| SinglePath::of(scene, p))
                 .collect(),
             guess: InitialGuess::default(),
         })
@@ -453,6 +461,16 @@ impl<'s> Tracer<'s> {
         start: Start,
         ws: &mut Workspace,
     ) -> RaySummary {
+        #[cfg(test)]
+        let general_only = crate::solver::tests::GENERAL_ONLY.with(|c| c.get());
+        #[cfg(not(test))]
+        let general_only = false;
+        if let Some(sp) = &self.single[path]
+            && !general_only
+            && let Some(done) = self.solve_single_path(sp, source, receiver, path, start, ws)
+        {
+            return done;
+        }
         let scene = self.scene;
         let spec = &scene.paths()[path];
         let k = spec.steps.len();
