@@ -1052,16 +1052,17 @@ pub(crate) mod tests {
     /// Returns the number of rays from the default start.
     fn fast_paths_agree(scene: &Scene) -> usize {
         type Outcome = (crate::Status, u64, usize, u64, Option<crate::Reason>);
+        type Rays = Vec<(Outcome, Vec<Point>, Vec<usize>)>;
         let tracer = Tracer::new(scene).unwrap();
         let mut ws = Workspace::new();
-        let mut results: [Vec<(Outcome, Vec<Point>, Vec<usize>)>; 2] = Default::default();
+        let mut results: [Rays; 2] = Default::default();
         for (general, out) in results.iter_mut().enumerate() {
             GENERAL_ONLY.with(|c| c.set(general == 1));
             let mut last: Vec<Vec<f64>> = vec![Vec::new(); scene.paths().len()];
             for s in 0..scene.sources().len() {
                 for r in 0..scene.receivers().len() {
-                    for p in 0..scene.paths().len() {
-                        let guess: Vec<f64> = last[p].iter().map(|x| x + 1e-3).collect();
+                    for (p, last) in last.iter_mut().enumerate() {
+                        let guess: Vec<f64> = last.iter().map(|x| x + 1e-3).collect();
                         let mut keep = |sum: crate::RaySummary, ws: &Workspace| {
                             let o = (
                                 sum.status,
@@ -1074,7 +1075,7 @@ pub(crate) mod tests {
                         };
                         let cold = tracer.solve_indexed_from(s, r, p, None, &mut ws);
                         keep(cold, &ws);
-                        last[p] = ws.parameters().to_vec();
+                        *last = ws.parameters().to_vec();
                         if !guess.is_empty() {
                             let warm = tracer.solve_indexed_from(s, r, p, Some(&guess), &mut ws);
                             keep(warm, &ws);
