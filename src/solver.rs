@@ -1038,6 +1038,7 @@ fn damped_step(g: &Geometry, ws: &mut Workspace) {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::trace::Start;
     use crate::{Scene, Tracer};
     use std::cell::Cell;
 
@@ -1046,8 +1047,9 @@ pub(crate) mod tests {
         pub(crate) static GENERAL_ONLY: Cell<bool> = const { Cell::new(false) };
     }
 
-    /// Every ray of `scene`, solved with and without the fast paths, from the default start
-    /// and from a warm start compared with it (the previous receiver's solution, moved): the
+    /// Every ray of `scene`, solved with and without the fast paths, from the default start,
+    /// from a warm start compared with it and from a given start (the previous receiver's
+    /// solution, moved): the
     /// same rays, bit for bit (status, time, iterations, residual, reason, points, media).
     /// Returns the number of rays from the default start.
     fn fast_paths_agree(scene: &Scene) -> usize {
@@ -1079,6 +1081,9 @@ pub(crate) mod tests {
                         if !guess.is_empty() {
                             let warm = tracer.solve_indexed_from(s, r, p, Some(&guess), &mut ws);
                             keep(warm, &ws);
+                            let given = Start::Given(&guess);
+                            let given = tracer.solve_indexed_start(s, r, p, given, &mut ws);
+                            keep(given, &ws);
                         }
                     }
                 }

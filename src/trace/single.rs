@@ -5,8 +5,8 @@
 //! it from the start: the results are those of the general solve, bit for bit.
 
 use super::{
-    RaySummary, Reason, SIDE_MARGIN, Start, Status, Tracer, initial_guess, refraction_guess,
-    warm_start,
+    RaySummary, Reason, SIDE_MARGIN, Start, Status, Tracer, given_start, initial_guess,
+    refraction_guess, warm_start,
 };
 use crate::geom::{Point, Vec2};
 use crate::polyline::{Polyline, segment_intersection};
@@ -36,8 +36,7 @@ impl SinglePath {
 }
 
 impl Tracer<'_> {
-    /// Solves one-interaction path `path` (described by `sp`) from `start` (the default or a
-    /// compared warm start), if it stays in the common case: the summary, with the ray's
+    /// Solves one-interaction path `path` (described by `sp`) from `start`, if it stays in the common case: the summary, with the ray's
     /// points, parameters and media in `ws` as the general solve leaves them; `None` to hand
     /// the ray to the general solve.
     pub(super) fn solve_single_path(
@@ -56,24 +55,6 @@ impl Tracer<'_> {
         ws.resize(1);
         ws.slowness.clear();
         ws.slowness.extend_from_slice(&sp.slowness);
-        let crossing = match step.kind {
-            StepKind::Refract => nearest_crossing(line, source, receiver),
-            StepKind::Reflect => None,
-        };
-        match crossing {
-            Some((s, t, j)) => {
-                let s = line.wrap(s);
-                let j = line.segment_at_hint(s, j);
-                let (s, j) = paraxial(line, s, t, j, sp.slowness, receiver - source);
-                ws.s[0] = s;
-                ws.seg[0] = j;
-                ws.pin[0] = Pin::Free;
-            }
-            None => {
-                initial_guess(scene, steps, source, receiver, ws);
-                refraction_guess(scene, steps, source, receiver, self.guess, ws);
-            }
-        }
         let g = Geometry {
             scene,
             steps,
@@ -81,10 +62,30 @@ impl Tracer<'_> {
             source,
             receiver,
         };
-        match start {
-            Start::Default => {}
-            Start::Compare(guess) => warm_start(&g, guess, ws),
-            Start::Given(_) => return None,
+        if let Start::Given(params) = start {
+            given_start(scene, steps, params, ws);
+        } else {
+            let crossing = match step.kind {
+                StepKind::Refract => nearest_crossing(line, source, receiver),
+                StepKind::Reflect => None,
+            };
+            match crossing {
+                Some((s, t, j)) => {
+                    let s = line.wrap(s);
+                    let j = line.segment_at_hint(s, j);
+                    let (s, j) = paraxial(line, s, t, j, sp.slowness, receiver - source);
+                    ws.s[0] = s;
+                    ws.seg[0] = j;
+                    ws.pin[0] = Pin::Free;
+                }
+                None => {
+                    initial_guess(scene, steps, source, receiver, ws);
+                    refraction_guess(scene, steps, source, receiver, self.guess, ws);
+                }
+            }
+            if let Start::Compare(guess) = start {
+                warm_start(&g, guess, ws);
+            }
         }
         let opts = scene.solver();
         let (_, sol) = solve_single(&g, ws, opts.tolerance, opts.max_iterations)?;
