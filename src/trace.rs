@@ -1067,13 +1067,36 @@ fn ray_parameter(
     };
     // The paraxial p (tan θ ≈ sin θ): f(p) ≥ 0 there, as tan θ ≥ sin θ. Below the smallest
     // slowness (a layer's critical angle) f is defined; just below it, it must be positive.
-    let mut p = (x / sum).min(limit * (1.0 - 1e-9));
+    let cap = limit * (1.0 - 1e-9);
+    let paraxial = (x / sum).min(cap);
+    // Where the paraxial p is near that critical angle, the p at which the layers of the
+    // smallest slowness alone (`Δt` thick together) take the whole offset, `Δt tan θ = x`, is
+    // nearer the root and still above it (the other layers add to f). From the paraxial p
+    // alone the iterates would first back away from the pole (f is steep there, like
+    // 1/√(p_max − p)) by a factor of about 3 a step: 15 or more steps.
+    let critical: f64 = layers
+        .iter()
+        .zip(w)
+        .filter(|&(_, &wj)| wj == limit)
+        .map(|(&(dt, _), _)| dt)
+        .sum();
+    let tan = x / critical;
+    let alone = limit * (tan / (1.0 + tan * tan).sqrt());
+    // (`alone` may exceed `cap`: the root can lie nearer the pole than that.)
+    let mut p = (x / sum).min(alone);
+    if !(p < limit) {
+        p = cap;
+    }
     let (mut fp, mut dfp) = f(p);
+    if !(fp >= 0.0) && p < paraxial {
+        // Round-off put `alone` below the root.
+        p = paraxial;
+        (fp, dfp) = f(p);
+    }
     if !(fp >= 0.0 && dfp > 0.0 && fp.is_finite() && dfp.is_finite()) {
         return None;
     }
-    // Near a critical angle f is steep (like 1/√(p_max − p)): from there the iterates first
-    // back away from the pole geometrically, then converge quadratically.
+    // Newton's iterates from above a root of this convex increasing function decrease to it.
     for _ in 0..60 {
         let next = p - fp / dfp;
         // Monotone from above: a step that does not decrease p is round-off.
@@ -1265,6 +1288,46 @@ mod tests {
                     "{p:?}–{q:?} vs {hull:?}"
                 );
             }
+        }
+    }
+
+    /// The flat-layer ray parameter against a bisection of `Σ Δtⱼ tan θⱼ = x`, from near-normal
+    /// offsets to ones where the paraxial start lies beyond a layer's critical angle.
+    #[test]
+    fn ray_parameter_solves_the_flat_layer_equation() {
+        // Fractions of the way down at the crossings, and slownesses (the third is the fastest).
+        let t = [0.2, 0.45, 0.5, 0.8];
+        let w = [1.0, 0.8, 0.4, 0.9, 0.6];
+        let sum: f64 = (0..5)
+            .map(|j| {
+                let lo = if j == 0 { 0.0 } else { t[j - 1] };
+                let hi = if j < 4 { t[j] } else { 1.0 };
+                (hi - lo) / w[j]
+            })
+            .sum();
+        let lhs = |p: f64| {
+            (0..5)
+                .map(|j| {
+                    let lo = if j == 0 { 0.0 } else { t[j - 1] };
+                    let hi = if j < 4 { t[j] } else { 1.0 };
+                    let sin = p / w[j];
+                    (hi - lo) * sin / (1.0 - sin * sin).sqrt()
+                })
+                .sum::<f64>()
+        };
+        let mut layers = Vec::new();
+        for x in [1e-3, 0.3, 1.0, 3.0, 30.0, 3e3, 3e5] {
+            let (mut lo, mut hi) = (0.0, 0.4);
+            for _ in 0..200 {
+                let mid = 0.5 * (lo + hi);
+                if lhs(mid) < x { lo = mid } else { hi = mid }
+            }
+            // The paraxial p is past the critical one (0.4) from x ≈ 1.5 on.
+            let d = Vec2::new(x, -1.0);
+            let along = |_: usize| Vec2::new(1.0, 0.0);
+            let (p, scaled) = ray_parameter(&t, &w, sum, d, along, &mut layers).unwrap();
+            assert_eq!(scaled, x);
+            assert!((p - lo).abs() <= 1e-14 * lo, "x = {x}: {p} against {lo}");
         }
     }
 }
