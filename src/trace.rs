@@ -1084,11 +1084,11 @@ fn ray_parameter(
     let alone = limit * (tan / (1.0 + tan * tan).sqrt());
     // (`alone` may exceed `cap`: the root can lie nearer the pole than that.)
     let mut p = (x / sum).min(alone);
-    if !(p < limit) {
+    if p >= limit {
         p = cap;
     }
     let (mut fp, mut dfp) = f(p);
-    if !(fp >= 0.0) && p < paraxial {
+    if (fp.is_nan() || fp < 0.0) && p < paraxial {
         // Round-off put `alone` below the root.
         p = paraxial;
         (fp, dfp) = f(p);
