@@ -229,8 +229,9 @@ pub fn ray_index(
 /// crossings' fractions of the way from `S` to `R`, `Z` and `X` the extents of `R − S` across
 /// and along the layers, `wⱼ` the legs' slownesses). Where the interfaces' tangents at the
 /// crossings are parallel (to within 5e-5 rad), the ray parameter `p` solves
-/// `Σⱼ Δtⱼ tan θⱼ = X / Z` with `sin θⱼ = p / wⱼ` (a 1-D Newton iteration from the paraxial
-/// `p`, monotone from above) and the lateral fractions become `τᵢ = Σ_{j≤i} Δtⱼ tan θⱼ · Z / X`:
+/// `Σⱼ Δtⱼ tan θⱼ = X / Z` with `sin θⱼ = p / wⱼ` (a 1-D Newton iteration, monotone from
+/// above, from the smaller of the paraxial `p` and the `p` at which the layers of the smallest
+/// slowness alone take the whole offset) and the lateral fractions become `τᵢ = Σ_{j≤i} Δtⱼ tan θⱼ · Z / X`:
 /// the solution itself for parallel flat layers, so the Newton solve that follows only
 /// confirms it. Elsewhere, for a single refraction (whose 1-D ray-parameter solve would cost
 /// what its Newton steps do), or with [`InitialGuess::Paraxial`], the small-angle limit
