@@ -721,26 +721,6 @@ pub(crate) fn solve(
     }
 }
 
-/// [`solve`] for a path of one interaction when its fast path finishes on its own: `None`
-/// when the iteration needs the general loop (a step leaving the segment, a vanished leg, a
-/// rejected step) or reached the iteration limit there. The same steps, bit for bit, as
-/// [`solve`] takes from the same start.
-pub(crate) fn solve_single(
-    g: &Geometry,
-    ws: &mut Workspace,
-    tol: f64,
-    max_iterations: usize,
-) -> Option<(Outcome, Solution)> {
-    let mut fast = Fast {
-        iterations: 0,
-        curvature: true,
-        evaluated: false,
-        polishes: 0,
-    };
-    fast_newton_single(g, ws, tol, max_iterations, &mut fast)
-        .filter(|(outcome, _)| *outcome == Outcome::Converged)
-}
-
 /// The iteration state that the fast path hands on to the general loop.
 struct Fast {
     /// Newton steps taken.

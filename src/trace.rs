@@ -468,9 +468,8 @@ impl<'s> Tracer<'s> {
         let general_only = false;
         if let Some(sp) = &self.single[path]
             && !general_only
-            && let Some(done) = self.solve_single_path(sp, source, receiver, path, start, ws)
         {
-            return done;
+            return self.solve_single_path(sp, source, receiver, path, start, ws);
         }
         let scene = self.scene;
         let spec = &scene.paths()[path];
@@ -567,6 +566,24 @@ impl<'s> Tracer<'s> {
                 .extend(ws.media.iter().map(|&m| scene.media()[m].slowness));
         };
 
+        self.classify(path, source, receiver, outcome, sol, ws)
+    }
+
+    /// The ray's status after the solve ended with `outcome` (`sol`): its points in `ws`, then
+    /// the end, vertex, side and obstruction tests.
+    fn classify(
+        &self,
+        path: usize,
+        source: Point,
+        receiver: Point,
+        outcome: Outcome,
+        sol: crate::solver::Solution,
+        ws: &mut Workspace,
+    ) -> RaySummary {
+        let scene = self.scene;
+        let spec = &scene.paths()[path];
+        let k = spec.steps.len();
+        ws.points.clear();
         ws.points.push(source);
         for (i, step) in spec.steps.iter().enumerate() {
             ws.points.push(

@@ -1,8 +1,8 @@
 //! The common one-interaction ray without the general bookkeeping: a path of one reflection
-//! or refraction with its leg media given, solved by the solver's one-interaction fast path
-//! from the documented start. Anything out of the common case (a step leaving the segment, a
-//! vanished leg, the iteration limit) hands the ray back to the general solve, which repeats
-//! it from the start: the results are those of the general solve, bit for bit.
+//! or refraction with its leg media given. The start (the documented one) and, when the solve
+//! ends with the point free and converged, the side and obstruction tests are written out for
+//! one interaction; the solve itself and every other ending go through the general code. The
+//! results are those of the general solve, bit for bit.
 
 use super::{
     RaySummary, Reason, SIDE_MARGIN, Start, Status, Tracer, given_start, initial_guess,
@@ -12,7 +12,7 @@ use crate::geom::{Point, Vec2};
 use crate::polyline::{Polyline, segment_intersection};
 use crate::problem::{Eval, Geometry};
 use crate::scene::{Scene, StepKind};
-use crate::solver::{Pin, Workspace, solve_single};
+use crate::solver::{Outcome, Pin, Workspace, solve};
 
 /// A path of one interaction whose leg media are given.
 #[derive(Clone, Copy, Debug)]
@@ -36,9 +36,8 @@ impl SinglePath {
 }
 
 impl Tracer<'_> {
-    /// Solves one-interaction path `path` (described by `sp`) from `start`, if it stays in the common case: the summary, with the ray's
-    /// points, parameters and media in `ws` as the general solve leaves them; `None` to hand
-    /// the ray to the general solve.
+    /// Solves one-interaction path `path` (described by `sp`) from `start`: the summary, with
+    /// the ray's points, parameters and media in `ws`, as the general solve gives them.
     pub(super) fn solve_single_path(
         &self,
         sp: &SinglePath,
@@ -47,7 +46,7 @@ impl Tracer<'_> {
         path: usize,
         start: Start,
         ws: &mut Workspace,
-    ) -> Option<RaySummary> {
+    ) -> RaySummary {
         let scene = self.scene;
         let steps = &scene.paths()[path].steps[..1];
         let step = &steps[0];
@@ -88,13 +87,16 @@ impl Tracer<'_> {
             }
         }
         let opts = scene.solver();
-        let (_, sol) = solve_single(&g, ws, opts.tolerance, opts.max_iterations)?;
+        let (outcome, sol) = solve(&g, ws, opts.tolerance, opts.max_iterations);
+        ws.media.clear();
+        ws.media.extend_from_slice(&sp.media);
+        if outcome != Outcome::Converged || ws.pin[0] != Pin::Free || ws.eval.vanished > 0 {
+            return self.classify(path, source, receiver, outcome, sol, ws);
+        }
         let j = ws.seg[0];
         let point = line.point_on(j, ws.s[0]);
         ws.points.clear();
         ws.points.extend_from_slice(&[source, point, receiver]);
-        ws.media.clear();
-        ws.media.extend_from_slice(&sp.media);
         let (status, reason) = if !sides_hold(step.kind, line.normal(j), &ws.eval) {
             (Status::NoPath, Some(Reason::WrongSide { step: 0 }))
         } else if let Some((leg, interface)) = self.obstruction(path, ws) {
@@ -102,13 +104,13 @@ impl Tracer<'_> {
         } else {
             (Status::Converged, None)
         };
-        Some(RaySummary {
+        RaySummary {
             status,
             time: sol.time,
             iterations: sol.iterations,
             residual: sol.residual,
             reason,
-        })
+        }
     }
 }
 
