@@ -599,13 +599,13 @@ fn leg_length(d: Vec2) -> f64 {
 /// `f64::max` for a first argument that is never NaN: the larger, or `a` when `b` is NaN
 /// (the same result, as one compare and select).
 #[inline(always)]
-fn max_num(a: f64, b: f64) -> f64 {
+pub(crate) fn max_num(a: f64, b: f64) -> f64 {
     if b > a { b } else { a }
 }
 
 /// `f64::min` for a first argument that is never NaN (see [`max_num`]).
 #[inline(always)]
-fn min_num(a: f64, b: f64) -> f64 {
+pub(crate) fn min_num(a: f64, b: f64) -> f64 {
     if b < a { b } else { a }
 }
 

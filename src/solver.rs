@@ -23,7 +23,7 @@
 
 use crate::geom::{Point, Vec2};
 pub(crate) use crate::problem::Pin;
-use crate::problem::{Eval, Frame, Geometry, leg_vanished, sweep_row};
+use crate::problem::{Eval, Frame, Geometry, leg_vanished, max_num, min_num, sweep_row};
 
 /// How the iteration ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -796,7 +796,10 @@ fn fast_newton(
             let to = s[i] + d;
             s_try[i] = to;
             let f = &frames[i];
-            inside &= to > f.lo && to < f.hi && d.abs() <= len[i].max(len[i + 1]).min(f.quarter);
+            // Leg lengths are never NaN here (the points are finite): the plain max and min.
+            inside &= to > f.lo
+                && to < f.hi
+                && d.abs() <= min_num(max_num(len[i], len[i + 1]), f.quarter);
         }
         if !finite {
             return None;
@@ -853,7 +856,8 @@ fn fast_newton_single(
         }
         // `thomas` on one row.
         let x = e.r * (1.0 / e.h);
-        if !(e.h.is_finite() && e.h.abs() > 1e-14 * e.h.abs() && x.is_finite()) {
+        // `thomas`'s pivot test on one row (|h| > 1e-14 |h| is h ≠ 0 for a finite h).
+        if !(e.h.is_finite() && e.h != 0.0 && x.is_finite()) {
             break None;
         }
         let d = -x;
@@ -861,7 +865,8 @@ fn fast_newton_single(
             break Some(Outcome::Converged);
         }
         let to = s + d;
-        if !(to > f.lo && to < f.hi && d.abs() <= e.len[0].max(e.len[1]).min(f.quarter)) {
+        let reach = min_num(max_num(e.len[0], e.len[1]), f.quarter);
+        if !(to > f.lo && to < f.hi && d.abs() <= reach) {
             break None;
         }
         let polish = residual <= tol;
