@@ -697,7 +697,6 @@ impl<'s> Tracer<'s> {
 
     /// First step whose legs are not on the sides it demands.
     fn wrong_side(&self, steps: &[crate::scene::Step], ws: &Workspace) -> Option<usize> {
-        let rel = &ws.eval.rel;
         for (i, step) in steps.iter().enumerate() {
             let line = &self.scene.interfaces()[step.interface].polyline;
             let j = ws.seg[i];
@@ -713,20 +712,8 @@ impl<'s> Tracer<'s> {
                 n += line.normal(before);
                 n_len = n.length();
             }
-            let a = n.dot(rel[i] - rel[i + 1]);
-            let b = n.dot(rel[i + 2] - rel[i + 1]);
-            // A leg within 1e-10 rad of the interface runs along it: on neither side.
+            let (a, b) = leg_sides(n, n_len, &ws.eval, i);
             let (la, lb) = (ws.eval.len[i], ws.eval.len[i + 1]);
-            let a = if a.abs() <= SIDE_MARGIN * la * n_len {
-                0.0
-            } else {
-                a
-            };
-            let b = if b.abs() <= SIDE_MARGIN * lb * n_len {
-                0.0
-            } else {
-                b
-            };
             // A vanished leg (an end point on the interface there) lies on both sides: the
             // other leg must still lie on one.
             let tiny = ws.eval.vanish;
@@ -742,11 +729,7 @@ impl<'s> Tracer<'s> {
                 }
                 continue;
             }
-            let ok = match step.kind {
-                StepKind::Reflect => (a > 0.0 && b > 0.0) || (a < 0.0 && b < 0.0),
-                StepKind::Refract => (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0),
-            };
-            if !ok {
+            if !sides_suit(step.kind, a, b) {
                 return Some(i);
             }
         }
@@ -885,6 +868,39 @@ fn meets_convex(p: Point, q: Point, hull: &[Point], pad: f64) -> bool {
 /// A leg whose sine with the interface is below this runs along it, on neither side.
 const SIDE_MARGIN: f64 = 1e-10;
 
+/// Where the legs of interaction `i` lie against the normal `n` (of length `n_len`) of its
+/// interface there: `(a, b)`, the source-side and receiver-side legs' components along `n`,
+/// zero for a leg within [`SIDE_MARGIN`] rad of the interface (it runs along it: on neither
+/// side).
+#[inline(always)]
+fn leg_sides(n: Vec2, n_len: f64, e: &crate::problem::Eval, i: usize) -> (f64, f64) {
+    let rel = &e.rel;
+    let a = n.dot(rel[i] - rel[i + 1]);
+    let b = n.dot(rel[i + 2] - rel[i + 1]);
+    let (la, lb) = (e.len[i], e.len[i + 1]);
+    let a = if a.abs() <= SIDE_MARGIN * la * n_len {
+        0.0
+    } else {
+        a
+    };
+    let b = if b.abs() <= SIDE_MARGIN * lb * n_len {
+        0.0
+    } else {
+        b
+    };
+    (a, b)
+}
+
+/// Whether legs on sides `a` and `b` ([`leg_sides`]) are what `kind` demands: one side for a
+/// reflection, opposite sides for a refraction.
+#[inline(always)]
+fn sides_suit(kind: StepKind, a: f64, b: f64) -> bool {
+    match kind {
+        StepKind::Reflect => (a > 0.0 && b > 0.0) || (a < 0.0 && b < 0.0),
+        StepKind::Refract => (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0),
+    }
+}
+
 /// Crossings closer than this fraction of a leg to its ends are the leg's own end points.
 const END_MARGIN: f64 = 1e-10;
 
@@ -983,6 +999,14 @@ fn refraction_guess(
     if k == 0 || w.len() != k + 1 {
         return;
     }
+    if k == 1 {
+        // One refraction: the 1-D ray-parameter solve is the Newton solve's own one-unknown
+        // problem and costs as much; the paraxial start.
+        let line = &scene.interfaces()[steps[0].interface].polyline;
+        let (t, w) = (ws.crossing_t[0], [w[0], w[1]]);
+        (ws.s[0], ws.seg[0]) = paraxial_one(line, ws.s[0], t, ws.seg[0], w, receiver - source);
+        return;
+    }
     let t = &ws.crossing_t[..k];
     let mut prev = 0.0;
     let mut sum = 0.0;
@@ -1000,12 +1024,8 @@ fn refraction_guess(
             .polyline
             .tangent(ws.seg[i])
     };
-    // One refraction: the 1-D ray-parameter solve is the Newton solve's own one-unknown
-    // problem and costs as much; it pays from two interactions on.
     let p = match guess {
-        InitialGuess::RayParameter if k >= 2 => {
-            ray_parameter(t, w, sum, d, tangent, &mut ws.layers)
-        }
+        InitialGuess::RayParameter => ray_parameter(t, w, sum, d, tangent, &mut ws.layers),
         _ => None,
     };
     let mut acc = 0.0;
@@ -1161,6 +1181,62 @@ fn image_point(
 }
 
 /// The documented initial guess (see [`Tracer`]).
+/// Polylines of at most this many segments are searched segment by segment for crossings,
+/// without their BVH.
+const SHORT: usize = 8;
+
+/// The crossing of `source → receiver` with `line` nearest the fraction `frac` of the way:
+/// `(parameter, fraction, segment)`; the first one found of equally near ones.
+#[inline(always)]
+pub(super) fn nearest_crossing(
+    line: &crate::polyline::Polyline,
+    source: Point,
+    receiver: Point,
+    frac: f64,
+) -> Option<(f64, f64, usize)> {
+    let mut best: Option<(f64, f64, f64, usize)> = None;
+    let mut take = |s: f64, t: f64, j: usize| {
+        let d = (t - frac).abs();
+        if best.is_none_or(|(_, bd, _, _)| d < bd) {
+            best = Some((s, d, t, j));
+        }
+    };
+    let n = line.num_segments();
+    if n <= SHORT {
+        for j in 0..n {
+            let (p, q) = line.segment(j);
+            if let Some((t, u)) = crate::polyline::segment_intersection(source, receiver, p, q) {
+                take(line.start(j) + u * line.segment_length(j), t, j);
+            }
+        }
+    } else {
+        line.crossings_with_segment(source, receiver, take);
+    }
+    best.map(|(s, _, t, j)| (s, t, j))
+}
+
+/// [`refraction_guess`] for one refraction: the paraxial point from the crossing of `S → R`
+/// at fraction `t`, parameter `s` on segment `j` of `line` (unchanged unless `0 < t < 1`),
+/// `w` the two slownesses and `d = R − S`.
+#[inline(always)]
+pub(super) fn paraxial_one(
+    line: &crate::polyline::Polyline,
+    s: f64,
+    t: f64,
+    j: usize,
+    w: [f64; 2],
+    d: Vec2,
+) -> (f64, usize) {
+    if !(t > 0.0 && t < 1.0) {
+        return (s, j);
+    }
+    let first = (t - 0.0) / w[0];
+    let sum = 0.0 + first + (1.0 - t) / w[1];
+    let tau = (0.0 + first) / sum;
+    let s = line.clamp_param(s + (tau - t) * d.dot(line.tangent(j)));
+    (s, line.segment_at_hint(s, j))
+}
+
 fn initial_guess(
     scene: &Scene,
     steps: &[crate::scene::Step],
@@ -1175,14 +1251,11 @@ fn initial_guess(
         let target = source.lerp(receiver, frac);
         let mut best: Option<(f64, f64, usize)> = None;
         let mut crossing_t = f64::NAN;
-        if step.kind == StepKind::Refract {
-            line.crossings_with_segment(source, receiver, |s, t, j| {
-                let d = (t - frac).abs();
-                if best.is_none_or(|(_, bd, _)| d < bd) {
-                    best = Some((s, d, j));
-                    crossing_t = t;
-                }
-            });
+        if step.kind == StepKind::Refract
+            && let Some((s, t, j)) = nearest_crossing(line, source, receiver, frac)
+        {
+            best = Some((s, (t - frac).abs(), j));
+            crossing_t = t;
         }
         if best.is_none() && line.num_segments() > LONG_POLYLINE {
             best = perpendicular_crossing(line, source, receiver, target);
