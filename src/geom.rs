@@ -179,6 +179,17 @@ impl Aabb {
             max: Point::new(a.x.max(b.x), a.y.max(b.y)),
         }
     }
+    /// [`from_points`](Self::from_points) for points that are not NaN (a compare and select
+    /// per bound, which is what `f64::min` and `max` give there).
+    #[inline]
+    pub fn from_finite(a: Point, b: Point) -> Aabb {
+        let (x0, x1) = if b.x < a.x { (b.x, a.x) } else { (a.x, b.x) };
+        let (y0, y1) = if b.y < a.y { (b.y, a.y) } else { (a.y, b.y) };
+        Aabb {
+            min: Point::new(x0, y0),
+            max: Point::new(x1, y1),
+        }
+    }
     /// The smallest box holding both boxes.
     #[inline]
     pub fn union(self, o: Aabb) -> Aabb {

@@ -68,6 +68,9 @@ impl std::fmt::Display for PolylineError {
 #[derive(Clone, Debug)]
 pub struct Polyline {
     vertices: Vec<Point>,
+    /// The vertices with the first repeated at the end on a closed polyline: segment `j` runs
+    /// from `ends[j]` to `ends[j + 1]`.
+    ends: Vec<Point>,
     closed: bool,
     /// Arclength at the start of each segment, plus the total length at the end.
     cum: Vec<f64>,
@@ -130,8 +133,13 @@ impl Polyline {
         cum.push(total);
         let bbox = boxes.iter().fold(Aabb::EMPTY, |acc, b| acc.union(*b));
         let bvh = Bvh::build(&boxes);
+        let mut ends = vertices.clone();
+        if closed {
+            ends.push(vertices[0]);
+        }
         let mut line = Polyline {
             vertices,
+            ends,
             closed,
             cum,
             dirs,
@@ -302,12 +310,8 @@ impl Polyline {
     /// End points of segment `j`.
     #[inline]
     pub fn segment(&self, j: usize) -> (Point, Point) {
-        let next = if j + 1 == self.vertices.len() {
-            0
-        } else {
-            j + 1
-        };
-        (self.vertices[j], self.vertices[next])
+        let e = &self.ends[j..j + 2];
+        (e[0], e[1])
     }
     /// Unit tangent of segment `j` (the direction of increasing arclength).
     #[inline]

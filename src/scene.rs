@@ -602,7 +602,8 @@ impl Scene {
             .iter()
             .find(|&&i| {
                 let (p, q) = self.segment_ends[i as usize];
-                Aabb::from_points(p, q).overlaps(sbox) && self.crosses(i, a, b, margin)
+                // Scene vertices are finite.
+                Aabb::from_finite(p, q).overlaps(sbox) && self.crosses(i, a, b, margin)
             })
             .map(|&i| self.segments[i as usize])
     }

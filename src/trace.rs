@@ -585,13 +585,10 @@ impl<'s> Tracer<'s> {
         let k = spec.steps.len();
         ws.points.clear();
         ws.points.push(source);
-        for (i, step) in spec.steps.iter().enumerate() {
-            ws.points.push(
-                scene.interfaces()[step.interface]
-                    .polyline
-                    .point_on(ws.seg[i], ws.s[i]),
-            );
-        }
+        let on = spec.steps.iter().zip(&ws.seg[..k]).zip(&ws.s[..k]);
+        ws.points.extend(
+            on.map(|((step, &j), &s)| scene.interfaces()[step.interface].polyline.point_on(j, s)),
+        );
         ws.points.push(receiver);
         let base = summary(sol);
         match outcome {
@@ -697,13 +694,15 @@ impl<'s> Tracer<'s> {
 
     /// First step whose legs are not on the sides it demands.
     fn wrong_side(&self, steps: &[crate::scene::Step], ws: &Workspace) -> Option<usize> {
+        let (k, e) = (steps.len(), &ws.eval);
+        let (seg, pin, rel, len) = (&ws.seg[..k], &ws.pin[..k], &e.rel[..k + 2], &e.len[..k + 1]);
         for (i, step) in steps.iter().enumerate() {
             let line = &self.scene.interfaces()[step.interface].polyline;
-            let j = ws.seg[i];
+            let j = seg[i];
             let mut n = line.normal(j);
             // |n|: 1 for a segment's unit normal; at a vertex, of the sum of the two.
             let mut n_len = 1.0;
-            if ws.pin[i] == Pin::Vertex {
+            if pin[i] == Pin::Vertex {
                 let before = if j > 0 {
                     j - 1
                 } else {
@@ -712,11 +711,11 @@ impl<'s> Tracer<'s> {
                 n += line.normal(before);
                 n_len = n.length();
             }
-            let (a, b) = leg_sides(n, n_len, &ws.eval, i);
-            let (la, lb) = (ws.eval.len[i], ws.eval.len[i + 1]);
+            let (a, b) = leg_sides(n, n_len, &rel[i..i + 3], &len[i..i + 2]);
+            let (la, lb) = (len[i], len[i + 1]);
             // A vanished leg (an end point on the interface there) lies on both sides: the
             // other leg must still lie on one.
-            let tiny = ws.eval.vanish;
+            let tiny = e.vanish;
             let (gone_a, gone_b) = (la <= tiny, lb <= tiny);
             if gone_a || gone_b {
                 let other_on_a_side = if gone_a {
@@ -741,13 +740,13 @@ impl<'s> Tracer<'s> {
         let pts = &ws.points;
         let k = pts.len() - 2;
         let candidates = &self.leg_candidates[path];
-        for leg in 0..=k {
-            let (a, b) = (pts[leg], pts[leg + 1]);
+        for (leg, ab) in pts.windows(2).enumerate() {
+            let (a, b) = (ab[0], ab[1]);
             if a == b {
                 continue;
             }
             let between = if leg > 0 && leg < k {
-                candidates[leg - 1].as_deref()
+                candidates.get(leg - 1).and_then(|c| c.as_deref())
             } else {
                 None
             };
@@ -868,16 +867,16 @@ fn meets_convex(p: Point, q: Point, hull: &[Point], pad: f64) -> bool {
 /// A leg whose sine with the interface is below this runs along it, on neither side.
 const SIDE_MARGIN: f64 = 1e-10;
 
-/// Where the legs of interaction `i` lie against the normal `n` (of length `n_len`) of its
-/// interface there: `(a, b)`, the source-side and receiver-side legs' components along `n`,
-/// zero for a leg within [`SIDE_MARGIN`] rad of the interface (it runs along it: on neither
-/// side).
+/// Where the legs of an interaction lie against the normal `n` (of length `n_len`) of its
+/// interface there, from the points before, at and after it (`rel`, relative to the source)
+/// and the two legs' lengths (`len`): `(a, b)`, the source-side and receiver-side legs'
+/// components along `n`, zero for a leg within [`SIDE_MARGIN`] rad of the interface (it runs
+/// along it: on neither side).
 #[inline(always)]
-fn leg_sides(n: Vec2, n_len: f64, e: &crate::problem::Eval, i: usize) -> (f64, f64) {
-    let rel = &e.rel;
-    let a = n.dot(rel[i] - rel[i + 1]);
-    let b = n.dot(rel[i + 2] - rel[i + 1]);
-    let (la, lb) = (e.len[i], e.len[i + 1]);
+fn leg_sides(n: Vec2, n_len: f64, rel: &[Vec2], len: &[f64]) -> (f64, f64) {
+    let a = n.dot(rel[0] - rel[1]);
+    let b = n.dot(rel[2] - rel[1]);
+    let (la, lb) = (len[0], len[1]);
     let a = if a.abs() <= SIDE_MARGIN * la * n_len {
         0.0
     } else {

@@ -97,7 +97,7 @@ impl Tracer<'_> {
         ws.points.clear();
         ws.points.extend_from_slice(&[source, point, receiver]);
         // `Tracer::wrong_side` for a free point with both legs there.
-        let (a, b) = leg_sides(line.normal(j), 1.0, &ws.eval, 0);
+        let (a, b) = leg_sides(line.normal(j), 1.0, &ws.eval.rel[..3], &ws.eval.len[..2]);
         let (status, reason) = if !sides_suit(step.kind, a, b) {
             (Status::NoPath, Some(Reason::WrongSide { step: 0 }))
         } else if let Some((leg, interface)) = self.obstruction(path, ws) {
