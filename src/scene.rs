@@ -674,8 +674,10 @@ fn middle_box(a: Point, b: Point, margin: f64) -> Aabb {
         let c = (0.5 * margin * along.abs() - slack).max(0.0);
         (lo + c, hi - c)
     };
-    let (x0, x1) = cut(a.x.min(b.x), a.x.max(b.x), d.x);
-    let (y0, y1) = cut(a.y.min(b.y), a.y.max(b.y), d.y);
+    // The legs' end points are finite.
+    let Aabb { min, max } = Aabb::from_finite(a, b);
+    let (x0, x1) = cut(min.x, max.x, d.x);
+    let (y0, y1) = cut(min.y, max.y, d.y);
     Aabb {
         min: Point::new(x0, y0),
         max: Point::new(x1, y1),

@@ -1029,6 +1029,7 @@ fn refraction_guess(
     };
     let mut acc = 0.0;
     prev = 0.0;
+    let (w, s_at, seg) = (&ws.slowness[..k + 1], &mut ws.s[..k], &mut ws.seg[..k]);
     for (i, step) in steps.iter().enumerate() {
         let tau = match p {
             Some((p, x)) => {
@@ -1043,10 +1044,10 @@ fn refraction_guess(
         };
         prev = t[i];
         let line = &scene.interfaces()[step.interface].polyline;
-        let lateral = d.dot(line.tangent(ws.seg[i]));
-        let s = line.clamp_param(ws.s[i] + (tau - t[i]) * lateral);
-        ws.seg[i] = line.segment_at_hint(s, ws.seg[i]);
-        ws.s[i] = s;
+        let lateral = d.dot(line.tangent(seg[i]));
+        let s = line.clamp_param(s_at[i] + (tau - t[i]) * lateral);
+        seg[i] = line.segment_at_hint(s, seg[i]);
+        s_at[i] = s;
     }
 }
 
@@ -1088,7 +1089,8 @@ fn ray_parameter(
         let hi = if j < k { t[j] } else { 1.0 };
         layers.push((hi - prev, 1.0 / wj));
         prev = hi;
-        limit = limit.min(wj);
+        // Slownesses are positive and finite: the plain min.
+        limit = if wj < limit { wj } else { limit };
     }
     // f(p) = Σ Δtⱼ sⱼ / cⱼ − x with sⱼ = p / wⱼ, cⱼ = √(1 − sⱼ²); f' = Σ Δtⱼ / (wⱼ cⱼ³).
     let f = |p: f64| {
