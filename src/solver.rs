@@ -285,14 +285,6 @@ fn vertex_param(g: &Geometry, i: usize, v: usize, seg: usize) -> f64 {
     }
 }
 
-/// Whether a vanished leg next to point `i` joins it to another interaction (not to the
-/// source or the receiver): two interactions on one spot are no path.
-#[inline]
-pub(crate) fn interior_leg_vanished(e: &Eval, i: usize, k: usize) -> bool {
-    let tiny = e.vanish;
-    (i > 0 && e.len[i] <= tiny) || (i + 1 < k && e.len[i + 1] <= tiny)
-}
-
 /// If `from → to` crosses exactly one vertex of polyline `i`, the segment that starts there.
 #[inline]
 fn single_vertex_between(g: &Geometry, i: usize, from: usize, to: usize) -> Option<usize> {

@@ -608,7 +608,10 @@ impl<'s> Tracer<'s> {
             }
             Outcome::Converged | Outcome::Vertex => {}
         }
-        if let Some(step) = (0..k).find(|&i| crate::solver::interior_leg_vanished(&ws.eval, i, k)) {
+        // The first interaction next to a vanished leg between two interactions: leg `j`
+        // (1 ≤ j < k) joins interactions `j − 1` and `j`.
+        let interior = ws.eval.len.get(1..k).unwrap_or(&[]);
+        if let Some(step) = interior.iter().position(|&l| l <= ws.eval.vanish) {
             return RaySummary {
                 status: Status::NoPath,
                 reason: Some(Reason::Coincident { step }),

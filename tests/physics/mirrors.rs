@@ -250,3 +250,32 @@ fn reflection_point_beyond_finite_mirror_is_no_path() {
         "{ray:?}"
     );
 }
+
+#[test]
+fn two_reflections_in_a_row_off_one_flat_mirror_coincide() {
+    // Off one flat mirror, a second reflection in a row has no path of its own: the image
+    // method gives the single reflection, and the two points fall on one spot. The first pair
+    // of steps that does is reported (legs between interactions only).
+    let (m0, m1, n0, n1) = ([-5.0, 0.0], [5.0, 0.0], [-5.0, 3.0], [5.0, 3.0]);
+    let v = mirror_scene(
+        &[("m", m0, m1), ("n", n0, n1)],
+        1.0,
+        &[[-2.0, 1.0]],
+        &[[2.0, 1.5]],
+        &[&["m", "m"], &["m", "n", "n"], &["m", "n"]],
+    );
+    let rays = trace_all(&scene(&v));
+    for (ray, step) in rays.iter().zip([0, 1]) {
+        assert_eq!(ray.status, Status::NoPath, "{ray:?}");
+        assert_eq!(ray.reason, Some(Reason::Coincident { step }), "{ray:?}");
+    }
+    // Without the repeated mirror the path exists: the image method's length.
+    let (length, _, valid) = image_path([-2.0, 1.0], [2.0, 1.5], &[(m0, m1), (n0, n1)]);
+    assert!(valid);
+    let ray = &rays[2];
+    assert_eq!(ray.status, Status::Converged, "{ray:?}");
+    assert!(
+        (ray.time.unwrap() - length).abs() <= TOL * length,
+        "{ray:?} vs {length}"
+    );
+}
