@@ -1024,11 +1024,11 @@ pub(crate) mod tests {
         pub(crate) static GENERAL_ONLY: Cell<bool> = const { Cell::new(false) };
     }
 
-    /// Every ray of `scene`, solved with and without the fast paths, from the default start,
-    /// from a warm start compared with it and from a given start (the previous receiver's
-    /// solution, moved): the
-    /// same rays, bit for bit (status, time, iterations, residual, reason, points, media).
-    /// Returns the number of rays from the default start.
+    /// Every ray of `scene`, solved with and without the fast paths (the one-interaction
+    /// kernel and the fast Newton loops), from the default start, from a warm start compared
+    /// with it and from a given start (the previous receiver's solution, moved): the same
+    /// rays, bit for bit (status, time, iterations, residual, reason, points, media). Returns
+    /// the number of rays.
     fn fast_paths_agree(scene: &Scene) -> usize {
         type Outcome = (crate::Status, u64, usize, u64, Option<crate::Reason>);
         type Rays = Vec<(Outcome, Vec<Point>, Vec<usize>)>;

@@ -982,8 +982,8 @@ fn perpendicular_crossing(
 /// The layers are taken as flat and parallel, `Δzⱼ = Δtⱼ Z` thick, where `Z` and `X` are the
 /// extents of `R − S` across and along them. When the interfaces' normals at the crossings agree
 /// to within [`PARALLEL`], the ray parameter `p` solves `Σⱼ Δzⱼ tan θⱼ = X` with
-/// `sin θⱼ = p / wⱼ` (Newton from the paraxial `p`, which lies above the root of this convex,
-/// increasing function: the iterates decrease monotonically to it), and
+/// `sin θⱼ = p / wⱼ` (Newton from a `p` above the root of this convex, increasing function, see
+/// [`ray_parameter`]: the iterates decrease monotonically to it), and
 /// `τᵢ = Σ_{j≤i} Δzⱼ tan θⱼ / X`: the exact solution for parallel flat layers. Otherwise, for
 /// a single refraction, or when that equation has no root (a ray beyond the critical angle of
 /// a layer), the paraxial fractions
@@ -1028,7 +1028,7 @@ fn refraction_guess(
     };
     let p = match guess {
         InitialGuess::RayParameter => ray_parameter(t, w, sum, d, tangent, &mut ws.layers),
-        _ => None,
+        InitialGuess::Paraxial => None,
     };
     let mut acc = 0.0;
     prev = 0.0;
@@ -1110,7 +1110,8 @@ fn ray_parameter(
     // The paraxial p (tan θ ≈ sin θ): f(p) ≥ 0 there, as tan θ ≥ sin θ. Below the smallest
     // slowness (a layer's critical angle) f is defined; just below it, it must be positive.
     let cap = limit * (1.0 - 1e-9);
-    let paraxial = (x / sum).min(cap);
+    let small_angle = x / sum;
+    let paraxial = small_angle.min(cap);
     // Where the paraxial p is near that critical angle, the p at which the layers of the
     // smallest slowness alone (`Δt` thick together) take the whole offset, `Δt tan θ = x`, is
     // nearer the root and still above it (the other layers add to f). From the paraxial p
@@ -1125,7 +1126,7 @@ fn ray_parameter(
     let tan = x / critical;
     let alone = limit * (tan / (1.0 + tan * tan).sqrt());
     // (`alone` may exceed `cap`: the root can lie nearer the pole than that.)
-    let mut p = (x / sum).min(alone);
+    let mut p = small_angle.min(alone);
     if p >= limit {
         p = cap;
     }
@@ -1184,11 +1185,6 @@ fn image_point(
     line.clamp_param(s + u)
 }
 
-/// The documented initial guess (see [`Tracer`]).
-/// Polylines of at most this many segments are searched segment by segment for crossings,
-/// without their BVH.
-const SHORT: usize = 8;
-
 /// The crossing of `source → receiver` with `line` nearest the fraction `frac` of the way:
 /// `(parameter, fraction, segment)`; the first one found of equally near ones.
 #[inline(always)]
@@ -1199,23 +1195,12 @@ pub(super) fn nearest_crossing(
     frac: f64,
 ) -> Option<(f64, f64, usize)> {
     let mut best: Option<(f64, f64, f64, usize)> = None;
-    let mut take = |s: f64, t: f64, j: usize| {
+    line.crossings_with_segment(source, receiver, |s, t, j| {
         let d = (t - frac).abs();
         if best.is_none_or(|(_, bd, _, _)| d < bd) {
             best = Some((s, d, t, j));
         }
-    };
-    let n = line.num_segments();
-    if n <= SHORT {
-        for j in 0..n {
-            let (p, q) = line.segment(j);
-            if let Some((t, u)) = crate::polyline::segment_intersection(source, receiver, p, q) {
-                take(line.start(j) + u * line.segment_length(j), t, j);
-            }
-        }
-    } else {
-        line.crossings_with_segment(source, receiver, take);
-    }
+    });
     best.map(|(s, _, t, j)| (s, t, j))
 }
 
@@ -1241,6 +1226,7 @@ pub(super) fn paraxial_one(
     (s, line.segment_at_hint(s, j))
 }
 
+/// The documented initial guess (see [`Tracer`]).
 fn initial_guess(
     scene: &Scene,
     steps: &[crate::scene::Step],
