@@ -10,7 +10,11 @@
 //! jump across exactly one vertex with its residual changing sign is pinned on that vertex;
 //! while pinned it stays put if the one-sided residuals `r⁻`, `r⁺` bracket zero (a kink of
 //! `T`: an edge-diffracted path, reported as `vertex`) and is released to the side where `T`
-//! decreases otherwise. A point pushed past the end of an open polyline is held at the end and
+//! decreases otherwise. A point already on a vertex that the step sends across it (and, from
+//! the other side, back: the others move too) is held there until the others have moved, then
+//! judged again. A first or last point whose step off its segment passes over the source or
+//! receiver, lying on its polyline, is put there (the kink of `T` where that leg vanishes).
+//! A point pushed past the end of an open polyline is held at the end and
 //! released when its residual points back inside; held there at convergence, the ray has no
 //! path.
 //!
@@ -59,6 +63,9 @@ pub struct Workspace {
     s_try: Vec<f64>,
     seg_try: Vec<usize>,
     pin_try: Vec<Pin>,
+    /// Per point: pinned on a vertex that it was being sent across and back over; kept there
+    /// until the others have moved (see `solve`).
+    sticky: Vec<bool>,
     // Boxed, so that accepting a trial swaps two pointers, not two dozen vectors.
     pub(crate) eval: Box<Eval>,
     eval_try: Box<Eval>,
@@ -112,6 +119,7 @@ impl Workspace {
         self.s_try.resize(k, 0.0);
         self.seg_try.resize(k, 0);
         self.pin_try.resize(k, Pin::Free);
+        self.sticky.resize(k, false);
         self.eval.resize(k);
         self.eval_try.resize(k);
         self.delta.resize(k, 0.0);
@@ -239,13 +247,12 @@ fn kink_residuals(g: &Geometry, e: &Eval, i: usize, back: Vec2) -> (f64, f64) {
     (one_sided(back, false), one_sided(e.tan[i], true))
 }
 
-/// If point `i` is the first or last interaction, the source or receiver lies on the line of
-/// its segment, and the trial step passes over that end point's parameter: the parameter.
+/// If point `i` is the first or last interaction, the source or receiver lies on segment `j`
+/// of its polyline, and the trial step passes over that end point's parameter: the parameter.
 #[inline]
-fn end_point_between(g: &Geometry, ws: &Workspace, i: usize) -> Option<f64> {
+fn end_point_between(g: &Geometry, ws: &Workspace, i: usize, j: usize) -> Option<f64> {
     let k = g.k();
     let line = g.line(i);
-    let j = ws.seg[i];
     let (a, b) = line.segment(j);
     let tiny = ws.eval.vanish;
     let on_segment = |p: crate::geom::Point| -> Option<f64> {
@@ -283,6 +290,18 @@ fn vertex_param(g: &Geometry, i: usize, v: usize, seg: usize) -> f64 {
     } else {
         line.start(seg + 1)
     }
+}
+
+/// If free point `i` sits exactly on the vertex that its trial step crosses (from `ws.seg[i]` to
+/// `ws.seg_try[i]`), with a kink of `T` there at the present positions of the others (the
+/// residuals on the two segments, from `ws.eval`, do not agree in sign: a point held there
+/// would stay), that vertex (the segment starting there).
+fn held_on_vertex(g: &Geometry, ws: &Workspace, i: usize) -> Option<usize> {
+    let e = &ws.eval;
+    let v = single_vertex_between(g, i, ws.seg[i], ws.seg_try[i])?;
+    let on_vertex = ws.s[i] == vertex_param(g, i, v, ws.seg[i]);
+    let kink = e.r[i] * residual_on(g, e, i, ws.seg_try[i]) <= 0.0;
+    (on_vertex && kink && !leg_vanished(&e.len, i, e.vanish)).then_some(v)
 }
 
 /// If `from → to` crosses exactly one vertex of polyline `i`, the segment that starts there.
@@ -361,6 +380,7 @@ pub(crate) fn solve(
     // Set when the last step was the non-monotone fallback (no trial lowered the merit): the
     // iteration has stalled, perhaps at the round-off floor of the residual.
     let mut stalled = false;
+    ws.sticky[..k].fill(false);
     loop {
         if !evaluated {
             g.evaluate(&ws.s, &ws.seg, &ws.pin, &mut ws.eval, true, curvature);
@@ -375,6 +395,7 @@ pub(crate) fn solve(
                 let scale = tol * (w[i] + w[i + 1]);
                 match ws.pin[i] {
                     Pin::Free => {}
+                    Pin::Vertex if ws.sticky[i] => {}
                     Pin::Vertex => {
                         let Some(before) = segment_before(g, i, ws.seg[i]) else {
                             ws.pin[i] = Pin::Free;
@@ -517,6 +538,15 @@ pub(crate) fn solve(
                 cap = cap.min(limit / d.abs());
             }
         }
+        if (tiny || residual <= tol)
+            && ws.sticky[..k].contains(&true)
+            && free_moves < 4 * max_iterations
+        {
+            // The others are stationary: judge the points held on the way again.
+            ws.sticky[..k].fill(false);
+            free_moves += 1;
+            continue;
+        }
         if tiny {
             return finished(ws, iterations);
         }
@@ -585,6 +615,28 @@ pub(crate) fn solve(
                     }
                 }
             }
+            // A step off its segment that passes over the source or receiver, lying on the
+            // segment left or the one reached (on a vertex, say), passes over a kink of T
+            // (where the leg vanishes): put the point there; the kink test decides the rest.
+            let ends = if k == 0 { [].as_slice() } else { &[0, k - 1] };
+            let passed_end = ends.iter().find_map(|&i| {
+                let moved = ws.pin[i] == Pin::Free
+                    && ws.pin_try[i] == Pin::Free
+                    && ws.seg_try[i] != ws.seg[i];
+                moved
+                    .then(|| {
+                        end_point_between(g, ws, i, ws.seg[i])
+                            .or_else(|| end_point_between(g, ws, i, ws.seg_try[i]))
+                            .map(|sp| (i, sp))
+                    })
+                    .flatten()
+            });
+            if let Some((i, sp)) = passed_end {
+                ws.s[i] = sp;
+                ws.seg[i] = g.line(i).segment_at_hint(sp, ws.seg[i]);
+                pinned = true;
+                break;
+            }
             let merit_ok = phi.is_finite() && phi <= (1.0 - 1e-4 * alpha) * phi0;
             if merit_ok && !flip_far && flip_one.is_none() {
                 accepted = true;
@@ -609,7 +661,15 @@ pub(crate) fn solve(
                     })
                 })
             };
-            if let Some(i) = crosser {
+            if let Some((i, v)) = crosser.and_then(|i| held_on_vertex(g, ws, i).map(|v| (i, v))) {
+                // Already on that vertex, with a kink of T there at the others' present
+                // positions: held. (Judged on the trial's positions of the others instead, it
+                // could be sent across the vertex and back for ever.)
+                ws.s[i] = vertex_param(g, i, v, v);
+                ws.seg[i] = v;
+                ws.pin[i] = Pin::Vertex;
+                pinned = true;
+            } else if let Some(i) = crosser {
                 let v =
                     single_vertex_between(g, i, ws.seg[i], ws.seg_try[i]).unwrap_or(ws.seg_try[i]);
                 let (s_new, seg_new) = (ws.s_try[i], ws.seg_try[i]);
@@ -638,7 +698,11 @@ pub(crate) fn solve(
                     pinned = true;
                 } else if end_point_here {
                 } else if r_before * ws.eval.r[i] > 0.0 {
-                    if r_after * r_before <= 0.0 {
+                    if r_after * r_before <= 0.0 || ws.s[i] == at_vertex {
+                        // Already on the vertex and sent across it (from the other side the
+                        // step sends it back: the others, moving too, change its residuals):
+                        // held there until the others have moved, then judged again.
+                        ws.sticky[i] = ws.s[i] == at_vertex;
                         ws.s[i] = vertex_param(g, i, v, v);
                         ws.seg[i] = v;
                         ws.pin[i] = Pin::Vertex;
@@ -653,7 +717,7 @@ pub(crate) fn solve(
                 // where the point reaches it; put the point there.
                 for i in 0..k {
                     if ws.pin[i] == Pin::Free && ws.seg_try[i] == ws.seg[i] {
-                        if let Some(sp) = end_point_between(g, ws, i) {
+                        if let Some(sp) = end_point_between(g, ws, i, ws.seg[i]) {
                             ws.s[i] = sp;
                             pinned = true;
                             break;
@@ -710,6 +774,8 @@ pub(crate) fn solve(
         std::mem::swap(&mut ws.s, &mut ws.s_try);
         std::mem::swap(&mut ws.seg, &mut ws.seg_try);
         std::mem::swap(&mut ws.pin, &mut ws.pin_try);
+        // The others have moved: the held points are judged again.
+        ws.sticky[..k].fill(false);
     }
 }
 

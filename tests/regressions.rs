@@ -138,6 +138,17 @@ fn refract_receiver_on_vertex_terminates() {
     assert_ne!(ray.status, Status::NotConverged, "{ray:?}");
 }
 
+/// A reflection whose source is a vertex of a digitised mirror, with a much larger slowness on
+/// the source's leg: steps jumped across the source's vertex (a kink of T) and back, cycling
+/// over four segments until the iteration limit. The point is put on the source when a step
+/// passes over it; the kink test holds it there.
+#[test]
+fn reflect_source_on_vertex_terminates() {
+    let ray = only_ray("reflect_source_on_vertex_cycles");
+    assert_ne!(ray.status, Status::NotConverged, "{ray:?}");
+    assert!(ray.iterations <= 5, "{ray:?}");
+}
+
 /// Source and receiver both on a straight interface: every leg lies in its line, so whatever
 /// the leg media, neither a reflection nor a refraction (some cycled to the iteration limit,
 /// some were reported `converged` with time 1).

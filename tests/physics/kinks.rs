@@ -272,3 +272,107 @@ fn concave_circle_reflection_at_a_maximum() {
     }
     println!("kinks circle: max relative time error {max_err:.2e}");
 }
+
+/// Eight layers digitised into 10 segments each along a sine, every one with a vertex on
+/// `x = 0`, straight below the source: the rays near that column of vertices cross several of
+/// them. Each ray must end converged or held on vertices (before, the iteration sent a point
+/// across its vertex and back until the iteration limit), and every interaction point must be
+/// a minimum of `T` along its interface with the others fixed: no direction along a segment
+/// at the point (both segments at a vertex) lowers `T` to first order.
+#[test]
+fn rays_through_a_column_of_vertices_end_on_a_minimum() {
+    let (layers, segs, half) = (8, 10, 100.0);
+    let speeds = [1.5, 2.0, 2.5, 3.0];
+    let slowness = |j: usize| 1.0 / speeds[j % speeds.len()];
+    let mut media = serde_json::Map::new();
+    let mut interfaces = serde_json::Map::new();
+    let mut lines: Vec<Vec<P>> = Vec::new();
+    for j in 0..=layers {
+        media.insert(
+            format!("m{j}"),
+            json!({ "speed": speeds[j % speeds.len()] }),
+        );
+    }
+    for i in 0..layers {
+        let line: Vec<P> = (0..=segs)
+            .map(|j| {
+                let x = -half + 2.0 * half * j as f64 / segs as f64;
+                let phase = 3.0 * std::f64::consts::TAU * x / (2.0 * half) + i as f64;
+                [x, -(i as f64) + 0.3 * phase.sin()]
+            })
+            .collect();
+        interfaces.insert(format!("L{i}"), json!({ "points": line }));
+        lines.push(line);
+    }
+    let receivers: Vec<P> = (0..41)
+        .map(|j| [-0.2 + 0.01 * j as f64, -(layers as f64) - 0.5])
+        .collect();
+    let steps: Vec<_> = (0..layers)
+        .map(|i| json!({ "refract": format!("L{i}") }))
+        .collect();
+    let leg_media: Vec<_> = (0..=layers).map(|j| format!("m{j}")).collect();
+    let sc = scene(&json!({
+        "media": media, "interfaces": interfaces,
+        "sources": [[0.0, 1.0]], "receivers": receivers,
+        "paths": [{ "steps": steps, "media": leg_media }],
+        "solver": { "tolerance": TOL, "max_iterations": 100 }
+    }));
+    let mut on_vertices = 0;
+    for ray in trace_all(&sc) {
+        let case = format!("receiver {:?}", receivers[ray.receiver]);
+        assert!(
+            matches!(ray.status, Status::Converged | Status::Vertex),
+            "{case}: {ray:?}"
+        );
+        on_vertices += (ray.status == Status::Vertex) as usize;
+        let p: Vec<P> = ray.points.iter().map(|&q| pt(q)).collect();
+        let time: f64 = (0..=layers)
+            .map(|j| slowness(j) * dist(p[j], p[j + 1]))
+            .sum();
+        assert!(
+            (time - ray.time.unwrap()).abs() <= 1e-13 * time,
+            "{case}: time {time} against {:?}",
+            ray.time
+        );
+        for i in 0..layers {
+            let (at, line) = (p[i + 1], &lines[i]);
+            let (arrive, leave) = (unit(sub(at, p[i])), unit(sub(p[i + 2], at)));
+            // `∂T/∂(at)` along the unit direction `d`.
+            let slope = |d: P| {
+                dot(
+                    sub(scale(arrive, slowness(i)), scale(leave, slowness(i + 1))),
+                    d,
+                )
+            };
+            // The directions along the interface from `at`: along its segment both ways, or
+            // onto either segment from a vertex.
+            let mut dirs = Vec::new();
+            for seg in line.windows(2) {
+                let (a, b) = (seg[0], seg[1]);
+                let t = unit(sub(b, a));
+                let f = fraction(at, a, b);
+                let near = |q: P| dist(at, q) <= 1e-9;
+                if near(a) {
+                    dirs.push(t);
+                } else if near(b) {
+                    dirs.push(scale(t, -1.0));
+                } else if f > 0.0 && f < 1.0 && dist_to_line(at, a, b) <= 1e-9 {
+                    dirs.extend([t, scale(t, -1.0)]);
+                }
+            }
+            assert!(
+                !dirs.is_empty(),
+                "{case}: point {i} {at:?} off its interface"
+            );
+            for d in dirs {
+                assert!(
+                    slope(d) >= -1e-9,
+                    "{case}: moving point {i} along {d:?} lowers T at rate {}",
+                    slope(d)
+                );
+            }
+        }
+    }
+    // The column of vertices is met: some rays end held on vertices.
+    assert!(on_vertices > 0, "no ray ended on a vertex");
+}
