@@ -249,6 +249,8 @@ fn kink_residuals(g: &Geometry, e: &Eval, i: usize, back: Vec2) -> (f64, f64) {
 
 /// If point `i` is the first or last interaction, the source or receiver lies on segment `j`
 /// of its polyline, and the trial step passes over that end point's parameter: the parameter.
+/// (On a closed polyline the step is the shorter way from `s` to `s_try`: steps are capped at a
+/// quarter of its length.)
 #[inline]
 fn end_point_between(g: &Geometry, ws: &Workspace, i: usize, j: usize) -> Option<f64> {
     let k = g.k();
@@ -267,12 +269,22 @@ fn end_point_between(g: &Geometry, ws: &Workspace, i: usize, j: usize) -> Option
     ];
     for p in candidates.into_iter().flatten() {
         if let Some(sp) = on_segment(p) {
-            let (lo, hi) = if ws.s[i] <= ws.s_try[i] {
-                (ws.s[i], ws.s_try[i])
+            let (from, to) = (ws.s[i], ws.s_try[i]);
+            let passed = if line.is_closed() {
+                let l = line.length();
+                let mut d = to - from;
+                if d > 0.5 * l {
+                    d -= l;
+                } else if d < -0.5 * l {
+                    d += l;
+                }
+                let (ahead, behind) = ((sp - from).rem_euclid(l), (from - sp).rem_euclid(l));
+                (d > 0.0 && ahead > 0.0 && ahead < d) || (d < 0.0 && behind > 0.0 && behind < -d)
             } else {
-                (ws.s_try[i], ws.s[i])
+                let (lo, hi) = if from <= to { (from, to) } else { (to, from) };
+                sp > lo && sp < hi
             };
-            if sp > lo && sp < hi {
+            if passed {
                 return Some(sp);
             }
         }

@@ -149,6 +149,16 @@ fn reflect_source_on_vertex_terminates() {
     assert!(ray.iterations <= 5, "{ray:?}");
 }
 
+/// One refraction through a closed triangle whose vertex is the receiver: a step across the
+/// polygon's closing vertex (its parameter wrapping round) must not count as passing over the
+/// receiver's parameter. The path ends on vertex 0, its first leg crossing the floor.
+#[test]
+fn wrapped_step_does_not_pass_over_the_receiver() {
+    let ray = only_ray("refract_receiver_on_polygon_vertex_wrap");
+    assert_eq!(ray.status, Status::Obstructed, "{ray:?}");
+    assert!(ray.iterations <= 5, "{ray:?}");
+}
+
 /// Source and receiver both on a straight interface: every leg lies in its line, so whatever
 /// the leg media, neither a reflection nor a refraction (some cycled to the iteration limit,
 /// some were reported `converged` with time 1).
