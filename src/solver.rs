@@ -259,37 +259,49 @@ fn end_point_between(g: &Geometry, ws: &Workspace, i: usize, j: usize) -> Option
     let tiny = ws.eval.vanish;
     let on_segment = |p: crate::geom::Point| -> Option<f64> {
         let t = line.tangent(j);
-        let along = (p - a).dot(t);
-        let off = (p - a).cross(t).abs();
-        (off <= tiny && along >= 0.0 && along <= (b - a).length()).then(|| line.start(j) + along)
-    };
-    let candidates = [
-        (i == 0).then_some(g.source),
-        (i + 1 == k).then_some(g.receiver),
-    ];
-    for p in candidates.into_iter().flatten() {
-        if let Some(sp) = on_segment(p) {
-            let (from, to) = (ws.s[i], ws.s_try[i]);
-            let passed = if line.is_closed() {
-                let l = line.length();
-                let mut d = to - from;
-                if d > 0.5 * l {
-                    d -= l;
-                } else if d < -0.5 * l {
-                    d += l;
-                }
-                let (ahead, behind) = ((sp - from).rem_euclid(l), (from - sp).rem_euclid(l));
-                (d > 0.0 && ahead > 0.0 && ahead < d) || (d < 0.0 && behind > 0.0 && behind < -d)
-            } else {
-                let (lo, hi) = if from <= to { (from, to) } else { (to, from) };
-                sp > lo && sp < hi
-            };
-            if passed {
-                return Some(sp);
-            }
+        // Off the segment's line (nearly always): nothing more to compute.
+        if (p - a).cross(t).abs() > tiny {
+            return None;
         }
-    }
-    None
+        let along = (p - a).dot(t);
+        (along >= 0.0 && along <= (b - a).length()).then(|| line.start(j) + along)
+    };
+    let passes = |p: crate::geom::Point| -> Option<f64> {
+        let sp = on_segment(p)?;
+        let (from, to) = (ws.s[i], ws.s_try[i]);
+        let passed = if line.is_closed() {
+            let l = line.length();
+            let mut d = to - from;
+            if d > 0.5 * l {
+                d -= l;
+            } else if d < -0.5 * l {
+                d += l;
+            }
+            let (ahead, behind) = ((sp - from).rem_euclid(l), (from - sp).rem_euclid(l));
+            (d > 0.0 && ahead > 0.0 && ahead < d) || (d < 0.0 && behind > 0.0 && behind < -d)
+        } else {
+            let (lo, hi) = if from <= to { (from, to) } else { (to, from) };
+            sp > lo && sp < hi
+        };
+        passed.then_some(sp)
+    };
+    let from_source = if i == 0 { passes(g.source) } else { None };
+    from_source.or_else(|| if i + 1 == k { passes(g.receiver) } else { None })
+}
+
+/// Whether the source (for the first point) or the receiver (for the last) lies within `tiny`
+/// of polyline `i`'s bounding box: else neither lies on one of its segments (the quick test
+/// before [`end_point_between`]).
+#[inline]
+fn end_near_line(g: &Geometry, i: usize, tiny: f64) -> bool {
+    let b = g.line(i).bbox();
+    let near = |p: Point| {
+        p.x >= b.min.x - tiny
+            && p.x <= b.max.x + tiny
+            && p.y >= b.min.y - tiny
+            && p.y <= b.max.y + tiny
+    };
+    (i == 0 && near(g.source)) || (i + 1 == g.k() && near(g.receiver))
 }
 
 /// The parameter of vertex `v` (where segment `v` starts) seen from segment `seg` (`v` or the
@@ -393,6 +405,8 @@ pub(crate) fn solve(
     // iteration has stalled, perhaps at the round-off floor of the residual.
     let mut stalled = false;
     ws.sticky[..k].fill(false);
+    // Whether some point is held in `ws.sticky`.
+    let mut any_sticky = false;
     loop {
         if !evaluated {
             g.evaluate(&ws.s, &ws.seg, &ws.pin, &mut ws.eval, true, curvature);
@@ -550,12 +564,10 @@ pub(crate) fn solve(
                 cap = cap.min(limit / d.abs());
             }
         }
-        if (tiny || residual <= tol)
-            && ws.sticky[..k].contains(&true)
-            && free_moves < 4 * max_iterations
-        {
+        if (tiny || residual <= tol) && any_sticky && free_moves < 4 * max_iterations {
             // The others are stationary: judge the points held on the way again.
             ws.sticky[..k].fill(false);
+            any_sticky = false;
             free_moves += 1;
             continue;
         }
@@ -630,11 +642,16 @@ pub(crate) fn solve(
             // A step off its segment that passes over the source or receiver, lying on the
             // segment left or the one reached (on a vertex, say), passes over a kink of T
             // (where the leg vanishes): put the point there; the kink test decides the rest.
-            let ends = if k == 0 { [].as_slice() } else { &[0, k - 1] };
+            let ends: &[usize] = match k {
+                0 => &[],
+                1 => &[0],
+                _ => &[0, k - 1],
+            };
             let passed_end = ends.iter().find_map(|&i| {
                 let moved = ws.pin[i] == Pin::Free
                     && ws.pin_try[i] == Pin::Free
-                    && ws.seg_try[i] != ws.seg[i];
+                    && ws.seg_try[i] != ws.seg[i]
+                    && end_near_line(g, i, ws.eval.vanish);
                 moved
                     .then(|| {
                         end_point_between(g, ws, i, ws.seg[i])
@@ -715,6 +732,7 @@ pub(crate) fn solve(
                         // step sends it back: the others, moving too, change its residuals):
                         // held there until the others have moved, then judged again.
                         ws.sticky[i] = ws.s[i] == at_vertex;
+                        any_sticky |= ws.sticky[i];
                         ws.s[i] = vertex_param(g, i, v, v);
                         ws.seg[i] = v;
                         ws.pin[i] = Pin::Vertex;
@@ -787,7 +805,10 @@ pub(crate) fn solve(
         std::mem::swap(&mut ws.seg, &mut ws.seg_try);
         std::mem::swap(&mut ws.pin, &mut ws.pin_try);
         // The others have moved: the held points are judged again.
-        ws.sticky[..k].fill(false);
+        if any_sticky {
+            ws.sticky[..k].fill(false);
+            any_sticky = false;
+        }
     }
 }
 
