@@ -221,6 +221,42 @@ pub fn dipping_stack(n_layers: usize, receivers: usize) -> SceneSpec {
     spec
 }
 
+/// [`layer_stack`] with digitised undulating interfaces: interface `i` is
+/// `y = −i + 0.3 sin(3 · 2π x / (2W) + i)` (`W` its half-width: three wavelengths across)
+/// sampled at `segments + 1` evenly spaced `x`. Neighbours stay at least 0.4 apart. For an
+/// even `segments` every interface has a vertex on `x = 0`, straight below the source: the
+/// rays near the vertical cross a column of vertices, and some end held on vertices
+/// (`vertex`), the nasty case of digitised horizons.
+///
+/// ```
+/// use eigenray::Status;
+/// let scene = eigenray::Scene::from_spec(&eigenray::demo::undulating_stack(8, 100, 50)).unwrap();
+/// let rays = eigenray::Tracer::new(&scene).unwrap().trace_all();
+/// assert!(rays.iter().all(|r| matches!(r.status, Status::Converged | Status::Vertex)));
+/// ```
+///
+/// # Panics
+/// If `n_layers` or `segments` is 0.
+pub fn undulating_stack(n_layers: usize, segments: usize, receivers: usize) -> SceneSpec {
+    assert!(segments > 0, "an interface needs at least one segment");
+    let mut spec = layer_stack(n_layers, receivers);
+    for (i, iface) in spec.interfaces.values_mut().enumerate() {
+        let (x0, x1, y) = (iface.points[0][0], iface.points[1][0], iface.points[0][1]);
+        iface.points = (0..=segments)
+            .map(|j| {
+                let x = x0 + (x1 - x0) * j as f64 / segments as f64;
+                let phase = 3.0 * std::f64::consts::TAU * (x - x0) / (x1 - x0) + i as f64;
+                [x, y + 0.3 * phase.sin()]
+            })
+            .collect();
+    }
+    spec.description = Some(format!(
+        "{n_layers} layers y = -i + 0.3 sin(3 * 2 pi (x + W) / 2W + i), each digitised with \
+         {segments} segments; source (0, 1); receivers on y = -{n_layers}.5"
+    ));
+    spec
+}
+
 /// The sea floor of [`sea_floor`]: `y = −2 + 0.1 sin(2π x / 5)` (km).
 pub fn sea_floor_depth(x: f64) -> f64 {
     -2.0 + 0.1 * (2.0 * std::f64::consts::PI * x / 5.0).sin()
