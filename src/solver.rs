@@ -14,6 +14,10 @@
 //! the other side, back: the others move too) is held there until the others have moved, then
 //! judged again. A first or last point whose step off its segment passes over the source or
 //! receiver, lying on its polyline, is put there (the kink of `T` where that leg vanishes).
+//! The iteration is deterministic, so a state met again would repeat for ever: from the eighth
+//! iteration on, the states are hashed, and after a repeat no step takes a point across a
+//! vertex — the point stops on it and is held until the others have moved (an active-set
+//! iteration on the corners).
 //! A point pushed past the end of an open polyline is held at the end and
 //! released when its residual points back inside; held there at convergence, the ray has no
 //! path.
@@ -289,6 +293,25 @@ fn end_point_between(g: &Geometry, ws: &Workspace, i: usize, j: usize) -> Option
     from_source.or_else(|| if i + 1 == k { passes(g.receiver) } else { None })
 }
 
+/// A hash of the iteration's state: parameters, segments, pins, held flags, and the loop's flags.
+fn state_hash(ws: &Workspace, k: usize, flags: &[bool], polishes: usize) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut mix = |x: u64| {
+        h = (h ^ x).wrapping_mul(0x0000_0100_0000_01b3);
+        h ^= h >> 29;
+    };
+    for i in 0..k {
+        mix(ws.s[i].to_bits());
+        mix(ws.seg[i] as u64);
+        mix(ws.pin[i] as u64 | (ws.sticky[i] as u64) << 8);
+    }
+    for &f in flags {
+        mix(f as u64);
+    }
+    mix(polishes as u64);
+    h
+}
+
 /// Whether the source (for the first point) or the receiver (for the last) lies within `tiny`
 /// of polyline `i`'s bounding box: else neither lies on one of its segments (the quick test
 /// before [`end_point_between`]).
@@ -407,6 +430,12 @@ pub(crate) fn solve(
     ws.sticky[..k].fill(false);
     // Whether some point is held in `ws.sticky`.
     let mut any_sticky = false;
+    // Hashes of the states the iteration has been in (the last `seen.len()`), to catch a cycle:
+    // the iteration is deterministic, so a state met again repeats for ever. After one, no step
+    // takes a point across a vertex (see below).
+    let mut seen = [0u64; 32];
+    let mut states = 0;
+    let mut cautious = false;
     loop {
         if !evaluated {
             g.evaluate(&ws.s, &ws.seg, &ws.pin, &mut ws.eval, true, curvature);
@@ -518,6 +547,17 @@ pub(crate) fn solve(
             );
         }
 
+        if iterations >= 8 && !cautious {
+            let flags = [curvature, near_kink, stalled, any_sticky];
+            let h = state_hash(ws, k, &flags, polishes);
+            if seen[..states.min(seen.len())].contains(&h) {
+                cautious = true;
+            } else {
+                seen[states % seen.len()] = h;
+                states += 1;
+            }
+        }
+
         // Newton system H δ = −r on the free points (solved as H x = r, δ = −x).
         let ok = if e.held == 0 {
             thomas(&e.diag, &e.off, &e.r, &mut ws.delta, &mut ws.scratch)
@@ -608,6 +648,37 @@ pub(crate) fn solve(
                     ws.s_try[i] = ws.s[i];
                     ws.seg_try[i] = ws.seg[i];
                     ws.pin_try[i] = ws.pin[i];
+                }
+            }
+            if cautious && crossed {
+                // After a cycle, points stop on the vertices they reach, one at a time, and are
+                // held there until the others have moved (an active-set iteration on the
+                // corners); a point that would cross several takes a shorter step.
+                let mut several = false;
+                let mut first = None;
+                for i in 0..k {
+                    if ws.pin[i] == Pin::Free
+                        && ws.pin_try[i] == Pin::Free
+                        && ws.seg_try[i] != ws.seg[i]
+                    {
+                        match single_vertex_between(g, i, ws.seg[i], ws.seg_try[i]) {
+                            Some(v) => first = first.or(Some((i, v))),
+                            None => several = true,
+                        }
+                    }
+                }
+                if several && attempt < 39 {
+                    alpha *= 0.5;
+                    continue;
+                }
+                if let Some((i, v)) = first {
+                    ws.s[i] = vertex_param(g, i, v, v);
+                    ws.seg[i] = v;
+                    ws.pin[i] = Pin::Vertex;
+                    ws.sticky[i] = true;
+                    any_sticky = true;
+                    pinned = true;
+                    break;
                 }
             }
             g.evaluate(

@@ -273,53 +273,19 @@ fn concave_circle_reflection_at_a_maximum() {
     println!("kinks circle: max relative time error {max_err:.2e}");
 }
 
-/// Eight layers digitised into 10 segments each along a sine, every one with a vertex on
-/// `x = 0`, straight below the source: the rays near that column of vertices cross several of
-/// them. Each ray must end converged or held on vertices (before, the iteration sent a point
-/// across its vertex and back until the iteration limit), and every interaction point must be
-/// a minimum of `T` along its interface with the others fixed: no direction along a segment
-/// at the point (both segments at a vertex) lowers `T` to first order.
-#[test]
-fn rays_through_a_column_of_vertices_end_on_a_minimum() {
-    let (layers, segs, half) = (8, 10, 100.0);
-    let speeds = [1.5, 2.0, 2.5, 3.0];
-    let slowness = |j: usize| 1.0 / speeds[j % speeds.len()];
-    let mut media = serde_json::Map::new();
-    let mut interfaces = serde_json::Map::new();
-    let mut lines: Vec<Vec<P>> = Vec::new();
-    for j in 0..=layers {
-        media.insert(
-            format!("m{j}"),
-            json!({ "speed": speeds[j % speeds.len()] }),
-        );
-    }
-    for i in 0..layers {
-        let line: Vec<P> = (0..=segs)
-            .map(|j| {
-                let x = -half + 2.0 * half * j as f64 / segs as f64;
-                let phase = 3.0 * std::f64::consts::TAU * x / (2.0 * half) + i as f64;
-                [x, -(i as f64) + 0.3 * phase.sin()]
-            })
-            .collect();
-        interfaces.insert(format!("L{i}"), json!({ "points": line }));
-        lines.push(line);
-    }
-    let receivers: Vec<P> = (0..41)
-        .map(|j| [-0.2 + 0.01 * j as f64, -(layers as f64) - 0.5])
-        .collect();
-    let steps: Vec<_> = (0..layers)
-        .map(|i| json!({ "refract": format!("L{i}") }))
-        .collect();
-    let leg_media: Vec<_> = (0..=layers).map(|j| format!("m{j}")).collect();
-    let sc = scene(&json!({
-        "media": media, "interfaces": interfaces,
-        "sources": [[0.0, 1.0]], "receivers": receivers,
-        "paths": [{ "steps": steps, "media": leg_media }],
-        "solver": { "tolerance": TOL, "max_iterations": 100 }
-    }));
+/// Every ray of `sc` (one path refracting through every interface in order, media given) ends
+/// converged or held on vertices, with the time its points give, and every interaction point is
+/// a minimum of `T` along its interface with the others fixed: no direction along a segment at
+/// the point (either segment at a vertex) lowers `T` to first order. Returns how many rays
+/// ended on vertices.
+fn assert_minima_through_layers(sc: &eigenray::Scene) -> usize {
+    let path = &sc.paths()[0];
+    let media = path.media.as_ref().expect("leg media");
+    let slowness = |j: usize| sc.media()[media[j]].slowness;
+    let layers = path.steps.len();
     let mut on_vertices = 0;
-    for ray in trace_all(&sc) {
-        let case = format!("receiver {:?}", receivers[ray.receiver]);
+    for ray in trace_all(sc) {
+        let case = format!("receiver {:?}", sc.receivers()[ray.receiver]);
         assert!(
             matches!(ray.status, Status::Converged | Status::Vertex),
             "{case}: {ray:?}"
@@ -334,8 +300,14 @@ fn rays_through_a_column_of_vertices_end_on_a_minimum() {
             "{case}: time {time} against {:?}",
             ray.time
         );
-        for i in 0..layers {
-            let (at, line) = (p[i + 1], &lines[i]);
+        for (i, step) in path.steps.iter().enumerate() {
+            let line: Vec<P> = sc.interfaces()[step.interface]
+                .polyline
+                .vertices()
+                .iter()
+                .map(|&q| pt(q))
+                .collect();
+            let at = p[i + 1];
             let (arrive, leave) = (unit(sub(at, p[i])), unit(sub(p[i + 2], at)));
             // `∂T/∂(at)` along the unit direction `d`.
             let slope = |d: P| {
@@ -373,6 +345,72 @@ fn rays_through_a_column_of_vertices_end_on_a_minimum() {
             }
         }
     }
+    on_vertices
+}
+
+/// `layers` interfaces `y = −i + 0.3 sin(3 · 2π x / (2 half) + i)` over `[−half, half]`, each
+/// digitised with `segs` segments (for an even `segs`, all with a vertex on `x = 0`, straight
+/// below the source at `(0, 1)`), leg speeds `speeds` repeating, one path refracting down
+/// through all of them to `receivers`.
+fn undulating_layers(
+    layers: usize,
+    segs: usize,
+    half: f64,
+    speeds: &[f64],
+    receivers: &[P],
+) -> eigenray::Scene {
+    let mut media = serde_json::Map::new();
+    let mut interfaces = serde_json::Map::new();
+    for j in 0..=layers {
+        media.insert(
+            format!("m{j}"),
+            json!({ "speed": speeds[j % speeds.len()] }),
+        );
+    }
+    for i in 0..layers {
+        let line: Vec<P> = (0..=segs)
+            .map(|j| {
+                let x = -half + 2.0 * half * j as f64 / segs as f64;
+                let phase = 3.0 * std::f64::consts::TAU * x / (2.0 * half) + i as f64;
+                [x, -(i as f64) + 0.3 * phase.sin()]
+            })
+            .collect();
+        interfaces.insert(format!("L{i}"), json!({ "points": line }));
+    }
+    let steps: Vec<_> = (0..layers)
+        .map(|i| json!({ "refract": format!("L{i}") }))
+        .collect();
+    let leg_media: Vec<_> = (0..=layers).map(|j| format!("m{j}")).collect();
+    scene(&json!({
+        "media": media, "interfaces": interfaces,
+        "sources": [[0.0, 1.0]], "receivers": receivers,
+        "paths": [{ "steps": steps, "media": leg_media }],
+        "solver": { "tolerance": TOL, "max_iterations": 100 }
+    }))
+}
+
+/// Eight layers of 10 segments each with a column of vertices below the source: the rays near
+/// the vertical cross several of them. Before, the iteration sent a point across its vertex and
+/// back until the iteration limit; now each ray ends on a minimum (some held on vertices).
+#[test]
+fn rays_through_a_column_of_vertices_end_on_a_minimum() {
+    let receivers: Vec<P> = (0..41).map(|j| [-0.2 + 0.01 * j as f64, -8.5]).collect();
+    let sc = undulating_layers(8, 10, 100.0, &[1.5, 2.0, 2.5, 3.0], &receivers);
     // The column of vertices is met: some rays end held on vertices.
-    assert!(on_vertices > 0, "no ray ended on a vertex");
+    assert!(
+        assert_minima_through_layers(&sc) > 0,
+        "no ray ended on a vertex"
+    );
+}
+
+/// 32 such layers of 100 segments: the ray to `(−0.1447…, −32.5)` went round a cycle of nine
+/// states (several points crossing vertices in turn) until the iteration limit. A state met
+/// again now switches the iteration to stopping points on the vertices they reach.
+#[test]
+fn a_cycle_among_vertices_is_left() {
+    let receivers: Vec<P> = (40..60)
+        .map(|j| [-9.6 + 38.4 * j as f64 / 199.0, -32.5])
+        .collect();
+    let sc = undulating_layers(32, 100, 320.0, &eigenray::demo::LAYER_SPEEDS, &receivers);
+    assert_minima_through_layers(&sc);
 }
