@@ -15,9 +15,10 @@
 //! judged again. A first or last point whose step off its segment passes over the source or
 //! receiver, lying on its polyline, is put there (the kink of `T` where that leg vanishes).
 //! The iteration is deterministic, so a state met again would repeat for ever: from the eighth
-//! iteration on, the states are hashed, and after a repeat no step takes a point across a
-//! vertex — the point stops on it and is held until the others have moved (an active-set
-//! iteration on the corners).
+//! iteration on, the states are hashed, and after a repeat — or, past the twelfth, a return to
+//! an earlier set of segments and pins (a cycle that need not repeat exactly) — no step takes a
+//! point across a vertex: the point stops on it and is held until the others have moved (an
+//! active-set iteration on the corners).
 //! A point pushed past the end of an open polyline is held at the end and
 //! released when its residual points back inside; held there at convergence, the ray has no
 //! path.
@@ -293,15 +294,18 @@ fn end_point_between(g: &Geometry, ws: &Workspace, i: usize, j: usize) -> Option
     from_source.or_else(|| if i + 1 == k { passes(g.receiver) } else { None })
 }
 
-/// A hash of the iteration's state: parameters, segments, pins, held flags, and the loop's flags.
-fn state_hash(ws: &Workspace, k: usize, flags: &[bool], polishes: usize) -> u64 {
+/// A hash of the iteration's state: parameters (with `params`), segments, pins, held flags, and
+/// the loop's flags.
+fn state_hash(ws: &Workspace, k: usize, flags: &[bool], polishes: usize, params: bool) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     let mut mix = |x: u64| {
         h = (h ^ x).wrapping_mul(0x0000_0100_0000_01b3);
         h ^= h >> 29;
     };
     for i in 0..k {
-        mix(ws.s[i].to_bits());
+        if params {
+            mix(ws.s[i].to_bits());
+        }
         mix(ws.seg[i] as u64);
         mix(ws.pin[i] as u64 | (ws.sticky[i] as u64) << 8);
     }
@@ -436,6 +440,10 @@ pub(crate) fn solve(
     let mut seen = [0u64; 32];
     let mut states = 0;
     let mut cautious = false;
+    // Likewise the segments and pins alone, each time they change: past the twelfth iteration,
+    // coming back to an earlier set is a cycle too (one that need not repeat exactly).
+    let mut seen_sets = [0u64; 32];
+    let (mut sets, mut last_set) = (0, 0u64);
     loop {
         if !evaluated {
             g.evaluate(&ws.s, &ws.seg, &ws.pin, &mut ws.eval, true, curvature);
@@ -549,12 +557,21 @@ pub(crate) fn solve(
 
         if iterations >= 8 && !cautious {
             let flags = [curvature, near_kink, stalled, any_sticky];
-            let h = state_hash(ws, k, &flags, polishes);
+            let h = state_hash(ws, k, &flags, polishes, true);
             if seen[..states.min(seen.len())].contains(&h) {
                 cautious = true;
             } else {
                 seen[states % seen.len()] = h;
                 states += 1;
+            }
+            let set = state_hash(ws, k, &[], 0, false);
+            if set != last_set {
+                if iterations >= 12 && seen_sets[..sets.min(seen_sets.len())].contains(&set) {
+                    cautious = true;
+                }
+                seen_sets[sets % seen_sets.len()] = set;
+                sets += 1;
+                last_set = set;
             }
         }
 

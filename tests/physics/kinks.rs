@@ -414,3 +414,82 @@ fn a_cycle_among_vertices_is_left() {
     let sc = undulating_layers(32, 100, 320.0, &eigenray::demo::LAYER_SPEEDS, &receivers);
     assert_minima_through_layers(&sc);
 }
+
+/// A waveguide of two digitised undulating walls (100 segments each), six alternating
+/// reflections: 97 of these 200 rays ended at the iteration limit at the start of this work,
+/// points creeping across vertices or cycling among them. Every ray must end converged or held
+/// on vertices, stationary along each wall: a free point with no slope along its segment, a
+/// point on a vertex with `T` rising both ways or falling both ways (a kink).
+#[test]
+fn reflections_in_a_digitised_waveguide_end_stationary() {
+    let (segs, amp, bounces) = (100, 0.02, 6);
+    let wall = |y0: f64, phase: f64| -> Vec<P> {
+        (0..=segs)
+            .map(|j| {
+                let x = -5.0 + 110.0 * j as f64 / segs as f64;
+                [x, y0 + amp * (0.7 * x + phase).sin()]
+            })
+            .collect()
+    };
+    let walls = [wall(0.0, 0.0), wall(1.0, 1.3)];
+    let steps: Vec<_> = (0..bounces)
+        .map(|i| json!({ "reflect": if i % 2 == 0 { "bottom" } else { "top" } }))
+        .collect();
+    let receivers: Vec<P> = (0..200)
+        .map(|j| {
+            [
+                20.0 + 60.0 * j as f64 / 199.0,
+                0.3 + 0.4 * ((j * 7) % 13) as f64 / 13.0,
+            ]
+        })
+        .collect();
+    let sc = scene(&json!({
+        "media": { "w": { "speed": 1.5 } },
+        "interfaces": { "bottom": { "points": walls[0] }, "top": { "points": walls[1] } },
+        "sources": [[0.0, 0.5]], "receivers": receivers,
+        "paths": [{ "steps": steps, "media": vec!["w"; bounces + 1] }],
+        "solver": { "tolerance": TOL, "max_iterations": 100 }
+    }));
+    for ray in trace_all(&sc) {
+        let case = format!("receiver {:?}", receivers[ray.receiver]);
+        assert!(
+            matches!(ray.status, Status::Converged | Status::Vertex),
+            "{case}: {ray:?}"
+        );
+        let p: Vec<P> = ray.points.iter().map(|&q| pt(q)).collect();
+        for i in 0..bounces {
+            let (at, line) = (p[i + 1], &walls[i % 2]);
+            let (arrive, leave) = (unit(sub(at, p[i])), unit(sub(p[i + 2], at)));
+            let slope = |d: P| dot(sub(arrive, leave), d) / 1.5;
+            let mut done = false;
+            for seg in line.windows(2) {
+                let (a, b) = (seg[0], seg[1]);
+                let t = unit(sub(b, a));
+                let f = fraction(at, a, b);
+                if dist(at, b) <= 1e-9 {
+                    // On the vertex at `b`: the slopes back along this segment and on along
+                    // the next one.
+                    let j = line.iter().position(|&q| q == b).expect("vertex");
+                    let on = unit(sub(line[j + 1], b));
+                    let (back, fwd) = (slope(scale(t, -1.0)), slope(on));
+                    assert!(
+                        (back >= -1e-9 && fwd >= -1e-9) || (back <= 1e-9 && fwd <= 1e-9),
+                        "{case}: point {i} on a vertex with slopes {back} back, {fwd} on"
+                    );
+                    done = true;
+                    break;
+                }
+                if f > 0.0 && f < 1.0 && dist_to_line(at, a, b) <= 1e-9 && dist(at, a) > 1e-9 {
+                    assert!(
+                        slope(t).abs() <= 1e-9,
+                        "{case}: point {i} free with slope {}",
+                        slope(t)
+                    );
+                    done = true;
+                    break;
+                }
+            }
+            assert!(done, "{case}: point {i} {at:?} off its wall");
+        }
+    }
+}
