@@ -556,7 +556,8 @@ pub(crate) fn solve(
         }
 
         if iterations >= 8 && !cautious {
-            let flags = [curvature, near_kink, stalled, any_sticky];
+            // (`any_sticky` follows from the held flags, which the hash includes.)
+            let flags = [curvature, near_kink, stalled];
             let h = state_hash(ws, k, &flags, polishes, true);
             if seen[..states.min(seen.len())].contains(&h) {
                 cautious = true;
@@ -679,7 +680,9 @@ pub(crate) fn solve(
                         && ws.seg_try[i] != ws.seg[i]
                     {
                         match single_vertex_between(g, i, ws.seg[i], ws.seg_try[i]) {
-                            Some(v) => first = first.or(Some((i, v))),
+                            Some(v) => {
+                                first.get_or_insert((i, v));
+                            }
                             None => several = true,
                         }
                     }
@@ -735,18 +738,18 @@ pub(crate) fn solve(
                 1 => &[0],
                 _ => &[0, k - 1],
             };
+            // (Within one segment the test comes below, only for a trial the merit rejects: the
+            // fast paths accept such steps on the merit alone, and must take the same ones.)
             let passed_end = ends.iter().find_map(|&i| {
                 let moved = ws.pin[i] == Pin::Free
                     && ws.pin_try[i] == Pin::Free
-                    && ws.seg_try[i] != ws.seg[i]
-                    && end_near_line(g, i, ws.eval.vanish);
-                moved
-                    .then(|| {
-                        end_point_between(g, ws, i, ws.seg[i])
-                            .or_else(|| end_point_between(g, ws, i, ws.seg_try[i]))
-                            .map(|sp| (i, sp))
-                    })
-                    .flatten()
+                    && ws.seg_try[i] != ws.seg[i];
+                if !moved || !end_near_line(g, i, ws.eval.vanish) {
+                    return None;
+                }
+                end_point_between(g, ws, i, ws.seg[i])
+                    .or_else(|| end_point_between(g, ws, i, ws.seg_try[i]))
+                    .map(|sp| (i, sp))
             });
             if let Some((i, sp)) = passed_end {
                 ws.s[i] = sp;

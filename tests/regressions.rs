@@ -147,6 +147,9 @@ fn reflect_source_on_vertex_terminates() {
     let ray = only_ray("reflect_source_on_vertex_cycles");
     assert_ne!(ray.status, Status::NotConverged, "{ray:?}");
     assert!(ray.iterations <= 5, "{ray:?}");
+    // With slowness 6.4 on the source's leg and 0.11 on the other, T grows whichever way the
+    // point leaves the source (at least 6.4 − 0.11 per unit length): the point is the source.
+    assert_eq!(ray.points[1], ray.points[0], "{ray:?}");
 }
 
 /// One refraction through a closed triangle whose vertex is the receiver: a step across the
@@ -154,9 +157,13 @@ fn reflect_source_on_vertex_terminates() {
 /// receiver's parameter. The path ends on vertex 0, its first leg crossing the floor.
 #[test]
 fn wrapped_step_does_not_pass_over_the_receiver() {
+    let text = fixture("refract_receiver_on_polygon_vertex_wrap");
+    let scene = Scene::from_json(&text).unwrap_or_else(|e| panic!("scene rejected: {e}"));
     let ray = only_ray("refract_receiver_on_polygon_vertex_wrap");
     assert_eq!(ray.status, Status::Obstructed, "{ray:?}");
     assert!(ray.iterations <= 5, "{ray:?}");
+    let triangle = &scene.interfaces()[scene.interface_index("poly").expect("poly")].polyline;
+    assert_eq!(ray.points[1], triangle.vertices()[0], "{ray:?}");
 }
 
 /// Source and receiver both on a straight interface: every leg lies in its line, so whatever
