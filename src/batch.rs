@@ -3,8 +3,11 @@
 use rayon::prelude::*;
 
 use crate::geom::{Point, Vec2};
-use crate::solver::{Workspace, receiver_sensitivity};
-use crate::trace::{Ray, RaySummary, Reason, Start, Status, Tracer};
+use crate::problem::{Frame, Geometry, Single};
+use crate::solver::{
+    Outcome, SingleIter, SingleNext, Workspace, receiver_sensitivity, single_sensitivity,
+};
+use crate::trace::{Ray, RaySummary, Reason, SinglePath, Start, Status, Tracer, given_param};
 
 /// How to run a batch.
 #[derive(Clone, Copy)]
@@ -386,83 +389,31 @@ impl Tracer<'_> {
             .zip(media.par_chunks_mut(chunk * media_block))
             .enumerate()
             .for_each_init(
-                || {
-                    (
-                        Workspace::new(),
-                        Warm::new(params_block, np),
-                        vec![false; np],
-                        Point::new(0.0, 0.0),
-                    )
-                },
-                |(ws, warm, have, last), (unit, ((rec, pts), med))| {
-                    have.iter_mut().for_each(|h| *h = false);
-                    let first = unit * chunk;
+                || (Workspace::new(), Warm::new(params_block, np)),
+                |(ws, warm), (unit, ((rec, pts), med))| {
                     let n = rec.len() / np;
-                    for b in 0..n {
-                        let block = first + b;
-                        let (source, receiver) = (block / nr, order[block % nr]);
-                        if b > 0 && (block % nr) == 0 {
-                            have.iter_mut().for_each(|h| *h = false);
-                        }
-                        // The previous receiver's solution is the start when that receiver is
-                        // near: closer than a quarter of this receiver's distance to the source.
-                        let here = scene.receivers()[receiver];
-                        let near = b > 0 && near(here, *last, scene.sources()[source]);
-                        let moved = here - *last;
-                        *last = here;
-                        for p in 0..np {
-                            let (lo, hi) = (param_offsets[p], param_offsets[p + 1]);
-                            let start = if opts.warm_start && have[p] && near {
-                                Start::Given(warm.predict(p, lo..hi, moved))
-                            } else {
-                                Start::Default
-                            };
-                            let mut s = self.solve_indexed_start(source, receiver, p, start, ws);
-                            if matches!(start, Start::Given(_)) && s.status != Status::Converged {
-                                // The neighbour's path may lead elsewhere (off an end, onto a
-                                // vertex): the documented start decides.
-                                let cold = self.solve_indexed_start(
-                                    source,
-                                    receiver,
-                                    p,
-                                    Start::Default,
-                                    ws,
-                                );
-                                s = RaySummary {
-                                    iterations: s.iterations + cold.iterations,
-                                    ..cold
-                                };
-                            }
-                            rec[b * np + p] = RayRecord {
-                                status: s.status,
-                                time: if s.status.has_time() {
-                                    s.time
-                                } else {
-                                    f64::NAN
-                                },
-                                iterations: s.iterations as u32,
-                                residual: s.residual,
-                                reason: s.reason,
-                            };
-                            let ray_points =
-                                &mut pts[b * pts_block + po[p]..b * pts_block + po[p + 1]];
-                            if s.status.has_time() {
-                                ray_points.copy_from_slice(ws.points());
-                            } else {
-                                ray_points.fill(Point::new(f64::NAN, f64::NAN));
-                            }
-                            let ray_media =
-                                &mut med[b * media_block + mo[p]..b * media_block + mo[p + 1]];
-                            if ws.media().len() == ray_media.len() {
-                                for (dst, &m) in ray_media.iter_mut().zip(ws.media()) {
-                                    *dst = m as u32;
-                                }
-                            } else {
-                                ray_media.fill(NO_MEDIUM);
-                            }
-                            have[p] = s.status == Status::Converged;
-                            if have[p] && opts.warm_start {
-                                warm.store(p, lo..hi, ws);
+                    let mut unit = Unit {
+                        first: unit * chunk,
+                        n,
+                        nr,
+                        order: &order,
+                        warm_start: opts.warm_start,
+                        rec,
+                        pts,
+                        med,
+                        np,
+                        pts_block,
+                        media_block,
+                        po,
+                        mo,
+                    };
+                    // Path by path: each path's rays form one chain of warm starts.
+                    for p in 0..np {
+                        match self.single_path(p) {
+                            Some(sp) => self.single_lanes(sp, p, &mut unit, ws),
+                            None => {
+                                let params = param_offsets[p]..param_offsets[p + 1];
+                                self.path_chain(p, params, &mut unit, ws, warm);
                             }
                         }
                     }
@@ -514,6 +465,354 @@ impl Tracer<'_> {
                 out.copy_from_slice(&media[from..from + media_block]);
             });
         batch.spatial = Some(spatial);
+    }
+}
+
+/// One work unit of a batch: blocks `first..first + n` in solve order (a block is one
+/// (source, receiver) pair, all paths) and their output.
+struct Unit<'a> {
+    first: usize,
+    n: usize,
+    /// Receivers per source.
+    nr: usize,
+    /// Solve order of the receivers.
+    order: &'a [usize],
+    warm_start: bool,
+    rec: &'a mut [RayRecord],
+    pts: &'a mut [Point],
+    med: &'a mut [u32],
+    /// Paths, points and leg media per block, and each path's offsets in a block.
+    np: usize,
+    pts_block: usize,
+    media_block: usize,
+    po: &'a [usize],
+    mo: &'a [usize],
+}
+
+impl Unit<'_> {
+    /// Source and receiver of block `b` of the unit.
+    #[inline]
+    fn ends(&self, b: usize) -> (usize, usize) {
+        let block = self.first + b;
+        (block / self.nr, self.order[block % self.nr])
+    }
+
+    /// Whether block `b` is the first of its source (the warm-start chain breaks there).
+    #[inline]
+    fn new_source(&self, b: usize) -> bool {
+        (self.first + b) % self.nr == 0
+    }
+
+    /// Writes ray `s` of path `p` of block `b` with its points and leg media.
+    #[inline]
+    fn write(&mut self, b: usize, p: usize, s: &RaySummary, points: &[Point], media: &[usize]) {
+        self.rec[b * self.np + p] = RayRecord {
+            status: s.status,
+            time: if s.status.has_time() {
+                s.time
+            } else {
+                f64::NAN
+            },
+            iterations: s.iterations as u32,
+            residual: s.residual,
+            reason: s.reason,
+        };
+        let at = b * self.pts_block;
+        let ray_points = &mut self.pts[at + self.po[p]..at + self.po[p + 1]];
+        if s.status.has_time() {
+            ray_points.copy_from_slice(points);
+        } else {
+            ray_points.fill(Point::new(f64::NAN, f64::NAN));
+        }
+        let at = b * self.media_block;
+        let ray_media = &mut self.med[at + self.mo[p]..at + self.mo[p + 1]];
+        if media.len() == ray_media.len() {
+            for (dst, &m) in ray_media.iter_mut().zip(media) {
+                *dst = m as u32;
+            }
+        } else {
+            ray_media.fill(NO_MEDIUM);
+        }
+    }
+}
+
+/// One-interaction rays solved side by side in [`Tracer::single_lanes`]. A ray's Newton steps
+/// are one chain of dependent operations (a square root and two divisions each), which leaves
+/// most of the core idle; this many rays in flight fill it.
+const LANES: usize = 4;
+
+/// A lane of [`Tracer::single_lanes`]: a chain of blocks solved in order, with its own warm
+/// starts, and the ray in flight.
+#[derive(Clone, Copy, Default)]
+struct Lane {
+    /// First, next and end block of the chain.
+    first: usize,
+    next: usize,
+    end: usize,
+    /// Whether a ray is in flight, and its block.
+    busy: bool,
+    b: usize,
+    source: Point,
+    receiver: Point,
+    /// The ray's segment, its frame, the receiver relative to the source and the ray's
+    /// coordinate scale ([`Geometry::coord`]).
+    seg: usize,
+    f: Frame,
+    to_receiver: Vec2,
+    coord: f64,
+    it: SingleIter,
+    /// The warm start the ray began from, if any.
+    guess: Option<f64>,
+    /// The step being tried.
+    to: f64,
+    polish: bool,
+    /// The chain: whether the last ray converged, the last receiver, and the last solution
+    /// with its sensitivity to the receiver (see [`Warm`]).
+    have: bool,
+    last: Point,
+    prev: f64,
+    z: f64,
+    g: Option<Vec2>,
+}
+
+/// What [`Tracer::single_lanes`] needs of its path, looked up once.
+#[derive(Clone, Copy)]
+struct SingleLanes<'a> {
+    sp: &'a SinglePath,
+    p: usize,
+    steps: &'a [crate::scene::Step],
+    kind: crate::scene::StepKind,
+    line: &'a crate::polyline::Polyline,
+    tol: f64,
+    max_iterations: usize,
+}
+
+impl Tracer<'_> {
+    /// Path `p` of every block of `unit`, one block after the other, each starting from the
+    /// last one's solution when that receiver is near.
+    fn path_chain(
+        &self,
+        p: usize,
+        params: std::ops::Range<usize>,
+        unit: &mut Unit,
+        ws: &mut Workspace,
+        warm: &mut Warm,
+    ) {
+        let scene = self.scene();
+        let (mut have, mut last) = (false, Point::default());
+        for b in 0..unit.n {
+            let (source, receiver) = unit.ends(b);
+            if b > 0 && unit.new_source(b) {
+                have = false;
+            }
+            // The previous receiver's solution is the start when that receiver is near:
+            // closer than a quarter of this receiver's distance to the source.
+            let here = scene.receivers()[receiver];
+            let near = b > 0 && near(here, last, scene.sources()[source]);
+            let moved = here - last;
+            last = here;
+            let guess =
+                (unit.warm_start && have && near).then(|| warm.predict(p, params.clone(), moved));
+            let s = self.solve_ray(source, receiver, p, guess, ws);
+            unit.write(b, p, &s, ws.points(), ws.media());
+            have = s.status == Status::Converged;
+            if have && unit.warm_start {
+                warm.store(p, params.clone(), ws);
+            }
+        }
+    }
+
+    /// One ray from `guess` if given, else from the default start; a warm-started ray that
+    /// does not converge is solved again from the default start.
+    fn solve_ray(
+        &self,
+        source: usize,
+        receiver: usize,
+        p: usize,
+        guess: Option<&[f64]>,
+        ws: &mut Workspace,
+    ) -> RaySummary {
+        let start = guess.map_or(Start::Default, Start::Given);
+        let s = self.solve_indexed_start(source, receiver, p, start, ws);
+        if guess.is_none() || s.status == Status::Converged {
+            return s;
+        }
+        // The neighbour's path may lead elsewhere (off an end, onto a vertex): the
+        // documented start decides.
+        let cold = self.solve_indexed_start(source, receiver, p, Start::Default, ws);
+        RaySummary {
+            iterations: s.iterations + cold.iterations,
+            ..cold
+        }
+    }
+
+    /// [`path_chain`](Self::path_chain) for a one-interaction path: the blocks split into
+    /// [`LANES`] chains whose rays are solved side by side, taking exactly the steps of
+    /// one-by-one solving. A ray that leaves the common case (another start, a step leaving
+    /// its segment, any status but `converged` after a warm start) is solved again one by one.
+    fn single_lanes(&self, sp: &SinglePath, p: usize, unit: &mut Unit, ws: &mut Workspace) {
+        let scene = self.scene();
+        let steps = &scene.paths()[p].steps;
+        let opts = scene.solver();
+        let path = SingleLanes {
+            sp,
+            p,
+            steps,
+            kind: steps[0].kind,
+            line: &scene.interfaces()[steps[0].interface].polyline,
+            tol: opts.tolerance,
+            max_iterations: opts.max_iterations,
+        };
+        let mut lanes = [Lane::default(); LANES];
+        for (l, lane) in lanes.iter_mut().enumerate() {
+            lane.first = l * unit.n / LANES;
+            lane.next = lane.first;
+            lane.end = (l + 1) * unit.n / LANES;
+        }
+        let w = sp.slowness;
+        loop {
+            let mut trying = [false; LANES];
+            for (lane, trying) in lanes.iter_mut().zip(&mut trying) {
+                *trying = self.lane_advance(&path, lane, unit, ws);
+            }
+            if !trying.contains(&true) {
+                return;
+            }
+            // The steps' trial evaluations, independent of each other.
+            let mut trials = [Single::default(); LANES];
+            for ((lane, trial), &trying) in lanes.iter().zip(&mut trials).zip(&trying) {
+                if trying {
+                    *trial = Geometry::evaluate_single(
+                        lane.to,
+                        &lane.f,
+                        w,
+                        lane.to_receiver,
+                        lane.coord,
+                        false,
+                    );
+                }
+            }
+            for ((lane, &trial), &trying) in lanes.iter_mut().zip(&trials).zip(&trying) {
+                if trying && !lane.it.accept(lane.to, lane.polish, trial) {
+                    self.lane_one_by_one(p, lane, unit, ws);
+                }
+            }
+        }
+    }
+
+    /// Moves `lane` on until its ray in flight has a step to try (`true`) or its chain is
+    /// done (`false`), starting its next rays and finishing the ones that end.
+    #[inline(always)]
+    fn lane_advance(
+        &self,
+        path: &SingleLanes,
+        lane: &mut Lane,
+        unit: &mut Unit,
+        ws: &mut Workspace,
+    ) -> bool {
+        let scene = self.scene();
+        let SingleLanes {
+            sp,
+            p,
+            steps,
+            kind,
+            line,
+            ..
+        } = *path;
+        loop {
+            if !lane.busy {
+                if lane.next == lane.end {
+                    return false;
+                }
+                let b = lane.next;
+                lane.next += 1;
+                lane.b = b;
+                let (source, receiver) = unit.ends(b);
+                let chained = b > lane.first;
+                if chained && unit.new_source(b) {
+                    lane.have = false;
+                }
+                let (source, here) = (scene.sources()[source], scene.receivers()[receiver]);
+                let near = chained && near(here, lane.last, source);
+                let moved = here - lane.last;
+                lane.last = here;
+                // `Warm::predict` for one parameter.
+                lane.guess = (unit.warm_start && lane.have && near).then(|| match lane.g {
+                    Some(g) => lane.prev - lane.z * g.dot(moved),
+                    None => lane.prev,
+                });
+                let start = match lane.guess {
+                    Some(wanted) => Some(given_param(line, wanted, lane.seg)),
+                    None => self.single_crossing_start(sp, kind, line, source, here),
+                };
+                let Some((s, j)) = start else {
+                    self.lane_one_by_one(p, lane, unit, ws);
+                    continue;
+                };
+                let g = Geometry {
+                    scene,
+                    steps,
+                    slowness: &sp.slowness,
+                    source,
+                    receiver: here,
+                };
+                (lane.source, lane.receiver, lane.seg) = (source, here, j);
+                (lane.to_receiver, lane.coord) = (here - source, g.coord());
+                lane.f = Frame::new(line, j, source);
+                lane.it =
+                    SingleIter::start(s, &lane.f, sp.slowness, lane.to_receiver, lane.coord, true);
+                lane.busy = true;
+            }
+            match lane.it.next(&lane.f, path.tol, path.max_iterations) {
+                SingleNext::Try { to, polish } => {
+                    (lane.to, lane.polish) = (to, polish);
+                    return true;
+                }
+                SingleNext::End(Outcome::Converged) => {
+                    let (e, j) = (&lane.it.e, lane.seg);
+                    let pts = [lane.source, line.point_on(j, lane.it.s), lane.receiver];
+                    let rel = [Vec2::default(), e.p, lane.to_receiver];
+                    let n = line.normal(j);
+                    let sol = lane.it.solution();
+                    let s = self.single_status(p, kind, n, &pts, &rel, &e.len, sol);
+                    if s.status != Status::Converged && lane.guess.is_some() {
+                        self.lane_one_by_one(p, lane, unit, ws);
+                        continue;
+                    }
+                    unit.write(lane.b, p, &s, &pts, &sp.media);
+                    lane.have = s.status == Status::Converged;
+                    if lane.have && unit.warm_start {
+                        lane.prev = lane.it.s;
+                        (lane.z, lane.g) = match single_sensitivity(e, lane.f.t, sp.slowness[1]) {
+                            Some((z, g)) => (z, Some(g)),
+                            None => (0.0, None),
+                        };
+                    }
+                    lane.busy = false;
+                }
+                SingleNext::End(_) | SingleNext::General => {
+                    self.lane_one_by_one(p, lane, unit, ws);
+                }
+            }
+        }
+    }
+
+    /// Solves the lane's present ray one by one (from the start it had), ends it and keeps its
+    /// solution for the chain.
+    fn lane_one_by_one(&self, p: usize, lane: &mut Lane, unit: &mut Unit, ws: &mut Workspace) {
+        let (source, receiver) = unit.ends(lane.b);
+        let guess = lane.guess.map(|g| [g]);
+        let s = self.solve_ray(source, receiver, p, guess.as_ref().map(|g| &g[..]), ws);
+        unit.write(lane.b, p, &s, ws.points(), ws.media());
+        lane.have = s.status == Status::Converged;
+        if lane.have && unit.warm_start {
+            let (mut z, mut unit_, mut cp) = ([0.0], [0.0], [0.0]);
+            lane.prev = ws.parameters()[0];
+            lane.seg = ws.seg[0];
+            lane.g = receiver_sensitivity(ws, &mut z, &mut unit_, &mut cp);
+            lane.z = z[0];
+        }
+        lane.busy = false;
     }
 }
 

@@ -32,7 +32,7 @@
 
 use crate::geom::{Point, Vec2};
 pub(crate) use crate::problem::Pin;
-use crate::problem::{Eval, Frame, Geometry, leg_vanished, max_num, min_num, sweep_row};
+use crate::problem::{Eval, Frame, Geometry, Single, leg_vanished, max_num, min_num, sweep_row};
 
 /// How the iteration ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -1026,57 +1026,133 @@ fn fast_newton_single(
     let w = [g.slowness[0], g.slowness[1]];
     let to_receiver = g.receiver - g.source;
     let coord = g.coord();
-    let mut s = ws.s[0];
-    let mut e = Geometry::evaluate_single(s, &f, w, to_receiver, coord, fast.curvature);
+    // Called first in `solve`: `fast` is as `solve` made it (no steps, curvature on).
+    let mut it = SingleIter::start(ws.s[0], &f, w, to_receiver, coord, fast.curvature);
     let done = loop {
+        match it.next(&f, tol, max_iterations) {
+            SingleNext::End(outcome) => break Some(outcome),
+            SingleNext::General => break None,
+            SingleNext::Try { to, polish } => {
+                let trial = Geometry::evaluate_single(to, &f, w, to_receiver, coord, false);
+                if !it.accept(to, polish, trial) {
+                    break None;
+                }
+            }
+        }
+    };
+    if it.iterations > 0 {
+        fast.curvature = false;
+    }
+    fast.iterations = it.iterations;
+    fast.polishes = it.polishes;
+    ws.s[0] = it.s;
+    it.e.store(&f, to_receiver, &mut ws.eval);
+    fast.evaluated = true;
+    done.map(|outcome| (outcome, it.solution()))
+}
+
+/// The iteration of [`fast_newton_single`], one state per ray: batches run several of these
+/// side by side (their dependency chains overlap), each taking exactly the steps the one-ray
+/// loop takes.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SingleIter {
+    /// The parameter.
+    pub s: f64,
+    /// The evaluation at `s`.
+    pub e: Single,
+    /// Newton steps taken.
+    pub iterations: usize,
+    /// Newton steps taken after the residual met the tolerance.
+    pub polishes: usize,
+}
+
+/// What [`SingleIter::next`] decided.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum SingleNext {
+    /// The solve ends with this outcome.
+    End(Outcome),
+    /// The general loop must take over from here.
+    General,
+    /// Evaluate at `to` and [`accept`](SingleIter::accept) the step (`polish`: the residual
+    /// already met the tolerance).
+    Try { to: f64, polish: bool },
+}
+
+impl SingleIter {
+    /// The state at the start parameter `s` on the segment `f`, before any step (`curvature`:
+    /// whether the evaluation adds the curvature estimate, as the first one of a solve does).
+    #[inline(always)]
+    pub fn start(
+        s: f64,
+        f: &Frame,
+        w: [f64; 2],
+        to_receiver: Vec2,
+        coord: f64,
+        curvature: bool,
+    ) -> Self {
+        SingleIter {
+            s,
+            e: Geometry::evaluate_single(s, f, w, to_receiver, coord, curvature),
+            iterations: 0,
+            polishes: 0,
+        }
+    }
+
+    /// The tests at the present point, in the general loop's order.
+    #[inline(always)]
+    pub fn next(&self, f: &Frame, tol: f64, max_iterations: usize) -> SingleNext {
+        let (s, e) = (self.s, &self.e);
         if e.vanished {
-            break None;
+            return SingleNext::General;
         }
         let residual = e.rmax;
-        if !residual.is_finite() || fast.iterations >= max_iterations {
-            break Some(Outcome::NotConverged);
+        if !residual.is_finite() || self.iterations >= max_iterations {
+            return SingleNext::End(Outcome::NotConverged);
         }
         // `thomas` on one row.
         let x = e.r * (1.0 / e.h);
         // `thomas`'s pivot test on one row (|h| > 1e-14 |h| is h ≠ 0 for a finite h).
         if !(e.h.is_finite() && e.h != 0.0 && x.is_finite()) {
-            break None;
+            return SingleNext::General;
         }
         let d = -x;
         if d.abs() <= 4.0 * f64::EPSILON * (s.abs() + e.len[0] + e.len[1]) {
-            break Some(Outcome::Converged);
+            return SingleNext::End(Outcome::Converged);
         }
         let to = s + d;
         let reach = min_num(max_num(e.len[0], e.len[1]), f.quarter);
         if !(to > f.lo && to < f.hi && d.abs() <= reach) {
-            break None;
+            return SingleNext::General;
         }
         let polish = residual <= tol;
-        if polish && (d.abs() <= tol.sqrt() * (e.len[0] + e.len[1]) || fast.polishes >= 2) {
-            break Some(Outcome::Converged);
+        if polish && (d.abs() <= tol.sqrt() * (e.len[0] + e.len[1]) || self.polishes >= 2) {
+            return SingleNext::End(Outcome::Converged);
         }
-        let trial = Geometry::evaluate_single(to, &f, w, to_receiver, coord, false);
-        if !(trial.phi.is_finite() && trial.phi <= (1.0 - 1e-4) * e.phi) {
-            break None;
+        SingleNext::Try { to, polish }
+    }
+
+    /// Takes the step to `to` evaluated as `trial` if it lowers the merit enough; `false` (and
+    /// no change) hands over to the general loop.
+    #[inline(always)]
+    pub fn accept(&mut self, to: f64, polish: bool, trial: Single) -> bool {
+        if !(trial.phi.is_finite() && trial.phi <= (1.0 - 1e-4) * self.e.phi) {
+            return false;
         }
-        fast.polishes += polish as usize;
-        fast.iterations += 1;
-        fast.curvature = false;
-        (s, e) = (to, trial);
-    };
-    ws.s[0] = s;
-    e.store(&f, to_receiver, &mut ws.eval);
-    fast.evaluated = true;
-    done.map(|outcome| {
-        (
-            outcome,
-            Solution {
-                time: e.time,
-                iterations: fast.iterations,
-                residual: e.rmax,
-            },
-        )
-    })
+        self.polishes += polish as usize;
+        self.iterations += 1;
+        (self.s, self.e) = (to, trial);
+        true
+    }
+
+    /// The solution at the present point.
+    #[inline(always)]
+    pub fn solution(&self) -> Solution {
+        Solution {
+            time: self.e.time,
+            iterations: self.iterations,
+            residual: self.e.rmax,
+        }
+    }
 }
 
 /// How the solution in `ws` moves with the receiver, to first order: after a solve that ended
@@ -1095,16 +1171,10 @@ pub(crate) fn receiver_sensitivity(
     if k == 0 || e.held > 0 || e.vanished > 0 || ws.slowness.len() != k + 1 {
         return None;
     }
-    let (t, u, l) = (e.tan[k - 1], e.u[k], e.len[k]);
-    if l.is_nan() || l <= 0.0 {
-        return None;
-    }
-    // r = (wₖ₋₁ uₖ₋₁ − wₖ uₖ) · t with uₖ = (R − xₖ₋₁) / ℓₖ: ∂(uₖ · t)/∂R = (t − (uₖ · t) uₖ) / ℓₖ.
-    let g = (t - u * u.dot(t)) * (-ws.slowness[k] / l);
+    let g = last_residual_gradient(e.tan[k - 1], e.u[k], e.len[k], ws.slowness[k])?;
     if k == 1 {
-        let h = e.diag[0];
-        z[0] = 1.0 / h;
-        return (h.is_finite() && h != 0.0 && z[0].is_finite()).then_some(g);
+        z[0] = pivot_inverse(e.diag[0])?;
+        return Some(g);
     }
     unit[..k].fill(0.0);
     unit[k - 1] = 1.0;
@@ -1116,6 +1186,32 @@ pub(crate) fn receiver_sensitivity(
         &mut cp[..k],
     )
     .then_some(g)
+}
+
+/// [`receiver_sensitivity`] of a one-interaction solution held in registers: `(z, g)`, with
+/// `t` the tangent at the point and `w` the receiver leg's slowness.
+#[inline(always)]
+pub(crate) fn single_sensitivity(e: &Single, t: Vec2, w: f64) -> Option<(f64, Vec2)> {
+    let g = last_residual_gradient(t, e.u[1], e.len[1], w)?;
+    Some((pivot_inverse(e.h)?, g))
+}
+
+/// `∂rₖ₋₁/∂R` for the last point's tangent `t`, the receiver leg's direction `u`, length `l`
+/// and slowness `w`; `None` for a vanished leg.
+#[inline(always)]
+fn last_residual_gradient(t: Vec2, u: Vec2, l: f64, w: f64) -> Option<Vec2> {
+    if l.is_nan() || l <= 0.0 {
+        return None;
+    }
+    // r = (wₖ₋₁ uₖ₋₁ − wₖ uₖ) · t with uₖ = (R − xₖ₋₁) / ℓₖ: ∂(uₖ · t)/∂R = (t − (uₖ · t) uₖ) / ℓₖ.
+    Some((t - u * u.dot(t)) * (-w / l))
+}
+
+/// `1/h` for a usable pivot `h` (`thomas`'s test on one row).
+#[inline(always)]
+fn pivot_inverse(h: f64) -> Option<f64> {
+    let z = 1.0 / h;
+    (h.is_finite() && h != 0.0 && z.is_finite()).then_some(z)
 }
 
 /// Whether every free point's residual is within the tolerance plus what round-off of its

@@ -11,7 +11,7 @@ use crate::scene::{Scene, SceneError, StepKind};
 use crate::solver::{Outcome, Pin, Workspace, solve};
 
 mod single;
-use single::SinglePath;
+pub(crate) use single::SinglePath;
 
 /// How a ray ended (the contract's `status`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
@@ -453,6 +453,16 @@ impl<'s> Tracer<'s> {
         )
     }
 
+    /// The one-interaction data of `path` when its rays take the one-interaction code.
+    #[inline]
+    pub(crate) fn single_path(&self, path: usize) -> Option<&SinglePath> {
+        #[cfg(test)]
+        if crate::solver::tests::GENERAL_ONLY.with(|c| c.get()) {
+            return None;
+        }
+        self.single[path].as_ref()
+    }
+
     fn solve_inner(
         &self,
         source: Point,
@@ -462,13 +472,7 @@ impl<'s> Tracer<'s> {
         start: Start,
         ws: &mut Workspace,
     ) -> RaySummary {
-        #[cfg(test)]
-        let general_only = crate::solver::tests::GENERAL_ONLY.with(|c| c.get());
-        #[cfg(not(test))]
-        let general_only = false;
-        if let Some(sp) = &self.single[path]
-            && !general_only
-        {
+        if let Some(sp) = self.single_path(path) {
             return self.solve_single_path(sp, source, receiver, path, start, ws);
         }
         let scene = self.scene;
@@ -646,7 +650,7 @@ impl<'s> Tracer<'s> {
                 ..base
             };
         }
-        if let Some((leg, interface)) = self.obstruction(path, ws) {
+        if let Some((leg, interface)) = self.obstruction(path, &ws.points) {
             return RaySummary {
                 status: Status::Obstructed,
                 reason: Some(Reason::Crosses { leg, interface }),
@@ -739,8 +743,7 @@ impl<'s> Tracer<'s> {
     }
 
     /// First leg that crosses an interface strictly between its ends: `(leg, interface)`.
-    fn obstruction(&self, path: usize, ws: &Workspace) -> Option<(usize, usize)> {
-        let pts = &ws.points;
+    fn obstruction(&self, path: usize, pts: &[Point]) -> Option<(usize, usize)> {
         let k = pts.len() - 2;
         let candidates = &self.leg_candidates[path];
         for (leg, ab) in pts.windows(2).enumerate() {
@@ -934,11 +937,21 @@ fn warm_start(g: &Geometry, guess: &[f64], ws: &mut Workspace) {
 fn given_start(scene: &Scene, steps: &[crate::scene::Step], params: &[f64], ws: &mut Workspace) {
     for (i, (step, &wanted)) in steps.iter().zip(params).enumerate() {
         let line = &scene.interfaces()[step.interface].polyline;
-        let s = line.clamp_param(wanted);
-        ws.s[i] = s;
-        ws.seg[i] = line.segment_at_hint(s, ws.seg[i]);
+        (ws.s[i], ws.seg[i]) = given_param(line, wanted, ws.seg[i]);
         ws.pin[i] = Pin::Free;
     }
+}
+
+/// One parameter of [`given_start`]: `wanted` made valid on `line` and its segment (`hint`
+/// tried first; the segment does not depend on it).
+#[inline(always)]
+pub(crate) fn given_param(
+    line: &crate::polyline::Polyline,
+    wanted: f64,
+    hint: usize,
+) -> (f64, usize) {
+    let s = line.clamp_param(wanted);
+    (s, line.segment_at_hint(s, hint))
 }
 
 /// Polylines with more segments than this start a reflection at the crossing of the

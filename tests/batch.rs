@@ -26,9 +26,15 @@ fn bench(name: &str) -> Scene {
 /// the same statuses and times and points equal to the tolerance's worth (a warm start ends at
 /// another point of the same tolerance ball). Returns (iterations one by one, in the batch).
 fn compare(scene: &Scene, warm_start: bool) -> (u64, u64) {
+    compare_in_units(scene, warm_start, BatchOptions::default().chunk)
+}
+
+/// [`compare`] with `chunk` receivers per work unit.
+fn compare_in_units(scene: &Scene, warm_start: bool, chunk: usize) -> (u64, u64) {
     let tracer = Tracer::new(scene).expect("tracer");
     let batch = tracer.trace_batch(&BatchOptions {
         warm_start,
+        chunk,
         ..BatchOptions::default()
     });
     assert_eq!(batch.len(), scene.num_rays());
@@ -69,6 +75,116 @@ fn batch_without_warm_starts_is_one_by_one_solving() {
     compare(&scene(&demo::air_water(500, 5)), false);
     compare(&scene(&demo::layer_stack(8, 200)), false);
     compare(&bench("room2d"), false);
+}
+
+/// One refraction and one reflection off a zigzag interface, two sources, a barrier in the
+/// upper medium and receivers on both sides: batches solve such one-interaction rays several
+/// side by side, and every way a ray can leave that common case (a step across a vertex, an
+/// obstructed leg, a receiver on the wrong side, no crossing to start from, a reflection) must
+/// still give the one-by-one ray.
+fn zigzag_with_barrier() -> Scene {
+    let zigzag: Vec<String> = (0..=16)
+        .map(|i| {
+            format!(
+                "[{}, {}]",
+                -4.0 + 0.5 * i as f64,
+                if i % 2 == 0 { 0.03 } else { -0.03 }
+            )
+        })
+        .collect();
+    let receivers: Vec<String> = demo::jittered_grid(300, [-3.0, 3.0], [-2.0, 1.5], 11)
+        .iter()
+        .map(|[x, y]| format!("[{x}, {y}]"))
+        .collect();
+    Scene::from_json(&format!(
+        r#"{{
+            "media": {{ "air": {{ "speed": 1.0 }}, "water": {{ "speed": 0.6 }} }},
+            "interfaces": {{
+                "zigzag": {{ "points": [{}] }},
+                "barrier": {{ "points": [[1.0, 0.4], [1.0, 1.3]] }}
+            }},
+            "sources": [[0.2, 2.0], [-1.5, 1.8]],
+            "receivers": [{}],
+            "paths": [
+                {{ "steps": [{{ "refract": "zigzag" }}], "media": ["air", "water"] }},
+                {{ "steps": [{{ "reflect": "zigzag" }}], "media": ["air", "air"] }}
+            ]
+        }}"#,
+        zigzag.join(", "),
+        receivers.join(", ")
+    ))
+    .expect("valid scene")
+}
+
+#[test]
+fn one_interaction_rays_side_by_side_are_one_by_one_rays() {
+    let sc = zigzag_with_barrier();
+    let rays = Tracer::new(&sc).expect("tracer").trace_all();
+    let statuses: std::collections::BTreeSet<_> = rays.iter().map(|r| r.status.as_str()).collect();
+    for status in [
+        Status::Converged,
+        Status::Obstructed,
+        Status::NoPath,
+        Status::Vertex,
+    ] {
+        assert!(
+            statuses.contains(status.as_str()),
+            "no {status} ray among {statuses:?}"
+        );
+    }
+    // Units of a few receivers (lanes of unequal length, sources changing inside a lane) and
+    // of the default size.
+    // A digitised curve too: its segments carry a curvature estimate, which the first
+    // evaluation of a ray adds and the later ones do not.
+    let curved = scene(&demo::undulating_stack(1, 200, 500));
+    for chunk in [1, 7, 256] {
+        compare_in_units(&sc, false, chunk);
+        compare_in_units(&curved, false, chunk);
+    }
+    // A zigzag has several eigenrays for some receivers, and a warm start may find another
+    // one than the default start: check every converged ray for itself (its time from its
+    // points, Snell's law on its segment), and that most rays are the one-by-one ones.
+    let tracer = Tracer::new(&sc).expect("tracer");
+    let slowness = |p: usize| if p == 0 { [1.0, 1.0 / 0.6] } else { [1.0, 1.0] };
+    for chunk in [7, 256] {
+        let batch = tracer.trace_batch(&BatchOptions {
+            chunk,
+            ..BatchOptions::default()
+        });
+        let mut same = 0;
+        for (i, one) in rays.iter().enumerate() {
+            let got = batch.ray(i);
+            let close = match (got.time, one.time) {
+                (Some(a), Some(b)) => (a - b).abs() <= 1e-12 * b,
+                (a, b) => a == b,
+            };
+            same += (close && got.status == one.status) as usize;
+            if got.status != Status::Converged {
+                continue;
+            }
+            let w = slowness(got.path);
+            let [a, x, b] = got.points[..] else {
+                panic!("ray {i}: {:?}", got.points)
+            };
+            let (u0, u1) = (x - a, b - x);
+            let time = w[0] * u0.length() + w[1] * u1.length();
+            let t_ray = got.time.expect("a converged ray has a time");
+            assert!(
+                (t_ray - time).abs() <= 1e-12 * time,
+                "ray {i}: {t_ray} vs {time}"
+            );
+            let seg = ((x.x + 4.0) / 0.5).floor().clamp(0.0, 15.0);
+            let rising = if seg as usize % 2 == 0 { -0.06 } else { 0.06 };
+            let t = eigenray::Vec2::new(0.5, rising) * (1.0 / 0.5f64.hypot(rising));
+            let snell = w[0] * u0.dot(t) / u0.length() - w[1] * u1.dot(t) / u1.length();
+            assert!(snell.abs() <= 1e-9, "ray {i}: Snell residual {snell}");
+        }
+        assert!(
+            same * 10 >= rays.len() * 9,
+            "{same} of {} rays as one by one",
+            rays.len()
+        );
+    }
 }
 
 #[test]

@@ -8,21 +8,22 @@ use super::{
     RaySummary, Reason, Start, Status, Tracer, given_start, initial_guess, leg_sides,
     nearest_crossing, paraxial_one, refraction_guess, sides_suit, warm_start,
 };
-use crate::geom::Point;
+use crate::geom::{Point, Vec2};
+use crate::polyline::Polyline;
 use crate::problem::Geometry;
 use crate::scene::{Scene, StepKind};
-use crate::solver::{Outcome, Pin, Workspace, solve};
+use crate::solver::{Outcome, Pin, Solution, Workspace, solve};
 
 /// A path of one interaction whose leg media are given.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct SinglePath {
-    media: [usize; 2],
-    slowness: [f64; 2],
+pub(crate) struct SinglePath {
+    pub(crate) media: [usize; 2],
+    pub(crate) slowness: [f64; 2],
 }
 
 impl SinglePath {
     /// The path's one-interaction data, if it is such a path.
-    pub(super) fn of(scene: &Scene, path: usize) -> Option<SinglePath> {
+    pub(crate) fn of(scene: &Scene, path: usize) -> Option<SinglePath> {
         let spec = &scene.paths()[path];
         match (spec.steps.len(), spec.media.as_deref()) {
             (1, Some(&[m0, m1])) => Some(SinglePath {
@@ -63,15 +64,8 @@ impl Tracer<'_> {
         if let Start::Given(params) = start {
             given_start(scene, steps, params, ws);
         } else {
-            let crossing = match step.kind {
-                StepKind::Refract => nearest_crossing(line, source, receiver, 0.5),
-                StepKind::Reflect => None,
-            };
-            match crossing {
-                Some((s, t, j)) => {
-                    let s = line.wrap(s);
-                    let j = line.segment_at_hint(s, j);
-                    let (s, j) = paraxial_one(line, s, t, j, sp.slowness, receiver - source);
+            match self.single_crossing_start(sp, step.kind, line, source, receiver) {
+                Some((s, j)) => {
                     ws.s[0] = s;
                     ws.seg[0] = j;
                     ws.pin[0] = Pin::Free;
@@ -93,14 +87,58 @@ impl Tracer<'_> {
             return self.classify(path, source, receiver, outcome, sol, ws);
         }
         let j = ws.seg[0];
-        let point = line.point_on(j, ws.s[0]);
         ws.points.clear();
-        ws.points.extend_from_slice(&[source, point, receiver]);
+        ws.points
+            .extend_from_slice(&[source, line.point_on(j, ws.s[0]), receiver]);
+        let (rel, len) = (&ws.eval.rel[..3], &ws.eval.len[..2]);
+        self.single_status(path, step.kind, line.normal(j), &ws.points, rel, len, sol)
+    }
+
+    /// The documented start of a one-interaction path when it is the crossing of `S → R` with
+    /// the interface (a refraction that crosses it), moved to the paraxial point: `(s, segment)`;
+    /// `None` when the general guess applies.
+    #[inline(always)]
+    pub(crate) fn single_crossing_start(
+        &self,
+        sp: &SinglePath,
+        kind: StepKind,
+        line: &Polyline,
+        source: Point,
+        receiver: Point,
+    ) -> Option<(f64, usize)> {
+        if kind != StepKind::Refract {
+            return None;
+        }
+        let (s, t, j) = nearest_crossing(line, source, receiver, 0.5)?;
+        let s = line.wrap(s);
+        let j = line.segment_at_hint(s, j);
+        Some(paraxial_one(line, s, t, j, sp.slowness, receiver - source))
+    }
+
+    /// The status of a one-interaction ray whose solve ended converged with its point free:
+    /// the side and obstruction tests of `classify`, written out for one interaction. `n` is
+    /// the normal of the point's segment, `pts` the source, the point and the receiver, `rel`
+    /// the same relative to the source and `len` the two legs' lengths.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the parts of a ray held in registers by its callers"
+    )]
+    #[inline(always)]
+    pub(crate) fn single_status(
+        &self,
+        path: usize,
+        kind: StepKind,
+        n: Vec2,
+        pts: &[Point],
+        rel: &[Vec2],
+        len: &[f64],
+        sol: Solution,
+    ) -> RaySummary {
         // `Tracer::wrong_side` for a free point with both legs there.
-        let (a, b) = leg_sides(line.normal(j), 1.0, &ws.eval.rel[..3], &ws.eval.len[..2]);
-        let (status, reason) = if !sides_suit(step.kind, a, b) {
+        let (a, b) = leg_sides(n, 1.0, rel, len);
+        let (status, reason) = if !sides_suit(kind, a, b) {
             (Status::NoPath, Some(Reason::WrongSide { step: 0 }))
-        } else if let Some((leg, interface)) = self.obstruction(path, ws) {
+        } else if let Some((leg, interface)) = self.obstruction(path, pts) {
             (Status::Obstructed, Some(Reason::Crosses { leg, interface }))
         } else {
             (Status::Converged, None)
