@@ -3,7 +3,7 @@
 use rayon::prelude::*;
 
 use crate::geom::{Point, Vec2};
-use crate::problem::{Frame, Geometry, Single};
+use crate::problem::{Frame, Geometry};
 use crate::solver::{
     Outcome, SingleIter, SingleNext, Workspace, receiver_sensitivity, single_sensitivity,
 };
@@ -410,7 +410,7 @@ impl Tracer<'_> {
                     // Path by path: each path's rays form one chain of warm starts.
                     for p in 0..np {
                         match self.single_path(p) {
-                            Some(sp) => self.single_lanes(sp, p, &mut unit, ws),
+                            Some(sp) => self.single_chain(sp, p, &mut unit, ws),
                             None => {
                                 let params = param_offsets[p]..param_offsets[p + 1];
                                 self.path_chain(p, params, &mut unit, ws, warm);
@@ -536,48 +536,9 @@ impl Unit<'_> {
     }
 }
 
-/// One-interaction rays solved side by side in [`Tracer::single_lanes`]. A ray's Newton steps
-/// are one chain of dependent operations (a square root and two divisions each), which leaves
-/// most of the core idle; this many rays in flight fill it.
-const LANES: usize = 4;
-
-/// A lane of [`Tracer::single_lanes`]: a chain of blocks solved in order, with its own warm
-/// starts, and the ray in flight.
-#[derive(Clone, Copy, Default)]
-struct Lane {
-    /// First, next and end block of the chain.
-    first: usize,
-    next: usize,
-    end: usize,
-    /// Whether a ray is in flight, and its block.
-    busy: bool,
-    b: usize,
-    source: Point,
-    receiver: Point,
-    /// The ray's segment, its frame, the receiver relative to the source and the ray's
-    /// coordinate scale ([`Geometry::coord`]).
-    seg: usize,
-    f: Frame,
-    to_receiver: Vec2,
-    coord: f64,
-    it: SingleIter,
-    /// The warm start the ray began from, if any.
-    guess: Option<f64>,
-    /// The step being tried.
-    to: f64,
-    polish: bool,
-    /// The chain: whether the last ray converged, the last receiver, and the last solution
-    /// with its sensitivity to the receiver (see [`Warm`]).
-    have: bool,
-    last: Point,
-    prev: f64,
-    z: f64,
-    g: Option<Vec2>,
-}
-
-/// What [`Tracer::single_lanes`] needs of its path, looked up once.
+/// What [`Tracer::single_chain`] needs of its path, looked up once.
 #[derive(Clone, Copy)]
-struct SingleLanes<'a> {
+struct SingleChain<'a> {
     sp: &'a SinglePath,
     p: usize,
     steps: &'a [crate::scene::Step],
@@ -585,6 +546,16 @@ struct SingleLanes<'a> {
     line: &'a crate::polyline::Polyline,
     tol: f64,
     max_iterations: usize,
+}
+
+/// The warm-start state of [`Tracer::single_chain`], [`Warm`] for one parameter: the last
+/// converged solution, its segment and its sensitivity to the receiver.
+#[derive(Clone, Copy, Default)]
+struct WarmOne {
+    prev: f64,
+    seg: usize,
+    z: f64,
+    g: Option<Vec2>,
 }
 
 impl Tracer<'_> {
@@ -646,15 +617,16 @@ impl Tracer<'_> {
         }
     }
 
-    /// [`path_chain`](Self::path_chain) for a one-interaction path: the blocks split into
-    /// [`LANES`] chains whose rays are solved side by side, taking exactly the steps of
-    /// one-by-one solving. A ray that leaves the common case (another start, a step leaving
-    /// its segment, any status but `converged` after a warm start) is solved again one by one.
-    fn single_lanes(&self, sp: &SinglePath, p: usize, unit: &mut Unit, ws: &mut Workspace) {
+    /// [`path_chain`](Self::path_chain) for a one-interaction path, without the workspace: each
+    /// ray's start, Newton steps ([`SingleIter`], the steps of one-by-one solving) and side and
+    /// obstruction tests in registers. A ray that leaves this common case (no crossing to
+    /// start from, a reflection, a step leaving its segment, any status but `converged` after a
+    /// warm start) is solved one by one from the same start.
+    fn single_chain(&self, sp: &SinglePath, p: usize, unit: &mut Unit, ws: &mut Workspace) {
         let scene = self.scene();
         let steps = &scene.paths()[p].steps;
         let opts = scene.solver();
-        let path = SingleLanes {
+        let path = SingleChain {
             sp,
             p,
             steps,
@@ -663,55 +635,66 @@ impl Tracer<'_> {
             tol: opts.tolerance,
             max_iterations: opts.max_iterations,
         };
-        let mut lanes = [Lane::default(); LANES];
-        for (l, lane) in lanes.iter_mut().enumerate() {
-            lane.first = l * unit.n / LANES;
-            lane.next = lane.first;
-            lane.end = (l + 1) * unit.n / LANES;
-        }
-        let w = sp.slowness;
-        loop {
-            let mut trying = [false; LANES];
-            for (lane, trying) in lanes.iter_mut().zip(&mut trying) {
-                *trying = self.lane_advance(&path, lane, unit, ws);
+        let (mut have, mut last, mut warm) = (false, Point::default(), WarmOne::default());
+        for b in 0..unit.n {
+            let (source, receiver) = unit.ends(b);
+            if b > 0 && unit.new_source(b) {
+                have = false;
             }
-            if !trying.contains(&true) {
-                return;
-            }
-            // The steps' trial evaluations, independent of each other.
-            let mut trials = [Single::default(); LANES];
-            for ((lane, trial), &trying) in lanes.iter().zip(&mut trials).zip(&trying) {
-                if trying {
-                    *trial = Geometry::evaluate_single(
-                        lane.to,
-                        &lane.f,
-                        w,
-                        lane.to_receiver,
-                        lane.coord,
-                        false,
-                    );
+            let (source, here) = (scene.sources()[source], scene.receivers()[receiver]);
+            let near = b > 0 && near(here, last, source);
+            let moved = here - last;
+            last = here;
+            // `Warm::predict` for one parameter.
+            let guess = (unit.warm_start && have && near).then(|| match warm.g {
+                Some(g) => warm.prev - warm.z * g.dot(moved),
+                None => warm.prev,
+            });
+            have = match self.single_fast(&path, source, here, guess, warm.seg) {
+                Some((s, pts, it, seg)) => {
+                    unit.write(b, p, &s, &pts, &sp.media);
+                    let have = s.status == Status::Converged;
+                    if have && unit.warm_start {
+                        let t = path.line.tangent(seg);
+                        (warm.prev, warm.seg) = (it.s, seg);
+                        (warm.z, warm.g) = match single_sensitivity(&it.e, t, sp.slowness[1]) {
+                            Some((z, g)) => (z, Some(g)),
+                            None => (0.0, None),
+                        };
+                    }
+                    have
                 }
-            }
-            for ((lane, &trial), &trying) in lanes.iter_mut().zip(&trials).zip(&trying) {
-                if trying && !lane.it.accept(lane.to, lane.polish, trial) {
-                    self.lane_one_by_one(p, lane, unit, ws);
+                None => {
+                    let (source, receiver) = unit.ends(b);
+                    let guess = guess.map(|g| [g]);
+                    let s = self.solve_ray(source, receiver, p, guess.as_ref().map(|g| &g[..]), ws);
+                    unit.write(b, p, &s, ws.points(), ws.media());
+                    let have = s.status == Status::Converged;
+                    if have && unit.warm_start {
+                        let (mut z, mut unit_, mut cp) = ([0.0], [0.0], [0.0]);
+                        (warm.prev, warm.seg) = (ws.parameters()[0], ws.seg[0]);
+                        warm.g = receiver_sensitivity(ws, &mut z, &mut unit_, &mut cp);
+                        warm.z = z[0];
+                    }
+                    have
                 }
-            }
+            };
         }
     }
 
-    /// Moves `lane` on until its ray in flight has a step to try (`true`) or its chain is
-    /// done (`false`), starting its next rays and finishing the ones that end.
+    /// One ray of [`single_chain`](Self::single_chain) from `guess` (else the crossing start),
+    /// `hint` a segment to try first: its summary, points, final iterate and segment; `None`
+    /// when the ray must be solved one by one.
     #[inline(always)]
-    fn lane_advance(
+    fn single_fast(
         &self,
-        path: &SingleLanes,
-        lane: &mut Lane,
-        unit: &mut Unit,
-        ws: &mut Workspace,
-    ) -> bool {
-        let scene = self.scene();
-        let SingleLanes {
+        path: &SingleChain,
+        source: Point,
+        receiver: Point,
+        guess: Option<f64>,
+        hint: usize,
+    ) -> Option<(RaySummary, [Point; 3], SingleIter, usize)> {
+        let SingleChain {
             sp,
             p,
             steps,
@@ -719,100 +702,41 @@ impl Tracer<'_> {
             line,
             ..
         } = *path;
+        let (s, j) = match guess {
+            Some(wanted) => given_param(line, wanted, hint),
+            None => self.single_crossing_start(sp, kind, line, source, receiver)?,
+        };
+        let g = Geometry {
+            scene: self.scene(),
+            steps,
+            slowness: &sp.slowness,
+            source,
+            receiver,
+        };
+        let (to_receiver, coord) = (receiver - source, g.coord());
+        let f = Frame::new(line, j, source);
+        let mut it = SingleIter::start(s, &f, sp.slowness, to_receiver, coord, true);
         loop {
-            if !lane.busy {
-                if lane.next == lane.end {
-                    return false;
-                }
-                let b = lane.next;
-                lane.next += 1;
-                lane.b = b;
-                let (source, receiver) = unit.ends(b);
-                let chained = b > lane.first;
-                if chained && unit.new_source(b) {
-                    lane.have = false;
-                }
-                let (source, here) = (scene.sources()[source], scene.receivers()[receiver]);
-                let near = chained && near(here, lane.last, source);
-                let moved = here - lane.last;
-                lane.last = here;
-                // `Warm::predict` for one parameter.
-                lane.guess = (unit.warm_start && lane.have && near).then(|| match lane.g {
-                    Some(g) => lane.prev - lane.z * g.dot(moved),
-                    None => lane.prev,
-                });
-                let start = match lane.guess {
-                    Some(wanted) => Some(given_param(line, wanted, lane.seg)),
-                    None => self.single_crossing_start(sp, kind, line, source, here),
-                };
-                let Some((s, j)) = start else {
-                    self.lane_one_by_one(p, lane, unit, ws);
-                    continue;
-                };
-                let g = Geometry {
-                    scene,
-                    steps,
-                    slowness: &sp.slowness,
-                    source,
-                    receiver: here,
-                };
-                (lane.source, lane.receiver, lane.seg) = (source, here, j);
-                (lane.to_receiver, lane.coord) = (here - source, g.coord());
-                lane.f = Frame::new(line, j, source);
-                lane.it =
-                    SingleIter::start(s, &lane.f, sp.slowness, lane.to_receiver, lane.coord, true);
-                lane.busy = true;
-            }
-            match lane.it.next(&lane.f, path.tol, path.max_iterations) {
+            match it.next(&f, path.tol, path.max_iterations) {
                 SingleNext::Try { to, polish } => {
-                    (lane.to, lane.polish) = (to, polish);
-                    return true;
-                }
-                SingleNext::End(Outcome::Converged) => {
-                    let (e, j) = (&lane.it.e, lane.seg);
-                    let pts = [lane.source, line.point_on(j, lane.it.s), lane.receiver];
-                    let rel = [Vec2::default(), e.p, lane.to_receiver];
-                    let n = line.normal(j);
-                    let sol = lane.it.solution();
-                    let s = self.single_status(p, kind, n, &pts, &rel, &e.len, sol);
-                    if s.status != Status::Converged && lane.guess.is_some() {
-                        self.lane_one_by_one(p, lane, unit, ws);
-                        continue;
+                    let trial =
+                        Geometry::evaluate_single(to, &f, sp.slowness, to_receiver, coord, false);
+                    if !it.accept(to, polish, trial) {
+                        return None;
                     }
-                    unit.write(lane.b, p, &s, &pts, &sp.media);
-                    lane.have = s.status == Status::Converged;
-                    if lane.have && unit.warm_start {
-                        lane.prev = lane.it.s;
-                        (lane.z, lane.g) = match single_sensitivity(e, lane.f.t, sp.slowness[1]) {
-                            Some((z, g)) => (z, Some(g)),
-                            None => (0.0, None),
-                        };
-                    }
-                    lane.busy = false;
                 }
-                SingleNext::End(_) | SingleNext::General => {
-                    self.lane_one_by_one(p, lane, unit, ws);
-                }
+                SingleNext::End(Outcome::Converged) => break,
+                SingleNext::End(_) | SingleNext::General => return None,
             }
         }
-    }
-
-    /// Solves the lane's present ray one by one (from the start it had), ends it and keeps its
-    /// solution for the chain.
-    fn lane_one_by_one(&self, p: usize, lane: &mut Lane, unit: &mut Unit, ws: &mut Workspace) {
-        let (source, receiver) = unit.ends(lane.b);
-        let guess = lane.guess.map(|g| [g]);
-        let s = self.solve_ray(source, receiver, p, guess.as_ref().map(|g| &g[..]), ws);
-        unit.write(lane.b, p, &s, ws.points(), ws.media());
-        lane.have = s.status == Status::Converged;
-        if lane.have && unit.warm_start {
-            let (mut z, mut unit_, mut cp) = ([0.0], [0.0], [0.0]);
-            lane.prev = ws.parameters()[0];
-            lane.seg = ws.seg[0];
-            lane.g = receiver_sensitivity(ws, &mut z, &mut unit_, &mut cp);
-            lane.z = z[0];
+        let e = &it.e;
+        let pts = [source, line.point_on(j, it.s), receiver];
+        let rel = [Vec2::default(), e.p, to_receiver];
+        let s = self.single_status(p, kind, line.normal(j), &pts, &rel, &e.len, it.solution());
+        if s.status != Status::Converged && guess.is_some() {
+            return None;
         }
-        lane.busy = false;
+        Some((s, pts, it, j))
     }
 }
 

@@ -1051,9 +1051,8 @@ fn fast_newton_single(
     done.map(|outcome| (outcome, it.solution()))
 }
 
-/// The iteration of [`fast_newton_single`], one state per ray: batches run several of these
-/// side by side (their dependency chains overlap), each taking exactly the steps the one-ray
-/// loop takes.
+/// The iteration of [`fast_newton_single`], as a state and its steps: the one-ray loop and
+/// the batches' one-interaction chains (which keep no workspace) take exactly the same steps.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct SingleIter {
     /// The parameter.

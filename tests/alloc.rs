@@ -100,3 +100,37 @@ fn region_lookup_allocates_nothing() {
     .unwrap();
     assert_eq!(allocations_per_sweep(&scene), 0);
 }
+
+/// Allocations of tracing `scene` into a batch that already holds its rays, on `pool` (whose
+/// one thread is the test's: the counter counts this thread's allocations).
+fn batch_allocations(scene: &Scene, pool: &rayon::ThreadPool) -> u64 {
+    let tracer = Tracer::new(scene).unwrap();
+    let opts = eigenray::BatchOptions::default();
+    let mut batch = eigenray::Batch::default();
+    pool.install(|| tracer.trace_batch_into(&opts, &mut batch));
+    let info = allocation_counter::measure(|| {
+        pool.install(|| tracer.trace_batch_into(&opts, &mut batch));
+    });
+    info.count_total
+}
+
+#[test]
+fn batches_allocate_per_call_not_per_ray() {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .use_current_thread()
+        .build()
+        .unwrap();
+    // A batch allocates its offsets and a workspace per rayon job, whatever the rays: ten
+    // times the receivers must not cost more. One refraction (solved without a workspace)
+    // and a stack of layers (the general path).
+    for spec in [|n| demo::air_water(n, 3), |n| demo::layer_stack(3, n)] {
+        let few = batch_allocations(&Scene::from_spec(&spec(2_000)).unwrap(), &pool);
+        let many = batch_allocations(&Scene::from_spec(&spec(20_000)).unwrap(), &pool);
+        assert!(few > 0, "the counter must see the batch's own allocations");
+        assert!(
+            many <= few + 16,
+            "{few} allocations for 2,000 rays, {many} for 20,000"
+        );
+    }
+}

@@ -78,8 +78,8 @@ fn batch_without_warm_starts_is_one_by_one_solving() {
 }
 
 /// One refraction and one reflection off a zigzag interface, two sources, a barrier in the
-/// upper medium and receivers on both sides: batches solve such one-interaction rays several
-/// side by side, and every way a ray can leave that common case (a step across a vertex, an
+/// upper medium and receivers on both sides: batches solve such one-interaction rays without
+/// the workspace, and every way a ray can leave that common case (a step across a vertex, an
 /// obstructed leg, a receiver on the wrong side, no crossing to start from, a reflection) must
 /// still give the one-by-one ray.
 fn zigzag_with_barrier() -> Scene {
@@ -117,7 +117,7 @@ fn zigzag_with_barrier() -> Scene {
 }
 
 #[test]
-fn one_interaction_rays_side_by_side_are_one_by_one_rays() {
+fn one_interaction_rays_of_a_batch_are_one_by_one_rays() {
     let sc = zigzag_with_barrier();
     let rays = Tracer::new(&sc).expect("tracer").trace_all();
     let statuses: std::collections::BTreeSet<_> = rays.iter().map(|r| r.status.as_str()).collect();
@@ -132,8 +132,8 @@ fn one_interaction_rays_side_by_side_are_one_by_one_rays() {
             "no {status} ray among {statuses:?}"
         );
     }
-    // Units of a few receivers (lanes of unequal length, sources changing inside a lane) and
-    // of the default size.
+    // Units of one receiver, of a few (sources changing inside a unit) and of the default
+    // size.
     // A digitised curve too: its segments carry a curvature estimate, which the first
     // evaluation of a ray adds and the later ones do not.
     let curved = scene(&demo::undulating_stack(1, 200, 500));
