@@ -609,6 +609,7 @@ fn batch_section() -> io::Result<String> {
         (Format::Json, "JSON", "json"),
         (Format::Jsonl, "JSON Lines", "jsonl"),
         (Format::Csv, "CSV", "csv"),
+        (Format::Npy, "NumPy `.npy`", "npy"),
     ] {
         let sink = three_runs(|| {
             write_batch(&scene, &batch, format, io::sink()).expect("write to sink");
@@ -717,7 +718,8 @@ fn batch_section() -> io::Result<String> {
          arrays take {:.0} MiB, `Batch::memory_bytes`; these receivers keep their grid order, so \
          they are solved in place — receivers in an incoherent order are solved along a Morton \
          curve into a second copy, then put back in ray order), {} after writing it in the \
-         three formats (the writers stream through a 64 KiB buffer, single-threaded).\n",
+         four formats (the writers format windows of 16,384 rays in parallel pieces, on the \
+         global rayon pool of both cores, then write them in order).\n",
         mib_kb(hwm_start),
         mib_kb(hwm_scene),
         mib_kb(hwm_solve),

@@ -1,10 +1,13 @@
 //! The `eigenray solve` output: the contract's JSON document, JSON Lines and CSV.
 //!
-//! Written by hand with `ryu` (shortest round-trip floats, as `serde_json` prints them) and
-//! `itoa`, straight from either owned [`Ray`]s or a flat [`Batch`], so that writing a large
-//! batch costs about as much as solving it.
+//! Written by hand with `zmij` (shortest round-trip floats, as `serde_json` prints them: it
+//! uses `zmij` too) and `itoa`, straight from either owned [`Ray`]s or a flat [`Batch`], and
+//! formatted in parallel (rayon) a window of rays at a time, so that writing a large batch
+//! costs less than solving it.
 
 use std::io::{self, Write};
+
+use rayon::prelude::*;
 
 use crate::batch::Batch;
 use crate::geom::Point;
@@ -23,6 +26,98 @@ pub enum Format {
     /// `source,receiver,path,status,time,iterations,residual,points` with the points as
     /// `x y;x y;…` (empty `time` and `points` for rays without a time).
     Csv,
+    /// NumPy's `.npy` file (format version 1.0): one record per ray, in ray order, of a packed
+    /// little-endian structured array that `numpy.load` reads as it is:
+    /// `source`, `receiver`, `path` (`<u4`), `status` (`u1`: 0 `converged`, 1 `vertex`,
+    /// 2 `no_path`, 3 `obstructed`, 4 `not_converged`), `iterations` (`<u4`), `time` and
+    /// `residual` (`<f8`, NaN when the ray has none), `points` (`<f8`, shape `(P, 2)` with `P`
+    /// the most points of a path, padded with NaN; all NaN for a ray without a time) and `media`
+    /// (`<u4`, shape `(L,)` with `L` the most legs, the leg media as indices into the scene's
+    /// media in their order, padded with `2³² − 1`, all of it when unknown). Reasons are left
+    /// out. Binary, fixed-size records: the compact format for large batches.
+    Npy,
+}
+
+/// Code of a status in [`Format::Npy`].
+fn status_code(status: Status) -> u8 {
+    match status {
+        Status::Converged => 0,
+        Status::Vertex => 1,
+        Status::NoPath => 2,
+        Status::Obstructed => 3,
+        Status::NotConverged => 4,
+    }
+}
+
+/// The shape of a [`Format::Npy`] record: the most points and legs of a ray.
+#[derive(Clone, Copy, Debug)]
+struct NpyShape {
+    points: usize,
+    legs: usize,
+}
+
+impl NpyShape {
+    /// The most points and legs of the scene's paths.
+    fn of(scene: &Scene) -> NpyShape {
+        let k = scene
+            .paths()
+            .iter()
+            .map(|p| p.steps.len())
+            .max()
+            .unwrap_or(0);
+        NpyShape {
+            points: k + 2,
+            legs: k + 1,
+        }
+    }
+}
+
+/// The `.npy` header (magic, version 1.0, the dictionary padded to a multiple of 64 bytes) of
+/// `n` records of `shape`.
+fn npy_header(n: usize, shape: NpyShape) -> Vec<u8> {
+    let dict = format!(
+        "{{'descr': [('source', '<u4'), ('receiver', '<u4'), ('path', '<u4'), \
+         ('status', '|u1'), ('iterations', '<u4'), ('time', '<f8'), ('residual', '<f8'), \
+         ('points', '<f8', ({}, 2)), ('media', '<u4', ({},))], \
+         'fortran_order': False, 'shape': ({},), }}",
+        shape.points, shape.legs, n
+    );
+    let mut header = b"\x93NUMPY\x01\x00".to_vec();
+    // The dictionary ends in a newline, padded with spaces so that the data starts at a
+    // multiple of 64 bytes.
+    let len = (10 + dict.len() + 1).div_ceil(64) * 64 - 10;
+    header.extend_from_slice(&(len as u16).to_le_bytes());
+    header.extend_from_slice(dict.as_bytes());
+    header.resize(10 + len - 1, b' ');
+    header.push(b'\n');
+    header
+}
+
+fn ray_npy<M: Iterator<Item = usize>>(buf: &mut Vec<u8>, shape: NpyShape, r: View<'_, M>) {
+    for v in [r.source, r.receiver, r.path] {
+        buf.extend_from_slice(&(v as u32).to_le_bytes());
+    }
+    buf.push(status_code(r.status));
+    buf.extend_from_slice(&(r.iterations.min(u32::MAX as usize) as u32).to_le_bytes());
+    buf.extend_from_slice(&r.time.unwrap_or(f64::NAN).to_le_bytes());
+    buf.extend_from_slice(&r.residual.to_le_bytes());
+    let points = if r.time.is_some() { r.points } else { &[] };
+    for i in 0..shape.points {
+        let p = points
+            .get(i)
+            .copied()
+            .unwrap_or(Point::new(f64::NAN, f64::NAN));
+        buf.extend_from_slice(&p.x.to_le_bytes());
+        buf.extend_from_slice(&p.y.to_le_bytes());
+    }
+    let mut media = r.media;
+    for _ in 0..shape.legs {
+        let m = media
+            .as_mut()
+            .and_then(|m| m.next())
+            .map_or(u32::MAX, |m| m as u32);
+        buf.extend_from_slice(&m.to_le_bytes());
+    }
 }
 
 /// One ray as the writers see it.
@@ -57,7 +152,7 @@ impl Names {
 
 fn float(buf: &mut Vec<u8>, v: f64) {
     if v.is_finite() {
-        buf.extend_from_slice(ryu::Buffer::new().format_finite(v).as_bytes());
+        buf.extend_from_slice(zmij::Buffer::new().format_finite(v).as_bytes());
     } else {
         buf.extend_from_slice(b"null");
     }
@@ -154,46 +249,70 @@ fn ray_csv<M: Iterator<Item = usize>>(buf: &mut Vec<u8>, r: View<'_, M>) {
     buf.push(b'\n');
 }
 
-/// Writes `n` rays produced by `view` in `format`, flushing the buffer every 64 KiB.
+/// Rays formatted at a time (in [`PIECE`]s, in parallel) before they are written out in order.
+const WINDOW: usize = 1 << 14;
+/// Rays per parallel piece of a window.
+const PIECE: usize = 1 << 10;
+
+/// Writes `n` rays produced by `view` in `format`: a window of rays at a time, formatted in
+/// parallel pieces (rayon) and then written in order.
 fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
     scene: &Scene,
     n: usize,
     format: Format,
+    shape: NpyShape,
     mut out: W,
-    view: impl Fn(usize) -> View<'a, M>,
+    view: impl Fn(usize) -> View<'a, M> + Sync,
 ) -> io::Result<()> {
     let names = Names::new(scene);
-    let mut buf = Vec::with_capacity(1 << 17);
     match format {
-        Format::Json => buf.extend_from_slice(b"{\"rays\":["),
+        Format::Npy => out.write_all(&npy_header(n, shape))?,
+        Format::Json => out.write_all(b"{\"rays\":[")?,
         Format::Csv => {
-            buf.extend_from_slice(b"source,receiver,path,status,time,iterations,residual,points\n")
+            out.write_all(b"source,receiver,path,status,time,iterations,residual,points\n")?
         }
         Format::Jsonl => {}
     }
-    for i in 0..n {
-        match format {
-            Format::Json => {
-                if i > 0 {
-                    buf.push(b',');
+    let format_piece = |buf: &mut Vec<u8>, rays: std::ops::Range<usize>| {
+        buf.clear();
+        for i in rays {
+            match format {
+                Format::Json => {
+                    if i > 0 {
+                        buf.push(b',');
+                    }
+                    ray_json(buf, scene, &names, view(i));
                 }
-                ray_json(&mut buf, scene, &names, view(i));
+                Format::Jsonl => {
+                    ray_json(buf, scene, &names, view(i));
+                    buf.push(b'\n');
+                }
+                Format::Csv => ray_csv(buf, view(i)),
+                Format::Npy => ray_npy(buf, shape, view(i)),
             }
-            Format::Jsonl => {
-                ray_json(&mut buf, scene, &names, view(i));
-                buf.push(b'\n');
-            }
-            Format::Csv => ray_csv(&mut buf, view(i)),
         }
-        if buf.len() >= 1 << 16 {
-            out.write_all(&buf)?;
-            buf.clear();
+    };
+    let mut pieces: Vec<Vec<u8>> = Vec::new();
+    for start in (0..n).step_by(WINDOW) {
+        let end = n.min(start + WINDOW);
+        let count = (end - start).div_ceil(PIECE);
+        if pieces.len() < count {
+            pieces.resize_with(count, Vec::new);
+        }
+        pieces[..count]
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(j, buf)| {
+                let lo = start + j * PIECE;
+                format_piece(buf, lo..end.min(lo + PIECE));
+            });
+        for piece in &pieces[..count] {
+            out.write_all(piece)?;
         }
     }
     if format == Format::Json {
-        buf.extend_from_slice(b"]}\n");
+        out.write_all(b"]}\n")?;
     }
-    out.write_all(&buf)?;
     out.flush()
 }
 
@@ -214,7 +333,7 @@ pub fn write_rays_json<W: Write>(scene: &Scene, rays: &[Ray], out: W) -> io::Res
 /// # Errors
 /// Any error of the writer.
 pub fn write_rays<W: Write>(scene: &Scene, rays: &[Ray], format: Format, out: W) -> io::Result<()> {
-    write_all(scene, rays.len(), format, out, |i| {
+    write_all(scene, rays.len(), format, NpyShape::of(scene), out, |i| {
         let r = &rays[i];
         View {
             source: r.source,
@@ -241,7 +360,7 @@ pub fn write_batch<W: Write>(
     format: Format,
     out: W,
 ) -> io::Result<()> {
-    write_all(scene, batch.len(), format, out, |i| {
+    write_all(scene, batch.len(), format, NpyShape::of(scene), out, |i| {
         let r = batch.record(i);
         let (source, receiver, path) = batch.triple(i);
         let has = r.status.has_time();
@@ -258,4 +377,131 @@ pub fn write_batch<W: Write>(
             reason: r.reason,
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{BatchOptions, Tracer, demo};
+
+    #[test]
+    fn floats_are_printed_as_serde_json_prints_them() {
+        let mut x = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut values = vec![
+            0.0, -0.0, 1e-7, 1e21, 1e22, 1.5e300, 5e-324, 0.1, 1e15, 1e16,
+        ];
+        for _ in 0..10_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            values.push(f64::from_bits(x));
+        }
+        for v in values.into_iter().filter(|v| v.is_finite()) {
+            let mut buf = Vec::new();
+            float(&mut buf, v);
+            let ours = String::from_utf8(buf).unwrap();
+            assert_eq!(ours, serde_json::to_string(&v).unwrap(), "{v:e}");
+            assert_eq!(ours.parse::<f64>().unwrap().to_bits(), v.to_bits(), "{v:e}");
+        }
+    }
+
+    #[test]
+    fn a_batch_of_several_windows_is_written_in_ray_order() {
+        // More than two windows, the last one and its last piece partial.
+        let n = 2 * WINDOW + PIECE + 17;
+        let scene = Scene::from_spec(&demo::air_water(n, 3)).unwrap();
+        let batch = Tracer::new(&scene)
+            .unwrap()
+            .trace_batch(&BatchOptions::default());
+        let write = |format| {
+            let mut out = Vec::new();
+            write_batch(&scene, &batch, format, &mut out).unwrap();
+            String::from_utf8(out).unwrap()
+        };
+        let json = write(Format::Json);
+        let doc: serde_json::Value = serde_json::from_str(&json).unwrap();
+        let rays = doc["rays"].as_array().unwrap();
+        assert_eq!(rays.len(), n);
+        for (i, ray) in rays.iter().enumerate() {
+            let (s, r, p) = batch.triple(i);
+            assert_eq!(ray["source"], s);
+            assert_eq!(ray["receiver"], r);
+            assert_eq!(ray["path"], p);
+            assert_eq!(
+                ray["time"].as_f64().unwrap(),
+                batch.record(i).time,
+                "ray {i}"
+            );
+        }
+        // JSON Lines holds the same objects, one per line; CSV one line per ray.
+        let jsonl = write(Format::Jsonl);
+        let lines: Vec<&str> = jsonl.lines().collect();
+        assert_eq!(lines.len(), n);
+        assert_eq!(format!("{{\"rays\":[{}]}}\n", lines.join(",")), json);
+        assert_eq!(write(Format::Csv).lines().count(), n + 1);
+        // The owned rays give the same document.
+        let mut owned = Vec::new();
+        write_rays_json(&scene, &batch.to_rays(), &mut owned).unwrap();
+        assert_eq!(String::from_utf8(owned).unwrap(), json);
+    }
+
+    #[test]
+    fn npy_records_hold_the_batch() {
+        // Reflection sequences of orders 0 to 2 (paths of 2 to 4 points) with every status a
+        // room gives.
+        let path = format!("{}/fixtures/bench/room2d.json", env!("CARGO_MANIFEST_DIR"));
+        let scene = Scene::from_json(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let batch = Tracer::new(&scene)
+            .unwrap()
+            .trace_batch(&BatchOptions::default());
+        let mut out = Vec::new();
+        write_batch(&scene, &batch, Format::Npy, &mut out).unwrap();
+        assert_eq!(&out[..8], b"\x93NUMPY\x01\x00");
+        let len = u16::from_le_bytes([out[8], out[9]]) as usize;
+        assert_eq!((10 + len) % 64, 0);
+        let dict = std::str::from_utf8(&out[10..10 + len]).unwrap();
+        assert!(dict.ends_with('\n'), "{dict:?}");
+        let (p, l) = (4, 3);
+        for part in [
+            "('points', '<f8', (4, 2))".to_owned(),
+            "('media', '<u4', (3,))".to_owned(),
+            format!("'shape': ({},)", batch.len()),
+        ] {
+            assert!(dict.contains(&part), "{part} not in {dict}");
+        }
+        let size = 3 * 4 + 1 + 4 + 8 + 8 + 16 * p + 4 * l;
+        let data = &out[10 + len..];
+        assert_eq!(data.len(), batch.len() * size);
+        let f64_at = |r: &[u8], at: usize| f64::from_le_bytes(r[at..at + 8].try_into().unwrap());
+        let u32_at = |r: &[u8], at: usize| u32::from_le_bytes(r[at..at + 4].try_into().unwrap());
+        let mut codes = std::collections::BTreeSet::new();
+        for (i, r) in data.chunks(size).enumerate() {
+            let rec = batch.record(i);
+            let (s, rc, pa) = batch.triple(i);
+            assert_eq!(
+                [u32_at(r, 0), u32_at(r, 4), u32_at(r, 8)],
+                [s, rc, pa].map(|v| v as u32)
+            );
+            assert_eq!(r[12], status_code(rec.status));
+            codes.insert(r[12]);
+            assert_eq!(u32_at(r, 13), rec.iterations);
+            let (time, residual) = (f64_at(r, 17), f64_at(r, 25));
+            assert_eq!(time.to_bits(), rec.time.to_bits(), "ray {i}");
+            assert_eq!(residual.to_bits(), rec.residual.to_bits(), "ray {i}");
+            let points = batch.points(i);
+            for j in 0..p {
+                let (x, y) = (f64_at(r, 33 + 16 * j), f64_at(r, 41 + 16 * j));
+                match points.get(j) {
+                    Some(q) if rec.status.has_time() => assert_eq!((x, y), (q.x, q.y)),
+                    _ => assert!(x.is_nan() && y.is_nan(), "ray {i} point {j}"),
+                }
+            }
+            let media: Vec<usize> = batch.media(i).map(|m| m.collect()).unwrap_or_default();
+            for j in 0..l {
+                let want = media.get(j).map_or(u32::MAX, |&m| m as u32);
+                assert_eq!(u32_at(r, 33 + 16 * p + 4 * j), want, "ray {i} leg {j}");
+            }
+        }
+        assert!(codes.len() >= 2, "statuses {codes:?}");
+    }
 }

@@ -59,7 +59,8 @@ struct SolveArgs {
     #[arg(value_name = "SCENE.json")]
     scene: PathBuf,
     /// Output format: `json`, one `{"rays": [...]}` document; `jsonl`, one ray per line;
-    /// `csv`, a header and one line per ray.
+    /// `csv`, a header and one line per ray; `npy`, NumPy's binary `.npy` file (redirect it to
+    /// a file), one fixed-size record per ray.
     #[arg(long, value_enum, default_value_t = Format::Json)]
     format: Format,
     /// Start every ray from the default initial guess instead of a neighbouring receiver's
@@ -108,6 +109,8 @@ enum Format {
     Jsonl,
     /// Comma-separated values: one line per ray, points as `x y;x y;…`.
     Csv,
+    /// NumPy's `.npy` file: one fixed-size binary record per ray (see `eigenray::Format::Npy`).
+    Npy,
 }
 
 impl From<Format> for eigenray::Format {
@@ -116,6 +119,7 @@ impl From<Format> for eigenray::Format {
             Format::Json => eigenray::Format::Json,
             Format::Jsonl => eigenray::Format::Jsonl,
             Format::Csv => eigenray::Format::Csv,
+            Format::Npy => eigenray::Format::Npy,
         }
     }
 }
@@ -175,6 +179,11 @@ fn main() -> ExitCode {
 
 /// `eigenray solve`: everything is computed before anything is written.
 fn solve(args: &SolveArgs) -> Result<(), Failure> {
+    if args.format == Format::Npy && std::io::IsTerminal::is_terminal(&io::stdout()) {
+        return Err(Failure::Input(
+            "--format npy: binary output; redirect standard output to a file".into(),
+        ));
+    }
     let text = read_scene_text(&args.scene)?;
     let scene = Scene::from_json(&text).map_err(Failure::scene)?;
     let tracer = Tracer::new(&scene).map_err(Failure::scene)?;
