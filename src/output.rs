@@ -255,7 +255,7 @@ const WINDOW: usize = 1 << 14;
 const PIECE: usize = 1 << 10;
 
 /// Writes `n` rays produced by `view` in `format`: a window of rays at a time, formatted in
-/// parallel pieces (rayon) and then written in order.
+/// parallel pieces (rayon) while the previous window is written, in order.
 fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
     scene: &Scene,
     n: usize,
@@ -292,23 +292,34 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
             }
         }
     };
-    let mut pieces: Vec<Vec<u8>> = Vec::new();
-    for start in (0..n).step_by(WINDOW) {
-        let end = n.min(start + WINDOW);
+    // Formats window `w` into `pieces` (one buffer per piece, in order).
+    let format_window = |pieces: &mut Vec<Vec<u8>>, w: usize| {
+        let (start, end) = (w * WINDOW, n.min((w + 1) * WINDOW));
         let count = (end - start).div_ceil(PIECE);
-        if pieces.len() < count {
-            pieces.resize_with(count, Vec::new);
-        }
-        pieces[..count]
-            .par_iter_mut()
-            .enumerate()
-            .for_each(|(j, buf)| {
-                let lo = start + j * PIECE;
-                format_piece(buf, lo..end.min(lo + PIECE));
-            });
-        for piece in &pieces[..count] {
-            out.write_all(piece)?;
-        }
+        pieces.resize_with(count, Vec::new);
+        pieces.par_iter_mut().enumerate().for_each(|(j, buf)| {
+            let lo = start + j * PIECE;
+            format_piece(buf, lo..end.min(lo + PIECE));
+        });
+    };
+    // Double-buffered: this thread writes one window while the pool formats the next.
+    let (mut ready, mut next) = (Vec::new(), Vec::new());
+    let windows = n.div_ceil(WINDOW);
+    if windows > 0 {
+        format_window(&mut ready, 0);
+    }
+    for w in 0..windows {
+        let mut written = Ok(());
+        rayon::in_place_scope(|scope| {
+            if w + 1 < windows {
+                let next = &mut next;
+                let format_window = &format_window;
+                scope.spawn(move |_| format_window(next, w + 1));
+            }
+            written = ready.iter().try_for_each(|piece| out.write_all(piece));
+        });
+        written?;
+        std::mem::swap(&mut ready, &mut next);
     }
     if format == Format::Json {
         out.write_all(b"]}\n")?;
