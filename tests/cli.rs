@@ -241,7 +241,7 @@ fn batch_with_failures_writes_every_ray_in_order() {
 }
 
 #[test]
-fn solve_reads_standard_input_and_writes_json_lines() {
+fn solve_reads_standard_input_and_writes_json_lines_and_npy() {
     let file = TempFile::with("scene.json", AIR_WATER);
     let from_file = run([OsStr::new("solve"), file.path().as_os_str()]);
     assert_eq!(from_file.status.code(), Some(0));
@@ -282,6 +282,27 @@ fn solve_reads_standard_input_and_writes_json_lines() {
         .map(|l| serde_json::from_str(l).expect("one JSON object per line"))
         .collect();
     assert_eq!(&per_line, rays);
+
+    // The .npy file: its header, then one 89-byte record per ray (3 points, 2 legs) whose
+    // time is the JSON document's (NaN for a ray without one).
+    let npy = run([
+        OsStr::new("solve"),
+        OsStr::new("--format"),
+        OsStr::new("npy"),
+        file.path().as_os_str(),
+    ]);
+    assert_eq!(npy.status.code(), Some(0), "stderr: {}", text(&npy.stderr));
+    let bytes = &npy.stdout;
+    assert_eq!(&bytes[..6], b"\x93NUMPY");
+    let data = &bytes[10 + u16::from_le_bytes([bytes[8], bytes[9]]) as usize..];
+    assert_eq!(data.len(), rays.len() * 89);
+    for (record, ray) in data.chunks(89).zip(rays) {
+        let time = f64::from_le_bytes(record[17..25].try_into().expect("8 bytes"));
+        match ray["time"].as_f64() {
+            Some(t) => assert_eq!(time, t),
+            None => assert!(time.is_nan()),
+        }
+    }
 }
 
 #[test]
