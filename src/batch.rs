@@ -3,7 +3,7 @@
 use rayon::prelude::*;
 
 use crate::geom::{Point, Vec2};
-use crate::problem::{Frame, Geometry};
+use crate::problem::{Frame, Geometry, coord};
 use crate::solver::{
     Outcome, SingleIter, SingleNext, Workspace, receiver_sensitivity, single_sensitivity,
 };
@@ -233,6 +233,16 @@ impl Warm {
         );
     }
 
+    /// [`store`](Self::store) for a one-interaction path whose solution `s` was solved without
+    /// a workspace, with its sensitivity `(z, g)` (`single_sensitivity`).
+    fn store_one(&mut self, p: usize, at: usize, s: f64, sensitivity: Option<(f64, Vec2)>) {
+        self.params[at] = s;
+        (self.z[at], self.g[p]) = match sensitivity {
+            Some((z, g)) => (z, Some(g)),
+            None => (0.0, None),
+        };
+    }
+
     /// The predicted start of path `p` for a receiver `moved` from the last one: the last
     /// solution moved by `−z (g · moved)` (a first-order continuation step).
     fn predict(&mut self, p: usize, range: std::ops::Range<usize>, moved: Vec2) -> &[f64] {
@@ -409,12 +419,10 @@ impl Tracer<'_> {
                     };
                     // Path by path: each path's rays form one chain of warm starts.
                     for p in 0..np {
+                        let params = param_offsets[p]..param_offsets[p + 1];
                         match self.single_path(p) {
-                            Some(sp) => self.single_chain(sp, p, &mut unit, ws),
-                            None => {
-                                let params = param_offsets[p]..param_offsets[p + 1];
-                                self.path_chain(p, params, &mut unit, ws, warm);
-                            }
+                            Some(sp) => self.single_chain(sp, p, params.start, &mut unit, ws, warm),
+                            None => self.path_chain(p, params, &mut unit, ws, warm),
                         }
                     }
                     if let Some(progress) = opts.progress {
@@ -541,21 +549,53 @@ impl Unit<'_> {
 struct SingleChain<'a> {
     sp: &'a SinglePath,
     p: usize,
-    steps: &'a [crate::scene::Step],
     kind: crate::scene::StepKind,
     line: &'a crate::polyline::Polyline,
     tol: f64,
     max_iterations: usize,
 }
 
-/// The warm-start state of [`Tracer::single_chain`], [`Warm`] for one parameter: the last
-/// converged solution, its segment and its sensitivity to the receiver.
-#[derive(Clone, Copy, Default)]
-struct WarmOne {
-    prev: f64,
-    seg: usize,
-    z: f64,
-    g: Option<Vec2>,
+/// One path's chain of warm starts through the blocks of a unit: whether its last ray
+/// converged, and the last receiver.
+#[derive(Default)]
+struct Chain {
+    have: bool,
+    last: Point,
+}
+
+/// A block's place in a [`Chain`].
+struct Link {
+    source: usize,
+    receiver: usize,
+    /// The receiver's position and its move from the last one.
+    here: Point,
+    moved: Vec2,
+    /// Whether the ray starts from the last solution: warm starts on, the last ray converged,
+    /// the same source, and the last receiver near (closer than a quarter of this receiver's
+    /// distance to the source).
+    warm: bool,
+}
+
+impl Chain {
+    /// Block `b` of `unit` in the chain.
+    #[inline]
+    fn link(&mut self, scene: &crate::scene::Scene, unit: &Unit, b: usize) -> Link {
+        let (source, receiver) = unit.ends(b);
+        if b > 0 && unit.new_source(b) {
+            self.have = false;
+        }
+        let here = scene.receivers()[receiver];
+        let near = b > 0 && near(here, self.last, scene.sources()[source]);
+        let moved = here - self.last;
+        self.last = here;
+        Link {
+            source,
+            receiver,
+            here,
+            moved,
+            warm: unit.warm_start && self.have && near,
+        }
+    }
 }
 
 impl Tracer<'_> {
@@ -569,25 +609,16 @@ impl Tracer<'_> {
         ws: &mut Workspace,
         warm: &mut Warm,
     ) {
-        let scene = self.scene();
-        let (mut have, mut last) = (false, Point::default());
+        let mut chain = Chain::default();
         for b in 0..unit.n {
-            let (source, receiver) = unit.ends(b);
-            if b > 0 && unit.new_source(b) {
-                have = false;
-            }
-            // The previous receiver's solution is the start when that receiver is near:
-            // closer than a quarter of this receiver's distance to the source.
-            let here = scene.receivers()[receiver];
-            let near = b > 0 && near(here, last, scene.sources()[source]);
-            let moved = here - last;
-            last = here;
-            let guess =
-                (unit.warm_start && have && near).then(|| warm.predict(p, params.clone(), moved));
-            let s = self.solve_ray(source, receiver, p, guess, ws);
+            let link = chain.link(self.scene(), unit, b);
+            let guess = link
+                .warm
+                .then(|| warm.predict(p, params.clone(), link.moved));
+            let s = self.solve_ray(link.source, link.receiver, p, guess, ws);
             unit.write(b, p, &s, ws.points(), ws.media());
-            have = s.status == Status::Converged;
-            if have && unit.warm_start {
+            chain.have = s.status == Status::Converged;
+            if chain.have && unit.warm_start {
                 warm.store(p, params.clone(), ws);
             }
         }
@@ -617,68 +648,63 @@ impl Tracer<'_> {
         }
     }
 
-    /// [`path_chain`](Self::path_chain) for a one-interaction path, without the workspace: each
-    /// ray's start, Newton steps ([`SingleIter`], the steps of one-by-one solving) and side and
-    /// obstruction tests in registers. A ray that leaves this common case (no crossing to
-    /// start from, a reflection, a step leaving its segment, any status but `converged` after a
-    /// warm start) is solved one by one from the same start.
-    fn single_chain(&self, sp: &SinglePath, p: usize, unit: &mut Unit, ws: &mut Workspace) {
+    /// [`path_chain`](Self::path_chain) for a one-interaction path (its parameter at `at` in
+    /// `warm`), without the workspace: each ray's start, Newton steps ([`SingleIter`], the
+    /// steps of one-by-one solving) and side and obstruction tests in registers. A ray that
+    /// leaves this common case (no crossing to start from, a reflection, a step leaving its
+    /// segment, any status but `converged` after a warm start) is solved one by one from the
+    /// same start.
+    fn single_chain(
+        &self,
+        sp: &SinglePath,
+        p: usize,
+        at: usize,
+        unit: &mut Unit,
+        ws: &mut Workspace,
+        warm: &mut Warm,
+    ) {
         let scene = self.scene();
-        let steps = &scene.paths()[p].steps;
+        let step = &scene.paths()[p].steps[0];
         let opts = scene.solver();
         let path = SingleChain {
             sp,
             p,
-            steps,
-            kind: steps[0].kind,
-            line: &scene.interfaces()[steps[0].interface].polyline,
+            kind: step.kind,
+            line: &scene.interfaces()[step.interface].polyline,
             tol: opts.tolerance,
             max_iterations: opts.max_iterations,
         };
-        let (mut have, mut last, mut warm) = (false, Point::default(), WarmOne::default());
+        let mut chain = Chain::default();
+        // The last ray's segment: the first one tried for the next start.
+        let mut seg = 0;
         for b in 0..unit.n {
-            let (source, receiver) = unit.ends(b);
-            if b > 0 && unit.new_source(b) {
-                have = false;
-            }
-            let (source, here) = (scene.sources()[source], scene.receivers()[receiver]);
-            let near = b > 0 && near(here, last, source);
-            let moved = here - last;
-            last = here;
-            // `Warm::predict` for one parameter.
-            let guess = (unit.warm_start && have && near).then(|| match warm.g {
-                Some(g) => warm.prev - warm.z * g.dot(moved),
-                None => warm.prev,
-            });
-            have = match self.single_fast(&path, source, here, guess, warm.seg) {
-                Some((s, pts, it, seg)) => {
+            let link = chain.link(scene, unit, b);
+            let guess = link
+                .warm
+                .then(|| warm.predict(p, at..at + 1, link.moved)[0]);
+            let source = scene.sources()[link.source];
+            match self.single_fast(&path, source, link.here, guess, seg) {
+                Some((s, pts, it, j)) => {
                     unit.write(b, p, &s, &pts, &sp.media);
-                    let have = s.status == Status::Converged;
-                    if have && unit.warm_start {
-                        let t = path.line.tangent(seg);
-                        (warm.prev, warm.seg) = (it.s, seg);
-                        (warm.z, warm.g) = match single_sensitivity(&it.e, t, sp.slowness[1]) {
-                            Some((z, g)) => (z, Some(g)),
-                            None => (0.0, None),
-                        };
+                    chain.have = s.status == Status::Converged;
+                    if chain.have && unit.warm_start {
+                        let t = path.line.tangent(j);
+                        warm.store_one(p, at, it.s, single_sensitivity(&it.e, t, sp.slowness[1]));
+                        seg = j;
                     }
-                    have
                 }
                 None => {
-                    let (source, receiver) = unit.ends(b);
                     let guess = guess.map(|g| [g]);
-                    let s = self.solve_ray(source, receiver, p, guess.as_ref().map(|g| &g[..]), ws);
+                    let guess = guess.as_ref().map(|g| &g[..]);
+                    let s = self.solve_ray(link.source, link.receiver, p, guess, ws);
                     unit.write(b, p, &s, ws.points(), ws.media());
-                    let have = s.status == Status::Converged;
-                    if have && unit.warm_start {
-                        let (mut z, mut unit_, mut cp) = ([0.0], [0.0], [0.0]);
-                        (warm.prev, warm.seg) = (ws.parameters()[0], ws.seg[0]);
-                        warm.g = receiver_sensitivity(ws, &mut z, &mut unit_, &mut cp);
-                        warm.z = z[0];
+                    chain.have = s.status == Status::Converged;
+                    if chain.have && unit.warm_start {
+                        warm.store(p, at..at + 1, ws);
+                        seg = ws.seg[0];
                     }
-                    have
                 }
-            };
+            }
         }
     }
 
@@ -695,27 +721,15 @@ impl Tracer<'_> {
         hint: usize,
     ) -> Option<(RaySummary, [Point; 3], SingleIter, usize)> {
         let SingleChain {
-            sp,
-            p,
-            steps,
-            kind,
-            line,
-            ..
+            sp, p, kind, line, ..
         } = *path;
         let (s, j) = match guess {
             Some(wanted) => given_param(line, wanted, hint),
             None => self.single_crossing_start(sp, kind, line, source, receiver)?,
         };
-        let g = Geometry {
-            scene: self.scene(),
-            steps,
-            slowness: &sp.slowness,
-            source,
-            receiver,
-        };
-        let (to_receiver, coord) = (receiver - source, g.coord());
+        let (to_receiver, coord) = (receiver - source, coord(source, receiver));
         let f = Frame::new(line, j, source);
-        let mut it = SingleIter::start(s, &f, sp.slowness, to_receiver, coord, true);
+        let mut it = SingleIter::start(s, &f, sp.slowness, to_receiver, coord);
         loop {
             match it.next(&f, path.tol, path.max_iterations) {
                 SingleNext::Try { to, polish } => {

@@ -1,4 +1,5 @@
-//! The `eigenray solve` output: the contract's JSON document, JSON Lines and CSV.
+//! The `eigenray solve` output: the contract's JSON document, JSON Lines, CSV and NumPy's
+//! `.npy`.
 //!
 //! Written by hand with `zmij` (shortest round-trip floats, as `serde_json` prints them: it
 //! uses `zmij` too) and `itoa`, straight from either owned [`Ray`]s or a flat [`Batch`], and
@@ -49,26 +50,26 @@ fn status_code(status: Status) -> u8 {
     }
 }
 
-/// The shape of a [`Format::Npy`] record: the most points and legs of a ray.
+/// The shape of a [`Format::Npy`] record: the most interactions `k` of a path, so `k + 2`
+/// points and `k + 1` legs.
 #[derive(Clone, Copy, Debug)]
 struct NpyShape {
-    points: usize,
-    legs: usize,
+    k: usize,
 }
 
 impl NpyShape {
-    /// The most points and legs of the scene's paths.
+    /// The shape for the scene's paths.
     fn of(scene: &Scene) -> NpyShape {
-        let k = scene
-            .paths()
-            .iter()
-            .map(|p| p.steps.len())
-            .max()
-            .unwrap_or(0);
-        NpyShape {
-            points: k + 2,
-            legs: k + 1,
-        }
+        let k = scene.paths().iter().map(|p| p.steps.len()).max();
+        NpyShape { k: k.unwrap_or(0) }
+    }
+
+    fn points(self) -> usize {
+        self.k + 2
+    }
+
+    fn legs(self) -> usize {
+        self.k + 1
     }
 }
 
@@ -80,7 +81,9 @@ fn npy_header(n: usize, shape: NpyShape) -> Vec<u8> {
          ('status', '|u1'), ('iterations', '<u4'), ('time', '<f8'), ('residual', '<f8'), \
          ('points', '<f8', ({}, 2)), ('media', '<u4', ({},))], \
          'fortran_order': False, 'shape': ({},), }}",
-        shape.points, shape.legs, n
+        shape.points(),
+        shape.legs(),
+        n
     );
     let mut header = b"\x93NUMPY\x01\x00".to_vec();
     // The dictionary ends in a newline, padded with spaces so that the data starts at a
@@ -102,7 +105,7 @@ fn ray_npy<M: Iterator<Item = usize>>(buf: &mut Vec<u8>, shape: NpyShape, r: Vie
     buf.extend_from_slice(&r.time.unwrap_or(f64::NAN).to_le_bytes());
     buf.extend_from_slice(&r.residual.to_le_bytes());
     let points = if r.time.is_some() { r.points } else { &[] };
-    for i in 0..shape.points {
+    for i in 0..shape.points() {
         let p = points
             .get(i)
             .copied()
@@ -111,7 +114,7 @@ fn ray_npy<M: Iterator<Item = usize>>(buf: &mut Vec<u8>, shape: NpyShape, r: Vie
         buf.extend_from_slice(&p.y.to_le_bytes());
     }
     let mut media = r.media;
-    for _ in 0..shape.legs {
+    for _ in 0..shape.legs() {
         let m = media
             .as_mut()
             .and_then(|m| m.next())
@@ -260,11 +263,11 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
     scene: &Scene,
     n: usize,
     format: Format,
-    shape: NpyShape,
     mut out: W,
     view: impl Fn(usize) -> View<'a, M> + Sync,
 ) -> io::Result<()> {
     let names = Names::new(scene);
+    let shape = NpyShape::of(scene);
     match format {
         Format::Npy => out.write_all(&npy_header(n, shape))?,
         Format::Json => out.write_all(b"{\"rays\":[")?,
@@ -344,7 +347,7 @@ pub fn write_rays_json<W: Write>(scene: &Scene, rays: &[Ray], out: W) -> io::Res
 /// # Errors
 /// Any error of the writer.
 pub fn write_rays<W: Write>(scene: &Scene, rays: &[Ray], format: Format, out: W) -> io::Result<()> {
-    write_all(scene, rays.len(), format, NpyShape::of(scene), out, |i| {
+    write_all(scene, rays.len(), format, out, |i| {
         let r = &rays[i];
         View {
             source: r.source,
@@ -371,7 +374,7 @@ pub fn write_batch<W: Write>(
     format: Format,
     out: W,
 ) -> io::Result<()> {
-    write_all(scene, batch.len(), format, NpyShape::of(scene), out, |i| {
+    write_all(scene, batch.len(), format, out, |i| {
         let r = batch.record(i);
         let (source, receiver, path) = batch.triple(i);
         let has = r.status.has_time();

@@ -297,12 +297,7 @@ impl<'a> Geometry<'a> {
     /// The largest coordinate of the end points (the scale of their round-off).
     #[inline]
     pub fn coord(&self) -> f64 {
-        self.source
-            .x
-            .abs()
-            .max(self.source.y.abs())
-            .max(self.receiver.x.abs())
-            .max(self.receiver.y.abs())
+        coord(self.source, self.receiver)
     }
 
     /// [`evaluate_framed`](Self::evaluate_framed) for a path of one interaction, bit for bit,
@@ -594,6 +589,17 @@ fn leg_length(d: Vec2) -> f64 {
     } else {
         d.length()
     }
+}
+
+/// [`Geometry::coord`] of a ray from `source` to `receiver`.
+#[inline]
+pub(crate) fn coord(source: Point, receiver: Point) -> f64 {
+    source
+        .x
+        .abs()
+        .max(source.y.abs())
+        .max(receiver.x.abs())
+        .max(receiver.y.abs())
 }
 
 /// `f64::max` for a first argument that is never NaN: the larger, or `a` when `b` is NaN

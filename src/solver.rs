@@ -1109,20 +1109,13 @@ pub(crate) enum SingleNext {
 }
 
 impl SingleIter {
-    /// The state at the start parameter `s` on the segment `f`, before any step (`curvature`:
-    /// whether the evaluation adds the curvature estimate, as the first one of a solve does).
+    /// The state at the start parameter `s` on the segment `f`, before any step (its
+    /// evaluation adds the curvature estimate, as the first one of a solve does).
     #[inline(always)]
-    pub fn start(
-        s: f64,
-        f: &Frame,
-        w: [f64; 2],
-        to_receiver: Vec2,
-        coord: f64,
-        curvature: bool,
-    ) -> Self {
+    pub fn start(s: f64, f: &Frame, w: [f64; 2], to_receiver: Vec2, coord: f64) -> Self {
         SingleIter {
             s,
-            e: Geometry::evaluate_single(s, f, w, to_receiver, coord, curvature),
+            e: Geometry::evaluate_single(s, f, w, to_receiver, coord, true),
             iterations: 0,
             polishes: 0,
         }
