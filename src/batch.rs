@@ -746,7 +746,16 @@ impl Tracer<'_> {
         let e = &it.e;
         let pts = [source, line.point_on(j, it.s), receiver];
         let rel = [Vec2::default(), e.p, to_receiver];
-        let s = self.single_status(p, kind, line.normal(j), &pts, &rel, &e.len, it.solution());
+        let s = self.single_status(
+            p,
+            kind,
+            line.normal(j),
+            j,
+            &pts,
+            &rel,
+            &e.len,
+            it.solution(),
+        );
         if s.status != Status::Converged && guess.is_some() {
             return None;
         }

@@ -228,6 +228,14 @@ pub struct SegmentRef {
     pub segment: u32,
 }
 
+impl SegmentRef {
+    /// No segment (an index no scene has).
+    pub const NONE: SegmentRef = SegmentRef {
+        interface: u32::MAX,
+        segment: u32::MAX,
+    };
+}
+
 /// A validated scene: media, interfaces, sources, receivers, paths and solver settings, with
 /// a scene-wide spatial index of all interface segments.
 #[derive(Clone, Debug)]
@@ -568,18 +576,31 @@ impl Scene {
 
     /// The first interface segment that the segment `a–b` crosses or touches strictly inside,
     /// at a fraction `t ∈ (margin, 1 − margin)` of the way from `a` to `b` (its end points
-    /// may lie on interfaces: touching there does not count).
+    /// may lie on interfaces: touching there does not count), other than the segments in
+    /// `own`.
+    ///
+    /// `own` names the segments that `a` and `b` lie on ([`SegmentRef::NONE`] for an end on
+    /// no interface). A straight segment meets a leg that ends on it only at that end (or
+    /// along all of it, which is no crossing), so testing it could only find round-off: a leg
+    /// that grazes its own interface at a small angle would otherwise seem to cross it.
     ///
     /// Only boxes that meet the middle part of `a–b` (`t` from about `margin / 2` to `1 −
     /// margin / 2`, less round-off) are visited: a leg between two interfaces then does not
     /// even look at the segments its end points lie on when they are axis-parallel.
-    pub(crate) fn first_crossing(&self, a: Point, b: Point, margin: f64) -> Option<SegmentRef> {
+    pub(crate) fn first_crossing(
+        &self,
+        a: Point,
+        b: Point,
+        margin: f64,
+        own: [SegmentRef; 2],
+    ) -> Option<SegmentRef> {
         let sbox = middle_box(a, b, margin);
         let mut hit = None;
         self.segment_bvh.any_near_segment_in(sbox, a, b, |i| {
-            let crossed = self.crosses(i, a, b, margin);
+            let r = self.segments[i as usize];
+            let crossed = r != own[0] && r != own[1] && self.crosses(i, a, b, margin);
             if crossed {
-                hit = Some(self.segments[i as usize]);
+                hit = Some(r);
             }
             crossed
         });
@@ -596,16 +617,23 @@ impl Scene {
         b: Point,
         margin: f64,
         candidates: &[u32],
+        own: [SegmentRef; 2],
     ) -> Option<SegmentRef> {
-        let sbox = middle_box(a, b, margin);
-        candidates
-            .iter()
-            .find(|&&i| {
-                let (p, q) = self.segment_ends[i as usize];
-                // Scene vertices are finite.
-                Aabb::from_finite(p, q).overlaps(sbox) && self.crosses(i, a, b, margin)
-            })
-            .map(|&i| self.segments[i as usize])
+        // Most legs have no candidate but their own segments: no box to build for them.
+        let mut sbox = None;
+        for &i in candidates {
+            let r = self.segments[i as usize];
+            if r == own[0] || r == own[1] {
+                continue;
+            }
+            let sbox = *sbox.get_or_insert_with(|| middle_box(a, b, margin));
+            let (p, q) = self.segment_ends[i as usize];
+            // Scene vertices are finite.
+            if Aabb::from_finite(p, q).overlaps(sbox) && self.crosses(i, a, b, margin) {
+                return Some(r);
+            }
+        }
+        None
     }
 
     /// Whether scene segment `i` meets `a–b` at a fraction `t ∈ (margin, 1 − margin)` of it.

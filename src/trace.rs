@@ -4,10 +4,10 @@ use std::fmt;
 
 use rayon::prelude::*;
 
-use crate::geom::{Point, Vec2};
+use crate::geom::{Aabb, Point, Vec2};
 use crate::problem::Geometry;
 use crate::regions::Regions;
-use crate::scene::{Scene, SceneError, StepKind};
+use crate::scene::{Scene, SceneError, SegmentRef, StepKind};
 use crate::solver::{Outcome, Pin, Workspace, solve};
 
 mod single;
@@ -247,9 +247,16 @@ pub struct Tracer<'s> {
     regions: Option<Regions>,
     /// Medium at each source (when regions exist).
     source_media: Vec<Option<usize>>,
-    /// Per path, per leg between two interactions (leg `i` at index `i − 1`): every scene
-    /// segment that can cross it, when there are few (see [`leg_candidates`]).
+    /// Per path, per leg: every scene segment that can cross it, when there are few (see
+    /// [`leg_candidates`]).
     leg_candidates: Vec<Vec<Option<Box<[u32]>>>>,
+    /// Per path: whether no leg has a candidate (a path through single-segment interfaces
+    /// with nothing between them): for a source and a receiver within `ends`, no leg can be
+    /// obstructed.
+    clear: Vec<bool>,
+    /// The boxes of the scene's sources and receivers, for which the candidates of the legs
+    /// from the source and to the receiver hold.
+    ends: [Aabb; 2],
     /// Per path: its one-interaction data when it is one interaction with given media.
     single: Vec<Option<SinglePath>>,
     guess: InitialGuess,
@@ -270,15 +277,26 @@ impl<'s> Tracer<'s> {
             Some(r) => scene.sources().iter().map(|&p| r.medium_at(p)).collect(),
             None => Vec::new(),
         };
+        let bound = |pts: &[Point]| {
+            pts.iter()
+                .fold(Aabb::EMPTY, |b, &p| b.union(Aabb::from_points(p, p)))
+        };
+        let ends = [bound(scene.sources()), bound(scene.receivers())];
+        let candidates: Vec<_> = scene
+            .paths()
+            .iter()
+            .map(|p| leg_candidates(scene, &p.steps, ends))
+            .collect();
         Ok(Tracer {
             scene,
             regions,
             source_media,
-            leg_candidates: scene
-                .paths()
+            clear: candidates
                 .iter()
-                .map(|p| leg_candidates(scene, &p.steps))
+                .map(|legs| legs.iter().all(|c| c.as_deref() == Some(&[])))
                 .collect(),
+            leg_candidates: candidates,
+            ends,
             single: (0..scene.paths().len())
                 .map(|p| SinglePath::of(scene, p))
                 .collect(),
@@ -650,7 +668,7 @@ impl<'s> Tracer<'s> {
                 ..base
             };
         }
-        if let Some((leg, interface)) = self.obstruction(path, &ws.points) {
+        if let Some((leg, interface)) = self.obstruction(path, &ws.points, &ws.seg[..k]) {
             return RaySummary {
                 status: Status::Obstructed,
                 reason: Some(Reason::Crosses { leg, interface }),
@@ -743,50 +761,101 @@ impl<'s> Tracer<'s> {
     }
 
     /// First leg that crosses an interface strictly between its ends: `(leg, interface)`.
-    fn obstruction(&self, path: usize, pts: &[Point]) -> Option<(usize, usize)> {
-        let k = pts.len() - 2;
-        let candidates = &self.leg_candidates[path];
-        for (leg, ab) in pts.windows(2).enumerate() {
-            let (a, b) = (ab[0], ab[1]);
-            if a == b {
-                continue;
-            }
-            let between = if leg > 0 && leg < k {
-                candidates.get(leg - 1).and_then(|c| c.as_deref())
+    /// `pts` are the source, the interaction points and the receiver; `seg` the segments of
+    /// the interaction points, which their own legs are not tested against (see
+    /// [`Scene::first_crossing`]).
+    fn obstruction(&self, path: usize, pts: &[Point], seg: &[usize]) -> Option<(usize, usize)> {
+        let k = seg.len();
+        let (pts, steps) = (&pts[..k + 2], &self.scene.paths()[path].steps[..k]);
+        let legs = &self.leg_candidates[path][..k + 1];
+        // The end legs' candidates hold for a source and a receiver within the scene's.
+        let inside = |p: Point, b: &Aabb| {
+            p.x >= b.min.x && p.x <= b.max.x && p.y >= b.min.y && p.y <= b.max.y
+        };
+        let usable = [
+            inside(pts[0], &self.ends[0]),
+            inside(pts[k + 1], &self.ends[1]),
+        ];
+        if self.clear[path] && usable[0] && usable[1] {
+            return None;
+        }
+        let mut own_a = SegmentRef::NONE;
+        for leg in 0..=k {
+            let (a, b) = (pts[leg], pts[leg + 1]);
+            let own_b = if leg < k {
+                SegmentRef {
+                    interface: steps[leg].interface as u32,
+                    segment: seg[leg] as u32,
+                }
             } else {
-                None
+                SegmentRef::NONE
             };
-            let hit = match between {
-                Some(c) => self.scene.first_crossing_among(a, b, END_MARGIN, c),
-                None => self.scene.first_crossing(a, b, END_MARGIN),
-            };
-            if let Some(sref) = hit {
-                return Some((leg, sref.interface as usize));
+            if a != b {
+                let own = [own_a, own_b];
+                let hit = match legs[leg].as_deref() {
+                    Some(c) if (leg > 0 || usable[0]) && (leg < k || usable[1]) => {
+                        self.scene.first_crossing_among(a, b, END_MARGIN, c, own)
+                    }
+                    _ => self.scene.first_crossing(a, b, END_MARGIN, own),
+                };
+                if let Some(r) = hit {
+                    return Some((leg, r.interface as usize));
+                }
             }
+            own_a = own_b;
         }
         None
     }
 }
 
 /// A leg between two interactions has its end points on their interfaces, so it lies in the
-/// convex hull of the two interfaces: the scene segments that meet that hull (widened by
+/// convex hull of the two interfaces; a leg from the source lies in the hull of the first
+/// interface and the box `ends[0]` (when the source is in it), one to the receiver in that of
+/// the last interface and `ends[1]`: the scene segments that meet that hull (widened by
 /// round-off) are all it can cross. Where they are few (a leg between two layers of a stack,
-/// flat or dipping: those two interfaces), the obstruction test checks just them instead of
-/// querying the scene's BVH, whose boxes of long slanted segments all overlap. Per leg between
-/// interactions `i − 1` and `i` (at index `i − 1`).
-fn leg_candidates(scene: &Scene, steps: &[crate::scene::Step]) -> Vec<Option<Box<[u32]>>> {
+/// flat or dipping: those two interfaces; the legs of a refraction at a lone surface), the
+/// obstruction test checks just them instead of querying the scene's BVH, whose boxes of long
+/// slanted segments all overlap. The segment of an end's interface when it has only that one
+/// is left out: the leg ends on it, so it is the leg's own (see [`Scene::first_crossing`]).
+/// Per leg `0..=k`.
+fn leg_candidates(
+    scene: &Scene,
+    steps: &[crate::scene::Step],
+    ends: [Aabb; 2],
+) -> Vec<Option<Box<[u32]>>> {
     /// More candidates than this: the BVH query is as quick.
     const MAX: usize = 8;
     /// Segments in the hull's box beyond which the hull test is not worth making.
     const BOX_LIMIT: usize = 4096;
-    steps
-        .windows(2)
-        .map(|w| {
-            let (a, b) = (
-                &scene.interfaces()[w[0].interface].polyline,
-                &scene.interfaces()[w[1].interface].polyline,
-            );
-            let bbox = a.bbox().union(b.bbox());
+    let k = steps.len();
+    let corners = |b: Aabb| {
+        [
+            b.min,
+            Point::new(b.max.x, b.min.y),
+            b.max,
+            Point::new(b.min.x, b.max.y),
+        ]
+    };
+    (0..=k)
+        .map(|leg| {
+            // The points that each end of the leg lies among.
+            let end = |i: Option<usize>, b: Aabb| -> Option<Vec<Point>> {
+                match i {
+                    Some(i) => Some(
+                        scene.interfaces()[steps[i].interface]
+                            .polyline
+                            .vertices()
+                            .to_vec(),
+                    ),
+                    // No scene source (or receiver): no leg can use the list.
+                    None => (b.min.x <= b.max.x).then(|| corners(b).to_vec()),
+                }
+            };
+            let mut pts = end(leg.checked_sub(1), ends[0])?;
+            pts.extend(end((leg < k).then_some(leg), ends[1])?);
+            let bbox = pts
+                .iter()
+                .fold(Aabb::EMPTY, |b, &p| b.union(Aabb::from_points(p, p)));
             let pad = 1e-9
                 * (bbox.max.x - bbox.min.x
                     + (bbox.max.y - bbox.min.y)
@@ -794,17 +863,24 @@ fn leg_candidates(scene: &Scene, steps: &[crate::scene::Step]) -> Vec<Option<Box
                     + bbox.min.x.abs()
                     + bbox.max.y.abs()
                     + bbox.min.y.abs());
-            let grown = crate::geom::Aabb {
+            let grown = Aabb {
                 min: Point::new(bbox.min.x - pad, bbox.min.y - pad),
                 max: Point::new(bbox.max.x + pad, bbox.max.y + pad),
             };
             let in_box = scene.segments_in(grown, BOX_LIMIT)?;
-            let hull = convex_hull(a.vertices().iter().chain(b.vertices()).copied().collect());
+            let hull = convex_hull(pts);
+            // The interfaces of the leg's ends that are one segment.
+            let lone = |i: Option<usize>| {
+                i.map(|i| steps[i].interface)
+                    .filter(|&f| scene.interfaces()[f].polyline.num_segments() == 1)
+            };
+            let own = [lone(leg.checked_sub(1)), lone((leg < k).then_some(leg))];
             let found: Vec<u32> = in_box
                 .into_iter()
                 .filter(|&i| {
-                    let (p, q) = scene.segment_points(scene.segments()[i as usize]);
-                    meets_convex(p, q, &hull, pad)
+                    let r = scene.segments()[i as usize];
+                    let (p, q) = scene.segment_points(r);
+                    !own.contains(&Some(r.interface as usize)) && meets_convex(p, q, &hull, pad)
                 })
                 .collect();
             (found.len() <= MAX).then(|| found.into_boxed_slice())
@@ -1308,8 +1384,8 @@ mod tests {
         }"#;
         let scene = Scene::from_json(doc).unwrap();
         let steps = &scene.paths()[0].steps;
-        let cands = leg_candidates(&scene, steps);
-        let c = cands[0].as_deref().expect("few candidates");
+        let cands = leg_candidates(&scene, steps, [Aabb::EMPTY; 2]);
+        let c = cands[1].as_deref().expect("few candidates");
         // a, b and c, not the far one.
         assert_eq!(c.len(), 3 + 3 + 1);
         let (a, b) = (
@@ -1321,8 +1397,12 @@ mod tests {
         for _ in 0..20_000 {
             let p = a.point_at(rng.next_f64() * a.length());
             let q = b.point_at(rng.next_f64() * b.length());
-            let bvh = scene.first_crossing(p, q, END_MARGIN).is_some();
-            let among = scene.first_crossing_among(p, q, END_MARGIN, c).is_some();
+            let bvh = scene
+                .first_crossing(p, q, END_MARGIN, [SegmentRef::NONE; 2])
+                .is_some();
+            let among = scene
+                .first_crossing_among(p, q, END_MARGIN, c, [SegmentRef::NONE; 2])
+                .is_some();
             assert_eq!(bvh, among, "leg {p:?} → {q:?}");
             if bvh { hits += 1 } else { misses += 1 }
         }
@@ -1330,26 +1410,90 @@ mod tests {
     }
 
     /// Legs between the layers of a stack, flat or dipping (where the boxes of all layers
-    /// overlap), have just the two layers' segments as candidates.
+    /// overlap), can cross nothing but the two layers they join: one segment each, the legs'
+    /// own, so no candidates at all (the path is clear); a third layer or a bend in one
+    /// brings candidates back.
     #[test]
-    fn stack_legs_have_two_candidates() {
+    fn stack_legs_have_no_candidates() {
         for spec in [
-            crate::demo::layer_stack(20, 1),
-            crate::demo::dipping_stack(20, 1),
+            crate::demo::layer_stack(20, 3),
+            crate::demo::dipping_stack(20, 3),
         ] {
             let scene = Scene::from_spec(&spec).unwrap();
-            let cands = leg_candidates(&scene, &scene.paths()[0].steps);
-            assert_eq!(cands.len(), 19);
-            for (leg, c) in cands.iter().enumerate() {
+            let tracer = Tracer::new(&scene).unwrap();
+            let cands = &tracer.leg_candidates[0];
+            assert_eq!(cands.len(), 21);
+            assert!(cands.iter().all(|c| c.as_deref() == Some(&[])), "{cands:?}");
+            assert!(tracer.clear[0]);
+            // Bend the interface of step 5: the legs that end on it (5 and 6) can cross its
+            // other segment.
+            let mut bent = spec.clone();
+            let crate::scene::StepSpec::Refract(name) = &spec.paths[0].steps[5] else {
+                panic!("a refraction");
+            };
+            let points = &mut bent.interfaces.get_mut(name).unwrap().points;
+            let (a, b) = (points[0], points[1]);
+            points.insert(1, [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]) + 1e-3]);
+            let scene = Scene::from_spec(&bent).unwrap();
+            let tracer = Tracer::new(&scene).unwrap();
+            assert!(!tracer.clear[0]);
+            for (leg, c) in tracer.leg_candidates[0].iter().enumerate() {
                 let c = c.as_deref().expect("few candidates");
-                let mut ifaces: Vec<u32> = c
-                    .iter()
-                    .map(|&i| scene.segments()[i as usize].interface)
-                    .collect();
-                ifaces.sort_unstable();
-                assert_eq!(ifaces, [leg as u32, leg as u32 + 1], "leg {}", leg + 1);
+                let expected = if leg == 5 || leg == 6 { 2 } else { 0 };
+                assert_eq!(c.len(), expected, "leg {leg}: {c:?}");
+                for &i in c {
+                    let r = scene.segments()[i as usize];
+                    assert_eq!(r.interface as usize, scene.paths()[0].steps[5].interface);
+                }
             }
         }
+    }
+
+    /// The candidate lists of the legs from the source and to the receiver hold for points
+    /// within the scene's sources and receivers: a ray between other points is tested against
+    /// every interface.
+    #[test]
+    fn points_beyond_the_scene_ends_are_tested_against_every_interface() {
+        let doc = r#"{
+            "media": { "air": { "speed": 1.0 }, "water": { "speed": 0.75 } },
+            "interfaces": {
+                "surface": { "points": [[-10, 0], [2, 0]] },
+                "wall": { "points": [[-3, 0.8], [-3, 3]] },
+                "deep": { "points": [[-3, -0.8], [-3, -3]] }
+            },
+            "sources": [[0, 1]], "receivers": [[0.5, -0.5]],
+            "paths": [{ "steps": [{ "refract": "surface" }], "media": ["air", "water"] }]
+        }"#;
+        let scene = Scene::from_json(doc).unwrap();
+        let tracer = Tracer::new(&scene).unwrap();
+        assert!(tracer.clear[0], "{:?}", tracer.leg_candidates);
+        let index = |name: &str| scene.interfaces().iter().position(|f| f.name == name);
+        let (wall, deep) = (index("wall").unwrap(), index("deep").unwrap());
+        let mut ws = Workspace::new();
+        let (near, far) = (Point::new(-0.5, 1.0), Point::new(-5.0, 3.0));
+        let receiver = scene.receivers()[0];
+        assert_eq!(
+            tracer.solve(near, receiver, 0, &mut ws).status,
+            Status::Converged
+        );
+        let beyond = tracer.solve(far, receiver, 0, &mut ws);
+        assert_eq!(beyond.status, Status::Obstructed, "{beyond:?}");
+        assert_eq!(
+            beyond.reason,
+            Some(Reason::Crosses {
+                leg: 0,
+                interface: wall
+            })
+        );
+        // And from the receiver's side.
+        let beyond = tracer.solve(Point::new(0.5, 1.0), Point::new(-5.0, -3.0), 0, &mut ws);
+        assert_eq!(
+            beyond.reason,
+            Some(Reason::Crosses {
+                leg: 1,
+                interface: deep
+            })
+        );
     }
 
     /// The hull test against brute force: a segment meets the hull exactly when it crosses

@@ -91,7 +91,16 @@ impl Tracer<'_> {
         ws.points
             .extend_from_slice(&[source, line.point_on(j, ws.s[0]), receiver]);
         let (rel, len) = (&ws.eval.rel[..3], &ws.eval.len[..2]);
-        self.single_status(path, step.kind, line.normal(j), &ws.points, rel, len, sol)
+        self.single_status(
+            path,
+            step.kind,
+            line.normal(j),
+            j,
+            &ws.points,
+            rel,
+            len,
+            sol,
+        )
     }
 
     /// The documented start of a one-interaction path when it is the crossing of `S → R` with
@@ -117,7 +126,7 @@ impl Tracer<'_> {
 
     /// The status of a one-interaction ray whose solve ended converged with its point free:
     /// the side and obstruction tests of `classify`, written out for one interaction. `n` is
-    /// the normal of the point's segment, `pts` the source, the point and the receiver, `rel`
+    /// the normal of the point's segment `j`, `pts` the source, the point and the receiver, `rel`
     /// the same relative to the source and `len` the two legs' lengths.
     #[expect(
         clippy::too_many_arguments,
@@ -129,6 +138,7 @@ impl Tracer<'_> {
         path: usize,
         kind: StepKind,
         n: Vec2,
+        j: usize,
         pts: &[Point],
         rel: &[Vec2],
         len: &[f64],
@@ -138,7 +148,7 @@ impl Tracer<'_> {
         let (a, b) = leg_sides(n, 1.0, rel, len);
         let (status, reason) = if !sides_suit(kind, a, b) {
             (Status::NoPath, Some(Reason::WrongSide { step: 0 }))
-        } else if let Some((leg, interface)) = self.obstruction(path, pts) {
+        } else if let Some((leg, interface)) = self.obstruction(path, pts, &[j]) {
             (Status::Obstructed, Some(Reason::Crosses { leg, interface }))
         } else {
             (Status::Converged, None)
