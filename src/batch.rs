@@ -514,17 +514,7 @@ impl Unit<'_> {
     /// Writes ray `s` of path `p` of block `b` with its points and leg media.
     #[inline]
     fn write(&mut self, b: usize, p: usize, s: &RaySummary, points: &[Point], media: &[usize]) {
-        self.rec[b * self.np + p] = RayRecord {
-            status: s.status,
-            time: if s.status.has_time() {
-                s.time
-            } else {
-                f64::NAN
-            },
-            iterations: s.iterations as u32,
-            residual: s.residual,
-            reason: s.reason,
-        };
+        self.rec[b * self.np + p] = RayRecord::of(s);
         let at = b * self.pts_block;
         let ray_points = &mut self.pts[at + self.po[p]..at + self.po[p + 1]];
         if s.status.has_time() {
@@ -540,6 +530,48 @@ impl Unit<'_> {
             }
         } else {
             ray_media.fill(NO_MEDIUM);
+        }
+    }
+
+    /// [`write`](Self::write) for a ray of one interaction with its leg media given: its
+    /// three points and two media, copied without a loop.
+    #[inline(always)]
+    fn write_one(
+        &mut self,
+        b: usize,
+        p: usize,
+        s: &RaySummary,
+        points: &[Point; 3],
+        media: [usize; 2],
+    ) {
+        self.rec[b * self.np + p] = RayRecord::of(s);
+        let at = b * self.pts_block + self.po[p];
+        let nan = Point::new(f64::NAN, f64::NAN);
+        let points = if s.status.has_time() {
+            *points
+        } else {
+            [nan; 3]
+        };
+        self.pts[at..at + 3].copy_from_slice(&points);
+        let at = b * self.media_block + self.mo[p];
+        self.med[at..at + 2].copy_from_slice(&[media[0] as u32, media[1] as u32]);
+    }
+}
+
+impl RayRecord {
+    /// The record of a ray's summary.
+    #[inline(always)]
+    fn of(s: &RaySummary) -> RayRecord {
+        RayRecord {
+            status: s.status,
+            time: if s.status.has_time() {
+                s.time
+            } else {
+                f64::NAN
+            },
+            iterations: s.iterations as u32,
+            residual: s.residual,
+            reason: s.reason,
         }
     }
 }
@@ -685,7 +717,7 @@ impl Tracer<'_> {
             let source = scene.sources()[link.source];
             match self.single_fast(&path, source, link.here, guess, seg) {
                 Some((s, pts, it, j)) => {
-                    unit.write(b, p, &s, &pts, &sp.media);
+                    unit.write_one(b, p, &s, &pts, sp.media);
                     chain.have = s.status == Status::Converged;
                     if chain.have && unit.warm_start {
                         let t = path.line.tangent(j);
@@ -728,13 +760,13 @@ impl Tracer<'_> {
             None => self.single_crossing_start(sp, kind, line, source, receiver)?,
         };
         let (to_receiver, coord) = (receiver - source, coord(source, receiver));
-        let f = Frame::new(line, j, source);
-        let mut it = SingleIter::start(s, &f, sp.slowness, to_receiver, coord);
+        let f = &Frame::new(line, j, source);
+        let mut it = SingleIter::start(s, f, sp.slowness, to_receiver, coord);
         loop {
-            match it.next(&f, path.tol, path.max_iterations) {
+            match it.next(f, path.tol, path.max_iterations) {
                 SingleNext::Try { to, polish } => {
                     let trial =
-                        Geometry::evaluate_single(to, &f, sp.slowness, to_receiver, coord, false);
+                        Geometry::evaluate_single(to, f, sp.slowness, to_receiver, coord, false);
                     if !it.accept(to, polish, trial) {
                         return None;
                     }

@@ -764,21 +764,32 @@ impl<'s> Tracer<'s> {
     /// `pts` are the source, the interaction points and the receiver; `seg` the segments of
     /// the interaction points, which their own legs are not tested against (see
     /// [`Scene::first_crossing`]).
+    #[inline(always)]
     fn obstruction(&self, path: usize, pts: &[Point], seg: &[usize]) -> Option<(usize, usize)> {
+        // A clear path between points within the scene's ends: nothing to test (the common
+        // case of a survey through layers, checked here without a call).
+        let (a, b) = (pts[0], pts[pts.len() - 1]);
+        if self.clear[path] && inside(a, &self.ends[0]) && inside(b, &self.ends[1]) {
+            return None;
+        }
+        self.obstruction_tested(path, pts, seg)
+    }
+
+    /// [`obstruction`](Self::obstruction) leg by leg.
+    fn obstruction_tested(
+        &self,
+        path: usize,
+        pts: &[Point],
+        seg: &[usize],
+    ) -> Option<(usize, usize)> {
         let k = seg.len();
         let (pts, steps) = (&pts[..k + 2], &self.scene.paths()[path].steps[..k]);
         let legs = &self.leg_candidates[path][..k + 1];
         // The end legs' candidates hold for a source and a receiver within the scene's.
-        let inside = |p: Point, b: &Aabb| {
-            p.x >= b.min.x && p.x <= b.max.x && p.y >= b.min.y && p.y <= b.max.y
-        };
         let usable = [
             inside(pts[0], &self.ends[0]),
             inside(pts[k + 1], &self.ends[1]),
         ];
-        if self.clear[path] && usable[0] && usable[1] {
-            return None;
-        }
         let mut own_a = SegmentRef::NONE;
         for leg in 0..=k {
             let (a, b) = (pts[leg], pts[leg + 1]);
@@ -806,6 +817,12 @@ impl<'s> Tracer<'s> {
         }
         None
     }
+}
+
+/// Whether `p` is in the closed box `b`.
+#[inline(always)]
+fn inside(p: Point, b: &Aabb) -> bool {
+    p.x >= b.min.x && p.x <= b.max.x && p.y >= b.min.y && p.y <= b.max.y
 }
 
 /// A leg between two interactions has its end points on their interfaces, so it lies in the
