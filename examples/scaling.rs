@@ -264,8 +264,8 @@ fn main() -> io::Result<()> {
          mean iteration count is {:.2} at k = 2 and {:.2} at k = 200 (k = 1 keeps the paraxial \
          start: {:.2}): what is left is the `O(k)` start (the crossings of `S → R` and the 1-D \
          ray-parameter solve), one `O(k)` evaluation with its Thomas sweep, and the \
-         classification (the obstruction test checks each leg between two layers against the \
-         two layers' segments only).\n",
+         classification (no obstruction test: each leg can meet only the two single-segment \
+         layers it ends on, so the path is clear).\n",
         a,
         b,
         rows[1].1.iterations,
