@@ -230,8 +230,9 @@ pub fn ray_index(
 /// and along the layers, `wⱼ` the legs' slownesses). Where the interfaces' tangents at the
 /// crossings are parallel (to within 5e-5 rad), the ray parameter `p` solves
 /// `Σⱼ Δtⱼ tan θⱼ = X / Z` with `sin θⱼ = p / wⱼ` (a 1-D Newton iteration, monotone from
-/// above, from the smaller of the paraxial `p` and the `p` at which the layers of the smallest
-/// slowness alone take the whole offset) and the lateral fractions become `τᵢ = Σ_{j≤i} Δtⱼ tan θⱼ · Z / X`:
+/// above, from the smallest of the paraxial `p`, the root of the equation with `tan θ` cut to
+/// its series' first four terms, and the `p` at which the layers of the smallest slowness
+/// alone take the whole offset) and the lateral fractions become `τᵢ = Σ_{j≤i} Δtⱼ tan θⱼ · Z / X`:
 /// the solution itself for parallel flat layers, so the Newton solve that follows only
 /// confirms it. Elsewhere, for a single refraction (whose 1-D ray-parameter solve would cost
 /// what its Newton steps do), or with [`InitialGuess::Paraxial`], the small-angle limit
@@ -1191,12 +1192,19 @@ fn ray_parameter(
     if !(x > 0.0 && x.is_finite()) {
         return None;
     }
-    // Per layer: thickness Δtⱼ (in units of Z) and speed 1/wⱼ.
+    // Per layer: thickness Δtⱼ (in units of Z) and speed vⱼ = 1/wⱼ; and the sums Σ Δtⱼ vⱼⁿ
+    // for n = 3, 5, 7 (of the series below).
     layers.clear();
     let (mut limit, mut prev) = (f64::INFINITY, 0.0);
+    let mut series = [0.0; 3];
     for (j, &wj) in w[..=k].iter().enumerate() {
         let hi = if j < k { t[j] } else { 1.0 };
-        layers.push((hi - prev, 1.0 / wj));
+        let (dt, v) = (hi - prev, 1.0 / wj);
+        layers.push((dt, v));
+        let (a, v2) = (dt * v, v * v);
+        series[0] += a * v2;
+        series[1] += a * v2 * v2;
+        series[2] += a * v2 * v2 * v2;
         prev = hi;
         // Slownesses are positive and finite: the plain min.
         limit = if wj < limit { wj } else { limit };
@@ -1233,12 +1241,35 @@ fn ray_parameter(
     let alone = limit * (tan / (1.0 + tan * tan).sqrt());
     // (`alone` may exceed `cap`: the root can lie nearer the pole than that.)
     let mut p = small_angle.min(alone);
+    // tan θ = sin θ (1 + sin²θ / 2 + 3 sin⁴θ / 8 + 5 sin⁶θ / 16 + …), all terms positive: the
+    // first four make a polynomial P(p) ≤ f(p) + x, convex and increasing, whose root is
+    // therefore above f's; Newton's iterates on it from its linear part's root (the
+    // paraxial p) stay above its root. Three of them, without a square root or a division by
+    // layer, save 1.5 of the 4.8 evaluations of f per ray through `demo::layer_stack(8, _)`.
+    let [b3, b5, b7] = series;
+    let mut q = small_angle;
+    for _ in 0..3 {
+        let q2 = q * q;
+        let g = q * (sum + q2 * (0.5 * b3 + q2 * (0.375 * b5 + q2 * 0.3125 * b7))) - x;
+        let dg = sum + q2 * (1.5 * b3 + q2 * (1.875 * b5 + q2 * 2.1875 * b7));
+        q -= g / dg;
+    }
+    // (A NaN `q`, from overflowing powers of a huge speed, is not taken.)
+    let series_bound = q < p;
+    if series_bound {
+        p = q;
+    }
     if p >= limit {
         p = cap;
     }
     let (mut fp, mut dfp) = f(p);
+    if series_bound && fp < 0.0 && fp >= -64.0 * f64::EPSILON * x {
+        // Where the series' neglected terms are below round-off, its root is f's to within
+        // round-off, on either side.
+        return Some((p, x));
+    }
     if (fp.is_nan() || fp < 0.0) && p < paraxial {
-        // Round-off put `alone` below the root.
+        // Round-off put `alone` (or the series' root) below the root.
         p = paraxial;
         (fp, dfp) = f(p);
     }
@@ -1571,7 +1602,7 @@ mod tests {
                 .sum::<f64>()
         };
         let mut layers = Vec::new();
-        for x in [1e-3, 0.3, 1.0, 3.0, 30.0, 3e3, 3e5] {
+        for x in [1e-8, 1e-5, 1e-3, 0.05, 0.3, 1.0, 3.0, 30.0, 3e3, 3e5] {
             let (mut lo, mut hi) = (0.0, 0.4);
             for _ in 0..200 {
                 let mid = 0.5 * (lo + hi);
