@@ -87,8 +87,9 @@ pub struct Workspace {
     /// step's interface (NaN where it does not, or for a reflection).
     pub(crate) crossing_t: Vec<f64>,
     pub(crate) seg_alt: Vec<usize>,
-    /// Per layer of the initial guess's ray-parameter refinement: thickness and speed.
-    pub(crate) layers: Vec<(f64, f64)>,
+    /// Per layer of the initial guess's ray-parameter refinement: thickness, speed, and the
+    /// lateral offset across it at the ray parameter found.
+    pub(crate) layers: Vec<(f64, f64, f64)>,
     pub(crate) points: Vec<Point>,
     frames: Vec<Frame>,
 }

@@ -1142,9 +1142,9 @@ fn refraction_guess(
     let (w, s_at, seg) = (&ws.slowness[..k + 1], &mut ws.s[..k], &mut ws.seg[..k]);
     for (i, step) in steps.iter().enumerate() {
         let tau = match p {
-            Some((p, x)) => {
-                let sin = p / w[i];
-                acc += (t[i] - prev) * sin / (1.0 - sin * sin).sqrt();
+            Some((_, x)) => {
+                // Δtᵢ tan θᵢ, from the evaluation at p.
+                acc += ws.layers[i].2;
                 acc / x
             }
             None => {
@@ -1179,7 +1179,7 @@ fn ray_parameter(
     sum: f64,
     d: Vec2,
     tangent: impl Fn(usize) -> Vec2,
-    layers: &mut Vec<(f64, f64)>,
+    layers: &mut Vec<(f64, f64, f64)>,
 ) -> Option<(f64, f64)> {
     let k = t.len();
     let m = tangent(0);
@@ -1200,7 +1200,7 @@ fn ray_parameter(
     for (j, &wj) in w[..=k].iter().enumerate() {
         let hi = if j < k { t[j] } else { 1.0 };
         let (dt, v) = (hi - prev, 1.0 / wj);
-        layers.push((dt, v));
+        layers.push((dt, v, f64::NAN));
         let (a, v2) = (dt * v, v * v);
         series[0] += a * v2;
         series[1] += a * v2 * v2;
@@ -1209,18 +1209,6 @@ fn ray_parameter(
         // Slownesses are positive and finite: the plain min.
         limit = if wj < limit { wj } else { limit };
     }
-    // f(p) = Σ Δtⱼ sⱼ / cⱼ − x with sⱼ = p / wⱼ, cⱼ = √(1 − sⱼ²); f' = Σ Δtⱼ / (wⱼ cⱼ³).
-    let f = |p: f64| {
-        let (mut f, mut df) = (-x, 0.0);
-        for &(dt, v) in layers.iter() {
-            let sin = p * v;
-            let r = 1.0 / (1.0 - sin * sin).sqrt();
-            let a = dt * r;
-            f += a * sin;
-            df += a * v * r * r;
-        }
-        (f, df)
-    };
     // The paraxial p (tan θ ≈ sin θ): f(p) ≥ 0 there, as tan θ ≥ sin θ. Below the smallest
     // slowness (a layer's critical angle) f is defined; just below it, it must be positive.
     let cap = limit * (1.0 - 1e-9);
@@ -1235,10 +1223,25 @@ fn ray_parameter(
         .iter()
         .zip(w)
         .filter(|&(_, &wj)| wj == limit)
-        .map(|(&(dt, _), _)| dt)
+        .map(|(&(dt, _, _), _)| dt)
         .sum();
     let tan = x / critical;
     let alone = limit * (tan / (1.0 + tan * tan).sqrt());
+    // f(p) = Σ Δtⱼ sⱼ / cⱼ − x with sⱼ = p / wⱼ, cⱼ = √(1 − sⱼ²); f' = Σ Δtⱼ / (wⱼ cⱼ³). Each
+    // evaluation leaves Δtⱼ tan θⱼ = Δtⱼ sⱼ / cⱼ in the layers, for the caller: every return
+    // with a p follows an evaluation at that p.
+    let mut f = |p: f64| {
+        let (mut f, mut df) = (-x, 0.0);
+        for (dt, v, offset) in layers.iter_mut() {
+            let sin = p * *v;
+            let r = 1.0 / (1.0 - sin * sin).sqrt();
+            let a = *dt * r;
+            *offset = a * sin;
+            f += *offset;
+            df += a * *v * r * r;
+        }
+        (f, df)
+    };
     // (`alone` may exceed `cap`: the root can lie nearer the pole than that.)
     let mut p = small_angle.min(alone);
     // tan θ = sin θ (1 + sin²θ / 2 + 3 sin⁴θ / 8 + 5 sin⁶θ / 16 + …), all terms positive: the
@@ -1614,6 +1617,16 @@ mod tests {
             let (p, scaled) = ray_parameter(&t, &w, sum, d, along, &mut layers).unwrap();
             assert_eq!(scaled, x);
             assert!((p - lo).abs() <= 1e-14 * lo, "x = {x}: {p} against {lo}");
+            // The layers' lateral offsets, which the start uses, are those at that p: they
+            // make up x (tested away from the critical angle: from x ≈ 1.5 on they are steep
+            // functions of p, and a rounding of it moves their sum by up to 1e-7 x).
+            let offsets: f64 = layers.iter().map(|l| l.2).sum();
+            if x <= 1.0 {
+                assert!(
+                    (offsets - x).abs() <= 1e-13 * x,
+                    "x = {x}: offsets {offsets}"
+                );
+            }
         }
     }
 }
