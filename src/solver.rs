@@ -32,7 +32,9 @@
 
 use crate::geom::{Point, Vec2};
 pub(crate) use crate::problem::Pin;
-use crate::problem::{Eval, Frame, Geometry, Single, leg_vanished, max_num, min_num, sweep_row};
+use crate::problem::{
+    Eval, Frame, Geometry, Single, finite, leg_vanished, max_num, min_num, sweep_row,
+};
 
 /// How the iteration ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -948,7 +950,7 @@ fn fast_newton(
             return None;
         }
         let residual = e.rmax;
-        if !residual.is_finite() || fast.iterations >= max_iterations {
+        if !finite(residual) || fast.iterations >= max_iterations {
             return Some((
                 Outcome::NotConverged,
                 Solution {
@@ -966,13 +968,13 @@ fn fast_newton(
         // tests: round-off floor, and whether the full step stays inside every segment.
         let (s, delta, frames) = (&ws.s[..k], &mut ws.delta[..k], &ws.frames[..k]);
         let (len, s_try, cp, y) = (&e.len[..k + 1], &mut ws.s_try[..k], &e.cp[..k], &e.y[..k]);
-        let mut finite = true;
+        let mut all_finite = true;
         let mut tiny = true;
         let mut inside = true;
         let mut x = 0.0;
         for i in (0..k).rev() {
             x = if i + 1 == k { y[i] } else { y[i] - cp[i] * x };
-            finite &= x.is_finite();
+            all_finite &= finite(x);
             let d = -x;
             delta[i] = d;
             tiny &= d.abs() <= 4.0 * f64::EPSILON * (s[i].abs() + len[i] + len[i + 1]);
@@ -984,7 +986,7 @@ fn fast_newton(
                 && to < f.hi
                 && d.abs() <= min_num(max_num(len[i], len[i + 1]), f.quarter);
         }
-        if !finite {
+        if !all_finite {
             return None;
         }
         if tiny {
@@ -1003,7 +1005,7 @@ fn fast_newton(
         let phi0 = e.phi;
         g.evaluate_passes(&ws.s_try, &ws.frames, &mut ws.eval_try, false);
         let phi = ws.eval_try.phi;
-        if !(phi.is_finite() && phi <= (1.0 - 1e-4) * phi0) {
+        if !(finite(phi) && phi <= (1.0 - 1e-4) * phi0) {
             // The general loop backtracks from here (it evaluates this trial again).
             return None;
         }
@@ -1034,13 +1036,13 @@ fn fast_newton_single(
             break None;
         }
         let residual = e.rmax;
-        if !residual.is_finite() || fast.iterations >= max_iterations {
+        if !finite(residual) || fast.iterations >= max_iterations {
             break Some(Outcome::NotConverged);
         }
         // `thomas` on one row.
         let x = e.r * (1.0 / e.h);
         // `thomas`'s pivot test on one row (|h| > 1e-14 |h| is h ≠ 0 for a finite h).
-        if !(e.h.is_finite() && e.h != 0.0 && x.is_finite()) {
+        if !(finite(e.h) && e.h != 0.0 && finite(x)) {
             break None;
         }
         let d = -x;
@@ -1057,7 +1059,7 @@ fn fast_newton_single(
             break Some(Outcome::Converged);
         }
         let trial = Geometry::evaluate_single(to, &f, w, to_receiver, coord, false);
-        if !(trial.phi.is_finite() && trial.phi <= (1.0 - 1e-4) * e.phi) {
+        if !(finite(trial.phi) && trial.phi <= (1.0 - 1e-4) * e.phi) {
             break None;
         }
         fast.polishes += polish as usize;
@@ -1130,13 +1132,13 @@ impl SingleIter {
             return SingleNext::General;
         }
         let residual = e.rmax;
-        if !residual.is_finite() || self.iterations >= max_iterations {
+        if !finite(residual) || self.iterations >= max_iterations {
             return SingleNext::End(Outcome::NotConverged);
         }
         // `thomas` on one row.
         let x = e.r * (1.0 / e.h);
         // `thomas`'s pivot test on one row (|h| > 1e-14 |h| is h ≠ 0 for a finite h).
-        if !(e.h.is_finite() && e.h != 0.0 && x.is_finite()) {
+        if !(finite(e.h) && e.h != 0.0 && finite(x)) {
             return SingleNext::General;
         }
         let d = -x;
@@ -1159,7 +1161,7 @@ impl SingleIter {
     /// no change) hands over to the general loop.
     #[inline(always)]
     pub fn accept(&mut self, to: f64, polish: bool, trial: Single) -> bool {
-        if !(trial.phi.is_finite() && trial.phi <= (1.0 - 1e-4) * self.e.phi) {
+        if !(finite(trial.phi) && trial.phi <= (1.0 - 1e-4) * self.e.phi) {
             return false;
         }
         self.polishes += polish as usize;
@@ -1235,7 +1237,7 @@ fn last_residual_gradient(t: Vec2, u: Vec2, l: f64, w: f64) -> Option<Vec2> {
 #[inline(always)]
 fn pivot_inverse(h: f64) -> Option<f64> {
     let z = 1.0 / h;
-    (h.is_finite() && h != 0.0 && z.is_finite()).then_some(z)
+    (finite(h) && h != 0.0 && finite(z)).then_some(z)
 }
 
 /// Whether every free point's residual is within the tolerance plus what round-off of its
