@@ -856,24 +856,27 @@ fn leg_candidates(
     };
     (0..=k)
         .map(|leg| {
-            // The points that each end of the leg lies among.
-            let end = |i: Option<usize>, b: Aabb| -> Option<Vec<Point>> {
-                match i {
-                    Some(i) => Some(
-                        scene.interfaces()[steps[i].interface]
-                            .polyline
-                            .vertices()
-                            .to_vec(),
-                    ),
-                    // No scene source (or receiver): no leg can use the list.
-                    None => (b.min.x <= b.max.x).then(|| corners(b).to_vec()),
-                }
+            // What each end of the leg lies on: an interaction's interface, or the box of the
+            // scene's sources (receivers); `None` when there are none.
+            enum Side<'a> {
+                Line(&'a crate::polyline::Polyline),
+                Box(Aabb),
+            }
+            let side = |i: Option<usize>, b: Aabb| match i {
+                Some(i) => Some(Side::Line(&scene.interfaces()[steps[i].interface].polyline)),
+                None => (b.min.x <= b.max.x).then_some(Side::Box(b)),
             };
-            let mut pts = end(leg.checked_sub(1), ends[0])?;
-            pts.extend(end((leg < k).then_some(leg), ends[1])?);
-            let bbox = pts
+            let sides = [
+                side(leg.checked_sub(1), ends[0])?,
+                side((leg < k).then_some(leg), ends[1])?,
+            ];
+            let bbox = sides
                 .iter()
-                .fold(Aabb::EMPTY, |b, &p| b.union(Aabb::from_points(p, p)));
+                .map(|e| match e {
+                    Side::Line(line) => line.bbox(),
+                    Side::Box(b) => *b,
+                })
+                .fold(Aabb::EMPTY, Aabb::union);
             let pad = 1e-9
                 * (bbox.max.x - bbox.min.x
                     + (bbox.max.y - bbox.min.y)
@@ -885,7 +888,15 @@ fn leg_candidates(
                 min: Point::new(bbox.min.x - pad, bbox.min.y - pad),
                 max: Point::new(bbox.max.x + pad, bbox.max.y + pad),
             };
+            // (A long interface fills the box with its own segments: no copy of its vertices.)
             let in_box = scene.segments_in(grown, BOX_LIMIT)?;
+            let pts = sides
+                .iter()
+                .flat_map(|e| match e {
+                    Side::Line(line) => line.vertices().to_vec(),
+                    Side::Box(b) => corners(*b).to_vec(),
+                })
+                .collect();
             let hull = convex_hull(pts);
             // The interfaces of the leg's ends that are one segment.
             let lone = |i: Option<usize>| {
