@@ -293,9 +293,7 @@ fn coherent(receivers: &[Point], source: Point) -> bool {
 
 /// Receiver indices sorted along a Morton curve over their bounding box.
 fn spatial_order(points: &[Point]) -> Vec<usize> {
-    let bbox = points.iter().fold(crate::geom::Aabb::EMPTY, |b, p| {
-        b.union(crate::geom::Aabb::from_points(*p, *p))
-    });
+    let bbox = crate::geom::Aabb::around(points);
     let (w, h) = (
         (bbox.max.x - bbox.min.x).max(f64::MIN_POSITIVE),
         (bbox.max.y - bbox.min.y).max(f64::MIN_POSITIVE),

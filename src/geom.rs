@@ -190,6 +190,12 @@ impl Aabb {
             max: Point::new(x1, y1),
         }
     }
+    /// The smallest box holding all `points` ([`EMPTY`](Self::EMPTY) for none).
+    pub fn around(points: &[Point]) -> Aabb {
+        points
+            .iter()
+            .fold(Aabb::EMPTY, |b, &p| b.union(Aabb::from_points(p, p)))
+    }
     /// The smallest box holding both boxes.
     #[inline]
     pub fn union(self, o: Aabb) -> Aabb {

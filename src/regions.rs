@@ -155,9 +155,7 @@ impl Regions {
         seg_offset.push(nseg);
 
         // An exact power-of-two scale brings every coordinate into the range spade accepts.
-        let geometry = verts
-            .iter()
-            .fold(Aabb::EMPTY, |b, p| b.union(Aabb::from_points(*p, *p)));
+        let geometry = Aabb::around(&verts);
         let extent = match scene.domain() {
             Some(d) => geometry.union(d),
             None => geometry,

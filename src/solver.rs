@@ -1025,68 +1025,36 @@ fn fast_newton_single(
     max_iterations: usize,
     fast: &mut Fast,
 ) -> Option<(Outcome, Solution)> {
-    let f = Frame::new(g.line(0), ws.seg[0], g.source);
+    // Called first in a solve: no step taken yet, the curvature on.
+    debug_assert!(fast.iterations == 0 && fast.polishes == 0 && fast.curvature);
+    let f = &Frame::new(g.line(0), ws.seg[0], g.source);
     let w = [g.slowness[0], g.slowness[1]];
-    let to_receiver = g.receiver - g.source;
-    let coord = g.coord();
-    let mut s = ws.s[0];
-    let mut e = Geometry::evaluate_single(s, &f, w, to_receiver, coord, fast.curvature);
+    let (to_receiver, coord) = (g.receiver - g.source, g.coord());
+    let mut it = SingleIter::start(ws.s[0], f, w, to_receiver, coord);
     let done = loop {
-        if e.vanished {
-            break None;
+        match it.next(f, tol, max_iterations) {
+            SingleNext::Try { to, polish } => {
+                let trial = Geometry::evaluate_single(to, f, w, to_receiver, coord, false);
+                if !it.accept(to, polish, trial) {
+                    break None;
+                }
+            }
+            SingleNext::End(outcome) => break Some(outcome),
+            SingleNext::General => break None,
         }
-        let residual = e.rmax;
-        if !finite(residual) || fast.iterations >= max_iterations {
-            break Some(Outcome::NotConverged);
-        }
-        // `thomas` on one row.
-        let x = e.r * (1.0 / e.h);
-        // `thomas`'s pivot test on one row (|h| > 1e-14 |h| is h ≠ 0 for a finite h).
-        if !(finite(e.h) && e.h != 0.0 && finite(x)) {
-            break None;
-        }
-        let d = -x;
-        if d.abs() <= 4.0 * f64::EPSILON * (s.abs() + e.len[0] + e.len[1]) {
-            break Some(Outcome::Converged);
-        }
-        let to = s + d;
-        let reach = min_num(max_num(e.len[0], e.len[1]), f.quarter);
-        if !(to > f.lo && to < f.hi && d.abs() <= reach) {
-            break None;
-        }
-        let polish = residual <= tol;
-        if polish && (d.abs() <= tol.sqrt() * (e.len[0] + e.len[1]) || fast.polishes >= 2) {
-            break Some(Outcome::Converged);
-        }
-        let trial = Geometry::evaluate_single(to, &f, w, to_receiver, coord, false);
-        if !(finite(trial.phi) && trial.phi <= (1.0 - 1e-4) * e.phi) {
-            break None;
-        }
-        fast.polishes += polish as usize;
-        fast.iterations += 1;
-        fast.curvature = false;
-        (s, e) = (to, trial);
     };
-    ws.s[0] = s;
-    e.store(&f, to_receiver, &mut ws.eval);
+    ws.s[0] = it.s;
+    it.e.store(f, to_receiver, &mut ws.eval);
+    fast.iterations = it.iterations;
+    fast.polishes = it.polishes;
+    fast.curvature = it.iterations == 0;
     fast.evaluated = true;
-    done.map(|outcome| {
-        (
-            outcome,
-            Solution {
-                time: e.time,
-                iterations: fast.iterations,
-                residual: e.rmax,
-            },
-        )
-    })
+    done.map(|outcome| (outcome, it.solution()))
 }
 
-/// The iteration of [`fast_newton_single`] as a state and its steps, for the batches'
-/// one-interaction chains (which keep no workspace): the same tests in the same order, the
-/// same arithmetic. `fast_newton_single` keeps its loop written out: driven through this state
-/// it took about 3 % more time per ray (A/B in one process). The batch tests check that both
-/// give the same rays bit for bit (`tests/batch.rs`, without warm starts).
+/// The iteration of [`fast_newton`] for one interaction as a state and its steps: the same
+/// tests in the same order, the same arithmetic, in registers. [`fast_newton_single`] drives
+/// it for a solve with a workspace, the batches' one-interaction chains without one.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct SingleIter {
     /// The parameter.

@@ -278,11 +278,10 @@ impl<'s> Tracer<'s> {
             Some(r) => scene.sources().iter().map(|&p| r.medium_at(p)).collect(),
             None => Vec::new(),
         };
-        let bound = |pts: &[Point]| {
-            pts.iter()
-                .fold(Aabb::EMPTY, |b, &p| b.union(Aabb::from_points(p, p)))
-        };
-        let ends = [bound(scene.sources()), bound(scene.receivers())];
+        let ends = [
+            Aabb::around(scene.sources()),
+            Aabb::around(scene.receivers()),
+        ];
         let candidates: Vec<_> = scene
             .paths()
             .iter()
@@ -770,7 +769,7 @@ impl<'s> Tracer<'s> {
         // A clear path between points within the scene's ends: nothing to test (the common
         // case of a survey through layers, checked here without a call).
         let (a, b) = (pts[0], pts[pts.len() - 1]);
-        if self.clear[path] && inside(a, &self.ends[0]) && inside(b, &self.ends[1]) {
+        if self.clear[path] && self.ends[0].contains(a) && self.ends[1].contains(b) {
             return None;
         }
         self.obstruction_tested(path, pts, seg)
@@ -788,8 +787,8 @@ impl<'s> Tracer<'s> {
         let legs = &self.leg_candidates[path][..k + 1];
         // The end legs' candidates hold for a source and a receiver within the scene's.
         let usable = [
-            inside(pts[0], &self.ends[0]),
-            inside(pts[k + 1], &self.ends[1]),
+            self.ends[0].contains(pts[0]),
+            self.ends[1].contains(pts[k + 1]),
         ];
         let mut own_a = SegmentRef::NONE;
         for leg in 0..=k {
@@ -818,12 +817,6 @@ impl<'s> Tracer<'s> {
         }
         None
     }
-}
-
-/// Whether `p` is in the closed box `b`.
-#[inline(always)]
-fn inside(p: Point, b: &Aabb) -> bool {
-    p.x >= b.min.x && p.x <= b.max.x && p.y >= b.min.y && p.y <= b.max.y
 }
 
 /// A leg between two interactions has its end points on their interfaces, so it lies in the
@@ -1456,17 +1449,30 @@ mod tests {
         );
         let mut rng = SplitMix64(3);
         let (mut hits, mut misses) = (0, 0);
+        let own = |step: usize, line: &crate::polyline::Polyline, s: f64| SegmentRef {
+            interface: steps[step].interface as u32,
+            segment: line.segment_at(s) as u32,
+        };
         for _ in 0..20_000 {
-            let p = a.point_at(rng.next_f64() * a.length());
-            let q = b.point_at(rng.next_f64() * b.length());
-            let bvh = scene
-                .first_crossing(p, q, END_MARGIN, [SegmentRef::NONE; 2])
-                .is_some();
-            let among = scene
-                .first_crossing_among(p, q, END_MARGIN, c, [SegmentRef::NONE; 2])
-                .is_some();
-            assert_eq!(bvh, among, "leg {p:?} → {q:?}");
-            if bvh { hits += 1 } else { misses += 1 }
+            let (sa, sb) = (rng.next_f64() * a.length(), rng.next_f64() * b.length());
+            let (p, q) = (a.point_at(sa), b.point_at(sb));
+            // Without and with the leg's own segments left out: the same answer either way.
+            for own in [[SegmentRef::NONE; 2], [own(0, a, sa), own(1, b, sb)]] {
+                let bvh = scene.first_crossing(p, q, END_MARGIN, own);
+                let among = scene.first_crossing_among(p, q, END_MARGIN, c, own);
+                assert_eq!(bvh.is_some(), among.is_some(), "leg {p:?} → {q:?}");
+                assert!(
+                    bvh.is_none_or(|r| !own.contains(&r)),
+                    "{bvh:?} is the leg's own"
+                );
+                if own[0] != SegmentRef::NONE {
+                    if bvh.is_some() {
+                        hits += 1
+                    } else {
+                        misses += 1
+                    }
+                }
+            }
         }
         assert!(hits > 1000 && misses > 1000, "{hits} hits, {misses} misses");
     }
