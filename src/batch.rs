@@ -640,15 +640,17 @@ impl Tracer<'_> {
         warm: &mut Warm,
     ) {
         let mut chain = Chain::default();
+        // Through parallel flat layers the default start is already the solution: a warm
+        // start would leave a Newton step or two.
+        let warm_start = unit.warm_start && !self.exact_start(p);
         for b in 0..unit.n {
             let link = chain.link(self.scene(), unit, b);
-            let guess = link
-                .warm
-                .then(|| warm.predict(p, params.clone(), link.moved));
+            let guess =
+                (link.warm && warm_start).then(|| warm.predict(p, params.clone(), link.moved));
             let s = self.solve_ray(link.source, link.receiver, p, guess, ws);
             unit.write(b, p, &s, ws.points(), ws.media());
             chain.have = s.status == Status::Converged;
-            if chain.have && unit.warm_start {
+            if chain.have && warm_start {
                 warm.store(p, params.clone(), ws);
             }
         }

@@ -10,6 +10,7 @@ use crate::regions::Regions;
 use crate::scene::{Scene, SceneError, SegmentRef, StepKind};
 use crate::solver::{Outcome, Pin, Workspace, solve};
 
+mod flat;
 mod single;
 pub(crate) use single::SinglePath;
 
@@ -242,7 +243,9 @@ pub fn ray_index(
 /// nearest the target, of the line through the target perpendicular to `R − S`, when there is
 /// one: an `O(log M)` query where the nearest-point search grows about like `√M`; a single
 /// reflection there then starts at the specular point of the tangent line at that crossing
-/// (the image method: exact on a straight mirror).
+/// (the image method: exact on a straight mirror). A path whose every step refracts at an
+/// interface of one segment (flat or dipping layers) finds its crossings from the segments
+/// `Tracer::new` kept for it, with no search: the same start, bit for bit.
 pub struct Tracer<'s> {
     scene: &'s Scene,
     regions: Option<Regions>,
@@ -260,6 +263,8 @@ pub struct Tracer<'s> {
     ends: [Aabb; 2],
     /// Per path: its one-interaction data when it is one interaction with given media.
     single: Vec<Option<SinglePath>>,
+    /// Per path: its segments when it refracts through one-segment interfaces only.
+    flat: Vec<Option<flat::FlatPath>>,
     guess: InitialGuess,
 }
 
@@ -299,6 +304,9 @@ impl<'s> Tracer<'s> {
             ends,
             single: (0..scene.paths().len())
                 .map(|p| SinglePath::of(scene, p))
+                .collect(),
+            flat: (0..scene.paths().len())
+                .map(|p| flat::FlatPath::of(scene, p))
                 .collect(),
             guess: InitialGuess::default(),
         })
@@ -481,6 +489,14 @@ impl<'s> Tracer<'s> {
         self.single[path].as_ref()
     }
 
+    /// Whether the default start of path `path` is its solution up to round-off: refractions
+    /// through parallel one-segment interfaces, started from the ray parameter. A batch
+    /// does not warm-start such a path.
+    pub(crate) fn exact_start(&self, path: usize) -> bool {
+        self.guess == InitialGuess::RayParameter
+            && self.flat[path].as_ref().is_some_and(|f| f.parallel)
+    }
+
     fn solve_inner(
         &self,
         source: Point,
@@ -512,7 +528,10 @@ impl<'s> Tracer<'s> {
         match start {
             Start::Given(params) => given_start(scene, &spec.steps, params, ws),
             Start::Default | Start::Compare(_) => {
-                initial_guess(scene, &spec.steps, source, receiver, ws)
+                let flat = self.flat[path].as_ref();
+                if !flat.is_some_and(|f| f.start(source, receiver, ws)) {
+                    initial_guess(scene, &spec.steps, source, receiver, ws);
+                }
             }
         }
         let lookup = spec.media.is_none();

@@ -202,16 +202,25 @@ fn warm_starts_keep_the_rays_and_save_iterations() {
         warm * 10 < single * 9,
         "air over water: {warm} iterations warm vs {single} one by one"
     );
-    // Through flat layers the default start is already the solution. The neighbour's
-    // prediction leaves one or two Newton steps, but it skips the crossing queries and the
-    // ray-parameter solve: fewer instructions per ray in all. The rays stay the same.
+    // Through parallel flat layers the default start (the ray parameter) is already the
+    // solution, and a batch does not warm-start them: no Newton step, and the very rays of
+    // one-by-one solving. Through dipping layers the warm starts save steps again.
     let sc = scene(&demo::layer_stack(8, 400));
     let (single, warm) = compare(&sc, true);
-    assert_eq!(single, 0, "flat layers one by one");
-    let rays = sc.num_rays() as u64;
+    assert_eq!((single, warm), (0, 0), "flat layers: iterations");
+    let tracer = Tracer::new(&sc).expect("tracer");
+    let warm_batch = tracer.trace_batch(&BatchOptions::default());
+    let cold_batch = tracer.trace_batch(&BatchOptions {
+        warm_start: false,
+        ..BatchOptions::default()
+    });
+    for i in 0..sc.num_rays() {
+        assert_eq!(warm_batch.ray(i), cold_batch.ray(i), "flat layers, ray {i}");
+    }
+    let (single, warm) = compare(&scene(&demo::dipping_stack(8, 400)), true);
     assert!(
-        warm <= 2 * rays,
-        "flat layers warm: {warm} iterations for {rays} rays"
+        warm * 10 < single * 8,
+        "dipping layers: {warm} iterations warm vs {single} one by one"
     );
     // A room with all its reflection sequences: whatever the warm starts save, the rays stay
     // the same.
