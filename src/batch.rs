@@ -683,7 +683,7 @@ impl Tracer<'_> {
     /// [`path_chain`](Self::path_chain) for a one-interaction path (its parameter at `at` in
     /// `warm`), without the workspace: each ray's start, Newton steps ([`SingleIter`], the
     /// steps of one-by-one solving) and side and obstruction tests in registers. A ray that
-    /// leaves this common case (no crossing to start from, a reflection, a step leaving its
+    /// leaves this common case (no crossing or specular point to start from, a step leaving its
     /// segment, any status but `converged` after a warm start) is solved one by one from the
     /// same start.
     fn single_chain(
@@ -709,17 +709,18 @@ impl Tracer<'_> {
         let mut chain = Chain::default();
         // The last ray's segment: the first one tried for the next start.
         let mut seg = 0;
+        // Off a flat mirror the default start is already the solution.
+        let warm_start = unit.warm_start && !self.exact_start(p);
         for b in 0..unit.n {
             let link = chain.link(scene, unit, b);
-            let guess = link
-                .warm
-                .then(|| warm.predict(p, at..at + 1, link.moved)[0]);
+            let guess =
+                (link.warm && warm_start).then(|| warm.predict(p, at..at + 1, link.moved)[0]);
             let source = scene.sources()[link.source];
             match self.single_fast(&path, source, link.here, guess, seg) {
                 Some((s, pts, it, j)) => {
                     unit.write_one(b, p, &s, &pts, sp.media);
                     chain.have = s.status == Status::Converged;
-                    if chain.have && unit.warm_start {
+                    if chain.have && warm_start {
                         let t = path.line.tangent(j);
                         warm.store_one(p, at, it.s, single_sensitivity(&it.e, t, sp.slowness[1]));
                         seg = j;
@@ -731,7 +732,7 @@ impl Tracer<'_> {
                     let s = self.solve_ray(link.source, link.receiver, p, guess, ws);
                     unit.write(b, p, &s, ws.points(), ws.media());
                     chain.have = s.status == Status::Converged;
-                    if chain.have && unit.warm_start {
+                    if chain.have && warm_start {
                         warm.store(p, at..at + 1, ws);
                         seg = ws.seg[0];
                     }

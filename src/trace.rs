@@ -10,8 +10,8 @@ use crate::regions::Regions;
 use crate::scene::{Scene, SceneError, SegmentRef, StepKind};
 use crate::solver::{Outcome, Pin, Workspace, solve};
 
-mod flat;
 mod single;
+mod straight;
 pub(crate) use single::SinglePath;
 
 /// How a ray ended (the contract's `status`).
@@ -245,7 +245,12 @@ pub fn ray_index(
 /// reflection there then starts at the specular point of the tangent line at that crossing
 /// (the image method: exact on a straight mirror). A path whose every step refracts at an
 /// interface of one segment (flat or dipping layers) finds its crossings from the segments
-/// `Tracer::new` kept for it, with no search: the same start, bit for bit.
+/// `Tracer::new` kept for it, with no search: the same start, bit for bit. A path whose every
+/// step reflects off an interface of one segment (flat mirrors, the walls of a room), with
+/// one slowness on every leg, starts
+/// at the image method's specular points instead (the source mirrored in each mirror's line
+/// in turn, then the points back from the receiver towards each image) when every one lies
+/// strictly inside its segment: the solution itself.
 pub struct Tracer<'s> {
     scene: &'s Scene,
     regions: Option<Regions>,
@@ -263,8 +268,9 @@ pub struct Tracer<'s> {
     ends: [Aabb; 2],
     /// Per path: its one-interaction data when it is one interaction with given media.
     single: Vec<Option<SinglePath>>,
-    /// Per path: its segments when it refracts through one-segment interfaces only.
-    flat: Vec<Option<flat::FlatPath>>,
+    /// Per path: its segments when it refracts at one-segment interfaces only, or reflects
+    /// off them only.
+    straight: Vec<Option<straight::StraightPath>>,
     guess: InitialGuess,
 }
 
@@ -305,8 +311,8 @@ impl<'s> Tracer<'s> {
             single: (0..scene.paths().len())
                 .map(|p| SinglePath::of(scene, p))
                 .collect(),
-            flat: (0..scene.paths().len())
-                .map(|p| flat::FlatPath::of(scene, p))
+            straight: (0..scene.paths().len())
+                .map(|p| straight::StraightPath::of(scene, p))
                 .collect(),
             guess: InitialGuess::default(),
         })
@@ -489,12 +495,15 @@ impl<'s> Tracer<'s> {
         self.single[path].as_ref()
     }
 
-    /// Whether the default start of path `path` is its solution up to round-off: refractions
-    /// through parallel one-segment interfaces, started from the ray parameter. A batch
-    /// does not warm-start such a path.
+    /// Whether the default start of path `path` is its solution up to round-off where it
+    /// applies: reflections off one-segment interfaces (the image method), refractions
+    /// through parallel ones started from the ray parameter. A batch does not warm-start such
+    /// a path.
     pub(crate) fn exact_start(&self, path: usize) -> bool {
-        self.guess == InitialGuess::RayParameter
-            && self.flat[path].as_ref().is_some_and(|f| f.parallel)
+        let ray_parameter = self.guess == InitialGuess::RayParameter;
+        self.straight[path]
+            .as_ref()
+            .is_some_and(|f| f.exact(ray_parameter))
     }
 
     fn solve_inner(
@@ -528,8 +537,8 @@ impl<'s> Tracer<'s> {
         match start {
             Start::Given(params) => given_start(scene, &spec.steps, params, ws),
             Start::Default | Start::Compare(_) => {
-                let flat = self.flat[path].as_ref();
-                if !flat.is_some_and(|f| f.start(source, receiver, ws)) {
+                let straight = self.straight[path].as_ref();
+                if !straight.is_some_and(|f| f.start(source, receiver, ws)) {
                     initial_guess(scene, &spec.steps, source, receiver, ws);
                 }
             }

@@ -104,8 +104,9 @@ impl Tracer<'_> {
     }
 
     /// The documented start of a one-interaction path when it is the crossing of `S → R` with
-    /// the interface (a refraction that crosses it), moved to the paraxial point: `(s, segment)`;
-    /// `None` when the general guess applies.
+    /// the interface (a refraction that crosses it), moved to the paraxial point, or the image
+    /// method's specular point (a reflection off an interface of one segment, one slowness):
+    /// `(s, segment)`; `None` when the general guess applies.
     #[inline(always)]
     pub(crate) fn single_crossing_start(
         &self,
@@ -115,8 +116,12 @@ impl Tracer<'_> {
         source: Point,
         receiver: Point,
     ) -> Option<(f64, usize)> {
-        if kind != StepKind::Refract {
-            return None;
+        if kind == StepKind::Reflect {
+            // The image method, with one slowness on both legs (not a converted wave).
+            if sp.slowness[0] != sp.slowness[1] {
+                return None;
+            }
+            return super::straight::single_specular(line, source, receiver).map(|s| (s, 0));
         }
         let (s, t, j) = nearest_crossing(line, source, receiver, 0.5)?;
         let s = line.wrap(s);

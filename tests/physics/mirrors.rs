@@ -1,4 +1,5 @@
 //! Flat mirrors against the image method: one, two and three reflections, and a finite end.
+//! The tracer starts from the image method there too, so no Newton step is left.
 
 use eigenray::{Reason, Status};
 use serde_json::{Value, json};
@@ -47,6 +48,8 @@ fn check_against_images(v: &Value, w: f64, mirrors: &[Vec<(P, P)>]) -> (f64, usi
         checked += 1;
         let case = format!("source {s:?}, receiver {r:?}, mirrors {ms:?}");
         assert_eq!(ray.status, Status::Converged, "{case}: {ray:?}");
+        // The start off one-segment mirrors is the image method's: no Newton step is left.
+        assert_eq!(ray.iterations, 0, "{case}: {ray:?}");
         let time = ray.time.unwrap();
         let err = rel_err(time, w * len);
         assert!(
@@ -328,4 +331,44 @@ fn grazing_reflections_are_not_obstructed_by_their_own_mirror() {
         }
     }
     println!("mirrors grazing: 2 × 200 rays, max relative time error {max:.2e}");
+}
+
+/// A converted reflection (another speed on the way back, as a P wave reflecting as an S wave)
+/// off one and off two flat mirrors: the image method does not hold, and the tracer must not
+/// take it for the solution. Checked against the law of reflection with two slownesses,
+/// `w₀ sin θ₀ = w₁ sin θ₁` at every point along its mirror, and the time of the points.
+#[test]
+fn converted_reflections_obey_the_law_with_two_slownesses() {
+    let (low, high) = (([-20.0, 0.0], [20.0, 0.0]), ([20.0, 3.0], [-20.0, 3.5]));
+    let v = json!({
+        "media": { "p": { "speed": 1.7 }, "s": { "speed": 1.0 } },
+        "interfaces": { "low": { "points": [low.0, low.1] },
+                        "high": { "points": [high.0, high.1] } },
+        "sources": [[-2.0, 1.0], [0.5, 2.0]],
+        "receivers": [[3.0, 1.5], [-1.0, 2.2], [6.0, 0.4]],
+        "paths": [
+            { "steps": [{ "reflect": "low" }], "media": ["p", "s"] },
+            { "steps": [{ "reflect": "low" }, { "reflect": "high" }], "media": ["p", "s", "s"] }
+        ]
+    });
+    let sc = scene(&v);
+    let w = |m: &str| if m == "p" { 1.0 / 1.7 } else { 1.0 };
+    let legs: [&[f64]; 2] = [&[w("p"), w("s")], &[w("p"), w("s"), w("s")]];
+    let mirrors: [&[(P, P)]; 2] = [&[low], &[low, high]];
+    let rays = trace_all(&sc);
+    assert_eq!(rays.len(), 12);
+    for ray in &rays {
+        assert_eq!(ray.status, Status::Converged, "{ray:?}");
+        assert!(ray.iterations > 0, "{ray:?}");
+        let p: Vec<P> = ray.points.iter().map(|&q| pt(q)).collect();
+        let w = legs[ray.path];
+        let time: f64 = p.windows(2).zip(w).map(|(l, w)| w * dist(l[0], l[1])).sum();
+        assert!(rel_err(ray.time.unwrap(), time) <= TOL, "{ray:?}");
+        for (i, &(a, b)) in mirrors[ray.path].iter().enumerate() {
+            let t = unit(sub(b, a));
+            let (arrive, leave) = (unit(sub(p[i + 1], p[i])), unit(sub(p[i + 2], p[i + 1])));
+            let law = (w[i] * dot(arrive, t) - w[i + 1] * dot(leave, t)) / (w[i] + w[i + 1]);
+            assert!(law.abs() <= TOL, "{ray:?}: point {i}, {law:e}");
+        }
+    }
 }

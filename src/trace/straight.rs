@@ -1,0 +1,331 @@
+//! The start of a path whose every step is at an interface of one segment: refractions only
+//! (flat or dipping layers) or reflections only (flat mirrors, the walls of a room), from
+//! data prepared once per path.
+//!
+//! - **Refractions:** the crossings of `S → R` with the interfaces, one segment intersection
+//!   each: the result of [`initial_guess`](super::initial_guess), bit for bit, without its
+//!   search; anything else (a crossing off a segment, a leg along one) goes to it.
+//! - **Reflections:** the image method. The source mirrored in each interface's line in turn,
+//!   then the points back from the receiver towards each image: the specular points of the
+//!   mirrors' lines, the solution itself when each lies inside its segment (the Newton solve
+//!   only confirms it). Where one does not, or a leg would reflect from the wrong side, the
+//!   documented guess applies as before.
+
+use super::PARALLEL;
+use crate::geom::{Point, Vec2};
+use crate::polyline::Polyline;
+use crate::scene::{Scene, Step, StepKind};
+use crate::solver::{Pin, Workspace};
+
+/// One interface of a [`StraightPath`]: its segment `p → p + e` and that segment's length.
+#[derive(Clone, Copy, Debug)]
+struct Line {
+    p: Point,
+    e: Vec2,
+    len: f64,
+}
+
+impl Line {
+    fn of(line: &Polyline) -> Line {
+        let (p, q) = line.segment(0);
+        Line {
+            p,
+            e: q - p,
+            len: line.segment_length(0),
+        }
+    }
+
+    /// `x` mirrored in the segment's line.
+    #[inline(always)]
+    fn mirror(&self, x: Point) -> Point {
+        let n = self.e.perp() * (1.0 / self.len);
+        x - n * (2.0 * n.dot(x - self.p))
+    }
+
+    /// Where `a → b` crosses the segment strictly inside both: the parameter along the
+    /// segment.
+    #[inline(always)]
+    fn crossing(&self, a: Point, b: Point) -> Option<f64> {
+        let d = b - a;
+        let den = d.cross(self.e);
+        let w = self.p - a;
+        let (t, u) = (w.cross(self.e) / den, w.cross(d) / den);
+        (t > 0.0 && t < 1.0 && u > 0.0 && u < 1.0).then_some(u * self.len)
+    }
+}
+
+/// The image method's specular point of a single reflection off `line`, an interface of one
+/// segment: its parameter, when it lies strictly inside the segment (`S` and `R` strictly on
+/// one side).
+#[inline(always)]
+pub(crate) fn single_specular(line: &Polyline, source: Point, receiver: Point) -> Option<f64> {
+    if line.num_segments() != 1 {
+        return None;
+    }
+    let l = Line::of(line);
+    l.crossing(receiver, l.mirror(source))
+}
+
+/// A path whose every step refracts, or whose every step reflects, at an open interface of one
+/// segment (reflections with one slowness on every leg).
+#[derive(Debug)]
+pub(crate) struct StraightPath {
+    lines: Box<[Line]>,
+    kind: StepKind,
+    /// Whether the segments are parallel (as `refraction_guess` takes them): for refractions,
+    /// the ray-parameter start then solves the path up to round-off.
+    pub(crate) parallel: bool,
+}
+
+impl StraightPath {
+    /// The path's segments, if it is such a path.
+    pub(crate) fn of(scene: &Scene, path: usize) -> Option<StraightPath> {
+        let steps = &scene.paths()[path].steps;
+        let polylines: Vec<_> = steps
+            .iter()
+            .map(|step| &scene.interfaces()[step.interface].polyline)
+            .collect();
+        let kind = steps.first()?.kind;
+        let simple = |(step, line): (&Step, &&Polyline)| {
+            step.kind == kind && line.num_segments() == 1 && !line.is_closed()
+        };
+        if !steps.iter().zip(&polylines).all(simple) {
+            return None;
+        }
+        // The image method needs one slowness on every leg: so it is with media looked up (a
+        // reflection keeps the medium), not always with media given (a converted wave).
+        let media = scene.paths()[path].media.as_deref().unwrap_or(&[]);
+        let slowness = |m: &usize| scene.media()[*m].slowness;
+        let one_slowness = media.windows(2).all(|m| slowness(&m[0]) == slowness(&m[1]));
+        if kind == StepKind::Reflect && !one_slowness {
+            return None;
+        }
+        let lines = polylines.iter().map(|line| Line::of(line)).collect();
+        let m = polylines[0].tangent(0);
+        let parallel = polylines
+            .iter()
+            .all(|line| line.tangent(0).dot(m).abs() >= 1.0 - PARALLEL);
+        Some(StraightPath {
+            lines,
+            kind,
+            parallel,
+        })
+    }
+
+    /// Whether the default start solves the path up to round-off wherever it applies:
+    /// reflections (the image method), or refractions at two or more parallel interfaces when
+    /// `ray_parameter` (the refinement [`InitialGuess::RayParameter`](super::InitialGuess);
+    /// a single refraction keeps the paraxial start).
+    pub(crate) fn exact(&self, ray_parameter: bool) -> bool {
+        match self.kind {
+            StepKind::Reflect => true,
+            StepKind::Refract => ray_parameter && self.parallel && self.lines.len() > 1,
+        }
+    }
+
+    /// Writes the start of a ray from `source` to `receiver` into `ws` (parameters, segments,
+    /// pins and crossing fractions; `ws` sized for the path) where it applies (see the module);
+    /// `false` leaves the ray to `initial_guess`.
+    #[inline]
+    pub(crate) fn start(&self, source: Point, receiver: Point, ws: &mut Workspace) -> bool {
+        match self.kind {
+            StepKind::Refract => self.crossings(source, receiver, ws),
+            StepKind::Reflect => self.images(source, receiver, ws),
+        }
+    }
+
+    fn crossings(&self, source: Point, receiver: Point, ws: &mut Workspace) -> bool {
+        let k = self.lines.len();
+        let (t, s, seg, pin) = (
+            &mut ws.crossing_t[..k],
+            &mut ws.s[..k],
+            &mut ws.seg[..k],
+            &mut ws.pin[..k],
+        );
+        let d = receiver - source;
+        for (i, line) in self.lines.iter().enumerate() {
+            // `segment_intersection(source, receiver, p, q)` and the parameter
+            // `crossings_with_segment` makes of it, operation for operation.
+            let den = d.cross(line.e);
+            let w = line.p - source;
+            let (ti, u) = (w.cross(line.e) / den, w.cross(d) / den);
+            if !((0.0..=1.0).contains(&ti) && (0.0..=1.0).contains(&u)) {
+                return false;
+            }
+            t[i] = ti;
+            s[i] = 0.0 + u * line.len;
+            seg[i] = 0;
+            pin[i] = Pin::Free;
+        }
+        true
+    }
+
+    /// The image method (see the module).
+    fn images(&self, source: Point, receiver: Point, ws: &mut Workspace) -> bool {
+        let k = self.lines.len();
+        // The source's image in the first mirror, then that image's in the second, …
+        let image = self.lines.iter().fold(source, |x, line| line.mirror(x));
+        // … and back: the last point lies where the receiver sees the last image, and that
+        // image mirrored back is the one the point before sees.
+        let (mut image, mut to) = (image, receiver);
+        for i in (0..k).rev() {
+            let line = &self.lines[i];
+            let Some(s) = line.crossing(to, image) else {
+                return false;
+            };
+            ws.s[i] = s;
+            ws.seg[i] = 0;
+            ws.pin[i] = Pin::Free;
+            ws.crossing_t[i] = f64::NAN;
+            to = line.p + line.e * (s / line.len);
+            image = line.mirror(image);
+        }
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::demo::{self, SplitMix64};
+    use crate::trace::initial_guess;
+
+    /// Layers flat and dipping, some interfaces drawn right to left, far from the origin or
+    /// not: wherever `S → R` crosses every segment, the start is `initial_guess`'s bit for
+    /// bit, and elsewhere it leaves the ray to it.
+    #[test]
+    fn the_start_is_the_documented_one() {
+        let mut specs = vec![demo::layer_stack(8, 3), demo::dipping_stack(8, 3)];
+        let mut reversed = demo::layer_stack(5, 3);
+        for (i, iface) in reversed.interfaces.values_mut().enumerate() {
+            if i % 2 == 1 {
+                iface.points.reverse();
+            }
+        }
+        specs.push(reversed);
+        let mut far = demo::dipping_stack(4, 3);
+        for iface in far.interfaces.values_mut() {
+            for p in &mut iface.points {
+                *p = [p[0] + 3.0e6, p[1] - 1.0e5];
+            }
+        }
+        specs.push(far);
+        let mut rng = SplitMix64(7);
+        for (n, spec) in specs.iter().enumerate() {
+            let scene = Scene::from_spec(spec).unwrap();
+            let flat = StraightPath::of(&scene, 0).expect("refractions at one-segment interfaces");
+            assert_eq!(flat.parallel, n != 1 && n != 3, "scene {n}");
+            let steps = &scene.paths()[0].steps;
+            let k = steps.len();
+            let b = crate::geom::Aabb::around(
+                &scene
+                    .interfaces()
+                    .iter()
+                    .flat_map(|i| i.polyline.vertices().to_vec())
+                    .collect::<Vec<_>>(),
+            );
+            let (mut started, mut left) = (0, 0);
+            for _ in 0..400 {
+                let mut at = |y: f64| {
+                    let x = b.min.x + (b.max.x - b.min.x) * (1.4 * rng.next_f64() - 0.2);
+                    Point::new(x, y)
+                };
+                let (s, r) = (at(b.max.y + 1.0), at(b.min.y - 1.5));
+                let (mut ws, mut reference) = (Workspace::new(), Workspace::new());
+                ws.resize(k);
+                reference.resize(k);
+                initial_guess(&scene, steps, s, r, &mut reference);
+                if !flat.start(s, r, &mut ws) {
+                    left += 1;
+                    continue;
+                }
+                started += 1;
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&ws.s), bits(&reference.s), "scene {n}: {s:?} -> {r:?}");
+                assert_eq!(bits(&ws.crossing_t), bits(&reference.crossing_t));
+                assert_eq!(ws.seg, reference.seg);
+                assert_eq!(ws.pin, reference.pin);
+            }
+            assert!(
+                started > 100 && left > 20,
+                "scene {n}: {started} started, {left} left"
+            );
+        }
+        // Refractions and a reflection, or an interface of two segments: not such a path.
+        let mut mirror = demo::layer_stack(2, 3);
+        let path = &mut mirror.paths[0];
+        path.steps[1] = crate::scene::StepSpec::Reflect("L001".into());
+        if let Some(media) = &mut path.media {
+            media[2] = media[1].clone();
+        }
+        let mirror = Scene::from_spec(&mirror).unwrap();
+        assert!(StraightPath::of(&mirror, 0).is_none());
+        let wavy = Scene::from_spec(&demo::undulating_stack(2, 20, 3)).unwrap();
+        assert!(StraightPath::of(&wavy, 0).is_none());
+    }
+
+    /// Two and three reflections between two tilted mirrors: where the start applies, each
+    /// point lies inside its segment and reflects (equal angles), and the rays it leaves to
+    /// the general guess are those whose specular points fall off a segment.
+    #[test]
+    fn images_give_the_specular_points() {
+        let doc = r#"{
+            "media": { "m": { "speed": 1.0 } },
+            "interfaces": { "low": { "points": [[-1, 0], [2, 0.3]] },
+                            "high": { "points": [[3, 3], [-0.5, 2.5]] } },
+            "sources": [[0, 1]], "receivers": [[1, 1.5]],
+            "paths": [{ "steps": [{ "reflect": "low" }, { "reflect": "high" }] },
+                      { "steps": [{ "reflect": "high" }, { "reflect": "low" },
+                                  { "reflect": "high" }] }]
+        }"#;
+        let scene = Scene::from_json(doc).unwrap();
+        let mut rng = SplitMix64(11);
+        for path in 0..2 {
+            let straight = StraightPath::of(&scene, path).expect("reflections off segments");
+            assert!(straight.exact(false) && !straight.parallel);
+            let steps = &scene.paths()[path].steps;
+            let k = steps.len();
+            let lines: Vec<_> = steps
+                .iter()
+                .map(|s| &scene.interfaces()[s.interface].polyline)
+                .collect();
+            let (mut started, mut left) = (0, 0);
+            for _ in 0..300 {
+                let mut at = || Point::new(-2.0 + 5.0 * rng.next_f64(), 0.8 + 1.3 * rng.next_f64());
+                let (s, r) = (at(), at());
+                let mut ws = Workspace::new();
+                ws.resize(k);
+                if !straight.start(s, r, &mut ws) {
+                    left += 1;
+                    continue;
+                }
+                started += 1;
+                let mut pts = vec![s];
+                for (i, line) in lines.iter().enumerate() {
+                    assert!(ws.s[i] > 0.0 && ws.s[i] < line.length());
+                    assert_eq!((ws.seg[i], ws.pin[i]), (0, Pin::Free));
+                    pts.push(line.point_on(0, ws.s[i]));
+                }
+                pts.push(r);
+                for (i, line) in lines.iter().enumerate() {
+                    let (a, b) = (pts[i + 1] - pts[i], pts[i + 2] - pts[i + 1]);
+                    let t = line.tangent(0);
+                    let law = a.dot(t) / a.length() - b.dot(t) / b.length();
+                    assert!(
+                        law.abs() <= 1e-13,
+                        "path {path}, {s:?} -> {r:?}: point {i}, {law:e}"
+                    );
+                    let n = line.normal(0);
+                    assert!(
+                        a.dot(n) * b.dot(n) < 0.0,
+                        "point {i} reflects from one side"
+                    );
+                }
+            }
+            assert!(
+                started > 50 && left > 20,
+                "path {path}: {started} started, {left} left"
+            );
+        }
+    }
+}
