@@ -758,7 +758,9 @@ impl Tracer<'_> {
         } = *path;
         let (s, j) = match guess {
             Some(wanted) => given_param(line, wanted, hint),
-            None => self.single_crossing_start(sp, kind, line, source, receiver)?,
+            None => self
+                .single_crossing_start(sp, kind, line, source, receiver)
+                .ok()?,
         };
         let (to_receiver, coord) = (receiver - source, coord(source, receiver));
         let f = &Frame::new(line, j, source);

@@ -152,7 +152,8 @@ pub struct RaySummary {
     pub time: f64,
     /// Solver iterations.
     pub iterations: usize,
-    /// Final relative residual.
+    /// Final relative residual (NaN when the solver did not run: no medium, or no path by
+    /// the image method).
     pub residual: f64,
     /// Why it is not `converged`, when it is not.
     pub reason: Option<Reason>,
@@ -175,7 +176,8 @@ pub struct Ray {
     pub points: Vec<Point>,
     /// Solver iterations.
     pub iterations: usize,
-    /// Final relative residual `maxᵢ |∂T/∂sᵢ| / (wᵢ + wᵢ₊₁)`.
+    /// Final relative residual `maxᵢ |∂T/∂sᵢ| / (wᵢ + wᵢ₊₁)` (NaN when the solver did not
+    /// run: no medium, or no path by the image method).
     pub residual: f64,
     /// Leg media (indices into [`Scene::media`]), when known.
     pub media: Vec<usize>,
@@ -250,7 +252,9 @@ pub fn ray_index(
 /// one slowness on every leg, starts
 /// at the image method's specular points instead (the source mirrored in each mirror's line
 /// in turn, then the points back from the receiver towards each image) when every one lies
-/// strictly inside its segment: the solution itself.
+/// strictly inside its segment: the solution itself. When one lies clearly beyond its
+/// segment's end (media given), the ray has no path (`T` is convex in the parameters, so
+/// that is its one stationary point) and is [`Status::NoPath`] at once.
 pub struct Tracer<'s> {
     scene: &'s Scene,
     regions: Option<Regions>,
@@ -534,12 +538,18 @@ impl<'s> Tracer<'s> {
             reason: Some(reason),
         };
 
+        let mut beyond = None;
         match start {
             Start::Given(params) => given_start(scene, &spec.steps, params, ws),
             Start::Default | Start::Compare(_) => {
                 let straight = self.straight[path].as_ref();
-                if !straight.is_some_and(|f| f.start(source, receiver, ws)) {
-                    initial_guess(scene, &spec.steps, source, receiver, ws);
+                match straight.map(|f| f.start(source, receiver, ws)) {
+                    Some(straight::Images::At(_)) => {}
+                    // With media given (a lookup decides before the geometry).
+                    Some(straight::Images::Beyond { step, .. }) if spec.media.is_some() => {
+                        beyond = Some(step);
+                    }
+                    _ => initial_guess(scene, &spec.steps, source, receiver, ws),
                 }
             }
         }
@@ -548,6 +558,9 @@ impl<'s> Tracer<'s> {
             ws.media.extend_from_slice(m);
         } else if let Err(reason) = self.lookup_media(source, src_medium, &spec.steps, ws) {
             return fail(Status::NoPath, reason);
+        }
+        if let Some(step) = beyond {
+            return fail(Status::NoPath, Reason::LeavesEnd { step });
         }
         ws.slowness
             .extend(ws.media.iter().map(|&m| scene.media()[m].slowness));

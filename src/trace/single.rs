@@ -4,6 +4,7 @@
 //! one interaction; the solve itself and every other ending go through the general code. The
 //! results are those of the general solve, bit for bit.
 
+use super::straight::{Images, single_specular};
 use super::{
     RaySummary, Reason, Start, Status, Tracer, given_start, initial_guess, leg_sides,
     nearest_crossing, paraxial_one, refraction_guess, sides_suit, warm_start,
@@ -65,12 +66,28 @@ impl Tracer<'_> {
             given_start(scene, steps, params, ws);
         } else {
             match self.single_crossing_start(sp, step.kind, line, source, receiver) {
-                Some((s, j)) => {
+                Ok((s, j)) => {
                     ws.s[0] = s;
                     ws.seg[0] = j;
                     ws.pin[0] = Pin::Free;
                 }
-                None => {
+                Err(Some((step, s))) => {
+                    // As the general path leaves it: no points, the parameter at the end.
+                    ws.s[0] = s;
+                    ws.seg[0] = 0;
+                    ws.pin[0] = Pin::Free;
+                    ws.points.clear();
+                    ws.media.clear();
+                    ws.media.extend_from_slice(&sp.media);
+                    return RaySummary {
+                        status: Status::NoPath,
+                        time: f64::NAN,
+                        iterations: 0,
+                        residual: f64::NAN,
+                        reason: Some(Reason::LeavesEnd { step }),
+                    };
+                }
+                Err(None) => {
                     initial_guess(scene, steps, source, receiver, ws);
                     refraction_guess(scene, steps, source, receiver, self.guess, ws);
                 }
@@ -106,7 +123,8 @@ impl Tracer<'_> {
     /// The documented start of a one-interaction path when it is the crossing of `S → R` with
     /// the interface (a refraction that crosses it), moved to the paraxial point, or the image
     /// method's specular point (a reflection off an interface of one segment, one slowness):
-    /// `(s, segment)`; `None` when the general guess applies.
+    /// `(s, segment)`. `Err(Some((0, s)))` when that specular point lies beyond the segment's
+    /// end (no path; `s` the end), `Err(None)` when the general guess applies.
     #[inline(always)]
     pub(crate) fn single_crossing_start(
         &self,
@@ -115,18 +133,22 @@ impl Tracer<'_> {
         line: &Polyline,
         source: Point,
         receiver: Point,
-    ) -> Option<(f64, usize)> {
+    ) -> Result<(f64, usize), Option<(usize, f64)>> {
         if kind == StepKind::Reflect {
             // The image method, with one slowness on both legs (not a converted wave).
             if sp.slowness[0] != sp.slowness[1] {
-                return None;
+                return Err(None);
             }
-            return super::straight::single_specular(line, source, receiver).map(|s| (s, 0));
+            return match single_specular(line, source, receiver) {
+                Images::At(s) => Ok((s, 0)),
+                Images::Beyond { step, s } => Err(Some((step, s))),
+                Images::Unsure => Err(None),
+            };
         }
-        let (s, t, j) = nearest_crossing(line, source, receiver, 0.5)?;
+        let (s, t, j) = nearest_crossing(line, source, receiver, 0.5).ok_or(None)?;
         let s = line.wrap(s);
         let j = line.segment_at_hint(s, j);
-        Some(paraxial_one(line, s, t, j, sp.slowness, receiver - source))
+        Ok(paraxial_one(line, s, t, j, sp.slowness, receiver - source))
     }
 
     /// The status of a one-interaction ray whose solve ended converged with its point free:
