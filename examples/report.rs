@@ -1059,8 +1059,9 @@ mod report {
              paraxial refinement (`InitialGuess::Paraxial`; computed once beforehand and not \
              timed for argmin and gradient descent; it is the \"0 iterations\" row). eigenray's \
              default start refines paths of refractions further, to the flat-layer ray-parameter \
-             solution: through the flat layers of seed500, layers10 and stack8 that is the \
-             solution itself, and every solver would stop at once from it, so the solvers are \
+             solution, and starts reflections off flat mirrors at the image method's points: \
+             through the flat layers of layers10 and stack8 and off the walls of room2d that is \
+             the solution itself, and every solver would stop at once from it, so the solvers are \
              compared from the paraxial start and the default start has a line of its own.\n\n\
              - **eigenray Newton**: `Tracer::solve_indexed_from` with one reused `Workspace` (the \
              time includes the start and the classification), at tolerances 1e-2 … 1e-14 \

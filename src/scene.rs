@@ -728,7 +728,7 @@ impl SceneSpec {
             return Err(SceneError::new("scene", msg));
         }
         let de = &mut serde_json::Deserializer::from_str(text);
-        let spec: SceneSpec = serde_path_to_error::deserialize(de).map_err(|e| {
+        let spec: SceneSpec = serde_path_to_error::deserialize(&mut *de).map_err(|e| {
             let path = e.path().to_string();
             let inner = e.into_inner();
             let root = path == "." || path.is_empty() || path == "?";
@@ -756,6 +756,10 @@ impl SceneSpec {
             }
             SceneError::new(if root { "scene".to_string() } else { path }, text)
         })?;
+        // Anything but whitespace after the document (a second document, stray text) is bad
+        // JSON too.
+        de.end()
+            .map_err(|e| SceneError::new("scene", format!("invalid JSON: {e}")))?;
         Ok(spec)
     }
 }

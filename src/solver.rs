@@ -26,9 +26,10 @@
 //! Stopping rule: every free point has `|rᵢ| ≤ tol · (wᵢ + wᵢ₊₁)` (a relative, dimensionless
 //! residual: the difference of the sines in Snell's law), or the full Newton step is below
 //! round-off (`|δᵢ| ≤ 4ε (|sᵢ| + ℓᵢ + ℓᵢ₊₁)`: no representable parameter is closer), or the
-//! line search has stalled with every residual within what round-off of its parameter produces
-//! (`|rᵢ| ≤ tol (wᵢ + wᵢ₊₁) + 8ε (|sᵢ| |Hᵢᵢ| + wᵢ + wᵢ₊₁)`, see `at_round_off_floor`: far from the
-//! origin or along grazing legs the tolerance itself may be out of reach).
+//! line search has stalled with every residual within what round-off of its position produces
+//! (`|rᵢ| ≤ tol (wᵢ + wᵢ₊₁) + 8ε (aᵢ |Hᵢᵢ| + wᵢ + wᵢ₊₁)`, `aᵢ` the largest of `|sᵢ|` and the
+//! point's coordinates relative to the source; see `at_round_off_floor`: far from the origin or
+//! the source, or along grazing legs, the tolerance itself may be out of reach).
 
 use crate::geom::{Point, Vec2};
 pub(crate) use crate::problem::Pin;
@@ -1209,16 +1210,22 @@ fn pivot_inverse(h: f64) -> Option<f64> {
 }
 
 /// Whether every free point's residual is within the tolerance plus what round-off of its
-/// parameter alone produces: `|rᵢ| ≤ tol (wᵢ + wᵢ₊₁) + 8ε (|sᵢ| |Hᵢᵢ| + wᵢ + wᵢ₊₁)` (a change of
-/// `sᵢ` by a few units in the last place moves `rᵢ` by `|Hᵢᵢ|` times that). Far from the origin,
-/// or where `H` is nearly singular (grazing legs), no representable parameter may have a
-/// residual below the tolerance; there the iteration stops as it would at the tolerance.
+/// position produces: `|rᵢ| ≤ tol (wᵢ + wᵢ₊₁) + 8ε (aᵢ |Hᵢᵢ| + wᵢ + wᵢ₊₁)`, `aᵢ` the largest of
+/// `|sᵢ|` and the point's coordinates relative to the source (a move of the point by a few
+/// units in the last place of either moves `rᵢ` by `|Hᵢᵢ|` times that). Far from the origin or
+/// the source, or where `H` is nearly singular (grazing legs, legs of 1e-9 between points far
+/// from the source), no representable parameter may have a residual below the tolerance;
+/// there the iteration stops as it would at the tolerance.
 fn at_round_off_floor(e: &Eval, s: &[f64], pin: &[Pin], w: &[f64], tol: f64) -> bool {
     (0..s.len()).all(|i| {
         let scale = w[i] + w[i + 1];
+        // The point's position carries the round-off of its parameter and of its coordinates
+        // relative to the source (`Polyline::offset_on`): far from the source, between two
+        // short legs, the second is the larger.
+        let p = e.rel[i + 1];
+        let at = s[i].abs().max(p.x.abs()).max(p.y.abs());
         pin[i] != Pin::Free
-            || e.r[i].abs()
-                <= tol * scale + 8.0 * f64::EPSILON * (s[i].abs() * e.diag[i].abs() + scale)
+            || e.r[i].abs() <= tol * scale + 8.0 * f64::EPSILON * (at * e.diag[i].abs() + scale)
     })
 }
 

@@ -196,16 +196,18 @@ pub(crate) enum Start<'a> {
     Given(&'a [f64]),
 }
 
-/// How a path made only of refractions crossed by the straight line `S → R` refines its start
-/// (see [`Tracer`]).
+/// How a path made only of refractions crossed by the straight line `S → R`, or only of
+/// reflections off flat mirrors, refines its start (see [`Tracer`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum InitialGuess {
     /// The flat-layer ray-parameter solution where the interfaces at the crossings are
-    /// parallel (the solution itself for parallel flat layers), the paraxial one elsewhere.
+    /// parallel (the solution itself for parallel flat layers), the paraxial one elsewhere;
+    /// off mirrors of one segment each, the image method (the solution itself, or no path).
     #[default]
     RayParameter,
-    /// The paraxial (small-angle) solution only: a start that leaves Newton steps to do even
-    /// through flat layers, for comparing solvers from one start.
+    /// The paraxial (small-angle) solution only, and no image method: a start that leaves
+    /// Newton steps to do even through flat layers and off flat mirrors, for comparing solvers
+    /// from one start.
     Paraxial,
 }
 
@@ -249,7 +251,7 @@ pub fn ray_index(
 /// interface of one segment (flat or dipping layers) finds its crossings from the segments
 /// `Tracer::new` kept for it, with no search: the same start, bit for bit. A path whose every
 /// step reflects off an interface of one segment (flat mirrors, the walls of a room), with
-/// one slowness on every leg, starts
+/// one slowness on every leg, starts (unless [`InitialGuess::Paraxial`])
 /// at the image method's specular points instead (the source mirrored in each mirror's line
 /// in turn, then the points back from the receiver towards each image) when every one lies
 /// strictly inside its segment: the solution itself. When one lies clearly beyond its
@@ -543,7 +545,8 @@ impl<'s> Tracer<'s> {
             Start::Given(params) => given_start(scene, &spec.steps, params, ws),
             Start::Default | Start::Compare(_) => {
                 let straight = self.straight[path].as_ref();
-                match straight.map(|f| f.start(source, receiver, ws)) {
+                let images = self.guess == InitialGuess::RayParameter;
+                match straight.map(|f| f.start(source, receiver, images, ws)) {
                     Some(straight::Images::At(_)) => {}
                     // With media given (a lookup decides before the geometry).
                     Some(straight::Images::Beyond { step, .. }) if spec.media.is_some() => {
@@ -557,6 +560,8 @@ impl<'s> Tracer<'s> {
         if let Some(m) = &spec.media {
             ws.media.extend_from_slice(m);
         } else if let Err(reason) = self.lookup_media(source, src_medium, &spec.steps, ws) {
+            // All leg media or none, as a batch records them (not those found before the gap).
+            ws.media.clear();
             return fail(Status::NoPath, reason);
         }
         if let Some(step) = beyond {

@@ -242,3 +242,52 @@ fn vertex_on_another_interface_across_the_domain_edge() {
     assert_eq!(rays.len(), 4);
     assert_points_on_interfaces("vertex on interface", &scene, &rays);
 }
+
+/// A ray whose second leg has no medium (region lookup, no `at` below the surface, no
+/// background): one-by-one solving kept the leg media found before the gap, a batch none.
+#[test]
+fn no_medium_ray_has_the_same_media_one_by_one_and_in_a_batch() {
+    use eigenray::{BatchOptions, Reason, Workspace};
+    let scene = Scene::from_json(&fixture("no_medium_partial_leg_media")).expect("valid scene");
+    let tracer = Tracer::new(&scene).expect("tracer");
+    let one = tracer.trace(0, 0, 0, &mut Workspace::new());
+    assert_eq!(one.status, Status::NoPath, "{one:?}");
+    assert_eq!(one.reason, Some(Reason::NoMedium { leg: 1 }), "{one:?}");
+    assert!(one.media.is_empty(), "{one:?}");
+    for warm_start in [false, true] {
+        let batch = tracer.trace_batch(&BatchOptions {
+            warm_start,
+            ..BatchOptions::default()
+        });
+        let got = batch.ray(0);
+        assert_eq!(
+            (got.status, got.reason, &got.media),
+            (one.status, one.reason, &one.media)
+        );
+    }
+}
+
+/// Trailing text after the scene object (a second document, stray words) is bad JSON: it was
+/// ignored and the scene traced.
+#[test]
+fn trailing_characters_after_the_scene_are_rejected() {
+    let scene = r#"{"media": {"a": {"speed": 1}}, "sources": [[0, 0]], "receivers": [[1, 1]],
+        "paths": [{"steps": []}]}"#;
+    assert!(Scene::from_json(scene).is_ok());
+    assert!(Scene::from_json(&format!("{scene} \n\t")).is_ok());
+    for tail in [" garbage", "\n{}", ",", "}"] {
+        let e = Scene::from_json(&format!("{scene}{tail}")).expect_err(tail);
+        assert_eq!(e.key, "scene", "{tail:?}: {e}");
+        assert!(e.message.contains("trailing characters"), "{tail:?}: {e}");
+    }
+}
+
+/// Refractions through interfaces 1e-9 apart, far from the source: the middle point's residual
+/// sits at the round-off floor of its source-relative coordinates; the line search stalled
+/// there until the iteration limit instead of stopping (`no_path`: the ray leaves an end).
+#[test]
+fn thin_stack_stops_at_the_round_off_floor() {
+    let ray = only_ray("thin_stack_round_off_stall");
+    assert_eq!(ray.status, Status::NoPath, "{ray:?}");
+    assert!(ray.iterations <= 10, "{ray:?}");
+}

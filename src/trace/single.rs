@@ -6,7 +6,7 @@
 
 use super::straight::{Images, single_specular};
 use super::{
-    RaySummary, Reason, Start, Status, Tracer, given_start, initial_guess, leg_sides,
+    InitialGuess, RaySummary, Reason, Start, Status, Tracer, given_start, initial_guess, leg_sides,
     nearest_crossing, paraxial_one, refraction_guess, sides_suit, warm_start,
 };
 use crate::geom::{Point, Vec2};
@@ -136,7 +136,7 @@ impl Tracer<'_> {
     ) -> Result<(f64, usize), Option<(usize, f64)>> {
         if kind == StepKind::Reflect {
             // The image method, with one slowness on both legs (not a converted wave).
-            if sp.slowness[0] != sp.slowness[1] {
+            if sp.slowness[0] != sp.slowness[1] || self.guess != InitialGuess::RayParameter {
                 return Err(None);
             }
             return match single_specular(line, source, receiver) {

@@ -161,15 +161,16 @@ impl StraightPath {
         })
     }
 
-    /// Whether the default start solves the path up to round-off wherever it applies:
-    /// reflections (the image method), or refractions at two or more parallel interfaces when
-    /// `ray_parameter` (the refinement [`InitialGuess::RayParameter`](super::InitialGuess);
-    /// a single refraction keeps the paraxial start).
+    /// Whether the default start solves the path up to round-off wherever it applies, with
+    /// `ray_parameter` (the refinement [`InitialGuess::RayParameter`](super::InitialGuess)):
+    /// reflections (the image method), or refractions at two or more parallel interfaces (a
+    /// single refraction keeps the paraxial start).
     pub(crate) fn exact(&self, ray_parameter: bool) -> bool {
-        match self.kind {
-            StepKind::Reflect => true,
-            StepKind::Refract => ray_parameter && self.parallel && self.lines.len() > 1,
-        }
+        ray_parameter
+            && match self.kind {
+                StepKind::Reflect => true,
+                StepKind::Refract => self.parallel && self.lines.len() > 1,
+            }
     }
 
     /// Writes the start of a ray from `source` to `receiver` into `ws` (parameters, segments,
@@ -177,12 +178,19 @@ impl StraightPath {
     /// [`Images::At`] (its parameter meaningless) when it did; [`Images::Beyond`] when the
     /// path has no solution (reflections only); [`Images::Unsure`] leaves the ray to
     /// `initial_guess`.
+    /// Without `images` (`InitialGuess::Paraxial`), reflections are left to `initial_guess`.
     #[inline]
-    pub(crate) fn start(&self, source: Point, receiver: Point, ws: &mut Workspace) -> Images {
+    pub(crate) fn start(
+        &self,
+        source: Point,
+        receiver: Point,
+        images: bool,
+        ws: &mut Workspace,
+    ) -> Images {
         match self.kind {
             StepKind::Refract if self.crossings(source, receiver, ws) => Images::At(f64::NAN),
-            StepKind::Refract => Images::Unsure,
-            StepKind::Reflect => self.images(source, receiver, ws),
+            StepKind::Reflect if images => self.images(source, receiver, ws),
+            _ => Images::Unsure,
         }
     }
 
@@ -304,7 +312,7 @@ mod tests {
                 ws.resize(k);
                 reference.resize(k);
                 initial_guess(&scene, steps, s, r, &mut reference);
-                if !matches!(flat.start(s, r, &mut ws), Images::At(_)) {
+                if !matches!(flat.start(s, r, true, &mut ws), Images::At(_)) {
                     left += 1;
                     continue;
                 }
@@ -351,7 +359,7 @@ mod tests {
         let mut rng = SplitMix64(11);
         for path in 0..2 {
             let straight = StraightPath::of(&scene, path).expect("reflections off segments");
-            assert!(straight.exact(false) && !straight.parallel);
+            assert!(straight.exact(true) && !straight.exact(false) && !straight.parallel);
             let steps = &scene.paths()[path].steps;
             let k = steps.len();
             let lines: Vec<_> = steps
@@ -364,7 +372,7 @@ mod tests {
                 let (s, r) = (at(), at());
                 let mut ws = Workspace::new();
                 ws.resize(k);
-                if !matches!(straight.start(s, r, &mut ws), Images::At(_)) {
+                if !matches!(straight.start(s, r, true, &mut ws), Images::At(_)) {
                     left += 1;
                     continue;
                 }
