@@ -759,7 +759,7 @@ impl Tracer<'_> {
         let (s, j) = match guess {
             Some(wanted) => given_param(line, wanted, hint),
             None => self
-                .single_crossing_start(sp, kind, line, source, receiver)
+                .single_crossing_start(sp, p, kind, line, source, receiver)
                 .ok()?,
         };
         let (to_receiver, coord) = (receiver - source, coord(source, receiver));

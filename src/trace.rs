@@ -532,14 +532,6 @@ impl<'s> Tracer<'s> {
         ws.slowness.clear();
         ws.media.clear();
         ws.points.clear();
-        let fail = |status, reason| RaySummary {
-            status,
-            time: f64::NAN,
-            iterations: 0,
-            residual: f64::NAN,
-            reason: Some(reason),
-        };
-
         let mut beyond = None;
         match start {
             Start::Given(params) => given_start(scene, &spec.steps, params, ws),
@@ -547,9 +539,9 @@ impl<'s> Tracer<'s> {
                 let straight = self.straight[path].as_ref();
                 let images = self.guess == InitialGuess::RayParameter;
                 match straight.map(|f| f.start(source, receiver, images, ws)) {
-                    Some(straight::Images::At(_)) => {}
+                    Some(straight::Start::At) => {}
                     // With media given (a lookup decides before the geometry).
-                    Some(straight::Images::Beyond { step, .. }) if spec.media.is_some() => {
+                    Some(straight::Start::Beyond { step }) if spec.media.is_some() => {
                         beyond = Some(step);
                     }
                     _ => initial_guess(scene, &spec.steps, source, receiver, ws),
@@ -562,10 +554,10 @@ impl<'s> Tracer<'s> {
         } else if let Err(reason) = self.lookup_media(source, src_medium, &spec.steps, ws) {
             // All leg media or none, as a batch records them (not those found before the gap).
             ws.media.clear();
-            return fail(Status::NoPath, reason);
+            return failed(Status::NoPath, reason);
         }
         if let Some(step) = beyond {
-            return fail(Status::NoPath, Reason::LeavesEnd { step });
+            return failed(Status::NoPath, Reason::LeavesEnd { step });
         }
         ws.slowness
             .extend(ws.media.iter().map(|&m| scene.media()[m].slowness));
@@ -1052,6 +1044,17 @@ fn sides_suit(kind: StepKind, a: f64, b: f64) -> bool {
 
 /// Crossings closer than this fraction of a leg to its ends are the leg's own end points.
 const END_MARGIN: f64 = 1e-10;
+
+/// A ray that ended before the solver ran: no time, no residual.
+fn failed(status: Status, reason: Reason) -> RaySummary {
+    RaySummary {
+        status,
+        time: f64::NAN,
+        iterations: 0,
+        residual: f64::NAN,
+        reason: Some(reason),
+    }
+}
 
 fn summary(sol: crate::solver::Solution) -> RaySummary {
     RaySummary {

@@ -4,9 +4,9 @@
 //! one interaction; the solve itself and every other ending go through the general code. The
 //! results are those of the general solve, bit for bit.
 
-use super::straight::{Images, single_specular};
+use super::straight::{self, single_specular};
 use super::{
-    InitialGuess, RaySummary, Reason, Start, Status, Tracer, given_start, initial_guess, leg_sides,
+    RaySummary, Reason, Start, Status, Tracer, failed, given_start, initial_guess, leg_sides,
     nearest_crossing, paraxial_one, refraction_guess, sides_suit, warm_start,
 };
 use crate::geom::{Point, Vec2};
@@ -65,7 +65,7 @@ impl Tracer<'_> {
         if let Start::Given(params) = start {
             given_start(scene, steps, params, ws);
         } else {
-            match self.single_crossing_start(sp, step.kind, line, source, receiver) {
+            match self.single_crossing_start(sp, path, step.kind, line, source, receiver) {
                 Ok((s, j)) => {
                     ws.s[0] = s;
                     ws.seg[0] = j;
@@ -79,13 +79,7 @@ impl Tracer<'_> {
                     ws.points.clear();
                     ws.media.clear();
                     ws.media.extend_from_slice(&sp.media);
-                    return RaySummary {
-                        status: Status::NoPath,
-                        time: f64::NAN,
-                        iterations: 0,
-                        residual: f64::NAN,
-                        reason: Some(Reason::LeavesEnd { step }),
-                    };
+                    return failed(Status::NoPath, Reason::LeavesEnd { step });
                 }
                 Err(None) => {
                     initial_guess(scene, steps, source, receiver, ws);
@@ -122,27 +116,30 @@ impl Tracer<'_> {
 
     /// The documented start of a one-interaction path when it is the crossing of `S → R` with
     /// the interface (a refraction that crosses it), moved to the paraxial point, or the image
-    /// method's specular point (a reflection off an interface of one segment, one slowness):
-    /// `(s, segment)`. `Err(Some((0, s)))` when that specular point lies beyond the segment's
-    /// end (no path; `s` the end), `Err(None)` when the general guess applies.
+    /// method's specular point (a reflection of path `p` off an interface of one segment, one
+    /// slowness: [`Tracer::exact_start`]): `(s, segment)`. `Err(Some((0, s)))` when that
+    /// specular point lies beyond the segment's end (no path; `s` the end), `Err(None)` when
+    /// the general guess applies.
     #[inline(always)]
     pub(crate) fn single_crossing_start(
         &self,
         sp: &SinglePath,
+        p: usize,
         kind: StepKind,
         line: &Polyline,
         source: Point,
         receiver: Point,
     ) -> Result<(f64, usize), Option<(usize, f64)>> {
         if kind == StepKind::Reflect {
-            // The image method, with one slowness on both legs (not a converted wave).
-            if sp.slowness[0] != sp.slowness[1] || self.guess != InitialGuess::RayParameter {
+            // The image method: a mirror of one segment, one slowness on both legs (not a
+            // converted wave), and the default refinement.
+            if !self.exact_start(p) {
                 return Err(None);
             }
             return match single_specular(line, source, receiver) {
-                Images::At(s) => Ok((s, 0)),
-                Images::Beyond { step, s } => Err(Some((step, s))),
-                Images::Unsure => Err(None),
+                (s, straight::Start::At) => Ok((s, 0)),
+                (s, straight::Start::Beyond { step }) => Err(Some((step, s))),
+                (_, straight::Start::Unsure) => Err(None),
             };
         }
         let (s, t, j) = nearest_crossing(line, source, receiver, 0.5).ok_or(None)?;

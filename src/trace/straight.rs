@@ -16,14 +16,15 @@
 
 use super::PARALLEL;
 use crate::geom::{Point, Vec2};
-use crate::polyline::Polyline;
+use crate::polyline::{Polyline, segment_intersection};
 use crate::scene::{Scene, Step, StepKind};
 use crate::solver::{Pin, Workspace};
 
-/// One interface of a [`StraightPath`]: its segment `p → p + e` and that segment's length.
+/// One interface of a [`StraightPath`]: its segment `p → q`, `e = q − p` and its length.
 #[derive(Clone, Copy, Debug)]
 struct Line {
     p: Point,
+    q: Point,
     e: Vec2,
     len: f64,
 }
@@ -33,6 +34,7 @@ impl Line {
         let (p, q) = line.segment(0);
         Line {
             p,
+            q,
             e: q - p,
             len: line.segment_length(0),
         }
@@ -79,40 +81,38 @@ struct Meet {
     beyond: bool,
 }
 
-/// What the image method says of a path of reflections off one-segment interfaces.
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum Images {
-    /// The solution is in `ws` (or, for one reflection, the parameter).
-    At(f64),
+/// What a [`StraightPath`]'s start found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Start {
+    /// The start (for reflections, the solution).
+    At,
     /// No path: the one stationary path through the mirrors' lines reflects at a point beyond
     /// the end of the mirror of step `step` (`T` is convex in the parameters and strictly so
-    /// there, so no other stationary point exists); `s` that step's parameter, at the end.
+    /// there, so no other stationary point exists). The parameters are at the segments' ends.
     Beyond {
         /// The step.
         step: usize,
-        /// Its parameter (the end of its segment).
-        s: f64,
     },
-    /// Neither (the general guess and solve decide).
+    /// Neither: the general guess applies.
     Unsure,
 }
 
-/// The image method's specular point of a single reflection off `line`, an interface of one
-/// segment, with one slowness on both legs.
+/// The image method for a single reflection off `line` (a path that
+/// [`StraightPath::exact`] holds for): the specular point's parameter (at the segment's end
+/// when it lies beyond), and what it says.
 #[inline(always)]
-pub(crate) fn single_specular(line: &Polyline, source: Point, receiver: Point) -> Images {
-    if line.num_segments() != 1 || line.is_closed() {
-        return Images::Unsure;
-    }
+pub(crate) fn single_specular(line: &Polyline, source: Point, receiver: Point) -> (f64, Start) {
+    debug_assert!(line.num_segments() == 1 && !line.is_closed());
     let l = Line::of(line);
-    match l.meet(receiver, l.mirror(source)) {
-        (s, m) if m.inside => Images::At(s),
-        (s, m) if m.beyond => Images::Beyond {
-            step: 0,
-            s: s.clamp(0.0, l.len),
-        },
-        _ => Images::Unsure,
-    }
+    let (s, meet) = l.meet(receiver, l.mirror(source));
+    let start = if meet.inside {
+        Start::At
+    } else if meet.beyond {
+        Start::Beyond { step: 0 }
+    } else {
+        Start::Unsure
+    };
+    (s.clamp(0.0, l.len), start)
 }
 
 /// A path whose every step refracts, or whose every step reflects, at an open interface of one
@@ -175,9 +175,8 @@ impl StraightPath {
 
     /// Writes the start of a ray from `source` to `receiver` into `ws` (parameters, segments,
     /// pins and crossing fractions; `ws` sized for the path) where it applies (see the module):
-    /// [`Images::At`] (its parameter meaningless) when it did; [`Images::Beyond`] when the
-    /// path has no solution (reflections only); [`Images::Unsure`] leaves the ray to
-    /// `initial_guess`.
+    /// [`Start::At`] when it did; [`Start::Beyond`] when the path has no solution
+    /// (reflections only); [`Start::Unsure`] leaves the ray to `initial_guess`.
     /// Without `images` (`InitialGuess::Paraxial`), reflections are left to `initial_guess`.
     #[inline]
     pub(crate) fn start(
@@ -186,11 +185,11 @@ impl StraightPath {
         receiver: Point,
         images: bool,
         ws: &mut Workspace,
-    ) -> Images {
+    ) -> Start {
         match self.kind {
-            StepKind::Refract if self.crossings(source, receiver, ws) => Images::At(f64::NAN),
+            StepKind::Refract if self.crossings(source, receiver, ws) => Start::At,
             StepKind::Reflect if images => self.images(source, receiver, ws),
-            _ => Images::Unsure,
+            _ => Start::Unsure,
         }
     }
 
@@ -202,16 +201,11 @@ impl StraightPath {
             &mut ws.seg[..k],
             &mut ws.pin[..k],
         );
-        let d = receiver - source;
         for (i, line) in self.lines.iter().enumerate() {
-            // `segment_intersection(source, receiver, p, q)` and the parameter
-            // `crossings_with_segment` makes of it, operation for operation.
-            let den = d.cross(line.e);
-            let w = line.p - source;
-            let (ti, u) = (w.cross(line.e) / den, w.cross(d) / den);
-            if !((0.0..=1.0).contains(&ti) && (0.0..=1.0).contains(&u)) {
+            // The crossing and parameter of `Polyline::crossings_with_segment`.
+            let Some((ti, u)) = segment_intersection(source, receiver, line.p, line.q) else {
                 return false;
-            }
+            };
             t[i] = ti;
             s[i] = 0.0 + u * line.len;
             seg[i] = 0;
@@ -221,7 +215,7 @@ impl StraightPath {
     }
 
     /// The image method (see the module).
-    fn images(&self, source: Point, receiver: Point, ws: &mut Workspace) -> Images {
+    fn images(&self, source: Point, receiver: Point, ws: &mut Workspace) -> Start {
         let k = self.lines.len();
         // The source's image in the first mirror, then that image's in the second, …
         let image = self.lines.iter().fold(source, |x, line| line.mirror(x));
@@ -239,7 +233,7 @@ impl StraightPath {
                 first_beyond = Some(i);
             }
             if !(inside || clear) {
-                return Images::Unsure;
+                return Start::Unsure;
             }
             // (A point beyond its segment's end is kept at that end: with no path, the
             // parameters of the ray are where it leaves.)
@@ -251,12 +245,9 @@ impl StraightPath {
             image = line.mirror(image);
         }
         match first_beyond {
-            _ if inside => Images::At(f64::NAN),
-            Some(step) if clear => Images::Beyond {
-                step,
-                s: ws.s[step],
-            },
-            _ => Images::Unsure,
+            _ if inside => Start::At,
+            Some(step) if clear => Start::Beyond { step },
+            _ => Start::Unsure,
         }
     }
 }
@@ -312,7 +303,7 @@ mod tests {
                 ws.resize(k);
                 reference.resize(k);
                 initial_guess(&scene, steps, s, r, &mut reference);
-                if !matches!(flat.start(s, r, true, &mut ws), Images::At(_)) {
+                if flat.start(s, r, true, &mut ws) != Start::At {
                     left += 1;
                     continue;
                 }
@@ -372,7 +363,7 @@ mod tests {
                 let (s, r) = (at(), at());
                 let mut ws = Workspace::new();
                 ws.resize(k);
-                if !matches!(straight.start(s, r, true, &mut ws), Images::At(_)) {
+                if straight.start(s, r, true, &mut ws) != Start::At {
                     left += 1;
                     continue;
                 }
