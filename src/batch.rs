@@ -19,6 +19,10 @@ pub struct BatchOptions<'a> {
     /// tridiagonal solve with the converged Hessian, a continuation step), which typically
     /// leaves one Newton step to do. A warm-started ray that does not converge is solved again
     /// from the default start, so warm starts never lose a ray the default start finds.
+    /// Rays whose default start is already the solution (off a flat mirror, through flat
+    /// layers) and single refractions at a one-segment interface (solved by a dedicated
+    /// kernel, whose own start costs less than a warm start's bookkeeping) are not
+    /// warm-started: they come out bit for bit as one by one.
     pub warm_start: bool,
     /// Receivers per work unit (one workspace and one warm-start chain per unit).
     pub chunk: usize,
@@ -709,18 +713,30 @@ impl Tracer<'_> {
         let mut chain = Chain::default();
         // The last ray's segment: the first one tried for the next start.
         let mut seg = 0;
-        // Off a flat mirror the default start is already the solution.
-        let warm_start = unit.warm_start && !self.exact_start(p);
+        // Off a flat mirror the default start is already the solution; at a flat interface
+        // the kernel's steps from its own start cost less than a warm start saves.
+        let flat = sp.flat();
+        let warm_start = unit.warm_start && !self.exact_start(p) && flat.is_none();
         for b in 0..unit.n {
             let link = chain.link(scene, unit, b);
             let guess =
                 (link.warm && warm_start).then(|| warm.predict(p, at..at + 1, link.moved)[0]);
             let source = scene.sources()[link.source];
-            match self.single_fast(&path, source, link.here, guess, seg) {
-                Some((s, pts, it, j)) => {
+            let fast = match flat {
+                // (Never warm-started.)
+                Some(flat) => flat.solve(source, link.here).map(|sol| {
+                    let (s, pts) = self.flat_status(flat, p, source, link.here, sol);
+                    (s, pts, None)
+                }),
+                None => self
+                    .single_fast(&path, source, link.here, guess, seg)
+                    .map(|(s, pts, it, j)| (s, pts, Some((it, j)))),
+            };
+            match fast {
+                Some((s, pts, it)) => {
                     unit.write_one(b, p, &s, &pts, sp.media);
                     chain.have = s.status == Status::Converged;
-                    if chain.have && warm_start {
+                    if let Some((it, j)) = it.filter(|_| chain.have && warm_start) {
                         let t = path.line.tangent(j);
                         warm.store_one(p, at, it.s, single_sensitivity(&it.e, t, sp.slowness[1]));
                         seg = j;

@@ -10,6 +10,7 @@ use crate::regions::Regions;
 use crate::scene::{Scene, SceneError, SegmentRef, StepKind};
 use crate::solver::{Outcome, Pin, Workspace, solve};
 
+mod flat;
 mod single;
 mod straight;
 pub(crate) use single::SinglePath;

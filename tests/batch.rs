@@ -208,12 +208,27 @@ fn warm_starts_keep_the_rays_and_save_iterations() {
         warm * 10 < single * 8,
         "sea floor: {warm} iterations warm vs {single} one by one"
     );
-    // One refraction on a grid of receivers.
-    let (single, warm) = compare(&scene(&demo::air_water(3000, 5)), true);
+    // One refraction on a grid of receivers, at a surface of two segments.
+    let mut kinked = demo::air_water(3000, 5);
+    let surface = kinked.interfaces.get_mut("surface").expect("surface");
+    surface.points = vec![[-1.0, 0.0], [0.5, 0.0], [2.0, 0.0]];
+    let (single, warm) = compare(&scene(&kinked), true);
     assert!(
         warm * 10 < single * 9,
         "air over water: {warm} iterations warm vs {single} one by one"
     );
+    // At a surface of one segment the flat kernel solves the rays, from the paraxial start
+    // whatever the neighbours: the batch with warm starts on gives the very rays of
+    // one-by-one solving.
+    let sc = scene(&demo::air_water(3000, 5));
+    let tracer = Tracer::new(&sc).expect("tracer");
+    let batch = tracer.trace_batch(&BatchOptions::default());
+    let mut ws = Workspace::new();
+    for i in 0..sc.num_rays() {
+        let (s, r, p) = batch.triple(i);
+        let one = tracer.trace(s, r, p, &mut ws);
+        assert_eq!(bits(batch.ray(i)), bits(one), "flat surface, ray {i}");
+    }
     // Through parallel flat layers the default start (the ray parameter) is already the
     // solution, and a batch does not warm-start them: no Newton step, and the very rays of
     // one-by-one solving. Through dipping layers the warm starts save steps again.

@@ -4,6 +4,7 @@
 //! one interaction; the solve itself and every other ending go through the general code. The
 //! results are those of the general solve, bit for bit.
 
+use super::flat::{FlatRefraction, FlatSolution};
 use super::straight::{self, single_specular};
 use super::{
     RaySummary, Reason, Start, Status, Tracer, failed, given_start, initial_guess, leg_sides,
@@ -20,6 +21,8 @@ use crate::solver::{Outcome, Pin, Solution, Workspace, solve};
 pub(crate) struct SinglePath {
     pub(crate) media: [usize; 2],
     pub(crate) slowness: [f64; 2],
+    /// The kernel of a refraction at a flat interface of one segment ([`SinglePath::flat`]).
+    flat: Option<FlatRefraction>,
 }
 
 impl SinglePath {
@@ -27,12 +30,32 @@ impl SinglePath {
     pub(crate) fn of(scene: &Scene, path: usize) -> Option<SinglePath> {
         let spec = &scene.paths()[path];
         match (spec.steps.len(), spec.media.as_deref()) {
-            (1, Some(&[m0, m1])) => Some(SinglePath {
-                media: [m0, m1],
-                slowness: [scene.media()[m0].slowness, scene.media()[m1].slowness],
-            }),
+            (1, Some(&[m0, m1])) => {
+                let slowness = [scene.media()[m0].slowness, scene.media()[m1].slowness];
+                let step = &spec.steps[0];
+                let line = &scene.interfaces()[step.interface].polyline;
+                Some(SinglePath {
+                    media: [m0, m1],
+                    slowness,
+                    flat: (step.kind == StepKind::Refract)
+                        .then(|| FlatRefraction::of(line, slowness, scene.solver()))
+                        .flatten(),
+                })
+            }
             _ => None,
         }
+    }
+}
+
+impl SinglePath {
+    /// The flat-refraction kernel of the path, if it has one.
+    #[inline(always)]
+    pub(crate) fn flat(&self) -> Option<&FlatRefraction> {
+        #[cfg(test)]
+        if crate::solver::tests::FLAT_OFF.with(|c| c.get()) {
+            return None;
+        }
+        self.flat.as_ref()
     }
 }
 
@@ -52,6 +75,11 @@ impl Tracer<'_> {
         let steps = &scene.paths()[path].steps[..1];
         let step = &steps[0];
         let line = &scene.interfaces()[step.interface].polyline;
+        if let (Start::Default, Some(flat)) = (start, sp.flat())
+            && let Some(sol) = flat.solve(source, receiver)
+        {
+            return self.single_flat(sp, flat, path, source, receiver, sol, ws);
+        }
         ws.resize(1);
         ws.slowness.clear();
         ws.slowness.extend_from_slice(&sp.slowness);
@@ -112,6 +140,65 @@ impl Tracer<'_> {
             len,
             sol,
         )
+    }
+
+    /// The ray of a converged [`FlatRefraction::solve`]: its status (the side and obstruction
+    /// tests), with its parameter, points and media in `ws`.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the parts of a ray held in registers by its callers"
+    )]
+    #[inline(always)]
+    fn single_flat(
+        &self,
+        sp: &SinglePath,
+        flat: &FlatRefraction,
+        path: usize,
+        source: Point,
+        receiver: Point,
+        sol: FlatSolution,
+        ws: &mut Workspace,
+    ) -> RaySummary {
+        ws.resize(1);
+        ws.s[0] = sol.s;
+        ws.seg[0] = 0;
+        ws.pin[0] = Pin::Free;
+        let (summary, pts) = self.flat_status(flat, path, source, receiver, sol);
+        ws.points.clear();
+        ws.points.extend_from_slice(&pts);
+        ws.media.clear();
+        ws.media.extend_from_slice(&sp.media);
+        summary
+    }
+
+    /// The status and points of the ray of a converged [`FlatRefraction::solve`].
+    #[inline(always)]
+    pub(crate) fn flat_status(
+        &self,
+        flat: &FlatRefraction,
+        path: usize,
+        source: Point,
+        receiver: Point,
+        sol: FlatSolution,
+    ) -> (RaySummary, [Point; 3]) {
+        let p = flat.point(sol.s);
+        let pts = [source, p, receiver];
+        let rel = [Vec2::default(), p - source, receiver - source];
+        let summary = self.single_status(
+            path,
+            StepKind::Refract,
+            flat.normal(),
+            0,
+            &pts,
+            &rel,
+            &sol.len,
+            Solution {
+                time: sol.time,
+                iterations: sol.iterations,
+                residual: sol.residual,
+            },
+        );
+        (summary, pts)
     }
 
     /// The documented start of a one-interaction path when it is the crossing of `S → R` with
