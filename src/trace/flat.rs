@@ -34,7 +34,7 @@
 
 use crate::geom::{Point, Vec2};
 use crate::polyline::Polyline;
-use crate::problem::finite;
+use crate::problem::{finite, max_num, min_num};
 use crate::scene::SolverOptions;
 
 /// A refraction at an open interface of one segment, with its two slownesses.
@@ -90,17 +90,17 @@ impl FlatRefraction {
         }
         let (origin, _) = line.segment(0);
         let len = line.length();
-        (len > 0.0 && len.is_finite() && opts.max_iterations >= QUARTIC_STEPS).then_some(
-            FlatRefraction {
-                origin,
-                t: line.tangent(0),
-                len,
-                w,
-                tol: opts.tolerance,
-                sqrt_tol: opts.tolerance.sqrt(),
-                steps: opts.max_iterations.min(QUARTIC_STEPS + MAX_STEPS),
-            },
-        )
+        let takes = |w: f64| w >= SLOWNESS[0] && w <= SLOWNESS[1];
+        let kernel = len > 0.0 && len.is_finite() && takes(w[0]) && takes(w[1]);
+        (kernel && opts.max_iterations >= QUARTIC_STEPS).then_some(FlatRefraction {
+            origin,
+            t: line.tangent(0),
+            len,
+            w,
+            tol: opts.tolerance,
+            sqrt_tol: opts.tolerance.sqrt(),
+            steps: opts.max_iterations.min(QUARTIC_STEPS + MAX_STEPS),
+        })
     }
 
     /// The refraction point of the ray from `source` to `receiver`, converged as the solver
@@ -116,10 +116,12 @@ impl FlatRefraction {
         let dx = xr - xs;
         // Clearly on opposite sides: no leg near the interface's line, where the general
         // solve's vanishing legs and kinks take over. The quartic's terms are fourth powers
-        // of these lengths: they must neither overflow nor lose precision to underflow.
+        // of these lengths times slownesses squared, and Halley's step squares its slope (the
+        // sixth power): within these bounds (and those of the slownesses, `SLOWNESS`) nothing
+        // overflows or underflows.
         let scale = zs.abs() + zr.abs() + dx.abs();
         let clear = 1e-9 * scale + 16.0 * f64::EPSILON * coord(source, receiver);
-        if !(zs * zr < 0.0 && zs.abs() > clear && zr.abs() > clear && scale > 1e-40 && scale < 1e50)
+        if !(zs * zr < 0.0 && zs.abs() > clear && zr.abs() > clear && scale > 1e-30 && scale < 1e30)
         {
             return None;
         }
@@ -148,9 +150,9 @@ impl FlatRefraction {
         // law have one sign) and on the segment: a bracket that the residual's sign narrows
         // (`r` increases: T is convex). The ends of the segment are not known to bracket it
         // until the residual there says so (`sure`); the feet are.
-        let (mut lo, mut hi) = (xs.min(xr), xs.max(xr));
+        let (mut lo, mut hi) = if xs < xr { (xs, xr) } else { (xr, xs) };
         let mut sure = [lo >= 0.0, hi <= self.len];
-        (lo, hi) = (lo.max(0.0), hi.min(self.len));
+        (lo, hi) = (max_num(lo, 0.0), min_num(hi, self.len));
         // (Both finite: a NaN or infinite coordinate failed the test of sides above.)
         if lo > hi {
             return None;
@@ -175,9 +177,9 @@ impl FlatRefraction {
             let (l0l1, total) = (l0 * l1, l0 + l1);
             // |step| = |r| (ℓ₀ℓ₁)² / h, the relative residual |r| / (ℓ₀ℓ₁ (w₀ + w₁)).
             let moved = r.abs() * (l0l1 * l0l1);
-            if !(finite(moved) && finite(h) && h > 0.0) {
-                return None;
-            }
+            // (The bounds on the scale and the slownesses keep both finite and h positive: the
+            // legs are no longer than the scale, and no shorter than the clearance.)
+            debug_assert!(finite(moved) && finite(h) && h > 0.0, "{moved} {h}");
             if moved <= 4.0 * f64::EPSILON * (x.abs() + total) * h
                 || (r.abs() <= self.tol * (w0 + w1) * l0l1 && moved <= self.sqrt_tol * total * h)
             {
@@ -244,11 +246,16 @@ impl FlatRefraction {
     }
 }
 
-/// The largest coordinate of the ray's ends (the scale of their round-off).
+/// The largest coordinate of the ray's ends (the scale of their round-off; a NaN is caught
+/// by the test of sides).
 #[inline(always)]
 fn coord(source: Point, receiver: Point) -> f64 {
-    crate::problem::coord(source, receiver)
+    let m = max_num(source.x.abs(), source.y.abs());
+    max_num(max_num(m, receiver.x.abs()), receiver.y.abs())
 }
+
+/// The slownesses the kernel takes (see [`FlatRefraction::solve`]).
+const SLOWNESS: [f64; 2] = [1e-15, 1e15];
 
 #[cfg(test)]
 mod tests {
@@ -387,6 +394,16 @@ mod tests {
         ] {
             assert!(flat.solve(s, r).is_none(), "{r:?}");
         }
+        // Beyond the scales and slownesses whose powers stay finite: the general solve's.
+        let s_far = Point::new(0.0, 1e31);
+        assert!(flat.solve(s_far, Point::new(0.5, -1e31)).is_none());
+        assert!(
+            flat.solve(Point::new(0.0, 1e-31), Point::new(0.5, -1e-31))
+                .is_none()
+        );
+        assert!(FlatRefraction::of(&line, [1e-16, 1.0], opts).is_none());
+        assert!(FlatRefraction::of(&line, [1.0, 2e15], opts).is_none());
+        assert!(FlatRefraction::of(&line, [1e-15, 1e15], opts).is_some());
         // A closed polyline or one of two segments has no kernel.
         let two = Polyline::new(
             vec![

@@ -71,15 +71,15 @@ impl Tracer<'_> {
         start: Start,
         ws: &mut Workspace,
     ) -> RaySummary {
-        let scene = self.scene;
-        let steps = &scene.paths()[path].steps[..1];
-        let step = &steps[0];
-        let line = &scene.interfaces()[step.interface].polyline;
         if let (Start::Default, Some(flat)) = (start, sp.flat())
             && let Some(sol) = flat.solve(source, receiver)
         {
             return self.single_flat(sp, flat, path, source, receiver, sol, ws);
         }
+        let scene = self.scene;
+        let steps = &scene.paths()[path].steps[..1];
+        let step = &steps[0];
+        let line = &scene.interfaces()[step.interface].polyline;
         ws.resize(1);
         ws.slowness.clear();
         ws.slowness.extend_from_slice(&sp.slowness);
