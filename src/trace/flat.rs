@@ -90,8 +90,8 @@ impl FlatRefraction {
         }
         let (origin, _) = line.segment(0);
         let len = line.length();
-        let takes = |w: f64| w >= SLOWNESS[0] && w <= SLOWNESS[1];
-        let kernel = len > 0.0 && len.is_finite() && takes(w[0]) && takes(w[1]);
+        let kernel =
+            len > 0.0 && len.is_finite() && SLOWNESS.contains(&w[0]) && SLOWNESS.contains(&w[1]);
         (kernel && opts.max_iterations >= QUARTIC_STEPS).then_some(FlatRefraction {
             origin,
             t: line.tangent(0),
@@ -255,7 +255,7 @@ fn coord(source: Point, receiver: Point) -> f64 {
 }
 
 /// The slownesses the kernel takes (see [`FlatRefraction::solve`]).
-const SLOWNESS: [f64; 2] = [1e-15, 1e15];
+const SLOWNESS: std::ops::RangeInclusive<f64> = 1e-15..=1e15;
 
 #[cfg(test)]
 mod tests {
