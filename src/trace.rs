@@ -258,6 +258,17 @@ pub fn ray_index(
 /// strictly inside its segment: the solution itself. When one lies clearly beyond its
 /// segment's end (media given), the ray has no path (`T` is convex in the parameters, so
 /// that is its one stationary point) and is [`Status::NoPath`] at once.
+///
+/// A single refraction with its media given, at an interface of one segment (air over
+/// water, a flat sea floor, a lens face), from the default start, is solved by a dedicated
+/// kernel in the segment's frame: from the paraxial start, two Halley steps on Snell's law
+/// squared (a quartic: no square root), then Newton steps on the residual with the solver's
+/// convergence tests, within a bracket that keeps every iterate between the feet of the
+/// source and the receiver. Its `iterations` count those steps (two at least; usually two).
+/// A ray outside its clean case (a source or receiver nearer the interface's line than 1e-9
+/// of the ray's extent, the root at or beyond the segment's end, no convergence within
+/// `max_iterations`) is solved by the general code from the same start, so the kernel
+/// changes no ray's status.
 pub struct Tracer<'s> {
     scene: &'s Scene,
     regions: Option<Regions>,
