@@ -1067,7 +1067,14 @@ mod report {
              time includes the start and the classification), at tolerances 1e-2 … 1e-14 \
              (100 iterations at most), and with a fixed number of iterations (tolerance 1e-300, \
              `max_iterations` = n; the time of a ray that did not converge is `RaySummary.time` \
-             all the same; the solver also stops when the full Newton step is below round-off).\n\
+             all the same; the solver also stops when the full Newton step is below round-off). \
+             On seed500 (one refraction at an interface of one segment) the rays go through the \
+             flat-refraction kernel, from either start: two Halley steps on Snell's law squared \
+             that always run (counted as iterations), then Newton steps on the residual only \
+             where the tolerance asks for them, so every tolerance takes about the same time; \
+             with fewer than 2 iterations allowed, or where the kernel has not converged within \
+             the limit, the ray goes to the general solve (after the kernel's attempt, which is \
+             timed too).\n\
              - **eigenray, default start**: the same at tolerances 1e-2 … 1e-14 with the default \
              `InitialGuess::RayParameter`: the whole default pipeline, start included.\n\
              - **argmin** Gauss-Newton, BFGS and L-BFGS through `eigenray::argmin_bridge` \

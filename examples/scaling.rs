@@ -685,7 +685,10 @@ fn batch_section() -> io::Result<String> {
         "`demo::air_water(1_000_000, 1)` (one refraction per ray), `Tracer::trace_batch` \
          inside a rayon pool of the given size, with the default `BatchOptions` (warm starts \
          along a Morton order of the receivers, 256 receivers per work unit: {iter_warm:.2} \
-         iterations per ray) or with `warm_start: false` ({iter_cold:.2} iterations per ray). \
+         iterations per ray) or with `warm_start: false` ({iter_cold:.2} iterations per ray; \
+         the surface is one segment, so the flat-refraction kernel solves these rays, and a \
+         batch does not warm-start its rays: its two Halley steps from the paraxial start, \
+         counted as iterations, cost less than a warm start's bookkeeping). \
          {converged} of {N} rays converged. Scene build: {}. \"Cores busy\" is the process's \
          CPU time over the wall-clock time: below the thread count, the threads waited for a \
          core held by another process — with about one core busy on 2 threads, the other \
