@@ -689,7 +689,8 @@ impl Tracer<'_> {
     /// steps of one-by-one solving) and side and obstruction tests in registers. A ray that
     /// leaves this common case (no crossing or specular point to start from, a step leaving its
     /// segment, any status but `converged` after a warm start) is solved one by one from the
-    /// same start.
+    /// same start. A refraction at a one-segment interface goes through the flat kernel
+    /// (`SinglePath::flat`) instead, never warm-started, as one by one.
     fn single_chain(
         &self,
         sp: &SinglePath,
