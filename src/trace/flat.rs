@@ -374,6 +374,47 @@ mod tests {
         assert!(solved >= inside, "{solved} solved, {inside} clearly inside");
     }
 
+    /// At the edges of the scales and slownesses the kernel takes (`SLOWNESS`, and 1e-30 to
+    /// 1e30 for the ray's extent), every power it forms stays finite (a debug build checks it
+    /// at every step) and what it returns obeys Snell's law.
+    #[test]
+    fn the_kernel_stays_finite_at_its_bounds() {
+        let opts = SolverOptions::default();
+        let mut rng = SplitMix64(7);
+        let mut solved = 0;
+        for scale in [2e-30, 1e-15, 1.0, 1e15, 3e29] {
+            for w in [
+                [1e-15, 1e-15],
+                [1e-15, 1e15],
+                [1e15, 1e-15],
+                [1e15, 1e15],
+                [1.0, 1e15],
+            ] {
+                let line = Polyline::new(
+                    vec![Point::new(0.0, 0.0), Point::new(0.1 * scale, 0.0)],
+                    false,
+                )
+                .unwrap();
+                let flat = FlatRefraction::of(&line, w, opts).unwrap();
+                for _ in 0..200 {
+                    let mut u = || rng.next_f64();
+                    let s = Point::new(0.1 * scale * u(), 0.1 * scale * (0.01 + u()));
+                    let r = Point::new(0.1 * scale * u(), -0.1 * scale * (0.01 + u()));
+                    let Some(sol) = flat.solve(s, r) else {
+                        continue;
+                    };
+                    solved += 1;
+                    let (o, t) = (line.segment(0).0, line.tangent(0));
+                    assert!(sol.s > 0.0 && sol.s < 0.1 * scale, "{scale:e} {w:?}");
+                    assert!(sol.time.is_finite() && sol.time > 0.0, "{scale:e} {w:?}");
+                    let rel = residual(o, t, w, s, r, sol.s).abs() / (w[0] + w[1]);
+                    assert!(rel <= 1e-12, "{scale:e} {w:?}: Snell residual {rel:e}");
+                }
+            }
+        }
+        assert!(solved > 2_000, "{solved}");
+    }
+
     #[test]
     fn the_kernel_hands_over_what_it_does_not_solve() {
         let opts = SolverOptions::default();
