@@ -524,6 +524,7 @@ impl<'s> Tracer<'s> {
             .is_some_and(|f| f.exact(ray_parameter))
     }
 
+    #[inline(always)]
     fn solve_inner(
         &self,
         source: Point,
@@ -536,6 +537,22 @@ impl<'s> Tracer<'s> {
         if let Some(sp) = self.single_path(path) {
             return self.solve_single_path(sp, source, receiver, path, start, ws);
         }
+        self.solve_general(source, src_medium, receiver, path, start, ws)
+    }
+
+    /// [`solve_inner`](Self::solve_inner) for a path of more than one interaction, or without
+    /// its media given: out of line, so that the one-interaction code keeps a small stack
+    /// frame.
+    #[inline(never)]
+    fn solve_general(
+        &self,
+        source: Point,
+        src_medium: Option<usize>,
+        receiver: Point,
+        path: usize,
+        start: Start,
+        ws: &mut Workspace,
+    ) -> RaySummary {
         let scene = self.scene;
         let spec = &scene.paths()[path];
         let k = spec.steps.len();

@@ -62,6 +62,7 @@ impl SinglePath {
 impl Tracer<'_> {
     /// Solves one-interaction path `path` (described by `sp`) from `start`: the summary, with
     /// the ray's points, parameters and media in `ws`, as the general solve gives them.
+    #[inline(always)]
     pub(super) fn solve_single_path(
         &self,
         sp: &SinglePath,
@@ -76,6 +77,21 @@ impl Tracer<'_> {
         {
             return self.single_flat(sp, flat, path, source, receiver, sol, ws);
         }
+        self.solve_single_general(sp, source, receiver, path, start, ws)
+    }
+
+    /// [`solve_single_path`](Self::solve_single_path) without the flat kernel: out of line,
+    /// so that the kernel's callers keep a small stack frame.
+    #[inline(never)]
+    fn solve_single_general(
+        &self,
+        sp: &SinglePath,
+        source: Point,
+        receiver: Point,
+        path: usize,
+        start: Start,
+        ws: &mut Workspace,
+    ) -> RaySummary {
         let scene = self.scene;
         let steps = &scene.paths()[path].steps[..1];
         let step = &steps[0];
