@@ -1323,10 +1323,10 @@ pub(crate) mod tests {
     }
 
     /// Every ray of `scene`, solved with and without the fast paths (the one-interaction
-    /// kernel and the fast Newton loops; not the flat-refraction kernel, whose steps differ), from the default start, from a warm start compared
-    /// with it and from a given start (the previous receiver's solution, moved): the same
-    /// rays, bit for bit (status, time, iterations, residual, reason, points, media). Returns
-    /// the number of rays.
+    /// kernel and the fast Newton loops; not the flat-refraction kernel, whose steps differ),
+    /// from the default start, from a warm start compared with it and from a given start (the
+    /// previous receiver's solution, moved): the same rays, bit for bit (status, time,
+    /// iterations, residual, reason, points, media). Returns the number of rays.
     fn fast_paths_agree(scene: &Scene) -> usize {
         type Outcome = (crate::Status, u64, usize, u64, Option<crate::Reason>);
         type Rays = Vec<(Outcome, Vec<Point>, Vec<usize>)>;

@@ -267,8 +267,9 @@ pub fn ray_index(
 /// source and the receiver. Its `iterations` count those steps (two at least; usually two).
 /// A ray outside its clean case (a source or receiver nearer the interface's line than 1e-9
 /// of the ray's extent, the root at or beyond the segment's end, no convergence within
-/// `max_iterations`) is solved by the general code from the same start, so the kernel
-/// changes no ray's status.
+/// `max_iterations`) is solved by the general code from the same start; where the kernel
+/// converges, the general solve gives the same status (tested on the benchmark and demo
+/// scenes), with a time within 1e-12.
 pub struct Tracer<'s> {
     scene: &'s Scene,
     regions: Option<Regions>,
@@ -524,6 +525,8 @@ impl<'s> Tracer<'s> {
             .is_some_and(|f| f.exact(ray_parameter))
     }
 
+    /// Solves one ray from `start`: a refraction at a one-segment interface with the flat
+    /// kernel in place, else the one-interaction code or the general solve, both out of line.
     #[inline(always)]
     fn solve_inner(
         &self,
@@ -535,6 +538,11 @@ impl<'s> Tracer<'s> {
         ws: &mut Workspace,
     ) -> RaySummary {
         if let Some(sp) = self.single_path(path) {
+            if let (Start::Default, Some(flat)) = (start, sp.flat())
+                && let Some(sol) = flat.solve(source, receiver)
+            {
+                return self.single_flat(sp, flat, path, source, receiver, sol, ws);
+            }
             return self.solve_single_path(sp, source, receiver, path, start, ws);
         }
         self.solve_general(source, src_medium, receiver, path, start, ws)

@@ -2,7 +2,9 @@
 //! or refraction with its leg media given. The start (the documented one) and, when the solve
 //! ends with the point free and converged, the side and obstruction tests are written out for
 //! one interaction; the solve itself and every other ending go through the general code. The
-//! results are those of the general solve, bit for bit.
+//! results are those of the general solve, bit for bit, except for a refraction at an
+//! interface of one segment from the default start, which the flat kernel (`trace::flat`)
+//! solves with steps of its own (the same status, times within 1e-12: tested there).
 
 use super::flat::{FlatRefraction, FlatSolution};
 use super::straight::{self, single_specular};
@@ -61,29 +63,11 @@ impl SinglePath {
 
 impl Tracer<'_> {
     /// Solves one-interaction path `path` (described by `sp`) from `start`: the summary, with
-    /// the ray's points, parameters and media in `ws`, as the general solve gives them.
-    #[inline(always)]
-    pub(super) fn solve_single_path(
-        &self,
-        sp: &SinglePath,
-        source: Point,
-        receiver: Point,
-        path: usize,
-        start: Start,
-        ws: &mut Workspace,
-    ) -> RaySummary {
-        if let (Start::Default, Some(flat)) = (start, sp.flat())
-            && let Some(sol) = flat.solve(source, receiver)
-        {
-            return self.single_flat(sp, flat, path, source, receiver, sol, ws);
-        }
-        self.solve_single_general(sp, source, receiver, path, start, ws)
-    }
-
-    /// [`solve_single_path`](Self::solve_single_path) without the flat kernel: out of line,
-    /// so that the kernel's callers keep a small stack frame.
+    /// the ray's points, parameters and media in `ws`, as the general solve gives them. Out of
+    /// line, so that the flat kernel's caller ([`Tracer::solve_inner`]) keeps a small stack
+    /// frame.
     #[inline(never)]
-    fn solve_single_general(
+    pub(super) fn solve_single_path(
         &self,
         sp: &SinglePath,
         source: Point,
@@ -165,7 +149,7 @@ impl Tracer<'_> {
         reason = "the parts of a ray held in registers by its callers"
     )]
     #[inline(always)]
-    fn single_flat(
+    pub(super) fn single_flat(
         &self,
         sp: &SinglePath,
         flat: &FlatRefraction,
