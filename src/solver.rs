@@ -973,43 +973,25 @@ fn fast_newton(
             // A tiny pivot: the general loop takes the damped step.
             return None;
         }
-        // Back substitution of `thomas` (x = H⁻¹ r, the step is −x), fused with the step's
-        // tests: round-off floor, and whether the full step stays inside every segment.
-        let (s, delta, frames) = (&ws.s[..k], &mut ws.delta[..k], &ws.frames[..k]);
-        let (len, s_try, cp, y) = (&e.len[..k + 1], &mut ws.s_try[..k], &e.cp[..k], &e.y[..k]);
-        let mut all_finite = true;
-        let mut tiny = true;
-        let mut inside = true;
-        let mut x = 0.0;
-        for i in (0..k).rev() {
-            x = if i + 1 == k { y[i] } else { y[i] - cp[i] * x };
-            all_finite &= finite(x);
-            let d = -x;
-            delta[i] = d;
-            tiny &= d.abs() <= 4.0 * f64::EPSILON * (s[i].abs() + len[i] + len[i + 1]);
-            let to = s[i] + d;
-            s_try[i] = to;
-            let f = &frames[i];
-            // Leg lengths are never NaN here (the points are finite): the plain max and min.
-            inside &= to > f.lo
-                && to < f.hi
-                && d.abs() <= min_num(max_num(len[i], len[i + 1]), f.quarter);
-        }
-        if !all_finite {
+        let step = back_substitute(
+            &ws.s[..k],
+            e,
+            &ws.frames[..k],
+            &mut ws.delta[..k],
+            &mut ws.s_try[..k],
+        );
+        if !step.finite {
             return None;
         }
-        if tiny {
+        if step.tiny {
             return Some(finished(ws, fast.iterations));
         }
-        if !inside {
+        if !step.inside {
             return None;
         }
         let polish = residual <= tol;
-        if polish {
-            let small = (0..k).all(|i| delta[i].abs() <= tol.sqrt() * (len[i] + len[i + 1]));
-            if small || fast.polishes >= 2 {
-                return Some(finished(ws, fast.iterations));
-            }
+        if polish && (step_small(&ws.delta[..k], &e.len[..k + 1], tol) || fast.polishes >= 2) {
+            return Some(finished(ws, fast.iterations));
         }
         let phi0 = e.phi;
         g.evaluate_passes(&ws.s_try, &ws.frames, &mut ws.eval_try, false);
@@ -1024,6 +1006,105 @@ fn fast_newton(
         std::mem::swap(&mut ws.eval, &mut ws.eval_try);
         std::mem::swap(&mut ws.s, &mut ws.s_try);
     }
+}
+
+/// What [`back_substitute`] found of the Newton step.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct StepTests {
+    /// Every component finite.
+    pub finite: bool,
+    /// Every component at the round-off floor of its point and legs.
+    pub tiny: bool,
+    /// The full step keeps every point strictly inside its segment, and moves none by more
+    /// than its longer leg (or a quarter of a closed polyline).
+    pub inside: bool,
+}
+
+/// The back substitution of `thomas` on the factored evaluation `e` at `s` (x = H⁻¹ r, the
+/// step is −x), fused with the step's tests (see [`StepTests`]): the step in `delta`, the
+/// trial point `s + delta` in `s_try`.
+#[inline(always)]
+pub(crate) fn back_substitute(
+    s: &[f64],
+    e: &Eval,
+    frames: &[Frame],
+    delta: &mut [f64],
+    s_try: &mut [f64],
+) -> StepTests {
+    let k = s.len();
+    let (len, cp, y) = (&e.len[..k + 1], &e.cp[..k], &e.y[..k]);
+    let (delta, s_try, frames) = (&mut delta[..k], &mut s_try[..k], &frames[..k]);
+    let mut all_finite = true;
+    let mut tiny = true;
+    let mut inside = true;
+    let mut x = 0.0;
+    for i in (0..k).rev() {
+        x = if i + 1 == k { y[i] } else { y[i] - cp[i] * x };
+        all_finite &= finite(x);
+        let d = -x;
+        delta[i] = d;
+        tiny &= d.abs() <= 4.0 * f64::EPSILON * (s[i].abs() + len[i] + len[i + 1]);
+        let to = s[i] + d;
+        s_try[i] = to;
+        let f = &frames[i];
+        // Leg lengths are never NaN here (the points are finite): the plain max and min.
+        inside &=
+            to > f.lo && to < f.hi && d.abs() <= min_num(max_num(len[i], len[i + 1]), f.quarter);
+    }
+    StepTests {
+        finite: all_finite,
+        tiny,
+        inside,
+    }
+}
+
+/// Whether every component of the step `delta` is within `√tol` of its point's legs
+/// (`len`): the step test that, with the residual within `tol`, ends a solve.
+#[inline(always)]
+pub(crate) fn step_small(delta: &[f64], len: &[f64], tol: f64) -> bool {
+    (0..delta.len()).all(|i| delta[i].abs() <= tol.sqrt() * (len[i] + len[i + 1]))
+}
+
+/// [`fast_newton`]'s first evaluation and tests at the start in `ws` (every point free), on
+/// `frames` (those it would build) and with at least one iteration allowed: the solution
+/// where they end the solve converged, else `None` (the solve takes the ray from the same
+/// start). The evaluation stays in `ws`.
+#[inline(always)]
+pub(crate) fn confirm_start(
+    g: &Geometry,
+    frames: impl Iterator<Item = Frame>,
+    ws: &mut Workspace,
+    tol: f64,
+) -> Option<Solution> {
+    let k = g.k();
+    debug_assert!(ws.pin[..k].iter().all(|&p| p == Pin::Free));
+    ws.frames.clear();
+    ws.frames.extend(frames);
+    for (i, f) in ws.frames.iter().enumerate() {
+        ws.eval.tan[i] = f.t;
+        ws.eval_try.tan[i] = f.t;
+    }
+    g.evaluate_passes(&ws.s, &ws.frames, &mut ws.eval, true);
+    let e = &ws.eval;
+    // (Unfactored: a vanished leg, an overflow or a tiny pivot.)
+    if !(e.factored && finite(e.rmax)) {
+        return None;
+    }
+    let step = back_substitute(
+        &ws.s[..k],
+        e,
+        &ws.frames[..k],
+        &mut ws.delta[..k],
+        &mut ws.s_try[..k],
+    );
+    let converged = step.finite
+        && (step.tiny
+            || (step.inside && e.rmax <= tol && step_small(&ws.delta[..k], &e.len[..k + 1], tol)));
+    converged.then_some(Solution {
+        time: e.time,
+        iterations: 0,
+        residual: e.rmax,
+    })
 }
 
 /// [`fast_newton`] for a path of one interaction, in registers: the same steps and tests.
@@ -1327,7 +1408,7 @@ pub(crate) mod tests {
     /// from the default start, from a warm start compared with it and from a given start (the
     /// previous receiver's solution, moved): the same rays, bit for bit (status, time,
     /// iterations, residual, reason, points, media). Returns the number of rays.
-    fn fast_paths_agree(scene: &Scene) -> usize {
+    pub(crate) fn fast_paths_agree(scene: &Scene) -> usize {
         type Outcome = (crate::Status, u64, usize, u64, Option<crate::Reason>);
         type Rays = Vec<(Outcome, Vec<Point>, Vec<usize>)>;
         let tracer = Tracer::new(scene).unwrap();

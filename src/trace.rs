@@ -12,6 +12,7 @@ use crate::solver::{Outcome, Pin, Workspace, solve};
 
 mod flat;
 mod single;
+mod stack;
 mod straight;
 pub(crate) use single::SinglePath;
 
@@ -514,6 +515,20 @@ impl<'s> Tracer<'s> {
         self.single[path].as_ref()
     }
 
+    /// The segments of `path` when its rays from the default start take the kernel of a
+    /// stack of parallel layers (`trace::stack`): a [`StraightPath::stack`] started from the
+    /// ray parameter.
+    #[inline(always)]
+    fn stack_path(&self, path: usize) -> Option<&straight::StraightPath> {
+        #[cfg(test)]
+        if crate::solver::tests::GENERAL_ONLY.with(|c| c.get()) {
+            return None;
+        }
+        self.straight[path]
+            .as_ref()
+            .filter(|sp| sp.stack() && self.guess == InitialGuess::RayParameter)
+    }
+
     /// Whether the default start of path `path` is its solution up to round-off where it
     /// applies: reflections off one-segment interfaces (the image method), refractions
     /// through parallel ones started from the ray parameter. A batch does not warm-start such
@@ -561,6 +576,11 @@ impl<'s> Tracer<'s> {
         start: Start,
         ws: &mut Workspace,
     ) -> RaySummary {
+        if let (Start::Default, Some(sp)) = (start, self.stack_path(path))
+            && let Some(ray) = self.solve_stack(sp, path, source, receiver, ws)
+        {
+            return ray;
+        }
         let scene = self.scene;
         let spec = &scene.paths()[path];
         let k = spec.steps.len();

@@ -17,16 +17,20 @@
 use super::PARALLEL;
 use crate::geom::{Point, Vec2};
 use crate::polyline::{Polyline, segment_intersection};
+use crate::problem::Frame;
 use crate::scene::{Scene, Step, StepKind};
 use crate::solver::{Pin, Workspace};
 
-/// One interface of a [`StraightPath`]: its segment `p → q`, `e = q − p` and its length.
+/// One interface of a [`StraightPath`]: its segment `p → q`, `e = q − p`, its length, and
+/// the polyline's unit tangent and curvature of the segment.
 #[derive(Clone, Copy, Debug)]
-struct Line {
+pub(super) struct Line {
     p: Point,
     q: Point,
     e: Vec2,
     len: f64,
+    t: Vec2,
+    kappa: f64,
 }
 
 impl Line {
@@ -37,6 +41,45 @@ impl Line {
             q,
             e: q - p,
             len: line.segment_length(0),
+            t: line.tangent(0),
+            kappa: line.curvature(0),
+        }
+    }
+
+    /// The segment's length.
+    #[inline(always)]
+    pub(super) fn len(&self) -> f64 {
+        self.len
+    }
+
+    /// The polyline's unit normal ([`Polyline::normal`]).
+    #[inline(always)]
+    pub(super) fn normal(&self) -> Vec2 {
+        self.t.perp()
+    }
+
+    /// [`Frame::new`] of the polyline's segment relative to `origin`, bit for bit.
+    #[inline(always)]
+    pub(super) fn frame(&self, origin: Point) -> Frame {
+        Frame {
+            a: self.p - origin,
+            b: self.q - origin,
+            t: self.t,
+            lo: 0.0,
+            hi: self.len,
+            kappa: self.kappa,
+            quarter: f64::INFINITY,
+        }
+    }
+
+    /// [`Polyline::point_on`] on the segment, bit for bit.
+    #[inline(always)]
+    pub(super) fn point_on(&self, s: f64) -> Point {
+        let (from_start, from_end) = (s - 0.0, self.len - s);
+        if from_start <= from_end {
+            self.p + self.t * from_start
+        } else {
+            self.q - self.t * from_end
         }
     }
 
@@ -119,11 +162,13 @@ pub(crate) fn single_specular(line: &Polyline, source: Point, receiver: Point) -
 /// segment (reflections with one slowness on every leg).
 #[derive(Debug)]
 pub(crate) struct StraightPath {
-    lines: Box<[Line]>,
+    pub(super) lines: Box<[Line]>,
     kind: StepKind,
     /// Whether the segments are parallel (as `refraction_guess` takes them): for refractions,
     /// the ray-parameter start then solves the path up to round-off.
     pub(crate) parallel: bool,
+    /// The legs' slownesses when the path's media are given (else empty).
+    pub(super) slowness: Box<[f64]>,
 }
 
 impl StraightPath {
@@ -158,6 +203,7 @@ impl StraightPath {
             lines,
             kind,
             parallel,
+            slowness: media.iter().map(slowness).collect(),
         })
     }
 
@@ -193,7 +239,20 @@ impl StraightPath {
         }
     }
 
-    fn crossings(&self, source: Point, receiver: Point, ws: &mut Workspace) -> bool {
+    /// Whether the path's rays can take the kernel of a stack of parallel layers
+    /// ([`Tracer::solve_stack`](super::Tracer)): two or more refractions at parallel
+    /// interfaces, with the media given.
+    pub(crate) fn stack(&self) -> bool {
+        self.kind == StepKind::Refract
+            && self.parallel
+            && self.lines.len() > 1
+            && self.slowness.len() == self.lines.len() + 1
+    }
+
+    /// The crossings of `source → receiver` with the interfaces (see the module) in `ws`,
+    /// if it crosses every segment.
+    #[inline(always)]
+    pub(super) fn crossings(&self, source: Point, receiver: Point, ws: &mut Workspace) -> bool {
         let k = self.lines.len();
         let (t, s, seg, pin) = (
             &mut ws.crossing_t[..k],

@@ -1,0 +1,265 @@
+//! Refraction through a stack of parallel flat layers (two or more open interfaces of one
+//! segment each, parallel, with the leg media given) from the default start: the general
+//! code's own steps for the common case, without its bookkeeping.
+//!
+//! From the ray-parameter start (`refraction_guess`) such a ray is solved up to round-off,
+//! and the general solve only confirms it: one evaluation, the Newton step's tests, then the
+//! classification. The kernel takes the same steps on the same numbers, with the per-path
+//! data prepared once ([`StraightPath`]) instead of looked up per ray: the segments' frames
+//! from their end points, the points from the segments, and the classification of a ray
+//! whose points are all free and inside their segments with no vanished leg (the side and
+//! obstruction tests). So where it returns, its ray is the general code's, bit for bit
+//! (`solver::tests::fast_paths_take_the_general_steps` and the tests below compare them).
+//! Anything else (a start not converged, a point at a segment's end, a vanished leg, a
+//! tiny pivot, no iteration allowed) goes to the general solve from the same start.
+
+use super::straight::StraightPath;
+use super::{RaySummary, Reason, Status, Tracer, leg_sides, refraction_guess, sides_suit, summary};
+use crate::geom::Point;
+use crate::problem::Geometry;
+use crate::scene::StepKind;
+use crate::solver::{Workspace, confirm_start};
+
+impl Tracer<'_> {
+    /// The ray of path `path` (described by `sp`, a [`StraightPath::stack`]) from `source` to
+    /// `receiver` from the default start, as the general solve gives it (summary, and
+    /// parameters, points and media in `ws`), or `None` outside the kernel's case (see the
+    /// module).
+    #[inline(always)]
+    pub(super) fn solve_stack(
+        &self,
+        sp: &StraightPath,
+        path: usize,
+        source: Point,
+        receiver: Point,
+        ws: &mut Workspace,
+    ) -> Option<RaySummary> {
+        let scene = self.scene;
+        let spec = &scene.paths()[path];
+        let (steps, lines) = (&spec.steps[..], &sp.lines[..]);
+        let k = lines.len();
+        let opts = scene.solver();
+        if opts.max_iterations == 0 {
+            return None;
+        }
+        // The start of `solve_general`: the crossings, then the ray parameter.
+        ws.resize(k);
+        if !sp.crossings(source, receiver, ws) {
+            return None;
+        }
+        ws.slowness.clear();
+        ws.slowness.extend_from_slice(&sp.slowness);
+        refraction_guess(scene, steps, source, receiver, self.guess, ws);
+        // `refraction_guess` clamps to the segments: a point at an end is the general
+        // solve's to pin (or release).
+        if !(0..k).all(|i| ws.s[i] > 0.0 && ws.s[i] < lines[i].len()) {
+            return None;
+        }
+        let g = Geometry {
+            scene,
+            steps,
+            slowness: &sp.slowness,
+            source,
+            receiver,
+        };
+        let frames = lines.iter().map(|l| l.frame(source));
+        let sol = confirm_start(&g, frames, ws, opts.tolerance)?;
+        let base = summary(sol);
+        ws.media.clear();
+        ws.media
+            .extend_from_slice(spec.media.as_deref().unwrap_or(&[]));
+        ws.points.clear();
+        ws.points.push(source);
+        ws.points
+            .extend(lines.iter().zip(&ws.s[..k]).map(|(l, &s)| l.point_on(s)));
+        ws.points.push(receiver);
+        // `Tracer::classify` for free points inside their segments, no leg vanished.
+        let (rel, len) = (&ws.eval.rel[..k + 2], &ws.eval.len[..k + 1]);
+        for (i, l) in lines.iter().enumerate() {
+            let (a, b) = leg_sides(l.normal(), 1.0, &rel[i..i + 3], &len[i..i + 2]);
+            if !sides_suit(StepKind::Refract, a, b) {
+                return Some(RaySummary {
+                    status: Status::NoPath,
+                    reason: Some(Reason::WrongSide { step: i }),
+                    ..base
+                });
+            }
+        }
+        if let Some((leg, interface)) = self.obstruction(path, &ws.points, &ws.seg[..k]) {
+            return Some(RaySummary {
+                status: Status::Obstructed,
+                reason: Some(Reason::Crosses { leg, interface }),
+                ..base
+            });
+        }
+        Some(RaySummary {
+            status: Status::Converged,
+            reason: None,
+            ..base
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::demo::{self, SplitMix64};
+    use crate::geom::{Point, Vec2};
+    use crate::scene::Scene;
+    use crate::solver::tests::{GENERAL_ONLY, fast_paths_agree};
+    use crate::trace::{InitialGuess, Start, Status, Tracer};
+    use crate::{RaySummary, Workspace};
+
+    /// A stack of `n` parallel interfaces at random: any direction, some drawn the other way
+    /// round, far from the origin or not, random thicknesses and speeds (contrasts up to 4:
+    /// some rays beyond a critical angle), a short screen across some legs, and sources and
+    /// receivers on either side, inside the stack or beyond the interfaces' ends.
+    fn random_stack(rng: &mut SplitMix64, n: usize) -> Scene {
+        let mut u = || rng.next_f64();
+        let angle = std::f64::consts::TAU * u();
+        let (t, nrm) = (
+            Vec2::new(angle.cos(), angle.sin()),
+            Vec2::new(-angle.sin(), angle.cos()),
+        );
+        let far = if u() < 0.3 { 2e5 } else { 0.0 };
+        let o = Point::new(far + 10.0 * u(), -far + 10.0 * u());
+        let half = 3.0 + 10.0 * u();
+        let mut depth = 0.0;
+        let mut interfaces = serde_json::Map::new();
+        let (mut steps, mut media) = (Vec::new(), vec![serde_json::json!("m0")]);
+        let mut speeds = serde_json::Map::new();
+        speeds.insert("m0".into(), serde_json::json!({ "speed": 0.5 + 1.5 * u() }));
+        for i in 0..n {
+            depth += 0.2 + 2.0 * u();
+            let c = o - nrm * depth;
+            let (mut a, mut b) = (c - t * half, c + t * half);
+            if u() < 0.3 {
+                (a, b) = (b, a);
+            }
+            interfaces.insert(
+                format!("L{i}"),
+                serde_json::json!({ "points": [[a.x, a.y], [b.x, b.y]] }),
+            );
+            steps.push(serde_json::json!({ "refract": format!("L{i}") }));
+            media.push(serde_json::json!(format!("m{}", i + 1)));
+            speeds.insert(
+                format!("m{}", i + 1),
+                serde_json::json!({ "speed": 0.5 + 1.5 * u() }),
+            );
+        }
+        // A screen across the first layer's legs, on one side of the stack.
+        let s0 = o - nrm * 0.1 + t * (0.2 * half);
+        interfaces.insert(
+            "screen".into(),
+            serde_json::json!({ "points": [[s0.x, s0.y], [s0.x - nrm.x * 0.05, s0.y - nrm.y * 0.05]] }),
+        );
+        let mut at = |above: bool| {
+            let along = half * (2.6 * u() - 1.3);
+            let across = if above {
+                0.05 + 3.0 * u()
+            } else {
+                -depth - 0.05 - 3.0 * u()
+            };
+            let across = if u() < 0.1 { -depth * u() } else { across };
+            let p = o + t * along + nrm * across;
+            serde_json::json!([p.x, p.y])
+        };
+        let sources: Vec<_> = (0..3).map(|_| at(true)).collect();
+        let receivers: Vec<_> = (0..40).map(|_| at(false)).collect();
+        let doc = serde_json::json!({
+            "media": speeds, "interfaces": interfaces,
+            "sources": sources, "receivers": receivers,
+            "paths": [{ "steps": steps, "media": media }],
+        });
+        Scene::from_json(&doc.to_string()).unwrap()
+    }
+
+    /// Every ray the kernel takes, against the general solve of the same ray (without any
+    /// fast path): bit for bit. Returns how many it took, and how many ended obstructed.
+    fn kernel_rays(scene: &Scene) -> (usize, usize) {
+        let tracer = Tracer::new(scene).unwrap();
+        let sp = tracer.stack_path(0).expect("a stack");
+        let (mut ws, mut general) = (Workspace::new(), Workspace::new());
+        let (mut taken, mut obstructed) = (0, 0);
+        let bits = |r: &RaySummary| {
+            (
+                r.status,
+                r.time.to_bits(),
+                r.iterations,
+                r.residual.to_bits(),
+                r.reason,
+            )
+        };
+        for &source in scene.sources() {
+            for &receiver in scene.receivers() {
+                let Some(ray) = tracer.solve_stack(sp, 0, source, receiver, &mut ws) else {
+                    continue;
+                };
+                taken += 1;
+                obstructed += usize::from(ray.status == Status::Obstructed);
+                GENERAL_ONLY.with(|c| c.set(true));
+                let reference =
+                    tracer.solve_inner(source, None, receiver, 0, Start::Default, &mut general);
+                GENERAL_ONLY.with(|c| c.set(false));
+                assert_eq!(bits(&ray), bits(&reference), "{source:?} -> {receiver:?}");
+                assert_eq!(ws.points(), general.points());
+                assert_eq!(ws.parameters(), general.parameters());
+                assert_eq!(ws.media(), general.media());
+            }
+        }
+        (taken, obstructed)
+    }
+
+    #[test]
+    fn the_kernel_takes_the_general_steps() {
+        for (n, spec) in [
+            (8, demo::layer_stack(8, 300)),
+            (40, demo::layer_stack(40, 50)),
+        ] {
+            let scene = Scene::from_spec(&spec).unwrap();
+            let (taken, _) = kernel_rays(&scene);
+            assert_eq!(
+                taken,
+                scene.num_rays(),
+                "layer_stack({n}): every ray is the clean case"
+            );
+        }
+        let layers10 = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/bench/layers10.json");
+        let scene = Scene::from_json(&std::fs::read_to_string(layers10).unwrap()).unwrap();
+        let (taken, _) = kernel_rays(&scene);
+        assert!(
+            taken > scene.num_rays() / 2,
+            "layers10: {taken} of {}",
+            scene.num_rays()
+        );
+        let mut rng = SplitMix64(23);
+        let (mut taken, mut obstructed, mut rays) = (0, 0, 0);
+        for i in 0..60 {
+            let scene = random_stack(&mut rng, 2 + i % 7);
+            let (t, o) = kernel_rays(&scene);
+            (taken, obstructed, rays) = (taken + t, obstructed + o, rays + scene.num_rays());
+            // The rays it leaves, and the warm and given starts, through the general code.
+            fast_paths_agree(&scene);
+        }
+        assert!(
+            taken > rays / 3 && taken < rays && obstructed > 10,
+            "{taken} of {rays} rays taken, {obstructed} obstructed"
+        );
+    }
+
+    /// The kernel is not taken from the paraxial start, nor for a path without its media.
+    #[test]
+    fn the_kernel_applies_to_its_case_only() {
+        let scene = Scene::from_spec(&demo::layer_stack(4, 3)).unwrap();
+        assert!(Tracer::new(&scene).unwrap().stack_path(0).is_some());
+        let paraxial = Tracer::new(&scene)
+            .unwrap()
+            .with_initial_guess(InitialGuess::Paraxial);
+        assert!(paraxial.stack_path(0).is_none());
+        let mut spec = demo::layer_stack(4, 3);
+        spec.paths[0].media = None;
+        let scene = Scene::from_spec(&spec).unwrap();
+        assert!(Tracer::new(&scene).unwrap().stack_path(0).is_none());
+        let dipping = Scene::from_spec(&demo::dipping_stack(4, 3)).unwrap();
+        assert!(Tracer::new(&dipping).unwrap().stack_path(0).is_none());
+    }
+}
