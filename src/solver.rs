@@ -92,7 +92,7 @@ pub struct Workspace {
     pub(crate) seg_alt: Vec<usize>,
     /// Per layer of the initial guess's ray-parameter refinement: thickness, speed, and the
     /// lateral offset across it at the ray parameter found.
-    pub(crate) layers: Vec<(f64, f64, f64)>,
+    pub(crate) layers: Vec<crate::trace::Layer>,
     pub(crate) points: Vec<Point>,
     frames: Vec<Frame>,
 }
