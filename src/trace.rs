@@ -5,6 +5,7 @@ use std::fmt;
 use rayon::prelude::*;
 
 use crate::geom::{Aabb, Point, Vec2};
+use crate::polyline::Polyline;
 use crate::problem::Geometry;
 use crate::regions::Regions;
 use crate::scene::{Scene, SceneError, SegmentRef, StepKind};
@@ -1226,7 +1227,58 @@ fn refraction_guess(
         (ws.s[0], ws.seg[0]) = paraxial_one(line, ws.s[0], t, ws.seg[0], w, receiver - source);
         return;
     }
-    let t = &ws.crossing_t[..k];
+    let lines = PathLines { scene, steps };
+    layered_guess(&lines, receiver - source, guess, ws);
+}
+
+/// The interfaces of a path as [`layered_guess`] sees them.
+pub(super) trait Lines {
+    /// The unit tangent of interface `i` on its segment `seg`.
+    fn tangent(&self, i: usize, seg: usize) -> Vec2;
+    /// Parameter `s` made valid on interface `i` ([`Polyline::clamp_param`]) and its segment
+    /// (`seg` tried first).
+    fn place(&self, i: usize, s: f64, seg: usize) -> (f64, usize);
+}
+
+/// The interfaces of a path's steps, looked up in the scene.
+struct PathLines<'a> {
+    scene: &'a Scene,
+    steps: &'a [crate::scene::Step],
+}
+
+impl PathLines<'_> {
+    #[inline(always)]
+    fn line(&self, i: usize) -> &Polyline {
+        &self.scene.interfaces()[self.steps[i].interface].polyline
+    }
+}
+
+impl Lines for PathLines<'_> {
+    #[inline(always)]
+    fn tangent(&self, i: usize, seg: usize) -> Vec2 {
+        self.line(i).tangent(seg)
+    }
+
+    #[inline(always)]
+    fn place(&self, i: usize, s: f64, seg: usize) -> (f64, usize) {
+        let line = self.line(i);
+        let s = line.clamp_param(s);
+        (s, line.segment_at_hint(s, seg))
+    }
+}
+
+/// [`refraction_guess`] for two or more refractions (`lines` the path's interfaces, `d` the
+/// receiver minus the source, the slownesses and crossings in `ws`).
+#[inline(always)]
+pub(super) fn layered_guess(
+    lines: &(impl Lines + ?Sized),
+    d: Vec2,
+    guess: InitialGuess,
+    ws: &mut Workspace,
+) {
+    let k = ws.s.len();
+    debug_assert!(k >= 2 && ws.slowness.len() == k + 1);
+    let (t, w) = (&ws.crossing_t[..k], &ws.slowness[..k + 1]);
     let mut prev = 0.0;
     let mut sum = 0.0;
     for i in 0..=k {
@@ -1237,20 +1289,16 @@ fn refraction_guess(
         sum += (ti - prev) / w[i];
         prev = ti;
     }
-    let d = receiver - source;
-    let tangent = |i: usize| {
-        scene.interfaces()[steps[i].interface]
-            .polyline
-            .tangent(ws.seg[i])
-    };
+    let seg = &ws.seg[..k];
+    let tangent = |i: usize| lines.tangent(i, seg[i]);
     let p = match guess {
         InitialGuess::RayParameter => ray_parameter(t, w, sum, d, tangent, &mut ws.layers),
         InitialGuess::Paraxial => None,
     };
     let mut acc = 0.0;
     prev = 0.0;
-    let (w, s_at, seg) = (&ws.slowness[..k + 1], &mut ws.s[..k], &mut ws.seg[..k]);
-    for (i, step) in steps.iter().enumerate() {
+    let (s_at, seg) = (&mut ws.s[..k], &mut ws.seg[..k]);
+    for i in 0..k {
         let tau = match p {
             Some((_, x)) => {
                 // Δtᵢ tan θᵢ, from the evaluation at p.
@@ -1263,11 +1311,8 @@ fn refraction_guess(
             }
         };
         prev = t[i];
-        let line = &scene.interfaces()[step.interface].polyline;
-        let lateral = d.dot(line.tangent(seg[i]));
-        let s = line.clamp_param(s_at[i] + (tau - t[i]) * lateral);
-        seg[i] = line.segment_at_hint(s, seg[i]);
-        s_at[i] = s;
+        let lateral = d.dot(lines.tangent(i, seg[i]));
+        (s_at[i], seg[i]) = lines.place(i, s_at[i] + (tau - t[i]) * lateral, seg[i]);
     }
 }
 

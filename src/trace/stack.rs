@@ -14,7 +14,7 @@
 //! tiny pivot, no iteration allowed) goes to the general solve from the same start.
 
 use super::straight::StraightPath;
-use super::{RaySummary, Reason, Status, Tracer, leg_sides, refraction_guess, sides_suit, summary};
+use super::{RaySummary, Reason, Status, Tracer, layered_guess, leg_sides, sides_suit, summary};
 use crate::geom::Point;
 use crate::problem::Geometry;
 use crate::scene::StepKind;
@@ -49,7 +49,7 @@ impl Tracer<'_> {
         }
         ws.slowness.clear();
         ws.slowness.extend_from_slice(&sp.slowness);
-        refraction_guess(scene, steps, source, receiver, self.guess, ws);
+        layered_guess(lines, receiver - source, self.guess, ws);
         // `refraction_guess` clamps to the segments: a point at an end is the general
         // solve's to pin (or release).
         if !(0..k).all(|i| ws.s[i] > 0.0 && ws.s[i] < lines[i].len()) {

@@ -108,6 +108,20 @@ impl Line {
     }
 }
 
+impl super::Lines for [Line] {
+    #[inline(always)]
+    fn tangent(&self, i: usize, _seg: usize) -> Vec2 {
+        self[i].t
+    }
+
+    /// [`Polyline::clamp_param`] on an open polyline of one segment, bit for bit.
+    #[inline(always)]
+    fn place(&self, i: usize, s: f64, _seg: usize) -> (f64, usize) {
+        let s = if s.is_finite() { s } else { 0.0 };
+        (s.clamp(0.0, self[i].len), 0)
+    }
+}
+
 /// How far inside `(0, 1)` a fraction along `a → b` and outside `[0, 1]` a fraction along the
 /// segment must be, and the sine of the angle between them must be, for a meeting to count
 /// as clear or beyond the segment's end (the image method's round-off is a few ulps of that).
