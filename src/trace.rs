@@ -237,12 +237,13 @@ pub fn ray_index(
 /// crossings' fractions of the way from `S` to `R`, `Z` and `X` the extents of `R − S` across
 /// and along the layers, `wⱼ` the legs' slownesses). Where the interfaces' tangents at the
 /// crossings are parallel (to within 5e-5 rad), the ray parameter `p` solves
-/// `Σⱼ Δtⱼ tan θⱼ = X / Z` with `sin θⱼ = p / wⱼ` (a 1-D Newton iteration, monotone from
+/// `Σⱼ Δtⱼ tan θⱼ = X / Z` with `sin θⱼ = p / wⱼ` (a 1-D iteration of Halley's steps from
 /// above, from the smallest of the paraxial `p`, the root of the equation with `tan θ` cut to
 /// its series' first four terms, and the `p` at which the layers of the smallest slowness
 /// alone take the whole offset) and the lateral fractions become `τᵢ = Σ_{j≤i} Δtⱼ tan θⱼ · Z / X`:
 /// the solution itself for parallel flat layers, so the Newton solve that follows only
-/// confirms it. Elsewhere, for a single refraction (whose 1-D ray-parameter solve would cost
+/// confirms it (for interfaces of one segment with the media given, a kernel of its own
+/// takes the general code's steps without its bookkeeping, bit for bit). Elsewhere, for a single refraction (whose 1-D ray-parameter solve would cost
 /// what its Newton steps do), or with [`InitialGuess::Paraxial`], the small-angle limit
 /// `τᵢ = Σ_{j≤i} Δtⱼ/wⱼ / Σⱼ Δtⱼ/wⱼ`.
 /// On a polyline of more than 1,024 segments (a
@@ -1200,8 +1201,8 @@ fn perpendicular_crossing(
 /// The layers are taken as flat and parallel, `Δzⱼ = Δtⱼ Z` thick, where `Z` and `X` are the
 /// extents of `R − S` across and along them. When the interfaces' normals at the crossings agree
 /// to within [`PARALLEL`], the ray parameter `p` solves `Σⱼ Δzⱼ tan θⱼ = X` with
-/// `sin θⱼ = p / wⱼ` (Newton from a `p` above the root of this convex, increasing function, see
-/// [`ray_parameter`]: the iterates decrease monotonically to it), and
+/// `sin θⱼ = p / wⱼ` (Halley's steps from a `p` above the root of this convex, increasing
+/// function, see [`ray_parameter`]), and
 /// `τᵢ = Σ_{j≤i} Δzⱼ tan θⱼ / X`: the exact solution for parallel flat layers. Otherwise, for
 /// a single refraction, or when that equation has no root (a ray beyond the critical angle of
 /// a layer), the paraxial fractions
@@ -1359,11 +1360,12 @@ fn ray_parameter(
     if !(x > 0.0 && x.is_finite()) {
         return None;
     }
-    // Per layer: thickness Δtⱼ (in units of Z) and speed vⱼ = 1/wⱼ; and the sums Σ Δtⱼ vⱼⁿ
-    // for n = 3, 5, 7 (of the series below).
-    layers.clear();
-    let (mut limit, mut prev) = (f64::INFINITY, 0.0);
+    // Per layer: thickness Δtⱼ (in units of Z) and speed vⱼ = 1/wⱼ; the sums Σ Δtⱼ vⱼⁿ for
+    // n = 3, 5, 7 (of the series below); the smallest slowness `limit` (a layer's critical
+    // angle) and how thick the layers of that slowness are together (`critical`).
+    let (mut limit, mut critical, mut prev) = (f64::INFINITY, 0.0, 0.0);
     let mut series = [0.0; 3];
+    layers.clear();
     for (j, &wj) in w[..=k].iter().enumerate() {
         let hi = if j < k { t[j] } else { 1.0 };
         let (dt, v) = (hi - prev, 1.0 / wj);
@@ -1377,11 +1379,15 @@ fn ray_parameter(
         series[1] += a * v2 * v2;
         series[2] += a * v2 * v2 * v2;
         prev = hi;
-        // Slownesses are positive and finite: the plain min.
-        limit = if wj < limit { wj } else { limit };
+        // (Slownesses are positive and finite.)
+        if wj < limit {
+            (limit, critical) = (wj, dt);
+        } else if wj == limit {
+            critical += dt;
+        }
     }
     // The paraxial p (tan θ ≈ sin θ): f(p) ≥ 0 there, as tan θ ≥ sin θ. Below the smallest
-    // slowness (a layer's critical angle) f is defined; just below it, it must be positive.
+    // slowness f is defined; just below it, it must be positive.
     let cap = limit * (1.0 - 1e-9);
     let small_angle = x / sum;
     let paraxial = small_angle.min(cap);
@@ -1390,12 +1396,6 @@ fn ray_parameter(
     // nearer the root and still above it (the other layers add to f). From the paraxial p
     // alone the iterates would first back away from the pole (f is steep there, like
     // 1/√(p_max − p)) by a factor of about 3 a step: 15 or more steps.
-    let critical: f64 = layers
-        .iter()
-        .zip(w)
-        .filter(|&(_, &wj)| wj == limit)
-        .map(|(l, _)| l.dt)
-        .sum();
     let tan = x / critical;
     let alone = limit * (tan / (1.0 + tan * tan).sqrt());
     // f(p) = Σ Δtⱼ sⱼ / cⱼ − x with sⱼ = p / wⱼ, cⱼ = √(1 − sⱼ²); f' = Σ Δtⱼ vⱼ / cⱼ³ and
