@@ -132,23 +132,32 @@ impl FlatRefraction {
         let [w0, w1] = self.w;
         // The paraxial start (`paraxial_one`): the crossing of S → R at fraction
         // `c = zₛ / (zₛ − zᵣ)` moved to `τ = (c/w₀) / (c/w₀ + (1 − c)/w₁)`, which is
-        // `zₛ w₁ / (zₛ w₁ − zᵣ w₀)`: one division where that form takes three in a row.
-        let tau = zs * w1 / (zs * w1 - zr * w0);
-        // Halley's steps on Q(a) = w₀² a² ℓ₁² − w₁² b² ℓ₀² in a = x − xₛ (b = Δx − a), with
-        // Q′ = 2 q₁ and Q″ = 2 q₂:  a ← a − Q q₁ / (2 q₁² − Q q₂ / 2).
+        // `zₛ w₁ / (zₛ w₁ − zᵣ w₀)`: one division where that form takes three in a row; and
+        // `a = τ Δx` with the product in the numerator, beside the denominator.
+        let (zw, dw) = (zs * w1, zs * w1 - zr * w0);
+        let start = zw * dx / dw;
+        // Halley's steps on Q(a) = w₀² a² ℓ₁² − w₁² b² ℓ₀² in a = x − xₛ (b = Δx − a). With
+        // P = w₀² zᵣ², R = w₁² zₛ² and D = w₀² − w₁², Q = P a² − R b² + D a² b², and
+        // Q′ = 2 q₁, Q″ = 2 q₂ with q₁ = P a + R b + D ab (b − a), q₂ = P − R + D (a² + b² − 4ab):
+        //   a ← a − Q q₁ / (2 q₁² − Q q₂ / 2).
+        // (Written for a short chain of dependent operations: the steps are the ray's latency.
+        // Where the ray is the normal, a = b = 0, the step is zero over zero: the NaN fails the
+        // bracket below, which takes the paraxial start, there the root.)
         let (zs2, zr2) = (zs * zs, zr * zr);
         let (p, q) = (w0 * w0, w1 * w1);
-        let mut a = tau * dx;
+        let (big_p, big_r, big_d) = (p * zr2, q * zs2, p - q);
+        let (twice_p, twice_r, twice_d) = (2.0 * big_p, 2.0 * big_r, 2.0 * big_d);
+        let (half_pr, half_d) = (0.5 * (big_p - big_r), 0.5 * big_d);
+        let mut a = start;
         for _ in 0..QUARTIC_STEPS {
             let b = dx - a;
             let (aa, bb, ab) = (a * a, b * b, a * b);
-            let (l0s, l1s) = (zs2 + aa, zr2 + bb);
-            let value = p * aa * l1s - q * bb * l0s;
-            let q1 = p * a * (l1s - ab) + q * b * (l0s - ab);
-            let q2 = p * (l1s + aa - 4.0 * ab) - q * (l0s + bb - 4.0 * ab);
-            // (Zero over zero where the ray is the normal, a = b = 0: already the root.)
-            let step = value * q1 / (2.0 * (q1 * q1) - 0.5 * (value * q2));
-            a -= if step.is_finite() { step } else { 0.0 };
+            let value = (big_p * aa - big_r * bb) + big_d * (aa * bb);
+            let skew = ab * (b - a);
+            let q1 = (big_p * a + big_r * b) + big_d * skew;
+            let q1_twice = (twice_p * a + twice_r * b) + twice_d * skew;
+            let q2_half = half_pr + half_d * ((aa + bb) - 4.0 * ab);
+            a -= value * q1 / (q1_twice * q1 - value * q2_half);
         }
         // The root lies between the source's and the receiver's feet (the sines of Snell's
         // law have one sign) and on the segment: a bracket that the residual's sign narrows
@@ -164,8 +173,9 @@ impl FlatRefraction {
         let mut x = xs + a;
         if !(x >= lo && x <= hi) {
             // The quartic's steps left the bracket (another root of the squared law, or a
-            // grazing ray's start far from the root): the paraxial start, or the middle.
-            x = xs + tau * dx;
+            // grazing ray's start far from the root, or the NaN of the normal ray): the paraxial
+            // start, or the middle.
+            x = xs + start;
             if !(x >= lo && x <= hi) {
                 x = 0.5 * (lo + hi);
             }
