@@ -273,6 +273,11 @@ pub fn ray_index(
 /// `max_iterations`) is solved by the general code from the same start; where the kernel
 /// converges, the general solve gives the same status (tested on the benchmark and demo
 /// scenes), with a time within 1e-12.
+///
+/// Two or more refractions at parallel interfaces of one segment each, with the media
+/// given, from the default start, take a kernel too: the general code's own steps (the
+/// ray-parameter start, one confirming evaluation, the tests) on data prepared once per
+/// path, so that its rays are the general code's bit for bit.
 pub struct Tracer<'s> {
     scene: &'s Scene,
     regions: Option<Regions>,
