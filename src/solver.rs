@@ -973,13 +973,7 @@ fn fast_newton(
             // A tiny pivot: the general loop takes the damped step.
             return None;
         }
-        let step = back_substitute(
-            &ws.s[..k],
-            e,
-            &ws.frames[..k],
-            &mut ws.delta[..k],
-            &mut ws.s_try[..k],
-        );
+        let step = ws.newton_step(k);
         if !step.finite {
             return None;
         }
@@ -990,10 +984,11 @@ fn fast_newton(
             return None;
         }
         let polish = residual <= tol;
-        if polish && (step_small(&ws.delta[..k], &e.len[..k + 1], tol) || fast.polishes >= 2) {
+        if polish && (step_small(&ws.delta[..k], &ws.eval.len[..k + 1], tol) || fast.polishes >= 2)
+        {
             return Some(finished(ws, fast.iterations));
         }
-        let phi0 = e.phi;
+        let phi0 = ws.eval.phi;
         g.evaluate_passes(&ws.s_try, &ws.frames, &mut ws.eval_try, false);
         let phi = ws.eval_try.phi;
         if !(finite(phi) && phi <= (1.0 - 1e-4) * phi0) {
@@ -1020,11 +1015,25 @@ pub(crate) struct StepTests {
     pub inside: bool,
 }
 
+impl Workspace {
+    /// [`back_substitute`] on the workspace's evaluation at its first `k` parameters.
+    #[inline(always)]
+    fn newton_step(&mut self, k: usize) -> StepTests {
+        back_substitute(
+            &self.s[..k],
+            &self.eval,
+            &self.frames[..k],
+            &mut self.delta[..k],
+            &mut self.s_try[..k],
+        )
+    }
+}
+
 /// The back substitution of `thomas` on the factored evaluation `e` at `s` (x = H⁻¹ r, the
 /// step is −x), fused with the step's tests (see [`StepTests`]): the step in `delta`, the
 /// trial point `s + delta` in `s_try`.
 #[inline(always)]
-pub(crate) fn back_substitute(
+fn back_substitute(
     s: &[f64],
     e: &Eval,
     frames: &[Frame],
@@ -1090,16 +1099,12 @@ pub(crate) fn confirm_start(
     if !(e.factored && finite(e.rmax)) {
         return None;
     }
-    let step = back_substitute(
-        &ws.s[..k],
-        e,
-        &ws.frames[..k],
-        &mut ws.delta[..k],
-        &mut ws.s_try[..k],
-    );
+    let rmax = e.rmax;
+    let step = ws.newton_step(k);
+    let e = &ws.eval;
     let converged = step.finite
         && (step.tiny
-            || (step.inside && e.rmax <= tol && step_small(&ws.delta[..k], &e.len[..k + 1], tol)));
+            || (step.inside && rmax <= tol && step_small(&ws.delta[..k], &e.len[..k + 1], tol)));
     converged.then_some(Solution {
         time: e.time,
         iterations: 0,
