@@ -1077,11 +1077,13 @@ pub(crate) fn step_small(delta: &[f64], len: &[f64], tol: f64) -> bool {
 /// [`fast_newton`]'s first evaluation and tests at the start in `ws` (every point free), on
 /// `frames` (those it would build) and with at least one iteration allowed: the solution
 /// where they end the solve converged, else `None` (the solve takes the ray from the same
-/// start). The evaluation stays in `ws`.
+/// start). The evaluation stays in `ws`. `curved`: whether some frame has a curvature
+/// estimate (without one, the curvature term is zero and its test is skipped).
 #[inline(always)]
 pub(crate) fn confirm_start(
     g: &Geometry,
     frames: impl Iterator<Item = Frame>,
+    curved: bool,
     ws: &mut Workspace,
     tol: f64,
 ) -> Option<Solution> {
@@ -1093,7 +1095,8 @@ pub(crate) fn confirm_start(
         ws.eval.tan[i] = f.t;
         ws.eval_try.tan[i] = f.t;
     }
-    g.evaluate_passes(&ws.s, &ws.frames, &mut ws.eval, true);
+    debug_assert!(curved || ws.frames.iter().all(|f| f.kappa == 0.0));
+    g.evaluate_passes(&ws.s, &ws.frames, &mut ws.eval, curved);
     let e = &ws.eval;
     // (Unfactored: a vanished leg, an overflow or a tiny pivot.)
     if !(e.factored && finite(e.rmax)) {

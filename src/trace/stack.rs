@@ -63,7 +63,7 @@ impl Tracer<'_> {
             receiver,
         };
         let frames = lines.iter().map(|l| l.frame(source));
-        let sol = confirm_start(&g, frames, ws, opts.tolerance)?;
+        let sol = confirm_start(&g, frames, sp.curved, ws, opts.tolerance)?;
         let base = summary(sol);
         ws.media.clear();
         ws.media

@@ -183,6 +183,9 @@ pub(crate) struct StraightPath {
     pub(crate) parallel: bool,
     /// The legs' slownesses when the path's media are given (else empty).
     pub(super) slowness: Box<[f64]>,
+    /// Whether some segment has a curvature estimate (`Polyline::curvature`; none has on an
+    /// open polyline of one segment).
+    pub(super) curved: bool,
 }
 
 impl StraightPath {
@@ -218,6 +221,7 @@ impl StraightPath {
             kind,
             parallel,
             slowness: media.iter().map(slowness).collect(),
+            curved: polylines.iter().any(|line| line.curvature(0) != 0.0),
         })
     }
 
