@@ -124,7 +124,7 @@ impl FlatRefraction {
         // sixth power): within these bounds (and those of the slownesses, `SLOWNESS`) nothing
         // overflows or underflows.
         let scale = zs.abs() + zr.abs() + dx.abs();
-        let clear = 1e-9 * scale + 16.0 * f64::EPSILON * coord(source, receiver);
+        let clear = CLEAR * scale + 16.0 * f64::EPSILON * coord(source, receiver);
         if !(zs * zr < 0.0 && zs.abs() > clear && zr.abs() > clear && scale > 1e-30 && scale < 1e30)
         {
             return None;
@@ -271,6 +271,14 @@ fn coord(source: Point, receiver: Point) -> f64 {
     let m = max_num(source.x.abs(), source.y.abs());
     max_num(max_num(m, receiver.x.abs()), receiver.y.abs())
 }
+
+/// How far, relative to the ray's extent, the source and the receiver must lie from the
+/// interface's line for the kernel (see [`FlatRefraction::solve`]). Above the classification's
+/// `SIDE_MARGIN`: a ray the kernel solves always has its legs on the two sides (each leg's sine
+/// with the line is at least this, as no leg is longer than the extent), so its status skips
+/// the side test.
+pub(crate) const CLEAR: f64 = 1e-9;
+const _: () = assert!(super::SIDE_MARGIN < CLEAR);
 
 /// The slownesses the kernel takes (see [`FlatRefraction::solve`]).
 const SLOWNESS: std::ops::RangeInclusive<f64> = 1e-15..=1e15;

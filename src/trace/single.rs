@@ -183,15 +183,18 @@ impl Tracer<'_> {
     ) -> (RaySummary, [Point; 3]) {
         let p = flat.point(sol.s);
         let pts = [source, p, receiver];
-        let rel = [Vec2::default(), p - source, receiver - source];
-        let summary = self.single_status(
+        // The kernel's clean case puts the source and the receiver clearly on either side of
+        // the interface's line (`flat::CLEAR`, above `SIDE_MARGIN` and the points'
+        // round-off): the side test always passes (checked in debug builds).
+        debug_assert!({
+            let rel = [Vec2::default(), p - source, receiver - source];
+            let (a, b) = leg_sides(flat.normal(), 1.0, &rel, &sol.len);
+            sides_suit(StepKind::Refract, a, b)
+        });
+        let summary = self.unobstructed_status(
             path,
-            StepKind::Refract,
-            flat.normal(),
-            0,
             &pts,
-            &rel,
-            &sol.len,
+            0,
             Solution {
                 time: sol.time,
                 iterations: sol.iterations,
@@ -257,12 +260,32 @@ impl Tracer<'_> {
     ) -> RaySummary {
         // `Tracer::wrong_side` for a free point with both legs there.
         let (a, b) = leg_sides(n, 1.0, rel, len);
-        let (status, reason) = if !sides_suit(kind, a, b) {
-            (Status::NoPath, Some(Reason::WrongSide { step: 0 }))
-        } else if let Some((leg, interface)) = self.obstruction(path, pts, &[j]) {
-            (Status::Obstructed, Some(Reason::Crosses { leg, interface }))
-        } else {
-            (Status::Converged, None)
+        if !sides_suit(kind, a, b) {
+            return RaySummary {
+                status: Status::NoPath,
+                time: sol.time,
+                iterations: sol.iterations,
+                residual: sol.residual,
+                reason: Some(Reason::WrongSide { step: 0 }),
+            };
+        }
+        self.unobstructed_status(path, pts, j, sol)
+    }
+
+    /// [`single_status`](Self::single_status) after its side test: the obstruction test.
+    #[inline(always)]
+    fn unobstructed_status(
+        &self,
+        path: usize,
+        pts: &[Point],
+        j: usize,
+        sol: Solution,
+    ) -> RaySummary {
+        let (status, reason) = match self.obstruction(path, pts, &[j]) {
+            Some((leg, interface)) => {
+                (Status::Obstructed, Some(Reason::Crosses { leg, interface }))
+            }
+            None => (Status::Converged, None),
         };
         RaySummary {
             status,
