@@ -1076,7 +1076,10 @@ mod report {
              the limit, the ray goes to the general solve (after the kernel's attempt, which is \
              timed too).\n\
              - **eigenray, default start**: the same at tolerances 1e-2 … 1e-14 with the default \
-             `InitialGuess::RayParameter`: the whole default pipeline, start included.\n\
+             `InitialGuess::RayParameter`: the whole default pipeline, start included. Through \
+             the parallel flat layers of layers10 and stack8 (media given) it goes through the \
+             stack kernel, which takes the general code's steps (the ray-parameter start, one \
+             confirming evaluation) on data prepared once per path.\n\
              - **argmin** Gauss-Newton, BFGS and L-BFGS through `eigenray::argmin_bridge` \
              (`solve_gauss_newton`, `solve_bfgs`, `solve_lbfgs` on a `PathProblem` built per \
              ray), with an iteration limit and an unreachable tolerance, or with a tolerance and \

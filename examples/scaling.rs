@@ -265,7 +265,8 @@ fn main() -> io::Result<()> {
          start: {:.2}): what is left is the `O(k)` start (the crossings of `S → R` and the 1-D \
          ray-parameter solve), one `O(k)` evaluation with its Thomas sweep, and the \
          classification (no obstruction test: each leg can meet only the two single-segment \
-         layers it ends on, so the path is clear).\n",
+         layers it ends on, so the path is clear), all in the stack kernel (`trace::stack`: \
+         the general code's steps on data prepared once per path).\n",
         a,
         b,
         rows[1].1.iterations,
