@@ -386,13 +386,7 @@ impl Polyline {
     #[inline]
     pub fn point_on(&self, j: usize, s: f64) -> Point {
         let (a, b) = self.segment(j);
-        let from_start = s - self.cum[j];
-        let from_end = self.cum[j + 1] - s;
-        if from_start <= from_end {
-            a + self.dirs[j] * from_start
-        } else {
-            b - self.dirs[j] * from_end
-        }
+        point_between(a, b, self.dirs[j], self.cum[j], self.cum[j + 1], s)
     }
 
     /// `point_on(j, s) - origin`, computed as (vertex − origin) + offset, which keeps full
@@ -497,6 +491,18 @@ pub(crate) fn segment_intersection(a: Point, b: Point, p: Point, q: Point) -> Op
     let t = w.cross(e) / den;
     let u = w.cross(d) / den;
     ((0.0..=1.0).contains(&t) && (0.0..=1.0).contains(&u)).then_some((t, u))
+}
+
+/// The point at parameter `s` on the segment `a → b` (unit tangent `t`) whose ends are at
+/// parameters `lo` and `hi`: [`Polyline::point_on`], interpolated from the nearer end.
+#[inline(always)]
+pub(crate) fn point_between(a: Point, b: Point, t: Vec2, lo: f64, hi: f64, s: f64) -> Point {
+    let (from_start, from_end) = (s - lo, hi - s);
+    if from_start <= from_end {
+        a + t * from_start
+    } else {
+        b - t * from_end
+    }
 }
 
 #[cfg(test)]

@@ -408,12 +408,7 @@ pub(crate) fn solve(
 ) -> (Outcome, Solution) {
     let k = g.k();
     let w = g.slowness;
-    let mut fast = Fast {
-        iterations: 0,
-        curvature: true,
-        evaluated: false,
-        polishes: 0,
-    };
+    let mut fast = Fast::START;
     #[cfg(test)]
     let general_only = tests::GENERAL_ONLY.with(|c| c.get());
     #[cfg(not(test))]
@@ -927,6 +922,16 @@ struct Fast {
     polishes: usize,
 }
 
+impl Fast {
+    /// Before the first step: nothing evaluated, the curvature estimate on.
+    const START: Fast = Fast {
+        iterations: 0,
+        curvature: true,
+        evaluated: false,
+        polishes: 0,
+    };
+}
+
 /// The common case of [`solve`], without its bookkeeping: every point free and every full
 /// Newton step staying inside the segments the points are on, with no leg vanishing. Takes
 /// exactly the steps the general loop would take there (same arithmetic, same tests), on
@@ -944,6 +949,37 @@ fn fast_newton(
     ws.frames.clear();
     ws.frames
         .extend((0..k).map(|i| Frame::new(g.line(i), ws.seg[i], g.source)));
+    fast_newton_framed(g, ws, tol, max_iterations, fast)
+}
+
+/// [`fast_newton`] from the start in `ws` (every point free) on frames prepared elsewhere
+/// (`frames`: those [`Frame::new`] gives for the points' segments), with a fresh iteration
+/// state: the same steps. For callers that keep a path's segments at hand.
+#[inline(always)]
+pub(crate) fn fast_newton_from(
+    g: &Geometry,
+    frames: impl Iterator<Item = Frame>,
+    ws: &mut Workspace,
+    tol: f64,
+    max_iterations: usize,
+) -> Option<(Outcome, Solution)> {
+    debug_assert!(ws.pin[..g.k()].iter().all(|&p| p == Pin::Free));
+    ws.frames.clear();
+    ws.frames.extend(frames);
+    let mut fast = Fast::START;
+    fast_newton_framed(g, ws, tol, max_iterations, &mut fast)
+}
+
+/// The loop of [`fast_newton`] on the frames in `ws.frames`.
+#[inline(always)]
+fn fast_newton_framed(
+    g: &Geometry,
+    ws: &mut Workspace,
+    tol: f64,
+    max_iterations: usize,
+    fast: &mut Fast,
+) -> Option<(Outcome, Solution)> {
+    let k = g.k();
     // `evaluate_passes` leaves the tangents to us: they are the frames'.
     for (i, f) in ws.frames.iter().enumerate() {
         ws.eval.tan[i] = f.t;
@@ -973,22 +1009,45 @@ fn fast_newton(
             // A tiny pivot: the general loop takes the damped step.
             return None;
         }
-        let step = ws.newton_step(k);
-        if !step.finite {
+        // Back substitution of `thomas` (x = H⁻¹ r, the step is −x), fused with the step's
+        // tests: round-off floor, and whether the full step stays inside every segment.
+        let (s, delta, frames) = (&ws.s[..k], &mut ws.delta[..k], &ws.frames[..k]);
+        let (len, s_try, cp, y) = (&e.len[..k + 1], &mut ws.s_try[..k], &e.cp[..k], &e.y[..k]);
+        let mut all_finite = true;
+        let mut tiny = true;
+        let mut inside = true;
+        let mut x = 0.0;
+        for i in (0..k).rev() {
+            x = if i + 1 == k { y[i] } else { y[i] - cp[i] * x };
+            all_finite &= finite(x);
+            let d = -x;
+            delta[i] = d;
+            tiny &= d.abs() <= 4.0 * f64::EPSILON * (s[i].abs() + len[i] + len[i + 1]);
+            let to = s[i] + d;
+            s_try[i] = to;
+            let f = &frames[i];
+            // Leg lengths are never NaN here (the points are finite): the plain max and min.
+            inside &= to > f.lo
+                && to < f.hi
+                && d.abs() <= min_num(max_num(len[i], len[i + 1]), f.quarter);
+        }
+        if !all_finite {
             return None;
         }
-        if step.tiny {
+        if tiny {
             return Some(finished(ws, fast.iterations));
         }
-        if !step.inside {
+        if !inside {
             return None;
         }
         let polish = residual <= tol;
-        if polish && (step_small(&ws.delta[..k], &ws.eval.len[..k + 1], tol) || fast.polishes >= 2)
-        {
-            return Some(finished(ws, fast.iterations));
+        if polish {
+            let small = (0..k).all(|i| delta[i].abs() <= tol.sqrt() * (len[i] + len[i + 1]));
+            if small || fast.polishes >= 2 {
+                return Some(finished(ws, fast.iterations));
+            }
         }
-        let phi0 = ws.eval.phi;
+        let phi0 = e.phi;
         g.evaluate_passes(&ws.s_try, &ws.frames, &mut ws.eval_try, false);
         let phi = ws.eval_try.phi;
         if !(finite(phi) && phi <= (1.0 - 1e-4) * phi0) {
@@ -1001,118 +1060,6 @@ fn fast_newton(
         std::mem::swap(&mut ws.eval, &mut ws.eval_try);
         std::mem::swap(&mut ws.s, &mut ws.s_try);
     }
-}
-
-/// What [`back_substitute`] found of the Newton step.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct StepTests {
-    /// Every component finite.
-    pub finite: bool,
-    /// Every component at the round-off floor of its point and legs.
-    pub tiny: bool,
-    /// The full step keeps every point strictly inside its segment, and moves none by more
-    /// than its longer leg (or a quarter of a closed polyline).
-    pub inside: bool,
-}
-
-impl Workspace {
-    /// [`back_substitute`] on the workspace's evaluation at its first `k` parameters.
-    #[inline(always)]
-    fn newton_step(&mut self, k: usize) -> StepTests {
-        back_substitute(
-            &self.s[..k],
-            &self.eval,
-            &self.frames[..k],
-            &mut self.delta[..k],
-            &mut self.s_try[..k],
-        )
-    }
-}
-
-/// The back substitution of `thomas` on the factored evaluation `e` at `s` (x = H⁻¹ r, the
-/// step is −x), fused with the step's tests (see [`StepTests`]): the step in `delta`, the
-/// trial point `s + delta` in `s_try`.
-#[inline(always)]
-fn back_substitute(
-    s: &[f64],
-    e: &Eval,
-    frames: &[Frame],
-    delta: &mut [f64],
-    s_try: &mut [f64],
-) -> StepTests {
-    let k = s.len();
-    let (len, cp, y) = (&e.len[..k + 1], &e.cp[..k], &e.y[..k]);
-    let (delta, s_try, frames) = (&mut delta[..k], &mut s_try[..k], &frames[..k]);
-    let mut all_finite = true;
-    let mut tiny = true;
-    let mut inside = true;
-    let mut x = 0.0;
-    for i in (0..k).rev() {
-        x = if i + 1 == k { y[i] } else { y[i] - cp[i] * x };
-        all_finite &= finite(x);
-        let d = -x;
-        delta[i] = d;
-        tiny &= d.abs() <= 4.0 * f64::EPSILON * (s[i].abs() + len[i] + len[i + 1]);
-        let to = s[i] + d;
-        s_try[i] = to;
-        let f = &frames[i];
-        // Leg lengths are never NaN here (the points are finite): the plain max and min.
-        inside &=
-            to > f.lo && to < f.hi && d.abs() <= min_num(max_num(len[i], len[i + 1]), f.quarter);
-    }
-    StepTests {
-        finite: all_finite,
-        tiny,
-        inside,
-    }
-}
-
-/// Whether every component of the step `delta` is within `√tol` of its point's legs
-/// (`len`): the step test that, with the residual within `tol`, ends a solve.
-#[inline(always)]
-pub(crate) fn step_small(delta: &[f64], len: &[f64], tol: f64) -> bool {
-    (0..delta.len()).all(|i| delta[i].abs() <= tol.sqrt() * (len[i] + len[i + 1]))
-}
-
-/// [`fast_newton`]'s first evaluation and tests at the start in `ws` (every point free), on
-/// `frames` (those it would build) and with at least one iteration allowed: the solution
-/// where they end the solve converged, else `None` (the solve takes the ray from the same
-/// start). The evaluation stays in `ws`. `curved`: whether some frame has a curvature
-/// estimate (without one, the curvature term is zero and its test is skipped).
-#[inline(always)]
-pub(crate) fn confirm_start(
-    g: &Geometry,
-    frames: impl Iterator<Item = Frame>,
-    curved: bool,
-    ws: &mut Workspace,
-    tol: f64,
-) -> Option<Solution> {
-    let k = g.k();
-    debug_assert!(ws.pin[..k].iter().all(|&p| p == Pin::Free));
-    ws.frames.clear();
-    ws.frames.extend(frames);
-    for (i, f) in ws.frames.iter().enumerate() {
-        ws.eval.tan[i] = f.t;
-        ws.eval_try.tan[i] = f.t;
-    }
-    debug_assert!(curved || ws.frames.iter().all(|f| f.kappa == 0.0));
-    g.evaluate_passes(&ws.s, &ws.frames, &mut ws.eval, curved);
-    let e = &ws.eval;
-    // (Unfactored: a vanished leg, an overflow or a tiny pivot.)
-    if !(e.factored && finite(e.rmax)) {
-        return None;
-    }
-    let rmax = e.rmax;
-    let step = ws.newton_step(k);
-    let e = &ws.eval;
-    let converged = step.finite
-        && (step.tiny
-            || (step.inside && rmax <= tol && step_small(&ws.delta[..k], &e.len[..k + 1], tol)));
-    converged.then_some(Solution {
-        time: e.time,
-        iterations: 0,
-        residual: e.rmax,
-    })
 }
 
 /// [`fast_newton`] for a path of one interaction, in registers: the same steps and tests.

@@ -243,8 +243,9 @@ pub fn ray_index(
 /// alone take the whole offset) and the lateral fractions become `τᵢ = Σ_{j≤i} Δtⱼ tan θⱼ · Z / X`:
 /// the solution itself for parallel flat layers, so the Newton solve that follows only
 /// confirms it (for interfaces of one segment with the media given, a kernel of its own
-/// takes the general code's steps without its bookkeeping, bit for bit). Elsewhere, for a single refraction (whose 1-D ray-parameter solve would cost
-/// what its Newton steps do), or with [`InitialGuess::Paraxial`], the small-angle limit
+/// takes the general code's steps without its bookkeeping, bit for bit). Elsewhere, for a
+/// single refraction (whose 1-D ray-parameter solve would cost what its Newton steps do), or
+/// with [`InitialGuess::Paraxial`], the small-angle limit
 /// `τᵢ = Σ_{j≤i} Δtⱼ/wⱼ / Σⱼ Δtⱼ/wⱼ`.
 /// On a polyline of more than 1,024 segments (a
 /// digitised sea floor, a measured profile) the nearest point is replaced by the crossing,
@@ -276,8 +277,8 @@ pub fn ray_index(
 ///
 /// Two or more refractions at parallel interfaces of one segment each, with the media
 /// given, from the default start, take a kernel too: the general code's own steps (the
-/// ray-parameter start, one confirming evaluation, the tests) on data prepared once per
-/// path, so that its rays are the general code's bit for bit.
+/// ray-parameter start, the solver's fast Newton path, the classification) on data prepared
+/// once per path, so that its rays are the general code's bit for bit.
 pub struct Tracer<'s> {
     scene: &'s Scene,
     regions: Option<Regions>,
@@ -1466,8 +1467,8 @@ fn ray_parameter(
     // `(ρ²/4 + (h vₘₐₓ)²/2) |h|` with `ρ = h f''/f'` (the f‴ term bounded through the
     // largest speed, `1/limit`). Where a thousand times that is below round-off, the step is
     // the last: the offsets follow it to second order (their error of order h³, below
-    // round-off too), without another evaluation. Through `demo::layer_stack(8, _)` this takes
-    // 2 evaluations per ray where Newton's steps to a residual at round-off took 3.3.
+    // round-off too), without another evaluation. Through `demo::layer_stack(8, 500)` this
+    // takes 1.8 evaluations per ray where Newton's steps to a residual at round-off took 3.3.
     let vmax = 1.0 / limit;
     for _ in 0..60 {
         if fp.abs() <= 4.0 * f64::EPSILON * x {
@@ -1842,6 +1843,19 @@ mod tests {
                     (offsets - x).abs() <= 1e-13 * x,
                     "x = {x}: offsets {offsets}"
                 );
+                // Each one (after a last step taken without an evaluation, moved along its
+                // Taylor series) against the layer's own offset at the bisected p.
+                for (j, l) in layers.iter().enumerate() {
+                    let lo_t = if j == 0 { 0.0 } else { t[j - 1] };
+                    let hi_t = if j < 4 { t[j] } else { 1.0 };
+                    let sin = lo / w[j];
+                    let exact = (hi_t - lo_t) * sin / (1.0 - sin * sin).sqrt();
+                    assert!(
+                        (l.offset - exact).abs() <= 1e-13 * x,
+                        "x = {x}, layer {j}: {} against {exact}",
+                        l.offset
+                    );
+                }
             }
         }
     }

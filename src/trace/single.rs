@@ -10,7 +10,7 @@ use super::flat::{FlatRefraction, FlatSolution};
 use super::straight::{self, single_specular};
 use super::{
     RaySummary, Reason, Start, Status, Tracer, failed, given_start, initial_guess, leg_sides,
-    nearest_crossing, paraxial_one, refraction_guess, sides_suit, warm_start,
+    nearest_crossing, paraxial_one, refraction_guess, sides_suit, summary, warm_start,
 };
 use crate::geom::{Point, Vec2};
 use crate::polyline::Polyline;
@@ -142,8 +142,9 @@ impl Tracer<'_> {
         )
     }
 
-    /// The ray of a converged [`FlatRefraction::solve`]: its status (the side and obstruction
-    /// tests), with its parameter, points and media in `ws`.
+    /// The ray of a converged [`FlatRefraction::solve`]: its status (the obstruction test; its
+    /// legs are on the sides a refraction demands, see [`Tracer::flat_status`]), with its
+    /// parameter, points and media in `ws`.
     #[expect(
         clippy::too_many_arguments,
         reason = "the parts of a ray held in registers by its callers"
@@ -263,10 +264,8 @@ impl Tracer<'_> {
         if !sides_suit(kind, a, b) {
             return RaySummary {
                 status: Status::NoPath,
-                time: sol.time,
-                iterations: sol.iterations,
-                residual: sol.residual,
                 reason: Some(Reason::WrongSide { step: 0 }),
+                ..summary(sol)
             };
         }
         self.unobstructed_status(path, pts, j, sol)
@@ -289,10 +288,8 @@ impl Tracer<'_> {
         };
         RaySummary {
             status,
-            time: sol.time,
-            iterations: sol.iterations,
-            residual: sol.residual,
             reason,
+            ..summary(sol)
         }
     }
 }

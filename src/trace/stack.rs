@@ -4,21 +4,22 @@
 //!
 //! From the ray-parameter start (`refraction_guess`) such a ray is solved up to round-off,
 //! and the general solve only confirms it: one evaluation, the Newton step's tests, then the
-//! classification. The kernel takes the same steps on the same numbers, with the per-path
-//! data prepared once ([`StraightPath`]) instead of looked up per ray: the segments' frames
-//! from their end points, the points from the segments, and the classification of a ray
-//! whose points are all free and inside their segments with no vanished leg (the side and
-//! obstruction tests). So where it returns, its ray is the general code's, bit for bit
+//! classification. The kernel takes the same steps on the same numbers (the solver's own
+//! fast path, `solver::fast_newton_from`), with the per-path data prepared once
+//! ([`StraightPath`]) instead of looked up per ray: the segments' frames from their end
+//! points, the points from the segments, and the classification of a ray whose points are
+//! all free and inside their segments with no vanished leg (the side and obstruction tests).
+//! So where it returns, its ray is the general code's, bit for bit
 //! (`solver::tests::fast_paths_take_the_general_steps` and the tests below compare them).
-//! Anything else (a start not converged, a point at a segment's end, a vanished leg, a
-//! tiny pivot, no iteration allowed) goes to the general solve from the same start.
+//! Anything else (a point at a segment's end, a fast path that ends otherwise than
+//! converged) goes to the general solve from the same start.
 
 use super::straight::StraightPath;
 use super::{RaySummary, Reason, Status, Tracer, layered_guess, leg_sides, sides_suit, summary};
 use crate::geom::Point;
 use crate::problem::Geometry;
 use crate::scene::StepKind;
-use crate::solver::{Workspace, confirm_start};
+use crate::solver::{Outcome, Workspace, fast_newton_from};
 
 impl Tracer<'_> {
     /// The ray of path `path` (described by `sp`, a [`StraightPath::stack`]) from `source` to
@@ -39,9 +40,6 @@ impl Tracer<'_> {
         let (steps, lines) = (&spec.steps[..], &sp.lines[..]);
         let k = lines.len();
         let opts = scene.solver();
-        if opts.max_iterations == 0 {
-            return None;
-        }
         // The start of `solve_general`: the crossings, then the ray parameter.
         ws.resize(k);
         if !sp.crossings(source, receiver, ws) {
@@ -50,8 +48,8 @@ impl Tracer<'_> {
         ws.slowness.clear();
         ws.slowness.extend_from_slice(&sp.slowness);
         layered_guess(lines, receiver - source, self.guess, ws);
-        // `refraction_guess` clamps to the segments: a point at an end is the general
-        // solve's to pin (or release).
+        // `layered_guess` clamps to the segments: a point at an end is the general solve's to
+        // pin (or release).
         if !(0..k).all(|i| ws.s[i] > 0.0 && ws.s[i] < lines[i].len()) {
             return None;
         }
@@ -62,8 +60,14 @@ impl Tracer<'_> {
             source,
             receiver,
         };
+        // `solve`'s fast path on the frames kept for the path; an outcome other than
+        // converged there (a step leaving a segment, a vanished leg, the iteration limit) is
+        // the general solve's.
         let frames = lines.iter().map(|l| l.frame(source));
-        let sol = confirm_start(&g, frames, sp.curved, ws, opts.tolerance)?;
+        let (outcome, sol) = fast_newton_from(&g, frames, ws, opts.tolerance, opts.max_iterations)?;
+        if outcome != Outcome::Converged {
+            return None;
+        }
         let base = summary(sol);
         ws.media.clear();
         ws.media

@@ -16,13 +16,13 @@
 
 use super::PARALLEL;
 use crate::geom::{Point, Vec2};
-use crate::polyline::{Polyline, segment_intersection};
+use crate::polyline::{Polyline, point_between, segment_intersection};
 use crate::problem::Frame;
 use crate::scene::{Scene, Step, StepKind};
 use crate::solver::{Pin, Workspace};
 
 /// One interface of a [`StraightPath`]: its segment `p → q`, `e = q − p`, its length, and
-/// the polyline's unit tangent and curvature of the segment.
+/// the polyline's unit tangent.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Line {
     p: Point,
@@ -30,19 +30,19 @@ pub(super) struct Line {
     e: Vec2,
     len: f64,
     t: Vec2,
-    kappa: f64,
 }
 
 impl Line {
     fn of(line: &Polyline) -> Line {
         let (p, q) = line.segment(0);
+        // (An open polyline of one segment has no curvature estimate: `Line::frame`.)
+        debug_assert_eq!(line.curvature(0), 0.0);
         Line {
             p,
             q,
             e: q - p,
             len: line.segment_length(0),
             t: line.tangent(0),
-            kappa: line.curvature(0),
         }
     }
 
@@ -58,7 +58,8 @@ impl Line {
         self.t.perp()
     }
 
-    /// [`Frame::new`] of the polyline's segment relative to `origin`, bit for bit.
+    /// [`Frame::new`] of the polyline's segment relative to `origin`, bit for bit (the
+    /// curvature estimate of an open polyline's end segments is zero).
     #[inline(always)]
     pub(super) fn frame(&self, origin: Point) -> Frame {
         Frame {
@@ -67,7 +68,7 @@ impl Line {
             t: self.t,
             lo: 0.0,
             hi: self.len,
-            kappa: self.kappa,
+            kappa: 0.0,
             quarter: f64::INFINITY,
         }
     }
@@ -75,12 +76,7 @@ impl Line {
     /// [`Polyline::point_on`] on the segment, bit for bit.
     #[inline(always)]
     pub(super) fn point_on(&self, s: f64) -> Point {
-        let (from_start, from_end) = (s - 0.0, self.len - s);
-        if from_start <= from_end {
-            self.p + self.t * from_start
-        } else {
-            self.q - self.t * from_end
-        }
+        point_between(self.p, self.q, self.t, 0.0, self.len, s)
     }
 
     /// `x` mirrored in the segment's line.
@@ -183,9 +179,6 @@ pub(crate) struct StraightPath {
     pub(crate) parallel: bool,
     /// The legs' slownesses when the path's media are given (else empty).
     pub(super) slowness: Box<[f64]>,
-    /// Whether some segment has a curvature estimate (`Polyline::curvature`; none has on an
-    /// open polyline of one segment).
-    pub(super) curved: bool,
 }
 
 impl StraightPath {
@@ -221,7 +214,6 @@ impl StraightPath {
             kind,
             parallel,
             slowness: media.iter().map(slowness).collect(),
-            curved: polylines.iter().any(|line| line.curvature(0) != 0.0),
         })
     }
 
