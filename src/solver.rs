@@ -417,7 +417,12 @@ pub(crate) fn solve(
         let done = match k {
             0 => None,
             1 => fast_newton_single(g, ws, tol, max_iterations, &mut fast),
-            _ => fast_newton(g, ws, tol, max_iterations, &mut fast),
+            _ => {
+                ws.frames.clear();
+                ws.frames
+                    .extend((0..k).map(|i| Frame::new(g.line(i), ws.seg[i], g.source)));
+                fast_newton(g, ws, tol, max_iterations, &mut fast)
+            }
         };
         if let Some(done) = done {
             return done;
@@ -935,44 +940,11 @@ impl Fast {
 /// The common case of [`solve`], without its bookkeeping: every point free and every full
 /// Newton step staying inside the segments the points are on, with no leg vanishing. Takes
 /// exactly the steps the general loop would take there (same arithmetic, same tests), on
-/// segment frames prepared once, and hands over (`None`, with `fast` updated) at the first
-/// iteration that needs more: a step leaving a segment or capped, a rejected full step, a
-/// vanished leg, a singular Hessian.
+/// the points' segment frames prepared once in `ws.frames`, and hands over (`None`, with
+/// `fast` updated) at the first iteration that needs more: a step leaving a segment or
+/// capped, a rejected full step, a vanished leg, a singular Hessian.
+#[inline(always)]
 fn fast_newton(
-    g: &Geometry,
-    ws: &mut Workspace,
-    tol: f64,
-    max_iterations: usize,
-    fast: &mut Fast,
-) -> Option<(Outcome, Solution)> {
-    let k = g.k();
-    ws.frames.clear();
-    ws.frames
-        .extend((0..k).map(|i| Frame::new(g.line(i), ws.seg[i], g.source)));
-    fast_newton_framed(g, ws, tol, max_iterations, fast)
-}
-
-/// [`fast_newton`] from the start in `ws` (every point free) on frames prepared elsewhere
-/// (`frames`: those [`Frame::new`] gives for the points' segments), with a fresh iteration
-/// state: the same steps. For callers that keep a path's segments at hand.
-#[inline(always)]
-pub(crate) fn fast_newton_from(
-    g: &Geometry,
-    frames: impl Iterator<Item = Frame>,
-    ws: &mut Workspace,
-    tol: f64,
-    max_iterations: usize,
-) -> Option<(Outcome, Solution)> {
-    debug_assert!(ws.pin[..g.k()].iter().all(|&p| p == Pin::Free));
-    ws.frames.clear();
-    ws.frames.extend(frames);
-    let mut fast = Fast::START;
-    fast_newton_framed(g, ws, tol, max_iterations, &mut fast)
-}
-
-/// The loop of [`fast_newton`] on the frames in `ws.frames`.
-#[inline(always)]
-fn fast_newton_framed(
     g: &Geometry,
     ws: &mut Workspace,
     tol: f64,
@@ -1060,6 +1032,24 @@ fn fast_newton_framed(
         std::mem::swap(&mut ws.eval, &mut ws.eval_try);
         std::mem::swap(&mut ws.s, &mut ws.s_try);
     }
+}
+
+/// [`fast_newton`] from the start in `ws` (every point free) on frames prepared elsewhere
+/// (`frames`: those [`Frame::new`] gives for the points' segments), with a fresh iteration
+/// state: the same steps. For callers that keep a path's segments at hand.
+#[inline(always)]
+pub(crate) fn fast_newton_from(
+    g: &Geometry,
+    frames: impl Iterator<Item = Frame>,
+    ws: &mut Workspace,
+    tol: f64,
+    max_iterations: usize,
+) -> Option<(Outcome, Solution)> {
+    debug_assert!(ws.pin[..g.k()].iter().all(|&p| p == Pin::Free));
+    ws.frames.clear();
+    ws.frames.extend(frames);
+    let mut fast = Fast::START;
+    fast_newton(g, ws, tol, max_iterations, &mut fast)
 }
 
 /// [`fast_newton`] for a path of one interaction, in registers: the same steps and tests.
