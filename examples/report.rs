@@ -32,8 +32,7 @@ mod report {
 
     use eigenray::argmin_bridge::{solve_bfgs, solve_gauss_newton, solve_lbfgs};
     use eigenray::{
-        InitialGuess, PathProblem, Point, RaySummary, Scene, SolverOptions, Status, Tracer,
-        Workspace, demo,
+        InitialGuess, PathProblem, Point, RayRecord, Scene, SolverOptions, Tracer, Workspace, demo,
     };
 
     use super::plot::{Marker, Plot, Scale, Series};
@@ -339,7 +338,7 @@ mod report {
     }
 
     /// eigenray's solver with the given options and start, one reused workspace, one thread.
-    fn ours(case: &Case, options: SolverOptions, guess: InitialGuess) -> (Timing, Vec<RaySummary>) {
+    fn ours(case: &Case, options: SolverOptions, guess: InitialGuess) -> (Timing, Vec<RayRecord>) {
         let mut scene = case.scene.clone();
         scene.set_solver(options);
         let tracer = Tracer::new(&scene)
@@ -347,19 +346,14 @@ mod report {
             .with_initial_guess(guess);
         let rays = case.rays();
         let mut ws = Workspace::new();
-        let mut out = vec![
-            RaySummary {
-                status: Status::NotConverged,
-                time: f64::NAN,
-                iterations: 0,
-                residual: f64::NAN,
-                reason: None,
-            };
-            rays.len()
-        ];
+        let mut out = vec![RayRecord::default(); rays.len()];
         let t = time_per_call(9, MIN_RUN, || {
             for (o, &(s, r, p)) in out.iter_mut().zip(&rays) {
                 *o = tracer.solve_indexed_from(s, r, p, None, &mut ws);
+                if !o.status.has_time() {
+                    // The last iterate's time: a fixed number of iterations may stop short.
+                    o.time = ws.iterate_time();
+                }
             }
             black_box(&out);
         });
@@ -1066,7 +1060,7 @@ mod report {
              - **eigenray Newton**: `Tracer::solve_indexed_from` with one reused `Workspace` (the \
              time includes the start and the classification), at tolerances 1e-2 … 1e-14 \
              (100 iterations at most), and with a fixed number of iterations (tolerance 1e-300, \
-             `max_iterations` = n; the time of a ray that did not converge is `RaySummary.time` \
+             `max_iterations` = n; the time of a ray that did not converge is its last iterate's, `Workspace::iterate_time` \
              all the same; the solver also stops when the full Newton step is below round-off). \
              On seed500 (one refraction at an interface of one segment) the rays go through the \
              flat-refraction kernel, from either start: two Halley steps on Snell's law squared \

@@ -3,11 +3,14 @@
 use rayon::prelude::*;
 
 use crate::geom::{Point, Vec2};
-use crate::problem::{Frame, Geometry, coord};
+use crate::problem::{Frame, coord};
 use crate::solver::{
-    Outcome, SingleIter, SingleNext, Workspace, receiver_sensitivity, single_sensitivity,
+    OneStepNewton, Outcome, ReceiverSensitivity, one_step_sensitivity, receiver_sensitivity,
 };
-use crate::trace::{Ray, RaySummary, Reason, SinglePath, Start, Status, Tracer, given_param};
+use crate::trace::{
+    OneStepPath, PathPlan, Ray, RayRecord, Start, Status, Tracer, Workspace, flat_status,
+    given_param,
+};
 
 /// How to run a batch.
 #[derive(Clone, Copy)]
@@ -40,34 +43,7 @@ impl Default for BatchOptions<'_> {
     }
 }
 
-/// The result of one ray of a batch, without its points (see [`Batch::points`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RayRecord {
-    /// How it ended.
-    pub status: Status,
-    /// Travel time (meaningful when `status.has_time()`, NaN otherwise).
-    pub time: f64,
-    /// Solver iterations.
-    pub iterations: u32,
-    /// Final relative residual (NaN when the solver did not run).
-    pub residual: f64,
-    /// Why it is not `converged`, when it is not.
-    pub reason: Option<Reason>,
-}
-
-impl Default for RayRecord {
-    fn default() -> Self {
-        RayRecord {
-            status: Status::NotConverged,
-            time: f64::NAN,
-            iterations: 0,
-            residual: f64::NAN,
-            reason: None,
-        }
-    }
-}
-
-/// Every ray of a scene, in the contract's ray order, in flat arrays: one record per ray and,
+/// Every ray of a scene, in ray order ([`ray_index`](crate::ray_index)), in flat arrays: one record per ray and,
 /// per (source, receiver) pair, one block holding the points (and leg media) of all paths.
 ///
 /// ```
@@ -152,7 +128,7 @@ impl Batch {
             receiver,
             path,
             status: rec.status,
-            time: has.then_some(rec.time),
+            time: rec.time,
             points: if has {
                 self.points(ray).to_vec()
             } else {
@@ -230,7 +206,8 @@ impl Warm {
         let k = range.len();
         self.params[range.clone()].copy_from_slice(ws.parameters());
         self.g[p] = receiver_sensitivity(
-            ws,
+            &ws.newton,
+            &ws.ray.slowness,
             &mut self.z[range],
             &mut self.unit[..k],
             &mut self.cp[..k],
@@ -238,11 +215,11 @@ impl Warm {
     }
 
     /// [`store`](Self::store) for a one-interaction path whose solution `s` was solved without
-    /// a workspace, with its sensitivity `(z, g)` (`single_sensitivity`).
-    fn store_one(&mut self, p: usize, at: usize, s: f64, sensitivity: Option<(f64, Vec2)>) {
+    /// a workspace, with its sensitivity (`one_step_sensitivity`).
+    fn store_one(&mut self, p: usize, at: usize, s: f64, sensitivity: Option<ReceiverSensitivity>) {
         self.params[at] = s;
         (self.z[at], self.g[p]) = match sensitivity {
-            Some((z, g)) => (z, Some(g)),
+            Some(sens) => (sens.z, Some(sens.g)),
             None => (0.0, None),
         };
     }
@@ -422,9 +399,11 @@ impl Tracer<'_> {
                     // Path by path: each path's rays form one chain of warm starts.
                     for p in 0..np {
                         let params = param_offsets[p]..param_offsets[p + 1];
-                        match self.single_path(p) {
-                            Some(sp) => self.single_chain(sp, p, params.start, &mut unit, ws, warm),
-                            None => self.path_chain(p, params, &mut unit, ws, warm),
+                        match self.plan_of(p) {
+                            PathPlan::OneStep(one) | PathPlan::FlatRefraction(one, _) => {
+                                self.one_step_chain(one, p, params.start, &mut unit, ws, warm)
+                            }
+                            _ => self.path_chain(p, params, &mut unit, ws, warm),
                         }
                     }
                     if let Some(progress) = opts.progress {
@@ -515,8 +494,8 @@ impl Unit<'_> {
 
     /// Writes ray `s` of path `p` of block `b` with its points and leg media.
     #[inline]
-    fn write(&mut self, b: usize, p: usize, s: &RaySummary, points: &[Point], media: &[usize]) {
-        self.rec[b * self.np + p] = RayRecord::of(s);
+    fn write(&mut self, b: usize, p: usize, s: &RayRecord, points: &[Point], media: &[usize]) {
+        self.rec[b * self.np + p] = *s;
         let at = b * self.pts_block;
         let ray_points = &mut self.pts[at + self.po[p]..at + self.po[p + 1]];
         if s.status.has_time() {
@@ -542,11 +521,11 @@ impl Unit<'_> {
         &mut self,
         b: usize,
         p: usize,
-        s: &RaySummary,
+        s: &RayRecord,
         points: &[Point; 3],
         media: [usize; 2],
     ) {
-        self.rec[b * self.np + p] = RayRecord::of(s);
+        self.rec[b * self.np + p] = *s;
         let at = b * self.pts_block + self.po[p];
         let nan = Point::new(f64::NAN, f64::NAN);
         let points = if s.status.has_time() {
@@ -560,33 +539,22 @@ impl Unit<'_> {
     }
 }
 
-impl RayRecord {
-    /// The record of a ray's summary.
-    #[inline(always)]
-    fn of(s: &RaySummary) -> RayRecord {
-        RayRecord {
-            status: s.status,
-            time: if s.status.has_time() {
-                s.time
-            } else {
-                f64::NAN
-            },
-            iterations: s.iterations as u32,
-            residual: s.residual,
-            reason: s.reason,
-        }
-    }
-}
-
-/// What [`Tracer::single_chain`] needs of its path, looked up once.
+/// What [`Tracer::one_step_chain`] needs of its path, looked up once.
 #[derive(Clone, Copy)]
-struct SingleChain<'a> {
-    sp: &'a SinglePath,
+struct OneStepChain<'a> {
+    one: &'a OneStepPath,
     p: usize,
     kind: crate::scene::StepKind,
     line: &'a crate::polyline::Polyline,
-    tol: f64,
-    max_iterations: usize,
+}
+
+/// A ray of [`Tracer::one_step_chain`] solved without the workspace: its record, points,
+/// final iterate and segment.
+struct OneStepRay {
+    record: RayRecord,
+    points: [Point; 3],
+    newton: OneStepNewton,
+    seg: usize,
 }
 
 /// One path's chain of warm starts through the blocks of a unit: whether its last ray
@@ -646,7 +614,8 @@ impl Tracer<'_> {
         let mut chain = Chain::default();
         // Through parallel flat layers the default start is already the solution: a warm
         // start would leave a Newton step or two.
-        let warm_start = unit.warm_start && !self.exact_start(p);
+        let skip = self.plan_of(p).skips_warm_start(self.initial_guess());
+        let warm_start = unit.warm_start && !skip;
         for b in 0..unit.n {
             let link = chain.link(self.scene(), unit, b);
             let guess =
@@ -669,7 +638,7 @@ impl Tracer<'_> {
         p: usize,
         guess: Option<&[f64]>,
         ws: &mut Workspace,
-    ) -> RaySummary {
+    ) -> RayRecord {
         let start = guess.map_or(Start::Default, Start::Given);
         let s = self.solve_indexed_start(source, receiver, p, start, ws);
         if guess.is_none() || s.status == Status::Converged {
@@ -678,22 +647,22 @@ impl Tracer<'_> {
         // The neighbour's path may lead elsewhere (off an end, onto a vertex): the
         // documented start decides.
         let cold = self.solve_indexed_start(source, receiver, p, Start::Default, ws);
-        RaySummary {
+        RayRecord {
             iterations: s.iterations + cold.iterations,
             ..cold
         }
     }
 
     /// [`path_chain`](Self::path_chain) for a one-interaction path (its parameter at `at` in
-    /// `warm`), without the workspace: each ray's start, Newton steps ([`SingleIter`], the
-    /// steps of one-by-one solving) and side and obstruction tests in registers. A ray that
-    /// leaves this common case (no crossing or specular point to start from, a step leaving its
-    /// segment, any status but `converged` after a warm start) is solved one by one from the
-    /// same start. A refraction at a one-segment interface goes through the flat kernel
-    /// (`SinglePath::flat`) instead, never warm-started, as one by one.
-    fn single_chain(
+    /// `warm`), without the workspace: each ray's start, Newton steps ([`OneStepNewton`], the
+    /// steps of one-by-one solving) and classification in registers. A ray that leaves this
+    /// common case (no crossing or specular point to start from, a step leaving its segment,
+    /// any status but `converged` after a warm start) is solved one by one from the same
+    /// start. A refraction at a one-segment interface goes through the flat kernel instead,
+    /// never warm-started, as one by one.
+    fn one_step_chain(
         &self,
-        sp: &SinglePath,
+        one: &OneStepPath,
         p: usize,
         at: usize,
         unit: &mut Unit,
@@ -702,22 +671,24 @@ impl Tracer<'_> {
     ) {
         let scene = self.scene();
         let step = &scene.paths()[p].steps[0];
-        let opts = scene.solver();
-        let path = SingleChain {
-            sp,
+        let path = OneStepChain {
+            one,
             p,
             kind: step.kind,
             line: &scene.interfaces()[step.interface].polyline,
-            tol: opts.tolerance,
-            max_iterations: opts.max_iterations,
         };
         let mut chain = Chain::default();
         // The last ray's segment: the first one tried for the next start.
         let mut seg = 0;
         // Off a flat mirror the default start is already the solution; at a flat interface
         // the kernel's steps from its own start cost less than a warm start saves.
-        let flat = sp.flat();
-        let warm_start = unit.warm_start && !self.exact_start(p) && flat.is_none();
+        let flat = match self.plan_of(p) {
+            PathPlan::FlatRefraction(_, flat) => Some(flat),
+            _ => None,
+        };
+        let skip = self.plan_of(p).skips_warm_start(self.initial_guess());
+        let warm_start = unit.warm_start && !skip;
+        let cx = self.context();
         for b in 0..unit.n {
             let link = chain.link(scene, unit, b);
             let guess =
@@ -726,20 +697,21 @@ impl Tracer<'_> {
             let fast = match flat {
                 // (Never warm-started.)
                 Some(flat) => flat.solve(source, link.here).map(|sol| {
-                    let (s, pts) = self.flat_status(flat, p, source, link.here, sol);
-                    (s, pts, None)
+                    let ray = flat_status(&cx, flat, p, source, link.here, sol);
+                    (ray.record, ray.points, None)
                 }),
                 None => self
-                    .single_fast(&path, source, link.here, guess, seg)
-                    .map(|(s, pts, it, j)| (s, pts, Some((it, j)))),
+                    .one_step_fast(&path, source, link.here, guess, seg)
+                    .map(|ray| (ray.record, ray.points, Some((ray.newton, ray.seg)))),
             };
             match fast {
-                Some((s, pts, it)) => {
-                    unit.write_one(b, p, &s, &pts, sp.media);
-                    chain.have = s.status == Status::Converged;
-                    if let Some((it, j)) = it.filter(|_| chain.have && warm_start) {
+                Some((record, points, newton)) => {
+                    unit.write_one(b, p, &record, &points, one.media);
+                    chain.have = record.status == Status::Converged;
+                    if let Some((it, j)) = newton.filter(|_| chain.have && warm_start) {
                         let t = path.line.tangent(j);
-                        warm.store_one(p, at, it.s, single_sensitivity(&it.e, t, sp.slowness[1]));
+                        let sens = one_step_sensitivity(&it.e, t, one.slowness[1]);
+                        warm.store_one(p, at, it.s, sens);
                         seg = j;
                     }
                 }
@@ -751,67 +723,65 @@ impl Tracer<'_> {
                     chain.have = s.status == Status::Converged;
                     if chain.have && warm_start {
                         warm.store(p, at..at + 1, ws);
-                        seg = ws.seg[0];
+                        seg = ws.newton.seg[0];
                     }
                 }
             }
         }
     }
 
-    /// One ray of [`single_chain`](Self::single_chain) from `guess` (else the crossing start),
-    /// `hint` a segment to try first: its summary, points, final iterate and segment; `None`
-    /// when the ray must be solved one by one.
+    /// One ray of [`one_step_chain`](Self::one_step_chain) from `guess` (else the crossing
+    /// start), `hint` a segment to try first; `None` when the ray must be solved one by one.
     #[inline(always)]
-    fn single_fast(
+    fn one_step_fast(
         &self,
-        path: &SingleChain,
+        path: &OneStepChain,
         source: Point,
         receiver: Point,
         guess: Option<f64>,
         hint: usize,
-    ) -> Option<(RaySummary, [Point; 3], SingleIter, usize)> {
-        let SingleChain {
-            sp, p, kind, line, ..
-        } = *path;
-        let (s, j) = match guess {
+    ) -> Option<OneStepRay> {
+        let OneStepChain { one, p, kind, line } = *path;
+        let at = match guess {
             Some(wanted) => given_param(line, wanted, hint),
-            None => self
-                .single_crossing_start(sp, p, kind, line, source, receiver)
-                .ok()?,
+            None => match one.crossing_start(kind, line, source, receiver) {
+                crate::trace::OneStepStart::At(at) => at,
+                _ => return None,
+            },
         };
+        let (s, j) = (at.s, at.seg);
         let (to_receiver, coord) = (receiver - source, coord(source, receiver));
         let f = &Frame::new(line, j, source);
-        let mut it = SingleIter::start(s, f, sp.slowness, to_receiver, coord);
-        loop {
-            match it.next(f, path.tol, path.max_iterations) {
-                SingleNext::Try { to, polish } => {
-                    let trial =
-                        Geometry::evaluate_single(to, f, sp.slowness, to_receiver, coord, false);
-                    if !it.accept(to, polish, trial) {
-                        return None;
-                    }
-                }
-                SingleNext::End(Outcome::Converged) => break,
-                SingleNext::End(_) | SingleNext::General => return None,
-            }
-        }
-        let e = &it.e;
-        let pts = [source, line.point_on(j, it.s), receiver];
-        let rel = [Vec2::default(), e.p, to_receiver];
-        let s = self.single_status(
-            p,
-            kind,
-            line.normal(j),
-            j,
-            &pts,
-            &rel,
-            &e.len,
-            it.solution(),
-        );
-        if s.status != Status::Converged && guess.is_some() {
+        let mut it = OneStepNewton::start(s, f, one.slowness, to_receiver, coord);
+        if it.run(f, one.slowness, to_receiver, coord, self.newton_options())
+            != Some(Outcome::Converged)
+        {
             return None;
         }
-        Some((s, pts, it, j))
+        let e = &it.e;
+        let points = [source, line.point_on(j, it.s), receiver];
+        let rel = [Vec2::default(), e.p, to_receiver];
+        let sol = it.solution(Outcome::Converged);
+        let sides = std::iter::once((kind, line.normal(j)));
+        let record = self.classifier().free_points(
+            self.scene(),
+            p,
+            sides,
+            &rel,
+            &e.len,
+            &points,
+            &[j],
+            &sol,
+        );
+        if record.status != Status::Converged && guess.is_some() {
+            return None;
+        }
+        Some(OneStepRay {
+            record,
+            points,
+            newton: it,
+            seg: j,
+        })
     }
 }
 

@@ -22,7 +22,7 @@
 //! let tracer = Tracer::new(&scene).unwrap();
 //! let rays = tracer.trace_all();
 //! assert_eq!(rays[0].status, Status::Converged);
-//! assert!((rays[0].time.unwrap() - 2.6017642).abs() < 1e-6);
+//! assert!((rays[0].time - 2.6017642).abs() < 1e-6);
 //! ```
 
 mod batch;
@@ -40,10 +40,10 @@ mod trace;
 #[cfg(feature = "argmin")]
 pub mod argmin_bridge;
 
-pub use batch::{Batch, BatchOptions, RayRecord};
+pub use batch::{Batch, BatchOptions};
 pub use geom::{Aabb, Point, SegmentContact, Vec2, orient, segment_contact};
 pub use output::{Format, write_batch, write_rays, write_rays_json};
-pub use polyline::{Polyline, PolylineError};
+pub use polyline::{Nearest, Polyline, PolylineError};
 pub use problem::{PathProblem, Tridiagonal};
 pub use regions::{LocateHint, Regions, Sides};
 pub use scene::{
@@ -51,8 +51,9 @@ pub use scene::{
     MAX_ITERATIONS_LIMIT, MAX_SPEED_RATIO, Medium, MediumSpec, Path, PathSpec, Scene, SceneError,
     SceneSpec, SegmentRef, SolverOptions, SolverSpec, Step, StepKind, StepSpec,
 };
-pub use solver::{Solution, Workspace};
-pub use trace::{InitialGuess, Ray, RaySummary, Reason, Status, Tracer, ray_index};
+pub use trace::{
+    InitialGuess, Kernels, Ray, RayRecord, Reason, Status, Tracer, Workspace, ray_index,
+};
 
 /// The README's examples, compiled and run as doctests.
 #[cfg(doctest)]

@@ -354,7 +354,7 @@ pub fn write_rays<W: Write>(scene: &Scene, rays: &[Ray], format: Format, out: W)
             receiver: r.receiver,
             path: r.path,
             status: r.status,
-            time: r.time,
+            time: r.status.has_time().then_some(r.time),
             points: &r.points,
             iterations: r.iterations,
             residual: r.residual,

@@ -51,6 +51,17 @@ impl std::fmt::Display for PolylineError {
     }
 }
 
+/// The point of a polyline nearest to a given point ([`Polyline::nearest`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Nearest {
+    /// Its parameter (arclength from the first vertex).
+    pub s: f64,
+    /// Its segment.
+    pub seg: usize,
+    /// Its distance from the given point.
+    pub distance: f64,
+}
+
 /// A polyline: the shape of one interface.
 ///
 /// A point on it is one number, its arclength `s` from the first vertex. Segment `j` runs from
@@ -413,10 +424,9 @@ impl Polyline {
         self.point_on(self.segment_at(s), s)
     }
 
-    /// The point of the polyline nearest to `p`: `(parameter, segment, distance)`.
-    /// `O(log M)` for well-spread segments (a BVH query). A point with a NaN coordinate gets
-    /// the first vertex, at distance NaN.
-    pub fn nearest(&self, p: Point) -> (f64, usize, f64) {
+    /// The point of the polyline nearest to `p`. `O(log M)` for well-spread segments (a BVH
+    /// query). A point with a NaN coordinate gets the first vertex, at distance NaN.
+    pub fn nearest(&self, p: Point) -> Nearest {
         let found = self.bvh.nearest(p, |j| {
             let (_, q) = self.project(j as usize, p);
             (q - p).dot(q - p)
@@ -424,9 +434,17 @@ impl Polyline {
         match found {
             Some((seg, d2)) => {
                 let (s, _) = self.project(seg as usize, p);
-                (s, seg as usize, d2.sqrt())
+                Nearest {
+                    s,
+                    seg: seg as usize,
+                    distance: d2.sqrt(),
+                }
             }
-            None => (0.0, 0, f64::NAN),
+            None => Nearest {
+                s: 0.0,
+                seg: 0,
+                distance: f64::NAN,
+            },
         }
     }
 
@@ -574,11 +592,19 @@ mod tests {
     #[test]
     fn nearest_point() {
         let sq = square();
-        let (s, seg, d) = sq.nearest(Point::new(0.5, -2.0));
+        let Nearest {
+            s,
+            seg,
+            distance: d,
+        } = sq.nearest(Point::new(0.5, -2.0));
         assert_eq!((s, seg, d), (0.5, 0, 2.0));
-        let (s, _, d) = sq.nearest(Point::new(2.0, 0.5));
+        let Nearest { s, distance: d, .. } = sq.nearest(Point::new(2.0, 0.5));
         assert_eq!((s, d), (1.5, 1.0));
-        let (s, seg, d) = sq.nearest(Point::new(f64::NAN, 0.5));
+        let Nearest {
+            s,
+            seg,
+            distance: d,
+        } = sq.nearest(Point::new(f64::NAN, 0.5));
         assert_eq!((s, seg), (0.0, 0));
         assert!(d.is_nan());
     }

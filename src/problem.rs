@@ -311,7 +311,7 @@ impl<'a> Geometry<'a> {
         to_receiver: Vec2,
         coord: f64,
         curvature: bool,
-    ) -> Single {
+    ) -> OnePointEval {
         // Written out in scalars, operation for operation as the `Vec2` forms of
         // `evaluate_framed` (so bit for bit): fewer shuffles and spills than the vector forms.
         let p = f.offset(s);
@@ -345,7 +345,7 @@ impl<'a> Geometry<'a> {
             [l0, l1],
             [i0, i1],
         );
-        Single {
+        OnePointEval {
             p,
             u,
             len,
@@ -452,7 +452,7 @@ impl<'a> Geometry<'a> {
 
 /// [`Eval`] of a one-interaction path, in registers (see [`Geometry::evaluate_single`]).
 #[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Single {
+pub(crate) struct OnePointEval {
     /// The interaction point minus the source.
     pub p: Vec2,
     /// Unit directions of the two legs.
@@ -477,7 +477,7 @@ pub(crate) struct Single {
     pub vanish: f64,
 }
 
-impl Single {
+impl OnePointEval {
     /// Writes this evaluation into `e` (sized for one interaction on the segment `f`), as
     /// [`Geometry::evaluate_framed`] would have left it.
     pub fn store(&self, f: &Frame, to_receiver: Vec2, e: &mut Eval) {

@@ -256,7 +256,7 @@ fn solved_rays(scene: &Scene) -> Vec<(Ray, PathProblem<'_>, Vec<f64>)> {
             let s = ws.parameters().to_vec();
             // The bridge's problem reproduces eigenray's ray at eigenray's parameters.
             assert!(max_point_difference(&problem.points(&s), &ray.points) <= 1e-12);
-            assert!((problem.time(&s) - ray.time.unwrap()).abs() <= 1e-13 * ray.time.unwrap());
+            assert!((problem.time(&s) - ray.time).abs() <= 1e-13 * ray.time);
             (ray, problem, s)
         })
         .collect()
@@ -269,7 +269,7 @@ fn cross_check(json: &str, name: &str) {
     let scene = Scene::from_json(json).unwrap();
     for (ray_index, (ray, problem, s_ours)) in solved_rays(&scene).into_iter().enumerate() {
         let label = format!("{name} ray {ray_index}");
-        let time = ray.time.unwrap();
+        let time = ray.time;
         let guess = initial_guess(&scene, ray.source, ray.receiver, ray.path);
         // Gauss-Newton and Newton take full steps, with no line search or trust region: from
         // eigenray's guess, which can be far from the ray, they may diverge (eigenray's damped
@@ -366,7 +366,7 @@ fn random_starts_agree() {
                 for (i, (solver, solve, accuracy)) in solvers.into_iter().enumerate() {
                     let out = solve(&problem, &s0, MAX_ITERS, TOL).unwrap();
                     let d = max_point_difference(&problem.points(&out.s), &ray.points);
-                    let time = ray.time.unwrap();
+                    let time = ray.time;
                     assert!(
                         out.residual <= accuracy.residual,
                         "{label}: {solver}: {out:?}"

@@ -278,7 +278,7 @@ fn coord(source: Point, receiver: Point) -> f64 {
 /// with the line is at least this, as no leg is longer than the extent), so its status skips
 /// the side test.
 pub(crate) const CLEAR: f64 = 1e-9;
-const _: () = assert!(super::SIDE_MARGIN < CLEAR);
+const _: () = assert!(super::classify::SIDE_MARGIN < CLEAR);
 
 /// The slownesses the kernel takes (see [`FlatRefraction::solve`]).
 const SLOWNESS: std::ops::RangeInclusive<f64> = 1e-15..=1e15;
@@ -288,7 +288,7 @@ mod tests {
     use super::*;
     use crate::demo::SplitMix64;
     use crate::scene::{Scene, SolverOptions};
-    use crate::trace::{Status, Tracer};
+    use crate::trace::{Kernels, PathPlan, Status, Tracer};
     use crate::{Ray, Workspace};
 
     /// `T′(x)` of the ray from `s` to `r` refracting at `x` along the segment `o + x t`.
@@ -533,8 +533,8 @@ mod tests {
         let tracer = Tracer::new(scene).unwrap();
         let mut ws = Workspace::new();
         let mut rays: [Vec<Ray>; 2] = Default::default();
-        for (off, out) in rays.iter_mut().enumerate() {
-            crate::solver::tests::FLAT_OFF.with(|c| c.set(off == 1));
+        for (kernels, out) in [Kernels::All, Kernels::BitExact].into_iter().zip(&mut rays) {
+            let tracer = Tracer::new(scene).unwrap().with_kernels(kernels);
             for s in 0..scene.sources().len() {
                 for r in 0..scene.receivers().len() {
                     for p in 0..scene.paths().len() {
@@ -543,7 +543,6 @@ mod tests {
                 }
             }
         }
-        crate::solver::tests::FLAT_OFF.with(|c| c.set(false));
         let size = scene
             .receivers()
             .iter()
@@ -553,14 +552,18 @@ mod tests {
         for (i, (a, b)) in rays[0].iter().zip(&rays[1]).enumerate() {
             assert_eq!((a.status, a.reason), (b.status, b.reason), "ray {i}");
             assert_eq!(a.media, b.media, "ray {i}");
-            if let (Some(ta), Some(tb)) = (a.time, b.time) {
+            if a.status.has_time() {
+                let (ta, tb) = (a.time, b.time);
                 assert!((ta - tb).abs() <= 1e-12 * tb, "ray {i}: {ta} vs {tb}");
                 for (pa, pb) in a.points.iter().zip(&b.points) {
                     assert!((*pa - *pb).length() <= 1e-9 * size, "ray {i}");
                 }
             }
             let (src, rcv) = (scene.sources()[a.source], scene.receivers()[a.receiver]);
-            let flat = tracer.single_path(a.path).and_then(|sp| sp.flat());
+            let flat = match tracer.plan_of(a.path) {
+                PathPlan::FlatRefraction(_, flat) => Some(flat),
+                _ => None,
+            };
             kernel += flat.and_then(|f| f.solve(src, rcv)).is_some() as usize;
         }
         kernel

@@ -15,103 +15,91 @@
 //! converged) goes to the general solve from the same start.
 
 use super::straight::StraightPath;
-use super::{RaySummary, Reason, Status, Tracer, layered_guess, leg_sides, sides_suit, summary};
+use super::{Context, RayRecord, Workspace, start::layered_guess};
 use crate::geom::Point;
 use crate::problem::Geometry;
 use crate::scene::StepKind;
-use crate::solver::{Outcome, Workspace, fast_newton_from};
+use crate::solver::{Outcome, fast_newton_from};
 
-impl Tracer<'_> {
-    /// The ray of path `path` (described by `sp`, a [`StraightPath::stack`]) from `source` to
-    /// `receiver` from the default start, as the general solve gives it (summary, and
+impl StraightPath {
+    /// The ray of path `path` (described by `self`, a [`StraightPath::stack`]) from `source`
+    /// to `receiver` from the default start, as the general solve gives it (record, and
     /// parameters, points and media in `ws`), or `None` outside the kernel's case (see the
     /// module).
     #[inline(always)]
     pub(super) fn solve_stack(
         &self,
-        sp: &StraightPath,
+        cx: &Context,
         path: usize,
         source: Point,
         receiver: Point,
         ws: &mut Workspace,
-    ) -> Option<RaySummary> {
-        let scene = self.scene;
+    ) -> Option<RayRecord> {
+        let scene = cx.scene;
         let spec = &scene.paths()[path];
-        let (steps, lines) = (&spec.steps[..], &sp.lines[..]);
+        let (steps, lines) = (&spec.steps[..], &self.lines[..]);
         let k = lines.len();
-        let opts = scene.solver();
-        // The start of `solve_general`: the crossings, then the ray parameter.
+        // The start of the general solve: the crossings, then the ray parameter.
         ws.resize(k);
-        if !sp.crossings(source, receiver, ws) {
+        if !self.crossings(source, receiver, ws) {
             return None;
         }
-        ws.slowness.clear();
-        ws.slowness.extend_from_slice(&sp.slowness);
-        layered_guess(lines, receiver - source, self.guess, ws);
+        ws.ray.slowness.clear();
+        ws.ray.slowness.extend_from_slice(&self.slowness);
+        layered_guess(lines, receiver - source, cx.guess, ws);
         // `layered_guess` clamps to the segments: a point at an end is the general solve's to
         // pin (or release).
-        if !(0..k).all(|i| ws.s[i] > 0.0 && ws.s[i] < lines[i].len()) {
+        if !(0..k).all(|i| ws.newton.s[i] > 0.0 && ws.newton.s[i] < lines[i].len()) {
             return None;
         }
         let g = Geometry {
             scene,
             steps,
-            slowness: &sp.slowness,
+            slowness: &self.slowness,
             source,
             receiver,
         };
-        // `solve`'s fast path on the frames kept for the path; an outcome other than
+        // The solver's fast path on the frames kept for the path; an outcome other than
         // converged there (a step leaving a segment, a vanished leg, the iteration limit) is
         // the general solve's.
         let frames = lines.iter().map(|l| l.frame(source));
-        let (outcome, sol) = fast_newton_from(&g, frames, ws, opts.tolerance, opts.max_iterations)?;
-        if outcome != Outcome::Converged {
+        let sol = fast_newton_from(&g, frames, &mut ws.newton, cx.newton)?;
+        if sol.outcome != Outcome::Converged {
             return None;
         }
-        let base = summary(sol);
-        ws.media.clear();
-        ws.media
+        ws.ray.media.clear();
+        ws.ray
+            .media
             .extend_from_slice(spec.media.as_deref().unwrap_or(&[]));
-        ws.points.clear();
-        ws.points.push(source);
-        ws.points
-            .extend(lines.iter().zip(&ws.s[..k]).map(|(l, &s)| l.point_on(s)));
-        ws.points.push(receiver);
-        // `Tracer::classify` for free points inside their segments, no leg vanished.
-        let (rel, len) = (&ws.eval.rel[..k + 2], &ws.eval.len[..k + 1]);
-        for (i, l) in lines.iter().enumerate() {
-            let (a, b) = leg_sides(l.normal(), 1.0, &rel[i..i + 3], &len[i..i + 2]);
-            if !sides_suit(StepKind::Refract, a, b) {
-                return Some(RaySummary {
-                    status: Status::NoPath,
-                    reason: Some(Reason::WrongSide { step: i }),
-                    ..base
-                });
-            }
-        }
-        if let Some((leg, interface)) = self.obstruction(path, &ws.points, &ws.seg[..k]) {
-            return Some(RaySummary {
-                status: Status::Obstructed,
-                reason: Some(Reason::Crosses { leg, interface }),
-                ..base
-            });
-        }
-        Some(RaySummary {
-            status: Status::Converged,
-            reason: None,
-            ..base
-        })
+        let points = &mut ws.ray.points;
+        points.clear();
+        points.push(source);
+        points.extend(
+            lines
+                .iter()
+                .zip(&ws.newton.s[..k])
+                .map(|(l, &s)| l.point_on(s)),
+        );
+        points.push(receiver);
+        // The classification of free points inside their segments, no leg vanished.
+        let nw = &ws.newton;
+        let (rel, len) = (&nw.eval.rel[..k + 2], &nw.eval.len[..k + 1]);
+        let sides = lines.iter().map(|l| (StepKind::Refract, l.normal()));
+        Some(
+            cx.classifier
+                .free_points(scene, path, sides, rel, len, points, &nw.seg[..k], &sol),
+        )
     }
 }
 
 #[cfg(test)]
 mod tests {
+    use crate::Workspace;
     use crate::demo::{self, SplitMix64};
     use crate::geom::{Point, Vec2};
     use crate::scene::Scene;
-    use crate::solver::tests::{GENERAL_ONLY, fast_paths_agree};
-    use crate::trace::{InitialGuess, Start, Status, Tracer};
-    use crate::{RaySummary, Workspace};
+    use crate::trace::test_support::kernels_agree;
+    use crate::trace::{InitialGuess, Kernels, PathPlan, RayRecord, Status, Tracer};
 
     /// A stack of `n` parallel interfaces at random: any direction, some drawn the other way
     /// round, far from the origin or not, random thicknesses and speeds (contrasts up to 4:
@@ -181,10 +169,16 @@ mod tests {
     /// fast path): bit for bit. Returns how many it took, and how many ended obstructed.
     fn kernel_rays(scene: &Scene) -> (usize, usize) {
         let tracer = Tracer::new(scene).unwrap();
-        let sp = tracer.stack_path(0).expect("a stack");
+        let general_tracer = Tracer::new(scene)
+            .unwrap()
+            .with_kernels(Kernels::GeneralOnly);
+        let PathPlan::Stack(sp) = tracer.plan_of(0) else {
+            panic!("a stack");
+        };
+        let cx = tracer.context();
         let (mut ws, mut general) = (Workspace::new(), Workspace::new());
         let (mut taken, mut obstructed) = (0, 0);
-        let bits = |r: &RaySummary| {
+        let bits = |r: &RayRecord| {
             (
                 r.status,
                 r.time.to_bits(),
@@ -195,15 +189,12 @@ mod tests {
         };
         for &source in scene.sources() {
             for &receiver in scene.receivers() {
-                let Some(ray) = tracer.solve_stack(sp, 0, source, receiver, &mut ws) else {
+                let Some(ray) = sp.solve_stack(&cx, 0, source, receiver, &mut ws) else {
                     continue;
                 };
                 taken += 1;
                 obstructed += usize::from(ray.status == Status::Obstructed);
-                GENERAL_ONLY.with(|c| c.set(true));
-                let reference =
-                    tracer.solve_inner(source, None, receiver, 0, Start::Default, &mut general);
-                GENERAL_ONLY.with(|c| c.set(false));
+                let reference = general_tracer.solve(source, receiver, 0, &mut general);
                 assert_eq!(bits(&ray), bits(&reference), "{source:?} -> {receiver:?}");
                 assert_eq!(ws.points(), general.points());
                 assert_eq!(ws.parameters(), general.parameters());
@@ -242,7 +233,7 @@ mod tests {
             let (t, o) = kernel_rays(&scene);
             (taken, obstructed, rays) = (taken + t, obstructed + o, rays + scene.num_rays());
             // The rays it leaves, and the warm and given starts, through the general code.
-            fast_paths_agree(&scene);
+            kernels_agree(&scene);
         }
         assert!(
             taken > rays / 3 && taken < rays && obstructed > 10,
@@ -253,17 +244,22 @@ mod tests {
     /// The kernel is not taken from the paraxial start, nor for a path without its media.
     #[test]
     fn the_kernel_applies_to_its_case_only() {
+        let stack = |t: &Tracer| matches!(t.plan_of(0), PathPlan::Stack(_));
         let scene = Scene::from_spec(&demo::layer_stack(4, 3)).unwrap();
-        assert!(Tracer::new(&scene).unwrap().stack_path(0).is_some());
+        assert!(stack(&Tracer::new(&scene).unwrap()));
         let paraxial = Tracer::new(&scene)
             .unwrap()
             .with_initial_guess(InitialGuess::Paraxial);
-        assert!(paraxial.stack_path(0).is_none());
+        assert!(!stack(&paraxial));
+        let general = Tracer::new(&scene)
+            .unwrap()
+            .with_kernels(Kernels::GeneralOnly);
+        assert!(!stack(&general));
         let mut spec = demo::layer_stack(4, 3);
         spec.paths[0].media = None;
         let scene = Scene::from_spec(&spec).unwrap();
-        assert!(Tracer::new(&scene).unwrap().stack_path(0).is_none());
+        assert!(!stack(&Tracer::new(&scene).unwrap()));
         let dipping = Scene::from_spec(&demo::dipping_stack(4, 3)).unwrap();
-        assert!(Tracer::new(&dipping).unwrap().stack_path(0).is_none());
+        assert!(!stack(&Tracer::new(&dipping).unwrap()));
     }
 }

@@ -14,17 +14,18 @@
 //!   reflection, so those points are its one stationary point. Anything else (a leg from the
 //!   wrong side, a point near an end, a grazing leg) goes to the documented guess as before.
 
-use super::PARALLEL;
+use super::Workspace;
+use super::start::{PARALLEL, Placed, StepLines};
 use crate::geom::{Point, Vec2};
 use crate::polyline::{Polyline, point_between, segment_intersection};
 use crate::problem::Frame;
+use crate::problem::Pin;
 use crate::scene::{Scene, Step, StepKind};
-use crate::solver::{Pin, Workspace};
 
 /// One interface of a [`StraightPath`]: its segment `p → q`, `e = q − p`, its length, and
 /// the polyline's unit tangent.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Line {
+pub(super) struct StraightSegment {
     p: Point,
     q: Point,
     e: Vec2,
@@ -32,12 +33,12 @@ pub(super) struct Line {
     t: Vec2,
 }
 
-impl Line {
-    fn of(line: &Polyline) -> Line {
+impl StraightSegment {
+    fn of(line: &Polyline) -> StraightSegment {
         let (p, q) = line.segment(0);
-        // (An open polyline of one segment has no curvature estimate: `Line::frame`.)
+        // (An open polyline of one segment has no curvature estimate: `StraightSegment::frame`.)
         debug_assert_eq!(line.curvature(0), 0.0);
-        Line {
+        StraightSegment {
             p,
             q,
             e: q - p,
@@ -104,7 +105,7 @@ impl Line {
     }
 }
 
-impl super::Lines for [Line] {
+impl StepLines for [StraightSegment] {
     #[inline(always)]
     fn tangent(&self, i: usize, _seg: usize) -> Vec2 {
         self[i].t
@@ -112,9 +113,12 @@ impl super::Lines for [Line] {
 
     /// [`Polyline::clamp_param`] on an open polyline of one segment, bit for bit.
     #[inline(always)]
-    fn place(&self, i: usize, s: f64, _seg: usize) -> (f64, usize) {
+    fn place(&self, i: usize, s: f64, _seg: usize) -> Placed {
         let s = if s.is_finite() { s } else { 0.0 };
-        (s.clamp(0.0, self[i].len), 0)
+        Placed {
+            s: s.clamp(0.0, self[i].len),
+            seg: 0,
+        }
     }
 }
 
@@ -136,7 +140,7 @@ struct Meet {
 
 /// What a [`StraightPath`]'s start found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Start {
+pub(crate) enum StraightStart {
     /// The start (for reflections, the solution).
     At,
     /// No path: the one stationary path through the mirrors' lines reflects at a point beyond
@@ -150,29 +154,40 @@ pub(crate) enum Start {
     Unsure,
 }
 
+/// The image method's answer for a single reflection.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Specular {
+    /// The specular point's parameter (at the segment's end when it lies beyond).
+    pub s: f64,
+    /// What it says.
+    pub start: StraightStart,
+}
+
 /// The image method for a single reflection off `line` (a path that
-/// [`StraightPath::exact`] holds for): the specular point's parameter (at the segment's end
-/// when it lies beyond), and what it says.
+/// [`StraightPath::exact`] holds for).
 #[inline(always)]
-pub(crate) fn single_specular(line: &Polyline, source: Point, receiver: Point) -> (f64, Start) {
+pub(crate) fn single_specular(line: &Polyline, source: Point, receiver: Point) -> Specular {
     debug_assert!(line.num_segments() == 1 && !line.is_closed());
-    let l = Line::of(line);
+    let l = StraightSegment::of(line);
     let (s, meet) = l.meet(receiver, l.mirror(source));
     let start = if meet.inside {
-        Start::At
+        StraightStart::At
     } else if meet.beyond {
-        Start::Beyond { step: 0 }
+        StraightStart::Beyond { step: 0 }
     } else {
-        Start::Unsure
+        StraightStart::Unsure
     };
-    (s.clamp(0.0, l.len), start)
+    Specular {
+        s: s.clamp(0.0, l.len),
+        start,
+    }
 }
 
 /// A path whose every step refracts, or whose every step reflects, at an open interface of one
 /// segment (reflections with one slowness on every leg).
 #[derive(Debug)]
 pub(crate) struct StraightPath {
-    pub(super) lines: Box<[Line]>,
+    pub(super) lines: Box<[StraightSegment]>,
     kind: StepKind,
     /// Whether the segments are parallel (as `refraction_guess` takes them): for refractions,
     /// the ray-parameter start then solves the path up to round-off.
@@ -204,7 +219,10 @@ impl StraightPath {
         if kind == StepKind::Reflect && !one_slowness {
             return None;
         }
-        let lines = polylines.iter().map(|line| Line::of(line)).collect();
+        let lines = polylines
+            .iter()
+            .map(|line| StraightSegment::of(line))
+            .collect();
         let m = polylines[0].tangent(0);
         let parallel = polylines
             .iter()
@@ -231,8 +249,8 @@ impl StraightPath {
 
     /// Writes the start of a ray from `source` to `receiver` into `ws` (parameters, segments,
     /// pins and crossing fractions; `ws` sized for the path) where it applies (see the module):
-    /// [`Start::At`] when it did; [`Start::Beyond`] when the path has no solution
-    /// (reflections only); [`Start::Unsure`] leaves the ray to `initial_guess`.
+    /// [`StraightStart::At`] when it did; [`StraightStart::Beyond`] when the path has no solution
+    /// (reflections only); [`StraightStart::Unsure`] leaves the ray to `initial_guess`.
     /// Without `images` (`InitialGuess::Paraxial`), reflections are left to `initial_guess`.
     #[inline]
     pub(crate) fn start(
@@ -241,11 +259,11 @@ impl StraightPath {
         receiver: Point,
         images: bool,
         ws: &mut Workspace,
-    ) -> Start {
+    ) -> StraightStart {
         match self.kind {
-            StepKind::Refract if self.crossings(source, receiver, ws) => Start::At,
+            StepKind::Refract if self.crossings(source, receiver, ws) => StraightStart::At,
             StepKind::Reflect if images => self.images(source, receiver, ws),
-            _ => Start::Unsure,
+            _ => StraightStart::Unsure,
         }
     }
 
@@ -265,10 +283,10 @@ impl StraightPath {
     pub(super) fn crossings(&self, source: Point, receiver: Point, ws: &mut Workspace) -> bool {
         let k = self.lines.len();
         let (t, s, seg, pin) = (
-            &mut ws.crossing_t[..k],
-            &mut ws.s[..k],
-            &mut ws.seg[..k],
-            &mut ws.pin[..k],
+            &mut ws.start.crossing_t[..k],
+            &mut ws.newton.s[..k],
+            &mut ws.newton.seg[..k],
+            &mut ws.newton.pin[..k],
         );
         for (i, line) in self.lines.iter().enumerate() {
             // The crossing and parameter of `Polyline::crossings_with_segment`.
@@ -284,7 +302,7 @@ impl StraightPath {
     }
 
     /// The image method (see the module).
-    fn images(&self, source: Point, receiver: Point, ws: &mut Workspace) -> Start {
+    fn images(&self, source: Point, receiver: Point, ws: &mut Workspace) -> StraightStart {
         let k = self.lines.len();
         // The source's image in the first mirror, then that image's in the second, …
         let image = self.lines.iter().fold(source, |x, line| line.mirror(x));
@@ -302,21 +320,21 @@ impl StraightPath {
                 first_beyond = Some(i);
             }
             if !(inside || clear) {
-                return Start::Unsure;
+                return StraightStart::Unsure;
             }
             // (A point beyond its segment's end is kept at that end: with no path, the
             // parameters of the ray are where it leaves.)
-            ws.s[i] = s.clamp(0.0, line.len);
-            ws.seg[i] = 0;
-            ws.pin[i] = Pin::Free;
-            ws.crossing_t[i] = f64::NAN;
+            ws.newton.s[i] = s.clamp(0.0, line.len);
+            ws.newton.seg[i] = 0;
+            ws.newton.pin[i] = Pin::Free;
+            ws.start.crossing_t[i] = f64::NAN;
             to = line.p + line.e * (s / line.len);
             image = line.mirror(image);
         }
         match first_beyond {
-            _ if inside => Start::At,
-            Some(step) if clear => Start::Beyond { step },
-            _ => Start::Unsure,
+            _ if inside => StraightStart::At,
+            Some(step) if clear => StraightStart::Beyond { step },
+            _ => StraightStart::Unsure,
         }
     }
 }
@@ -372,16 +390,20 @@ mod tests {
                 ws.resize(k);
                 reference.resize(k);
                 initial_guess(&scene, steps, s, r, &mut reference);
-                if flat.start(s, r, true, &mut ws) != Start::At {
+                if flat.start(s, r, true, &mut ws) != StraightStart::At {
                     left += 1;
                     continue;
                 }
                 started += 1;
                 let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-                assert_eq!(bits(&ws.s), bits(&reference.s), "scene {n}: {s:?} -> {r:?}");
-                assert_eq!(bits(&ws.crossing_t), bits(&reference.crossing_t));
-                assert_eq!(ws.seg, reference.seg);
-                assert_eq!(ws.pin, reference.pin);
+                let (nw, rw) = (&ws.newton, &reference.newton);
+                assert_eq!(bits(&nw.s), bits(&rw.s), "scene {n}: {s:?} -> {r:?}");
+                assert_eq!(
+                    bits(&ws.start.crossing_t),
+                    bits(&reference.start.crossing_t)
+                );
+                assert_eq!(nw.seg, rw.seg);
+                assert_eq!(nw.pin, rw.pin);
             }
             assert!(
                 started > 100 && left > 20,
@@ -432,16 +454,16 @@ mod tests {
                 let (s, r) = (at(), at());
                 let mut ws = Workspace::new();
                 ws.resize(k);
-                if straight.start(s, r, true, &mut ws) != Start::At {
+                if straight.start(s, r, true, &mut ws) != StraightStart::At {
                     left += 1;
                     continue;
                 }
                 started += 1;
                 let mut pts = vec![s];
                 for (i, line) in lines.iter().enumerate() {
-                    assert!(ws.s[i] > 0.0 && ws.s[i] < line.length());
-                    assert_eq!((ws.seg[i], ws.pin[i]), (0, Pin::Free));
-                    pts.push(line.point_on(0, ws.s[i]));
+                    assert!(ws.newton.s[i] > 0.0 && ws.newton.s[i] < line.length());
+                    assert_eq!((ws.newton.seg[i], ws.newton.pin[i]), (0, Pin::Free));
+                    pts.push(line.point_on(0, ws.newton.s[i]));
                 }
                 pts.push(r);
                 for (i, line) in lines.iter().enumerate() {
@@ -490,21 +512,23 @@ mod tests {
         let mirrors = Scene::from_json(&doc.to_string()).unwrap();
         for (name, scene) in [("room2d", room), ("mirrors", mirrors)] {
             let fast = Tracer::new(&scene).unwrap();
-            let mut general = Tracer::new(&scene).unwrap();
-            general.straight.iter_mut().for_each(|s| *s = None);
+            // The general guess (no image method: every path here reflects) and solve.
+            let general = Tracer::new(&scene)
+                .unwrap()
+                .with_initial_guess(crate::InitialGuess::Paraxial)
+                .with_kernels(crate::Kernels::GeneralOnly);
             let mut ws = Workspace::new();
             let (np, nr) = (scene.paths().len(), scene.receivers().len());
             let (mut decided, mut started) = (0, 0);
             for i in 0..scene.num_rays() {
                 let (s, r, p) = (i / (np * nr), (i / np) % nr, i % np);
                 let a = fast.trace(s, r, p, &mut ws);
-                crate::solver::tests::GENERAL_ONLY.with(|c| c.set(true));
                 let b = general.trace(s, r, p, &mut ws);
-                crate::solver::tests::GENERAL_ONLY.with(|c| c.set(false));
                 assert_eq!(a.status, b.status, "{name}: {a:?} vs {b:?}");
                 let kind = |r: &crate::Ray| r.reason.as_ref().map(std::mem::discriminant);
                 assert_eq!(kind(&a), kind(&b), "{name}: {a:?} vs {b:?}");
-                if let (Some(x), Some(y)) = (a.time, b.time) {
+                if a.status.has_time() {
+                    let (x, y) = (a.time, b.time);
                     assert!((x - y).abs() <= 1e-12 * y, "{name}: {a:?} vs {b:?}");
                 }
                 if a.iterations == 0 && a.points.len() > 2 {

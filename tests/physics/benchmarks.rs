@@ -62,7 +62,7 @@ fn check_at(name: &str, tolerance: Option<f64>, max_point: f64) -> (f64, f64) {
             continue;
         }
         let t = times[i].as_f64().expect("time");
-        let err = rel_err(ray.time.unwrap(), t);
+        let err = rel_err(ray.time, t);
         max_t = max_t.max(err);
         let pts = points[i].as_array().expect("points");
         assert_eq!(pts.len(), ray.points.len(), "{name}: ray {i} points");

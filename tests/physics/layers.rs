@@ -91,7 +91,7 @@ fn check(v: &Value, legs: &[(f64, f64)], ys: &[f64]) -> (f64, f64) {
         );
 
         assert_eq!(ray.status, Status::Converged, "{case}: {ray:?}");
-        let time = ray.time.unwrap();
+        let time = ray.time;
         let err = rel_err(time, t_ref);
         assert!(
             err <= TOL,

@@ -65,7 +65,7 @@ fn check_refraction(p0: P, p1: P, s: P, r: P, w1: f64, w2: f64, as_speed: bool) 
         n2 * sin2
     );
 
-    let time = ray.time.expect("time");
+    let time = ray.time;
     let own = rel_err(time, path_time(&pts, &[n1, n2]));
     assert!(own <= TOL, "{case}: time {time} vs its points: {own:e}");
 
@@ -97,7 +97,7 @@ fn classic_air_water() {
     );
     let e = check_refraction([-1.0, 0.0], [2.0, 0.0], s, r, 1.0, 1.333, false);
     let sc = refraction([-1.0, 0.0], [2.0, 0.0], s, r, 1.0, 1.333, false);
-    let time = trace_all(&sc)[0].time.unwrap();
+    let time = trace_all(&sc)[0].time;
     assert!(rel_err(time, 2.601764023084769) <= TOL, "time {time}");
     println!("snell classic: errors (snell, own time, reference time, position) = {e:?}");
 }

@@ -75,7 +75,8 @@ impl View {
 
 /// Whether a ray is drawn: it has a finite time and at least two finite points.
 fn drawable(r: &Ray) -> bool {
-    r.time.is_some_and(f64::is_finite)
+    r.status.has_time()
+        && r.time.is_finite()
         && r.points.len() >= 2
         && r.points.iter().all(|p| p.is_finite())
 }
@@ -184,7 +185,8 @@ pub fn scene_svg(scene: &Scene, rays: &[Ray], title: &str) -> String {
     let drawn: Vec<&Ray> = rays.iter().filter(|r| drawable(r)).collect();
     let range = drawn
         .iter()
-        .filter_map(|r| r.time)
+        .filter(|r| r.status.has_time())
+        .map(|r| r.time)
         .fold(None, |acc: Option<(f64, f64)>, t| match acc {
             None => Some((t, t)),
             Some((lo, hi)) => Some((lo.min(t), hi.max(t))),
@@ -256,7 +258,7 @@ pub fn scene_svg(scene: &Scene, rays: &[Ray], title: &str) -> String {
         r#"<g fill="none" stroke-width="{stroke}" stroke-opacity="0.85" stroke-linejoin="round" stroke-linecap="round">"#
     );
     for r in &drawn {
-        let t = r.time.unwrap_or(f64::NAN);
+        let t = r.time;
         let dash = match r.status {
             Status::Obstructed => r#" stroke-dasharray="5 3""#,
             Status::Vertex => r#" stroke-dasharray="1 3""#,

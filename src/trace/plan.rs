@@ -1,0 +1,139 @@
+//! The per-path plan: which kernel solves a path's rays, decided once in `Tracer::new`.
+//!
+//! Every ray goes through [`PathPlan`]: [`Tracer::solve`](super::Tracer::solve) and the
+//! batches dispatch on it and on nothing else. A kernel is a shortcut for a common case
+//! that ends in the same classifier (`classify`) as the general solve, and hands every ray
+//! outside its case to the general code from the same start.
+
+use crate::scene::{Scene, StepKind};
+
+use super::InitialGuess;
+use super::flat::FlatRefraction;
+use super::straight::StraightPath;
+
+/// Which kernels a [`Tracer`](super::Tracer) may use (see
+/// [`Tracer::with_kernels`](super::Tracer::with_kernels)). Every kernel gives the status the
+/// general code gives; all but the flat-refraction kernel take the general code's own steps
+/// and give its rays bit for bit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Kernels {
+    /// Every kernel (the default, and the fastest).
+    #[default]
+    All,
+    /// The kernels whose rays are the general code's bit for bit: every one but the
+    /// flat-refraction kernel (its own Halley steps on Snell's law give times within 1e-12 of
+    /// the general solve's, not the same bits).
+    BitExact,
+    /// No kernel and no fast path: the documented start and the general Newton loop for every
+    /// ray (for comparisons with the kernels).
+    GeneralOnly,
+}
+
+/// How the rays of one path are solved.
+#[derive(Debug)]
+pub(crate) enum PathPlan {
+    /// The documented start and the general solve.
+    General,
+    /// Every step refracts at, or every step reflects off, an interface of one segment: the
+    /// start from the segments kept here (crossings; the image method off mirrors), then the
+    /// general solve.
+    Straight(StraightPath),
+    /// Two or more refractions at parallel interfaces of one segment, the media given: from
+    /// the default start, the stack kernel (`trace::stack`); otherwise as `Straight`.
+    Stack(StraightPath),
+    /// One interaction with its media given: the one-step code (`trace::one_step`).
+    OneStep(OneStepPath),
+    /// One refraction at an interface of one segment, the media given: from the default
+    /// start, the flat kernel (`trace::flat`); otherwise as `OneStep`.
+    FlatRefraction(OneStepPath, FlatRefraction),
+}
+
+/// A path of one interaction whose leg media are given.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct OneStepPath {
+    /// The two legs' media and slownesses.
+    pub media: [usize; 2],
+    pub slowness: [f64; 2],
+    /// Whether the default start of a reflection is the image method's specular point (a
+    /// mirror of one segment, one slowness on both legs, [`InitialGuess::RayParameter`]).
+    pub images: bool,
+}
+
+impl PathPlan {
+    /// The plan of path `path` of `scene` for rays started as `guess`, with `kernels`.
+    pub(crate) fn of(
+        scene: &Scene,
+        path: usize,
+        guess: InitialGuess,
+        kernels: Kernels,
+    ) -> PathPlan {
+        let straight = StraightPath::of(scene, path);
+        let ray_parameter = guess == InitialGuess::RayParameter;
+        if kernels != Kernels::GeneralOnly
+            && let Some(one) = OneStepPath::of(scene, path, straight.as_ref(), ray_parameter)
+        {
+            let spec = &scene.paths()[path];
+            let step = &spec.steps[0];
+            let line = &scene.interfaces()[step.interface].polyline;
+            let flat = (kernels == Kernels::All && step.kind == StepKind::Refract)
+                .then(|| FlatRefraction::of(line, one.slowness, scene.solver()))
+                .flatten();
+            return match flat {
+                Some(flat) => PathPlan::FlatRefraction(one, flat),
+                None => PathPlan::OneStep(one),
+            };
+        }
+        match straight {
+            Some(sp) if kernels != Kernels::GeneralOnly && sp.stack() && ray_parameter => {
+                PathPlan::Stack(sp)
+            }
+            Some(sp) => PathPlan::Straight(sp),
+            None => PathPlan::General,
+        }
+    }
+
+    /// The segments of a path whose start comes from them.
+    #[inline(always)]
+    pub(crate) fn straight(&self) -> Option<&StraightPath> {
+        match self {
+            PathPlan::Straight(sp) | PathPlan::Stack(sp) => Some(sp),
+            _ => None,
+        }
+    }
+
+    /// Whether the default start of the path is its solution up to round-off where it applies
+    /// (reflections off one-segment interfaces by the image method, refractions through
+    /// parallel ones from the ray parameter), or its rays take the flat kernel, whose own start
+    /// costs less than a warm start's bookkeeping: a batch does not warm-start such a path.
+    pub(crate) fn skips_warm_start(&self, guess: InitialGuess) -> bool {
+        let ray_parameter = guess == InitialGuess::RayParameter;
+        match self {
+            PathPlan::FlatRefraction(..) => true,
+            PathPlan::OneStep(one) => one.images,
+            PathPlan::Straight(sp) | PathPlan::Stack(sp) => sp.exact(ray_parameter),
+            PathPlan::General => false,
+        }
+    }
+}
+
+impl OneStepPath {
+    /// The path's one-interaction data, if it is such a path (`straight` its segments, when it
+    /// has a straight start; `ray_parameter` whether the tracer refines starts).
+    fn of(
+        scene: &Scene,
+        path: usize,
+        straight: Option<&StraightPath>,
+        ray_parameter: bool,
+    ) -> Option<OneStepPath> {
+        let spec = &scene.paths()[path];
+        match (spec.steps.len(), spec.media.as_deref()) {
+            (1, Some(&[m0, m1])) => Some(OneStepPath {
+                media: [m0, m1],
+                slowness: [scene.media()[m0].slowness, scene.media()[m1].slowness],
+                images: spec.steps[0].kind == StepKind::Reflect
+                    && straight.is_some_and(|sp| sp.exact(ray_parameter)),
+            }),
+            _ => None,
+        }
+    }
+}

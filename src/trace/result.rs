@@ -1,0 +1,255 @@
+//! What a ray's solve gives: its status, the reason for a failure, its record and the owned
+//! ray with its points.
+
+use std::fmt;
+
+use crate::geom::Point;
+use crate::scene::Scene;
+use crate::solver::Solution;
+
+/// How a ray ended (the contract's `status`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    /// A stationary-time path: every interaction strictly inside a segment, every leg on the
+    /// side its step demands, no leg crossing an interface.
+    Converged,
+    /// Time is stationary only with an interaction held on a polyline vertex (a kink: an
+    /// edge-diffracted path, not a specular one).
+    Vertex,
+    /// No such path exists from the solver's start: it would leave an open polyline's end, or
+    /// the side conditions cannot hold.
+    NoPath,
+    /// The stationary path exists but a leg crosses another interface.
+    Obstructed,
+    /// The solver gave up.
+    NotConverged,
+}
+
+impl Status {
+    /// The contract's name: `converged`, `vertex`, `no_path`, `obstructed`, `not_converged`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Status::Converged => "converged",
+            Status::Vertex => "vertex",
+            Status::NoPath => "no_path",
+            Status::Obstructed => "obstructed",
+            Status::NotConverged => "not_converged",
+        }
+    }
+    /// Whether the ray has a travel time and points (`converged`, `vertex`, `obstructed`).
+    pub fn has_time(self) -> bool {
+        matches!(
+            self,
+            Status::Converged | Status::Vertex | Status::Obstructed
+        )
+    }
+}
+
+impl fmt::Display for Status {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Why a ray is not `converged`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reason {
+    /// Interaction `step` was pushed to the end of its open polyline.
+    LeavesEnd {
+        /// Index of the step.
+        step: usize,
+    },
+    /// At interaction `step` the legs are not on the sides the step demands.
+    WrongSide {
+        /// Index of the step.
+        step: usize,
+    },
+    /// Interaction `step` is held on a vertex of its polyline.
+    AtVertex {
+        /// Index of the step.
+        step: usize,
+    },
+    /// Leg `leg` crosses interface `interface`.
+    Crosses {
+        /// Index of the leg (0: the one leaving the source).
+        leg: usize,
+        /// Index of the interface it crosses.
+        interface: usize,
+    },
+    /// No medium fills the region of leg `leg` (no `at` claims it and there is no background).
+    NoMedium {
+        /// Index of the leg.
+        leg: usize,
+    },
+    /// The leg media found at the solution differ from those it was solved with, again and
+    /// again.
+    MediaUnsettled,
+    /// Interaction `step` and the next one fell on one spot (the leg between them vanished):
+    /// the path degenerates to fewer interactions.
+    Coincident {
+        /// Index of the step.
+        step: usize,
+    },
+    /// The iteration limit was reached.
+    IterationLimit,
+}
+
+impl Reason {
+    /// The reason in words, naming interfaces by their names in `scene`.
+    pub fn describe(&self, scene: &Scene) -> String {
+        match *self {
+            Reason::Crosses { leg, interface } => match scene.interfaces().get(interface) {
+                Some(i) => format!("leg {leg} crosses interface `{}`", i.name),
+                None => self.to_string(),
+            },
+            _ => self.to_string(),
+        }
+    }
+}
+
+impl fmt::Display for Reason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Reason::LeavesEnd { step } => {
+                write!(f, "step {step} would leave the end of its open interface")
+            }
+            Reason::WrongSide { step } => write!(
+                f,
+                "at step {step} the legs are not on the sides the step demands"
+            ),
+            Reason::AtVertex { step } => write!(f, "step {step} is held on a polyline vertex"),
+            Reason::Crosses { leg, interface } => {
+                write!(f, "leg {leg} crosses interface {interface}")
+            }
+            Reason::NoMedium { leg } => write!(f, "no medium fills the region of leg {leg}"),
+            Reason::MediaUnsettled => f.write_str("the leg media change with the solution"),
+            Reason::Coincident { step } => {
+                write!(
+                    f,
+                    "steps {step} and {} fall on one spot (the leg between them vanished)",
+                    step + 1
+                )
+            }
+            Reason::IterationLimit => f.write_str("iteration limit reached"),
+        }
+    }
+}
+
+/// The result of one ray without its points: what [`Tracer::solve`] returns (the points stay
+/// in the [`Workspace`]) and what a [`Batch`](crate::Batch) holds per ray.
+///
+/// A ray without a time (`no_path`, `not_converged`) has `time` NaN: in every result type,
+/// `time` is a number exactly when [`Status::has_time`] holds.
+#[derive(Clone, Copy, Debug)]
+pub struct RayRecord {
+    /// How it ended.
+    pub status: Status,
+    /// Travel time; NaN when `status` has none.
+    pub time: f64,
+    /// Solver iterations.
+    pub iterations: u32,
+    /// Final relative residual `maxᵢ |∂T/∂sᵢ| / (wᵢ + wᵢ₊₁)` (NaN when the solver did not
+    /// run: no medium, or no path by the image method).
+    pub residual: f64,
+    /// Why it is not `converged`, when it is not.
+    pub reason: Option<Reason>,
+}
+
+/// `a` and `b` are the same number, or both NaN (no value).
+fn same(a: f64, b: f64) -> bool {
+    a == b || (a.is_nan() && b.is_nan())
+}
+
+/// Equal when every field is, a NaN `time` or `residual` (none) equal to another.
+impl PartialEq for RayRecord {
+    fn eq(&self, o: &Self) -> bool {
+        self.status == o.status
+            && same(self.time, o.time)
+            && self.iterations == o.iterations
+            && same(self.residual, o.residual)
+            && self.reason == o.reason
+    }
+}
+
+/// Equal when every field is, a NaN `time` or `residual` (none) equal to another.
+impl PartialEq for Ray {
+    fn eq(&self, o: &Self) -> bool {
+        (self.source, self.receiver, self.path, self.status)
+            == (o.source, o.receiver, o.path, o.status)
+            && same(self.time, o.time)
+            && self.points == o.points
+            && self.iterations == o.iterations
+            && same(self.residual, o.residual)
+            && self.media == o.media
+            && self.reason == o.reason
+    }
+}
+
+impl Default for RayRecord {
+    fn default() -> Self {
+        RayRecord {
+            status: Status::NotConverged,
+            time: f64::NAN,
+            iterations: 0,
+            residual: f64::NAN,
+            reason: None,
+        }
+    }
+}
+
+impl RayRecord {
+    /// The record of a solve that ended as `status` (for `reason`): its time only when the
+    /// status has one.
+    #[inline(always)]
+    pub(crate) fn of(status: Status, reason: Option<Reason>, sol: &Solution) -> RayRecord {
+        RayRecord {
+            status,
+            time: if status.has_time() {
+                sol.time
+            } else {
+                f64::NAN
+            },
+            iterations: sol.iterations as u32,
+            residual: sol.residual,
+            reason,
+        }
+    }
+
+    /// A ray that ended before the solver ran: no time, no residual.
+    pub(crate) fn failed(status: Status, reason: Reason) -> RayRecord {
+        RayRecord {
+            status,
+            time: f64::NAN,
+            iterations: 0,
+            residual: f64::NAN,
+            reason: Some(reason),
+        }
+    }
+}
+
+/// One solved ray: a (source, receiver, path) triple and its result.
+#[derive(Clone, Debug)]
+pub struct Ray {
+    /// Source index.
+    pub source: usize,
+    /// Receiver index.
+    pub receiver: usize,
+    /// Path index.
+    pub path: usize,
+    /// How it ended.
+    pub status: Status,
+    /// Travel time; NaN when `status` has none (`no_path`, `not_converged`).
+    pub time: f64,
+    /// Source, interaction points and receiver, whenever `time` is present (else empty).
+    pub points: Vec<Point>,
+    /// Solver iterations.
+    pub iterations: usize,
+    /// Final relative residual `maxᵢ |∂T/∂sᵢ| / (wᵢ + wᵢ₊₁)` (NaN when the solver did not
+    /// run: no medium, or no path by the image method).
+    pub residual: f64,
+    /// Leg media (indices into [`Scene::media`]), when known.
+    pub media: Vec<usize>,
+    /// Why it is not `converged`, when it is not.
+    pub reason: Option<Reason>,
+}
