@@ -697,8 +697,9 @@ impl Tracer<'_> {
             let fast = match flat {
                 // (Never warm-started.)
                 Some(flat) => flat.solve(source, link.here).map(|sol| {
-                    let ray = flat_status(&cx, flat, p, source, link.here, sol);
-                    (ray.record, ray.points, None)
+                    let points = [source, flat.point(sol.s), link.here];
+                    let record = flat_status(&cx, flat, p, &points, sol);
+                    (record, points, None)
                 }),
                 None => self
                     .one_step_fast(&path, source, link.here, guess, seg)

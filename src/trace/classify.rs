@@ -35,7 +35,7 @@ impl Crossing {
             leg: self.leg,
             interface: self.interface,
         };
-        RayRecord::of(Status::Obstructed, Some(reason), sol)
+        RayRecord::timed(Status::Obstructed, Some(reason), sol)
     }
 }
 
@@ -102,10 +102,10 @@ impl Classifier {
             on.map(|((step, &j), &s)| scene.interfaces()[step.interface].polyline.point_on(j, s)),
         );
         points.push(receiver);
-        let no_path = |reason| RayRecord::of(Status::NoPath, Some(reason), sol);
+        let no_path = |reason| RayRecord::untimed(Status::NoPath, reason, sol);
         match sol.outcome {
             Outcome::NotConverged => {
-                return RayRecord::of(Status::NotConverged, Some(Reason::IterationLimit), sol);
+                return RayRecord::untimed(Status::NotConverged, Reason::IterationLimit, sol);
             }
             Outcome::LeftEnd(step) => return no_path(Reason::LeavesEnd { step }),
             Outcome::Converged | Outcome::Vertex => {}
@@ -140,9 +140,9 @@ impl Classifier {
             return crossing.record(sol);
         }
         if let Some(step) = nw.pin.iter().position(|p| *p == Pin::Vertex).or(at_vertex) {
-            return RayRecord::of(Status::Vertex, Some(Reason::AtVertex { step }), sol);
+            return RayRecord::timed(Status::Vertex, Some(Reason::AtVertex { step }), sol);
         }
-        RayRecord::of(Status::Converged, None, sol)
+        RayRecord::timed(Status::Converged, None, sol)
     }
 
     /// [`classify`](Self::classify) for a converged solve whose points are all free and
@@ -169,7 +169,7 @@ impl Classifier {
         for (i, (kind, n)) in sides.enumerate() {
             let (a, b) = leg_sides(n, 1.0, &rel[i..i + 3], &len[i..i + 2]);
             if !sides_suit(kind, a, b) {
-                return RayRecord::of(Status::NoPath, Some(Reason::WrongSide { step: i }), sol);
+                return RayRecord::untimed(Status::NoPath, Reason::WrongSide { step: i }, sol);
             }
         }
         self.unobstructed(scene, path, pts, seg, sol)
@@ -188,7 +188,7 @@ impl Classifier {
     ) -> RayRecord {
         match self.obstruction(scene, path, pts, seg) {
             Some(crossing) => crossing.record(sol),
-            None => RayRecord::of(Status::Converged, None, sol),
+            None => RayRecord::timed(Status::Converged, None, sol),
         }
     }
 

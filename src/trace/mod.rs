@@ -569,14 +569,14 @@ impl<'s> Tracer<'s> {
             std::mem::swap(&mut ws.ray.media, &mut ws.ray.media_prev);
             if let Err(reason) = self.lookup_media(path, source, src_medium, ws) {
                 std::mem::swap(&mut ws.ray.media, &mut ws.ray.media_prev);
-                return RayRecord::of(Status::NoPath, Some(reason), &sol);
+                return RayRecord::untimed(Status::NoPath, reason, &sol);
             }
             if ws.ray.media == ws.ray.media_prev {
                 break sol;
             }
             rounds += 1;
             if rounds >= 3 {
-                return RayRecord::of(Status::NoPath, Some(Reason::MediaUnsettled), &sol);
+                return RayRecord::untimed(Status::NoPath, Reason::MediaUnsettled, &sol);
             }
             ws.ray.slowness.clear();
             ws.ray

@@ -21,13 +21,6 @@ use crate::problem::{Geometry, Pin};
 use crate::scene::StepKind;
 use crate::solver::{Outcome, Solution, solve};
 
-/// The ray of a converged flat-kernel solve: its record and its three points.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct FlatRay {
-    pub record: RayRecord,
-    pub points: [Point; 3],
-}
-
 /// Where the documented start of a one-interaction ray is, when it is not the general guess.
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum OneStepStart {
@@ -142,12 +135,12 @@ impl OneStepPath {
         ws.newton.s[0] = sol.s;
         ws.newton.seg[0] = 0;
         ws.newton.pin[0] = Pin::Free;
-        let ray = flat_status(cx, flat, path, source, receiver, sol);
+        let points = [source, flat.point(sol.s), receiver];
         ws.ray.points.clear();
-        ws.ray.points.extend_from_slice(&ray.points);
+        ws.ray.points.extend_from_slice(&points);
         ws.ray.media.clear();
         ws.ray.media.extend_from_slice(&self.media);
-        ray.record
+        flat_status(cx, flat, path, &points, sol)
     }
 
     /// The documented start of a one-interaction ray when it is the crossing of `S → R` with
@@ -192,18 +185,17 @@ impl OneStepPath {
     }
 }
 
-/// The record and points of the ray of a converged [`FlatRefraction::solve`].
+/// The record of the ray of a converged [`FlatRefraction::solve`] through `points` (the source,
+/// `flat.point(sol.s)` and the receiver).
 #[inline(always)]
 pub(crate) fn flat_status(
     cx: &Context,
     flat: &FlatRefraction,
     path: usize,
-    source: Point,
-    receiver: Point,
+    points: &[Point; 3],
     sol: FlatSolution,
-) -> FlatRay {
-    let p = flat.point(sol.s);
-    let points = [source, p, receiver];
+) -> RayRecord {
+    let [source, p, receiver] = *points;
     // The kernel's clean case puts the source and the receiver clearly on either side of the
     // interface's line (`flat::CLEAR`, above `SIDE_MARGIN` and the points' round-off): the
     // side test always passes (checked in debug builds).
@@ -218,8 +210,6 @@ pub(crate) fn flat_status(
         iterations: sol.iterations,
         residual: sol.residual,
     };
-    let record = cx
-        .classifier
-        .unobstructed(cx.scene, path, &points, &[0], &solution);
-    FlatRay { record, points }
+    cx.classifier
+        .unobstructed(cx.scene, path, points, &[0], &solution)
 }

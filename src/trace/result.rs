@@ -199,20 +199,31 @@ impl Default for RayRecord {
 }
 
 impl RayRecord {
-    /// The record of a solve that ended as `status` (for `reason`): its time only when the
-    /// status has one.
+    /// The record of a solve that ended as `status`, a status with a time (`converged`,
+    /// `vertex`, `obstructed`), for `reason`.
     #[inline(always)]
-    pub(crate) fn of(status: Status, reason: Option<Reason>, sol: &Solution) -> RayRecord {
+    pub(crate) fn timed(status: Status, reason: Option<Reason>, sol: &Solution) -> RayRecord {
+        debug_assert!(status.has_time());
         RayRecord {
             status,
-            time: if status.has_time() {
-                sol.time
-            } else {
-                f64::NAN
-            },
+            time: sol.time,
             iterations: sol.iterations as u32,
             residual: sol.residual,
             reason,
+        }
+    }
+
+    /// The record of a solve that ended as `status`, a status without a time (`no_path`,
+    /// `not_converged`), for `reason`.
+    #[inline(always)]
+    pub(crate) fn untimed(status: Status, reason: Reason, sol: &Solution) -> RayRecord {
+        debug_assert!(!status.has_time());
+        RayRecord {
+            status,
+            time: f64::NAN,
+            iterations: sol.iterations as u32,
+            residual: sol.residual,
+            reason: Some(reason),
         }
     }
 
