@@ -83,7 +83,7 @@ pub(crate) struct Eval {
     pub off: Vec<f64>,
     /// Travel time.
     pub time: f64,
-    /// Merit `Σ (rᵢ / (wᵢ + wᵢ₊₁))²` over the points as held (see [`Geometry::evaluate`]).
+    /// Merit `Σ (rᵢ / (wᵢ + wᵢ₊₁))²` over the points as held (see [`ProblemRef::evaluate`]).
     pub phi: f64,
     /// Largest relative residual `|rᵢ| / (wᵢ + wᵢ₊₁)` of the free points.
     pub rmax: f64,
@@ -92,7 +92,7 @@ pub(crate) struct Eval {
     /// Number of free points next to a vanished leg.
     pub vanished: usize,
     /// Forward sweep of the Thomas algorithm on `H x = r` (see
-    /// [`Geometry::evaluate_passes`]): modified super-diagonal `cp` and right-hand side `y`, `k`
+    /// [`ProblemRef::evaluate_passes`]): modified super-diagonal `cp` and right-hand side `y`, `k`
     /// each, valid when `factored`.
     pub cp: Vec<f64>,
     /// See `cp`.
@@ -119,9 +119,10 @@ impl Eval {
     }
 }
 
-/// The geometry of one ray: which polylines, which slownesses, which end points.
+/// The path problem of one ray as the solver works on it: a [`PathProblem`] borrowed (which
+/// polylines, which slownesses, which end points).
 #[derive(Clone, Copy)]
-pub(crate) struct Geometry<'a> {
+pub(crate) struct ProblemRef<'a> {
     pub scene: &'a Scene,
     pub steps: &'a [Step],
     pub slowness: &'a [f64],
@@ -129,7 +130,7 @@ pub(crate) struct Geometry<'a> {
     pub receiver: Point,
 }
 
-impl<'a> Geometry<'a> {
+impl<'a> ProblemRef<'a> {
     #[inline]
     pub fn line(&self, i: usize) -> &'a Polyline {
         &self.scene.interfaces()[self.steps[i].interface].polyline
@@ -302,7 +303,7 @@ impl<'a> Geometry<'a> {
 
     /// [`evaluate_framed`](Self::evaluate_framed) for a path of one interaction, bit for bit,
     /// in registers: `w` the two slownesses, `to_receiver` the receiver minus the source,
-    /// `coord` [`Geometry::coord`].
+    /// `coord` [`ProblemRef::coord`].
     #[inline(always)]
     pub fn evaluate_single(
         s: f64,
@@ -450,7 +451,7 @@ impl<'a> Geometry<'a> {
     }
 }
 
-/// [`Eval`] of a one-interaction path, in registers (see [`Geometry::evaluate_single`]).
+/// [`Eval`] of a one-interaction path, in registers (see [`ProblemRef::evaluate_single`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct OnePointEval {
     /// The interaction point minus the source.
@@ -479,7 +480,7 @@ pub(crate) struct OnePointEval {
 
 impl OnePointEval {
     /// Writes this evaluation into `e` (sized for one interaction on the segment `f`), as
-    /// [`Geometry::evaluate_framed`] would have left it.
+    /// [`ProblemRef::evaluate_framed`] would have left it.
     pub fn store(&self, f: &Frame, to_receiver: Vec2, e: &mut Eval) {
         e.rel[..3].copy_from_slice(&[Vec2::default(), self.p, to_receiver]);
         e.u[..2].copy_from_slice(&self.u);
@@ -592,7 +593,7 @@ fn leg_length(d: Vec2) -> f64 {
     }
 }
 
-/// [`Geometry::coord`] of a ray from `source` to `receiver`.
+/// [`ProblemRef::coord`] of a ray from `source` to `receiver`.
 #[inline]
 pub(crate) fn coord(source: Point, receiver: Point) -> f64 {
     source
@@ -603,8 +604,8 @@ pub(crate) fn coord(source: Point, receiver: Point) -> f64 {
         .max(receiver.y.abs())
 }
 
-/// `x.is_finite()` as one compare of `|x|` (the standard bit test takes five instructions; in
-/// the one-interaction loops these tests were a sixth of the instructions per ray).
+/// `x.is_finite()` as one compare of `|x|` (the standard bit test takes five instructions, and
+/// the one-interaction loops make many such tests).
 #[inline(always)]
 pub(crate) fn finite(x: f64) -> bool {
     x.abs() < f64::INFINITY
@@ -713,8 +714,8 @@ impl<'a> PathProblem<'a> {
         &self.slowness
     }
 
-    pub(crate) fn geometry(&self) -> Geometry<'_> {
-        Geometry {
+    pub(crate) fn as_ref(&self) -> ProblemRef<'_> {
+        ProblemRef {
             scene: self.scene,
             steps: &self.scene.paths()[self.path].steps,
             slowness: &self.slowness,
@@ -724,7 +725,7 @@ impl<'a> PathProblem<'a> {
     }
 
     fn eval(&self, s: &[f64], hessian: bool) -> Eval {
-        let g = self.geometry();
+        let g = self.as_ref();
         let k = g.k();
         assert_eq!(s.len(), k, "one parameter per interaction");
         let mut e = Eval::default();

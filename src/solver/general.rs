@@ -9,12 +9,12 @@
 
 use super::{IterationState, NewtonOptions, NewtonWorkspace, Outcome, Solution, thomas};
 use crate::geom::{Point, Vec2};
-use crate::problem::{Eval, Geometry, Pin, leg_vanished};
+use crate::problem::{Eval, Pin, ProblemRef, leg_vanished};
 
 /// The general iteration from `ws` as the fast path left it (`fast`). Leaves the final state in
 /// `ws` (`s`, `seg`, `pin`, `eval`).
 pub(super) fn run(
-    g: &Geometry,
+    g: &ProblemRef,
     ws: &mut NewtonWorkspace,
     opts: NewtonOptions,
     fast: IterationState,
@@ -233,7 +233,7 @@ impl GeneralLoop {
 
     /// Backtracking along the Newton step in `ws.delta` from the fraction `cap`, on the merit,
     /// with the vertices and end points met on the way (see the module).
-    fn line_search(&mut self, g: &Geometry, ws: &mut NewtonWorkspace, cap: f64) -> Search {
+    fn line_search(&mut self, g: &ProblemRef, ws: &mut NewtonWorkspace, cap: f64) -> Search {
         let k = g.k();
         let phi0 = ws.eval.phi;
         let mut alpha = cap;
@@ -304,7 +304,7 @@ impl GeneralLoop {
 
 /// Releases the held points whose residuals say that `T` decreases off their hold, keeps the
 /// others: whether one was released.
-fn release_held(g: &Geometry, ws: &mut NewtonWorkspace, tol: f64) -> bool {
+fn release_held(g: &ProblemRef, ws: &mut NewtonWorkspace, tol: f64) -> bool {
     let (k, w) = (g.k(), g.slowness);
     let e = &ws.eval;
     let mut released = false;
@@ -357,7 +357,7 @@ fn release_held(g: &Geometry, ws: &mut NewtonWorkspace, tol: f64) -> bool {
 /// Holds the free points next to a vanished leg on their kink where the one-sided residuals
 /// bracket zero, and otherwise gives them the residual of the way down (or moves them onto
 /// the previous segment): whether one was held or moved.
-fn hold_on_kinks(g: &Geometry, ws: &mut NewtonWorkspace, tol: f64) -> bool {
+fn hold_on_kinks(g: &ProblemRef, ws: &mut NewtonWorkspace, tol: f64) -> bool {
     let (k, w) = (g.k(), g.slowness);
     let mut pinned = false;
     for i in 0..k {
@@ -415,7 +415,7 @@ fn newton_system(ws: &mut NewtonWorkspace, k: usize) -> bool {
 /// floor (the full step cannot move any point to another float), and the cap (no point moves
 /// further than its longer leg, nor a quarter way round a closed polyline, nor past the next
 /// corner).
-fn negate_and_cap(g: &Geometry, ws: &mut NewtonWorkspace) -> StepSize {
+fn negate_and_cap(g: &ProblemRef, ws: &mut NewtonWorkspace) -> StepSize {
     let e = &ws.eval;
     let mut tiny = true;
     let mut cap: f64 = 1.0;
@@ -442,7 +442,7 @@ fn negate_and_cap(g: &Geometry, ws: &mut NewtonWorkspace) -> StepSize {
 
 /// Places the free points at the fraction `alpha` of the step in `ws.*_try` (and, with
 /// `copy_held`, the held ones where they are): whether a point changed segments.
-fn trial_step(g: &Geometry, ws: &mut NewtonWorkspace, alpha: f64, copy_held: bool) -> bool {
+fn trial_step(g: &ProblemRef, ws: &mut NewtonWorkspace, alpha: f64, copy_held: bool) -> bool {
     let mut crossed = false;
     for i in 0..g.k() {
         if ws.pin[i] == Pin::Free {
@@ -469,7 +469,7 @@ struct VerticesReached {
 }
 
 /// [`VerticesReached`] of the trial in `ws`.
-fn vertices_reached(g: &Geometry, ws: &NewtonWorkspace) -> VerticesReached {
+fn vertices_reached(g: &ProblemRef, ws: &NewtonWorkspace) -> VerticesReached {
     let mut several = false;
     let mut first = None;
     for i in 0..g.k() {
@@ -496,7 +496,7 @@ struct Flips {
 }
 
 /// [`Flips`] of the trial in `ws` (evaluated in `ws.eval_try`).
-fn residual_flips(g: &Geometry, ws: &NewtonWorkspace) -> Flips {
+fn residual_flips(g: &ProblemRef, ws: &NewtonWorkspace) -> Flips {
     let (mut far, mut one) = (false, None);
     for i in 0..g.k() {
         if ws.pin[i] != Pin::Free || ws.pin_try[i] != Pin::Free || ws.seg_try[i] == ws.seg[i] {
@@ -516,7 +516,7 @@ fn residual_flips(g: &Geometry, ws: &NewtonWorkspace) -> Flips {
 /// A first or last point whose trial step off its segment passes over the source or
 /// receiver lying on the segment left or the one reached: the point and that end point's
 /// parameter.
-fn end_point_passed(g: &Geometry, ws: &NewtonWorkspace, k: usize) -> Option<(usize, f64)> {
+fn end_point_passed(g: &ProblemRef, ws: &NewtonWorkspace, k: usize) -> Option<(usize, f64)> {
     let ends: &[usize] = match k {
         0 => &[],
         1 => &[0],
@@ -541,7 +541,7 @@ fn end_point_passed(g: &Geometry, ws: &NewtonWorkspace, k: usize) -> Option<(usi
 /// only creep towards it). Likewise an end point of the ray on a point's segment. Whether a
 /// point was put somewhere.
 fn vertex_met(
-    g: &Geometry,
+    g: &ProblemRef,
     ws: &mut NewtonWorkspace,
     flips: &Flips,
     any_sticky: &mut bool,
@@ -664,7 +664,7 @@ pub(super) fn finished(ws: &NewtonWorkspace, iterations: usize) -> Solution {
 
 /// Moves point `i` to parameter `s` (wrapping or holding at an end), updating its segment.
 #[inline]
-fn place(g: &Geometry, i: usize, s: f64, hint: usize) -> (f64, usize, Pin) {
+fn place(g: &ProblemRef, i: usize, s: f64, hint: usize) -> (f64, usize, Pin) {
     let line = g.line(i);
     if line.is_closed() {
         let w = line.wrap(s);
@@ -682,7 +682,7 @@ fn place(g: &Geometry, i: usize, s: f64, hint: usize) -> (f64, usize, Pin) {
 
 /// The segment before the vertex where segment `j` starts, if any.
 #[inline]
-fn segment_before(g: &Geometry, i: usize, j: usize) -> Option<usize> {
+fn segment_before(g: &ProblemRef, i: usize, j: usize) -> Option<usize> {
     let line = g.line(i);
     if j > 0 {
         Some(j - 1)
@@ -696,7 +696,7 @@ fn segment_before(g: &Geometry, i: usize, j: usize) -> Option<usize> {
 /// The segment before point `i` when the point sits exactly on the vertex where its segment
 /// starts (moving back it follows that segment), else `None`.
 #[inline]
-fn segment_behind_vertex(g: &Geometry, s: &[f64], seg: &[usize], i: usize) -> Option<usize> {
+fn segment_behind_vertex(g: &ProblemRef, s: &[f64], seg: &[usize], i: usize) -> Option<usize> {
     if s[i] == g.line(i).start(seg[i]) {
         segment_before(g, i, seg[i])
     } else {
@@ -706,7 +706,7 @@ fn segment_behind_vertex(g: &Geometry, s: &[f64], seg: &[usize], i: usize) -> Op
 
 /// Residual of point `i` as if its tangent were that of segment `j`.
 #[inline]
-fn residual_on(g: &Geometry, e: &Eval, i: usize, j: usize) -> f64 {
+fn residual_on(g: &ProblemRef, e: &Eval, i: usize, j: usize) -> f64 {
     let t = g.line(i).tangent(j);
     (e.u[i] * g.slowness[i] - e.u[i + 1] * g.slowness[i + 1]).dot(t)
 }
@@ -714,7 +714,7 @@ fn residual_on(g: &Geometry, e: &Eval, i: usize, j: usize) -> f64 {
 /// One-sided residuals `(r⁻, r⁺)` of point `i` next to a vanished leg: moving the point
 /// along its tangent `t` makes the vanished leg reappear pointing along `±t`.
 #[inline]
-fn kink_residuals(g: &Geometry, e: &Eval, i: usize, back: Vec2) -> (f64, f64) {
+fn kink_residuals(g: &ProblemRef, e: &Eval, i: usize, back: Vec2) -> (f64, f64) {
     let w = g.slowness;
     let tiny = e.vanish;
     // Moving forward the point follows its segment's tangent `t`, moving back `back` (the
@@ -742,7 +742,7 @@ fn kink_residuals(g: &Geometry, e: &Eval, i: usize, back: Vec2) -> (f64, f64) {
 /// (On a closed polyline the step is the shorter way from `s` to `s_try`: steps are capped at a
 /// quarter of its length.)
 #[inline]
-fn end_point_between(g: &Geometry, ws: &NewtonWorkspace, i: usize, j: usize) -> Option<f64> {
+fn end_point_between(g: &ProblemRef, ws: &NewtonWorkspace, i: usize, j: usize) -> Option<f64> {
     let k = g.k();
     let line = g.line(i);
     let (a, b) = line.segment(j);
@@ -811,7 +811,7 @@ fn state_hash(
 /// of polyline `i`'s bounding box: else neither lies on one of its segments (the quick test
 /// before [`end_point_between`]).
 #[inline]
-fn end_near_line(g: &Geometry, i: usize, tiny: f64) -> bool {
+fn end_near_line(g: &ProblemRef, i: usize, tiny: f64) -> bool {
     let b = g.line(i).bbox();
     let near = |p: Point| {
         p.x >= b.min.x - tiny
@@ -825,7 +825,7 @@ fn end_near_line(g: &Geometry, i: usize, tiny: f64) -> bool {
 /// The parameter of vertex `v` (where segment `v` starts) seen from segment `seg` (`v` or the
 /// segment before it): on a closed polyline vertex 0 is at `length` from the last segment.
 #[inline]
-fn vertex_param(g: &Geometry, i: usize, v: usize, seg: usize) -> f64 {
+fn vertex_param(g: &ProblemRef, i: usize, v: usize, seg: usize) -> f64 {
     let line = g.line(i);
     if seg == v {
         line.start(v)
@@ -838,7 +838,7 @@ fn vertex_param(g: &Geometry, i: usize, v: usize, seg: usize) -> f64 {
 /// `ws.seg_try[i]`), with a kink of `T` there at the present positions of the others (the
 /// residuals on the two segments, from `ws.eval`, do not agree in sign: a point held there
 /// would stay), that vertex (the segment starting there).
-fn held_on_vertex(g: &Geometry, ws: &NewtonWorkspace, i: usize) -> Option<usize> {
+fn held_on_vertex(g: &ProblemRef, ws: &NewtonWorkspace, i: usize) -> Option<usize> {
     let e = &ws.eval;
     let v = single_vertex_between(g, i, ws.seg[i], ws.seg_try[i])?;
     let on_vertex = ws.s[i] == vertex_param(g, i, v, ws.seg[i]);
@@ -848,7 +848,7 @@ fn held_on_vertex(g: &Geometry, ws: &NewtonWorkspace, i: usize) -> Option<usize>
 
 /// If `from → to` crosses exactly one vertex of polyline `i`, the segment that starts there.
 #[inline]
-fn single_vertex_between(g: &Geometry, i: usize, from: usize, to: usize) -> Option<usize> {
+fn single_vertex_between(g: &ProblemRef, i: usize, from: usize, to: usize) -> Option<usize> {
     let line = g.line(i);
     let n = line.num_segments();
     if to == from + 1 || (line.is_closed() && from == n - 1 && to == 0) {
@@ -895,7 +895,7 @@ fn at_round_off_floor(e: &Eval, s: &[f64], pin: &[Pin], w: &[f64], tol: f64) -> 
 /// Hessian's natural scale `w/ℓ`, and failing that a scaled steepest-descent step. Leaves
 /// `x` with `H x ≈ r` in `ws.delta` (the caller negates it).
 #[cold]
-fn damped_step(g: &Geometry, ws: &mut NewtonWorkspace) {
+fn damped_step(g: &ProblemRef, ws: &mut NewtonWorkspace) {
     let k = g.k();
     let w = g.slowness;
     let e = &ws.eval;

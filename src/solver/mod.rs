@@ -37,7 +37,7 @@ mod one_step;
 pub(crate) use one_step::{OneStepNewton, ReceiverSensitivity, one_step_sensitivity};
 
 use crate::geom::Vec2;
-use crate::problem::{Frame, Geometry, Pin, finite, max_num, min_num, sweep_row};
+use crate::problem::{Frame, Pin, ProblemRef, finite, max_num, min_num, sweep_row};
 
 /// What a solve is asked to do.
 #[derive(Clone, Copy, Debug)]
@@ -164,7 +164,7 @@ pub(crate) fn thomas(diag: &[f64], off: &[f64], d: &[f64], x: &mut [f64], cp: &m
 }
 
 /// The merit `Σ (rᵢ / (wᵢ + wᵢ₊₁))²` at the parameters in `ws` (all points free).
-pub(crate) fn merit_at(g: &Geometry, ws: &mut NewtonWorkspace) -> f64 {
+pub(crate) fn merit_at(g: &ProblemRef, ws: &mut NewtonWorkspace) -> f64 {
     g.evaluate(&ws.s, &ws.seg, &ws.pin, &mut ws.eval, false, false);
     ws.eval.phi
 }
@@ -172,7 +172,7 @@ pub(crate) fn merit_at(g: &Geometry, ws: &mut NewtonWorkspace) -> f64 {
 /// Runs the iteration from the parameters, segments and pins already in `ws` (set by the
 /// start): the fast path while it applies (every point free, full steps inside the segments),
 /// then the general loop. Leaves the final state in `ws` (`s`, `seg`, `pin`, `eval`).
-pub(crate) fn solve(g: &Geometry, ws: &mut NewtonWorkspace, opts: NewtonOptions) -> Solution {
+pub(crate) fn solve(g: &ProblemRef, ws: &mut NewtonWorkspace, opts: NewtonOptions) -> Solution {
     let k = g.k();
     let mut state = IterationState::START;
     if opts.fast_path && ws.pin[..k].iter().all(|&p| p == Pin::Free) {
@@ -224,7 +224,7 @@ impl IterationState {
 /// capped, a rejected full step, a vanished leg, a singular Hessian.
 #[inline(always)]
 fn fast_newton(
-    g: &Geometry,
+    g: &ProblemRef,
     ws: &mut NewtonWorkspace,
     opts: NewtonOptions,
     fast: &mut IterationState,
@@ -316,7 +316,7 @@ fn fast_newton(
 /// state: the same steps. For callers that keep a path's segments at hand.
 #[inline(always)]
 pub(crate) fn fast_newton_from(
-    g: &Geometry,
+    g: &ProblemRef,
     frames: impl Iterator<Item = Frame>,
     ws: &mut NewtonWorkspace,
     opts: NewtonOptions,

@@ -6,12 +6,12 @@ use super::{
     pivot_inverse,
 };
 use crate::geom::Vec2;
-use crate::problem::{Frame, Geometry, OnePointEval, finite, max_num, min_num};
+use crate::problem::{Frame, OnePointEval, ProblemRef, finite, max_num, min_num};
 
 /// The solver's fast path (`fast_newton`) for a path of one interaction, in registers: the same
 /// steps and tests.
 pub(super) fn fast_newton(
-    g: &Geometry,
+    g: &ProblemRef,
     ws: &mut NewtonWorkspace,
     opts: NewtonOptions,
     fast: &mut IterationState,
@@ -67,7 +67,7 @@ impl OneStepNewton {
     pub fn start(s: f64, f: &Frame, w: [f64; 2], to_receiver: Vec2, coord: f64) -> Self {
         OneStepNewton {
             s,
-            e: Geometry::evaluate_single(s, f, w, to_receiver, coord, true),
+            e: ProblemRef::evaluate_single(s, f, w, to_receiver, coord, true),
             iterations: 0,
             polishes: 0,
         }
@@ -133,7 +133,7 @@ impl OneStepNewton {
         loop {
             match self.next(f, opts.tolerance, opts.max_iterations) {
                 OneStepNext::Try { to, polish } => {
-                    let trial = Geometry::evaluate_single(to, f, w, to_receiver, coord, false);
+                    let trial = ProblemRef::evaluate_single(to, f, w, to_receiver, coord, false);
                     if !self.accept(to, polish, trial) {
                         return None;
                     }

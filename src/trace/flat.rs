@@ -69,15 +69,10 @@ pub(crate) struct FlatSolution {
     pub iterations: usize,
 }
 
-/// Halley's steps on Snell's law squared from the paraxial start (see the module). Over
-/// 3,000 random rays of the demo's geometry (source at height 1, receivers 0 to 1 across and
-/// 0.2 to 1 deep, indices 1 and 1.333; a Python prototype in double precision), two leave
-/// 0.1 % of the rays above a relative residual of 1e-12 (the worst at 1.5e-12: one step on
-/// `r` finishes them) where three Newton steps leave 2 % (the worst at 1.9e-11); three
-/// Halley or four Newton steps leave every ray at round-off (`demo_rays_take_two_steps`
-/// checks the kernel on `demo::air_water`). One by one, two Halley steps cost as much as
-/// three Newton steps (116 against 117 ns per air-over-water ray, medians of six alternating
-/// runs) and four Newton steps measured slower (116-120 against 91-99 ns in an earlier run).
+/// Halley's steps on Snell's law squared from the paraxial start (see the module): two leave
+/// the common ray within a few ulps (`demo_rays_take_two_steps` checks them on
+/// `demo::air_water`), and a fixed count lets the processor overlap one ray's steps with the
+/// next ray's.
 const QUARTIC_STEPS: usize = 2;
 
 /// Steps on the travel time's own residual after those, before the kernel hands a ray to
@@ -263,9 +258,9 @@ impl FlatRefraction {
 }
 
 /// The largest coordinate of the ray's ends (the scale of their round-off):
-/// `problem::coord` with compare-and-select instead of the NaN-ignoring `f64::max`, which
-/// costs some 18 instructions more per ray. They differ only where a coordinate is NaN, and
-/// such a ray fails the kernel's test of sides either way.
+/// `problem::coord` with compare-and-select instead of the NaN-ignoring `f64::max`. They
+/// differ only where a coordinate is NaN, and such a ray fails the kernel's test of sides
+/// either way.
 #[inline(always)]
 fn coord(source: Point, receiver: Point) -> f64 {
     let m = max_num(source.x.abs(), source.y.abs());

@@ -10,7 +10,7 @@
 use rayon::prelude::*;
 
 use crate::geom::Point;
-use crate::problem::Geometry;
+use crate::problem::ProblemRef;
 use crate::regions::Regions;
 use crate::scene::{Scene, SceneError};
 use crate::solver::{NewtonOptions, NewtonWorkspace, solve};
@@ -535,7 +535,7 @@ impl<'s> Tracer<'s> {
             refraction_guess(scene, &spec.steps, source, receiver, self.guess, ws);
         }
         if let Start::Compare(guess) = start {
-            let g = Geometry {
+            let g = ProblemRef {
                 scene,
                 steps: &spec.steps,
                 slowness: &ws.ray.slowness,
@@ -548,7 +548,7 @@ impl<'s> Tracer<'s> {
         let mut total_iterations = 0;
         let mut rounds = 0;
         let sol = loop {
-            let g = Geometry {
+            let g = ProblemRef {
                 scene,
                 steps: &spec.steps,
                 slowness: &ws.ray.slowness,

@@ -13,11 +13,11 @@ use super::start::{
     Placed, given_start, initial_guess, nearest_crossing, paraxial_one, refraction_guess,
     warm_start,
 };
-use super::straight::{StraightStart, single_specular};
+use super::straight::{StraightStart, specular_point};
 use super::{Context, RayRecord, Reason, Start, Status, Workspace};
 use crate::geom::{Point, Vec2};
 use crate::polyline::Polyline;
-use crate::problem::{Geometry, Pin};
+use crate::problem::{Pin, ProblemRef};
 use crate::scene::StepKind;
 use crate::solver::{Outcome, Solution, solve};
 
@@ -53,7 +53,7 @@ impl OneStepPath {
         ws.resize(1);
         ws.ray.slowness.clear();
         ws.ray.slowness.extend_from_slice(&self.slowness);
-        let g = Geometry {
+        let g = ProblemRef {
             scene,
             steps,
             slowness: &self.slowness,
@@ -159,7 +159,7 @@ impl OneStepPath {
             if !self.images {
                 return OneStepStart::General;
             }
-            let specular = single_specular(line, source, receiver);
+            let specular = specular_point(line, source, receiver);
             return match specular.start {
                 StraightStart::At => OneStepStart::At(Placed {
                     s: specular.s,

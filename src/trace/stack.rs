@@ -10,14 +10,14 @@
 //! points, the points from the segments, and the classification of a ray whose points are
 //! all free and inside their segments with no vanished leg (the side and obstruction tests).
 //! So where it returns, its ray is the general code's, bit for bit
-//! (`solver::tests::fast_paths_take_the_general_steps` and the tests below compare them).
+//! (`tests/kernels.rs` and the tests below compare them).
 //! Anything else (a point at a segment's end, a fast path that ends otherwise than
 //! converged) goes to the general solve from the same start.
 
 use super::straight::StraightPath;
 use super::{Context, RayRecord, Workspace, start::layered_guess};
 use crate::geom::Point;
-use crate::problem::Geometry;
+use crate::problem::ProblemRef;
 use crate::scene::StepKind;
 use crate::solver::{Outcome, fast_newton_from};
 
@@ -52,7 +52,7 @@ impl StraightPath {
         if !(0..k).all(|i| ws.newton.s[i] > 0.0 && ws.newton.s[i] < lines[i].len()) {
             return None;
         }
-        let g = Geometry {
+        let g = ProblemRef {
             scene,
             steps,
             slowness: &self.slowness,

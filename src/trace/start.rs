@@ -4,7 +4,7 @@
 
 use crate::geom::{Point, Vec2};
 use crate::polyline::Polyline;
-use crate::problem::{Geometry, Pin};
+use crate::problem::{Pin, ProblemRef};
 use crate::scene::{Scene, Step, StepKind};
 use crate::solver::NewtonWorkspace;
 
@@ -44,7 +44,7 @@ pub(crate) struct Placed {
 
 /// Replaces the default guess already in `nw` by `guess` if the residual is smaller there.
 pub(super) fn warm_start(
-    g: &Geometry,
+    g: &ProblemRef,
     guess: &[f64],
     nw: &mut NewtonWorkspace,
     scratch: &mut StartScratch,
@@ -129,18 +129,10 @@ fn perpendicular_crossing(
 }
 
 /// Refines the straight-line guess of a path of refractions only (every step crossed by the
-/// line `S → R`, at increasing fractions `tᵢ`, kept in `ws.start.crossing_t`): each point moves along
-/// its interface to the lateral fraction `τᵢ` where a ray through flat layers would cross.
-///
-/// The layers are taken as flat and parallel, `Δzⱼ = Δtⱼ Z` thick, where `Z` and `X` are the
-/// extents of `R − S` across and along them. When the interfaces' normals at the crossings agree
-/// to within [`PARALLEL`], the ray parameter `p` solves `Σⱼ Δzⱼ tan θⱼ = X` with
-/// `sin θⱼ = p / wⱼ` (Halley's steps from a `p` above the root of this convex, increasing
-/// function, see [`ray_parameter`]), and
-/// `τᵢ = Σ_{j≤i} Δzⱼ tan θⱼ / X`: the exact solution for parallel flat layers. Otherwise, for
-/// a single refraction, or when that equation has no root (a ray beyond the critical angle of
-/// a layer), the paraxial fractions
-/// `τᵢ = Σ_{j≤i} Δtⱼ/wⱼ / Σ Δtⱼ/wⱼ` (the small-angle limit).
+/// line `S → R`, at increasing fractions kept in `ws.start.crossing_t`): each point moves along
+/// its interface to where a ray through flat layers would cross, as [`InitialGuess`] describes
+/// (the ray parameter through parallel interfaces, [`ray_parameter`]; the small-angle limit
+/// elsewhere, for a single refraction, or where that equation has no root).
 pub(super) fn refraction_guess(
     scene: &Scene,
     steps: &[Step],
@@ -265,9 +257,7 @@ pub(super) fn layered_guess(
 
 /// Largest angle between two interfaces' normals (as `1 − cos`) for which
 /// [`refraction_guess`] treats the layers as parallel: about 5e-5 rad, round-off of digitised
-/// coordinates. (With 8° the refinement also served nearly parallel layers: through the 5°
-/// dips of `demo::dipping_stack` it saved 0.1–0.3 of 3 Newton steps per ray but cost more
-/// time than it saved.)
+/// coordinates.
 pub(super) const PARALLEL: f64 = 1e-9;
 
 /// One layer of [`ray_parameter`]'s equation: its thickness `Δt` (in units of `Z`) and
@@ -370,7 +360,7 @@ fn ray_parameter(
     // first four make a polynomial P(p) ≤ f(p) + x, convex and increasing, whose root is
     // therefore above f's; Newton's iterates on it from its linear part's root (the
     // paraxial p) stay above its root. Three of them, without a square root or a division by
-    // layer, save 1.5 of the 4.8 evaluations of f per ray through `demo::layer_stack(8, _)`.
+    // layer, save evaluations of f.
     let [b3, b5, b7] = series;
     let mut q = small_angle;
     for _ in 0..3 {
@@ -407,8 +397,7 @@ fn ray_parameter(
     // `(ρ²/4 + (h vₘₐₓ)²/2) |h|` with `ρ = h f''/f'` (the f‴ term bounded through the
     // largest speed, `1/limit`). Where a thousand times that is below round-off, the step is
     // the last: the offsets follow it to second order (their error of order h³, below
-    // round-off too), without another evaluation. Through `demo::layer_stack(8, 500)` this
-    // takes 1.8 evaluations per ray where Newton's steps to a residual at round-off took 3.3.
+    // round-off too), without another evaluation.
     let vmax = 1.0 / limit;
     for _ in 0..60 {
         if fp.abs() <= 4.0 * f64::EPSILON * x {

@@ -166,7 +166,7 @@ pub(crate) struct Specular {
 /// The image method for a single reflection off `line` (a path that
 /// [`StraightPath::exact`] holds for).
 #[inline(always)]
-pub(crate) fn single_specular(line: &Polyline, source: Point, receiver: Point) -> Specular {
+pub(crate) fn specular_point(line: &Polyline, source: Point, receiver: Point) -> Specular {
     debug_assert!(line.num_segments() == 1 && !line.is_closed());
     let l = StraightSegment::of(line);
     let (s, meet) = l.meet(receiver, l.mirror(source));
