@@ -25,7 +25,10 @@ pub struct BatchOptions<'a> {
     /// Rays whose default start is already the solution (off a flat mirror, through flat
     /// layers) and single refractions at a one-segment interface (solved by a dedicated
     /// kernel, whose own start costs less than a warm start's bookkeeping) are not
-    /// warm-started: they come out bit for bit as one by one.
+    /// warm-started: they come out bit for bit as one by one. Where a path's step sequence
+    /// holds several stationary paths (an interface of several segments: a zigzag or bent
+    /// floor, a bent mirror), a warm start that converges may reach another of them than the
+    /// default start; turn warm starts off for the very rays of one-by-one solving.
     pub warm_start: bool,
     /// Receivers per work unit (one workspace and one warm-start chain per unit).
     pub chunk: usize,

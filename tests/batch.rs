@@ -369,3 +369,61 @@ fn a_reused_batch_gives_the_same_rays() {
     }
     assert!(timeless > 0, "no ray without a time");
 }
+
+/// A waveguide of two straight mirrors and four bounces, its legs alternating between two
+/// wave speeds (converted reflections: no image method, so the batch warm-starts them), with
+/// receivers along it and beyond its ends. Each sequence has one stationary path (`T` is
+/// convex in the parameters), so a warm start either finds that path or fails: a neighbour's
+/// bounce points lead it off a mirror's end where the default start finds the path. Such a
+/// ray is solved again from the default start, so the batch gives one-by-one solving's rays,
+/// ray for ray.
+#[test]
+fn batches_keep_the_rays_where_warm_starts_fail() {
+    let guide = serde_json::json!({
+        "media": { "p": { "speed": 1.5 }, "s": { "speed": 0.9 } },
+        "interfaces": {
+            "top": { "points": [[-5.0, 1.0], [5.0, 1.0]] },
+            "bottom": { "points": [[5.0, -1.0], [-5.0, -1.0]] }
+        },
+        "sources": [[-4.0, 0.1], [0.5, -0.3]],
+        "receivers": demo::jittered_grid(900, [-4.9, 9.0], [-0.9, 0.9], 7),
+        "paths": [
+            { "steps": [{ "reflect": "top" }, { "reflect": "bottom" },
+                        { "reflect": "top" }, { "reflect": "bottom" }],
+              "media": ["p", "s", "p", "s", "p"] },
+            { "steps": [{ "reflect": "bottom" }, { "reflect": "top" }, { "reflect": "bottom" }],
+              "media": ["s", "p", "s", "p"] }
+        ]
+    });
+    let scene = Scene::from_json(&guide.to_string()).expect("valid scene");
+    let tracer = Tracer::new(&scene).expect("tracer");
+    let one_by_one = tracer.trace_all();
+    let count = |s: Status| one_by_one.iter().filter(|r| r.status == s).count();
+    let (converged, no_path) = (count(Status::Converged), count(Status::NoPath));
+    assert!(
+        converged > 1000 && no_path > 500,
+        "{converged} converged, {no_path} without a path"
+    );
+    for chunk in [16, 256] {
+        let batch = tracer.trace_batch(&BatchOptions {
+            chunk,
+            ..BatchOptions::default()
+        });
+        // Rays that took more iterations than one by one were solved twice: their warm start
+        // failed.
+        let mut resolved = 0;
+        for (i, one) in one_by_one.iter().enumerate() {
+            let got = batch.ray(i);
+            assert_eq!(got.status, one.status, "ray {i}: {got:?} vs {one:?}");
+            if got.status.has_time() {
+                let (a, b) = (got.time, one.time);
+                assert!((a - b).abs() <= 1e-12 * b, "ray {i}: {got:?} vs {one:?}");
+            }
+            resolved += usize::from(got.iterations > one.iterations + 2);
+        }
+        assert!(
+            resolved > 20,
+            "chunk {chunk}: {resolved} warm starts failed"
+        );
+    }
+}
