@@ -7,6 +7,8 @@
 //! `straight`), the Newton solve (`crate::solver`), the media lookup and the classification
 //! (`classify`). Every kernel ends in the same classifier.
 
+use std::borrow::Borrow;
+
 use rayon::prelude::*;
 
 use crate::geom::Point;
@@ -193,8 +195,8 @@ pub(crate) struct Context<'a> {
 /// Common cases take a kernel (see [`Kernels`]): a single refraction at a flat interface, a
 /// stack of parallel flat layers, one interaction with its media given. Every kernel ends in
 /// the same classification and hands the rays outside its case to the general code.
-pub struct Tracer<'s> {
-    scene: &'s Scene,
+pub struct Tracer<S = Scene> {
+    scene: S,
     regions: Option<Regions>,
     /// Medium at each source (when regions exist).
     source_media: Vec<Option<usize>>,
@@ -206,27 +208,41 @@ pub struct Tracer<'s> {
     kernels: Kernels,
 }
 
-impl<'s> Tracer<'s> {
+impl<S: Borrow<Scene>> Tracer<S> {
     /// Prepares a scene for tracing: builds the region lookup only if some path needs it.
+    /// The tracer borrows the scene (`Tracer::new(&scene)`), or owns it (`Tracer::new(scene)`,
+    /// or an `Arc<Scene>` to share it), so that an application can keep the tracer alone.
+    ///
+    /// ```
+    /// use eigenray::{Scene, Tracer};
+    /// // A long-lived application keeps the tracer, which owns its scene.
+    /// struct Layout {
+    ///     tracer: Tracer,
+    /// }
+    /// let scene = Scene::from_spec(&eigenray::demo::air_water(10, 1)).unwrap();
+    /// let layout = Layout { tracer: Tracer::new(scene).unwrap() };
+    /// assert_eq!(layout.tracer.trace_all().len(), 10);
+    /// ```
     ///
     /// # Errors
     /// A scene whose regions are inconsistent (two `at` points in one region).
-    pub fn new(scene: &'s Scene) -> Result<Tracer<'s>, SceneError> {
-        let regions = if scene.needs_regions() {
-            Some(Regions::build(scene)?)
-        } else {
-            None
-        };
+    pub fn new(scene: S) -> Result<Tracer<S>, SceneError> {
+        let regions = Self::regions_of(scene.borrow())?;
         let source_media = match &regions {
-            Some(r) => scene.sources().iter().map(|&p| r.medium_at(p)).collect(),
+            Some(r) => scene
+                .borrow()
+                .sources()
+                .iter()
+                .map(|&p| r.medium_at(p))
+                .collect(),
             None => Vec::new(),
         };
-        let opts = scene.solver();
+        let (classifier, opts) = (Classifier::new(scene.borrow()), scene.borrow().solver());
         let mut tracer = Tracer {
             scene,
             regions,
             source_media,
-            classifier: Classifier::new(scene),
+            classifier,
             plans: Vec::new(),
             newton: NewtonOptions {
                 tolerance: opts.tolerance,
@@ -240,9 +256,18 @@ impl<'s> Tracer<'s> {
         Ok(tracer)
     }
 
+    /// The region lookup of `scene`, if some path needs one.
+    fn regions_of(scene: &Scene) -> Result<Option<Regions>, SceneError> {
+        Ok(if scene.needs_regions() {
+            Some(Regions::build(scene)?)
+        } else {
+            None
+        })
+    }
+
     /// Decides each path's plan for the present start and kernels.
     fn plan(&mut self) {
-        let scene = self.scene;
+        let scene = self.scene.borrow();
         self.plans = (0..scene.paths().len())
             .map(|p| PathPlan::of(scene, p, self.guess, self.kernels))
             .collect();
@@ -289,8 +314,8 @@ impl<'s> Tracer<'s> {
     }
 
     /// The scene.
-    pub fn scene(&self) -> &'s Scene {
-        self.scene
+    pub fn scene(&self) -> &Scene {
+        self.scene.borrow()
     }
 
     /// The region lookup, if the scene needed one.
@@ -302,7 +327,7 @@ impl<'s> Tracer<'s> {
     #[inline(always)]
     pub(crate) fn context(&self) -> Context<'_> {
         Context {
-            scene: self.scene,
+            scene: self.scene.borrow(),
             classifier: &self.classifier,
             newton: self.newton,
             guess: self.guess,
@@ -327,9 +352,12 @@ impl<'s> Tracer<'s> {
     }
 
     /// Solves every ray of the scene, in parallel, in ray order ([`ray_index`]).
-    pub fn trace_all(&self) -> Vec<Ray> {
-        let (r, p) = (self.scene.receivers().len(), self.scene.paths().len());
-        (0..self.scene.num_rays())
+    pub fn trace_all(&self) -> Vec<Ray>
+    where
+        S: Sync,
+    {
+        let (r, p) = (self.scene().receivers().len(), self.scene().paths().len());
+        (0..self.scene().num_rays())
             .into_par_iter()
             .map_init(Workspace::new, |ws, idx| {
                 let path = idx % p;
@@ -372,7 +400,7 @@ impl<'s> Tracer<'s> {
     ) -> RayRecord {
         assert_eq!(
             guess.len(),
-            self.scene.paths()[path].steps.len(),
+            self.scene().paths()[path].steps.len(),
             "one parameter per step"
         );
         let src_medium = self.regions.as_ref().and_then(|r| r.medium_at(source));
@@ -411,9 +439,9 @@ impl<'s> Tracer<'s> {
     ) -> RayRecord {
         let src_medium = self.source_media.get(source).copied().flatten();
         self.solve_planned(
-            self.scene.sources()[source],
+            self.scene().sources()[source],
             src_medium,
-            self.scene.receivers()[receiver],
+            self.scene().receivers()[receiver],
             path,
             start,
             ws,
@@ -492,7 +520,7 @@ impl<'s> Tracer<'s> {
         {
             return ray;
         }
-        let scene = self.scene;
+        let scene = self.scene();
         let spec = &scene.paths()[path];
         let k = spec.steps.len();
         ws.resize(k);
@@ -605,10 +633,10 @@ impl<'s> Tracer<'s> {
     ) -> Result<(), Reason> {
         classify::lookup_media(
             self.regions.as_ref(),
-            self.scene,
+            self.scene(),
             source,
             src_medium,
-            &self.scene.paths()[path].steps,
+            &self.scene().paths()[path].steps,
             &ws.newton,
             &mut ws.ray.media,
         )
