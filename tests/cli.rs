@@ -284,14 +284,27 @@ fn solve_reads_standard_input_and_writes_json_lines_and_npy() {
     assert_eq!(&per_line, rays);
 
     // The .npy file: its header, then one 89-byte record per ray (3 points, 2 legs) whose
-    // time is the JSON document's (NaN for a ray without one).
+    // time is the JSON document's (NaN for a ray without one); `--names` writes the tables
+    // that name its codes and indices.
+    let names = TempFile::path_only("names.json");
     let npy = run([
         OsStr::new("solve"),
         OsStr::new("--format"),
         OsStr::new("npy"),
+        OsStr::new("--names"),
+        names.path().as_os_str(),
         file.path().as_os_str(),
     ]);
     assert_eq!(npy.status.code(), Some(0), "stderr: {}", text(&npy.stderr));
+    let tables: Value =
+        serde_json::from_str(&std::fs::read_to_string(names.path()).expect("names written"))
+            .expect("names are JSON");
+    assert_eq!(tables["media"], serde_json::json!(["air", "water"]));
+    assert_eq!(tables["status"][2], "no_path");
+    assert_eq!(
+        tables["paths"],
+        serde_json::json!(["transmitted", "bounce"])
+    );
     let bytes = &npy.stdout;
     assert_eq!(&bytes[..6], b"\x93NUMPY");
     let data = &bytes[10 + u16::from_le_bytes([bytes[8], bytes[9]]) as usize..];

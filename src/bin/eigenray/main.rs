@@ -67,6 +67,11 @@ struct SolveArgs {
     /// solution.
     #[arg(long)]
     no_warm_start: bool,
+    /// Also write the scene's name tables as JSON to this file: the status of each `.npy`
+    /// status code, the name of each path and of each medium index (media in the order of
+    /// their names). The `.npy` format holds numbers only; this file names them.
+    #[arg(long, value_name = "PATH")]
+    names: Option<PathBuf>,
     /// Also draw the scene and its rays, coloured by travel time, to this SVG file.
     #[arg(long, value_name = "PATH")]
     svg: Option<PathBuf>,
@@ -103,13 +108,15 @@ impl Default for DemoArgs {
 /// Output formats of `solve`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum Format {
-    /// The contract's document: `{"rays": [...]}`.
+    /// One JSON document, `{"rays": [...]}`, one object per ray.
     Json,
     /// One ray object per line (JSON Lines), in ray order.
     Jsonl,
-    /// Comma-separated values: one line per ray, points as `x y;x y;…`.
+    /// Comma-separated values: a header, then one line per ray (points as `x y;x y;…`, leg
+    /// media as names joined by `;`).
     Csv,
-    /// NumPy's `.npy` file: one fixed-size binary record per ray (see `eigenray::Format::Npy`).
+    /// NumPy's `.npy` file: one fixed-size binary record per ray, numbers only (`--names`
+    /// writes the names of its codes and indices).
     Npy,
 }
 
@@ -189,6 +196,11 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
     let tracer = Tracer::new(&scene).map_err(Failure::scene)?;
     let batch = trace(&tracer, !args.no_warm_start);
 
+    if let Some(path) = &args.names {
+        let mut names = Vec::new();
+        eigenray::write_names(&scene, &mut names).map_err(|e| write_failure(path, &e))?;
+        fs::write(path, names).map_err(|e| write_failure(path, &e))?;
+    }
     if let Some(path) = &args.svg {
         let title = format!("{}: {}", display_name(&args.scene), batch_summary(&batch));
         write_svg(path, &scene, &batch, &title)?;
@@ -343,13 +355,16 @@ fn write_svg(path: &Path, scene: &Scene, batch: &Batch, title: &str) -> Result<(
     } else {
         svg::scene_svg(scene, &rays, title)
     };
-    fs::write(path, svg).map_err(|e| {
-        Failure::Output(format!(
-            "{}: cannot write: {}",
-            path.display(),
-            io_message(&e)
-        ))
-    })
+    fs::write(path, svg).map_err(|e| write_failure(path, &e))
+}
+
+/// A file that could not be written.
+fn write_failure(path: &Path, e: &io::Error) -> Failure {
+    Failure::Output(format!(
+        "{}: cannot write: {}",
+        path.display(),
+        io_message(e)
+    ))
 }
 
 /// Whether a write failed because the reader closed the pipe (also when the error comes
