@@ -163,6 +163,8 @@ struct Names {
     paths: Vec<Option<Vec<u8>>>,
     /// CSV fields of the path names (quoted where needed; empty for an unnamed path).
     paths_csv: Vec<Vec<u8>>,
+    /// The medium names for CSV, when none needs quoting (else the field is quoted whole).
+    media_csv: Option<Vec<Vec<u8>>>,
 }
 
 /// `s` as a JSON string.
@@ -198,10 +200,16 @@ impl Names {
                 f
             })
             .collect();
+        let media_csv = scene
+            .media()
+            .iter()
+            .map(|m| (!m.name.contains([',', '"', '\n', '\r'])).then(|| m.name.as_bytes().to_vec()))
+            .collect();
         Names {
             media,
             paths,
             paths_csv,
+            media_csv,
         }
     }
 }
@@ -316,14 +324,27 @@ fn ray_csv<M: Iterator<Item = usize>>(
     }
     buf.push(b',');
     if let Some(media) = r.media {
-        let mut joined = String::new();
-        for (i, m) in media.enumerate() {
-            if i > 0 {
-                joined.push(';');
+        match &names.media_csv {
+            // No name needs quoting: the names as they are, joined by `;`.
+            Some(plain) => {
+                for (i, m) in media.enumerate() {
+                    if i > 0 {
+                        buf.push(b';');
+                    }
+                    buf.extend_from_slice(plain.get(m).map_or(b"?", Vec::as_slice));
+                }
             }
-            joined.push_str(scene.media().get(m).map_or("?", |m| m.name.as_str()));
+            None => {
+                let mut joined = String::new();
+                for (i, m) in media.enumerate() {
+                    if i > 0 {
+                        joined.push(';');
+                    }
+                    joined.push_str(scene.media().get(m).map_or("?", |m| m.name.as_str()));
+                }
+                csv_field(buf, &joined);
+            }
         }
-        csv_field(buf, &joined);
     }
     buf.push(b',');
     if let Some(reason) = r.reason {

@@ -397,3 +397,21 @@ fn media_from_region_lookup_are_named() {
     // air = 0, glass = 1: the scene's media in the order of their names.
     assert_eq!(legs, [0, 1, 0]);
 }
+
+/// A medium name that CSV must quote: the whole `media` field is quoted.
+#[test]
+fn csv_quotes_a_media_field_whose_names_need_it() {
+    let scene = Scene::from_json(
+        r#"{
+        "media": { "air, dry": { "speed": 1 }, "water": { "speed": 0.5 } },
+        "interfaces": { "surface": { "points": [[-10, 0], [10, 0]] } },
+        "sources": [[0, 1]], "receivers": [[1, -1]],
+        "paths": [{ "steps": [{ "refract": "surface" }], "media": ["air, dry", "water"] }]
+    }"#,
+    )
+    .expect("valid scene");
+    let csv = String::from_utf8(written(&scene, Format::Csv)).unwrap();
+    let line = csv.lines().nth(1).unwrap();
+    assert!(line.contains(",\"air, dry;water\","), "{line}");
+    assert_eq!(csv_fields(line)[9], "air, dry;water");
+}
