@@ -17,7 +17,7 @@ mod stack;
 mod straight;
 pub(crate) use single::SinglePath;
 
-/// How a ray ended (the contract's `status`).
+/// How a ray ended (the `status` of `eigenray solve`'s output).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Status {
@@ -37,7 +37,8 @@ pub enum Status {
 }
 
 impl Status {
-    /// The contract's name: `converged`, `vertex`, `no_path`, `obstructed`, `not_converged`.
+    /// Its name in `eigenray solve`'s output: `converged`, `vertex`, `no_path`, `obstructed`,
+    /// `not_converged`.
     pub fn as_str(self) -> &'static str {
         match self {
             Status::Converged => "converged",
@@ -214,7 +215,7 @@ pub enum InitialGuess {
     Paraxial,
 }
 
-/// The contract's ray numbering: source-major, then receiver, then path.
+/// The ray numbering of every output: source-major, then receiver, then path.
 #[inline]
 pub fn ray_index(
     source: usize,
@@ -384,7 +385,8 @@ impl<'s> Tracer<'s> {
         self.to_ray(source, receiver, path, &s, ws)
     }
 
-    /// Solves every ray of the scene, in parallel, in the contract's ray order.
+    /// Solves every ray of the scene, in parallel, in ray order (source-major, then receiver,
+    /// then path).
     pub fn trace_all(&self) -> Vec<Ray> {
         let (r, p) = (self.scene.receivers().len(), self.scene.paths().len());
         (0..self.scene.num_rays())

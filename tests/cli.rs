@@ -1,4 +1,5 @@
-//! Integration tests of the `eigenray` command line: the `solve` contract, invalid scenes, the demo.
+//! Integration tests of the `eigenray` command line: `solve`'s output, invalid scenes, the
+//! demo.
 
 use std::ffi::OsStr;
 use std::io::Write;
@@ -63,7 +64,7 @@ fn solve(scene: &str) -> Value {
     serde_json::from_slice(&out.stdout).expect("stdout is one JSON document")
 }
 
-/// Checks the contract's shape of every ray: count, order, indices, and `time`/`points`
+/// Checks the documented shape of every ray: count, order, indices, and `time`/`points`
 /// present exactly for `converged`, `vertex` and `obstructed` (with steps + 2 points).
 fn check_rays(doc: &Value, sources: usize, receivers: usize, steps: &[usize]) -> Vec<Value> {
     let rays = doc["rays"].as_array().expect("`rays` is an array").clone();
