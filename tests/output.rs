@@ -57,7 +57,7 @@ fn refraction_by_bisection() -> (f64, f64) {
     (x, x.hypot(1.0) + (1.0 - x).hypot(1.0) / 0.5)
 }
 
-fn ray<'a>(rays: &'a [Value], receiver: usize, path: usize) -> &'a Value {
+fn ray(rays: &[Value], receiver: usize, path: usize) -> &Value {
     &rays[receiver * 4 + path]
 }
 

@@ -286,6 +286,9 @@ fn star(x: f64, y: f64, r: f64) -> String {
 /// A label's box in pixels: `(x0, y0, x1, y1)`.
 type LabelBox = (f64, f64, f64, f64);
 
+/// A straight piece of a drawing in pixels: its two ends.
+type PixelSegment = ((f64, f64), (f64, f64));
+
 /// The box of a `size`-pixel text of `chars` characters whose baseline starts at `(x, y)`.
 fn text_box(x: f64, y: f64, chars: usize, size: f64) -> LabelBox {
     (
@@ -644,7 +647,7 @@ pub fn scene_svg(scene: &Scene, batch: &Batch, title: &str, colouring: Colouring
 
     // Labels: interfaces at their middle, where they cover the fewest rays and no other label;
     // then the media.
-    let ray_segments: Vec<((f64, f64), (f64, f64))> = rays
+    let ray_segments: Vec<PixelSegment> = rays
         .iter()
         .flat_map(|r| r.points.windows(2).map(|w| (view.px(w[0]), view.px(w[1]))))
         .collect();
@@ -655,7 +658,7 @@ pub fn scene_svg(scene: &Scene, batch: &Batch, title: &str, colouring: Colouring
         taken.push(text_box(x, y, i.name.chars().count(), 12.0));
         halo_text(&mut s, x, y, "", "#222", &i.name);
     }
-    let walls: Vec<((f64, f64), (f64, f64))> = scene
+    let walls: Vec<PixelSegment> = scene
         .interfaces()
         .iter()
         .flat_map(|i| {
@@ -775,7 +778,7 @@ pub fn scene_svg(scene: &Scene, batch: &Batch, title: &str, colouring: Colouring
 fn interface_label_spot(
     view: &View,
     i: &eigenray::Interface,
-    rays: &[((f64, f64), (f64, f64))],
+    rays: &[PixelSegment],
     taken: &[LabelBox],
 ) -> (f64, f64) {
     let v = i.polyline.vertices();
