@@ -42,8 +42,11 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
-    /// Solve every (source, receiver, path) ray of a scene file; write the rays as JSON to
-    /// standard output, in ray order.
+    /// Solve every (source, receiver, path) ray of a scene file; write the rays to standard
+    /// output, in ray order (JSON unless `--format` says otherwise).
+    ///
+    /// The scene file and every output field are described in docs/scene-format.md of
+    /// eigenray's repository.
     Solve(SolveArgs),
     /// Solve the built-in air-over-water scene, print a summary and draw it (the default).
     Demo(DemoArgs),
@@ -292,7 +295,10 @@ fn demo(args: &DemoArgs) -> Result<(), Failure> {
 
     let mut lines = vec![summary];
     if !args.no_svg {
-        let title = format!("eigenray demo: {media}, {} rays", batch.len());
+        let title = format!(
+            "eigenray demo: {media}, {} rays",
+            svg::thousands(batch.len())
+        );
         write_svg(&args.svg, &scene, &batch, &title, svg::Colouring::Time)?;
         lines.push(format!("wrote {}", args.svg.display()));
     }
