@@ -537,3 +537,72 @@ fn closed_stdout_exits_quietly() {
     assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
     assert!(stderr.is_empty(), "stderr: {stderr}");
 }
+
+/// The README's worked scene is `examples/scenes/room.json`, and its output lines are what
+/// `solve --format csv` prints for it.
+#[test]
+fn the_readme_room_is_the_example_file_and_its_output() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let readme = std::fs::read_to_string(format!("{root}/README.md")).expect("README");
+    let block = |fence: &str| -> String {
+        let start = readme.find(fence).expect(fence) + fence.len();
+        readme[start..][..readme[start..].find("```").expect("closing fence")].to_string()
+    };
+    let shown: Value = serde_json::from_str(&block("```json\n")).expect("README scene");
+    let path = format!("{root}/examples/scenes/room.json");
+    let mut file: Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("room")).expect("JSON");
+    file.as_object_mut().expect("object").remove("description");
+    assert_eq!(shown, file);
+
+    let out = run(["solve", path.as_str(), "--format", "csv"]);
+    assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
+    let csv = text(&out.stdout);
+    for line in block("```text\n").lines().filter(|l| *l != "…") {
+        assert!(
+            csv.lines().any(|l| l == line),
+            "README line {line:?} not in\n{csv}"
+        );
+    }
+}
+
+/// docs/scene-format.md's example scene gives the output lines and name tables the page shows.
+#[test]
+fn the_format_page_shows_its_scene_output() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let page = std::fs::read_to_string(format!("{root}/docs/scene-format.md")).expect("page");
+    // The first block of `fence` after `heading`.
+    let block = |heading: &str, fence: &str| -> String {
+        let at = page.find(heading).expect(heading);
+        let start = at + page[at..].find(fence).expect(fence) + fence.len();
+        page[start..][..page[start..].find("```").expect("closing fence")].to_string()
+    };
+    let scene = TempFile::with("format-page.json", block("## A scene", "```json\n"));
+    let names = TempFile::path_only("format-page-names.json");
+    let csv = run([
+        OsStr::new("solve"),
+        scene.path().as_os_str(),
+        OsStr::new("--format"),
+        OsStr::new("csv"),
+        OsStr::new("--names"),
+        names.path().as_os_str(),
+    ]);
+    assert_eq!(csv.status.code(), Some(0), "stderr: {}", text(&csv.stderr));
+    let lines: Vec<&str> = text(&csv.stdout).lines().collect();
+    for line in block("### `--format csv`", "```text\n").lines() {
+        assert!(lines.contains(&line), "{line:?} not in {lines:?}");
+    }
+    let shown: Value =
+        serde_json::from_str(&block("### `--names", "```json\n")).expect("names block");
+    let written: Value =
+        serde_json::from_str(&std::fs::read_to_string(names.path()).expect("names")).expect("JSON");
+    assert_eq!(shown, written);
+
+    let json = run([OsStr::new("solve"), scene.path().as_os_str()]);
+    let doc: Value = serde_json::from_slice(&json.stdout).expect("JSON");
+    let shown: Value =
+        serde_json::from_str(&block("### `--format json`", "```json\n")).expect("rays block");
+    let rays = shown["rays"].as_array().expect("rays");
+    assert_eq!(&doc["rays"][0], &rays[0]);
+    assert_eq!(&doc["rays"][1], &rays[1]);
+}
