@@ -606,3 +606,29 @@ fn the_format_page_shows_its_scene_output() {
     assert_eq!(&doc["rays"][0], &rays[0]);
     assert_eq!(&doc["rays"][1], &rays[1]);
 }
+
+/// A big demo draws a sample and says so, in a picture a viewer can open.
+#[test]
+fn a_big_demo_draws_a_sample() {
+    let svg = TempFile::path_only("big-demo.svg");
+    let out = run([
+        OsStr::new("demo"),
+        OsStr::new("--receivers"),
+        OsStr::new("100000"),
+        OsStr::new("--svg"),
+        svg.path().as_os_str(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
+    let picture = std::fs::read_to_string(svg.path()).expect("SVG written");
+    assert!(picture.len() < 1_000_000, "{} bytes", picture.len());
+    assert!(picture.contains("100,000 rays"), "title");
+    assert!(
+        picture.contains("2,000 of 100,000 rays drawn (a sample spread over all rays)"),
+        "caption"
+    );
+    assert_eq!(
+        picture.matches("<polyline").count(),
+        2_000 + 1,
+        "rays and the surface"
+    );
+}
