@@ -82,7 +82,7 @@ mod report {
     }
 
     impl Case {
-        /// Every (source, receiver, path) in the contract's ray order.
+        /// Every (source, receiver, path) in ray order (source-major, then receiver, then path).
         fn rays(&self) -> Vec<(usize, usize, usize)> {
             let s = &self.scene;
             let mut v = Vec::with_capacity(s.num_rays());
