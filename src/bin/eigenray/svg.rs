@@ -181,6 +181,11 @@ fn esc(s: &str) -> String {
     out
 }
 
+/// `has` for one, `have` for more.
+fn have(n: usize) -> &'static str {
+    if n == 1 { "has" } else { "have" }
+}
+
 /// `1234567` as `1,234,567`.
 pub fn thousands(n: usize) -> String {
     let digits = n.to_string();
@@ -374,6 +379,16 @@ fn sample(batch: &Batch) -> (Vec<usize>, bool) {
     (picked, true)
 }
 
+/// The line style of path `p` when colouring by path: the colours repeat every 20 paths, solid
+/// the first time round, long dashes the second, and so on.
+fn path_dash(p: usize) -> &'static str {
+    if (p / PATH_COLOURS.len()) % 2 == 1 {
+        r#" stroke-dasharray="8 3""#
+    } else {
+        ""
+    }
+}
+
 /// The label of path `p`: its name, or `path p`.
 fn path_label(scene: &Scene, p: usize) -> String {
     match scene.paths().get(p).and_then(|p| p.name.as_deref()) {
@@ -495,8 +510,25 @@ pub fn scene_svg(scene: &Scene, batch: &Batch, title: &str, colouring: Colouring
         thousands(rays.len()),
         thousands(batch.len())
     );
-    if sampled {
-        caption.push_str(" (a sample spread over all rays)");
+    let timeless = batch
+        .records()
+        .iter()
+        .filter(|r| !(r.status.has_time() && r.time.is_finite()))
+        .count();
+    match (sampled, timeless) {
+        (false, 0) => {}
+        (true, 0) => caption.push_str(" (a sample spread over all rays)"),
+        (false, n) => {
+            let _ = write!(caption, " ({} {} no time)", thousands(n), have(n));
+        }
+        (true, n) => {
+            let _ = write!(
+                caption,
+                " (a sample spread over all rays; {} {} no time)",
+                thousands(n),
+                have(n)
+            );
+        }
     }
     caption.push_str(match colouring {
         Colouring::Time => ", coloured by travel time",
@@ -612,6 +644,7 @@ pub fn scene_svg(scene: &Scene, batch: &Batch, title: &str, colouring: Colouring
         let dash = match r.status {
             Status::Obstructed => r#" stroke-dasharray="5 3""#,
             Status::Vertex => r#" stroke-dasharray="1 3""#,
+            _ if colouring == Colouring::Path => path_dash(r.path),
             _ => "",
         };
         let _ = writeln!(
@@ -975,10 +1008,11 @@ fn path_legend(
         let y = top + 32.0 + LEGEND_LINE * k as f64;
         let _ = writeln!(
             s,
-            r#"<path d="M{:.2},{:.2}h22" stroke="{}" stroke-width="3"/><text x="{:.2}" y="{:.2}">{} ({})</text>"#,
+            r#"<path d="M{:.2},{:.2}h22" stroke="{}" stroke-width="3"{}/><text x="{:.2}" y="{:.2}">{} ({})</text>"#,
             x - 8.0,
             y - 4.0,
             PATH_COLOURS[p % PATH_COLOURS.len()],
+            path_dash(p),
             x + 20.0,
             y,
             esc(&path_label(scene, p)),
@@ -1186,6 +1220,26 @@ mod tests {
         for name in ["air", "water", "surface", "travel time", "(length ÷ speed)"] {
             assert!(texts.iter().any(|t| t == name), "{name}");
         }
+    }
+
+    #[test]
+    fn the_caption_counts_rays_without_a_time() {
+        let svg = picture(
+            r#"{
+            "media": { "air": { "speed": 1 } },
+            "interfaces": { "floor": { "points": [[-1, 0], [1, 0]] } },
+            "sources": [[0, 1]], "receivers": [[0.5, 1], [5, 1]],
+            "paths": [{ "steps": [{ "reflect": "floor" }], "media": ["air", "air"] }]
+        }"#,
+            Colouring::Time,
+        );
+        let (_, texts) = parse(&svg);
+        assert!(
+            texts
+                .iter()
+                .any(|t| t.starts_with("1 of 2 rays drawn (1 has no time)")),
+            "{texts:?}"
+        );
     }
 
     #[test]
