@@ -52,7 +52,7 @@ mod report {
         method: String,
     }
 
-    /// A figure of another tool from `../shared/benchmarks/README.md`.
+    /// A figure of another tool from `fixtures/bench/README.md`.
     struct Other {
         what: &'static str,
         /// Legend entry in the plot.
@@ -81,7 +81,7 @@ mod report {
     }
 
     impl Case {
-        /// Every (source, receiver, path) in the contract's ray order.
+        /// Every (source, receiver, path) in ray order (source-major, then receiver, then path).
         fn rays(&self) -> Vec<(usize, usize, usize)> {
             let s = &self.scene;
             let mut v = Vec::with_capacity(s.num_rays());
@@ -1084,7 +1084,7 @@ mod report {
              Gershgorin bound of the Hessian over every ray at the start and at the solution \
              (the classic step for an `L`-smooth function). `PathProblem::gradient` allocates \
              its scratch space on every call, which is part of its cost here.\n\
-             - **other tools**: the figures of `../shared/benchmarks/README.md` (one core, same \
+             - **other tools**: the figures of `fixtures/bench/README.md` (one core, same \
              scenes), as reference lines.\n"
         );
 

@@ -732,7 +732,7 @@ fn batch_section() -> io::Result<String> {
     );
     let _ = writeln!(
         md,
-        "For comparison (`../shared/benchmarks/README.md`, one core): on `seed100k` (the same \
+        "For comparison (`fixtures/bench/README.md`, one core): on `seed100k` (the same \
          scene with 100,000 receivers) the fastest other tool, numpy+autograd gradient descent \
          over all receivers as one vector, takes 0.89 µs/ray for max error ≤ 1e-6 (40 \
          iterations) and 1.65 µs/ray for ≤ 1e-12 (75 iterations); the batch above takes {} \

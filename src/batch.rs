@@ -50,8 +50,9 @@ impl Default for BatchOptions<'_> {
     }
 }
 
-/// Every ray of a scene, in ray order ([`ray_index`](crate::ray_index)), in flat arrays: one record per ray and,
-/// per (source, receiver) pair, one block holding the points (and leg media) of all paths.
+/// Every ray of a scene, in ray order (source-major, then receiver, then path), in flat
+/// arrays: one record per ray and, per (source, receiver) pair, one block holding the points
+/// (and leg media) of all paths.
 ///
 /// ```
 /// use eigenray::{BatchOptions, Scene, Status, Tracer};

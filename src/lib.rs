@@ -42,7 +42,9 @@ pub mod argmin_bridge;
 
 pub use batch::{Batch, BatchOptions};
 pub use geom::{Aabb, Point, SegmentContact, Vec2, orient, segment_contact};
-pub use output::{Format, write_batch, write_rays, write_rays_json};
+pub use output::{
+    Format, NO_MEDIUM, STATUS_CODES, write_batch, write_names, write_rays, write_rays_json,
+};
 pub use polyline::{Nearest, Polyline, PolylineError};
 pub use problem::{PathProblem, Tridiagonal};
 pub use regions::{LocateHint, Regions, Sides};

@@ -1,5 +1,5 @@
-//! The `eigenray solve` output: the contract's JSON document, JSON Lines, CSV and NumPy's
-//! `.npy`.
+//! The `eigenray solve` output: a JSON document, JSON Lines, CSV and NumPy's `.npy`, and the
+//! name tables that give the `.npy` file's indices their names.
 //!
 //! Written by hand with `zmij` (shortest round-trip floats, as `serde_json` prints them: it
 //! uses `zmij` too) and `itoa`, straight from either owned [`Ray`]s or a flat [`Batch`], and
@@ -18,14 +18,18 @@ use crate::trace::{Ray, Reason, Status};
 /// Output formats of `eigenray solve`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Format {
-    /// The contract's document: `{"rays": [...]}`.
+    /// One JSON document, `{"rays": [...]}`: one object per ray, in ray order (see
+    /// [`write_rays_json`] for its fields).
     #[default]
     Json,
     /// One ray object per line (the same objects as in `Json`).
     Jsonl,
     /// A header line, then one line per ray:
-    /// `source,receiver,path,status,time,iterations,residual,points` with the points as
-    /// `x y;x y;…` (empty `time` and `points` for rays without a time).
+    /// `source,receiver,path,status,time,iterations,residual,points,path_name,media,reason`,
+    /// with the points as `x y;x y;…` and the leg media as names joined by `;`. Empty fields
+    /// where the ray has no such value (`time` and `points` without a time, `residual` when
+    /// not finite, `path_name` for an unnamed path, `media` when unknown, `reason` when
+    /// converged). A field holding `,`, `"` or a line break is quoted as RFC 4180 says.
     Csv,
     /// NumPy's `.npy` file (format version 1.0): one record per ray, in ray order, of a packed
     /// little-endian structured array that `numpy.load` reads as it is:
@@ -33,13 +37,27 @@ pub enum Format {
     /// 2 `no_path`, 3 `obstructed`, 4 `not_converged`), `iterations` (`<u4`), `time` and
     /// `residual` (`<f8`, NaN when the ray has none), `points` (`<f8`, shape `(P, 2)` with `P`
     /// the most points of a path, padded with NaN; all NaN for a ray without a time) and `media`
-    /// (`<u4`, shape `(L,)` with `L` the most legs, the leg media as indices into the scene's
-    /// media in their order, padded with `2³² − 1`, all of it when unknown). Reasons are left
-    /// out. Binary, fixed-size records: the compact format for large batches.
+    /// (`<u4`, shape `(L,)` with `L` the most legs, the leg media as indices into
+    /// [`Scene::media`], which lists the media in the order of their names, padded with
+    /// `2³² − 1`, all of it when unknown). Names and reasons are left out: [`write_names`]
+    /// writes the tables that turn `status`, `path` and `media` into names. Binary, fixed-size
+    /// records: the compact format for large batches.
     Npy,
 }
 
-/// Code of a status in [`Format::Npy`].
+/// The statuses in the order of their [`Format::Npy`] codes (0 to 4).
+pub const STATUS_CODES: [Status; 5] = [
+    Status::Converged,
+    Status::Vertex,
+    Status::NoPath,
+    Status::Obstructed,
+    Status::NotConverged,
+];
+
+/// The [`Format::Npy`] `media` entry of a leg whose medium is not known.
+pub const NO_MEDIUM: u32 = u32::MAX;
+
+/// Code of a status in [`Format::Npy`]: its place in [`STATUS_CODES`].
 fn status_code(status: Status) -> u8 {
     match status {
         Status::Converged => 0,
@@ -118,7 +136,7 @@ fn ray_npy<M: Iterator<Item = usize>>(buf: &mut Vec<u8>, shape: NpyShape, r: Vie
         let m = media
             .as_mut()
             .and_then(|m| m.next())
-            .map_or(u32::MAX, |m| m as u32);
+            .map_or(NO_MEDIUM, |m| m as u32);
         buf.extend_from_slice(&m.to_le_bytes());
     }
 }
@@ -137,19 +155,62 @@ struct View<'a, M: Iterator<Item = usize>> {
     reason: Option<Reason>,
 }
 
-/// Escaped JSON strings of the medium and interface names, made once per document.
+/// The medium and path names as each format writes them, made once per document.
 struct Names {
+    /// Escaped JSON strings of the media.
     media: Vec<Vec<u8>>,
+    /// Escaped JSON strings of the path names (`None` for an unnamed path).
+    paths: Vec<Option<Vec<u8>>>,
+    /// CSV fields of the path names (quoted where needed; empty for an unnamed path).
+    paths_csv: Vec<Vec<u8>>,
+    /// The medium names for CSV, when none needs quoting (else the field is quoted whole).
+    media_csv: Option<Vec<Vec<u8>>>,
+}
+
+/// `s` as a JSON string.
+fn json_string(s: &str) -> Vec<u8> {
+    serde_json::to_vec(s).unwrap_or_else(|_| b"\"?\"".to_vec())
+}
+
+/// Appends `field` to a CSV line, quoted (RFC 4180) when it holds `,`, `"` or a line break.
+fn csv_field(buf: &mut Vec<u8>, field: &str) {
+    if field.contains([',', '"', '\n', '\r']) {
+        buf.push(b'"');
+        buf.extend_from_slice(field.replace('"', "\"\"").as_bytes());
+        buf.push(b'"');
+    } else {
+        buf.extend_from_slice(field.as_bytes());
+    }
 }
 
 impl Names {
     fn new(scene: &Scene) -> Names {
-        let media = scene
+        let media = scene.media().iter().map(|m| json_string(&m.name)).collect();
+        let paths = scene
+            .paths()
+            .iter()
+            .map(|p| p.name.as_deref().map(json_string))
+            .collect();
+        let paths_csv = scene
+            .paths()
+            .iter()
+            .map(|p| {
+                let mut f = Vec::new();
+                csv_field(&mut f, p.name.as_deref().unwrap_or(""));
+                f
+            })
+            .collect();
+        let media_csv = scene
             .media()
             .iter()
-            .map(|m| serde_json::to_vec(&m.name).unwrap_or_else(|_| b"\"?\"".to_vec()))
+            .map(|m| (!m.name.contains([',', '"', '\n', '\r'])).then(|| m.name.as_bytes().to_vec()))
             .collect();
-        Names { media }
+        Names {
+            media,
+            paths,
+            paths_csv,
+            media_csv,
+        }
     }
 }
 
@@ -177,6 +238,10 @@ fn ray_json<M: Iterator<Item = usize>>(
     int(buf, r.receiver);
     buf.extend_from_slice(b",\"path\":");
     int(buf, r.path);
+    if let Some(Some(name)) = names.paths.get(r.path) {
+        buf.extend_from_slice(b",\"path_name\":");
+        buf.extend_from_slice(name);
+    }
     buf.extend_from_slice(b",\"status\":\"");
     buf.extend_from_slice(r.status.as_str().as_bytes());
     buf.push(b'"');
@@ -214,13 +279,17 @@ fn ray_json<M: Iterator<Item = usize>>(
     }
     if let Some(reason) = r.reason {
         buf.extend_from_slice(b",\"reason\":");
-        let text = reason.describe(scene);
-        buf.extend_from_slice(&serde_json::to_vec(&text).unwrap_or_else(|_| b"\"?\"".to_vec()));
+        buf.extend_from_slice(&json_string(&reason.describe(scene)));
     }
     buf.push(b'}');
 }
 
-fn ray_csv<M: Iterator<Item = usize>>(buf: &mut Vec<u8>, r: View<'_, M>) {
+fn ray_csv<M: Iterator<Item = usize>>(
+    buf: &mut Vec<u8>,
+    scene: &Scene,
+    names: &Names,
+    r: View<'_, M>,
+) {
     int(buf, r.source);
     buf.push(b',');
     int(buf, r.receiver);
@@ -249,8 +318,44 @@ fn ray_csv<M: Iterator<Item = usize>>(buf: &mut Vec<u8>, r: View<'_, M>) {
             float(buf, p.y);
         }
     }
+    buf.push(b',');
+    if let Some(name) = names.paths_csv.get(r.path) {
+        buf.extend_from_slice(name);
+    }
+    buf.push(b',');
+    if let Some(media) = r.media {
+        match &names.media_csv {
+            // No name needs quoting: the names as they are, joined by `;`.
+            Some(plain) => {
+                for (i, m) in media.enumerate() {
+                    if i > 0 {
+                        buf.push(b';');
+                    }
+                    buf.extend_from_slice(plain.get(m).map_or(b"?", Vec::as_slice));
+                }
+            }
+            None => {
+                let mut joined = String::new();
+                for (i, m) in media.enumerate() {
+                    if i > 0 {
+                        joined.push(';');
+                    }
+                    joined.push_str(scene.media().get(m).map_or("?", |m| m.name.as_str()));
+                }
+                csv_field(buf, &joined);
+            }
+        }
+    }
+    buf.push(b',');
+    if let Some(reason) = r.reason {
+        csv_field(buf, &reason.describe(scene));
+    }
     buf.push(b'\n');
 }
+
+/// The header line of [`Format::Csv`].
+const CSV_HEADER: &[u8] =
+    b"source,receiver,path,status,time,iterations,residual,points,path_name,media,reason\n";
 
 /// Rays formatted at a time (in [`PIECE`]s, in parallel) before they are written out in order.
 const WINDOW: usize = 1 << 14;
@@ -271,9 +376,7 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
     match format {
         Format::Npy => out.write_all(&npy_header(n, shape))?,
         Format::Json => out.write_all(b"{\"rays\":[")?,
-        Format::Csv => {
-            out.write_all(b"source,receiver,path,status,time,iterations,residual,points\n")?
-        }
+        Format::Csv => out.write_all(CSV_HEADER)?,
         Format::Jsonl => {}
     }
     let format_piece = |buf: &mut Vec<u8>, rays: std::ops::Range<usize>| {
@@ -290,7 +393,7 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
                     ray_json(buf, scene, &names, view(i));
                     buf.push(b'\n');
                 }
-                Format::Csv => ray_csv(buf, view(i)),
+                Format::Csv => ray_csv(buf, scene, &names, view(i)),
                 Format::Npy => ray_npy(buf, shape, view(i)),
             }
         }
@@ -330,11 +433,11 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
     out.flush()
 }
 
-/// Writes the contract's `{"rays": [...]}` document for `rays` (compact, one line).
+/// Writes the `{"rays": [...]}` document of `eigenray solve` for `rays` (compact, one line).
 ///
-/// Each ray has `source`, `receiver`, `path`, `status`, `time` and `points` (when it has a
-/// time), `iterations`, `residual` (when finite), the leg `media` names (when known) and a
-/// `reason` when it is not converged.
+/// Each ray has `source`, `receiver` and `path` (indices), `path_name` (when the path has a
+/// name), `status`, `time` and `points` (when it has a time), `iterations`, `residual` (when
+/// finite), the leg `media` names (when known) and a `reason` when it is not converged.
 ///
 /// # Errors
 /// Any error of the writer.
@@ -393,10 +496,47 @@ pub fn write_batch<W: Write>(
     })
 }
 
+/// Writes the name tables of `scene` as one JSON document: what the indices of the other
+/// formats mean, for readers of [`Format::Npy`], which holds numbers only.
+///
+/// ```json
+/// {"status": ["converged", "vertex", "no_path", "obstructed", "not_converged"],
+///  "paths": ["transmitted", null], "media": ["air", "water"],
+///  "interfaces": ["surface"], "no_medium": 4294967295}
+/// ```
+///
+/// `status[code]` is the name of an `.npy` status code, `paths[path]` the name of a path
+/// (`null` when it has none), `media[index]` the name of a medium index (the scene's media in
+/// the order of their names, as [`Scene::media`] lists them) and `no_medium` the index
+/// written for a leg whose medium is not known. `interfaces` lists the interface names in
+/// the order of [`Scene::interfaces`].
+///
+/// # Errors
+/// Any error of the writer.
+pub fn write_names<W: Write>(scene: &Scene, mut out: W) -> io::Result<()> {
+    let doc = serde_json::json!({
+        "status": STATUS_CODES.map(Status::as_str),
+        "paths": scene.paths().iter().map(|p| p.name.as_deref()).collect::<Vec<_>>(),
+        "media": scene.media().iter().map(|m| m.name.as_str()).collect::<Vec<_>>(),
+        "interfaces": scene.interfaces().iter().map(|i| i.name.as_str()).collect::<Vec<_>>(),
+        "no_medium": NO_MEDIUM,
+    });
+    serde_json::to_writer_pretty(&mut out, &doc)?;
+    out.write_all(b"\n")?;
+    out.flush()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::{BatchOptions, Tracer, demo};
+
+    #[test]
+    fn status_codes_are_their_places_in_the_table() {
+        for (k, s) in STATUS_CODES.into_iter().enumerate() {
+            assert_eq!(usize::from(status_code(s)), k, "{s}");
+        }
+    }
 
     #[test]
     fn floats_are_printed_as_serde_json_prints_them() {
@@ -496,7 +636,8 @@ mod tests {
                 [u32_at(r, 0), u32_at(r, 4), u32_at(r, 8)],
                 [s, rc, pa].map(|v| v as u32)
             );
-            assert_eq!(r[12], status_code(rec.status));
+            // The published table (tests/output.rs checks the codes by hand).
+            assert_eq!(STATUS_CODES[usize::from(r[12])], rec.status);
             codes.insert(r[12]);
             assert_eq!(u32_at(r, 13), rec.iterations);
             let (time, residual) = (f64_at(r, 17), f64_at(r, 25));

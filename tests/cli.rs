@@ -1,4 +1,5 @@
-//! Integration tests of the `eigenray` command line: the `solve` contract, invalid scenes, the demo.
+//! Integration tests of the `eigenray` command line: `solve`'s output, invalid scenes, the
+//! demo.
 
 use std::ffi::OsStr;
 use std::io::Write;
@@ -63,7 +64,7 @@ fn solve(scene: &str) -> Value {
     serde_json::from_slice(&out.stdout).expect("stdout is one JSON document")
 }
 
-/// Checks the contract's shape of every ray: count, order, indices, and `time`/`points`
+/// Checks the documented shape of every ray: count, order, indices, and `time`/`points`
 /// present exactly for `converged`, `vertex` and `obstructed` (with steps + 2 points).
 fn check_rays(doc: &Value, sources: usize, receivers: usize, steps: &[usize]) -> Vec<Value> {
     let rays = doc["rays"].as_array().expect("`rays` is an array").clone();
@@ -284,14 +285,27 @@ fn solve_reads_standard_input_and_writes_json_lines_and_npy() {
     assert_eq!(&per_line, rays);
 
     // The .npy file: its header, then one 89-byte record per ray (3 points, 2 legs) whose
-    // time is the JSON document's (NaN for a ray without one).
+    // time is the JSON document's (NaN for a ray without one); `--names` writes the tables
+    // that name its codes and indices.
+    let names = TempFile::path_only("names.json");
     let npy = run([
         OsStr::new("solve"),
         OsStr::new("--format"),
         OsStr::new("npy"),
+        OsStr::new("--names"),
+        names.path().as_os_str(),
         file.path().as_os_str(),
     ]);
     assert_eq!(npy.status.code(), Some(0), "stderr: {}", text(&npy.stderr));
+    let tables: Value =
+        serde_json::from_str(&std::fs::read_to_string(names.path()).expect("names written"))
+            .expect("names are JSON");
+    assert_eq!(tables["media"], serde_json::json!(["air", "water"]));
+    assert_eq!(tables["status"][2], "no_path");
+    assert_eq!(
+        tables["paths"],
+        serde_json::json!(["transmitted", "bounce"])
+    );
     let bytes = &npy.stdout;
     assert_eq!(&bytes[..6], b"\x93NUMPY");
     let data = &bytes[10 + u16::from_le_bytes([bytes[8], bytes[9]]) as usize..];
@@ -522,4 +536,99 @@ fn closed_stdout_exits_quietly() {
     assert!(!stderr.contains("panicked"), "stderr: {stderr}");
     assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
     assert!(stderr.is_empty(), "stderr: {stderr}");
+}
+
+/// The README's worked scene is `examples/scenes/room.json`, and its output lines are what
+/// `solve --format csv` prints for it.
+#[test]
+fn the_readme_room_is_the_example_file_and_its_output() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let readme = std::fs::read_to_string(format!("{root}/README.md")).expect("README");
+    let block = |fence: &str| -> String {
+        let start = readme.find(fence).expect(fence) + fence.len();
+        readme[start..][..readme[start..].find("```").expect("closing fence")].to_string()
+    };
+    let shown: Value = serde_json::from_str(&block("```json\n")).expect("README scene");
+    let path = format!("{root}/examples/scenes/room.json");
+    let mut file: Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("room")).expect("JSON");
+    file.as_object_mut().expect("object").remove("description");
+    assert_eq!(shown, file);
+
+    let out = run(["solve", path.as_str(), "--format", "csv"]);
+    assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
+    let csv = text(&out.stdout);
+    for line in block("```text\n").lines().filter(|l| *l != "…") {
+        assert!(
+            csv.lines().any(|l| l == line),
+            "README line {line:?} not in\n{csv}"
+        );
+    }
+}
+
+/// docs/scene-format.md's example scene gives the output lines and name tables the page shows.
+#[test]
+fn the_format_page_shows_its_scene_output() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let page = std::fs::read_to_string(format!("{root}/docs/scene-format.md")).expect("page");
+    // The first block of `fence` after `heading`.
+    let block = |heading: &str, fence: &str| -> String {
+        let at = page.find(heading).expect(heading);
+        let start = at + page[at..].find(fence).expect(fence) + fence.len();
+        page[start..][..page[start..].find("```").expect("closing fence")].to_string()
+    };
+    let scene = TempFile::with("format-page.json", block("## A scene", "```json\n"));
+    let names = TempFile::path_only("format-page-names.json");
+    let csv = run([
+        OsStr::new("solve"),
+        scene.path().as_os_str(),
+        OsStr::new("--format"),
+        OsStr::new("csv"),
+        OsStr::new("--names"),
+        names.path().as_os_str(),
+    ]);
+    assert_eq!(csv.status.code(), Some(0), "stderr: {}", text(&csv.stderr));
+    let lines: Vec<&str> = text(&csv.stdout).lines().collect();
+    for line in block("### `--format csv`", "```text\n").lines() {
+        assert!(lines.contains(&line), "{line:?} not in {lines:?}");
+    }
+    let shown: Value =
+        serde_json::from_str(&block("### `--names", "```json\n")).expect("names block");
+    let written: Value =
+        serde_json::from_str(&std::fs::read_to_string(names.path()).expect("names")).expect("JSON");
+    assert_eq!(shown, written);
+
+    let json = run([OsStr::new("solve"), scene.path().as_os_str()]);
+    let doc: Value = serde_json::from_slice(&json.stdout).expect("JSON");
+    let shown: Value =
+        serde_json::from_str(&block("### `--format json`", "```json\n")).expect("rays block");
+    let rays = shown["rays"].as_array().expect("rays");
+    assert_eq!(&doc["rays"][0], &rays[0]);
+    assert_eq!(&doc["rays"][1], &rays[1]);
+}
+
+/// A big demo draws a sample and says so, in a picture a viewer can open.
+#[test]
+fn a_big_demo_draws_a_sample() {
+    let svg = TempFile::path_only("big-demo.svg");
+    let out = run([
+        OsStr::new("demo"),
+        OsStr::new("--receivers"),
+        OsStr::new("100000"),
+        OsStr::new("--svg"),
+        svg.path().as_os_str(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
+    let picture = std::fs::read_to_string(svg.path()).expect("SVG written");
+    assert!(picture.len() < 1_000_000, "{} bytes", picture.len());
+    assert!(picture.contains("100,000 rays"), "title");
+    assert!(
+        picture.contains("2,000 of 100,000 rays drawn (a sample spread over all rays)"),
+        "caption"
+    );
+    assert_eq!(
+        picture.matches("<polyline").count(),
+        2_000 + 1,
+        "rays and the surface"
+    );
 }

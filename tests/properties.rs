@@ -485,7 +485,7 @@ fn unit(a: Point, b: Point) -> (f64, f64) {
     (dx / l, dy / l)
 }
 
-/// Checks one traced ray against the physics and the contract; `Err` says what is wrong.
+/// Checks one traced ray against the physics and the documented output; `Err` says what is wrong.
 fn check_ray(scene: &Scene, tracer: &Tracer<&Scene>, ray: &Ray) -> Result<(), String> {
     let path = &scene.paths()[ray.path];
     let k = path.steps.len();

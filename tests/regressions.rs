@@ -56,7 +56,7 @@ fn only_ray(name: &str) -> Ray {
 }
 
 /// An impossible path (the source and receiver are on the wrong sides for its steps) must
-/// not be reported as a specular or edge-diffracted path. `no_path` is the contract's answer;
+/// not be reported as a specular or edge-diffracted path. `no_path` is the documented answer;
 /// `obstructed` would also be honest (a stationary path whose leg crosses an interface).
 fn assert_impossible(name: &str) {
     let ray = only_ray(name);

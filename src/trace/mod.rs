@@ -724,7 +724,7 @@ pub(crate) mod test_support {
                 std::fs::read_to_string(format!("{root}/fixtures/bench/{name}.json")).unwrap();
             assert!(kernels_agree(&Scene::from_json(&text).unwrap()) > 0);
         }
-        // The contract's cases and the fuzz finds: vertices, ends, wrong sides, degenerate legs.
+        // The documented cases and the fuzz finds: vertices, ends, wrong sides, degenerate legs.
         for dir in ["cases", "fuzz"] {
             for entry in std::fs::read_dir(format!("{root}/fixtures/{dir}")).unwrap() {
                 let path = entry.unwrap().path();

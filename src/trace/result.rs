@@ -7,7 +7,7 @@ use crate::geom::Point;
 use crate::scene::Scene;
 use crate::solver::Solution;
 
-/// How a ray ended (the contract's `status`).
+/// How a ray ended (the `status` of `eigenray solve`'s output).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Status {
@@ -27,7 +27,8 @@ pub enum Status {
 }
 
 impl Status {
-    /// The contract's name: `converged`, `vertex`, `no_path`, `obstructed`, `not_converged`.
+    /// Its name in `eigenray solve`'s output: `converged`, `vertex`, `no_path`,
+    /// `obstructed`, `not_converged`.
     pub fn as_str(self) -> &'static str {
         match self {
             Status::Converged => "converged",

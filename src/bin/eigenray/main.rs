@@ -14,7 +14,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use eigenray::{Batch, BatchOptions, Ray, Scene, SceneError, Status, Tracer, write_batch};
+use eigenray::{Batch, BatchOptions, Scene, SceneError, Status, Tracer, write_batch};
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Receivers of the demo scene by default.
@@ -25,10 +25,6 @@ const DEMO_MAX_RECEIVERS: u64 = 10_000_000;
 const DEMO_SEED: u64 = 1;
 /// Where the demo writes its picture by default.
 const DEMO_SVG: &str = "eigenray-demo.svg";
-/// At most this many rays are drawn in a picture (every k-th ray beyond it), so that a big
-/// batch does not make a picture no viewer can open.
-const SVG_MAX_RAYS: usize = 20_000;
-
 #[derive(Parser, Debug)]
 #[command(
     name = "eigenray",
@@ -46,8 +42,11 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
-    /// Solve every (source, receiver, path) ray of a scene file; write the rays as JSON to
-    /// standard output, in ray order.
+    /// Solve every (source, receiver, path) ray of a scene file; write the rays to standard
+    /// output, in ray order (JSON unless `--format` says otherwise).
+    ///
+    /// The scene file and every output field are described in docs/scene-format.md of
+    /// eigenray's repository.
     Solve(SolveArgs),
     /// Solve the built-in air-over-water scene, print a summary and draw it (the default).
     Demo(DemoArgs),
@@ -67,9 +66,19 @@ struct SolveArgs {
     /// solution.
     #[arg(long)]
     no_warm_start: bool,
-    /// Also draw the scene and its rays, coloured by travel time, to this SVG file.
+    /// Also write the scene's name tables as JSON to this file: the status of each `.npy`
+    /// status code, the name of each path and of each medium index (media in the order of
+    /// their names). The `.npy` format holds numbers only; this file names them.
+    #[arg(long, value_name = "PATH")]
+    names: Option<PathBuf>,
+    /// Also draw the scene and its rays to this SVG file (with axes; past 2,000 rays a
+    /// sample of them).
     #[arg(long, value_name = "PATH")]
     svg: Option<PathBuf>,
+    /// What colours the rays in the picture: `time` (travel time, with a colour bar) or `path`
+    /// (one colour per path, with a legend of path names).
+    #[arg(long, value_enum, value_name = "BY", default_value_t = svg::Colouring::Time)]
+    colour_by: svg::Colouring,
 }
 
 #[derive(Args, Debug)]
@@ -103,13 +112,15 @@ impl Default for DemoArgs {
 /// Output formats of `solve`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum Format {
-    /// The contract's document: `{"rays": [...]}`.
+    /// One JSON document, `{"rays": [...]}`, one object per ray.
     Json,
     /// One ray object per line (JSON Lines), in ray order.
     Jsonl,
-    /// Comma-separated values: one line per ray, points as `x y;x y;…`.
+    /// Comma-separated values: a header, then one line per ray (points as `x y;x y;…`, leg
+    /// media as names joined by `;`).
     Csv,
-    /// NumPy's `.npy` file: one fixed-size binary record per ray (see `eigenray::Format::Npy`).
+    /// NumPy's `.npy` file: one fixed-size binary record per ray, numbers only (`--names`
+    /// writes the names of its codes and indices).
     Npy,
 }
 
@@ -189,9 +200,14 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
     let tracer = Tracer::new(&scene).map_err(Failure::scene)?;
     let batch = trace(&tracer, !args.no_warm_start);
 
+    if let Some(path) = &args.names {
+        let mut names = Vec::new();
+        eigenray::write_names(&scene, &mut names).map_err(|e| write_failure(path, &e))?;
+        fs::write(path, names).map_err(|e| write_failure(path, &e))?;
+    }
     if let Some(path) = &args.svg {
         let title = format!("{}: {}", display_name(&args.scene), batch_summary(&batch));
-        write_svg(path, &scene, &batch, &title)?;
+        write_svg(path, &scene, &batch, &title, args.colour_by)?;
     }
     write_batch(&scene, &batch, args.format.into(), io::stdout().lock()).map_err(Failure::stdout)
 }
@@ -279,8 +295,11 @@ fn demo(args: &DemoArgs) -> Result<(), Failure> {
 
     let mut lines = vec![summary];
     if !args.no_svg {
-        let title = format!("eigenray demo: {media}, {} rays", batch.len());
-        write_svg(&args.svg, &scene, &batch, &title)?;
+        let title = format!(
+            "eigenray demo: {media}, {} rays",
+            svg::thousands(batch.len())
+        );
+        write_svg(&args.svg, &scene, &batch, &title, svg::Colouring::Time)?;
         lines.push(format!("wrote {}", args.svg.display()));
     }
     let mut out = io::stdout().lock();
@@ -290,7 +309,8 @@ fn demo(args: &DemoArgs) -> Result<(), Failure> {
     out.flush().map_err(Failure::stdout)
 }
 
-/// `500 rays: 498 converged, 2 no_path` (statuses in the contract's order, zeros left out).
+/// `500 rays: 498 converged, 2 no_path` (statuses in the order of their `.npy` codes, zeros
+/// left out).
 fn batch_summary(batch: &Batch) -> String {
     const ORDER: [Status; 5] = [
         Status::Converged,
@@ -331,25 +351,25 @@ fn time_range(batch: &Batch) -> Option<(f64, f64)> {
         })
 }
 
-/// Draws the picture and writes it to `path` (at most [`SVG_MAX_RAYS`] rays drawn).
-fn write_svg(path: &Path, scene: &Scene, batch: &Batch, title: &str) -> Result<(), Failure> {
-    let step = batch.len().div_ceil(SVG_MAX_RAYS).max(1);
-    let rays: Vec<Ray> = (0..batch.len())
-        .step_by(step)
-        .map(|i| batch.ray(i))
-        .collect();
-    let svg = if step > 1 {
-        svg::scene_svg(scene, &rays, &format!("{title} (1 ray in {step} drawn)"))
-    } else {
-        svg::scene_svg(scene, &rays, title)
-    };
-    fs::write(path, svg).map_err(|e| {
-        Failure::Output(format!(
-            "{}: cannot write: {}",
-            path.display(),
-            io_message(&e)
-        ))
-    })
+/// Draws the picture and writes it to `path` (past [`svg::MAX_RAYS`] rays, a sample).
+fn write_svg(
+    path: &Path,
+    scene: &Scene,
+    batch: &Batch,
+    title: &str,
+    colouring: svg::Colouring,
+) -> Result<(), Failure> {
+    let svg = svg::scene_svg(scene, batch, title, colouring);
+    fs::write(path, svg).map_err(|e| write_failure(path, &e))
+}
+
+/// A file that could not be written.
+fn write_failure(path: &Path, e: &io::Error) -> Failure {
+    Failure::Output(format!(
+        "{}: cannot write: {}",
+        path.display(),
+        io_message(e)
+    ))
 }
 
 /// Whether a write failed because the reader closed the pipe (also when the error comes

@@ -1,8 +1,10 @@
-//! A hand-written SVG picture of a scene and its rays, coloured by travel time (viridis).
+//! A hand-written SVG picture of a scene and its rays: axes with coordinates, the rays coloured
+//! by travel time (viridis, with a colour bar) or by path (with a legend), labelled interfaces
+//! and media. Big batches are drawn as a sample, and the picture says so.
 
 use std::fmt::Write as _;
 
-use eigenray::{Aabb, Point, Ray, Scene, Status};
+use eigenray::{Aabb, Batch, Point, Ray, Scene, Status};
 
 /// Viridis (matplotlib's perceptually uniform colormap) at 0, 1/8, …, 1; linear in between.
 const VIRIDIS: [[u8; 3]; 9] = [
@@ -17,18 +19,47 @@ const VIRIDIS: [[u8; 3]; 9] = [
     [0xfd, 0xe7, 0x25],
 ];
 
-/// Largest plot, in pixels; the scene is scaled uniformly to fit.
+/// Colours of paths (Tableau's 10, then their lighter companions), repeated beyond 20 paths.
+const PATH_COLOURS: [&str; 20] = [
+    "#4e79a7", "#f28e2b", "#e15759", "#76b7b2", "#59a14f", "#edc948", "#b07aa1", "#ff9da7",
+    "#9c755f", "#bab0ac", "#a0cbe8", "#ffbe7d", "#ff9d9a", "#86bcb6", "#8cd17d", "#f1ce63",
+    "#d4a6c8", "#fabfd2", "#d7b5a6", "#79706e",
+];
+
+/// At most this many rays are drawn: beyond it an evenly spread sample, and the caption says so.
+pub const MAX_RAYS: usize = 2_000;
+/// At most this many receivers are drawn (beyond it, those of the drawn rays).
+const MAX_RECEIVERS: usize = 2_000;
+
+/// Largest plot, in pixels.
 const PLOT_MAX_W: f64 = 820.0;
 const PLOT_MAX_H: f64 = 620.0;
-/// Smallest plot area (the colour bar and the title need room even for a flat scene).
+/// A plot is never flatter (or narrower) than this: beyond it one axis is stretched, and the
+/// caption gives the factor.
+const MAX_ASPECT: f64 = 3.0;
+/// Smallest plot area (the colour bar and the title need room even for a small scene).
 const AREA_MIN_W: f64 = 460.0;
-const AREA_MIN_H: f64 = 280.0;
-const LEFT: f64 = 20.0;
+const AREA_MIN_H: f64 = 300.0;
+/// Room left of the plot for the y axis's labels.
+const LEFT: f64 = 78.0;
 /// Room for the title and the caption.
-const TOP: f64 = 62.0;
-const BOTTOM: f64 = 20.0;
+const TOP: f64 = 66.0;
+/// Room below the plot for the x axis's labels.
+const BOTTOM: f64 = 48.0;
 /// Room right of the plot for the colour bar and its labels.
-const BAR_AREA: f64 = 140.0;
+const BAR_AREA: f64 = 170.0;
+/// Height of one line of the path legend.
+const LEGEND_LINE: f64 = 17.0;
+
+/// What gives a ray its colour.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Colouring {
+    /// Travel time, on viridis, with a colour bar.
+    #[default]
+    Time,
+    /// The path (sequence of steps), with a legend of path names.
+    Path,
+}
 
 /// Viridis at `t ∈ [0, 1]` (clamped; NaN is 0) as `#rrggbb`.
 pub fn viridis(t: f64) -> String {
@@ -41,22 +72,24 @@ pub fn viridis(t: f64) -> String {
     format!("#{:02x}{:02x}{:02x}", c(0), c(1), c(2))
 }
 
-/// World → pixel map: uniform scale about the centres, y up.
+/// World → pixel map, y up. Positions are taken relative to the centre and divided by the half
+/// extents (never multiplied by a scale), so that tiny or huge scenes stay finite.
 struct View {
     /// World centre.
     c: Point,
-    /// Pixel centre.
+    /// World half extents shown.
+    hw: f64,
+    hh: f64,
+    /// Pixel centre and half sizes of the plot.
     pc: (f64, f64),
-    /// Pixels per world unit.
-    scale: f64,
+    half: (f64, f64),
 }
 
 impl View {
     fn px(&self, p: Point) -> (f64, f64) {
-        // `p − c` cannot overflow: `p` lies within the half extents of `c`.
         (
-            self.pc.0 + (p.x - self.c.x) * self.scale,
-            self.pc.1 - (p.y - self.c.y) * self.scale,
+            self.pc.0 + (p.x - self.c.x) / self.hw * self.half.0,
+            self.pc.1 - (p.y - self.c.y) / self.hh * self.half.1,
         )
     }
     /// `x,y x,y …` for a `points` attribute.
@@ -70,6 +103,18 @@ impl View {
             let _ = write!(s, "{x:.2},{y:.2}");
         }
         s
+    }
+    fn left(&self) -> f64 {
+        self.pc.0 - self.half.0
+    }
+    fn top(&self) -> f64 {
+        self.pc.1 - self.half.1
+    }
+    fn right(&self) -> f64 {
+        self.pc.0 + self.half.0
+    }
+    fn bottom(&self) -> f64 {
+        self.pc.1 + self.half.1
     }
 }
 
@@ -85,7 +130,7 @@ fn drawable(r: &Ray) -> bool {
 /// degenerate, with a margin. Computed in halves so that huge coordinates do not overflow.
 fn world(scene: &Scene, rays: &[Ray]) -> (Point, f64, f64) {
     let mut b = scene.bbox();
-    for r in rays.iter().filter(|r| drawable(r)) {
+    for r in rays {
         for p in &r.points {
             b = b.union(Aabb::from_points(*p, *p));
         }
@@ -107,7 +152,9 @@ fn world(scene: &Scene, rays: &[Ray]) -> (Point, f64, f64) {
     let ext = if ext > 0.0 {
         ext
     } else {
-        c.x.abs().max(c.y.abs()).min(limit).max(1.0)
+        // A single point: a box of its own magnitude (or 1 at the origin).
+        let m = c.x.abs().max(c.y.abs()).min(limit);
+        if m > 0.0 { m } else { 1.0 }
     };
     (
         c,
@@ -116,7 +163,8 @@ fn world(scene: &Scene, rays: &[Ray]) -> (Point, f64, f64) {
     )
 }
 
-/// XML-escapes text for element content and attribute values.
+/// XML-escapes text for element content and attribute values; characters that XML 1.0 does
+/// not allow become spaces (controls) or U+FFFD (U+FFFE, U+FFFF).
 fn esc(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for ch in s.chars() {
@@ -126,10 +174,28 @@ fn esc(s: &str) -> String {
             '>' => out.push_str("&gt;"),
             '"' => out.push_str("&quot;"),
             '\'' => out.push_str("&apos;"),
-            // Characters XML 1.0 does not allow.
             c if (c as u32) < 0x20 && !matches!(c, '\t' | '\n' | '\r') => out.push(' '),
+            '\u{fffe}' | '\u{ffff}' => out.push('\u{fffd}'),
             c => out.push(c),
         }
+    }
+    out
+}
+
+/// `has` for one, `have` for more.
+fn have(n: usize) -> &'static str {
+    if n == 1 { "has" } else { "have" }
+}
+
+/// `1234567` as `1,234,567`.
+pub fn thousands(n: usize) -> String {
+    let digits = n.to_string();
+    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
+    for (i, ch) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(ch);
     }
     out
 }
@@ -146,6 +212,66 @@ fn tick_label(v: f64, span: f64) -> String {
         6
     };
     format!("{v:.decimals$}")
+}
+
+/// Ticks at a round step (1, 2 or 5 × 10ⁿ) within `[lo, hi]`, about `target` of them, with
+/// labels that differ by that step; empty when the range is not finite.
+fn axis_ticks(lo: f64, hi: f64, target: f64) -> Vec<(f64, String)> {
+    let span = hi - lo;
+    if !(span.is_finite() && span > 0.0 && lo.is_finite() && hi.is_finite()) {
+        return Vec::new();
+    }
+    let raw = span / target;
+    let mag = 10f64.powf(raw.log10().floor());
+    if !(mag.is_finite() && mag > 0.0) {
+        return Vec::new();
+    }
+    let f = raw / mag;
+    let step = mag
+        * if f <= 1.0 {
+            1.0
+        } else if f <= 2.0 {
+            2.0
+        } else if f <= 5.0 {
+            5.0
+        } else {
+            10.0
+        };
+    let first = (lo / step).ceil();
+    let last = (hi / step).floor();
+    if !(first.is_finite() && last.is_finite()) || last - first > 40.0 {
+        return Vec::new();
+    }
+    let exponent = step.log10().floor();
+    let largest = lo.abs().max(hi.abs());
+    let label = |v: f64| -> String {
+        if v == 0.0 {
+            "0".into()
+        } else if (1e-4..1e6).contains(&largest) && (-6.0..=6.0).contains(&exponent) {
+            let decimals = (-exponent).max(0.0) as usize;
+            let s = format!("{v:.decimals$}");
+            if s.trim_start_matches('-')
+                .chars()
+                .all(|c| c == '0' || c == '.')
+            {
+                "0".into()
+            } else {
+                s
+            }
+        } else {
+            // Scientific, with the digits the step needs.
+            let digits = (largest.log10().floor() - exponent).clamp(0.0, 12.0) as usize;
+            format!("{v:.digits$e}")
+        }
+    };
+    let mut ticks = Vec::new();
+    let mut k = first;
+    while k <= last {
+        let v = k * step;
+        ticks.push((v, label(v)));
+        k += 1.0;
+    }
+    ticks
 }
 
 /// A five-pointed star of outer radius `r` centred on `(x, y)`, as polygon points.
@@ -165,25 +291,181 @@ fn star(x: f64, y: f64, r: f64) -> String {
     s
 }
 
-/// An SVG picture of `scene` and `rays`: the domain box (dashed), the interfaces (closed ones
-/// closed), each ray with points as a polyline coloured by travel time (viridis; obstructed
-/// rays dashed, vertex rays dotted), sources as stars, receivers as dots, labelled `at` points
-/// of the media, a colour bar with the time range, and `title`. The y axis points up.
-pub fn scene_svg(scene: &Scene, rays: &[Ray], title: &str) -> String {
-    let (centre, hw, hh) = world(scene, rays);
-    let scale = (0.5 * PLOT_MAX_W / hw).min(0.5 * PLOT_MAX_H / hh);
-    let (plot_w, plot_h) = (2.0 * hw * scale, 2.0 * hh * scale);
-    let (area_w, area_h) = (plot_w.max(AREA_MIN_W), plot_h.max(AREA_MIN_H));
-    let (width, height) = (LEFT + area_w + BAR_AREA, TOP + area_h + BOTTOM);
+/// A label's box in pixels: `(x0, y0, x1, y1)`.
+type LabelBox = (f64, f64, f64, f64);
+
+/// A straight piece of a drawing in pixels: its two ends.
+type PixelSegment = ((f64, f64), (f64, f64));
+
+/// The box of a `size`-pixel text of `chars` characters whose baseline starts at `(x, y)`.
+fn text_box(x: f64, y: f64, chars: usize, size: f64) -> LabelBox {
+    (
+        x - 2.0,
+        y - size,
+        x + 0.6 * size * chars as f64 + 2.0,
+        y + 0.3 * size,
+    )
+}
+
+/// Whether the pixel segments `a → b` and `c → d` cross (touching counts).
+fn segments_cross(a: (f64, f64), b: (f64, f64), c: (f64, f64), d: (f64, f64)) -> bool {
+    let orient = |p: (f64, f64), q: (f64, f64), r: (f64, f64)| {
+        (q.0 - p.0) * (r.1 - p.1) - (q.1 - p.1) * (r.0 - p.0)
+    };
+    let (o1, o2) = (orient(a, b, c), orient(a, b, d));
+    let (o3, o4) = (orient(c, d, a), orient(c, d, b));
+    o1 * o2 <= 0.0 && o3 * o4 <= 0.0 && (a != b)
+}
+
+fn boxes_overlap(a: LabelBox, b: LabelBox) -> bool {
+    a.0 < b.2 && b.0 < a.2 && a.1 < b.3 && b.1 < a.3
+}
+
+/// Whether the pixel segment `p → q` meets box `b` (Liang–Barsky clipping).
+fn segment_meets_box(p: (f64, f64), q: (f64, f64), b: LabelBox) -> bool {
+    let (dx, dy) = (q.0 - p.0, q.1 - p.1);
+    let (mut t0, mut t1) = (0.0_f64, 1.0_f64);
+    for (den, num) in [
+        (-dx, p.0 - b.0),
+        (dx, b.2 - p.0),
+        (-dy, p.1 - b.1),
+        (dy, b.3 - p.1),
+    ] {
+        if den == 0.0 {
+            if num < 0.0 {
+                return false;
+            }
+        } else {
+            let t = num / den;
+            if den < 0.0 {
+                t0 = t0.max(t);
+            } else {
+                t1 = t1.min(t);
+            }
+        }
+    }
+    t0 <= t1
+}
+
+/// Text that reads on any background in every renderer: a white outline drawn first, then the
+/// text over it (no `paint-order`, which some renderers ignore).
+fn halo_text(s: &mut String, x: f64, y: f64, attrs: &str, fill: &str, text: &str) {
+    let text = esc(text);
+    let _ = writeln!(
+        s,
+        r#"<text x="{x:.2}" y="{y:.2}" {attrs} fill="white" stroke="white" stroke-width="3.5" stroke-linejoin="round">{text}</text><text x="{x:.2}" y="{y:.2}" {attrs} fill="{fill}">{text}</text>"#
+    );
+}
+
+/// The rays to draw: every ray, or past [`MAX_RAYS`] a stratified sample (one ray at a
+/// pseudo-random place in each of [`MAX_RAYS`] equal runs of the ray order), so that a regular
+/// grid of receivers or a set of paths does not alias with a stride. The second value says
+/// whether it is a sample.
+fn sample(batch: &Batch) -> (Vec<usize>, bool) {
+    let n = batch.len();
+    if n <= MAX_RAYS {
+        return ((0..n).collect(), false);
+    }
+    let mut x = 0x9e37_79b9_7f4a_7c15_u64;
+    let picked = (0..MAX_RAYS)
+        .map(|k| {
+            // xorshift64: a fixed sequence, so the same batch gives the same picture.
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let (lo, hi) = (k * n / MAX_RAYS, (k + 1) * n / MAX_RAYS);
+            lo + (x % (hi - lo) as u64) as usize
+        })
+        .collect();
+    (picked, true)
+}
+
+/// The line style of path `p` when colouring by path: the colours repeat every 20 paths, solid
+/// the first time round, long dashes the second, and so on.
+fn path_dash(p: usize) -> &'static str {
+    if (p / PATH_COLOURS.len()) % 2 == 1 {
+        r#" stroke-dasharray="8 3""#
+    } else {
+        ""
+    }
+}
+
+/// The label of path `p`: its name, or `path p`.
+fn path_label(scene: &Scene, p: usize) -> String {
+    match scene.paths().get(p).and_then(|p| p.name.as_deref()) {
+        Some(name) => name.to_string(),
+        None => format!("path {p}"),
+    }
+}
+
+/// An SVG picture of `scene` and the rays of `batch`: the axes with coordinates, the domain box
+/// (dashed), the interfaces (closed ones closed) labelled at their middle, each drawn ray as a
+/// polyline coloured as `colouring` says (obstructed rays dashed, vertex rays dotted), sources
+/// as stars, receivers as dots, the media labelled, a colour bar (travel time) or a legend
+/// (paths), and `title`. The y axis points up. Past [`MAX_RAYS`] rays a sample is drawn; past
+/// [`MAX_ASPECT`] one axis is stretched; the caption says both.
+pub fn scene_svg(scene: &Scene, batch: &Batch, title: &str, colouring: Colouring) -> String {
+    let (picked, sampled) = sample(batch);
+    let rays: Vec<Ray> = picked
+        .iter()
+        .map(|&i| batch.ray(i))
+        .filter(drawable)
+        .collect();
+    let (centre, mut hw, mut hh) = world(scene, &rays);
+
+    // Stretch the short axis of a flat (or tall) scene so that the plot stays readable.
+    let mut stretch = None;
+    if hw > MAX_ASPECT * hh {
+        let factor = hw / (MAX_ASPECT * hh);
+        hh *= factor;
+        stretch = Some(("vertical", factor));
+    } else if hh > MAX_ASPECT * hw {
+        let factor = hh / (MAX_ASPECT * hw);
+        hw *= factor;
+        stretch = Some(("horizontal", factor));
+    }
+    let (plot_w, plot_h) = if hw >= hh {
+        (PLOT_MAX_W, (PLOT_MAX_W * (hh / hw)).min(PLOT_MAX_H))
+    } else {
+        ((PLOT_MAX_H * (hw / hh)).min(PLOT_MAX_W), PLOT_MAX_H)
+    };
+    // Both fit within the maxima.
+    let fit = (PLOT_MAX_W / plot_w).min(PLOT_MAX_H / plot_h).min(1.0);
+    let (plot_w, plot_h) = (plot_w * fit, plot_h * fit);
+
+    // Paths drawn, for the legend.
+    let mut per_path = vec![0usize; scene.paths().len()];
+    for r in &rays {
+        if let Some(c) = per_path.get_mut(r.path) {
+            *c += 1;
+        }
+    }
+    let legend: Vec<usize> = (0..per_path.len()).filter(|&p| per_path[p] > 0).collect();
+    let legend_h = match colouring {
+        Colouring::Path => 40.0 + LEGEND_LINE * legend.len() as f64,
+        Colouring::Time => 0.0,
+    };
+    let longest = legend
+        .iter()
+        .map(|&p| path_label(scene, p).chars().count() + thousands(per_path[p]).len() + 3)
+        .max()
+        .unwrap_or(0);
+    let side = match colouring {
+        Colouring::Time => BAR_AREA,
+        Colouring::Path => (60.0 + 7.0 * longest as f64).clamp(BAR_AREA, 360.0),
+    };
+
+    let (area_w, area_h) = (plot_w.max(AREA_MIN_W), plot_h.max(AREA_MIN_H).max(legend_h));
+    let (width, height) = (LEFT + area_w + side, TOP + area_h + BOTTOM);
     let view = View {
         c: centre,
+        hw,
+        hh,
         pc: (LEFT + 0.5 * area_w, TOP + 0.5 * area_h),
-        scale,
+        half: (0.5 * plot_w, 0.5 * plot_h),
     };
-    let (left, top) = (view.pc.0 - 0.5 * plot_w, view.pc.1 - 0.5 * plot_h);
 
-    let drawn: Vec<&Ray> = rays.iter().filter(|r| drawable(r)).collect();
-    let range = drawn
+    let range = rays
         .iter()
         .filter(|r| r.status.has_time())
         .map(|r| r.time)
@@ -191,12 +473,20 @@ pub fn scene_svg(scene: &Scene, rays: &[Ray], title: &str) -> String {
             None => Some((t, t)),
             Some((lo, hi)) => Some((lo.min(t), hi.max(t))),
         });
-    let colour = |t: f64| match range {
-        Some((lo, hi)) if hi > lo => viridis((t - lo) / (hi - lo)),
-        _ => viridis(0.5),
+    let colour = |r: &Ray| -> String {
+        match colouring {
+            Colouring::Path => PATH_COLOURS[r.path % PATH_COLOURS.len()].to_string(),
+            Colouring::Time => {
+                let t = r.time;
+                match range {
+                    Some((lo, hi)) if hi > lo => viridis((t - lo) / (hi - lo)),
+                    _ => viridis(0.5),
+                }
+            }
+        }
     };
 
-    let mut s = String::with_capacity(4096 + drawn.len() * 96);
+    let mut s = String::with_capacity(8192 + rays.len() * 96);
     let _ = writeln!(s, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
     let _ = writeln!(
         s,
@@ -206,33 +496,128 @@ pub fn scene_svg(scene: &Scene, rays: &[Ray], title: &str) -> String {
     let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
     let _ = writeln!(
         s,
-        r##"<rect x="{:.2}" y="{:.2}" width="{plot_w:.2}" height="{plot_h:.2}" fill="#fafafa" stroke="#e0e0e0"/>"##,
-        left, top
+        r##"<rect x="{:.2}" y="{:.2}" width="{plot_w:.2}" height="{plot_h:.2}" fill="#fafafa" stroke="#bbb"/>"##,
+        view.left(),
+        view.top()
     );
 
     // Title and caption.
     let _ = writeln!(
         s,
-        r##"<text x="{LEFT}" y="26" font-size="16" font-weight="bold" fill="#222">{}</text>"##,
+        r##"<text x="12" y="24" font-size="16" font-weight="bold" fill="#222">{}</text>"##,
         esc(title)
     );
     let mut caption = format!(
-        "{} of {} rays drawn, coloured by travel time",
-        drawn.len(),
-        rays.len()
+        "{} of {} rays drawn",
+        thousands(rays.len()),
+        thousands(batch.len())
     );
-    if drawn.iter().any(|r| r.status == Status::Obstructed) {
+    let timeless = batch
+        .records()
+        .iter()
+        .filter(|r| !(r.status.has_time() && r.time.is_finite()))
+        .count();
+    match (sampled, timeless) {
+        (false, 0) => {}
+        (true, 0) => caption.push_str(" (a sample spread over all rays)"),
+        (false, n) => {
+            let _ = write!(caption, " ({} {} no time)", thousands(n), have(n));
+        }
+        (true, n) => {
+            let _ = write!(
+                caption,
+                " (a sample spread over all rays; {} {} no time)",
+                thousands(n),
+                have(n)
+            );
+        }
+    }
+    caption.push_str(match colouring {
+        Colouring::Time => ", coloured by travel time",
+        Colouring::Path => ", coloured by path",
+    });
+    if rays.iter().any(|r| r.status == Status::Obstructed) {
         caption.push_str("; dashed: obstructed");
     }
-    if drawn.iter().any(|r| r.status == Status::Vertex) {
+    if rays.iter().any(|r| r.status == Status::Vertex) {
         caption.push_str("; dotted: vertex (edge-diffracted)");
     }
-    caption.push_str("; ★ sources, ● receivers");
     let _ = writeln!(
         s,
-        r##"<text x="{LEFT}" y="46" font-size="12" fill="#555">{}</text>"##,
+        r##"<text x="12" y="44" font-size="12" fill="#555">{}</text>"##,
         esc(&caption)
     );
+    let mut caption2 = String::from("★ sources, ● receivers");
+    let nr = scene.receivers().len();
+    let receivers: Vec<usize> = if nr <= MAX_RECEIVERS {
+        (0..nr).collect()
+    } else {
+        let mut seen: Vec<usize> = rays.iter().map(|r| r.receiver).collect();
+        seen.sort_unstable();
+        seen.dedup();
+        seen.truncate(MAX_RECEIVERS);
+        let _ = write!(
+            caption2,
+            " ({} of {} receivers shown: those of the drawn rays)",
+            thousands(seen.len()),
+            thousands(nr)
+        );
+        seen
+    };
+    if let Some((axis, factor)) = stretch {
+        let _ = write!(
+            caption2,
+            "; {axis} scale stretched ×{}",
+            tick_label(factor, factor)
+        );
+    }
+    let _ = writeln!(
+        s,
+        r##"<text x="12" y="60" font-size="12" fill="#555">{}</text>"##,
+        esc(&caption2)
+    );
+
+    // Axes: ticks, grid lines and coordinates along the plot's left and bottom edges.
+    let xt = axis_ticks(centre.x - hw, centre.x + hw, plot_w / 90.0);
+    let yt = axis_ticks(centre.y - hh, centre.y + hh, plot_h / 60.0);
+    let _ = writeln!(
+        s,
+        r##"<g class="axes" stroke="#e4e4e4" stroke-width="1" font-size="11" fill="#444">"##
+    );
+    for (v, label) in &xt {
+        let (x, _) = view.px(Point::new(*v, centre.y));
+        let _ = writeln!(
+            s,
+            r##"<path d="M{x:.2},{:.2}V{:.2}"/><path d="M{x:.2},{:.2}v5" stroke="#444"/><text x="{x:.2}" y="{:.2}" text-anchor="middle" stroke="none">{}</text>"##,
+            view.top(),
+            view.bottom(),
+            view.bottom(),
+            view.bottom() + 17.0,
+            esc(label)
+        );
+    }
+    for (v, label) in &yt {
+        let (_, y) = view.px(Point::new(centre.x, *v));
+        let _ = writeln!(
+            s,
+            r##"<path d="M{:.2},{y:.2}H{:.2}"/><path d="M{:.2},{y:.2}h-5" stroke="#444"/><text x="{:.2}" y="{:.2}" text-anchor="end" stroke="none">{}</text>"##,
+            view.left(),
+            view.right(),
+            view.left(),
+            view.left() - 8.0,
+            y + 4.0,
+            esc(label)
+        );
+    }
+    let _ = writeln!(
+        s,
+        r##"<text x="{:.2}" y="{:.2}" text-anchor="middle" stroke="none" font-size="12">x</text><text x="{:.2}" y="{:.2}" text-anchor="middle" stroke="none" font-size="12">y</text>"##,
+        view.pc.0,
+        view.bottom() + 36.0,
+        view.left() - 62.0,
+        view.pc.1 + 4.0
+    );
+    let _ = writeln!(s, "</g>");
 
     // Domain box.
     if let Some(d) = scene.domain() {
@@ -247,44 +632,40 @@ pub fn scene_svg(scene: &Scene, rays: &[Ray], title: &str) -> String {
     }
 
     // Rays.
-    let stroke = match drawn.len() {
+    let stroke = match rays.len() {
         0..=50 => 1.6,
-        51..=2000 => 0.9,
-        _ => 0.5,
+        51..=600 => 0.9,
+        _ => 0.6,
     };
-    let titles = drawn.len() <= 5000;
     let _ = writeln!(
         s,
-        r#"<g fill="none" stroke-width="{stroke}" stroke-opacity="0.85" stroke-linejoin="round" stroke-linecap="round">"#
+        r#"<g class="rays" fill="none" stroke-width="{stroke}" stroke-opacity="0.85" stroke-linejoin="round" stroke-linecap="round">"#
     );
-    for r in &drawn {
+    for r in &rays {
         let t = r.time;
         let dash = match r.status {
             Status::Obstructed => r#" stroke-dasharray="5 3""#,
             Status::Vertex => r#" stroke-dasharray="1 3""#,
+            _ if colouring == Colouring::Path => path_dash(r.path),
             _ => "",
         };
-        let _ = write!(
+        let _ = writeln!(
             s,
-            r#"<polyline points="{}" stroke="{}"{dash}>"#,
+            r#"<polyline points="{}" stroke="{}"{dash}><title>source {}, receiver {}, {}: {}, time {t}</title></polyline>"#,
             view.points(&r.points),
-            colour(t)
+            colour(r),
+            r.source,
+            r.receiver,
+            esc(&path_label(scene, r.path)),
+            r.status
         );
-        if titles {
-            let _ = write!(
-                s,
-                "<title>source {}, receiver {}, path {}: {}, time {t}</title>",
-                r.source, r.receiver, r.path, r.status
-            );
-        }
-        let _ = writeln!(s, "</polyline>");
     }
     let _ = writeln!(s, "</g>");
 
     // Interfaces, over the rays that end on them.
     let _ = writeln!(
         s,
-        r##"<g fill="none" stroke="#333" stroke-width="2" stroke-linejoin="round">"##
+        r##"<g class="interfaces" fill="none" stroke="#333" stroke-width="2" stroke-linejoin="round">"##
     );
     for i in scene.interfaces() {
         let tag = if i.polyline.is_closed() {
@@ -300,50 +681,106 @@ pub fn scene_svg(scene: &Scene, rays: &[Ray], title: &str) -> String {
         );
     }
     let _ = writeln!(s, "</g>");
-    let halo = r#"stroke="white" stroke-width="3" paint-order="stroke""#;
-    let _ = writeln!(s, r##"<g font-size="12" fill="#333" {halo}>"##);
+
+    // Labels: interfaces at their middle, where they cover the fewest rays and no other label;
+    // then the media.
+    let ray_segments: Vec<PixelSegment> = rays
+        .iter()
+        .flat_map(|r| r.points.windows(2).map(|w| (view.px(w[0]), view.px(w[1]))))
+        .collect();
+    let mut taken: Vec<LabelBox> = Vec::new();
+    let _ = writeln!(s, r#"<g class="labels" font-size="12">"#);
     for i in scene.interfaces() {
-        if let Some(p) = i.polyline.vertices().first() {
-            let (x, y) = view.px(*p);
-            let _ = writeln!(
-                s,
-                r#"<text x="{:.2}" y="{:.2}">{}</text>"#,
-                x + 4.0,
-                y - 5.0,
-                esc(&i.name)
-            );
-        }
+        let (x, y) = interface_label_spot(&view, i, &ray_segments, &taken);
+        taken.push(text_box(x, y, i.name.chars().count(), 12.0));
+        halo_text(&mut s, x, y, "", "#222", &i.name);
     }
-    for m in scene.media() {
-        if let Some(p) = m.at {
-            let (x, y) = view.px(p);
+    let walls: Vec<PixelSegment> = scene
+        .interfaces()
+        .iter()
+        .flat_map(|i| {
+            let v = i.polyline.vertices();
+            let closing = if i.polyline.is_closed() && v.len() > 2 {
+                Some((v[v.len() - 1], v[0]))
+            } else {
+                None
+            };
+            v.windows(2)
+                .map(|w| (w[0], w[1]))
+                .chain(closing)
+                .map(|(a, b)| (view.px(a), view.px(b)))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let plot = (view.left(), view.top(), view.right(), view.bottom());
+    for (m, (x, y)) in medium_spots(scene, &view, &rays) {
+        let name = &scene.media()[m].name;
+        let chars = name.chars().count();
+        let spot = if scene.media()[m].at.is_some() {
+            // Beside the user's point.
+            (x + 6.0, y - 6.0)
+        } else {
+            // Near the middle of the medium's legs, where the label covers the fewest rays,
+            // crosses no interface on the way and overlaps no other label.
+            let mut best = (f64::INFINITY, (x, y));
+            for dy in [0.0, -40.0, 40.0, -80.0, 80.0, -120.0, 120.0] {
+                for dx in [
+                    0.0, -60.0, 60.0, -120.0, 120.0, -180.0, 180.0, -240.0, 240.0,
+                ] {
+                    let (bx, by) = (x + dx - 0.3 * 13.0 * chars as f64, y + dy + 4.0);
+                    let b = text_box(bx, by, chars, 13.0);
+                    let inside = b.0 >= plot.0 && b.2 <= plot.2 && b.1 >= plot.1 && b.3 <= plot.3;
+                    let crosses = walls.iter().any(|&(p, q)| {
+                        segment_meets_box(p, q, b) || segments_cross((x, y), (x + dx, y + dy), p, q)
+                    });
+                    if !inside || crosses || taken.iter().any(|t| boxes_overlap(*t, b)) {
+                        continue;
+                    }
+                    let covered = ray_segments
+                        .iter()
+                        .filter(|(p, q)| segment_meets_box(*p, *q, b))
+                        .count() as f64;
+                    let score = covered + 0.01 * dx.hypot(dy);
+                    if score < best.0 {
+                        best = (score, (bx, by));
+                    }
+                }
+            }
+            best.1
+        };
+        taken.push(text_box(spot.0, spot.1, chars, 13.0));
+        if scene.media()[m].at.is_some() {
             let _ = writeln!(
                 s,
-                r##"<path d="M{:.2},{y:.2}h8M{x:.2},{:.2}v8" stroke="#777" stroke-width="1"/><text x="{:.2}" y="{:.2}" font-style="italic" fill="#555">{}</text>"##,
+                r##"<path d="M{:.2},{y:.2}h8M{x:.2},{:.2}v8" stroke="#777" stroke-width="1"/>"##,
                 x - 4.0,
-                y - 4.0,
-                x + 6.0,
-                y - 6.0,
-                esc(&m.name)
+                y - 4.0
             );
         }
+        halo_text(
+            &mut s,
+            spot.0,
+            spot.1,
+            r#"font-size="13" font-style="italic""#,
+            "#555",
+            name,
+        );
     }
     let _ = writeln!(s, "</g>");
 
     // Receivers, then sources on top.
-    let nr = scene.receivers().len();
-    let radius = match nr {
+    let radius = match receivers.len() {
         0..=100 => 3.0,
-        101..=2000 => 1.8,
-        _ => 1.0,
+        101..=600 => 1.8,
+        _ => 1.2,
     };
     let _ = writeln!(
         s,
-        r##"<g fill="#111" stroke="white" stroke-width="{:.2}">"##,
+        r##"<g class="receivers" fill="#111" stroke="white" stroke-width="{:.2}">"##,
         radius * 0.3
     );
-    for (k, p) in scene.receivers().iter().enumerate() {
-        let (x, y) = view.px(*p);
+    for &k in &receivers {
+        let (x, y) = view.px(scene.receivers()[k]);
         let _ = writeln!(
             s,
             r#"<circle cx="{x:.2}" cy="{y:.2}" r="{radius}"><title>receiver {k}</title></circle>"#
@@ -352,7 +789,7 @@ pub fn scene_svg(scene: &Scene, rays: &[Ray], title: &str) -> String {
     let _ = writeln!(s, "</g>");
     let _ = writeln!(
         s,
-        r##"<g fill="#e4572e" stroke="#222" stroke-width="1" stroke-linejoin="round">"##
+        r##"<g class="sources" fill="#e4572e" stroke="#222" stroke-width="1" stroke-linejoin="round">"##
     );
     for (k, p) in scene.sources().iter().enumerate() {
         let (x, y) = view.px(*p);
@@ -364,14 +801,129 @@ pub fn scene_svg(scene: &Scene, rays: &[Ray], title: &str) -> String {
     }
     let _ = writeln!(s, "</g>");
 
-    // Colour bar: min at the bottom, max at the top.
-    let bar_x = LEFT + area_w + 30.0;
-    let (bar_top, bar_bottom) = (TOP + 22.0, TOP + area_h - 6.0);
+    let key_x = LEFT + area_w + 26.0;
+    match colouring {
+        Colouring::Time => colour_bar(&mut s, key_x, TOP, area_h, range),
+        Colouring::Path => path_legend(&mut s, scene, key_x, TOP, &legend, &per_path),
+    }
+    let _ = writeln!(s, "</svg>");
+    s
+}
+
+/// Where interface `i`'s label goes: near the middle of its length, on whichever side and at
+/// whichever of a few places along it covers the fewest ray segments and no label in `taken`.
+fn interface_label_spot(
+    view: &View,
+    i: &eigenray::Interface,
+    rays: &[PixelSegment],
+    taken: &[LabelBox],
+) -> (f64, f64) {
+    let v = i.polyline.vertices();
+    let mut pts: Vec<(f64, f64)> = v.iter().map(|p| view.px(*p)).collect();
+    if i.polyline.is_closed() && !pts.is_empty() {
+        pts.push(pts[0]);
+    }
+    let lens: Vec<f64> = pts
+        .windows(2)
+        .map(|w| (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1))
+        .collect();
+    let total: f64 = lens.iter().sum();
+    // The point at fraction `f` of the length, and the unit normal there.
+    let at = |f: f64| -> ((f64, f64), (f64, f64)) {
+        let mut d = f * total;
+        for (k, &l) in lens.iter().enumerate() {
+            if d <= l || k + 1 == lens.len() {
+                let (a, b) = (pts[k], pts[k + 1]);
+                let t = if l > 0.0 {
+                    (d / l).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                let (dx, dy) = if l > 0.0 {
+                    ((b.0 - a.0) / l, (b.1 - a.1) / l)
+                } else {
+                    (1.0, 0.0)
+                };
+                return ((a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1)), (-dy, dx));
+            }
+            d -= l;
+        }
+        (pts.first().copied().unwrap_or((0.0, 0.0)), (0.0, -1.0))
+    };
+    let chars = i.name.chars().count();
+    let width = 0.6 * 12.0 * chars as f64;
+    let mut best = (f64::INFINITY, (0.0, 0.0));
+    for (rank, f) in [0.5, 0.4, 0.6, 0.3, 0.7, 0.2, 0.8].into_iter().enumerate() {
+        let ((x, y), n) = at(f);
+        for side in [1.0, -1.0] {
+            // The label's centre off the line by half its box's extent across it and 5 px.
+            let off = 5.0 + 0.5 * (n.0.abs() * width + n.1.abs() * 15.6);
+            let (cx, cy) = (x + side * n.0 * off, y + side * n.1 * off);
+            let (bx, by) = (cx - 0.5 * width, cy + 4.0);
+            let b = text_box(bx, by, chars, 12.0);
+            let covered = rays
+                .iter()
+                .filter(|(p, q)| segment_meets_box(*p, *q, b))
+                .count() as f64;
+            let inside = b.0 >= view.left()
+                && b.2 <= view.right()
+                && b.1 >= view.top()
+                && b.3 <= view.bottom();
+            let clash = if taken.iter().any(|t| boxes_overlap(*t, b)) {
+                1e9
+            } else if inside {
+                0.0
+            } else {
+                1e6
+            };
+            // Prefer the middle, then fewer rays under the label.
+            let score = clash + covered + 0.5 * rank as f64;
+            if score < best.0 {
+                best = (score, (bx, by));
+            }
+        }
+    }
+    best.1
+}
+
+/// Where each medium's name goes: at its `at` point, or else at the middle of the drawn legs in
+/// that medium (the centroid of their midpoints); media with neither are not labelled.
+fn medium_spots(scene: &Scene, view: &View, rays: &[Ray]) -> Vec<(usize, (f64, f64))> {
+    let n = scene.media().len();
+    let mut sum = vec![(0.0, 0.0, 0usize); n];
+    for r in rays {
+        for (leg, &m) in r.media.iter().enumerate() {
+            if let (Some(a), Some(b), Some(acc)) =
+                (r.points.get(leg), r.points.get(leg + 1), sum.get_mut(m))
+            {
+                let (x, y) = view.px(Point::new(0.5 * a.x + 0.5 * b.x, 0.5 * a.y + 0.5 * b.y));
+                acc.0 += x;
+                acc.1 += y;
+                acc.2 += 1;
+            }
+        }
+    }
+    (0..n)
+        .filter_map(|m| match scene.media()[m].at {
+            Some(p) => Some((m, view.px(p))),
+            None => {
+                let (x, y, k) = sum[m];
+                (k > 0).then(|| (m, (x / k as f64, y / k as f64)))
+            }
+        })
+        .collect()
+}
+
+/// The travel-time colour bar: min at the bottom, max at the top, in the scene's time unit.
+fn colour_bar(s: &mut String, x: f64, top: f64, area_h: f64, range: Option<(f64, f64)>) {
+    let (bar_top, bar_bottom) = (top + 40.0, top + area_h - 6.0);
     let _ = writeln!(
         s,
-        r##"<text x="{:.2}" y="{:.2}" font-size="12" fill="#222">travel time</text>"##,
-        bar_x - 8.0,
-        TOP + 8.0
+        r##"<g class="colour-bar"><text x="{:.2}" y="{:.2}" font-size="12" fill="#222">travel time</text><text x="{:.2}" y="{:.2}" font-size="11" fill="#555">(length ÷ speed)</text>"##,
+        x - 8.0,
+        top + 10.0,
+        x - 8.0,
+        top + 26.0
     );
     match range {
         Some((lo, hi)) => {
@@ -397,19 +949,23 @@ pub fn scene_svg(scene: &Scene, rays: &[Ray], title: &str) -> String {
             };
             let _ = writeln!(
                 s,
-                r##"<rect x="{bar_x:.2}" y="{bar_top:.2}" width="16" height="{:.2}" fill="{fill}" stroke="#444" stroke-width="0.8"/>"##,
+                r##"<rect x="{x:.2}" y="{bar_top:.2}" width="16" height="{:.2}" fill="{fill}" stroke="#444" stroke-width="0.8"/>"##,
                 bar_bottom - bar_top
             );
             let span = hi - lo;
-            let ticks: &[f64] = if hi > lo { &[0.0, 0.5, 1.0] } else { &[0.5] };
+            let ticks: &[f64] = if hi > lo {
+                &[0.0, 0.25, 0.5, 0.75, 1.0]
+            } else {
+                &[0.5]
+            };
             for &f in ticks {
                 let y = bar_bottom - f * (bar_bottom - bar_top);
                 let v = if hi > lo { lo + f * span } else { lo };
                 let _ = writeln!(
                     s,
                     r##"<path d="M{:.2},{y:.2}h5" stroke="#444" stroke-width="1"/><text x="{:.2}" y="{:.2}" font-size="12" fill="#222">{}</text>"##,
-                    bar_x + 16.0,
-                    bar_x + 24.0,
+                    x + 16.0,
+                    x + 24.0,
                     y + 4.0,
                     tick_label(v, span)
                 );
@@ -419,18 +975,59 @@ pub fn scene_svg(scene: &Scene, rays: &[Ray], title: &str) -> String {
             let _ = writeln!(
                 s,
                 r##"<text x="{:.2}" y="{:.2}" font-size="12" fill="#555">no ray has a time</text>"##,
-                bar_x - 8.0,
+                x - 8.0,
                 bar_top + 14.0
             );
         }
     }
-    let _ = writeln!(s, "</svg>");
-    s
+    let _ = writeln!(s, "</g>");
+}
+
+/// The legend of paths: a line of each drawn path's colour, its name and its drawn rays.
+fn path_legend(
+    s: &mut String,
+    scene: &Scene,
+    x: f64,
+    top: f64,
+    legend: &[usize],
+    per_path: &[usize],
+) {
+    let _ = writeln!(
+        s,
+        r##"<g class="legend" font-size="12" fill="#222"><text x="{:.2}" y="{:.2}">path (rays drawn)</text>"##,
+        x - 8.0,
+        top + 10.0
+    );
+    if legend.is_empty() {
+        let _ = writeln!(
+            s,
+            r##"<text x="{:.2}" y="{:.2}" fill="#555">no ray has a time</text>"##,
+            x - 8.0,
+            top + 30.0
+        );
+    }
+    for (k, &p) in legend.iter().enumerate() {
+        let y = top + 32.0 + LEGEND_LINE * k as f64;
+        let _ = writeln!(
+            s,
+            r#"<path d="M{:.2},{:.2}h22" stroke="{}" stroke-width="3"{}/><text x="{:.2}" y="{:.2}">{} ({})</text>"#,
+            x - 8.0,
+            y - 4.0,
+            PATH_COLOURS[p % PATH_COLOURS.len()],
+            path_dash(p),
+            x + 20.0,
+            y,
+            esc(&path_label(scene, p)),
+            thousands(per_path[p])
+        );
+    }
+    let _ = writeln!(s, "</g>");
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use eigenray::{BatchOptions, Tracer};
 
     #[test]
     fn viridis_ends_and_clamps() {
@@ -443,11 +1040,12 @@ mod tests {
     }
 
     #[test]
-    fn escapes_markup() {
+    fn escapes_markup_and_characters_xml_forbids() {
         assert_eq!(
             esc(r#"a<b & "c">'"#),
             "a&lt;b &amp; &quot;c&quot;&gt;&apos;"
         );
+        assert_eq!(esc("a\u{1}b\u{fffe}c\u{ffff}"), "a b\u{fffd}c\u{fffd}");
     }
 
     #[test]
@@ -455,5 +1053,250 @@ mod tests {
         assert_eq!(tick_label(1.8912, 0.81), "1.8912");
         assert_eq!(tick_label(1234.5, 100.0), "1234.5");
         assert_eq!(tick_label(2.5e7, 1.0), "2.500e7");
+    }
+
+    #[test]
+    fn axis_ticks_are_round() {
+        let t: Vec<String> = axis_ticks(-1.3, 2.2, 6.0)
+            .into_iter()
+            .map(|t| t.1)
+            .collect();
+        assert_eq!(t, ["-1", "0", "1", "2"]);
+        let t: Vec<String> = axis_ticks(-0.3, 0.45, 6.0)
+            .into_iter()
+            .map(|t| t.1)
+            .collect();
+        assert_eq!(t, ["-0.2", "0", "0.2", "0.4"]);
+        let t: Vec<String> = axis_ticks(0.0, 1000.0, 5.0)
+            .into_iter()
+            .map(|t| t.1)
+            .collect();
+        assert_eq!(t, ["0", "200", "400", "600", "800", "1000"]);
+        assert!(axis_ticks(0.0, f64::INFINITY, 5.0).is_empty());
+        let tiny = axis_ticks(-2e-310, 2e-310, 4.0);
+        let labels: Vec<&str> = tiny.iter().map(|t| t.1.as_str()).collect();
+        assert_eq!(labels, ["-2e-310", "-1e-310", "0", "1e-310", "2e-310"]);
+    }
+
+    #[test]
+    fn thousands_separate() {
+        assert_eq!(thousands(0), "0");
+        assert_eq!(thousands(999), "999");
+        assert_eq!(thousands(1000), "1,000");
+        assert_eq!(thousands(1_000_000), "1,000,000");
+    }
+
+    fn picture(json: &str, colouring: Colouring) -> String {
+        let scene = Scene::from_json(json).expect("valid scene");
+        let batch = Tracer::new(&scene)
+            .expect("tracer")
+            .trace_batch(&BatchOptions::default());
+        scene_svg(&scene, &batch, "test", colouring)
+    }
+
+    /// Parses the picture as XML and returns its elements' (name, class) pairs and texts.
+    fn parse(svg: &str) -> (Vec<(String, String)>, Vec<String>) {
+        let doc = roxmltree::Document::parse(svg).expect("well-formed XML");
+        let mut elements = Vec::new();
+        let mut texts = Vec::new();
+        for n in doc.descendants() {
+            if n.is_element() {
+                elements.push((
+                    n.tag_name().name().to_string(),
+                    n.attribute("class").unwrap_or("").to_string(),
+                ));
+                for a in n.attributes() {
+                    assert!(
+                        !a.value().contains("NaN") && !a.value().contains("inf"),
+                        "{}={}",
+                        a.name(),
+                        a.value()
+                    );
+                }
+                if n.tag_name().name() == "text" {
+                    texts.push(n.text().unwrap_or("").to_string());
+                }
+            }
+        }
+        (elements, texts)
+    }
+
+    const ROOM: &str = r#"{
+        "media": { "air": { "speed": 343 } },
+        "interfaces": {
+            "north": { "points": [[0, 4], [6, 4]] }, "east": { "points": [[6, 0], [6, 4]] },
+            "south": { "points": [[0, 0], [6, 0]] }, "west": { "points": [[0, 0], [0, 4]] }
+        },
+        "sources": [[1.5, 1.2]], "receivers": [[4.5, 2.5], [3, 3]],
+        "paths": [
+            { "name": "direct", "steps": [], "media": ["air"] },
+            { "name": "north", "steps": [{ "reflect": "north" }], "media": ["air", "air"] },
+            { "name": "west", "steps": [{ "reflect": "west" }], "media": ["air", "air"] }
+        ]
+    }"#;
+
+    #[test]
+    fn a_room_by_path_has_axes_labels_and_a_legend() {
+        let svg = picture(ROOM, Colouring::Path);
+        let (elements, texts) = parse(&svg);
+        let has = |class: &str| elements.iter().any(|(_, c)| c == class);
+        assert!(has("axes") && has("legend") && has("rays") && has("labels"));
+        assert!(!has("colour-bar"));
+        for want in [
+            "direct (2)",
+            "north (2)",
+            "west (2)",
+            "0",
+            "6",
+            "4",
+            "x",
+            "y",
+        ] {
+            assert!(texts.iter().any(|t| t == want), "{want} not in {texts:?}");
+        }
+        // Every interface labelled once (each text drawn twice: outline and fill); the medium
+        // too, from its legs.
+        for name in ["north", "east", "south", "west", "air"] {
+            assert_eq!(texts.iter().filter(|t| *t == name).count(), 2, "{name}");
+        }
+        assert!(!svg.contains("paint-order"));
+        assert!(texts.iter().any(|t| t.starts_with("6 of 6 rays drawn")));
+    }
+
+    #[test]
+    fn the_west_label_sits_beside_the_west_wall_middle() {
+        let svg = picture(ROOM, Colouring::Time);
+        let doc = roxmltree::Document::parse(&svg).unwrap();
+        let west = doc
+            .descendants()
+            .find(|n| n.has_tag_name("text") && n.text() == Some("west"))
+            .expect("west label");
+        let y: f64 = west.attribute("y").unwrap().parse().unwrap();
+        // The wall runs from y = 0 to 4; the corners are at the plot's pixel rows of the
+        // north and south walls' labels' lines. The label is within the middle half.
+        let rows: Vec<f64> = doc
+            .descendants()
+            .filter(|n| n.has_tag_name("polyline"))
+            .filter(|n| n.children().any(|c| c.text() == Some("west")))
+            .flat_map(|n| {
+                n.attribute("points")
+                    .unwrap()
+                    .split(' ')
+                    .map(|p| p.split(',').nth(1).unwrap().parse::<f64>().unwrap())
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        let (lo, hi) = (rows[0].min(rows[1]), rows[0].max(rows[1]));
+        let quarter = 0.25 * (hi - lo);
+        assert!(
+            y > lo + quarter && y < hi - quarter + 12.0,
+            "{y} in {lo}..{hi}"
+        );
+    }
+
+    #[test]
+    fn a_big_batch_is_drawn_as_a_sample_and_says_so() {
+        let scene = Scene::from_spec(&eigenray::demo::air_water(20_000, 1)).unwrap();
+        let batch = Tracer::new(&scene)
+            .unwrap()
+            .trace_batch(&BatchOptions::default());
+        let svg = scene_svg(&scene, &batch, "demo", Colouring::Time);
+        let (elements, texts) = parse(&svg);
+        let drawn = elements.iter().filter(|(n, _)| n == "polyline").count() - 1;
+        assert!(drawn <= MAX_RAYS, "{drawn}");
+        let caption = format!(
+            "{} of 20,000 rays drawn (a sample spread over all rays)",
+            thousands(drawn)
+        );
+        assert!(
+            texts.iter().any(|t| t.starts_with(&caption)),
+            "{caption} not in {texts:?}"
+        );
+        assert!(
+            texts
+                .iter()
+                .any(|t| t.contains("of 20,000 receivers shown"))
+        );
+        assert!(svg.len() < 1_500_000, "{} bytes", svg.len());
+        // Air and water are labelled from their legs.
+        for name in ["air", "water", "surface", "travel time", "(length ÷ speed)"] {
+            assert!(texts.iter().any(|t| t == name), "{name}");
+        }
+    }
+
+    #[test]
+    fn the_caption_counts_rays_without_a_time() {
+        let svg = picture(
+            r#"{
+            "media": { "air": { "speed": 1 } },
+            "interfaces": { "floor": { "points": [[-1, 0], [1, 0]] } },
+            "sources": [[0, 1]], "receivers": [[0.5, 1], [5, 1]],
+            "paths": [{ "steps": [{ "reflect": "floor" }], "media": ["air", "air"] }]
+        }"#,
+            Colouring::Time,
+        );
+        let (_, texts) = parse(&svg);
+        assert!(
+            texts
+                .iter()
+                .any(|t| t.starts_with("1 of 2 rays drawn (1 has no time)")),
+            "{texts:?}"
+        );
+    }
+
+    #[test]
+    fn a_sample_holds_every_path() {
+        let json = r#"{
+            "media": { "air": { "speed": 1 } },
+            "interfaces": { "floor": { "points": [[-100, 0], [100, 0]] } },
+            "sources": [[0, 1]], "receivers": RECEIVERS,
+            "paths": [{ "steps": [], "media": ["air"] },
+                      { "steps": [{ "reflect": "floor" }], "media": ["air", "air"] }]
+        }"#;
+        let receivers: Vec<[f64; 2]> = (0..3000).map(|k| [k as f64 * 0.01, 2.0]).collect();
+        let json = json.replace("RECEIVERS", &serde_json::to_string(&receivers).unwrap());
+        let svg = picture(&json, Colouring::Path);
+        let (_, texts) = parse(&svg);
+        assert!(texts.iter().any(|t| t.starts_with("path 0 (")), "{texts:?}");
+        assert!(texts.iter().any(|t| t.starts_with("path 1 (")), "{texts:?}");
+    }
+
+    #[test]
+    fn a_wide_shallow_scene_is_stretched_and_says_so() {
+        let svg = picture(
+            r#"{
+            "media": { "air": { "speed": 1 }, "rock": { "speed": 2 } },
+            "interfaces": { "bed": { "points": [[0, -1], [1000, -1]] } },
+            "sources": [[0, 0]], "receivers": [[1000, 0]],
+            "paths": [{ "steps": [{ "reflect": "bed" }], "media": ["air", "air"] }]
+        }"#,
+            Colouring::Time,
+        );
+        let (_, texts) = parse(&svg);
+        assert!(
+            texts.iter().any(|t| t.contains("vertical scale stretched")),
+            "{texts:?}"
+        );
+        let doc = roxmltree::Document::parse(&svg).unwrap();
+        let root = doc.root_element();
+        let h: f64 = root.attribute("height").unwrap().parse().unwrap();
+        let w: f64 = root.attribute("width").unwrap().parse().unwrap();
+        assert!(h > 0.35 * w, "{w} × {h}");
+    }
+
+    #[test]
+    fn tiny_scenes_and_odd_names_stay_well_formed() {
+        let svg = picture(
+            r#"{
+            "media": { "a\ufffeb": { "speed": 1 } },
+            "interfaces": { "i\uffff<&>": { "points": [[-1e-310, 0], [1e-310, 0]] } },
+            "sources": [[0, 1e-310]], "receivers": [[5e-311, 1e-310]],
+            "paths": [{ "name": "p\u0001", "steps": [{ "reflect": "i\uffff<&>" }], "media": ["a\ufffeb", "a\ufffeb"] }]
+        }"#,
+            Colouring::Path,
+        );
+        let (elements, _) = parse(&svg);
+        assert!(elements.iter().any(|(_, c)| c == "axes"));
+        assert!(!svg.contains("inf") && !svg.contains("NaN"));
     }
 }
