@@ -1,10 +1,6 @@
 //! Batches: every ray of a scene in parallel, in ray order, in flat storage, with warm starts.
 
-use std::borrow::Borrow;
-
 use rayon::prelude::*;
-
-use crate::scene::Scene;
 
 use crate::geom::{Point, Vec2};
 use crate::problem::{Frame, coord};
@@ -302,7 +298,7 @@ fn spatial_order(points: &[Point]) -> Vec<usize> {
     keyed.into_iter().map(|(_, i)| i).collect()
 }
 
-impl<S: Borrow<Scene> + Sync> Tracer<S> {
+impl Tracer<'_> {
     /// Solves every ray of the scene in parallel (rayon, one workspace per work unit), with
     /// the same results as solving them one by one (up to the start each ray is solved from
     /// when `warm_start` is on), in ray order.
@@ -608,7 +604,7 @@ impl Chain {
     }
 }
 
-impl<S: Borrow<Scene>> Tracer<S> {
+impl Tracer<'_> {
     /// Path `p` of every block of `unit`, one block after the other, each starting from the
     /// last one's solution when that receiver is near.
     fn path_chain(

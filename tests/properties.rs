@@ -486,7 +486,7 @@ fn unit(a: Point, b: Point) -> (f64, f64) {
 }
 
 /// Checks one traced ray against the physics and the documented output; `Err` says what is wrong.
-fn check_ray(scene: &Scene, tracer: &Tracer<&Scene>, ray: &Ray) -> Result<(), String> {
+fn check_ray(scene: &Scene, tracer: &Tracer, ray: &Ray) -> Result<(), String> {
     let path = &scene.paths()[ray.path];
     let k = path.steps.len();
     let size = scene.bbox().diagonal();

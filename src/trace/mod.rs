@@ -7,8 +7,6 @@
 //! `straight`), the Newton solve (`crate::solver`), the media lookup and the classification
 //! (`classify`). Every kernel ends in the same classifier.
 
-use std::borrow::Borrow;
-
 use rayon::prelude::*;
 
 use crate::geom::Point;
@@ -195,8 +193,8 @@ pub(crate) struct Context<'a> {
 /// Common cases take a kernel (see [`Kernels`]): a single refraction at a flat interface, a
 /// stack of parallel flat layers, one interaction with its media given. Every kernel ends in
 /// the same classification and hands the rays outside its case to the general code.
-pub struct Tracer<S = Scene> {
-    scene: S,
+pub struct Tracer<'s> {
+    scene: &'s Scene,
     regions: Option<Regions>,
     /// Medium at each source (when regions exist).
     source_media: Vec<Option<usize>>,
@@ -208,41 +206,27 @@ pub struct Tracer<S = Scene> {
     kernels: Kernels,
 }
 
-impl<S: Borrow<Scene>> Tracer<S> {
+impl<'s> Tracer<'s> {
     /// Prepares a scene for tracing: builds the region lookup only if some path needs it.
-    /// The tracer borrows the scene (`Tracer::new(&scene)`), or owns it (`Tracer::new(scene)`,
-    /// or an `Arc<Scene>` to share it), so that an application can keep the tracer alone.
-    ///
-    /// ```
-    /// use eigenray::{Scene, Tracer};
-    /// // A long-lived application keeps the tracer, which owns its scene.
-    /// struct Layout {
-    ///     tracer: Tracer,
-    /// }
-    /// let scene = Scene::from_spec(&eigenray::demo::air_water(10, 1)).unwrap();
-    /// let layout = Layout { tracer: Tracer::new(scene).unwrap() };
-    /// assert_eq!(layout.tracer.trace_all().len(), 10);
-    /// ```
     ///
     /// # Errors
     /// A scene whose regions are inconsistent (two `at` points in one region).
-    pub fn new(scene: S) -> Result<Tracer<S>, SceneError> {
-        let regions = Self::regions_of(scene.borrow())?;
+    pub fn new(scene: &'s Scene) -> Result<Tracer<'s>, SceneError> {
+        let regions = if scene.needs_regions() {
+            Some(Regions::build(scene)?)
+        } else {
+            None
+        };
         let source_media = match &regions {
-            Some(r) => scene
-                .borrow()
-                .sources()
-                .iter()
-                .map(|&p| r.medium_at(p))
-                .collect(),
+            Some(r) => scene.sources().iter().map(|&p| r.medium_at(p)).collect(),
             None => Vec::new(),
         };
-        let (classifier, opts) = (Classifier::new(scene.borrow()), scene.borrow().solver());
+        let opts = scene.solver();
         let mut tracer = Tracer {
             scene,
             regions,
             source_media,
-            classifier,
+            classifier: Classifier::new(scene),
             plans: Vec::new(),
             newton: NewtonOptions {
                 tolerance: opts.tolerance,
@@ -256,18 +240,9 @@ impl<S: Borrow<Scene>> Tracer<S> {
         Ok(tracer)
     }
 
-    /// The region lookup of `scene`, if some path needs one.
-    fn regions_of(scene: &Scene) -> Result<Option<Regions>, SceneError> {
-        Ok(if scene.needs_regions() {
-            Some(Regions::build(scene)?)
-        } else {
-            None
-        })
-    }
-
     /// Decides each path's plan for the present start and kernels.
     fn plan(&mut self) {
-        let scene = self.scene.borrow();
+        let scene = self.scene;
         self.plans = (0..scene.paths().len())
             .map(|p| PathPlan::of(scene, p, self.guess, self.kernels))
             .collect();
@@ -314,8 +289,8 @@ impl<S: Borrow<Scene>> Tracer<S> {
     }
 
     /// The scene.
-    pub fn scene(&self) -> &Scene {
-        self.scene.borrow()
+    pub fn scene(&self) -> &'s Scene {
+        self.scene
     }
 
     /// The region lookup, if the scene needed one.
@@ -327,7 +302,7 @@ impl<S: Borrow<Scene>> Tracer<S> {
     #[inline(always)]
     pub(crate) fn context(&self) -> Context<'_> {
         Context {
-            scene: self.scene.borrow(),
+            scene: self.scene,
             classifier: &self.classifier,
             newton: self.newton,
             guess: self.guess,
@@ -352,12 +327,9 @@ impl<S: Borrow<Scene>> Tracer<S> {
     }
 
     /// Solves every ray of the scene, in parallel, in ray order ([`ray_index`]).
-    pub fn trace_all(&self) -> Vec<Ray>
-    where
-        S: Sync,
-    {
-        let (r, p) = (self.scene().receivers().len(), self.scene().paths().len());
-        (0..self.scene().num_rays())
+    pub fn trace_all(&self) -> Vec<Ray> {
+        let (r, p) = (self.scene.receivers().len(), self.scene.paths().len());
+        (0..self.scene.num_rays())
             .into_par_iter()
             .map_init(Workspace::new, |ws, idx| {
                 let path = idx % p;
@@ -400,7 +372,7 @@ impl<S: Borrow<Scene>> Tracer<S> {
     ) -> RayRecord {
         assert_eq!(
             guess.len(),
-            self.scene().paths()[path].steps.len(),
+            self.scene.paths()[path].steps.len(),
             "one parameter per step"
         );
         let src_medium = self.regions.as_ref().and_then(|r| r.medium_at(source));
@@ -439,9 +411,9 @@ impl<S: Borrow<Scene>> Tracer<S> {
     ) -> RayRecord {
         let src_medium = self.source_media.get(source).copied().flatten();
         self.solve_planned(
-            self.scene().sources()[source],
+            self.scene.sources()[source],
             src_medium,
-            self.scene().receivers()[receiver],
+            self.scene.receivers()[receiver],
             path,
             start,
             ws,
@@ -520,7 +492,7 @@ impl<S: Borrow<Scene>> Tracer<S> {
         {
             return ray;
         }
-        let scene = self.scene();
+        let scene = self.scene;
         let spec = &scene.paths()[path];
         let k = spec.steps.len();
         ws.resize(k);
@@ -633,10 +605,10 @@ impl<S: Borrow<Scene>> Tracer<S> {
     ) -> Result<(), Reason> {
         classify::lookup_media(
             self.regions.as_ref(),
-            self.scene(),
+            self.scene,
             source,
             src_medium,
-            &self.scene().paths()[path].steps,
+            &self.scene.paths()[path].steps,
             &ws.newton,
             &mut ws.ray.media,
         )

@@ -244,7 +244,7 @@ mod tests {
     /// The kernel is not taken from the paraxial start, nor for a path without its media.
     #[test]
     fn the_kernel_applies_to_its_case_only() {
-        let stack = |t: &Tracer<&Scene>| matches!(t.plan_of(0), PathPlan::Stack(_));
+        let stack = |t: &Tracer| matches!(t.plan_of(0), PathPlan::Stack(_));
         let scene = Scene::from_spec(&demo::layer_stack(4, 3)).unwrap();
         assert!(stack(&Tracer::new(&scene).unwrap()));
         let paraxial = Tracer::new(&scene)

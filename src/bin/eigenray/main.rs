@@ -216,7 +216,7 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
 const PROGRESS_RAYS: usize = 1_000_000;
 
 /// Solves every ray; a progress bar on standard error for big batches when it is a terminal.
-fn trace(tracer: &Tracer<&Scene>, warm_start: bool) -> Batch {
+fn trace(tracer: &Tracer, warm_start: bool) -> Batch {
     let n = tracer.scene().num_rays();
     let bar = (n >= PROGRESS_RAYS && std::io::IsTerminal::is_terminal(&io::stderr())).then(|| {
         let bar = ProgressBar::new(n as u64);
