@@ -125,16 +125,94 @@ impl Regions {
     /// the domain's edge; `interfaces` if the triangulation fails (which a valid scene does not
     /// cause).
     pub fn build(scene: &Scene) -> Result<Regions, SceneError> {
-        let built =
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| Regions::build_inner(scene)));
-        let mut regions = built.map_err(|_| {
-            SceneError::new(
-                "interfaces",
-                "the region triangulation failed (internal error)",
-            )
-        })??;
+        let mut regions = Regions::build_inner(scene)?;
         regions.assign_media(scene)?;
+        regions.check_media(scene)?;
         Ok(regions)
+    }
+
+    /// Refuses media assignments that cannot mean what the scene says: no medium anywhere, a
+    /// background or a declared medium that fills no region, a source in a region without a
+    /// medium, or, in a scene without a domain, a refraction (with media from region lookup)
+    /// at an open interface that has the same region on both sides.
+    fn check_media(&self, scene: &Scene) -> Result<(), SceneError> {
+        let no_domain_hint = if scene.domain().is_none() {
+            "; without a `domain`, an open interface divides nothing and only closed ones \
+             enclose regions: add a `domain` box whose edges the interfaces end on"
+        } else {
+            ""
+        };
+        if self.region_medium.iter().all(Option::is_none) {
+            return Err(SceneError::new(
+                "background",
+                "no medium fills any region: name a `background`, or give media `at` points",
+            ));
+        }
+        if let Some(b) = scene.background() {
+            if !self.region_medium.iter().any(|&m| m == Some(b)) {
+                return Err(SceneError::new(
+                    "background",
+                    format!(
+                        "`{}` fills no region: the `at` points claim every region{no_domain_hint}",
+                        scene.media()[b].name
+                    ),
+                ));
+            }
+        }
+        let mut named = vec![false; scene.media().len()];
+        for p in scene.paths() {
+            for &m in p.media.iter().flatten() {
+                named[m] = true;
+            }
+        }
+        for (m, medium) in scene.media().iter().enumerate() {
+            if !named[m] && !self.region_medium.contains(&Some(m)) {
+                return Err(SceneError::new(
+                    format!("media.{}", medium.name),
+                    "fills no region and no path names it: give it an `at` point inside its \
+                     region, make it the `background`, or name it in a path's `media`",
+                ));
+            }
+        }
+        for (k, &p) in scene.sources().iter().enumerate() {
+            if self.medium_at(p).is_none() {
+                return Err(SceneError::new(
+                    format!("sources[{k}]"),
+                    "lies in a region that no medium fills (no `at` point claims it and there \
+                     is no `background`)",
+                ));
+            }
+        }
+        let divides: Vec<bool> = (0..scene.interfaces().len())
+            .map(|i| {
+                let (first, end) = (self.seg_offset[i], self.seg_offset[i + 1]);
+                self.pieces[self.piece_offset[first]..self.piece_offset[end]]
+                    .iter()
+                    .any(|p| p.left != p.right)
+            })
+            .collect();
+        for (k, path) in scene.paths().iter().enumerate() {
+            // With a domain, an open interface that ends inside it divides nothing on purpose
+            // (a dangling reflector); without one, every open interface divides nothing.
+            if path.media.is_some() || scene.domain().is_some() {
+                continue;
+            }
+            for (j, step) in path.steps.iter().enumerate() {
+                let open = !scene.interfaces()[step.interface].polyline.is_closed();
+                if step.kind == crate::scene::StepKind::Refract && open && !divides[step.interface]
+                {
+                    return Err(SceneError::new(
+                        format!("paths[{k}].steps[{j}].refract"),
+                        format!(
+                            "interface `{}` has the same region on both sides, so the \
+                             refraction cannot change medium{no_domain_hint}",
+                            scene.interfaces()[step.interface].name
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     fn build_inner(scene: &Scene) -> Result<Regions, SceneError> {
@@ -367,7 +445,10 @@ impl Regions {
                         s0
                     } else {
                         let prev: &Piece = &pieces[pieces.len() - 1];
-                        (s0 + (position(x) - a).dot(tangent)).clamp(prev.start, s1)
+                        // `max` then `min`, not `clamp`: no panic whatever round-off does.
+                        (s0 + (position(x) - a).dot(tangent))
+                            .max(prev.start)
+                            .min(s1)
                     };
                     match pieces.last() {
                         Some(p) if pieces.len() > first && p.left == left && p.right == right => {}
@@ -413,10 +494,16 @@ impl Regions {
                 )
             })?;
             if let Some(other) = claimed[region] {
+                let hint = if scene.domain().is_none() {
+                    " (without a `domain`, an open interface divides nothing: add a `domain` \
+                     box whose edges the interfaces end on)"
+                } else {
+                    ""
+                };
                 return Err(SceneError::new(
                     key,
                     format!(
-                        "lies in the same region as media.{}.at",
+                        "lies in the same region as media.{}.at{hint}",
                         scene.media()[other].name
                     ),
                 ));
@@ -755,13 +842,19 @@ struct Scale {
     e: [i32; 2],
 }
 
+/// The exponent of the largest coordinate in spade's coordinates.
+const TOP_EXPONENT: i32 = 198;
+
 /// `2^n` for `n` in `[-1022, 1023]`.
 fn pow2(n: i32) -> f64 {
     f64::from_bits(((n.clamp(-1022, 1023) + 1023) as u64) << 52)
 }
 
 impl Scale {
-    /// The scale that maps the largest coordinate magnitude of `b` to `[1, 2)`.
+    /// The scale that maps the largest coordinate magnitude of `b` to `[2^198, 2^199)`: near
+    /// the top of spade's range (`2^201`, with room for the margin box), so that coordinates
+    /// down to `2^-340` of the largest stay above its smallest (`2^-142`) and none is
+    /// flushed (the scene refuses a wider range, see `REGION_RANGE_BITS`).
     fn for_box(b: Aabb) -> Scale {
         let m = [b.min.x, b.min.y, b.max.x, b.max.y]
             .iter()
@@ -775,6 +868,7 @@ impl Scale {
         } else {
             -1023 - (m.to_bits().leading_zeros() as i32 - 12)
         };
+        let e = e - TOP_EXPONENT;
         Scale {
             e: [e / 2, e - e / 2],
         }
@@ -1019,8 +1113,9 @@ mod tests {
             "media": {
                 "up": { "speed": 1, "at": [0, 1] },
                 "down": { "speed": 2, "at": [0, -1] },
-                "out": { "speed": 3, "at": [0, 5] }
+                "out": { "speed": 3 }
             },
+            "background": "out",
             "domain": [[-2, -2], [2, 2]],
             "interfaces": { "s": { "points": [[-3, 0.1], [3, -0.1]] } },
             "sources": [], "receivers": [], "paths": []
@@ -1301,7 +1396,11 @@ mod tests {
         .unwrap();
         let e = Regions::build(&scene).unwrap_err();
         assert_eq!(e.key, "media.b.at");
-        assert_eq!(e.message, "lies in the same region as media.a.at");
+        assert_eq!(
+            e.message,
+            "lies in the same region as media.a.at (without a `domain`, an open interface \
+             divides nothing: add a `domain` box whose edges the interfaces end on)"
+        );
     }
 
     #[test]
@@ -1313,8 +1412,9 @@ mod tests {
             "sources": [], "receivers": [], "paths": []
         }"#,
         )
-        .unwrap();
-        assert_eq!(Regions::build(&scene).unwrap_err().key, "media.a.at");
+        .unwrap_err();
+        assert_eq!(scene.key, "media.a.at");
+        assert!(scene.message.contains("edge of the domain"), "{scene}");
     }
 
     #[test]
@@ -1521,7 +1621,7 @@ mod tests {
     #[test]
     fn shared_vertices_and_extreme_coordinates() {
         // Two interfaces share both end vertices, and coordinates spade cannot take directly.
-        for k in [1e-100, 1e-30, 1.0, 1e40, 1e70] {
+        for k in [1e-98, 1e-30, 1.0, 1e40, 1e70] {
             let json = format!(
                 r#"{{
                 "media": {{ "in": {{ "speed": 1, "at": [{a}, {b}] }}, "out": {{ "speed": 2 }} }},
@@ -1558,11 +1658,18 @@ mod tests {
 
     #[test]
     fn no_interfaces() {
-        let (_, r) = regions(
+        // No medium anywhere: refused.
+        let scene = Scene::from_json(
             r#"{ "media": { "a": { "speed": 1 } }, "sources": [], "receivers": [], "paths": [] }"#,
+        )
+        .unwrap();
+        assert_eq!(Regions::build(&scene).unwrap_err().key, "background");
+        let (_, r) = regions(
+            r#"{ "media": { "a": { "speed": 1 } }, "background": "a",
+                 "sources": [], "receivers": [], "paths": [] }"#,
         );
         assert_eq!(r.num_regions(), 1);
-        assert_eq!(r.medium_at(p(0.0, 0.0)), None);
+        assert_eq!(r.medium_at(p(0.0, 0.0)), Some(0));
         let (scene, r) = regions(
             r#"{ "media": { "a": { "speed": 1, "at": [0.5, 0.5] } }, "domain": [[0, 0], [1, 1]],
                  "sources": [], "receivers": [], "paths": [] }"#,

@@ -379,6 +379,9 @@ impl<'s> Tracer<'s> {
     }
 
     /// Solves one ray of the scene.
+    ///
+    /// # Panics
+    /// If an index is out of range (`source`, `receiver`, `path` index the scene's lists).
     pub fn trace(&self, source: usize, receiver: usize, path: usize, ws: &mut Workspace) -> Ray {
         let s = self.solve_indexed(source, receiver, path, ws);
         self.to_ray(source, receiver, path, &s, ws)
@@ -433,6 +436,10 @@ impl<'s> Tracer<'s> {
 
     /// Solves path `path` between two arbitrary points. The points of the ray are left in
     /// `ws` ([`Workspace::points`]); nothing is allocated once `ws` has grown.
+    ///
+    /// # Panics
+    /// If a point is not finite or lies outside the scene's coordinate range, or `path` is
+    /// not an index into [`Scene::paths`]: [`Scene::check_solve`] tells beforehand.
     pub fn solve(
         &self,
         source: Point,
@@ -440,6 +447,9 @@ impl<'s> Tracer<'s> {
         path: usize,
         ws: &mut Workspace,
     ) -> RaySummary {
+        if let Err(e) = self.scene.check_solve(source, receiver, path) {
+            panic!("Tracer::solve: {e}");
+        }
         let src_medium = self.regions.as_ref().and_then(|r| r.medium_at(source));
         self.solve_inner(source, src_medium, receiver, path, Start::Default, ws)
     }
@@ -450,7 +460,8 @@ impl<'s> Tracer<'s> {
     /// residual.
     ///
     /// # Panics
-    /// If `guess` does not have one parameter per step of the path.
+    /// If `guess` does not have one parameter per step of the path, or as
+    /// [`solve`](Self::solve) does.
     pub fn solve_from(
         &self,
         source: Point,
@@ -459,6 +470,9 @@ impl<'s> Tracer<'s> {
         guess: &[f64],
         ws: &mut Workspace,
     ) -> RaySummary {
+        if let Err(e) = self.scene.check_solve(source, receiver, path) {
+            panic!("Tracer::solve_from: {e}");
+        }
         assert_eq!(
             guess.len(),
             self.scene.paths()[path].steps.len(),
@@ -477,6 +491,9 @@ impl<'s> Tracer<'s> {
 
     /// Solves ray (`source`, `receiver`, `path`) of the scene, optionally warm-started
     /// (see [`solve_from`](Self::solve_from)); the points stay in `ws`.
+    ///
+    /// # Panics
+    /// If an index is out of range.
     pub fn solve_indexed_from(
         &self,
         source: usize,
