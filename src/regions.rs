@@ -149,7 +149,7 @@ impl Regions {
             ));
         }
         if let Some(b) = scene.background() {
-            if !self.region_medium.iter().any(|&m| m == Some(b)) {
+            if !self.region_medium.contains(&Some(b)) {
                 return Err(SceneError::new(
                     "background",
                     format!(

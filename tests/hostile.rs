@@ -749,7 +749,10 @@ fn layered_scene_without_domain_hints_at_a_domain() {
 /// A random layered scene: `n` flat or dipping layers across a domain, media by `at`, a
 /// background, sources above and receivers below, and a few paths (direct, reflections,
 /// refractions, and explicit media).
-fn layered(raw: &(Vec<(f64, f64)>, Vec<f64>, Vec<(f64, f64)>, Vec<(f64, f64)>)) -> Value {
+/// Layers `(depth jitter, dip)`, speeds, sources and receivers (fractions of their boxes).
+type RawLayers = (Vec<(f64, f64)>, Vec<f64>, Vec<(f64, f64)>, Vec<(f64, f64)>);
+
+fn layered(raw: &RawLayers) -> Value {
     let (layers, speeds, sources, receivers) = raw;
     let n = layers.len();
     let mut interfaces = serde_json::Map::new();
