@@ -167,7 +167,8 @@ pub struct MediumSpec {
     /// Refractive index (> 0); time = index × length.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub index: Option<f64>,
-    /// A point strictly inside the region this medium fills.
+    /// A point strictly inside the region this medium fills (inside the domain, when there is
+    /// one). One point claims one region: two separate pieces of one material are two media.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub at: Option<[f64; 2]>,
 }

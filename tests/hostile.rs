@@ -496,6 +496,25 @@ fn layers(n: usize) -> String {
     .to_string()
 }
 
+/// A path of 10^6 reflections over 100,000 interfaces (about 36 MB), no rays.
+fn long_path() -> String {
+    let n = 100_000;
+    let mut text =
+        String::from(r#"{"media": {"air": {"speed": 1.0}}, "background": "air", "interfaces": {"#);
+    for k in 0..n {
+        let sep = if k == 0 { "" } else { "," };
+        let y = -(k as f64) - 0.5;
+        text += &format!(r#"{sep}"l{k}": {{"points": [[-10.0, {y}], [10.0, {y}]]}}"#);
+    }
+    text += r#"}, "sources": [], "receivers": [], "paths": [{"steps": ["#;
+    for k in 0..1_000_000 {
+        let sep = if k == 0 { "" } else { "," };
+        text += &format!(r#"{sep}{{"reflect": "l{}"}}"#, k % n);
+    }
+    text += r#"]}]}"#;
+    text
+}
+
 /// `n` parallel diagonal segments whose boxes all overlap.
 fn diagonals(n: usize) -> String {
     let mut interfaces = serde_json::Map::new();
@@ -516,11 +535,24 @@ fn validation_of_large_scenes_is_fast() {
     for (name, text, limit) in [
         ("100,000 layers", layers(100_000), 10.0),
         ("40,000 overlapping diagonals", diagonals(40_000), 10.0),
+        (
+            "a 10^6-step path over 100,000 interfaces",
+            long_path(),
+            20.0,
+        ),
     ] {
         let start = Instant::now();
-        Scene::from_json(&text).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let scene = Scene::from_json(&text).unwrap_or_else(|e| panic!("{name}: {e}"));
         let secs = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        drop(Tracer::new(&scene).expect("tracer"));
+        let tracer = start.elapsed().as_secs_f64();
+        eprintln!("{name}: validated in {secs:.3} s, tracer prepared in {tracer:.3} s");
         assert!(secs < limit, "{name}: {secs:.2} s to validate");
+        assert!(
+            tracer < limit,
+            "{name}: {tracer:.2} s to prepare the tracer"
+        );
     }
     // The diagonals with one crossing added: found.
     let mut v: Value = serde_json::from_str(&diagonals(40_000)).expect("json");
