@@ -152,6 +152,7 @@ pub fn build(input: &Input) -> SceneSpec {
 }
 
 /// Whether every number in the spec is finite (then it round-trips through JSON exactly).
+#[allow(dead_code, reason = "used by the structured target only")]
 pub fn all_finite(spec: &SceneSpec) -> bool {
     let p = |p: &[f64; 2]| p[0].is_finite() && p[1].is_finite();
     spec.media.values().all(|m| m.at.as_ref().is_none_or(p))

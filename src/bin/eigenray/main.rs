@@ -40,7 +40,8 @@ const SVG_MAX_RAYS: usize = 20_000;
     long_about = "Eigenrays through prescribed reflections and refractions on 2-D piecewise-linear \
                   interfaces.\n\nWithout a command, runs the built-in demo (`eigenray demo`).\n\n\
                   Exit status: 0 success (also when some rays find no path); 2 invalid scene, \
-                  unreadable input or usage error; 1 output could not be written."
+                  unreadable or too large input, a batch beyond the available memory, or usage \
+                  error; 1 output could not be written (also a closed standard output)."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -58,7 +59,7 @@ enum Command {
 
 #[derive(Args, Debug)]
 struct SolveArgs {
-    /// Scene file (JSON); `-` reads standard input.
+    /// Scene file (JSON, at most 256 MiB); `-` reads standard input.
     #[arg(value_name = "SCENE.json")]
     scene: PathBuf,
     /// Output format: `json`, one `{"rays": [...]}` document; `jsonl`, one ray per line;
