@@ -778,6 +778,19 @@ impl Scene {
         b
     }
 
+    /// Whether the boxes of the interface segments overlap in more than `budget` pairs (each
+    /// pair counted from both sides, a segment with itself once); stops counting beyond it.
+    pub(crate) fn box_overlaps_exceed(&self, budget: usize) -> bool {
+        let mut count = 0usize;
+        self.segment_ends.iter().any(|&(a, b)| {
+            self.segment_bvh
+                .any_overlapping(Aabb::from_points(a, b), |_| {
+                    count += 1;
+                    count > budget
+                })
+        })
+    }
+
     /// Every interface segment, scene-wide.
     pub fn segments(&self) -> &[SegmentRef] {
         &self.segments
