@@ -561,24 +561,24 @@ fn validation_of_large_scenes_is_fast() {
     assert!(e.message.contains("crosses"), "{e}");
 }
 
+/// [`diagonals`] with a background, a source, a receiver and a direct path by region lookup.
+fn diagonals_with_lookup(n: usize) -> Value {
+    let mut v: Value = serde_json::from_str(&diagonals(n)).expect("json");
+    v["background"] = json!("air");
+    v["sources"] = json!([[-5.0, 1.0]]);
+    v["receivers"] = json!([[-5.0, 2.0]]);
+    v["paths"] = json!([{"steps": []}]);
+    v
+}
+
 #[test]
 fn intertwined_interfaces_are_refused_for_region_lookup_at_once() {
     // 2,500 parallel diagonals (boxes all overlapping) with region lookup took 13 s to
     // triangulate, 5,000 took 3 minutes: refused before the triangulation starts.
-    let mut v: Value = serde_json::from_str(&diagonals(2500)).expect("json");
-    v["background"] = json!("air");
-    v["sources"] = json!([[-5.0, 1.0]]);
-    v["receivers"] = json!([[-5.0, 2.0]]);
-    v["paths"] = json!([{"steps": []}]);
-    let run = solve_file(&v.to_string());
+    let run = solve_file(&diagonals_with_lookup(2500).to_string());
     run.assert_refused("interfaces: too many interface segments lie across each other");
     // 300 of them are triangulated.
-    let mut v: Value = serde_json::from_str(&diagonals(300)).expect("json");
-    v["background"] = json!("air");
-    v["sources"] = json!([[-5.0, 1.0]]);
-    v["receivers"] = json!([[-5.0, 2.0]]);
-    v["paths"] = json!([{"steps": []}]);
-    let s = scene(&v).expect("valid");
+    let s = scene(&diagonals_with_lookup(300)).expect("valid");
     assert_eq!(rays(&s), vec![(Status::Converged, Some(1.0))]);
 }
 
