@@ -368,6 +368,7 @@ fn read_scene_text(path: &Path) -> Result<String, Failure> {
 
 /// `eigenray demo`: the air-over-water scene, a one-line summary and a picture.
 fn demo(args: &DemoArgs) -> Result<(), Failure> {
+    check_stdout_open()?;
     // The range check on `--receivers` keeps this conversion exact.
     let n = usize::try_from(args.receivers)
         .map_err(|_| Failure::Input("--receivers: too large".into()))?;
