@@ -703,6 +703,17 @@ fn closed_stdout_exits_1() {
         "{}",
         run.stderr
     );
+    // The demo too.
+    let run = run_bounded("demo --no-svg", ">&-", None, Duration::from_secs(60));
+    assert_eq!(run.code, Some(1), "stderr: {}", run.stderr);
+    // Redirected to /dev/null it is open: success.
+    let run = run_bounded(
+        &format!("solve {}", file.path()),
+        ">/dev/null",
+        None,
+        Duration::from_secs(60),
+    );
+    assert_eq!(run.code, Some(0), "stderr: {}", run.stderr);
 }
 
 #[test]
