@@ -42,10 +42,12 @@ fn bench_rays(c: &mut Criterion, group: &str, name: &str, scene: &Scene) {
 
 /// `scene` with the solver's residual tolerance set to `tolerance`.
 fn with_tolerance(mut scene: Scene, tolerance: f64) -> Scene {
-    scene.set_solver(eigenray::SolverOptions {
-        tolerance,
-        ..scene.solver()
-    });
+    scene
+        .set_solver(eigenray::SolverOptions {
+            tolerance,
+            ..scene.solver()
+        })
+        .expect("valid solver options");
     scene
 }
 
@@ -136,19 +138,23 @@ fn versus_argmin(c: &mut Criterion) {
         ("8_interactions", demo::layer_stack(8, 500)),
     ] {
         let mut scene = scene(&spec);
-        scene.set_solver(SolverOptions {
-            tolerance: TOL,
-            max_iterations: 100,
-        });
+        scene
+            .set_solver(SolverOptions {
+                tolerance: TOL,
+                max_iterations: 100,
+            })
+            .expect("valid solver options");
         let source = scene.sources()[0];
         let receivers = scene.receivers().to_vec();
         // The paraxial start (the solver stopped after 0 iterations): the default start of
         // these flat layers is their solution, which would leave no solver anything to do.
         let mut start = scene.clone();
-        start.set_solver(SolverOptions {
-            tolerance: TOL,
-            max_iterations: 0,
-        });
+        start
+            .set_solver(SolverOptions {
+                tolerance: TOL,
+                max_iterations: 0,
+            })
+            .expect("valid solver options");
         let guesses: Vec<Vec<f64>> = {
             let tracer = Tracer::new(&start)
                 .expect("tracer")

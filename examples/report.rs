@@ -299,10 +299,12 @@ mod report {
     fn starts(case: &Case) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
         let mut scene = case.scene.clone();
         let run = |max_iterations: usize, scene: &mut Scene| {
-            scene.set_solver(SolverOptions {
-                tolerance: 1e-300,
-                max_iterations,
-            });
+            scene
+                .set_solver(SolverOptions {
+                    tolerance: 1e-300,
+                    max_iterations,
+                })
+                .expect("valid solver options");
             let tracer = Tracer::new(scene)
                 .expect("tracer")
                 .with_initial_guess(InitialGuess::Paraxial);
@@ -340,7 +342,7 @@ mod report {
     /// eigenray's solver with the given options and start, one reused workspace, one thread.
     fn ours(case: &Case, options: SolverOptions, guess: InitialGuess) -> (Timing, Vec<RayRecord>) {
         let mut scene = case.scene.clone();
-        scene.set_solver(options);
+        scene.set_solver(options).expect("valid solver options");
         let tracer = Tracer::new(&scene)
             .expect("tracer")
             .with_initial_guess(guess);

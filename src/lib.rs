@@ -49,9 +49,10 @@ pub use polyline::{Nearest, Polyline, PolylineError};
 pub use problem::{PathProblem, Tridiagonal};
 pub use regions::{LocateHint, Regions, Sides};
 pub use scene::{
-    DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, Interface, InterfaceSpec, MAX_COORDINATE,
-    MAX_ITERATIONS_LIMIT, MAX_SPEED_RATIO, Medium, MediumSpec, Path, PathSpec, Scene, SceneError,
-    SceneSpec, SegmentRef, SolverOptions, SolverSpec, Step, StepKind, StepSpec,
+    BatchSize, DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, Interface, InterfaceSpec, MAX_COORDINATE,
+    MAX_ITERATIONS_LIMIT, MAX_SPEED_RATIO, MIN_COORDINATE, Medium, MediumSpec, Path, PathSpec,
+    REGION_RANGE_BITS, Scene, SceneError, SceneSpec, SegmentRef, SolverOptions, SolverSpec, Step,
+    StepKind, StepSpec,
 };
 pub use trace::{
     InitialGuess, Kernels, Ray, RayRecord, Reason, Status, Tracer, Workspace, ray_index,

@@ -120,8 +120,21 @@ impl Polyline {
             if vertices[0] == vertices[vertices.len() - 1] {
                 return Err(PolylineError::ZeroLengthSegment { index: 0 });
             }
-            let (a, b) = (vertices[0], vertices[1]);
-            if vertices.iter().all(|&c| orient(a, b, c) == 0.0) {
+            // Exact orientation underflows on tiny coordinates (products below the smallest
+            // subnormal): test a copy scaled up by a power of two (exact) when they are small.
+            let largest = vertices
+                .iter()
+                .fold(0.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
+            let (f0, f1) = if largest < 1.0 {
+                // 2^k with 2^k × largest in [1, 2): at most 2^1074, applied in two steps.
+                let k = -largest.log2().floor() as i32;
+                (2f64.powi(k / 2), 2f64.powi(k - k / 2))
+            } else {
+                (1.0, 1.0)
+            };
+            let up = |p: Point| Point::new(p.x * f0 * f1, p.y * f0 * f1);
+            let (a, b) = (up(vertices[0]), up(vertices[1]));
+            if vertices.iter().all(|&c| orient(a, b, up(c)) == 0.0) {
                 return Err(PolylineError::Collinear);
             }
         }

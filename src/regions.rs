@@ -22,6 +22,10 @@ type VertexRef<'a> = VertexHandle<'a, Point2<f64>, (), CdtEdge<()>, ()>;
 /// "No region" marker in the compact tables.
 const NONE: u32 = u32::MAX;
 
+/// Most pairs of interface segments with overlapping boxes that region lookup triangulates
+/// (a sea floor of 100,000 segments has about 300,000; 1,400 parallel diagonals reach it).
+const MAX_BOX_OVERLAPS: usize = 2_000_000;
+
 /// The media on the two sides of an interface at one point (medium indices into
 /// [`Scene::media`]; `None` where the region there has no medium).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -117,24 +121,119 @@ impl Regions {
     /// Triangulates the scene's interfaces (and its domain box) and assigns the media.
     ///
     /// `O(M log M)` for `M` interface segments. The scene must come from
-    /// [`Scene::from_spec`] (interfaces that neither cross nor overlap); any finite
-    /// coordinates work, however large or small.
+    /// [`Scene::from_spec`] (interfaces that neither cross nor overlap); coordinates are held
+    /// exactly when they span at most `2^REGION_RANGE_BITS` (what the scene checks when it
+    /// needs region lookup), smaller ones are flushed to zero.
     ///
     /// # Errors
-    /// `media.NAME.at` when two `at` points lie in one region, or an `at` point lies exactly on
-    /// the domain's edge; `interfaces` if the triangulation fails (which a valid scene does not
-    /// cause).
+    /// `media.NAME.at` when two `at` points lie in one region; `interfaces` when more than
+    /// 2,000,000 pairs of segment boxes overlap (the triangulation's work would grow beyond
+    /// what a machine can do), or the triangulation fails (which a valid scene does not cause);
+    /// and the media checks of the scene format (no medium anywhere, a background or a medium
+    /// filling no region, a source without a medium, a refraction at an interface dividing
+    /// nothing in a scene without a domain).
     pub fn build(scene: &Scene) -> Result<Regions, SceneError> {
-        let built =
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| Regions::build_inner(scene)));
-        let mut regions = built.map_err(|_| {
-            SceneError::new(
+        // Long segments whose boxes overlap by the thousand (parallel diagonals) make the
+        // constrained triangulation's work grow faster than quadratically (2,500 such
+        // segments: 13 s, 5,000: 3 min): refused before it starts rather than left to hang.
+        if scene.box_overlaps_exceed(MAX_BOX_OVERLAPS) {
+            return Err(SceneError::new(
                 "interfaces",
-                "the region triangulation failed (internal error)",
-            )
-        })??;
+                format!(
+                    "too many interface segments lie across each other's extent for region \
+                     lookup (more than {MAX_BOX_OVERLAPS} pairs of overlapping bounding \
+                     boxes): give every path its `media`, or use fewer, shorter segments"
+                ),
+            ));
+        }
+        let mut regions = Regions::build_inner(scene)?;
         regions.assign_media(scene)?;
+        regions.check_media(scene)?;
         Ok(regions)
+    }
+
+    /// Refuses media assignments that cannot mean what the scene says: no medium anywhere, a
+    /// background or a declared medium that fills no region, a source in a region without a
+    /// medium, or, in a scene without a domain, a refraction (with media from region lookup)
+    /// at an open interface that has the same region on both sides.
+    fn check_media(&self, scene: &Scene) -> Result<(), SceneError> {
+        let no_domain_hint = if scene.domain().is_none() {
+            "; without a `domain`, an open interface divides nothing and only closed ones \
+             enclose regions: add a `domain` box whose edges the interfaces end on"
+        } else {
+            ""
+        };
+        if self.region_medium.iter().all(Option::is_none) {
+            return Err(SceneError::new(
+                "background",
+                "no medium fills any region: name a `background`, or give media `at` points",
+            ));
+        }
+        if let Some(b) = scene.background() {
+            if !self.region_medium.contains(&Some(b)) {
+                return Err(SceneError::new(
+                    "background",
+                    format!(
+                        "`{}` fills no region: the `at` points claim every region{no_domain_hint}",
+                        scene.media()[b].name
+                    ),
+                ));
+            }
+        }
+        let mut named = vec![false; scene.media().len()];
+        for p in scene.paths() {
+            for &m in p.media.iter().flatten() {
+                named[m] = true;
+            }
+        }
+        for (m, medium) in scene.media().iter().enumerate() {
+            if !named[m] && !self.region_medium.contains(&Some(m)) {
+                return Err(SceneError::new(
+                    format!("media.{}", medium.name),
+                    "fills no region and no path names it: give it an `at` point inside its \
+                     region, make it the `background`, or name it in a path's `media`",
+                ));
+            }
+        }
+        for (k, &p) in scene.sources().iter().enumerate() {
+            if self.medium_at(p).is_none() {
+                return Err(SceneError::new(
+                    format!("sources[{k}]"),
+                    "lies in a region that no medium fills (no `at` point claims it and there \
+                     is no `background`)",
+                ));
+            }
+        }
+        let divides: Vec<bool> = (0..scene.interfaces().len())
+            .map(|i| {
+                let (first, end) = (self.seg_offset[i], self.seg_offset[i + 1]);
+                self.pieces[self.piece_offset[first]..self.piece_offset[end]]
+                    .iter()
+                    .any(|p| p.left != p.right)
+            })
+            .collect();
+        for (k, path) in scene.paths().iter().enumerate() {
+            // With a domain, an open interface that ends inside it divides nothing on purpose
+            // (a dangling reflector); without one, every open interface divides nothing.
+            if path.media.is_some() || scene.domain().is_some() {
+                continue;
+            }
+            for (j, step) in path.steps.iter().enumerate() {
+                let open = !scene.interfaces()[step.interface].polyline.is_closed();
+                if step.kind == crate::scene::StepKind::Refract && open && !divides[step.interface]
+                {
+                    return Err(SceneError::new(
+                        format!("paths[{k}].steps[{j}].refract"),
+                        format!(
+                            "interface `{}` has the same region on both sides, so the \
+                             refraction cannot change medium{no_domain_hint}",
+                            scene.interfaces()[step.interface].name
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     fn build_inner(scene: &Scene) -> Result<Regions, SceneError> {
@@ -367,7 +466,10 @@ impl Regions {
                         s0
                     } else {
                         let prev: &Piece = &pieces[pieces.len() - 1];
-                        (s0 + (position(x) - a).dot(tangent)).clamp(prev.start, s1)
+                        // `max` then `min`, not `clamp`: no panic whatever round-off does.
+                        (s0 + (position(x) - a).dot(tangent))
+                            .max(prev.start)
+                            .min(s1)
                     };
                     match pieces.last() {
                         Some(p) if pieces.len() > first && p.left == left && p.right == right => {}
@@ -413,10 +515,16 @@ impl Regions {
                 )
             })?;
             if let Some(other) = claimed[region] {
+                let hint = if scene.domain().is_none() {
+                    " (without a `domain`, an open interface divides nothing: add a `domain` \
+                     box whose edges the interfaces end on)"
+                } else {
+                    ""
+                };
                 return Err(SceneError::new(
                     key,
                     format!(
-                        "lies in the same region as media.{}.at",
+                        "lies in the same region as media.{}.at{hint}",
                         scene.media()[other].name
                     ),
                 ));
@@ -755,13 +863,19 @@ struct Scale {
     e: [i32; 2],
 }
 
+/// The exponent of the largest coordinate in spade's coordinates.
+const TOP_EXPONENT: i32 = 198;
+
 /// `2^n` for `n` in `[-1022, 1023]`.
 fn pow2(n: i32) -> f64 {
     f64::from_bits(((n.clamp(-1022, 1023) + 1023) as u64) << 52)
 }
 
 impl Scale {
-    /// The scale that maps the largest coordinate magnitude of `b` to `[1, 2)`.
+    /// The scale that maps the largest coordinate magnitude of `b` to `[2^198, 2^199)`: near
+    /// the top of spade's range (`2^201`, with room for the margin box), so that coordinates
+    /// down to `2^-340` of the largest stay above its smallest (`2^-142`) and none is
+    /// flushed (the scene refuses a wider range, see `REGION_RANGE_BITS`).
     fn for_box(b: Aabb) -> Scale {
         let m = [b.min.x, b.min.y, b.max.x, b.max.y]
             .iter()
@@ -775,6 +889,7 @@ impl Scale {
         } else {
             -1023 - (m.to_bits().leading_zeros() as i32 - 12)
         };
+        let e = e - TOP_EXPONENT;
         Scale {
             e: [e / 2, e - e / 2],
         }
@@ -1019,8 +1134,9 @@ mod tests {
             "media": {
                 "up": { "speed": 1, "at": [0, 1] },
                 "down": { "speed": 2, "at": [0, -1] },
-                "out": { "speed": 3, "at": [0, 5] }
+                "out": { "speed": 3 }
             },
+            "background": "out",
             "domain": [[-2, -2], [2, 2]],
             "interfaces": { "s": { "points": [[-3, 0.1], [3, -0.1]] } },
             "sources": [], "receivers": [], "paths": []
@@ -1301,7 +1417,11 @@ mod tests {
         .unwrap();
         let e = Regions::build(&scene).unwrap_err();
         assert_eq!(e.key, "media.b.at");
-        assert_eq!(e.message, "lies in the same region as media.a.at");
+        assert_eq!(
+            e.message,
+            "lies in the same region as media.a.at (without a `domain`, an open interface \
+             divides nothing: add a `domain` box whose edges the interfaces end on)"
+        );
     }
 
     #[test]
@@ -1313,8 +1433,9 @@ mod tests {
             "sources": [], "receivers": [], "paths": []
         }"#,
         )
-        .unwrap();
-        assert_eq!(Regions::build(&scene).unwrap_err().key, "media.a.at");
+        .unwrap_err();
+        assert_eq!(scene.key, "media.a.at");
+        assert!(scene.message.contains("edge of the domain"), "{scene}");
     }
 
     #[test]
@@ -1521,7 +1642,7 @@ mod tests {
     #[test]
     fn shared_vertices_and_extreme_coordinates() {
         // Two interfaces share both end vertices, and coordinates spade cannot take directly.
-        for k in [1e-100, 1e-30, 1.0, 1e40, 1e70] {
+        for k in [1e-98, 1e-30, 1.0, 1e40, 1e70] {
             let json = format!(
                 r#"{{
                 "media": {{ "in": {{ "speed": 1, "at": [{a}, {b}] }}, "out": {{ "speed": 2 }} }},
@@ -1558,11 +1679,18 @@ mod tests {
 
     #[test]
     fn no_interfaces() {
-        let (_, r) = regions(
+        // No medium anywhere: refused.
+        let scene = Scene::from_json(
             r#"{ "media": { "a": { "speed": 1 } }, "sources": [], "receivers": [], "paths": [] }"#,
+        )
+        .unwrap();
+        assert_eq!(Regions::build(&scene).unwrap_err().key, "background");
+        let (_, r) = regions(
+            r#"{ "media": { "a": { "speed": 1 } }, "background": "a",
+                 "sources": [], "receivers": [], "paths": [] }"#,
         );
         assert_eq!(r.num_regions(), 1);
-        assert_eq!(r.medium_at(p(0.0, 0.0)), None);
+        assert_eq!(r.medium_at(p(0.0, 0.0)), Some(0));
         let (scene, r) = regions(
             r#"{ "media": { "a": { "speed": 1, "at": [0.5, 0.5] } }, "domain": [[0, 0], [1, 1]],
                  "sources": [], "receivers": [], "paths": [] }"#,

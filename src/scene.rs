@@ -1,13 +1,15 @@
 //! Scenes: the JSON document (`SceneSpec`), its validation, and the validated `Scene`.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::fmt;
 
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::bvh::Bvh;
 use crate::geom::{Aabb, Point, SegmentContact, orient, segment_contact};
 use crate::polyline::{Polyline, PolylineError};
+
+mod crossings;
 
 /// Default relative tolerance on the stationarity residual.
 pub const DEFAULT_TOLERANCE: f64 = 1e-12;
@@ -39,9 +41,40 @@ impl SceneError {
 }
 
 impl fmt::Display for SceneError {
+    /// `key: message`, with control characters, line and paragraph separators, bidirectional
+    /// overrides and non-characters escaped as `\u{..}`: names come from the user, and a
+    /// terminal must not act on them.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: {}", self.key, self.message)
+        write_escaped(f, &self.key)?;
+        f.write_str(": ")?;
+        write_escaped(f, &self.message)
     }
+}
+
+/// Whether `c` must not reach a terminal or a log as it is: control characters (C0, DEL, C1),
+/// line and paragraph separators, bidirectional overrides and isolates, and non-characters.
+pub(crate) fn needs_escape(c: char) -> bool {
+    c.is_control()
+        || matches!(
+            c,
+            '\u{2028}' | '\u{2029}' | '\u{200e}' | '\u{200f}' | '\u{061c}'
+        )
+        || ('\u{202a}'..='\u{202e}').contains(&c)
+        || ('\u{2066}'..='\u{2069}').contains(&c)
+        || ('\u{fdd0}'..='\u{fdef}').contains(&c)
+        || (c as u32) & 0xfffe == 0xfffe
+}
+
+/// Writes `text` with every character that [`needs_escape`] as `\u{hex}`.
+fn write_escaped(f: &mut fmt::Formatter<'_>, text: &str) -> fmt::Result {
+    for c in text.chars() {
+        if needs_escape(c) {
+            write!(f, "\\u{{{:x}}}", c as u32)?;
+        } else {
+            fmt::Write::write_char(f, c)?;
+        }
+    }
+    Ok(())
 }
 
 impl std::error::Error for SceneError {}
@@ -69,6 +102,7 @@ pub struct SceneSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub description: Option<String>,
     /// Media by name.
+    #[serde(deserialize_with = "unique_names")]
     pub media: BTreeMap<String, MediumSpec>,
     /// Medium of every region that no `at` claims.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -77,7 +111,7 @@ pub struct SceneSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub domain: Option<[[f64; 2]; 2]>,
     /// Interfaces by name.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "unique_names")]
     pub interfaces: BTreeMap<String, InterfaceSpec>,
     /// Source points.
     pub sources: Vec<[f64; 2]>,
@@ -90,6 +124,39 @@ pub struct SceneSpec {
     pub solver: Option<SolverSpec>,
 }
 
+/// A JSON object of names: like a `BTreeMap`, but a name given twice is an error (serde's
+/// maps keep the last one silently).
+fn unique_names<'de, D, V>(d: D) -> Result<BTreeMap<String, V>, D::Error>
+where
+    D: Deserializer<'de>,
+    V: Deserialize<'de>,
+{
+    struct Names<V>(std::marker::PhantomData<V>);
+    impl<'de, V: Deserialize<'de>> serde::de::Visitor<'de> for Names<V> {
+        type Value = BTreeMap<String, V>;
+        fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+            f.write_str("an object of names")
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(
+            self,
+            mut map: A,
+        ) -> Result<Self::Value, A::Error> {
+            let mut out = BTreeMap::new();
+            while let Some(name) = map.next_key::<String>()? {
+                if out.contains_key(&name) {
+                    return Err(serde::de::Error::custom(format!(
+                        "the name `{name}` is given twice (each name may appear once)"
+                    )));
+                }
+                let value = map.next_value()?;
+                out.insert(name, value);
+            }
+            Ok(out)
+        }
+    }
+    d.deserialize_map(Names(std::marker::PhantomData))
+}
+
 /// A medium: exactly one of `speed` or `index`, and optionally a point inside its region.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -100,7 +167,8 @@ pub struct MediumSpec {
     /// Refractive index (> 0); time = index × length.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub index: Option<f64>,
-    /// A point strictly inside the region this medium fills.
+    /// A point strictly inside the region this medium fills (inside the domain, when there is
+    /// one). One point claims one region: two separate pieces of one material are two media.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub at: Option<[f64; 2]>,
 }
@@ -210,6 +278,31 @@ pub struct SolverOptions {
     pub max_iterations: usize,
 }
 
+impl SolverOptions {
+    /// Checks the settings as a scene document's `solver` is checked, except that
+    /// `max_iterations` may be 0 (a solve then returns its start: useful to inspect it).
+    ///
+    /// # Errors
+    /// `solver.tolerance` outside `(0, 1)`, or `solver.max_iterations` above
+    /// [`MAX_ITERATIONS_LIMIT`].
+    pub fn validate(&self) -> Result<(), SceneError> {
+        let t = self.tolerance;
+        if !(t.is_finite() && t > 0.0 && t < 1.0) {
+            return Err(SceneError::new(
+                "solver.tolerance",
+                "must be a number in (0, 1)",
+            ));
+        }
+        if self.max_iterations > MAX_ITERATIONS_LIMIT {
+            return Err(SceneError::new(
+                "solver.max_iterations",
+                format!("must be between 1 and {MAX_ITERATIONS_LIMIT}"),
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl Default for SolverOptions {
     fn default() -> Self {
         SolverOptions {
@@ -252,10 +345,43 @@ pub struct Scene {
     /// End points of `segments`, in the same order.
     segment_ends: Vec<(Point, Point)>,
     segment_bvh: Bvh,
+    batch_size: BatchSize,
+}
+
+/// The sizes of a whole batch of a scene, computed once at validation with checked
+/// arithmetic (a scene whose counts would overflow is refused), so that code that allocates
+/// for every ray can rely on them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BatchSize {
+    /// Rays: sources × receivers × paths.
+    pub rays: usize,
+    /// Points of all rays: sources × receivers × Σ over paths of (steps + 2).
+    pub points: usize,
+    /// Leg media of all rays: sources × receivers × Σ over paths of (steps + 1).
+    pub legs: usize,
+}
+
+impl BatchSize {
+    /// Bytes that storing a whole batch takes, given the bytes of one ray's record, of one
+    /// point and of one leg's medium (`None` when it does not fit in a `usize`).
+    pub fn bytes(&self, per_ray: usize, per_point: usize, per_leg: usize) -> Option<usize> {
+        self.rays
+            .checked_mul(per_ray)?
+            .checked_add(self.points.checked_mul(per_point)?)?
+            .checked_add(self.legs.checked_mul(per_leg)?)
+    }
 }
 
 /// Largest coordinate magnitude accepted: beyond it distances and times could overflow.
 pub const MAX_COORDINATE: f64 = 1e100;
+/// Smallest magnitude of a nonzero coordinate accepted: below it products of coordinate
+/// differences (orientation tests, squared lengths) could underflow. Within
+/// `[MIN_COORDINATE, MAX_COORDINATE]` a scene scaled by any factor gives the same statuses.
+pub const MIN_COORDINATE: f64 = 1e-100;
+/// Region lookup holds coordinates whose magnitudes lie within `2^REGION_RANGE_BITS` of the
+/// largest (its triangulation's exact predicates need exponents within a fixed range): a
+/// scene that needs region lookup and has a nonzero coordinate smaller than that is refused.
+pub const REGION_RANGE_BITS: i32 = 340;
 /// Speeds and indices must lie in `[1 / MAX_SPEED_RATIO, MAX_SPEED_RATIO]`.
 pub const MAX_SPEED_RATIO: f64 = 1e100;
 
@@ -266,6 +392,14 @@ fn point(key: &str, p: [f64; 2]) -> Result<Point, SceneError> {
         Err(SceneError::new(
             key,
             format!("coordinates must lie within ±{MAX_COORDINATE:e} (distances would overflow)"),
+        ))
+    } else if p.iter().any(|v| *v != 0.0 && v.abs() < MIN_COORDINATE) {
+        Err(SceneError::new(
+            key,
+            format!(
+                "a nonzero coordinate must be at least {MIN_COORDINATE:e} in magnitude (smaller \
+                 ones underflow in products; measure the scene in smaller units)"
+            ),
         ))
     } else {
         Ok(Point::new(p[0], p[1]))
@@ -336,10 +470,10 @@ impl Scene {
                 at,
             });
         }
+        // Media and interfaces come in name order (the document's maps are sorted): names
+        // are found by binary search, so that validation stays O(n log n).
         let medium_index = |key: &str, name: &str| -> Result<usize, SceneError> {
-            media
-                .iter()
-                .position(|m| m.name == name)
+            by_name(&media, |m| &m.name, name)
                 .ok_or_else(|| SceneError::new(key, format!("unknown medium `{name}`")))
         };
         let background = match &spec.background {
@@ -381,15 +515,31 @@ impl Scene {
             });
         }
         let (segments, segment_bvh) = index_segments(&interfaces);
-        check_crossings(&interfaces, &segments, &segment_bvh)?;
+        crossings::check(&interfaces, &segments)?;
 
         for m in &media {
             if let Some(at) = m.at {
+                let key = format!("media.{}.at", m.name);
                 if on_interface(&interfaces, &segments, &segment_bvh, at).is_some() {
                     return Err(SceneError::new(
-                        format!("media.{}.at", m.name),
+                        key,
                         "lies on an interface; it must be strictly inside a region",
                     ));
+                }
+                if let Some(d) = domain {
+                    if !d.contains(at) {
+                        return Err(SceneError::new(
+                            key,
+                            "lies outside the domain; it must be strictly inside a region of \
+                             the domain (outside the domain is the background's)",
+                        ));
+                    }
+                    if at.x == d.min.x || at.x == d.max.x || at.y == d.min.y || at.y == d.max.y {
+                        return Err(SceneError::new(
+                            key,
+                            "lies on the edge of the domain; it must be strictly inside a region",
+                        ));
+                    }
                 }
             }
         }
@@ -403,25 +553,37 @@ impl Scene {
         let sources = points("sources", &spec.sources)?;
         let receivers = points("receivers", &spec.receivers)?;
 
+        let needs_regions = spec.paths.iter().any(|p| p.media.is_none());
+        if needs_regions {
+            for (k, &p) in sources.iter().enumerate() {
+                source_in_a_region(&interfaces, &segments, &segment_bvh, domain, k, p)?;
+            }
+        }
+
         let mut paths = Vec::with_capacity(spec.paths.len());
+        let mut path_names: HashMap<&str, usize> = HashMap::new();
         for (k, p) in spec.paths.iter().enumerate() {
             let key = format!("paths[{k}]");
+            if let Some(name) = &p.name {
+                if let Some(first) = path_names.insert(name, k) {
+                    return Err(SceneError::new(
+                        format!("{key}.name"),
+                        format!("`{name}` is also the name of paths[{first}] (names must differ)"),
+                    ));
+                }
+            }
             let mut steps = Vec::with_capacity(p.steps.len());
             for (j, s) in p.steps.iter().enumerate() {
                 let (kind, name, which) = match s {
                     StepSpec::Reflect(n) => (StepKind::Reflect, n, "reflect"),
                     StepSpec::Refract(n) => (StepKind::Refract, n, "refract"),
                 };
-                let interface =
-                    interfaces
-                        .iter()
-                        .position(|i| &i.name == name)
-                        .ok_or_else(|| {
-                            SceneError::new(
-                                format!("{key}.steps[{j}].{which}"),
-                                format!("unknown interface `{name}`"),
-                            )
-                        })?;
+                let interface = by_name(&interfaces, |i| &i.name, name).ok_or_else(|| {
+                    SceneError::new(
+                        format!("{key}.steps[{j}].{which}"),
+                        format!("unknown interface `{name}`"),
+                    )
+                })?;
                 steps.push(Step { kind, interface });
             }
             let media = match &p.media {
@@ -454,23 +616,31 @@ impl Scene {
         let mut solver = SolverOptions::default();
         if let Some(s) = &spec.solver {
             if let Some(t) = s.tolerance {
-                if !(t.is_finite() && t > 0.0 && t < 1.0) {
-                    return Err(SceneError::new(
-                        "solver.tolerance",
-                        "must be a number in (0, 1)",
-                    ));
-                }
                 solver.tolerance = t;
             }
             if let Some(m) = s.max_iterations {
-                if m == 0 || m > MAX_ITERATIONS_LIMIT as u64 {
+                solver.max_iterations = usize::try_from(m).unwrap_or(usize::MAX);
+                if m == 0 {
                     return Err(SceneError::new(
                         "solver.max_iterations",
                         format!("must be between 1 and {MAX_ITERATIONS_LIMIT}"),
                     ));
                 }
-                solver.max_iterations = m as usize;
             }
+            solver.validate()?;
+        }
+        let batch_size = batch_size(sources.len(), receivers.len(), &paths)?;
+        let scene_points = || {
+            interfaces
+                .iter()
+                .flat_map(|i| i.polyline.vertices().iter().copied())
+                .chain(sources.iter().copied())
+                .chain(receivers.iter().copied())
+                .chain(media.iter().filter_map(|m| m.at))
+                .chain(domain.into_iter().flat_map(|d| [d.min, d.max]))
+        };
+        if needs_regions {
+            check_region_range(scene_points())?;
         }
 
         let segment_ends = segments
@@ -493,6 +663,7 @@ impl Scene {
             segment_ends,
             segments,
             segment_bvh,
+            batch_size,
         })
     }
 
@@ -502,7 +673,7 @@ impl Scene {
     }
     /// Index of the medium with this name.
     pub fn medium_index(&self, name: &str) -> Option<usize> {
-        self.media.iter().position(|m| m.name == name)
+        by_name(&self.media, |m| &m.name, name)
     }
     /// Index of the background medium.
     pub fn background(&self) -> Option<usize> {
@@ -518,7 +689,7 @@ impl Scene {
     }
     /// Index of the interface with this name.
     pub fn interface_index(&self, name: &str) -> Option<usize> {
-        self.interfaces.iter().position(|i| i.name == name)
+        by_name(&self.interfaces, |i| &i.name, name)
     }
     /// Source points.
     pub fn sources(&self) -> &[Point] {
@@ -536,13 +707,51 @@ impl Scene {
     pub fn solver(&self) -> SolverOptions {
         self.solver
     }
-    /// Replaces the solver settings.
-    pub fn set_solver(&mut self, options: SolverOptions) {
+    /// Replaces the solver settings, after the checks that a scene document's `solver` gets.
+    ///
+    /// # Errors
+    /// As [`SolverOptions::validate`]; the settings are then left as they were.
+    pub fn set_solver(&mut self, options: SolverOptions) -> Result<(), SceneError> {
+        options.validate()?;
         self.solver = options;
+        Ok(())
     }
-    /// Number of rays: sources × receivers × paths.
+    /// Number of rays: sources × receivers × paths (checked at validation: it fits).
     pub fn num_rays(&self) -> usize {
-        self.sources.len() * self.receivers.len() * self.paths.len()
+        self.batch_size.rays
+    }
+    /// The sizes of a whole batch of this scene (rays, their points and leg media), checked at
+    /// validation: every product fits in a `usize`. Multiply by the bytes of each
+    /// ([`BatchSize::bytes`]) to know what a batch needs before allocating it.
+    pub fn batch_size(&self) -> BatchSize {
+        self.batch_size
+    }
+
+    /// Checks the arguments of a solve between two arbitrary points (what
+    /// [`Tracer::solve`](crate::Tracer::solve) needs): both points finite and within the
+    /// accepted coordinate range ([`MIN_COORDINATE`] to [`MAX_COORDINATE`] in magnitude, or
+    /// zero), and `path` an index into [`paths`](Self::paths).
+    ///
+    /// # Errors
+    /// `source`, `receiver` or `path`, with what is wrong.
+    pub fn check_solve(
+        &self,
+        source: Point,
+        receiver: Point,
+        path: usize,
+    ) -> Result<(), SceneError> {
+        point("source", [source.x, source.y])?;
+        point("receiver", [receiver.x, receiver.y])?;
+        if path >= self.paths.len() {
+            return Err(SceneError::new(
+                "path",
+                format!(
+                    "index {path} is out of range (the scene has {} paths)",
+                    self.paths.len()
+                ),
+            ));
+        }
+        Ok(())
     }
     /// Whether some path needs region lookup (gives no `media`).
     pub fn needs_regions(&self) -> bool {
@@ -567,6 +776,19 @@ impl Scene {
             b = b.union(d);
         }
         b
+    }
+
+    /// Whether the boxes of the interface segments overlap in more than `budget` pairs (each
+    /// pair counted from both sides, a segment with itself once); stops counting beyond it.
+    pub(crate) fn box_overlaps_exceed(&self, budget: usize) -> bool {
+        let mut count = 0usize;
+        self.segment_ends.iter().any(|&(a, b)| {
+            self.segment_bvh
+                .any_overlapping(Aabb::from_points(a, b), |_| {
+                    count += 1;
+                    count > budget
+                })
+        })
     }
 
     /// Every interface segment, scene-wide.
@@ -764,6 +986,116 @@ impl SceneSpec {
     }
 }
 
+/// Index of the item named `name` in `items`, which are sorted by name.
+fn by_name<T>(items: &[T], name_of: impl Fn(&T) -> &String, name: &str) -> Option<usize> {
+    items
+        .binary_search_by(|item| name_of(item).as_str().cmp(name))
+        .ok()
+}
+
+/// The sizes of a batch, with checked arithmetic: a scene whose counts overflow is refused.
+fn batch_size(sources: usize, receivers: usize, paths: &[Path]) -> Result<BatchSize, SceneError> {
+    let too_many = |what: &str| {
+        SceneError::new(
+            "paths",
+            format!(
+                "too many rays: {sources} sources × {receivers} receivers × {} paths ({what}) \
+                 is more than this machine can count",
+                paths.len()
+            ),
+        )
+    };
+    let pairs = sources
+        .checked_mul(receivers)
+        .ok_or_else(|| too_many("sources × receivers"))?;
+    let rays = pairs
+        .checked_mul(paths.len())
+        .ok_or_else(|| too_many("rays"))?;
+    let (mut points, mut legs) = (0usize, 0usize);
+    for p in paths {
+        let k = p.steps.len();
+        points = k
+            .checked_add(2)
+            .and_then(|n| points.checked_add(n))
+            .ok_or_else(|| too_many("points"))?;
+        legs = k
+            .checked_add(1)
+            .and_then(|n| legs.checked_add(n))
+            .ok_or_else(|| too_many("legs"))?;
+    }
+    Ok(BatchSize {
+        rays,
+        points: pairs
+            .checked_mul(points)
+            .ok_or_else(|| too_many("points of all rays"))?,
+        legs: pairs
+            .checked_mul(legs)
+            .ok_or_else(|| too_many("legs of all rays"))?,
+    })
+}
+
+/// Refuses a scene whose coordinates span more than region lookup can hold: a nonzero
+/// magnitude below `2^-REGION_RANGE_BITS` of the largest.
+fn check_region_range(points: impl Iterator<Item = Point> + Clone) -> Result<(), SceneError> {
+    let largest = points
+        .clone()
+        .fold(0.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
+    // 2^-REGION_RANGE_BITS, in two exact steps (each factor is a normal number).
+    let floor = largest
+        * 2f64.powi(-REGION_RANGE_BITS / 2)
+        * 2f64.powi(-(REGION_RANGE_BITS - REGION_RANGE_BITS / 2));
+    let smallest = points
+        .flat_map(|p| [p.x.abs(), p.y.abs()])
+        .filter(|&v| v != 0.0)
+        .fold(f64::INFINITY, f64::min);
+    if smallest < floor {
+        return Err(SceneError::new(
+            "scene",
+            format!(
+                "coordinates span too many orders of magnitude for region lookup (from \
+                 {smallest:e} to {largest:e}; at most 2^{REGION_RANGE_BITS}, about 1e102): \
+                 move the origin near the geometry, drop far geometry, or give every path its \
+                 `media`"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A source of a scene that needs region lookup must lie strictly inside a region: not on an
+/// interface, nor on the domain's edge.
+fn source_in_a_region(
+    interfaces: &[Interface],
+    segments: &[SegmentRef],
+    bvh: &Bvh,
+    domain: Option<Aabb>,
+    k: usize,
+    p: Point,
+) -> Result<(), SceneError> {
+    let key = format!("sources[{k}]");
+    if let Some(s) = on_interface(interfaces, segments, bvh, p) {
+        return Err(SceneError::new(
+            key,
+            format!(
+                "lies exactly on interface `{}`, so it has no medium: move it off the \
+                 interface, or give every path its `media`",
+                interfaces[s.interface as usize].name
+            ),
+        ));
+    }
+    if let Some(d) = domain {
+        let inside = p.x > d.min.x && p.x < d.max.x && p.y > d.min.y && p.y < d.max.y;
+        if d.contains(p) && !inside {
+            return Err(SceneError::new(
+                key,
+                "lies exactly on the edge of the domain, so it has no medium: move it off the \
+                 edge, or give every path its `media`",
+            ));
+        }
+    }
+    Ok(())
+}
+
 fn index_segments(interfaces: &[Interface]) -> (Vec<SegmentRef>, Bvh) {
     let mut segments = Vec::new();
     let mut boxes = Vec::new();
@@ -813,63 +1145,83 @@ fn segments_on(
     });
 }
 
-/// Rejects segments that cross or overlap, and polylines that touch themselves away from a
-/// shared vertex of neighbouring segments. Touching at a vertex is allowed between interfaces
-/// (also a vertex of one on a segment of another, as where a fault ends on a layer).
-fn check_crossings(
+/// The problem with segments `i` and `j` (scene-wide indices), if they meet where they must
+/// not: a crossing or an overlap, or a polyline touching itself away from the shared vertex of
+/// neighbouring segments. Touching is allowed between interfaces (also a vertex of one on a
+/// segment of another, as where a fault ends on a layer). Reported at the segment of lower
+/// index.
+fn contact_problem(
     interfaces: &[Interface],
     segments: &[SegmentRef],
-    bvh: &Bvh,
-) -> Result<(), SceneError> {
-    for (k, s) in segments.iter().enumerate() {
-        let line = &interfaces[s.interface as usize].polyline;
-        let (a0, a1) = line.segment(s.segment as usize);
-        let mut problem: Option<SceneError> = None;
-        bvh.any_overlapping(Aabb::from_points(a0, a1), |other| {
-            let o = segments[other as usize];
-            if (other as usize) <= k {
-                return false;
-            }
-            let oline = &interfaces[o.interface as usize].polyline;
-            let (b0, b1) = oline.segment(o.segment as usize);
-            let contact = segment_contact(a0, a1, b0, b1);
-            let same = o.interface == s.interface;
-            let nseg = line.num_segments() as u32;
-            let adjacent = same
-                && (o.segment == s.segment + 1
-                    || (line.is_closed() && s.segment == 0 && o.segment == nseg - 1));
-            let name = &interfaces[s.interface as usize].name;
-            let oname = &interfaces[o.interface as usize].name;
-            let msg = match contact {
-                SegmentContact::Disjoint => return false,
-                SegmentContact::Touch if !same || adjacent => return false,
-                SegmentContact::Touch => format!(
-                    "the polyline touches itself (segments {} and {})",
-                    s.segment, o.segment
-                ),
-                SegmentContact::Overlap if same => format!(
-                    "the polyline overlaps itself (segments {} and {})",
-                    s.segment, o.segment
-                ),
-                SegmentContact::Cross if same => format!(
-                    "the polyline crosses itself (segments {} and {})",
-                    s.segment, o.segment
-                ),
-                SegmentContact::Overlap => format!(
-                    "overlaps interface `{oname}` (segment {} on segment {})",
-                    s.segment, o.segment
-                ),
-                SegmentContact::Cross => format!(
-                    "crosses interface `{oname}` (segment {} crosses segment {})",
-                    s.segment, o.segment
-                ),
-            };
-            problem = Some(SceneError::new(format!("interfaces.{name}.points"), msg));
-            true
-        });
-        if let Some(p) = problem {
-            return Err(p);
-        }
+    i: u32,
+    j: u32,
+) -> Option<SceneError> {
+    let (s, o) = (segments[i.min(j) as usize], segments[i.max(j) as usize]);
+    let line = &interfaces[s.interface as usize].polyline;
+    let (a0, a1) = line.segment(s.segment as usize);
+    let oline = &interfaces[o.interface as usize].polyline;
+    let (b0, b1) = oline.segment(o.segment as usize);
+    let contact = segment_contact(a0, a1, b0, b1);
+    let same = o.interface == s.interface;
+    let nseg = line.num_segments() as u32;
+    let (lo, hi) = (s.segment.min(o.segment), s.segment.max(o.segment));
+    let adjacent = same && (hi == lo + 1 || (line.is_closed() && lo == 0 && hi == nseg - 1));
+    let name = &interfaces[s.interface as usize].name;
+    let oname = &interfaces[o.interface as usize].name;
+    let msg = match contact {
+        SegmentContact::Disjoint => return None,
+        SegmentContact::Touch if !same || adjacent => return None,
+        SegmentContact::Touch => format!(
+            "the polyline touches itself (segments {} and {})",
+            s.segment, o.segment
+        ),
+        SegmentContact::Overlap if same => format!(
+            "the polyline overlaps itself (segments {} and {})",
+            s.segment, o.segment
+        ),
+        SegmentContact::Cross if same => format!(
+            "the polyline crosses itself (segments {} and {})",
+            s.segment, o.segment
+        ),
+        SegmentContact::Overlap => format!(
+            "overlaps interface `{oname}` (segment {} on segment {})",
+            s.segment, o.segment
+        ),
+        SegmentContact::Cross => format!(
+            "crosses interface `{oname}` (segment {} crosses segment {})",
+            s.segment, o.segment
+        ),
+    };
+    Some(SceneError::new(format!("interfaces.{name}.points"), msg))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ray_counts_that_overflow_are_refused() {
+        let path = |steps: usize| Path {
+            name: None,
+            steps: vec![
+                Step {
+                    kind: StepKind::Reflect,
+                    interface: 0
+                };
+                steps
+            ],
+            media: None,
+        };
+        let one = [path(0)];
+        // 2^63 sources × 2 receivers × 1 path: 2^64 rays, which would wrap to 0.
+        let e = batch_size(usize::MAX / 2 + 1, 2, &one).expect_err("2^64");
+        assert_eq!(e.key, "paths");
+        assert!(e.message.contains("too many rays"), "{e}");
+        let e = batch_size(1 << 22, 1 << 22, &[path(0), path(0)]).map(|s| s.rays);
+        assert_eq!(e, Ok(1 << 45));
+        let e = batch_size(1 << 31, 1 << 31, &[path(2)]).expect_err("points overflow");
+        assert!(e.message.contains("points"), "{e}");
+        let ok = batch_size(3, 5, &[path(0), path(2)]).expect("fits");
+        assert_eq!((ok.rays, ok.points, ok.legs), (30, 15 * 6, 15 * 4));
     }
-    Ok(())
 }

@@ -152,10 +152,12 @@ fn perturbed(s: &[f64]) -> Vec<f64> {
 /// eigenray's own initial guess for one ray: its parameters after zero iterations.
 fn initial_guess(scene: &Scene, source: usize, receiver: usize, path: usize) -> Vec<f64> {
     let mut scene = scene.clone();
-    scene.set_solver(SolverOptions {
-        max_iterations: 0,
-        ..scene.solver()
-    });
+    scene
+        .set_solver(SolverOptions {
+            max_iterations: 0,
+            ..scene.solver()
+        })
+        .expect("valid solver options");
     let tracer = Tracer::new(&scene).unwrap();
     let mut ws = Workspace::new();
     let ray = tracer.trace(source, receiver, path, &mut ws);

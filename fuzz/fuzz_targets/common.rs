@@ -24,7 +24,8 @@ pub fn trace_and_check(mut scene: Scene) {
     scene.set_solver(SolverOptions {
         max_iterations: opts.max_iterations.min(MAX_ITERATIONS),
         ..opts
-    });
+    })
+        .expect("valid solver options");
     let tracer = match Tracer::new(&scene) {
         Ok(t) => t,
         Err(e) => {

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use crate::geom::Point;
 use crate::problem::ProblemRef;
 use crate::regions::Regions;
-use crate::scene::{Scene, SceneError};
+use crate::scene::{MAX_COORDINATE, MIN_COORDINATE, Scene, SceneError};
 use crate::solver::{NewtonOptions, NewtonWorkspace, solve};
 
 mod classify;
@@ -342,6 +342,10 @@ impl<'s> Tracer<'s> {
 
     /// Solves path `path` between two arbitrary points. The points of the ray are left in
     /// `ws` ([`Workspace::points`]); nothing is allocated once `ws` has grown.
+    ///
+    /// # Panics
+    /// If a point is not finite or lies outside the scene's coordinate range, or `path` is
+    /// not an index into [`Scene::paths`]: [`Scene::check_solve`] tells beforehand.
     pub fn solve(
         &self,
         source: Point,
@@ -349,6 +353,7 @@ impl<'s> Tracer<'s> {
         path: usize,
         ws: &mut Workspace,
     ) -> RayRecord {
+        self.assert_solvable(source, receiver, path, "Tracer::solve");
         let src_medium = self.regions.as_ref().and_then(|r| r.medium_at(source));
         let record = self.solve_planned(source, src_medium, receiver, path, Start::Default, ws);
         ws.forget_points_without_time(&record);
@@ -361,7 +366,8 @@ impl<'s> Tracer<'s> {
     /// residual.
     ///
     /// # Panics
-    /// If `guess` does not have one parameter per step of the path.
+    /// If `guess` does not have one parameter per step of the path, or as
+    /// [`solve`](Self::solve) does.
     pub fn solve_from(
         &self,
         source: Point,
@@ -370,6 +376,7 @@ impl<'s> Tracer<'s> {
         guess: &[f64],
         ws: &mut Workspace,
     ) -> RayRecord {
+        self.assert_solvable(source, receiver, path, "Tracer::solve_from");
         assert_eq!(
             guess.len(),
             self.scene.paths()[path].steps.len(),
@@ -418,6 +425,29 @@ impl<'s> Tracer<'s> {
             start,
             ws,
         )
+    }
+
+    /// Panics unless `source`, `receiver` and `path` are valid arguments of a solve
+    /// ([`Scene::check_solve`]): a quick test on the hot path, the message out of line.
+    #[inline(always)]
+    fn assert_solvable(&self, source: Point, receiver: Point, path: usize, call: &str) {
+        let ok = |v: f64| {
+            let a = v.abs();
+            a <= MAX_COORDINATE && (a >= MIN_COORDINATE || a == 0.0)
+        };
+        let fine = ok(source.x) && ok(source.y) && ok(receiver.x) && ok(receiver.y);
+        if !(fine && path < self.plans.len()) {
+            self.refuse(source, receiver, path, call);
+        }
+    }
+
+    /// The panic of [`assert_solvable`](Self::assert_solvable).
+    #[cold]
+    #[inline(never)]
+    fn refuse(&self, source: Point, receiver: Point, path: usize, call: &str) {
+        if let Err(e) = self.scene.check_solve(source, receiver, path) {
+            panic!("{call}: {e}");
+        }
     }
 
     /// The plan of path `path`.

@@ -257,6 +257,11 @@ mod tests {
         assert!(!stack(&general));
         let mut spec = demo::layer_stack(4, 3);
         spec.paths[0].media = None;
+        // Region lookup: the layers end on the domain's edges; each medium claims its layer.
+        spec.domain = Some([[-100.0, -5.0], [100.0, 2.0]]);
+        for (j, m) in spec.media.values_mut().enumerate() {
+            m.at = Some([0.0, 0.5 - j as f64]);
+        }
         let scene = Scene::from_spec(&spec).unwrap();
         assert!(!stack(&Tracer::new(&scene).unwrap()));
         let dipping = Scene::from_spec(&demo::dipping_stack(4, 3)).unwrap();

@@ -30,7 +30,8 @@ fn check_at(name: &str, tolerance: Option<f64>, max_point: f64) -> (f64, f64) {
         sc.set_solver(eigenray::SolverOptions {
             tolerance,
             ..sc.solver()
-        });
+        })
+        .expect("valid solver options");
     }
     let rays = trace_all(&sc);
     let status = reference["status"].as_array().expect("status");

@@ -25,6 +25,10 @@ const DEMO_MAX_RECEIVERS: u64 = 10_000_000;
 const DEMO_SEED: u64 = 1;
 /// Where the demo writes its picture by default.
 const DEMO_SVG: &str = "eigenray-demo.svg";
+/// Largest scene file read: a scene document beyond it is refused before it fills the memory
+/// (100,000 interfaces of a few points each take about 10 MB).
+const MAX_INPUT_BYTES: u64 = 256 << 20;
+
 #[derive(Parser, Debug)]
 #[command(
     name = "eigenray",
@@ -33,7 +37,8 @@ const DEMO_SVG: &str = "eigenray-demo.svg";
     long_about = "Eigenrays through prescribed reflections and refractions on 2-D piecewise-linear \
                   interfaces.\n\nWithout a command, runs the built-in demo (`eigenray demo`).\n\n\
                   Exit status: 0 success (also when some rays find no path); 2 invalid scene, \
-                  unreadable input or usage error; 1 output could not be written."
+                  unreadable or too large input, a batch beyond the available memory, or usage \
+                  error; 1 output could not be written (also a closed standard output)."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -54,7 +59,7 @@ enum Command {
 
 #[derive(Args, Debug)]
 struct SolveArgs {
-    /// Scene file (JSON); `-` reads standard input.
+    /// Scene file (JSON, at most 256 MiB); `-` reads standard input.
     #[arg(value_name = "SCENE.json")]
     scene: PathBuf,
     /// Output format: `json`, one `{"rays": [...]}` document; `jsonl`, one ray per line;
@@ -154,8 +159,9 @@ impl Failure {
             Failure::BrokenPipe => (1, None),
         };
         if let Some(m) = message {
-            // One line, whatever the message holds; a failing stderr has nowhere to report to.
-            let line = m.replace(['\r', '\n'], " ");
+            // One line, whatever the message holds, with control characters escaped (names and
+            // paths come from the user); a failing stderr has nowhere to report to.
+            let line = escape_controls(&m);
             let _ = writeln!(io::stderr().lock(), "error: {line}");
         }
         ExitCode::from(code)
@@ -188,8 +194,107 @@ fn main() -> ExitCode {
     }
 }
 
+/// `text` with control characters (and the other characters a terminal could act on) as
+/// `\u{..}`.
+fn escape_controls(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        let bidi = matches!(
+            c,
+            '\u{2028}' | '\u{2029}' | '\u{200e}' | '\u{200f}' | '\u{061c}'
+        ) || ('\u{202a}'..='\u{202e}').contains(&c)
+            || ('\u{2066}'..='\u{2069}').contains(&c);
+        if c.is_control() || bidi || (c as u32) & 0xfffe == 0xfffe {
+            let _ = write!(out, "\\u{{{:x}}}", c as u32);
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// Fails when standard output is closed (`>&-`): the run would otherwise end with status 0
+/// and no output.
+fn check_stdout_open() -> Result<(), Failure> {
+    use std::os::fd::AsFd;
+    let closed = || Failure::Output("standard output: cannot write: it is closed".to_string());
+    // Duplicating the descriptor fails exactly when it is not open.
+    if io::stdout().as_fd().try_clone_to_owned().is_err() {
+        return Err(closed());
+    }
+    // The standard library reopens a descriptor closed at start-up on /dev/null for reading
+    // and writing (Linux shows it in /proc); a shell's `>/dev/null` opens it for writing only.
+    let null = fs::read_link("/proc/self/fd/1").is_ok_and(|t| t == Path::new("/dev/null"));
+    let read_write = fs::read_to_string("/proc/self/fdinfo/1").is_ok_and(|info| {
+        info.lines()
+            .find_map(|l| l.strip_prefix("flags:"))
+            .and_then(|f| u32::from_str_radix(f.trim(), 8).ok())
+            .is_some_and(|f| f & 3 == 2)
+    });
+    if null && read_write {
+        return Err(closed());
+    }
+    Ok(())
+}
+
+/// Refuses a batch whose arrays would not fit in the memory this machine has available, before
+/// anything is allocated, saying how much it needs and why.
+fn check_batch_memory(scene: &Scene, warm_start: bool) -> Result<(), Failure> {
+    let size = scene.batch_size();
+    let per_ray = std::mem::size_of::<eigenray::RayRecord>();
+    let per_point = std::mem::size_of::<eigenray::Point>();
+    // Solving in a spatial order keeps a second copy of the arrays.
+    let copies = if warm_start { 2 } else { 1 };
+    let need = size
+        .bytes(per_ray, per_point, 4)
+        .and_then(|b| b.checked_mul(copies));
+    let have = available_memory();
+    let too_much = match (need, have) {
+        (None, _) => true,
+        (Some(n), Some(h)) => n as u64 > h,
+        (Some(_), None) => false,
+    };
+    if !too_much {
+        return Ok(());
+    }
+    let gb = |b: f64| format!("{:.1} GB", b / 1e9);
+    let need_text = match need {
+        Some(n) => gb(n as f64),
+        None => "more bytes than this machine can address".to_string(),
+    };
+    let why = format!(
+        "{} rays of {per_ray} bytes and {} points of {per_point} bytes{}",
+        size.rays,
+        size.points,
+        if copies == 2 {
+            ", twice (solved in a spatial order)"
+        } else {
+            ""
+        }
+    );
+    let have_text = have.map_or(String::new(), |h| {
+        format!(
+            ", more than the {} this machine has available",
+            gb(h as f64)
+        )
+    });
+    Err(Failure::Input(format!(
+        "paths: the batch needs about {need_text} ({why}){have_text}: split the receivers \
+         or the paths over several runs"
+    )))
+}
+
+/// Memory available to a new allocation (Linux's `MemAvailable`), if known.
+fn available_memory() -> Option<u64> {
+    let info = fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    kb.checked_mul(1024)
+}
+
 /// `eigenray solve`: everything is computed before anything is written.
 fn solve(args: &SolveArgs) -> Result<(), Failure> {
+    check_stdout_open()?;
     if args.format == Format::Npy && std::io::IsTerminal::is_terminal(&io::stdout()) {
         return Err(Failure::Input(
             "--format npy: binary output; redirect standard output to a file".into(),
@@ -197,6 +302,7 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
     }
     let text = read_scene_text(&args.scene)?;
     let scene = Scene::from_json(&text).map_err(Failure::scene)?;
+    check_batch_memory(&scene, !args.no_warm_start)?;
     let tracer = Tracer::new(&scene).map_err(Failure::scene)?;
     let batch = trace(&tracer, !args.no_warm_start);
 
@@ -245,13 +351,25 @@ fn trace(tracer: &Tracer, warm_start: bool) -> Batch {
 /// The scene file as text: `-` is standard input; errors name the path.
 fn read_scene_text(path: &Path) -> Result<String, Failure> {
     let name = display_name(path);
-    let bytes = if path.as_os_str() == "-" {
+    // At most one byte more than the limit is read: enough to know that it is exceeded.
+    let read = |r: &mut dyn Read| {
         let mut buf = Vec::new();
-        io::stdin().lock().read_to_end(&mut buf).map(|_| buf)
+        r.take(MAX_INPUT_BYTES + 1)
+            .read_to_end(&mut buf)
+            .map(|_| buf)
+    };
+    let bytes = if path.as_os_str() == "-" {
+        read(&mut io::stdin().lock())
     } else {
-        fs::read(path)
+        fs::File::open(path).and_then(|mut f| read(&mut f))
     }
     .map_err(|e| Failure::Input(format!("{name}: cannot read: {}", io_message(&e))))?;
+    if bytes.len() as u64 > MAX_INPUT_BYTES {
+        return Err(Failure::Input(format!(
+            "{name}: larger than {} MiB, the largest scene file read",
+            MAX_INPUT_BYTES >> 20
+        )));
+    }
     let mut text = String::from_utf8(bytes).map_err(|e| {
         Failure::Input(format!(
             "{name}: not UTF-8 text (invalid byte at offset {})",
@@ -267,6 +385,7 @@ fn read_scene_text(path: &Path) -> Result<String, Failure> {
 
 /// `eigenray demo`: the air-over-water scene, a one-line summary and a picture.
 fn demo(args: &DemoArgs) -> Result<(), Failure> {
+    check_stdout_open()?;
     // The range check on `--receivers` keeps this conversion exact.
     let n = usize::try_from(args.receivers)
         .map_err(|_| Failure::Input("--receivers: too large".into()))?;

@@ -1286,11 +1286,13 @@ mod tests {
 
     #[test]
     fn tiny_scenes_and_odd_names_stay_well_formed() {
+        // The smallest scale a scene may have (scenes below 1e-100 are refused; the axes of
+        // still smaller extents are tested above).
         let svg = picture(
             r#"{
             "media": { "a\ufffeb": { "speed": 1 } },
-            "interfaces": { "i\uffff<&>": { "points": [[-1e-310, 0], [1e-310, 0]] } },
-            "sources": [[0, 1e-310]], "receivers": [[5e-311, 1e-310]],
+            "interfaces": { "i\uffff<&>": { "points": [[-1e-99, 0], [1e-99, 0]] } },
+            "sources": [[0, 1e-100]], "receivers": [[5e-100, 1e-100]],
             "paths": [{ "name": "p\u0001", "steps": [{ "reflect": "i\uffff<&>" }], "media": ["a\ufffeb", "a\ufffeb"] }]
         }"#,
             Colouring::Path,
