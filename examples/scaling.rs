@@ -109,7 +109,7 @@ struct SegRow {
 /// (see `Tracer`): the crossings of the line through `target` perpendicular to
 /// `source → receiver`, nearest to `target` (the same query through the public API).
 fn perpendicular_crossing(
-    line: &eigenray::Polyline,
+    line: &eigenray::geometry::Polyline,
     source: eigenray::Point,
     receiver: eigenray::Point,
     target: eigenray::Point,

@@ -40,23 +40,51 @@ mod trace;
 #[cfg(feature = "argmin")]
 pub mod argmin_bridge;
 
+// The vocabulary: scenes, the tracer and its options, ray results, batches, outputs.
 pub use batch::{Batch, BatchOptions};
-pub use geom::{Aabb, Point, SegmentContact, Vec2, orient, segment_contact};
-pub use output::{
-    Format, NO_MEDIUM, STATUS_CODES, write_batch, write_names, write_rays, write_rays_json,
-};
-pub use polyline::{Nearest, Polyline, PolylineError};
+pub use geom::{Point, Vec2};
+pub use output::{Format, write_batch, write_names, write_rays, write_rays_json};
 pub use problem::{PathProblem, Tridiagonal};
-pub use regions::{LocateHint, Regions, Sides};
 pub use scene::{
-    BatchSize, DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, Interface, InterfaceSpec, MAX_COORDINATE,
-    MAX_ITERATIONS_LIMIT, MAX_SPEED_RATIO, MIN_COORDINATE, Medium, MediumSpec, Path, PathSpec,
-    REGION_RANGE_BITS, Scene, SceneError, SceneSpec, SegmentRef, SolverOptions, SolverSpec, Step,
-    StepKind, StepSpec,
+    InterfaceSpec, MediumSpec, PathSpec, Scene, SceneError, SceneSpec, SolverOptions, SolverSpec,
+    StepSpec,
 };
 pub use trace::{
     InitialGuess, Kernels, Ray, RayRecord, Reason, Status, Tracer, Workspace, ray_index,
 };
+
+/// The parts of a validated [`Scene`], as its accessors give them: media, interfaces, paths
+/// and their steps, segments, and the sizes of a batch.
+pub mod scene_parts {
+    pub use crate::scene::{BatchSize, Interface, Medium, Path, SegmentRef, Step, StepKind};
+}
+
+/// The limits a scene is validated against, and the solver's defaults.
+pub mod limits {
+    pub use crate::scene::{
+        DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, MAX_COORDINATE, MAX_ITERATIONS_LIMIT,
+        MAX_SPEED_RATIO, MIN_COORDINATE, REGION_RANGE_BITS,
+    };
+}
+
+/// The geometry beneath a scene: polylines and their queries, boxes, and the robust
+/// orientation and segment-contact tests the validation uses.
+pub mod geometry {
+    pub use crate::geom::{Aabb, SegmentContact, orient, segment_contact};
+    pub use crate::polyline::{Nearest, Polyline, PolylineError};
+}
+
+/// Region lookup: the regions the interfaces cut the plane into, and the medium of each
+/// ([`Tracer::regions`]).
+pub mod lookup {
+    pub use crate::regions::{LocateHint, Regions, Sides};
+}
+
+/// The fixed codes of the `.npy` format: the status codes, and the index marking a leg medium
+/// that was not found.
+pub mod npy {
+    pub use crate::output::{NO_MEDIUM, STATUS_CODES};
+}
 
 /// The README's examples, compiled and run as doctests.
 #[cfg(doctest)]

@@ -728,9 +728,10 @@ impl Scene {
     }
 
     /// Checks the arguments of a solve between two arbitrary points (what
-    /// [`Tracer::solve`](crate::Tracer::solve) needs): both points finite and within the
-    /// accepted coordinate range ([`MIN_COORDINATE`] to [`MAX_COORDINATE`] in magnitude, or
-    /// zero), and `path` an index into [`paths`](Self::paths).
+    /// [`Tracer::solve`](crate::Tracer::solve) needs): both points finite and within
+    /// ±[`MAX_COORDINATE`], and `path` an index into [`paths`](Self::paths). (A coordinate
+    /// below [`MIN_COORDINATE`] is allowed here: the scene's own coordinates fix its scale, and
+    /// to it such a coordinate is zero.)
     ///
     /// # Errors
     /// `source`, `receiver` or `path`, with what is wrong.
@@ -740,8 +741,12 @@ impl Scene {
         receiver: Point,
         path: usize,
     ) -> Result<(), SceneError> {
-        point("source", [source.x, source.y])?;
-        point("receiver", [receiver.x, receiver.y])?;
+        for (key, p) in [("source", source), ("receiver", receiver)] {
+            if !(p.x.abs() <= MAX_COORDINATE && p.y.abs() <= MAX_COORDINATE) {
+                // The scene's own message for a point that is not finite or too large.
+                point(key, [p.x, p.y])?;
+            }
+        }
         if path >= self.paths.len() {
             return Err(SceneError::new(
                 "path",

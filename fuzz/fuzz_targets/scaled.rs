@@ -5,7 +5,8 @@
 #![no_main]
 
 use arbitrary::Arbitrary;
-use eigenray::{MAX_COORDINATE, MIN_COORDINATE, Scene, SceneSpec, SolverOptions, Tracer};
+use eigenray::limits::{MAX_COORDINATE, MIN_COORDINATE};
+use eigenray::{Scene, SceneSpec, SolverOptions, Tracer};
 use libfuzzer_sys::fuzz_target;
 
 mod spec_gen;

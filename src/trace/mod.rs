@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use crate::geom::Point;
 use crate::problem::ProblemRef;
 use crate::regions::Regions;
-use crate::scene::{MAX_COORDINATE, MIN_COORDINATE, Scene, SceneError};
+use crate::scene::{MAX_COORDINATE, Scene, SceneError};
 use crate::solver::{NewtonOptions, NewtonWorkspace, solve};
 
 mod classify;
@@ -431,12 +431,10 @@ impl<'s> Tracer<'s> {
     /// ([`Scene::check_solve`]): a quick test on the hot path, the message out of line.
     #[inline(always)]
     fn assert_solvable(&self, source: Point, receiver: Point, path: usize, call: &str) {
-        let ok = |v: f64| {
-            let a = v.abs();
-            a <= MAX_COORDINATE && (a >= MIN_COORDINATE || a == 0.0)
-        };
-        let fine = ok(source.x) && ok(source.y) && ok(receiver.x) && ok(receiver.y);
-        if !(fine && path < self.plans.len()) {
+        // Finite and within ±MAX_COORDINATE (NaN fails every comparison), without branches.
+        let ok = |v: f64| v.abs() <= MAX_COORDINATE;
+        let fine = ok(source.x) & ok(source.y) & ok(receiver.x) & ok(receiver.y);
+        if !(fine & (path < self.plans.len())) {
             self.refuse(source, receiver, path, call);
         }
     }

@@ -2,7 +2,8 @@
 //! own nearest-point search (shared by `tests/regressions.rs`, `tests/properties.rs` and the
 //! fuzz targets through `#[path]`).
 
-use eigenray::{Point, Polyline};
+use eigenray::Point;
+use eigenray::geometry::Polyline;
 
 /// Distance from `p` to segment `a–b` (computed on coordinates scaled to the segment, so that
 /// tiny and huge scenes neither underflow nor overflow).

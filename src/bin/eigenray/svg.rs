@@ -4,7 +4,8 @@
 
 use std::fmt::Write as _;
 
-use eigenray::{Aabb, Batch, Point, Ray, Scene, Status};
+use eigenray::geometry::Aabb;
+use eigenray::{Batch, Point, Ray, Scene, Status};
 
 /// Viridis (matplotlib's perceptually uniform colormap) at 0, 1/8, …, 1; linear in between.
 const VIRIDIS: [[u8; 3]; 9] = [
@@ -814,7 +815,7 @@ pub fn scene_svg(scene: &Scene, batch: &Batch, title: &str, colouring: Colouring
 /// whichever of a few places along it covers the fewest ray segments and no label in `taken`.
 fn interface_label_spot(
     view: &View,
-    i: &eigenray::Interface,
+    i: &eigenray::scene_parts::Interface,
     rays: &[PixelSegment],
     taken: &[LabelBox],
 ) -> (f64, f64) {
