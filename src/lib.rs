@@ -52,7 +52,8 @@ pub use scene::{
     SceneSpec, SegmentRef, SolverOptions, SolverSpec, Step, StepKind, StepSpec,
 };
 pub use trace::{
-    InitialGuess, Kernels, Ray, RayRecord, Reason, Status, Tracer, Workspace, ray_index,
+    Arrival, InitialGuess, Kernels, Kink, Ray, RayRecord, Reason, Stationary, StationaryError,
+    Status, Tracer, Workspace, ray_index,
 };
 
 /// The README's examples, compiled and run as doctests.

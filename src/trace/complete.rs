@@ -1,0 +1,824 @@
+//! Every stationary path of a step sequence: a branch-and-bound over tuples of nodes of each
+//! polyline's segment hierarchy, pruned by certain bounds on the residuals, and an exact solve
+//! of every surviving assignment of segments (and of vertices).
+//!
+//! On one assignment of segments, with each point on the whole line of its segment, the time
+//! `T(s) = Σ wⱼ |xⱼ₊₁ − xⱼ|` is a sum of norms of affine maps, so convex: it has one minimum
+//! (one set of minima when degenerate). A path is an interior stationary path of the sequence
+//! (`converged` or `obstructed`) exactly when its assignment's minimiser lies strictly inside
+//! every segment, and a `vertex` path when some points held on vertices make the others'
+//! minimiser lie inside their segments while the one-sided derivatives at each held vertex
+//! bracket zero. Each candidate goes through the one classifier.
+//!
+//! The search visits tuples of hierarchy nodes (a node: a range of consecutive segments, the
+//! box of their vertices and the cone of their tangents, the tangent of the segment before
+//! the range included so that its first vertex is covered). For point `i` between boxes, the
+//! residual `rᵢ = (wᵢ uᵢ − wᵢ₊₁ uᵢ₊₁) · tᵢ` is bounded over every direction `uᵢ` from a point
+//! of the previous box to one of this box, every `uᵢ₊₁` from this box to the next, and every
+//! tangent in the cone (interval arithmetic on the angles); a tuple whose bound for some
+//! point excludes zero holds no stationary path and is dropped. Where a bound cannot be
+//! computed (two boxes that touch, so a leg may vanish) that point does not prune. Leaves
+//! (one segment each) are solved: every choice of interior or held first vertex per point.
+
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::fmt;
+
+use crate::geom::{Aabb, Point, Vec2};
+use crate::polyline::Polyline;
+use crate::problem::{Eval, Pin, ProblemRef};
+use crate::scene::Scene;
+use crate::solver::{NewtonWorkspace, Outcome, Solution, thomas};
+
+use super::{Classifier, Reason, Status};
+
+/// How the time behaves at the held vertices of a `vertex` path.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Kink {
+    /// Moving any held point off its vertex along either segment makes the time rise.
+    Minimum,
+    /// Moving any held point off its vertex along either segment makes the time fall.
+    Maximum,
+    /// Held points of both kinds (two or more held points).
+    Mixed,
+}
+
+impl Kink {
+    /// The contract's name: `minimum`, `maximum` (and `mixed`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Kink::Minimum => "minimum",
+            Kink::Maximum => "maximum",
+            Kink::Mixed => "mixed",
+        }
+    }
+}
+
+/// One stationary path of a sequence (see [`Tracer::stationary_paths`](super::Tracer::stationary_paths)).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Arrival {
+    /// `converged`, `vertex` or `obstructed`.
+    pub status: Status,
+    /// Travel time (always a number: every arrival has a time).
+    pub time: f64,
+    /// Source, interaction points, receiver.
+    pub points: Vec<Point>,
+    /// Interaction parameters (arclengths along their polylines).
+    pub parameters: Vec<f64>,
+    /// The segment of each interaction (a held point: the segment its vertex starts).
+    pub segments: Vec<usize>,
+    /// Leg media, as indices into [`Scene::media`].
+    pub media: Vec<usize>,
+    /// Why it is not `converged`, when it is not.
+    pub reason: Option<Reason>,
+    /// For a `vertex` path: how the time behaves at its held vertices.
+    pub kink: Option<Kink>,
+    /// Final relative residual of the free points.
+    pub residual: f64,
+    /// Whether the search of its triple was complete (see [`Stationary::complete`]).
+    pub complete: bool,
+}
+
+/// What a search of one triple did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Stationary {
+    /// Whether every stationary path of the triple is listed: `false` when the search reached
+    /// its limit of tuples, or an assignment's solve did not settle (the list may then be
+    /// short). With `true`, an empty list proves that the sequence has no stationary path.
+    pub complete: bool,
+    /// Tuples of hierarchy nodes visited.
+    pub tuples: usize,
+    /// Assignments solved.
+    pub solves: usize,
+}
+
+/// Why a search cannot run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StationaryError {
+    /// There is no path of that index.
+    ///
+    /// How to fix: pass an index below `Scene::paths().len()`.
+    NoSuchPath {
+        /// The index asked for.
+        path: usize,
+    },
+    /// The path does not give its leg media; the complete search does not look them up in
+    /// the regions yet.
+    ///
+    /// How to fix: give the path's `media` (one per leg).
+    MediaNotGiven {
+        /// The path's index.
+        path: usize,
+    },
+}
+
+impl fmt::Display for StationaryError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StationaryError::NoSuchPath { path } => write!(f, "there is no path {path}"),
+            StationaryError::MediaNotGiven { path } => write!(
+                f,
+                "path {path} gives no `media`: the search for every stationary path needs \
+                 the leg media given (region lookup is not supported there yet)"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for StationaryError {}
+
+/// Tuples a search visits at most before it gives up (and says it is not complete).
+const MAX_TUPLES: usize = 1 << 26;
+/// Newton steps per assignment.
+const MAX_STEPS: usize = 200;
+
+/// A range of consecutive segments of a polyline: its box and tangent cone.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    /// First segment.
+    first: u32,
+    /// The box of the range's vertices.
+    bbox: Aabb,
+    /// The range of tangent angles (unwrapped), the segment before the range included.
+    cone: [f64; 2],
+    /// The two halves, when the range has more than one segment.
+    kids: Option<[u32; 2]>,
+}
+
+/// A binary hierarchy over one polyline's segments (built once per interface).
+#[derive(Clone, Debug)]
+pub(crate) struct Hierarchy {
+    nodes: Vec<Node>,
+    /// Unwrapped tangent angle of each segment.
+    theta: Vec<f64>,
+    /// On a closed polyline, the angle of the last segment unwrapped against the first.
+    before_first: Option<f64>,
+}
+
+impl Hierarchy {
+    /// The hierarchy of `line`'s segments.
+    pub(crate) fn new(line: &Polyline) -> Hierarchy {
+        let m = line.num_segments();
+        let turn = |a: Vec2, b: Vec2| a.cross(b).atan2(a.dot(b));
+        let mut theta = Vec::with_capacity(m);
+        let t0 = line.tangent(0);
+        theta.push(t0.y.atan2(t0.x));
+        for j in 1..m {
+            theta.push(theta[j - 1] + turn(line.tangent(j - 1), line.tangent(j)));
+        }
+        let before_first = line
+            .is_closed()
+            .then(|| theta[0] - turn(line.tangent(m - 1), line.tangent(0)));
+        let mut h = Hierarchy {
+            nodes: Vec::with_capacity(2 * m),
+            theta,
+            before_first,
+        };
+        h.build(line, 0, m);
+        h
+    }
+
+    /// The angle of the segment before `j` (none at an open polyline's start).
+    fn before(&self, j: usize) -> Option<f64> {
+        if j > 0 {
+            Some(self.theta[j - 1])
+        } else {
+            self.before_first
+        }
+    }
+
+    /// The cone of tangents at the vertex where segment `j` starts.
+    fn vertex_cone(&self, j: usize) -> [f64; 2] {
+        let t = self.theta[j];
+        let b = self.before(j).unwrap_or(t);
+        [t.min(b), t.max(b)]
+    }
+
+    /// Adds the node of segments `a..b` and its descendants; returns its index.
+    fn build(&mut self, line: &Polyline, a: usize, b: usize) -> u32 {
+        let at = self.nodes.len();
+        let (p, q) = line.segment(a);
+        self.nodes.push(Node {
+            first: a as u32,
+            bbox: Aabb::from_points(p, q),
+            cone: self.vertex_cone(a),
+            kids: None,
+        });
+        if b - a > 1 {
+            let mid = a + (b - a) / 2;
+            let l = self.build(line, a, mid);
+            let r = self.build(line, mid, b);
+            let (nl, nr) = (self.nodes[l as usize], self.nodes[r as usize]);
+            let node = &mut self.nodes[at];
+            node.bbox = nl.bbox.union(nr.bbox);
+            node.cone = [nl.cone[0].min(nr.cone[0]), nl.cone[1].max(nr.cone[1])];
+            node.kids = Some([l, r]);
+        }
+        at as u32
+    }
+}
+
+/// A closed interval of reals.
+#[derive(Clone, Copy, Debug)]
+struct Range {
+    lo: f64,
+    hi: f64,
+}
+
+impl Range {
+    fn scale(self, w: f64) -> Range {
+        Range {
+            lo: w * self.lo,
+            hi: w * self.hi,
+        }
+    }
+    fn sub(self, o: Range) -> Range {
+        Range {
+            lo: self.lo - o.hi,
+            hi: self.hi - o.lo,
+        }
+    }
+    fn add(self, o: Range) -> Range {
+        Range {
+            lo: self.lo + o.lo,
+            hi: self.hi + o.hi,
+        }
+    }
+    fn mul(self, o: Range) -> Range {
+        let c = [
+            self.lo * o.lo,
+            self.lo * o.hi,
+            self.hi * o.lo,
+            self.hi * o.hi,
+        ];
+        Range {
+            lo: c[0].min(c[1]).min(c[2]).min(c[3]),
+            hi: c[0].max(c[1]).max(c[2]).max(c[3]),
+        }
+    }
+}
+
+/// `cos θ` over `θ ∈ [lo, hi]`.
+fn cos_range(lo: f64, hi: f64) -> Range {
+    if !(hi - lo < TAU) {
+        return Range { lo: -1.0, hi: 1.0 };
+    }
+    let has_max = (lo / TAU).ceil() * TAU <= hi;
+    let has_min = ((lo - PI) / TAU).ceil() * TAU + PI <= hi;
+    let (a, b) = (lo.cos(), hi.cos());
+    Range {
+        lo: if has_min { -1.0 } else { a.min(b) },
+        hi: if has_max { 1.0 } else { a.max(b) },
+    }
+}
+
+/// `sin θ` over `θ ∈ [lo, hi]`.
+fn sin_range(lo: f64, hi: f64) -> Range {
+    cos_range(lo - FRAC_PI_2, hi - FRAC_PI_2)
+}
+
+/// Widening of every tangent cone (rad): the round-off of the unwrapped angles.
+const CONE_PAD: f64 = 1e-9;
+
+/// The angles of every direction from a point of `from` to a point of `to`, widened by their
+/// round-off; `None` when the boxes touch (a leg between them may vanish: no bound).
+fn directions(from: Aabb, to: Aabb) -> Option<[f64; 2]> {
+    let (x0, x1) = (to.min.x - from.max.x, to.max.x - from.min.x);
+    let (y0, y1) = (to.min.y - from.max.y, to.max.y - from.min.y);
+    if x0 <= 0.0 && x1 >= 0.0 && y0 <= 0.0 && y1 >= 0.0 {
+        return None;
+    }
+    let phi = (0.5 * (y0 + y1)).atan2(0.5 * (x0 + x1));
+    let (mut lo, mut hi) = (0.0f64, 0.0f64);
+    for (x, y) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)] {
+        let mut a = y.atan2(x) - phi;
+        if a > PI {
+            a -= TAU;
+        } else if a < -PI {
+            a += TAU;
+        }
+        lo = lo.min(a);
+        hi = hi.max(a);
+    }
+    // Round-off of the corners' differences against the distance of the box from the origin.
+    let near = Aabb {
+        min: Point::new(x0, y0),
+        max: Point::new(x1, y1),
+    }
+    .distance_sq(Point::new(0.0, 0.0))
+    .sqrt();
+    let scale = [from.min, from.max, to.min, to.max]
+        .iter()
+        .fold(0.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
+    let pad = 1e-12 + 16.0 * f64::EPSILON * scale / near;
+    if !pad.is_finite() {
+        return None;
+    }
+    Some([phi + lo - pad, phi + hi + pad])
+}
+
+/// Whether the residual `(wa ua − wb ub) · t` is bounded away from zero for `ua` in the
+/// directions `da`, `ub` in `db` and `t` in the cone of angles `cone`.
+fn excludes_zero(wa: f64, wb: f64, da: [f64; 2], db: [f64; 2], cone: [f64; 2]) -> bool {
+    let psi = 0.5 * (cone[0] + cone[1]);
+    let h = 0.5 * (cone[1] - cone[0]) + CONE_PAD;
+    // Components along the cone's middle tangent and its normal.
+    let along = cos_range(da[0] - psi, da[1] - psi)
+        .scale(wa)
+        .sub(cos_range(db[0] - psi, db[1] - psi).scale(wb));
+    let across = sin_range(da[0] - psi, da[1] - psi)
+        .scale(wa)
+        .sub(sin_range(db[0] - psi, db[1] - psi).scale(wb));
+    let r = cos_range(-h, h)
+        .mul(along)
+        .add(sin_range(-h, h).mul(across));
+    let margin = 1e-10 * (wa + wb);
+    r.lo > margin || r.hi < -margin
+}
+
+/// What a point of a tuple may be: a box and a tangent cone.
+#[derive(Clone, Copy, Debug)]
+struct Place {
+    bbox: Aabb,
+    cone: [f64; 2],
+}
+
+/// Whether the places of the points (with the source and receiver around them) hold no
+/// stationary path: some point's residual bound excludes zero.
+fn pruned(places: &[Place], source: Point, receiver: Point, w: &[f64]) -> bool {
+    let k = places.len();
+    let end = |p: Point| Aabb::from_points(p, p);
+    let bbox = |i: usize| match i {
+        0 => end(source),
+        i if i == k + 1 => end(receiver),
+        i => places[i - 1].bbox,
+    };
+    // Directions of leg 0 (source to the first point), then each next leg.
+    let mut before = directions(bbox(0), bbox(1));
+    for i in 0..k {
+        let after = directions(bbox(i + 1), bbox(i + 2));
+        if let (Some(da), Some(db)) = (before, after)
+            && excludes_zero(w[i], w[i + 1], da, db, places[i].cone)
+        {
+            return true;
+        }
+        before = after;
+    }
+    false
+}
+
+/// The search's scratch and settings for one triple.
+struct Search<'a> {
+    g: ProblemRef<'a>,
+    path: usize,
+    classifier: &'a Classifier,
+    hierarchies: &'a [&'a Hierarchy],
+    tolerance: f64,
+    nw: NewtonWorkspace,
+    trial: Eval,
+    s_try: Vec<f64>,
+    delta: Vec<f64>,
+    diag: Vec<f64>,
+    off: Vec<f64>,
+    rhs: Vec<f64>,
+    cp: Vec<f64>,
+    places: Vec<Place>,
+    points: Vec<Point>,
+    stats: Stationary,
+}
+
+/// How an assignment's solve ended.
+enum Settled {
+    /// At the minimiser (to the tolerance or round-off).
+    Yes,
+    /// At a minimiser where a leg vanished (no stationary path: the classifier's
+    /// `coincident`).
+    Degenerate,
+    /// Not settled (the search is then not complete).
+    No,
+}
+
+/// Shortest leg between two interactions, relative to the path's length, below which a solve
+/// that stalls is taken to approach a minimum where that leg vanishes (where `T` is not
+/// differentiable: no stationary path, the classifier's `coincident`). Where `T` is smooth
+/// the damped Newton steps on a convex `T` converge quadratically and do not stall; they
+/// stall only next to such a kink, which they approach slowly.
+const COLLAPSE: f64 = 1e-3;
+/// Sine of the angle between a leg and its interaction's segment below which a stalled solve
+/// is taken to run along the segment's line.
+const ALONG: f64 = 1e-7;
+
+/// How a solve that stalled or ran out of steps at evaluation `e` ended: [`Settled::Degenerate`]
+/// when a leg between two interactions is collapsing, else not settled.
+fn collapsing(e: &Eval, k: usize) -> Settled {
+    let total: f64 = e.len[..=k].iter().sum();
+    // A leg along the line of an interaction it ends at: `T` is flat along that line
+    // (the minimum is not unique), and the leg lies on neither side (the classifier's
+    // `wrong_side`).
+    let along = |i: usize| {
+        e.u[i].cross(e.tan[i]).abs() <= ALONG || e.u[i + 1].cross(e.tan[i]).abs() <= ALONG
+    };
+    if (1..k).any(|j| e.len[j] <= COLLAPSE * total) || (0..k).any(along) {
+        Settled::Degenerate
+    } else {
+        Settled::No
+    }
+}
+
+/// Every stationary path of path `path` from `source` to `receiver` into `out` (see
+/// [`Tracer::stationary_paths`](super::Tracer::stationary_paths)).
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the tracer's parts that the search borrows"
+)]
+pub(crate) fn stationary_paths(
+    scene: &Scene,
+    classifier: &Classifier,
+    hierarchies: &[&Hierarchy],
+    tolerance: f64,
+    source: Point,
+    receiver: Point,
+    path: usize,
+    out: &mut Vec<Arrival>,
+) -> Result<Stationary, StationaryError> {
+    out.clear();
+    let spec = scene
+        .paths()
+        .get(path)
+        .ok_or(StationaryError::NoSuchPath { path })?;
+    let media = spec
+        .media
+        .as_deref()
+        .ok_or(StationaryError::MediaNotGiven { path })?;
+    let slowness: Vec<f64> = media.iter().map(|&m| scene.media()[m].slowness).collect();
+    let k = spec.steps.len();
+    let mut nw = NewtonWorkspace::default();
+    nw.resize_to(k);
+    let mut trial = Eval::default();
+    trial.resize(k);
+    let mut search = Search {
+        g: ProblemRef {
+            scene,
+            steps: &spec.steps,
+            slowness: &slowness,
+            source,
+            receiver,
+        },
+        path,
+        classifier,
+        hierarchies,
+        tolerance,
+        nw,
+        trial,
+        s_try: vec![0.0; k],
+        delta: vec![0.0; k],
+        diag: vec![0.0; k],
+        off: vec![0.0; k],
+        rhs: vec![0.0; k],
+        cp: vec![0.0; k],
+        places: Vec::with_capacity(k),
+        points: Vec::with_capacity(k + 2),
+        stats: Stationary {
+            complete: true,
+            tuples: 0,
+            solves: 0,
+        },
+    };
+    search.run(out);
+    finish(out, media, search.stats.complete);
+    Ok(search.stats)
+}
+
+/// Orders the arrivals by time, drops repeats of one path (a vertex path kept over an
+/// interior path on the same points), and fills in what every arrival shares.
+fn finish(out: &mut Vec<Arrival>, media: &[usize], complete: bool) {
+    out.sort_by(|a, b| a.time.total_cmp(&b.time).then(a.segments.cmp(&b.segments)));
+    let same = |a: &Arrival, b: &Arrival| {
+        let scale = a
+            .points
+            .iter()
+            .fold(1.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
+        (a.time - b.time).abs() <= 1e-9 * a.time.abs().max(1e-300)
+            && a.points.len() == b.points.len()
+            && a.points
+                .iter()
+                .zip(&b.points)
+                .all(|(p, q)| (*p - *q).length() <= 1e-9 * scale)
+    };
+    let mut kept: Vec<Arrival> = Vec::with_capacity(out.len());
+    for a in out.drain(..) {
+        match kept.iter_mut().rev().find(|b| same(b, &a)) {
+            Some(b) => {
+                if a.status == Status::Vertex && b.status != Status::Vertex {
+                    *b = a;
+                }
+            }
+            None => kept.push(a),
+        }
+    }
+    kept.sort_by(|a, b| a.time.total_cmp(&b.time).then(a.segments.cmp(&b.segments)));
+    for a in &mut kept {
+        a.media.clear();
+        a.media.extend_from_slice(media);
+        a.complete = complete;
+    }
+    *out = kept;
+}
+
+impl Search<'_> {
+    /// The branch-and-bound from the tuple of roots.
+    fn run(&mut self, out: &mut Vec<Arrival>) {
+        let k = self.g.k();
+        if k == 0 {
+            self.solve_leaf_choice(&[], 0, out);
+            return;
+        }
+        let mut stack: Vec<u32> = vec![0; k];
+        let mut tuple = vec![0u32; k];
+        let mut segs = vec![0usize; k];
+        while !stack.is_empty() {
+            let at = stack.len() - k;
+            tuple.copy_from_slice(&stack[at..]);
+            stack.truncate(at);
+            self.stats.tuples += 1;
+            if self.stats.tuples > MAX_TUPLES {
+                self.stats.complete = false;
+                return;
+            }
+            self.places.clear();
+            for (i, &n) in tuple.iter().enumerate() {
+                let node = &self.hierarchies[i].nodes[n as usize];
+                self.places.push(Place {
+                    bbox: node.bbox,
+                    cone: node.cone,
+                });
+            }
+            if pruned(
+                &self.places,
+                self.g.source,
+                self.g.receiver,
+                self.g.slowness,
+            ) {
+                continue;
+            }
+            // Split the widest node that has halves.
+            let split = (0..k)
+                .filter_map(|i| {
+                    let node = &self.hierarchies[i].nodes[tuple[i] as usize];
+                    node.kids.map(|kids| (i, kids, node.bbox.diagonal()))
+                })
+                .max_by(|a, b| a.2.total_cmp(&b.2).then(b.0.cmp(&a.0)));
+            match split {
+                Some((i, [l, r], _)) => {
+                    for child in [r, l] {
+                        stack.extend_from_slice(&tuple);
+                        let at = stack.len() - k + i;
+                        stack[at] = child;
+                    }
+                }
+                None => {
+                    for (i, &n) in tuple.iter().enumerate() {
+                        segs[i] = self.hierarchies[i].nodes[n as usize].first as usize;
+                    }
+                    for held in 0..(1usize << k) {
+                        self.solve_leaf_choice(&segs, held, out);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The assignment of segments `segs` with the points in the bit set `held` on the first
+    /// vertices of their segments: its bound, then its solve and classification.
+    fn solve_leaf_choice(&mut self, segs: &[usize], held: usize, out: &mut Vec<Arrival>) {
+        let k = segs.len();
+        let is_held = |i: usize| held >> i & 1 == 1;
+        self.places.clear();
+        for (i, &j) in segs.iter().enumerate() {
+            let h = self.hierarchies[i];
+            let line = self.g.line(i);
+            if is_held(i) {
+                if h.before(j).is_none() {
+                    // The start of an open polyline: an end, not a vertex.
+                    return;
+                }
+                let v = line.vertices()[j];
+                self.places.push(Place {
+                    bbox: Aabb::from_points(v, v),
+                    cone: h.vertex_cone(j),
+                });
+            } else {
+                let (p, q) = line.segment(j);
+                let t = h.theta[j];
+                self.places.push(Place {
+                    bbox: Aabb::from_points(p, p).union(Aabb::from_points(q, q)),
+                    cone: [t, t],
+                });
+            }
+        }
+        if pruned(
+            &self.places,
+            self.g.source,
+            self.g.receiver,
+            self.g.slowness,
+        ) {
+            return;
+        }
+        self.stats.solves += 1;
+        let nw = &mut self.nw;
+        for (i, &j) in segs.iter().enumerate() {
+            let line = self.g.line(i);
+            nw.seg[i] = j;
+            if is_held(i) {
+                nw.pin[i] = Pin::Vertex;
+                nw.s[i] = line.start(j);
+            } else {
+                nw.pin[i] = Pin::Free;
+                // Consecutive points on one segment start apart.
+                let f = (i + 1) as f64 / (k + 1) as f64;
+                nw.s[i] = line.start(j) + f * (line.start(j + 1) - line.start(j));
+            }
+        }
+        let (settled, iterations) = self.minimise(held);
+        match settled {
+            Settled::Yes => {}
+            Settled::Degenerate => return,
+            Settled::No => {
+                self.stats.complete = false;
+                return;
+            }
+        }
+        let nw = &self.nw;
+        let e = &nw.eval;
+        // Free points strictly inside their segments.
+        for (i, &j) in segs.iter().enumerate() {
+            let line = self.g.line(i);
+            if !is_held(i) && !(nw.s[i] > line.start(j) && nw.s[i] < line.start(j + 1)) {
+                return;
+            }
+        }
+        // Held points: the one-sided derivatives bracket zero.
+        let w = self.g.slowness;
+        let mut kink = None;
+        for (i, &j) in segs.iter().enumerate() {
+            if !is_held(i) {
+                continue;
+            }
+            let line = self.g.line(i);
+            let before = if j > 0 {
+                j - 1
+            } else {
+                line.num_segments() - 1
+            };
+            let v = e.u[i] * w[i] - e.u[i + 1] * w[i + 1];
+            let (r_before, r_after) = (v.dot(line.tangent(before)), v.dot(line.tangent(j)));
+            let this = if r_before < 0.0 && r_after > 0.0 {
+                Kink::Minimum
+            } else if r_before > 0.0 && r_after < 0.0 {
+                Kink::Maximum
+            } else {
+                return;
+            };
+            kink = Some(match kink {
+                None => this,
+                Some(k) if k == this => this,
+                Some(_) => Kink::Mixed,
+            });
+        }
+        let sol = Solution {
+            outcome: if held == 0 {
+                Outcome::Converged
+            } else {
+                Outcome::Vertex
+            },
+            time: e.time,
+            iterations,
+            residual: e.rmax,
+        };
+        let record = self.classifier.classify(
+            self.g.scene,
+            self.path,
+            self.g.source,
+            self.g.receiver,
+            &sol,
+            nw,
+            &mut self.points,
+        );
+        if !record.status.has_time() {
+            return;
+        }
+        out.push(Arrival {
+            status: record.status,
+            time: record.time,
+            points: self.points.clone(),
+            parameters: nw.s[..k].to_vec(),
+            segments: segs.to_vec(),
+            media: Vec::new(),
+            reason: record.reason,
+            kink: (record.status == Status::Vertex).then_some(kink).flatten(),
+            residual: record.residual,
+            complete: true,
+        });
+    }
+
+    /// Minimises the time over the free points on the lines of their segments (the held ones
+    /// stay on their vertices) from the state in `self.nw`: damped Newton steps on the
+    /// analytic Hessian of `problem` with backtracking on `T` itself, which is convex there.
+    /// Returns how it ended and the steps taken; leaves the evaluation at the end in
+    /// `self.nw.eval`.
+    fn minimise(&mut self, held: usize) -> (Settled, usize) {
+        let k = self.g.k();
+        let is_held = |i: usize| held >> i & 1 == 1;
+        let tol = self.tolerance;
+        let mut steps = 0;
+        loop {
+            let nw = &mut self.nw;
+            self.g
+                .evaluate(&nw.s, &nw.seg, &nw.pin, &mut nw.eval, true, false);
+            let e = &nw.eval;
+            if e.vanished > 0 || (1..k).any(|j| e.len[j] <= e.vanish) {
+                return (Settled::Degenerate, steps);
+            }
+            if !e.rmax.is_finite() {
+                return (Settled::No, steps);
+            }
+            if e.rmax <= tol || k == 0 || held == (1 << k) - 1 {
+                return (Settled::Yes, steps);
+            }
+            if steps >= MAX_STEPS {
+                return (collapsing(e, k), steps);
+            }
+            for i in 0..k {
+                let free = !is_held(i);
+                self.diag[i] = if free { e.diag[i] } else { 1.0 };
+                self.rhs[i] = if free { -e.r[i] } else { 0.0 };
+                if i + 1 < k {
+                    self.off[i] = if free && !is_held(i + 1) {
+                        e.off[i]
+                    } else {
+                        0.0
+                    };
+                }
+            }
+            let off = &self.off[..k.saturating_sub(1)];
+            if !thomas(&self.diag, off, &self.rhs, &mut self.delta, &mut self.cp) {
+                // A singular Hessian (legs along a segment's line): damp it.
+                let scale = self.diag.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+                for d in &mut self.diag {
+                    *d += 1e-9 * scale + f64::MIN_POSITIVE;
+                }
+                if !thomas(&self.diag, off, &self.rhs, &mut self.delta, &mut self.cp) {
+                    return (Settled::No, steps);
+                }
+            }
+            let tiny = (0..k).all(|i| {
+                self.delta[i].abs()
+                    <= 4.0 * f64::EPSILON * (nw.s[i].abs() + e.len[i] + e.len[i + 1])
+            });
+            if tiny {
+                return (Settled::Yes, steps);
+            }
+            // No point moves further than twice its longer leg at once.
+            let mut cap = 1.0f64;
+            for i in 0..k {
+                let reach = 2.0 * e.len[i].max(e.len[i + 1]);
+                if self.delta[i].abs() > reach {
+                    cap = cap.min(reach / self.delta[i].abs());
+                }
+            }
+            let slope: f64 = (0..k).map(|i| e.r[i] * self.delta[i]).sum();
+            let (t0, rmax0) = (e.time, e.rmax);
+            let mut alpha = cap;
+            let accepted = loop {
+                for i in 0..k {
+                    self.s_try[i] = nw.s[i] + alpha * self.delta[i];
+                }
+                self.g
+                    .evaluate(&self.s_try, &nw.seg, &nw.pin, &mut self.trial, false, false);
+                let t = self.trial.time;
+                let drop = t0 - t;
+                // Descent on T, or (within round-off of T) on the residual.
+                let round_off = 4.0 * f64::EPSILON * t0;
+                if drop >= -1e-4 * alpha * slope || (drop >= -round_off && self.trial.rmax < rmax0)
+                {
+                    break true;
+                }
+                alpha *= 0.5;
+                if alpha < 1e-12 {
+                    break false;
+                }
+            };
+            if !accepted {
+                // Stalled within round-off of the minimum, or not settled.
+                let e = &self.nw.eval;
+                let settled = if rmax0 <= 1e-8 {
+                    Settled::Yes
+                } else {
+                    collapsing(e, k)
+                };
+                return (settled, steps);
+            }
+            nw.s[..k].copy_from_slice(&self.s_try);
+            steps += 1;
+        }
+    }
+}
