@@ -751,3 +751,147 @@ fn every_stationary_path_of_random_scenes_matches_brute_force() {
     // solve that does not settle next to a collapse) are skipped, not compared: few.
     assert!(ambiguous * 4 < compared, "{ambiguous} ambiguous");
 }
+
+/// The reference's paths of `case` (which must not be a close call) against the engine's:
+/// the same set, times to 1e-12. Returns the engine's arrivals.
+fn agree(case: &Case) -> Vec<Arrival> {
+    let Reference::Paths(want) = reference(case) else {
+        panic!("a named case is a close call");
+    };
+    let got = engine(case);
+    compare(case, &want, &got).unwrap();
+    for (p, a) in want.iter().zip(&got) {
+        assert!(
+            (p.time - a.time).abs() <= 1e-12 * p.time,
+            "{} vs {}",
+            p.time,
+            a.time
+        );
+    }
+    got
+}
+
+/// A glass lens: a regular hexagon of circumradius 0.4 about the origin with vertices at
+/// 30° + k·60° (flat faces left and right), index 1.5 in air; source (−2, 0.3); path `refract
+/// lens, refract lens`.
+fn lens_case(receiver: P) -> Case {
+    let points = (0..6)
+        .map(|k| {
+            let a = (30.0 + 60.0 * k as f64).to_radians();
+            [0.4 * a.cos(), 0.4 * a.sin()]
+        })
+        .collect();
+    Case {
+        lines: vec![Line {
+            points,
+            closed: true,
+        }],
+        slowness: vec![1.0, 1.5, 1.0],
+        steps: vec![(false, 0), (false, 0)],
+        source: [-2.0, 0.3],
+        receiver,
+    }
+}
+
+fn converged_times(arrivals: &[Arrival]) -> Vec<f64> {
+    arrivals
+        .iter()
+        .filter(|a| a.status == Status::Converged)
+        .map(|a| a.time)
+        .collect()
+}
+
+/// Issue 18's lens (our hexagon: the issue does not give its vertices): where the default
+/// mode's two steps start on one crossing of the line from source to receiver, the sequence
+/// has stationary paths through two faces; the search lists them (and the vertex paths
+/// beside them) as the brute force does.
+#[test]
+fn lens_paths_through_two_faces() {
+    for (receiver, first) in [([1.0, 0.0], 3.3626), ([0.6, 0.0], 2.9219)] {
+        let arrivals = agree(&lens_case(receiver));
+        let times = converged_times(&arrivals);
+        assert!(!times.is_empty(), "{arrivals:?}");
+        assert!((times[0] - first).abs() < 1e-4, "{times:?}");
+        assert!(arrivals.iter().all(|a| a.complete && a.media == [0, 1, 2]));
+        // Points inside their segments, legs on the right sides: the first leaves the
+        // source, enters the glass, leaves it on the other face.
+        let a = arrivals
+            .iter()
+            .find(|a| a.status == Status::Converged)
+            .unwrap();
+        assert_ne!(a.segments[0], a.segments[1]);
+    }
+}
+
+/// Through the same lens to a receiver close behind it, three converged paths (one through
+/// each pair of faces that can focus there), ordered by time, each once.
+#[test]
+fn lens_receiver_with_three_paths() {
+    let arrivals = agree(&lens_case([0.6, 0.0]));
+    let times = converged_times(&arrivals);
+    assert_eq!(times.len(), 3, "{arrivals:?}");
+    let expected = [2.92185859079608, 2.9653375886435818, 3.0274201722087346];
+    for (t, e) in times.iter().zip(expected) {
+        assert!((t - e).abs() <= 1e-12 * e, "{times:?}");
+    }
+    assert!(arrivals.windows(2).all(|w| w[0].time <= w[1].time));
+}
+
+/// A converted reflection (slowness 1 down, 1.6 up) off a bent polyline whose only
+/// stationary path has a leg through a screen: listed once, as `obstructed`, not dropped.
+#[test]
+fn converted_reflection_whose_only_path_is_obstructed() {
+    let case = Case {
+        lines: vec![
+            Line {
+                points: vec![[-3.0, 0.0], [0.5, -0.3], [3.0, 0.2]],
+                closed: false,
+            },
+            Line {
+                points: vec![[1.4, 1.0], [2.1, 0.9]],
+                closed: false,
+            },
+        ],
+        slowness: vec![1.0, 1.6],
+        steps: vec![(true, 0)],
+        source: [-1.5, 2.0],
+        receiver: [2.0, 2.0],
+    };
+    let arrivals = agree(&case);
+    assert_eq!(arrivals.len(), 1, "{arrivals:?}");
+    assert_eq!(arrivals[0].status, Status::Obstructed);
+    assert!(arrivals[0].complete);
+}
+
+/// A roof seen from above: no slope reflects, the ridge is a minimum-type kink; a valley seen
+/// from above: a specular point on each slope and a maximum-type kink in its bottom.
+#[test]
+fn kinks_of_roofs_and_valleys() {
+    let roof = Case {
+        lines: vec![Line {
+            points: vec![[-3.0, 0.0], [0.0, 0.5], [3.0, 0.0]],
+            closed: false,
+        }],
+        slowness: vec![1.0, 1.0],
+        steps: vec![(true, 0)],
+        source: [-0.5, 2.0],
+        receiver: [0.5, 2.0],
+    };
+    let kinds = |c: &Case| -> Vec<_> { agree(c).iter().map(|a| (a.status, a.kink)).collect() };
+    assert_eq!(kinds(&roof), [(Status::Vertex, Some(Kink::Minimum))]);
+    let valley = Case {
+        lines: vec![Line {
+            points: vec![[-3.0, 0.0], [0.0, -2.0], [3.0, 0.0]],
+            closed: false,
+        }],
+        ..roof
+    };
+    assert_eq!(
+        kinds(&valley),
+        [
+            (Status::Converged, None),
+            (Status::Converged, None),
+            (Status::Vertex, Some(Kink::Maximum))
+        ]
+    );
+}

@@ -310,13 +310,13 @@ impl<'s> Tracer<'s> {
     ///
     /// ```
     /// use eigenray::{Kink, Point, Scene, Status, Tracer};
-    /// // A mirror bent into a roof, seen from above: a specular point on each slope, and
-    /// // the ridge between them, where the time has a maximum-type kink.
+    /// // A mirror bent into a valley, seen from above: a specular point on each slope, and
+    /// // the bottom, where the time has a maximum-type kink.
     /// let scene = Scene::from_json(r#"{
     ///     "media": { "air": { "speed": 1.0 } },
-    ///     "interfaces": { "roof": { "points": [[-3, 0], [0, 0.5], [3, 0]] } },
+    ///     "interfaces": { "valley": { "points": [[-3, 0], [0, -2], [3, 0]] } },
     ///     "sources": [[-0.5, 2]], "receivers": [[0.5, 2]],
-    ///     "paths": [{ "steps": [{ "reflect": "roof" }], "media": ["air", "air"] }]
+    ///     "paths": [{ "steps": [{ "reflect": "valley" }], "media": ["air", "air"] }]
     /// }"#).unwrap();
     /// let tracer = Tracer::new(&scene).unwrap();
     /// let mut arrivals = Vec::new();
@@ -327,6 +327,7 @@ impl<'s> Tracer<'s> {
     /// let statuses: Vec<Status> = arrivals.iter().map(|a| a.status).collect();
     /// assert_eq!(statuses, [Status::Converged, Status::Converged, Status::Vertex]);
     /// assert_eq!(arrivals[2].kink, Some(Kink::Maximum));
+    /// assert!((arrivals[0].time - 45f64.sqrt()).abs() < 1e-12);
     /// assert!(arrivals.windows(2).all(|w| w[0].time <= w[1].time));
     /// ```
     ///
