@@ -257,10 +257,11 @@ fn minimise(case: &Case, choice: &[Choice]) -> Result<Vec<f64>, &'static str> {
                 .max_by(|&x, &y| m[x][c].abs().total_cmp(&m[y][c].abs()))
                 .unwrap();
             m.swap(c, piv);
-            for r in c + 1..n {
-                let f = m[r][c] / m[c][c];
-                for cc in c..=n {
-                    m[r][cc] -= f * m[c][cc];
+            let pivot_row = m[c].clone();
+            for row in &mut m[c + 1..] {
+                let f = row[c] / pivot_row[c];
+                for (x, p) in row[c..].iter_mut().zip(&pivot_row[c..]) {
+                    *x -= f * p;
                 }
             }
         }

@@ -15,12 +15,23 @@
 //! the range included so that its first vertex is covered). For point `i` between boxes, the
 //! residual `rᵢ = (wᵢ uᵢ − wᵢ₊₁ uᵢ₊₁) · tᵢ` is bounded over every direction `uᵢ` from a point
 //! of the previous box to one of this box, every `uᵢ₊₁` from this box to the next, and every
-//! tangent in the cone (interval arithmetic on the angles); a tuple whose bound for some
-//! point excludes zero holds no stationary path and is dropped. Where a bound cannot be
-//! computed (two boxes that touch, so a leg may vanish) that point does not prune. Leaves
-//! (one segment each) are solved: every choice of interior or held first vertex per point.
+//! tangent `tᵢ` of the cone: `rᵢ` lies within `(wᵢ uᵢ − wᵢ₊₁ uᵢ₊₁) · t₀ ± (wᵢ + wᵢ₊₁) |tᵢ − t₀|`
+//! (`t₀` the cone's middle tangent), and `u · t₀` over the directions of a box of differences
+//! that misses the origin lies between its values at the box's corners (or reaches ±1 where
+//! the directions pass through `±t₀`). Every bound is widened by its round-off. A tuple whose
+//! bound for some point excludes zero holds no stationary path and is dropped; where a bound
+//! cannot be computed (two boxes that touch, so a leg may vanish) that point does not prune.
+//! Leaves (one segment each) are solved: every choice of interior or held first vertex per
+//! point, each choice bounded again first with its own segment's tangent or its vertex's cone.
+//!
+//! An assignment's solve is damped Newton on the analytic Hessian of `problem` with
+//! backtracking on `T` itself (convex there). It cannot be the solver's own loop, which moves
+//! points across vertices: here each point stays on its segment's line. A solve that stalls
+//! next to a collapsed leg (within [`COLLAPSE`] of the path's length) or with a leg along its
+//! segment's line is taken to approach a minimum where `T` is not differentiable, which holds
+//! no stationary path; any other solve that does not settle marks the search incomplete.
 
-use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::f64::consts::PI;
 use std::fmt;
 
 use crate::geom::{Aabb, Point, Vec2};
@@ -140,6 +151,8 @@ struct Node {
     bbox: Aabb,
     /// The range of tangent angles (unwrapped), the segment before the range included.
     cone: [f64; 2],
+    /// Its box and cone as the bound takes them.
+    place: Place,
     /// The two halves, when the range has more than one segment.
     kids: Option<[u32; 2]>,
 }
@@ -197,10 +210,12 @@ impl Hierarchy {
     fn build(&mut self, line: &Polyline, a: usize, b: usize) -> u32 {
         let at = self.nodes.len();
         let (p, q) = line.segment(a);
+        let (bbox, cone) = (Aabb::from_points(p, q), self.vertex_cone(a));
         self.nodes.push(Node {
             first: a as u32,
-            bbox: Aabb::from_points(p, q),
-            cone: self.vertex_cone(a),
+            bbox,
+            cone,
+            place: Place::new(bbox, cone),
             kids: None,
         });
         if b - a > 1 {
@@ -211,139 +226,109 @@ impl Hierarchy {
             let node = &mut self.nodes[at];
             node.bbox = nl.bbox.union(nr.bbox);
             node.cone = [nl.cone[0].min(nr.cone[0]), nl.cone[1].max(nr.cone[1])];
+            node.place = Place::new(node.bbox, node.cone);
             node.kids = Some([l, r]);
         }
         at as u32
     }
 }
 
-/// A closed interval of reals.
-#[derive(Clone, Copy, Debug)]
-struct Range {
-    lo: f64,
-    hi: f64,
-}
-
-impl Range {
-    fn scale(self, w: f64) -> Range {
-        Range {
-            lo: w * self.lo,
-            hi: w * self.hi,
-        }
-    }
-    fn sub(self, o: Range) -> Range {
-        Range {
-            lo: self.lo - o.hi,
-            hi: self.hi - o.lo,
-        }
-    }
-    fn add(self, o: Range) -> Range {
-        Range {
-            lo: self.lo + o.lo,
-            hi: self.hi + o.hi,
-        }
-    }
-    fn mul(self, o: Range) -> Range {
-        let c = [
-            self.lo * o.lo,
-            self.lo * o.hi,
-            self.hi * o.lo,
-            self.hi * o.hi,
-        ];
-        Range {
-            lo: c[0].min(c[1]).min(c[2]).min(c[3]),
-            hi: c[0].max(c[1]).max(c[2]).max(c[3]),
-        }
-    }
-}
-
-/// `cos θ` over `θ ∈ [lo, hi]`.
-fn cos_range(lo: f64, hi: f64) -> Range {
-    if !(hi - lo < TAU) {
-        return Range { lo: -1.0, hi: 1.0 };
-    }
-    let has_max = (lo / TAU).ceil() * TAU <= hi;
-    let has_min = ((lo - PI) / TAU).ceil() * TAU + PI <= hi;
-    let (a, b) = (lo.cos(), hi.cos());
-    Range {
-        lo: if has_min { -1.0 } else { a.min(b) },
-        hi: if has_max { 1.0 } else { a.max(b) },
-    }
-}
-
-/// `sin θ` over `θ ∈ [lo, hi]`.
-fn sin_range(lo: f64, hi: f64) -> Range {
-    cos_range(lo - FRAC_PI_2, hi - FRAC_PI_2)
-}
-
 /// Widening of every tangent cone (rad): the round-off of the unwrapped angles.
 const CONE_PAD: f64 = 1e-9;
 
-/// The angles of every direction from a point of `from` to a point of `to`, widened by their
-/// round-off; `None` when the boxes touch (a leg between them may vanish: no bound).
-fn directions(from: Aabb, to: Aabb) -> Option<[f64; 2]> {
-    let (x0, x1) = (to.min.x - from.max.x, to.max.x - from.min.x);
-    let (y0, y1) = (to.min.y - from.max.y, to.max.y - from.min.y);
-    if x0 <= 0.0 && x1 >= 0.0 && y0 <= 0.0 && y1 >= 0.0 {
+/// What a point of a tuple may be: a box, and tangents `t` with `|t − tangent| ≤ spread`.
+#[derive(Clone, Copy, Debug)]
+struct Place {
+    bbox: Aabb,
+    tangent: Vec2,
+    spread: f64,
+}
+
+impl Place {
+    /// The place of points in `bbox` with tangent angles in `cone`.
+    fn new(bbox: Aabb, cone: [f64; 2]) -> Place {
+        let mid = 0.5 * (cone[0] + cone[1]);
+        let h = 0.5 * (cone[1] - cone[0]) + CONE_PAD;
+        // |t − t₀| = 2 sin(|δ|/2) for t at angle δ from t₀.
+        let spread = if h < PI { 2.0 * (0.5 * h).sin() } else { 2.0 };
+        Place {
+            bbox,
+            tangent: Vec2::new(mid.cos(), mid.sin()),
+            spread,
+        }
+    }
+}
+
+/// Every difference of a point of `to` and a point of `from`: a box, with the round-off of
+/// its corners against its distance from the origin (the error of a direction taken from it);
+/// `None` when the boxes touch (a leg between them may vanish: no bound).
+#[derive(Clone, Copy, Debug)]
+struct Legs {
+    d: Aabb,
+    pad: f64,
+}
+
+fn legs(from: Aabb, to: Aabb) -> Option<Legs> {
+    let d = Aabb {
+        min: Point::new(to.min.x - from.max.x, to.min.y - from.max.y),
+        max: Point::new(to.max.x - from.min.x, to.max.y - from.min.y),
+    };
+    let near = d.distance_sq(Point::new(0.0, 0.0)).sqrt();
+    if near.is_nan() || near <= 0.0 {
         return None;
     }
-    let phi = (0.5 * (y0 + y1)).atan2(0.5 * (x0 + x1));
-    let (mut lo, mut hi) = (0.0f64, 0.0f64);
-    for (x, y) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)] {
-        let mut a = y.atan2(x) - phi;
-        if a > PI {
-            a -= TAU;
-        } else if a < -PI {
-            a += TAU;
-        }
-        lo = lo.min(a);
-        hi = hi.max(a);
-    }
-    // Round-off of the corners' differences against the distance of the box from the origin.
-    let near = Aabb {
-        min: Point::new(x0, y0),
-        max: Point::new(x1, y1),
-    }
-    .distance_sq(Point::new(0.0, 0.0))
-    .sqrt();
     let scale = [from.min, from.max, to.min, to.max]
         .iter()
         .fold(0.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
     let pad = 1e-12 + 16.0 * f64::EPSILON * scale / near;
-    if !pad.is_finite() {
-        return None;
+    pad.is_finite().then_some(Legs { d, pad })
+}
+
+/// Whether the ray from the origin along `t` meets the box `d`.
+fn ray_meets(t: Vec2, d: Aabb) -> bool {
+    let (mut lo, mut hi) = (0.0f64, f64::INFINITY);
+    for (t, a, b) in [(t.x, d.min.x, d.max.x), (t.y, d.min.y, d.max.y)] {
+        if t == 0.0 {
+            if a > 0.0 || b < 0.0 {
+                return false;
+            }
+        } else {
+            let (p, q) = (a / t, b / t);
+            lo = lo.max(p.min(q));
+            hi = hi.min(p.max(q));
+        }
     }
-    Some([phi + lo - pad, phi + hi + pad])
+    lo <= hi
 }
 
-/// Whether the residual `(wa ua − wb ub) · t` is bounded away from zero for `ua` in the
-/// directions `da`, `ub` in `db` and `t` in the cone of angles `cone`.
-fn excludes_zero(wa: f64, wb: f64, da: [f64; 2], db: [f64; 2], cone: [f64; 2]) -> bool {
-    let psi = 0.5 * (cone[0] + cone[1]);
-    let h = 0.5 * (cone[1] - cone[0]) + CONE_PAD;
-    // Components along the cone's middle tangent and its normal.
-    let along = cos_range(da[0] - psi, da[1] - psi)
-        .scale(wa)
-        .sub(cos_range(db[0] - psi, db[1] - psi).scale(wb));
-    let across = sin_range(da[0] - psi, da[1] - psi)
-        .scale(wa)
-        .sub(sin_range(db[0] - psi, db[1] - psi).scale(wb));
-    let r = cos_range(-h, h)
-        .mul(along)
-        .add(sin_range(-h, h).mul(across));
-    let margin = 1e-10 * (wa + wb);
-    r.lo > margin || r.hi < -margin
-}
-
-/// What a point of a tuple may be: a box and a tangent cone.
-#[derive(Clone, Copy, Debug)]
-struct Place {
-    bbox: Aabb,
-    cone: [f64; 2],
+/// The range of `u · t` over the unit directions `u` of the differences in `legs`: at the
+/// corners (the extreme directions of a box that misses the origin), or ±1 where the
+/// directions pass through `±t`.
+fn dot_range(legs: Legs, t: Vec2) -> [f64; 2] {
+    let d = legs.d;
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (x, y) in [
+        (d.min.x, d.min.y),
+        (d.max.x, d.min.y),
+        (d.min.x, d.max.y),
+        (d.max.x, d.max.y),
+    ] {
+        let c = (x * t.x + y * t.y) / x.hypot(y);
+        lo = lo.min(c);
+        hi = hi.max(c);
+    }
+    if ray_meets(t, d) {
+        hi = 1.0;
+    }
+    if ray_meets(-t, d) {
+        lo = -1.0;
+    }
+    [lo - legs.pad, hi + legs.pad]
 }
 
 /// Whether the places of the points (with the source and receiver around them) hold no
-/// stationary path: some point's residual bound excludes zero.
+/// stationary path: for some point the bound of `rᵢ = (wᵢ uᵢ − wᵢ₊₁ uᵢ₊₁) · tᵢ` excludes zero,
+/// `rᵢ` within `(wᵢ uᵢ − wᵢ₊₁ uᵢ₊₁) · t₀ ± (wᵢ + wᵢ₊₁) |tᵢ − t₀|`.
 fn pruned(places: &[Place], source: Point, receiver: Point, w: &[f64]) -> bool {
     let k = places.len();
     let end = |p: Point| Aabb::from_points(p, p);
@@ -352,14 +337,17 @@ fn pruned(places: &[Place], source: Point, receiver: Point, w: &[f64]) -> bool {
         i if i == k + 1 => end(receiver),
         i => places[i - 1].bbox,
     };
-    // Directions of leg 0 (source to the first point), then each next leg.
-    let mut before = directions(bbox(0), bbox(1));
+    let mut before = legs(bbox(0), bbox(1));
     for i in 0..k {
-        let after = directions(bbox(i + 1), bbox(i + 2));
-        if let (Some(da), Some(db)) = (before, after)
-            && excludes_zero(w[i], w[i + 1], da, db, places[i].cone)
-        {
-            return true;
+        let after = legs(bbox(i + 1), bbox(i + 2));
+        if let (Some(la), Some(lb)) = (before, after) {
+            let (t, spread) = (places[i].tangent, places[i].spread);
+            let (a, b) = (dot_range(la, t), dot_range(lb, t));
+            let (wa, wb) = (w[i], w[i + 1]);
+            let slack = (wa + wb) * spread + 1e-10 * (wa + wb);
+            if wa * a[0] - wb * b[1] - slack > 0.0 || wa * a[1] - wb * b[0] + slack < 0.0 {
+                return true;
+            }
         }
         before = after;
     }
@@ -546,11 +534,8 @@ impl Search<'_> {
             }
             self.places.clear();
             for (i, &n) in tuple.iter().enumerate() {
-                let node = &self.hierarchies[i].nodes[n as usize];
-                self.places.push(Place {
-                    bbox: node.bbox,
-                    cone: node.cone,
-                });
+                self.places
+                    .push(self.hierarchies[i].nodes[n as usize].place);
             }
             if pruned(
                 &self.places,
@@ -602,16 +587,14 @@ impl Search<'_> {
                     return;
                 }
                 let v = line.vertices()[j];
-                self.places.push(Place {
-                    bbox: Aabb::from_points(v, v),
-                    cone: h.vertex_cone(j),
-                });
+                self.places
+                    .push(Place::new(Aabb::from_points(v, v), h.vertex_cone(j)));
             } else {
                 let (p, q) = line.segment(j);
-                let t = h.theta[j];
                 self.places.push(Place {
-                    bbox: Aabb::from_points(p, p).union(Aabb::from_points(q, q)),
-                    cone: [t, t],
+                    bbox: Aabb::from_points(p, q),
+                    tangent: line.tangent(j),
+                    spread: 0.0,
                 });
             }
         }
@@ -652,7 +635,8 @@ impl Search<'_> {
         // Free points strictly inside their segments.
         for (i, &j) in segs.iter().enumerate() {
             let line = self.g.line(i);
-            if !is_held(i) && !(nw.s[i] > line.start(j) && nw.s[i] < line.start(j + 1)) {
+            let inside = nw.s[i] > line.start(j) && nw.s[i] < line.start(j + 1);
+            if !is_held(i) && !inside {
                 return;
             }
         }
