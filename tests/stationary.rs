@@ -3,7 +3,7 @@
 //! random scenes, each minimised on its own (dense Newton on plain numbers), classified by
 //! the contract's rules, and deduplicated. Then the issue's named cases.
 
-use eigenray::{Arrival, Kink, Point, Scene, Status, Tracer, demo::SplitMix64};
+use eigenray::{Arrival, Kink, Point, Scene, StationaryError, Status, Tracer, demo::SplitMix64};
 
 type P = [f64; 2];
 
@@ -216,26 +216,23 @@ fn minimise(case: &Case, choice: &[Choice]) -> Result<Vec<f64>, &'static str> {
         if worst <= 1e-14 {
             return Ok(t);
         }
-        // Leg `l` joins point l−1 and point l: Hessian of w|x_l − x_{l−1}|.
+        // Leg `l` joins point l−1 and point l: Hessian of w|x_l − x_{l−1}|. How leg `l` moves
+        // with point `i`: +dᵢ at its far end, −dᵢ at its near end.
+        let moves = |i: usize, l: usize| {
+            if i == l {
+                1.0
+            } else if i + 1 == l {
+                -1.0
+            } else {
+                0.0
+            }
+        };
         for l in 0..=k {
             let p = |v: P, q: P| (dot(v, q) - dot(v, u[l]) * dot(q, u[l])) * w[l] / len[l];
             for (a, &i) in free.iter().enumerate() {
                 for (b, &j) in free.iter().enumerate() {
                     // ∂x_l/∂t_i = d_i when i == l, ∂x_{l−1}/∂t_i = d_i when i == l − 1.
-                    let si = if i == l {
-                        1.0
-                    } else if i + 1 == l {
-                        -1.0
-                    } else {
-                        0.0
-                    };
-                    let sj = if j == l {
-                        1.0
-                    } else if j + 1 == l {
-                        -1.0
-                    } else {
-                        0.0
-                    };
+                    let (si, sj) = (moves(i, l), moves(j, l));
                     if si != 0.0 && sj != 0.0 {
                         hess[a][b] += si * sj * p(d[i], d[j]);
                     }
@@ -895,4 +892,51 @@ fn kinks_of_roofs_and_valleys() {
             (Status::Vertex, Some(Kink::Maximum))
         ]
     );
+}
+
+/// The direct ray (no steps): one path, `converged`, or `obstructed` behind a screen.
+#[test]
+fn direct_ray_is_one_path() {
+    let mut case = Case {
+        lines: vec![Line {
+            points: vec![[-1.0, 1.0], [1.0, 1.2]],
+            closed: false,
+        }],
+        slowness: vec![1.25],
+        steps: vec![],
+        source: [0.0, 0.0],
+        receiver: [3.0, 4.0],
+    };
+    let arrivals = agree(&case);
+    assert_eq!(arrivals.len(), 1);
+    assert_eq!(arrivals[0].status, Status::Obstructed);
+    assert!((arrivals[0].time - 6.25).abs() < 1e-12);
+    case.receiver = [3.0, -4.0];
+    let arrivals = agree(&case);
+    assert_eq!(arrivals[0].status, Status::Converged);
+}
+
+/// A path that leaves its media to region lookup is refused, not answered wrongly; so is a
+/// path index out of range.
+#[test]
+fn media_from_regions_are_refused() {
+    let scene = Scene::from_json(
+        r#"{ "media": { "air": { "speed": 1.0 } }, "background": "air",
+             "interfaces": { "wall": { "points": [[-1, 0], [1, 0]] } },
+             "sources": [[0, 1]], "receivers": [[0.5, 1]],
+             "paths": [{ "steps": [{ "reflect": "wall" }] }] }"#,
+    )
+    .unwrap();
+    let tracer = Tracer::new(&scene).unwrap();
+    let (s, r) = (scene.sources()[0], scene.receivers()[0]);
+    let mut out = Vec::new();
+    assert_eq!(
+        tracer.stationary_paths(s, r, 0, &mut out),
+        Err(StationaryError::MediaNotGiven { path: 0 })
+    );
+    assert_eq!(
+        tracer.stationary_paths(s, r, 1, &mut out),
+        Err(StationaryError::NoSuchPath { path: 1 })
+    );
+    assert!(out.is_empty());
 }

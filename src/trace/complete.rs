@@ -266,6 +266,8 @@ impl Place {
 struct Legs {
     d: Aabb,
     pad: f64,
+    /// The directions of the box's corners.
+    corners: [Vec2; 4],
 }
 
 fn legs(from: Aabb, to: Aabb) -> Option<Legs> {
@@ -281,7 +283,24 @@ fn legs(from: Aabb, to: Aabb) -> Option<Legs> {
         .iter()
         .fold(0.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
     let pad = 1e-12 + 16.0 * f64::EPSILON * scale / near;
-    pad.is_finite().then_some(Legs { d, pad })
+    // (A square that overflows, far beyond the scene's coordinates: no bound.)
+    let big = [d.min.x, d.min.y, d.max.x, d.max.y]
+        .iter()
+        .any(|c| !(c.abs() < 1e150));
+    if big {
+        return None;
+    }
+    let unit = |x: f64, y: f64| {
+        let l = (x * x + y * y).sqrt();
+        Vec2::new(x / l, y / l)
+    };
+    let corners = [
+        unit(d.min.x, d.min.y),
+        unit(d.max.x, d.min.y),
+        unit(d.min.x, d.max.y),
+        unit(d.max.x, d.max.y),
+    ];
+    pad.is_finite().then_some(Legs { d, pad, corners })
 }
 
 /// Whether the ray from the origin along `t` meets the box `d`.
@@ -307,13 +326,8 @@ fn ray_meets(t: Vec2, d: Aabb) -> bool {
 fn dot_range(legs: Legs, t: Vec2) -> [f64; 2] {
     let d = legs.d;
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for (x, y) in [
-        (d.min.x, d.min.y),
-        (d.max.x, d.min.y),
-        (d.min.x, d.max.y),
-        (d.max.x, d.max.y),
-    ] {
-        let c = (x * t.x + y * t.y) / x.hypot(y);
+    for c in legs.corners {
+        let c = c.dot(t);
         lo = lo.min(c);
         hi = hi.max(c);
     }
@@ -361,6 +375,14 @@ struct Search<'a> {
     classifier: &'a Classifier,
     hierarchies: &'a [&'a Hierarchy],
     tolerance: f64,
+    sc: Scratch,
+    stats: Stationary,
+}
+
+/// What a search reuses from one triple to the next (per thread): the solve's state and
+/// scratch, the tuples' stack.
+#[derive(Default)]
+struct Scratch {
     nw: NewtonWorkspace,
     trial: Eval,
     s_try: Vec<f64>,
@@ -371,7 +393,37 @@ struct Search<'a> {
     cp: Vec<f64>,
     places: Vec<Place>,
     points: Vec<Point>,
-    stats: Stationary,
+    slowness: Vec<f64>,
+    stack: Vec<u32>,
+    tuple: Vec<u32>,
+    segs: Vec<usize>,
+}
+
+impl Scratch {
+    /// Sized for paths of `k` interactions.
+    fn resize(&mut self, k: usize) {
+        if !self.nw.fits(k) {
+            self.nw.resize_to(k);
+        }
+        self.trial.resize(k);
+        for v in [
+            &mut self.s_try,
+            &mut self.delta,
+            &mut self.diag,
+            &mut self.off,
+            &mut self.rhs,
+            &mut self.cp,
+        ] {
+            v.resize(k, 0.0);
+        }
+        self.tuple.resize(k, 0);
+        self.segs.resize(k, 0);
+    }
+}
+
+thread_local! {
+    /// Each thread's scratch, taken by a search and given back at its end.
+    static SCRATCH: std::cell::Cell<Option<Box<Scratch>>> = const { std::cell::Cell::new(None) };
 }
 
 /// How an assignment's solve ended.
@@ -437,12 +489,12 @@ pub(crate) fn stationary_paths(
         .media
         .as_deref()
         .ok_or(StationaryError::MediaNotGiven { path })?;
-    let slowness: Vec<f64> = media.iter().map(|&m| scene.media()[m].slowness).collect();
     let k = spec.steps.len();
-    let mut nw = NewtonWorkspace::default();
-    nw.resize_to(k);
-    let mut trial = Eval::default();
-    trial.resize(k);
+    let mut sc = *SCRATCH.with(|c| c.take()).unwrap_or_default();
+    sc.resize(k);
+    let mut slowness = std::mem::take(&mut sc.slowness);
+    slowness.clear();
+    slowness.extend(media.iter().map(|&m| scene.media()[m].slowness));
     let mut search = Search {
         g: ProblemRef {
             scene,
@@ -455,16 +507,7 @@ pub(crate) fn stationary_paths(
         classifier,
         hierarchies,
         tolerance,
-        nw,
-        trial,
-        s_try: vec![0.0; k],
-        delta: vec![0.0; k],
-        diag: vec![0.0; k],
-        off: vec![0.0; k],
-        rhs: vec![0.0; k],
-        cp: vec![0.0; k],
-        places: Vec::with_capacity(k),
-        points: Vec::with_capacity(k + 2),
+        sc,
         stats: Stationary {
             complete: true,
             tuples: 0,
@@ -472,8 +515,12 @@ pub(crate) fn stationary_paths(
         },
     };
     search.run(out);
-    finish(out, media, search.stats.complete);
-    Ok(search.stats)
+    let stats = search.stats;
+    let mut sc = search.sc;
+    sc.slowness = slowness;
+    SCRATCH.with(|c| c.set(Some(Box::new(sc))));
+    finish(out, media, stats.complete);
+    Ok(stats)
 }
 
 /// Orders the arrivals by time, drops repeats of one path (a vertex path kept over an
@@ -513,6 +560,12 @@ fn finish(out: &mut Vec<Arrival>, media: &[usize], complete: bool) {
 }
 
 impl Search<'_> {
+    /// [`pruned`] for the places in `self.sc.places`.
+    fn pruned(&self) -> bool {
+        let g = &self.g;
+        pruned(&self.sc.places, g.source, g.receiver, g.slowness)
+    }
+
     /// The branch-and-bound from the tuple of roots.
     fn run(&mut self, out: &mut Vec<Arrival>) {
         let k = self.g.k();
@@ -520,9 +573,24 @@ impl Search<'_> {
             self.solve_leaf_choice(&[], 0, out);
             return;
         }
-        let mut stack: Vec<u32> = vec![0; k];
-        let mut tuple = vec![0u32; k];
-        let mut segs = vec![0usize; k];
+        let mut stack = std::mem::take(&mut self.sc.stack);
+        let mut tuple = std::mem::take(&mut self.sc.tuple);
+        let mut segs = std::mem::take(&mut self.sc.segs);
+        stack.clear();
+        stack.resize(k, 0);
+        self.branch_and_bound(&mut stack, &mut tuple, &mut segs, out);
+        (self.sc.stack, self.sc.tuple, self.sc.segs) = (stack, tuple, segs);
+    }
+
+    /// The search's loop, on the tuples in `stack` (scratch `tuple` and `segs`, `k` long).
+    fn branch_and_bound(
+        &mut self,
+        stack: &mut Vec<u32>,
+        tuple: &mut [u32],
+        segs: &mut [usize],
+        out: &mut Vec<Arrival>,
+    ) {
+        let k = self.g.k();
         while !stack.is_empty() {
             let at = stack.len() - k;
             tuple.copy_from_slice(&stack[at..]);
@@ -532,17 +600,13 @@ impl Search<'_> {
                 self.stats.complete = false;
                 return;
             }
-            self.places.clear();
+            self.sc.places.clear();
             for (i, &n) in tuple.iter().enumerate() {
-                self.places
+                self.sc
+                    .places
                     .push(self.hierarchies[i].nodes[n as usize].place);
             }
-            if pruned(
-                &self.places,
-                self.g.source,
-                self.g.receiver,
-                self.g.slowness,
-            ) {
+            if self.pruned() {
                 continue;
             }
             // Split the widest node that has halves.
@@ -555,7 +619,7 @@ impl Search<'_> {
             match split {
                 Some((i, [l, r], _)) => {
                     for child in [r, l] {
-                        stack.extend_from_slice(&tuple);
+                        stack.extend_from_slice(tuple);
                         let at = stack.len() - k + i;
                         stack[at] = child;
                     }
@@ -565,7 +629,7 @@ impl Search<'_> {
                         segs[i] = self.hierarchies[i].nodes[n as usize].first as usize;
                     }
                     for held in 0..(1usize << k) {
-                        self.solve_leaf_choice(&segs, held, out);
+                        self.solve_leaf_choice(segs, held, out);
                     }
                 }
             }
@@ -577,7 +641,7 @@ impl Search<'_> {
     fn solve_leaf_choice(&mut self, segs: &[usize], held: usize, out: &mut Vec<Arrival>) {
         let k = segs.len();
         let is_held = |i: usize| held >> i & 1 == 1;
-        self.places.clear();
+        self.sc.places.clear();
         for (i, &j) in segs.iter().enumerate() {
             let h = self.hierarchies[i];
             let line = self.g.line(i);
@@ -587,27 +651,23 @@ impl Search<'_> {
                     return;
                 }
                 let v = line.vertices()[j];
-                self.places
+                self.sc
+                    .places
                     .push(Place::new(Aabb::from_points(v, v), h.vertex_cone(j)));
             } else {
                 let (p, q) = line.segment(j);
-                self.places.push(Place {
+                self.sc.places.push(Place {
                     bbox: Aabb::from_points(p, q),
                     tangent: line.tangent(j),
                     spread: 0.0,
                 });
             }
         }
-        if pruned(
-            &self.places,
-            self.g.source,
-            self.g.receiver,
-            self.g.slowness,
-        ) {
+        if self.pruned() {
             return;
         }
         self.stats.solves += 1;
-        let nw = &mut self.nw;
+        let nw = &mut self.sc.nw;
         for (i, &j) in segs.iter().enumerate() {
             let line = self.g.line(i);
             nw.seg[i] = j;
@@ -630,7 +690,7 @@ impl Search<'_> {
                 return;
             }
         }
-        let nw = &self.nw;
+        let nw = &self.sc.nw;
         let e = &nw.eval;
         // Free points strictly inside their segments.
         for (i, &j) in segs.iter().enumerate() {
@@ -685,7 +745,7 @@ impl Search<'_> {
             self.g.receiver,
             &sol,
             nw,
-            &mut self.points,
+            &mut self.sc.points,
         );
         if !record.status.has_time() {
             return;
@@ -693,7 +753,7 @@ impl Search<'_> {
         out.push(Arrival {
             status: record.status,
             time: record.time,
-            points: self.points.clone(),
+            points: self.sc.points.clone(),
             parameters: nw.s[..k].to_vec(),
             segments: segs.to_vec(),
             media: Vec::new(),
@@ -705,17 +765,17 @@ impl Search<'_> {
     }
 
     /// Minimises the time over the free points on the lines of their segments (the held ones
-    /// stay on their vertices) from the state in `self.nw`: damped Newton steps on the
+    /// stay on their vertices) from the state in `self.sc.nw`: damped Newton steps on the
     /// analytic Hessian of `problem` with backtracking on `T` itself, which is convex there.
     /// Returns how it ended and the steps taken; leaves the evaluation at the end in
-    /// `self.nw.eval`.
+    /// `self.sc.nw.eval`.
     fn minimise(&mut self, held: usize) -> (Settled, usize) {
         let k = self.g.k();
         let is_held = |i: usize| held >> i & 1 == 1;
         let tol = self.tolerance;
         let mut steps = 0;
         loop {
-            let nw = &mut self.nw;
+            let nw = &mut self.sc.nw;
             self.g
                 .evaluate(&nw.s, &nw.seg, &nw.pin, &mut nw.eval, true, false);
             let e = &nw.eval;
@@ -733,29 +793,41 @@ impl Search<'_> {
             }
             for i in 0..k {
                 let free = !is_held(i);
-                self.diag[i] = if free { e.diag[i] } else { 1.0 };
-                self.rhs[i] = if free { -e.r[i] } else { 0.0 };
+                self.sc.diag[i] = if free { e.diag[i] } else { 1.0 };
+                self.sc.rhs[i] = if free { -e.r[i] } else { 0.0 };
                 if i + 1 < k {
-                    self.off[i] = if free && !is_held(i + 1) {
+                    self.sc.off[i] = if free && !is_held(i + 1) {
                         e.off[i]
                     } else {
                         0.0
                     };
                 }
             }
-            let off = &self.off[..k.saturating_sub(1)];
-            if !thomas(&self.diag, off, &self.rhs, &mut self.delta, &mut self.cp) {
+            let off = &self.sc.off[..k.saturating_sub(1)];
+            if !thomas(
+                &self.sc.diag,
+                off,
+                &self.sc.rhs,
+                &mut self.sc.delta,
+                &mut self.sc.cp,
+            ) {
                 // A singular Hessian (legs along a segment's line): damp it.
-                let scale = self.diag.iter().fold(0.0f64, |m, d| m.max(d.abs()));
-                for d in &mut self.diag {
+                let scale = self.sc.diag.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+                for d in &mut self.sc.diag {
                     *d += 1e-9 * scale + f64::MIN_POSITIVE;
                 }
-                if !thomas(&self.diag, off, &self.rhs, &mut self.delta, &mut self.cp) {
+                if !thomas(
+                    &self.sc.diag,
+                    off,
+                    &self.sc.rhs,
+                    &mut self.sc.delta,
+                    &mut self.sc.cp,
+                ) {
                     return (Settled::No, steps);
                 }
             }
             let tiny = (0..k).all(|i| {
-                self.delta[i].abs()
+                self.sc.delta[i].abs()
                     <= 4.0 * f64::EPSILON * (nw.s[i].abs() + e.len[i] + e.len[i + 1])
             });
             if tiny {
@@ -765,24 +837,31 @@ impl Search<'_> {
             let mut cap = 1.0f64;
             for i in 0..k {
                 let reach = 2.0 * e.len[i].max(e.len[i + 1]);
-                if self.delta[i].abs() > reach {
-                    cap = cap.min(reach / self.delta[i].abs());
+                if self.sc.delta[i].abs() > reach {
+                    cap = cap.min(reach / self.sc.delta[i].abs());
                 }
             }
-            let slope: f64 = (0..k).map(|i| e.r[i] * self.delta[i]).sum();
+            let slope: f64 = (0..k).map(|i| e.r[i] * self.sc.delta[i]).sum();
             let (t0, rmax0) = (e.time, e.rmax);
             let mut alpha = cap;
             let accepted = loop {
                 for i in 0..k {
-                    self.s_try[i] = nw.s[i] + alpha * self.delta[i];
+                    self.sc.s_try[i] = nw.s[i] + alpha * self.sc.delta[i];
                 }
-                self.g
-                    .evaluate(&self.s_try, &nw.seg, &nw.pin, &mut self.trial, false, false);
-                let t = self.trial.time;
+                self.g.evaluate(
+                    &self.sc.s_try,
+                    &nw.seg,
+                    &nw.pin,
+                    &mut self.sc.trial,
+                    false,
+                    false,
+                );
+                let t = self.sc.trial.time;
                 let drop = t0 - t;
                 // Descent on T, or (within round-off of T) on the residual.
                 let round_off = 4.0 * f64::EPSILON * t0;
-                if drop >= -1e-4 * alpha * slope || (drop >= -round_off && self.trial.rmax < rmax0)
+                if drop >= -1e-4 * alpha * slope
+                    || (drop >= -round_off && self.sc.trial.rmax < rmax0)
                 {
                     break true;
                 }
@@ -793,7 +872,7 @@ impl Search<'_> {
             };
             if !accepted {
                 // Stalled within round-off of the minimum, or not settled.
-                let e = &self.nw.eval;
+                let e = &self.sc.nw.eval;
                 let settled = if rmax0 <= 1e-8 {
                     Settled::Yes
                 } else {
@@ -801,7 +880,7 @@ impl Search<'_> {
                 };
                 return (settled, steps);
             }
-            nw.s[..k].copy_from_slice(&self.s_try);
+            nw.s[..k].copy_from_slice(&self.sc.s_try);
             steps += 1;
         }
     }
