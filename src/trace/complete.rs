@@ -286,7 +286,7 @@ fn legs(from: Aabb, to: Aabb) -> Option<Legs> {
     // (A square that overflows, far beyond the scene's coordinates: no bound.)
     let big = [d.min.x, d.min.y, d.max.x, d.max.y]
         .iter()
-        .any(|c| !(c.abs() < 1e150));
+        .any(|c| c.abs() >= 1e150 || c.is_nan());
     if big {
         return None;
     }

@@ -136,8 +136,9 @@ impl fmt::Display for Reason {
     }
 }
 
-/// The result of one ray without its points: what [`Tracer::solve`] returns (the points stay
-/// in the [`Workspace`]) and what a [`Batch`](crate::Batch) holds per ray.
+/// The result of one ray without its points: what [`Tracer::solve`](crate::Tracer::solve)
+/// returns (the points stay in the [`Workspace`](crate::Workspace)) and what a
+/// [`Batch`](crate::Batch) holds per ray.
 ///
 /// A ray without a time (`no_path`, `not_converged`) has `time` NaN: in every result type,
 /// `time` is a number exactly when [`Status::has_time`] holds.
