@@ -940,3 +940,33 @@ fn media_from_regions_are_refused() {
     );
     assert!(out.is_empty());
 }
+
+/// The search's cost grows with log M: one reflection off a digitised sea floor of 1,000 and
+/// of 100,000 segments visits a few dozen tuples per ray and solves about one assignment.
+#[test]
+fn sea_floor_search_visits_few_tuples() {
+    let mut tuples = Vec::new();
+    for m in [1_000, 100_000] {
+        let scene = Scene::from_spec(&eigenray::demo::sea_floor(m, 20)).unwrap();
+        let tracer = Tracer::new(&scene).unwrap();
+        let mut out = Vec::new();
+        let (mut visited, mut solves) = (0, 0);
+        for &receiver in scene.receivers() {
+            let search = tracer
+                .stationary_paths(scene.sources()[0], receiver, 0, &mut out)
+                .unwrap();
+            assert!(search.complete);
+            assert_eq!(out.len(), 1, "{out:?}");
+            assert!(matches!(out[0].status, Status::Converged | Status::Vertex));
+            visited += search.tuples;
+            solves += search.solves;
+        }
+        assert!(solves <= 2 * 20, "{solves} solves");
+        tuples.push(visited as f64 / 20.0);
+    }
+    // About two tuples more per level of the hierarchy (7 more levels), not 100 times more.
+    assert!(
+        tuples[0] < 40.0 && tuples[1] < tuples[0] + 30.0,
+        "{tuples:?}"
+    );
+}
