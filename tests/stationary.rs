@@ -970,3 +970,44 @@ fn sea_floor_search_visits_few_tuples() {
         "{tuples:?}"
     );
 }
+
+/// Two refractions through one closed interface (a digitised round lens of 1,000 and of
+/// 20,000 segments): the legs between two points of the same interface are bounded by the
+/// tangents between them, so the search stays small (without that bound every pair of
+/// neighbouring segments was solved: hundreds of thousands of solves).
+#[test]
+fn round_lens_search_stays_small() {
+    let mut costs = Vec::new();
+    for m in [1_000, 20_000] {
+        let points = (0..m)
+            .map(|i| {
+                let a = std::f64::consts::TAU * i as f64 / m as f64;
+                [0.5 * a.cos(), 0.5 * a.sin()]
+            })
+            .collect();
+        let case = Case {
+            lines: vec![Line {
+                points,
+                closed: true,
+            }],
+            ..lens_case([1.0, 0.0])
+        };
+        let scene = Scene::from_json(&case.json()).unwrap();
+        let tracer = Tracer::new(&scene).unwrap();
+        let mut out = Vec::new();
+        let search = tracer
+            .stationary_paths(Point::new(-2.0, 0.3), Point::new(1.0, 0.0), 0, &mut out)
+            .unwrap();
+        assert!(search.complete && !out.is_empty(), "{out:?}");
+        // Every arrival passes through the glass: its first leg enters near the source side.
+        assert!(
+            out.iter()
+                .all(|a| a.points[1].x < 0.0 && a.points[2].x > 0.0)
+        );
+        costs.push((search.tuples, search.solves));
+    }
+    assert!(
+        costs.iter().all(|&(t, s)| t < 10_000 && s < 500),
+        "{costs:?}"
+    );
+}

@@ -18,9 +18,13 @@
 //! tangent `tᵢ` of the cone: `rᵢ` lies within `(wᵢ uᵢ − wᵢ₊₁ uᵢ₊₁) · t₀ ± (wᵢ + wᵢ₊₁) |tᵢ − t₀|`
 //! (`t₀` the cone's middle tangent), and `u · t₀` over the directions of a box of differences
 //! that misses the origin lies between its values at the box's corners (or reaches ±1 where
-//! the directions pass through `±t₀`). Every bound is widened by its round-off. A tuple whose
-//! bound for some point excludes zero holds no stationary path and is dropped; where a bound
-//! cannot be computed (two boxes that touch, so a leg may vanish) that point does not prune.
+//! the directions pass through `±t₀`). Where two consecutive points lie on adjacent or
+//! overlapping ranges of one interface (boxes that touch), the leg between them runs along
+//! a sum of the tangents between them: its direction lies in the arc of their tangent angles
+//! (or, when either point may come first, in that arc or the opposite one). Every bound is
+//! widened by its round-off. A tuple whose bound for some point excludes zero holds no
+//! stationary path and is dropped; where a bound cannot be computed (boxes that touch
+//! otherwise, so a leg may vanish, or a tangent arc of π or more) that point does not prune.
 //! Leaves (one segment each) are solved: every choice of interior or held first vertex per
 //! point, each choice bounded again first with its own segment's tangent or its vertex's cone.
 //!
@@ -215,7 +219,7 @@ impl Hierarchy {
             first: a as u32,
             bbox,
             cone,
-            place: Place::new(bbox, cone),
+            place: Place::new(bbox, cone, a, a + 1),
             kids: None,
         });
         if b - a > 1 {
@@ -226,7 +230,7 @@ impl Hierarchy {
             let node = &mut self.nodes[at];
             node.bbox = nl.bbox.union(nr.bbox);
             node.cone = [nl.cone[0].min(nr.cone[0]), nl.cone[1].max(nr.cone[1])];
-            node.place = Place::new(node.bbox, node.cone);
+            node.place = Place::new(node.bbox, node.cone, a, b);
             node.kids = Some([l, r]);
         }
         at as u32
@@ -242,11 +246,18 @@ struct Place {
     bbox: Aabb,
     tangent: Vec2,
     spread: f64,
+    /// The interface (set by the search; `usize::MAX` in a hierarchy's nodes).
+    interface: usize,
+    /// The segments `first..end` whose points (and first vertex) the place holds, and the
+    /// range of their tangent angles.
+    first: usize,
+    end: usize,
+    cone: [f64; 2],
 }
 
 impl Place {
-    /// The place of points in `bbox` with tangent angles in `cone`.
-    fn new(bbox: Aabb, cone: [f64; 2]) -> Place {
+    /// The place of points in `bbox` on segments `first..end` with tangent angles in `cone`.
+    fn new(bbox: Aabb, cone: [f64; 2], first: usize, end: usize) -> Place {
         let mid = 0.5 * (cone[0] + cone[1]);
         let h = 0.5 * (cone[1] - cone[0]) + CONE_PAD;
         // |t − t₀| = 2 sin(|δ|/2) for t at angle δ from t₀.
@@ -255,6 +266,85 @@ impl Place {
             bbox,
             tangent: Vec2::new(mid.cos(), mid.sin()),
             spread,
+            interface: usize::MAX,
+            first,
+            end,
+            cone,
+        }
+    }
+}
+
+/// The directions of a leg between two places on one interface whose boxes touch: a point
+/// `y` after `x` along the polyline has `y − x` a sum of non-negative multiples of the
+/// tangents between them, so for adjacent or overlapping ranges of segments the direction lies
+/// in the arc of their tangent angles (`both`: or in the opposite arc, when either point may
+/// come first). `None` when the ranges are apart or the arc is not narrower than π.
+#[derive(Clone, Copy, Debug)]
+struct Chord {
+    /// Unit vectors at the arc's ends (counter-clockwise from `ends[0]`).
+    ends: [Vec2; 2],
+    /// Whether the opposite arc is possible too.
+    both: bool,
+    /// Whether the arc is reversed (the second point comes first along the polyline).
+    reversed: bool,
+}
+
+fn chord(a: &Place, b: &Place) -> Option<Chord> {
+    if a.interface != b.interface || a.interface == usize::MAX {
+        return None;
+    }
+    let (forward, backward) = (a.end <= b.first, b.end <= a.first);
+    let overlap = !forward && !backward;
+    let adjacent = a.end == b.first || b.end == a.first || overlap;
+    if !adjacent {
+        return None;
+    }
+    let lo = a.cone[0].min(b.cone[0]) - CONE_PAD;
+    let hi = a.cone[1].max(b.cone[1]) + CONE_PAD;
+    if !(hi - lo < PI) {
+        return None;
+    }
+    Some(Chord {
+        ends: [Vec2::new(lo.cos(), lo.sin()), Vec2::new(hi.cos(), hi.sin())],
+        both: overlap,
+        reversed: backward,
+    })
+}
+
+/// The range of `u · t` over the unit vectors `u` of the arc from `e0` counter-clockwise to
+/// `e1` (narrower than π).
+fn arc_dot_range(e0: Vec2, e1: Vec2, t: Vec2) -> [f64; 2] {
+    let within = |v: Vec2| e0.cross(v) >= 0.0 && v.cross(e1) >= 0.0;
+    let (a, b) = (e0.dot(t), e1.dot(t));
+    let hi = if within(t) { 1.0 } else { a.max(b) };
+    let lo = if within(-t) { -1.0 } else { a.min(b) };
+    [lo - 1e-12, hi + 1e-12]
+}
+
+/// What bounds the directions of one leg.
+#[derive(Clone, Copy, Debug)]
+enum LegBound {
+    Box(Legs),
+    Arc(Chord),
+    Unknown,
+}
+
+impl LegBound {
+    /// The ranges of `u · t` (two for a chord that may run either way).
+    fn dot_ranges(self, t: Vec2) -> ([f64; 2], Option<[f64; 2]>) {
+        match self {
+            LegBound::Box(l) => (dot_range(l, t), None),
+            LegBound::Arc(c) => {
+                let [e0, e1] = c.ends;
+                let fwd = arc_dot_range(e0, e1, t);
+                let back = arc_dot_range(-e0, -e1, t);
+                match (c.both, c.reversed) {
+                    (true, _) => (fwd, Some(back)),
+                    (false, false) => (fwd, None),
+                    (false, true) => (back, None),
+                }
+            }
+            LegBound::Unknown => ([-1.0, 1.0], None),
         }
     }
 }
@@ -351,15 +441,31 @@ fn pruned(places: &[Place], source: Point, receiver: Point, w: &[f64]) -> bool {
         i if i == k + 1 => end(receiver),
         i => places[i - 1].bbox,
     };
-    let mut before = legs(bbox(0), bbox(1));
+    // Leg `l` joins point l − 1 and point l (0: the source; k + 1: the receiver).
+    let leg = |l: usize| match legs(bbox(l), bbox(l + 1)) {
+        Some(b) => LegBound::Box(b),
+        None if l >= 1 && l < k => {
+            chord(&places[l - 1], &places[l]).map_or(LegBound::Unknown, LegBound::Arc)
+        }
+        None => LegBound::Unknown,
+    };
+    let mut before = leg(0);
     for i in 0..k {
-        let after = legs(bbox(i + 1), bbox(i + 2));
-        if let (Some(la), Some(lb)) = (before, after) {
+        let after = leg(i + 1);
+        if !matches!(before, LegBound::Unknown) && !matches!(after, LegBound::Unknown) {
             let (t, spread) = (places[i].tangent, places[i].spread);
-            let (a, b) = (dot_range(la, t), dot_range(lb, t));
             let (wa, wb) = (w[i], w[i + 1]);
             let slack = (wa + wb) * spread + 1e-10 * (wa + wb);
-            if wa * a[0] - wb * b[1] - slack > 0.0 || wa * a[1] - wb * b[0] + slack < 0.0 {
+            let excludes = |a: [f64; 2], b: [f64; 2]| {
+                wa * a[0] - wb * b[1] - slack > 0.0 || wa * a[1] - wb * b[0] + slack < 0.0
+            };
+            let (a0, a1) = before.dot_ranges(t);
+            let (b0, b1) = after.dot_ranges(t);
+            let all = [Some(a0), a1]
+                .into_iter()
+                .flatten()
+                .all(|a| [Some(b0), b1].into_iter().flatten().all(|b| excludes(a, b)));
+            if all {
                 return true;
             }
         }
@@ -602,9 +708,9 @@ impl Search<'_> {
             }
             self.sc.places.clear();
             for (i, &n) in tuple.iter().enumerate() {
-                self.sc
-                    .places
-                    .push(self.hierarchies[i].nodes[n as usize].place);
+                let mut place = self.hierarchies[i].nodes[n as usize].place;
+                place.interface = self.g.steps[i].interface;
+                self.sc.places.push(place);
             }
             if self.pruned() {
                 continue;
@@ -651,17 +757,19 @@ impl Search<'_> {
                     return;
                 }
                 let v = line.vertices()[j];
-                self.sc
-                    .places
-                    .push(Place::new(Aabb::from_points(v, v), h.vertex_cone(j)));
+                let cone = h.vertex_cone(j);
+                let place = Place::new(Aabb::from_points(v, v), cone, j, j + 1);
+                self.sc.places.push(place);
             } else {
                 let (p, q) = line.segment(j);
+                let t = h.theta[j];
                 self.sc.places.push(Place {
-                    bbox: Aabb::from_points(p, q),
                     tangent: line.tangent(j),
                     spread: 0.0,
+                    ..Place::new(Aabb::from_points(p, q), [t, t], j, j + 1)
                 });
             }
+            self.sc.places[i].interface = self.g.steps[i].interface;
         }
         if self.pruned() {
             return;
