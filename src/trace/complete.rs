@@ -301,7 +301,7 @@ fn chord(a: &Place, b: &Place) -> Option<Chord> {
     }
     let lo = a.cone[0].min(b.cone[0]) - CONE_PAD;
     let hi = a.cone[1].max(b.cone[1]) + CONE_PAD;
-    if !(hi - lo < PI) {
+    if hi - lo >= PI || (hi - lo).is_nan() {
         return None;
     }
     Some(Chord {
