@@ -50,7 +50,8 @@ pub use scene::{
     StepSpec,
 };
 pub use trace::{
-    InitialGuess, Kernels, Ray, RayRecord, Reason, Status, Tracer, Workspace, ray_index,
+    Arrival, InitialGuess, Kernels, Kink, Ray, RayRecord, Reason, Stationary, StationaryError,
+    Status, Tracer, Workspace, ray_index,
 };
 
 /// The parts of a validated [`Scene`], as its accessors give them: media, interfaces, paths

@@ -16,6 +16,7 @@ use crate::scene::{MAX_COORDINATE, Scene, SceneError};
 use crate::solver::{NewtonOptions, NewtonWorkspace, solve};
 
 mod classify;
+mod complete;
 mod flat;
 mod one_step;
 mod plan;
@@ -25,6 +26,7 @@ mod start;
 mod straight;
 
 pub(crate) use classify::Classifier;
+pub use complete::{Arrival, Kink, Stationary, StationaryError};
 pub(crate) use one_step::{OneStepStart, flat_status};
 pub use plan::Kernels;
 pub(crate) use plan::{OneStepPath, PathPlan};
@@ -204,6 +206,8 @@ pub struct Tracer<'s> {
     newton: NewtonOptions,
     guess: InitialGuess,
     kernels: Kernels,
+    /// Per interface: its segment hierarchy for the complete search, built on first use.
+    hierarchies: Vec<std::sync::OnceLock<complete::Hierarchy>>,
 }
 
 impl<'s> Tracer<'s> {
@@ -235,6 +239,11 @@ impl<'s> Tracer<'s> {
             },
             guess: InitialGuess::default(),
             kernels: Kernels::default(),
+            hierarchies: scene
+                .interfaces()
+                .iter()
+                .map(|_| Default::default())
+                .collect(),
         };
         tracer.plan();
         Ok(tracer)
@@ -286,6 +295,75 @@ impl<'s> Tracer<'s> {
         self.kernels = kernels;
         self.plan();
         self
+    }
+
+    /// Every stationary path of path `path` from `source` to `receiver` into `out` (emptied
+    /// first): `converged`, `vertex` (with its [`Kink`]) and `obstructed` ones, each once,
+    /// ordered by time. A search that is [`complete`](Stationary::complete) lists them all, so
+    /// an empty `out` then proves that the sequence has no stationary path.
+    ///
+    /// On one assignment of segments the time is convex in the parameters; the search runs
+    /// a branch-and-bound over each polyline's segment hierarchy with certain bounds on the
+    /// residuals, and solves each surviving assignment exactly (see the `complete` module's
+    /// documentation). The path must give its leg media. The first call on an interface
+    /// builds its hierarchy (`O(M)`); later calls cost about `O(log M)` per arrival.
+    ///
+    /// ```
+    /// use eigenray::{Kink, Point, Scene, Status, Tracer};
+    /// // A mirror bent into a valley, seen from above: a specular point on each slope, and
+    /// // the bottom, where the time has a maximum-type kink.
+    /// let scene = Scene::from_json(r#"{
+    ///     "media": { "air": { "speed": 1.0 } },
+    ///     "interfaces": { "valley": { "points": [[-3, 0], [0, -2], [3, 0]] } },
+    ///     "sources": [[-0.5, 2]], "receivers": [[0.5, 2]],
+    ///     "paths": [{ "steps": [{ "reflect": "valley" }], "media": ["air", "air"] }]
+    /// }"#).unwrap();
+    /// let tracer = Tracer::new(&scene).unwrap();
+    /// let mut arrivals = Vec::new();
+    /// let search = tracer
+    ///     .stationary_paths(Point::new(-0.5, 2.0), Point::new(0.5, 2.0), 0, &mut arrivals)
+    ///     .unwrap();
+    /// assert!(search.complete);
+    /// let statuses: Vec<Status> = arrivals.iter().map(|a| a.status).collect();
+    /// assert_eq!(statuses, [Status::Converged, Status::Converged, Status::Vertex]);
+    /// assert_eq!(arrivals[2].kink, Some(Kink::Maximum));
+    /// assert!((arrivals[0].time - 45f64.sqrt()).abs() < 1e-12);
+    /// assert!(arrivals.windows(2).all(|w| w[0].time <= w[1].time));
+    /// ```
+    ///
+    /// # Errors
+    /// A path index out of range, or a path without `media`.
+    pub fn stationary_paths(
+        &self,
+        source: Point,
+        receiver: Point,
+        path: usize,
+        out: &mut Vec<Arrival>,
+    ) -> Result<Stationary, StationaryError> {
+        let spec = self
+            .scene
+            .paths()
+            .get(path)
+            .ok_or(StationaryError::NoSuchPath { path })?;
+        let hierarchies: Vec<&complete::Hierarchy> = spec
+            .steps
+            .iter()
+            .map(|step| {
+                self.hierarchies[step.interface].get_or_init(|| {
+                    complete::Hierarchy::new(&self.scene.interfaces()[step.interface].polyline)
+                })
+            })
+            .collect();
+        complete::stationary_paths(
+            self.scene,
+            &self.classifier,
+            &hierarchies,
+            self.newton.tolerance,
+            source,
+            receiver,
+            path,
+            out,
+        )
     }
 
     /// The scene.

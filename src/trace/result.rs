@@ -7,7 +7,7 @@ use crate::geom::Point;
 use crate::scene::Scene;
 use crate::solver::Solution;
 
-/// How a ray ended (the `status` of `eigenray solve`'s output).
+/// How a ray ended (the contract's `status`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Status {
@@ -27,8 +27,7 @@ pub enum Status {
 }
 
 impl Status {
-    /// Its name in `eigenray solve`'s output: `converged`, `vertex`, `no_path`,
-    /// `obstructed`, `not_converged`.
+    /// The contract's name: `converged`, `vertex`, `no_path`, `obstructed`, `not_converged`.
     pub fn as_str(self) -> &'static str {
         match self {
             Status::Converged => "converged",
@@ -137,8 +136,9 @@ impl fmt::Display for Reason {
     }
 }
 
-/// The result of one ray without its points: what [`Tracer::solve`](crate::Tracer::solve) returns (the points stay
-/// in the [`Workspace`](crate::Workspace)) and what a [`Batch`](crate::Batch) holds per ray.
+/// The result of one ray without its points: what [`Tracer::solve`](crate::Tracer::solve)
+/// returns (the points stay in the [`Workspace`](crate::Workspace)) and what a
+/// [`Batch`](crate::Batch) holds per ray.
 ///
 /// A ray without a time (`no_path`, `not_converged`) has `time` NaN: in every result type,
 /// `time` is a number exactly when [`Status::has_time`] holds.

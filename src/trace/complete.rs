@@ -1,0 +1,995 @@
+//! Every stationary path of a step sequence: a branch-and-bound over tuples of nodes of each
+//! polyline's segment hierarchy, pruned by certain bounds on the residuals, and an exact solve
+//! of every surviving assignment of segments (and of vertices).
+//!
+//! On one assignment of segments, with each point on the whole line of its segment, the time
+//! `T(s) = Σ wⱼ |xⱼ₊₁ − xⱼ|` is a sum of norms of affine maps, so convex: it has one minimum
+//! (one set of minima when degenerate). A path is an interior stationary path of the sequence
+//! (`converged` or `obstructed`) exactly when its assignment's minimiser lies strictly inside
+//! every segment, and a `vertex` path when some points held on vertices make the others'
+//! minimiser lie inside their segments while the one-sided derivatives at each held vertex
+//! bracket zero. Each candidate goes through the one classifier.
+//!
+//! The search visits tuples of hierarchy nodes (a node: a range of consecutive segments, the
+//! box of their vertices and the cone of their tangents, the tangent of the segment before
+//! the range included so that its first vertex is covered). For point `i` between boxes, the
+//! residual `rᵢ = (wᵢ uᵢ − wᵢ₊₁ uᵢ₊₁) · tᵢ` is bounded over every direction `uᵢ` from a point
+//! of the previous box to one of this box, every `uᵢ₊₁` from this box to the next, and every
+//! tangent `tᵢ` of the cone: `rᵢ` lies within `(wᵢ uᵢ − wᵢ₊₁ uᵢ₊₁) · t₀ ± (wᵢ + wᵢ₊₁) |tᵢ − t₀|`
+//! (`t₀` the cone's middle tangent), and `u · t₀` over the directions of a box of differences
+//! that misses the origin lies between its values at the box's corners (or reaches ±1 where
+//! the directions pass through `±t₀`). Where two consecutive points lie on adjacent or
+//! overlapping ranges of one interface (boxes that touch), the leg between them runs along
+//! a sum of the tangents between them: its direction lies in the arc of their tangent angles
+//! (or, when either point may come first, in that arc or the opposite one). Every bound is
+//! widened by its round-off. A tuple whose bound for some point excludes zero holds no
+//! stationary path and is dropped; where a bound cannot be computed (boxes that touch
+//! otherwise, so a leg may vanish, or a tangent arc of π or more) that point does not prune.
+//! Leaves (one segment each) are solved: every choice of interior or held first vertex per
+//! point, each choice bounded again first with its own segment's tangent or its vertex's cone.
+//!
+//! An assignment's solve is damped Newton on the analytic Hessian of `problem` with
+//! backtracking on `T` itself (convex there). It cannot be the solver's own loop, which moves
+//! points across vertices: here each point stays on its segment's line. A solve that stalls
+//! next to a collapsed leg (within [`COLLAPSE`] of the path's length) or with a leg along its
+//! segment's line is taken to approach a minimum where `T` is not differentiable, which holds
+//! no stationary path; any other solve that does not settle marks the search incomplete.
+
+use std::f64::consts::PI;
+use std::fmt;
+
+use crate::geom::{Aabb, Point, Vec2};
+use crate::polyline::Polyline;
+use crate::problem::{Eval, Pin, ProblemRef};
+use crate::scene::Scene;
+use crate::solver::{NewtonWorkspace, Outcome, Solution, thomas};
+
+use super::{Classifier, Reason, Status};
+
+/// How the time behaves at the held vertices of a `vertex` path.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Kink {
+    /// Moving any held point off its vertex along either segment makes the time rise.
+    Minimum,
+    /// Moving any held point off its vertex along either segment makes the time fall.
+    Maximum,
+    /// Held points of both kinds (two or more held points).
+    Mixed,
+}
+
+impl Kink {
+    /// The contract's name: `minimum`, `maximum` (and `mixed`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Kink::Minimum => "minimum",
+            Kink::Maximum => "maximum",
+            Kink::Mixed => "mixed",
+        }
+    }
+}
+
+/// One stationary path of a sequence (see [`Tracer::stationary_paths`](super::Tracer::stationary_paths)).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Arrival {
+    /// `converged`, `vertex` or `obstructed`.
+    pub status: Status,
+    /// Travel time (always a number: every arrival has a time).
+    pub time: f64,
+    /// Source, interaction points, receiver.
+    pub points: Vec<Point>,
+    /// Interaction parameters (arclengths along their polylines).
+    pub parameters: Vec<f64>,
+    /// The segment of each interaction (a held point: the segment its vertex starts).
+    pub segments: Vec<usize>,
+    /// Leg media, as indices into [`Scene::media`].
+    pub media: Vec<usize>,
+    /// Why it is not `converged`, when it is not.
+    pub reason: Option<Reason>,
+    /// For a `vertex` path: how the time behaves at its held vertices.
+    pub kink: Option<Kink>,
+    /// Final relative residual of the free points.
+    pub residual: f64,
+    /// Whether the search of its triple was complete (see [`Stationary::complete`]).
+    pub complete: bool,
+}
+
+/// What a search of one triple did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Stationary {
+    /// Whether every stationary path of the triple is listed: `false` when the search reached
+    /// its limit of tuples, or an assignment's solve did not settle (the list may then be
+    /// short). With `true`, an empty list proves that the sequence has no stationary path.
+    pub complete: bool,
+    /// Tuples of hierarchy nodes visited.
+    pub tuples: usize,
+    /// Assignments solved.
+    pub solves: usize,
+}
+
+/// Why a search cannot run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StationaryError {
+    /// There is no path of that index.
+    ///
+    /// How to fix: pass an index below `Scene::paths().len()`.
+    NoSuchPath {
+        /// The index asked for.
+        path: usize,
+    },
+    /// The path does not give its leg media; the complete search does not look them up in
+    /// the regions yet.
+    ///
+    /// How to fix: give the path's `media` (one per leg).
+    MediaNotGiven {
+        /// The path's index.
+        path: usize,
+    },
+}
+
+impl fmt::Display for StationaryError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StationaryError::NoSuchPath { path } => write!(f, "there is no path {path}"),
+            StationaryError::MediaNotGiven { path } => write!(
+                f,
+                "path {path} gives no `media`: the search for every stationary path needs \
+                 the leg media given (region lookup is not supported there yet)"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for StationaryError {}
+
+/// Tuples a search visits at most before it gives up (and says it is not complete).
+const MAX_TUPLES: usize = 1 << 26;
+/// Newton steps per assignment.
+const MAX_STEPS: usize = 200;
+
+/// A range of consecutive segments of a polyline: its box and tangent cone.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    /// First segment.
+    first: u32,
+    /// The box of the range's vertices.
+    bbox: Aabb,
+    /// The range of tangent angles (unwrapped), the segment before the range included.
+    cone: [f64; 2],
+    /// Its box and cone as the bound takes them.
+    place: Place,
+    /// The two halves, when the range has more than one segment.
+    kids: Option<[u32; 2]>,
+}
+
+/// A binary hierarchy over one polyline's segments (built once per interface).
+#[derive(Clone, Debug)]
+pub(crate) struct Hierarchy {
+    nodes: Vec<Node>,
+    /// Unwrapped tangent angle of each segment.
+    theta: Vec<f64>,
+    /// On a closed polyline, the angle of the last segment unwrapped against the first.
+    before_first: Option<f64>,
+}
+
+impl Hierarchy {
+    /// The hierarchy of `line`'s segments.
+    pub(crate) fn new(line: &Polyline) -> Hierarchy {
+        let m = line.num_segments();
+        let turn = |a: Vec2, b: Vec2| a.cross(b).atan2(a.dot(b));
+        let mut theta = Vec::with_capacity(m);
+        let t0 = line.tangent(0);
+        theta.push(t0.y.atan2(t0.x));
+        for j in 1..m {
+            theta.push(theta[j - 1] + turn(line.tangent(j - 1), line.tangent(j)));
+        }
+        let before_first = line
+            .is_closed()
+            .then(|| theta[0] - turn(line.tangent(m - 1), line.tangent(0)));
+        let mut h = Hierarchy {
+            nodes: Vec::with_capacity(2 * m),
+            theta,
+            before_first,
+        };
+        h.build(line, 0, m);
+        h
+    }
+
+    /// The angle of the segment before `j` (none at an open polyline's start).
+    fn before(&self, j: usize) -> Option<f64> {
+        if j > 0 {
+            Some(self.theta[j - 1])
+        } else {
+            self.before_first
+        }
+    }
+
+    /// The cone of tangents at the vertex where segment `j` starts.
+    fn vertex_cone(&self, j: usize) -> [f64; 2] {
+        let t = self.theta[j];
+        let b = self.before(j).unwrap_or(t);
+        [t.min(b), t.max(b)]
+    }
+
+    /// Adds the node of segments `a..b` and its descendants; returns its index.
+    fn build(&mut self, line: &Polyline, a: usize, b: usize) -> u32 {
+        let at = self.nodes.len();
+        let (p, q) = line.segment(a);
+        let (bbox, cone) = (Aabb::from_points(p, q), self.vertex_cone(a));
+        self.nodes.push(Node {
+            first: a as u32,
+            bbox,
+            cone,
+            place: Place::new(bbox, cone, a, a + 1),
+            kids: None,
+        });
+        if b - a > 1 {
+            let mid = a + (b - a) / 2;
+            let l = self.build(line, a, mid);
+            let r = self.build(line, mid, b);
+            let (nl, nr) = (self.nodes[l as usize], self.nodes[r as usize]);
+            let node = &mut self.nodes[at];
+            node.bbox = nl.bbox.union(nr.bbox);
+            node.cone = [nl.cone[0].min(nr.cone[0]), nl.cone[1].max(nr.cone[1])];
+            node.place = Place::new(node.bbox, node.cone, a, b);
+            node.kids = Some([l, r]);
+        }
+        at as u32
+    }
+}
+
+/// Widening of every tangent cone (rad): the round-off of the unwrapped angles.
+const CONE_PAD: f64 = 1e-9;
+
+/// What a point of a tuple may be: a box, and tangents `t` with `|t − tangent| ≤ spread`.
+#[derive(Clone, Copy, Debug)]
+struct Place {
+    bbox: Aabb,
+    tangent: Vec2,
+    spread: f64,
+    /// The interface (set by the search; `usize::MAX` in a hierarchy's nodes).
+    interface: usize,
+    /// The segments `first..end` whose points (and first vertex) the place holds, and the
+    /// range of their tangent angles.
+    first: usize,
+    end: usize,
+    cone: [f64; 2],
+}
+
+impl Place {
+    /// The place of points in `bbox` on segments `first..end` with tangent angles in `cone`.
+    fn new(bbox: Aabb, cone: [f64; 2], first: usize, end: usize) -> Place {
+        let mid = 0.5 * (cone[0] + cone[1]);
+        let h = 0.5 * (cone[1] - cone[0]) + CONE_PAD;
+        // |t − t₀| = 2 sin(|δ|/2) for t at angle δ from t₀.
+        let spread = if h < PI { 2.0 * (0.5 * h).sin() } else { 2.0 };
+        Place {
+            bbox,
+            tangent: Vec2::new(mid.cos(), mid.sin()),
+            spread,
+            interface: usize::MAX,
+            first,
+            end,
+            cone,
+        }
+    }
+}
+
+/// The directions of a leg between two places on one interface whose boxes touch: a point
+/// `y` after `x` along the polyline has `y − x` a sum of non-negative multiples of the
+/// tangents between them, so for adjacent or overlapping ranges of segments the direction lies
+/// in the arc of their tangent angles (`both`: or in the opposite arc, when either point may
+/// come first). `None` when the ranges are apart or the arc is not narrower than π.
+#[derive(Clone, Copy, Debug)]
+struct Chord {
+    /// Unit vectors at the arc's ends (counter-clockwise from `ends[0]`).
+    ends: [Vec2; 2],
+    /// Whether the opposite arc is possible too.
+    both: bool,
+    /// Whether the arc is reversed (the second point comes first along the polyline).
+    reversed: bool,
+}
+
+fn chord(a: &Place, b: &Place) -> Option<Chord> {
+    if a.interface != b.interface || a.interface == usize::MAX {
+        return None;
+    }
+    let (forward, backward) = (a.end <= b.first, b.end <= a.first);
+    let overlap = !forward && !backward;
+    let adjacent = a.end == b.first || b.end == a.first || overlap;
+    if !adjacent {
+        return None;
+    }
+    let lo = a.cone[0].min(b.cone[0]) - CONE_PAD;
+    let hi = a.cone[1].max(b.cone[1]) + CONE_PAD;
+    if hi - lo >= PI || (hi - lo).is_nan() {
+        return None;
+    }
+    Some(Chord {
+        ends: [Vec2::new(lo.cos(), lo.sin()), Vec2::new(hi.cos(), hi.sin())],
+        both: overlap,
+        reversed: backward,
+    })
+}
+
+/// The range of `u · t` over the unit vectors `u` of the arc from `e0` counter-clockwise to
+/// `e1` (narrower than π).
+fn arc_dot_range(e0: Vec2, e1: Vec2, t: Vec2) -> [f64; 2] {
+    let within = |v: Vec2| e0.cross(v) >= 0.0 && v.cross(e1) >= 0.0;
+    let (a, b) = (e0.dot(t), e1.dot(t));
+    let hi = if within(t) { 1.0 } else { a.max(b) };
+    let lo = if within(-t) { -1.0 } else { a.min(b) };
+    [lo - 1e-12, hi + 1e-12]
+}
+
+/// What bounds the directions of one leg.
+#[derive(Clone, Copy, Debug)]
+enum LegBound {
+    Box(Legs),
+    Arc(Chord),
+    Unknown,
+}
+
+impl LegBound {
+    /// The ranges of `u · t` (two for a chord that may run either way).
+    fn dot_ranges(self, t: Vec2) -> ([f64; 2], Option<[f64; 2]>) {
+        match self {
+            LegBound::Box(l) => (dot_range(l, t), None),
+            LegBound::Arc(c) => {
+                let [e0, e1] = c.ends;
+                let fwd = arc_dot_range(e0, e1, t);
+                let back = arc_dot_range(-e0, -e1, t);
+                match (c.both, c.reversed) {
+                    (true, _) => (fwd, Some(back)),
+                    (false, false) => (fwd, None),
+                    (false, true) => (back, None),
+                }
+            }
+            LegBound::Unknown => ([-1.0, 1.0], None),
+        }
+    }
+}
+
+/// Every difference of a point of `to` and a point of `from`: a box, with the round-off of
+/// its corners against its distance from the origin (the error of a direction taken from it);
+/// `None` when the boxes touch (a leg between them may vanish: no bound).
+#[derive(Clone, Copy, Debug)]
+struct Legs {
+    d: Aabb,
+    pad: f64,
+    /// The directions of the box's corners.
+    corners: [Vec2; 4],
+}
+
+fn legs(from: Aabb, to: Aabb) -> Option<Legs> {
+    let d = Aabb {
+        min: Point::new(to.min.x - from.max.x, to.min.y - from.max.y),
+        max: Point::new(to.max.x - from.min.x, to.max.y - from.min.y),
+    };
+    let near = d.distance_sq(Point::new(0.0, 0.0)).sqrt();
+    if near.is_nan() || near <= 0.0 {
+        return None;
+    }
+    let scale = [from.min, from.max, to.min, to.max]
+        .iter()
+        .fold(0.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
+    let pad = 1e-12 + 16.0 * f64::EPSILON * scale / near;
+    // (A square that overflows, far beyond the scene's coordinates: no bound.)
+    let big = [d.min.x, d.min.y, d.max.x, d.max.y]
+        .iter()
+        .any(|c| c.abs() >= 1e150 || c.is_nan());
+    if big {
+        return None;
+    }
+    let unit = |x: f64, y: f64| {
+        let l = (x * x + y * y).sqrt();
+        Vec2::new(x / l, y / l)
+    };
+    let corners = [
+        unit(d.min.x, d.min.y),
+        unit(d.max.x, d.min.y),
+        unit(d.min.x, d.max.y),
+        unit(d.max.x, d.max.y),
+    ];
+    pad.is_finite().then_some(Legs { d, pad, corners })
+}
+
+/// Whether the ray from the origin along `t` meets the box `d`.
+fn ray_meets(t: Vec2, d: Aabb) -> bool {
+    let (mut lo, mut hi) = (0.0f64, f64::INFINITY);
+    for (t, a, b) in [(t.x, d.min.x, d.max.x), (t.y, d.min.y, d.max.y)] {
+        if t == 0.0 {
+            if a > 0.0 || b < 0.0 {
+                return false;
+            }
+        } else {
+            let (p, q) = (a / t, b / t);
+            lo = lo.max(p.min(q));
+            hi = hi.min(p.max(q));
+        }
+    }
+    lo <= hi
+}
+
+/// The range of `u · t` over the unit directions `u` of the differences in `legs`: at the
+/// corners (the extreme directions of a box that misses the origin), or ±1 where the
+/// directions pass through `±t`.
+fn dot_range(legs: Legs, t: Vec2) -> [f64; 2] {
+    let d = legs.d;
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for c in legs.corners {
+        let c = c.dot(t);
+        lo = lo.min(c);
+        hi = hi.max(c);
+    }
+    if ray_meets(t, d) {
+        hi = 1.0;
+    }
+    if ray_meets(-t, d) {
+        lo = -1.0;
+    }
+    [lo - legs.pad, hi + legs.pad]
+}
+
+/// Whether the places of the points (with the source and receiver around them) hold no
+/// stationary path: for some point the bound of `rᵢ = (wᵢ uᵢ − wᵢ₊₁ uᵢ₊₁) · tᵢ` excludes zero,
+/// `rᵢ` within `(wᵢ uᵢ − wᵢ₊₁ uᵢ₊₁) · t₀ ± (wᵢ + wᵢ₊₁) |tᵢ − t₀|`.
+fn pruned(places: &[Place], source: Point, receiver: Point, w: &[f64]) -> bool {
+    let k = places.len();
+    let end = |p: Point| Aabb::from_points(p, p);
+    let bbox = |i: usize| match i {
+        0 => end(source),
+        i if i == k + 1 => end(receiver),
+        i => places[i - 1].bbox,
+    };
+    // Leg `l` joins point l − 1 and point l (0: the source; k + 1: the receiver).
+    let leg = |l: usize| match legs(bbox(l), bbox(l + 1)) {
+        Some(b) => LegBound::Box(b),
+        None if l >= 1 && l < k => {
+            chord(&places[l - 1], &places[l]).map_or(LegBound::Unknown, LegBound::Arc)
+        }
+        None => LegBound::Unknown,
+    };
+    let mut before = leg(0);
+    for i in 0..k {
+        let after = leg(i + 1);
+        if !matches!(before, LegBound::Unknown) && !matches!(after, LegBound::Unknown) {
+            let (t, spread) = (places[i].tangent, places[i].spread);
+            let (wa, wb) = (w[i], w[i + 1]);
+            let slack = (wa + wb) * spread + 1e-10 * (wa + wb);
+            let excludes = |a: [f64; 2], b: [f64; 2]| {
+                wa * a[0] - wb * b[1] - slack > 0.0 || wa * a[1] - wb * b[0] + slack < 0.0
+            };
+            let (a0, a1) = before.dot_ranges(t);
+            let (b0, b1) = after.dot_ranges(t);
+            let all = [Some(a0), a1]
+                .into_iter()
+                .flatten()
+                .all(|a| [Some(b0), b1].into_iter().flatten().all(|b| excludes(a, b)));
+            if all {
+                return true;
+            }
+        }
+        before = after;
+    }
+    false
+}
+
+/// The search's scratch and settings for one triple.
+struct Search<'a> {
+    g: ProblemRef<'a>,
+    path: usize,
+    classifier: &'a Classifier,
+    hierarchies: &'a [&'a Hierarchy],
+    tolerance: f64,
+    sc: Scratch,
+    stats: Stationary,
+}
+
+/// What a search reuses from one triple to the next (per thread): the solve's state and
+/// scratch, the tuples' stack.
+#[derive(Default)]
+struct Scratch {
+    nw: NewtonWorkspace,
+    trial: Eval,
+    s_try: Vec<f64>,
+    delta: Vec<f64>,
+    diag: Vec<f64>,
+    off: Vec<f64>,
+    rhs: Vec<f64>,
+    cp: Vec<f64>,
+    places: Vec<Place>,
+    points: Vec<Point>,
+    slowness: Vec<f64>,
+    stack: Vec<u32>,
+    tuple: Vec<u32>,
+    segs: Vec<usize>,
+}
+
+impl Scratch {
+    /// Sized for paths of `k` interactions.
+    fn resize(&mut self, k: usize) {
+        if !self.nw.fits(k) {
+            self.nw.resize_to(k);
+        }
+        self.trial.resize(k);
+        for v in [
+            &mut self.s_try,
+            &mut self.delta,
+            &mut self.diag,
+            &mut self.off,
+            &mut self.rhs,
+            &mut self.cp,
+        ] {
+            v.resize(k, 0.0);
+        }
+        self.tuple.resize(k, 0);
+        self.segs.resize(k, 0);
+    }
+}
+
+thread_local! {
+    /// Each thread's scratch, taken by a search and given back at its end.
+    static SCRATCH: std::cell::Cell<Option<Box<Scratch>>> = const { std::cell::Cell::new(None) };
+}
+
+/// How an assignment's solve ended.
+enum Settled {
+    /// At the minimiser (to the tolerance or round-off).
+    Yes,
+    /// At a minimiser where a leg vanished (no stationary path: the classifier's
+    /// `coincident`).
+    Degenerate,
+    /// Not settled (the search is then not complete).
+    No,
+}
+
+/// Shortest leg between two interactions, relative to the path's length, below which a solve
+/// that stalls is taken to approach a minimum where that leg vanishes (where `T` is not
+/// differentiable: no stationary path, the classifier's `coincident`). Where `T` is smooth
+/// the damped Newton steps on a convex `T` converge quadratically and do not stall; they
+/// stall only next to such a kink, which they approach slowly.
+const COLLAPSE: f64 = 1e-3;
+/// Sine of the angle between a leg and its interaction's segment below which a stalled solve
+/// is taken to run along the segment's line.
+const ALONG: f64 = 1e-7;
+
+/// How a solve that stalled or ran out of steps at evaluation `e` ended: [`Settled::Degenerate`]
+/// when a leg between two interactions is collapsing, else not settled.
+fn collapsing(e: &Eval, k: usize) -> Settled {
+    let total: f64 = e.len[..=k].iter().sum();
+    // A leg along the line of an interaction it ends at: `T` is flat along that line
+    // (the minimum is not unique), and the leg lies on neither side (the classifier's
+    // `wrong_side`).
+    let along = |i: usize| {
+        e.u[i].cross(e.tan[i]).abs() <= ALONG || e.u[i + 1].cross(e.tan[i]).abs() <= ALONG
+    };
+    if (1..k).any(|j| e.len[j] <= COLLAPSE * total) || (0..k).any(along) {
+        Settled::Degenerate
+    } else {
+        Settled::No
+    }
+}
+
+/// Every stationary path of path `path` from `source` to `receiver` into `out` (see
+/// [`Tracer::stationary_paths`](super::Tracer::stationary_paths)).
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the tracer's parts that the search borrows"
+)]
+pub(crate) fn stationary_paths(
+    scene: &Scene,
+    classifier: &Classifier,
+    hierarchies: &[&Hierarchy],
+    tolerance: f64,
+    source: Point,
+    receiver: Point,
+    path: usize,
+    out: &mut Vec<Arrival>,
+) -> Result<Stationary, StationaryError> {
+    out.clear();
+    let spec = scene
+        .paths()
+        .get(path)
+        .ok_or(StationaryError::NoSuchPath { path })?;
+    let media = spec
+        .media
+        .as_deref()
+        .ok_or(StationaryError::MediaNotGiven { path })?;
+    let k = spec.steps.len();
+    let mut sc = *SCRATCH.with(|c| c.take()).unwrap_or_default();
+    sc.resize(k);
+    let mut slowness = std::mem::take(&mut sc.slowness);
+    slowness.clear();
+    slowness.extend(media.iter().map(|&m| scene.media()[m].slowness));
+    let mut search = Search {
+        g: ProblemRef {
+            scene,
+            steps: &spec.steps,
+            slowness: &slowness,
+            source,
+            receiver,
+        },
+        path,
+        classifier,
+        hierarchies,
+        tolerance,
+        sc,
+        stats: Stationary {
+            complete: true,
+            tuples: 0,
+            solves: 0,
+        },
+    };
+    search.run(out);
+    let stats = search.stats;
+    let mut sc = search.sc;
+    sc.slowness = slowness;
+    SCRATCH.with(|c| c.set(Some(Box::new(sc))));
+    finish(out, media, stats.complete);
+    Ok(stats)
+}
+
+/// Orders the arrivals by time, drops repeats of one path (a vertex path kept over an
+/// interior path on the same points), and fills in what every arrival shares.
+fn finish(out: &mut Vec<Arrival>, media: &[usize], complete: bool) {
+    out.sort_by(|a, b| a.time.total_cmp(&b.time).then(a.segments.cmp(&b.segments)));
+    let same = |a: &Arrival, b: &Arrival| {
+        let scale = a
+            .points
+            .iter()
+            .fold(1.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
+        (a.time - b.time).abs() <= 1e-9 * a.time.abs().max(1e-300)
+            && a.points.len() == b.points.len()
+            && a.points
+                .iter()
+                .zip(&b.points)
+                .all(|(p, q)| (*p - *q).length() <= 1e-9 * scale)
+    };
+    let mut kept: Vec<Arrival> = Vec::with_capacity(out.len());
+    for a in out.drain(..) {
+        match kept.iter_mut().rev().find(|b| same(b, &a)) {
+            Some(b) => {
+                if a.status == Status::Vertex && b.status != Status::Vertex {
+                    *b = a;
+                }
+            }
+            None => kept.push(a),
+        }
+    }
+    kept.sort_by(|a, b| a.time.total_cmp(&b.time).then(a.segments.cmp(&b.segments)));
+    for a in &mut kept {
+        a.media.clear();
+        a.media.extend_from_slice(media);
+        a.complete = complete;
+    }
+    *out = kept;
+}
+
+impl Search<'_> {
+    /// [`pruned`] for the places in `self.sc.places`.
+    fn pruned(&self) -> bool {
+        let g = &self.g;
+        pruned(&self.sc.places, g.source, g.receiver, g.slowness)
+    }
+
+    /// The branch-and-bound from the tuple of roots.
+    fn run(&mut self, out: &mut Vec<Arrival>) {
+        let k = self.g.k();
+        if k == 0 {
+            self.solve_leaf_choice(&[], 0, out);
+            return;
+        }
+        let mut stack = std::mem::take(&mut self.sc.stack);
+        let mut tuple = std::mem::take(&mut self.sc.tuple);
+        let mut segs = std::mem::take(&mut self.sc.segs);
+        stack.clear();
+        stack.resize(k, 0);
+        self.branch_and_bound(&mut stack, &mut tuple, &mut segs, out);
+        (self.sc.stack, self.sc.tuple, self.sc.segs) = (stack, tuple, segs);
+    }
+
+    /// The search's loop, on the tuples in `stack` (scratch `tuple` and `segs`, `k` long).
+    fn branch_and_bound(
+        &mut self,
+        stack: &mut Vec<u32>,
+        tuple: &mut [u32],
+        segs: &mut [usize],
+        out: &mut Vec<Arrival>,
+    ) {
+        let k = self.g.k();
+        while !stack.is_empty() {
+            let at = stack.len() - k;
+            tuple.copy_from_slice(&stack[at..]);
+            stack.truncate(at);
+            self.stats.tuples += 1;
+            if self.stats.tuples > MAX_TUPLES {
+                self.stats.complete = false;
+                return;
+            }
+            self.sc.places.clear();
+            for (i, &n) in tuple.iter().enumerate() {
+                let mut place = self.hierarchies[i].nodes[n as usize].place;
+                place.interface = self.g.steps[i].interface;
+                self.sc.places.push(place);
+            }
+            if self.pruned() {
+                continue;
+            }
+            // Split the widest node that has halves.
+            let split = (0..k)
+                .filter_map(|i| {
+                    let node = &self.hierarchies[i].nodes[tuple[i] as usize];
+                    node.kids.map(|kids| (i, kids, node.bbox.diagonal()))
+                })
+                .max_by(|a, b| a.2.total_cmp(&b.2).then(b.0.cmp(&a.0)));
+            match split {
+                Some((i, [l, r], _)) => {
+                    for child in [r, l] {
+                        stack.extend_from_slice(tuple);
+                        let at = stack.len() - k + i;
+                        stack[at] = child;
+                    }
+                }
+                None => {
+                    for (i, &n) in tuple.iter().enumerate() {
+                        segs[i] = self.hierarchies[i].nodes[n as usize].first as usize;
+                    }
+                    for held in 0..(1usize << k) {
+                        self.solve_leaf_choice(segs, held, out);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The assignment of segments `segs` with the points in the bit set `held` on the first
+    /// vertices of their segments: its bound, then its solve and classification.
+    fn solve_leaf_choice(&mut self, segs: &[usize], held: usize, out: &mut Vec<Arrival>) {
+        let k = segs.len();
+        let is_held = |i: usize| held >> i & 1 == 1;
+        self.sc.places.clear();
+        for (i, &j) in segs.iter().enumerate() {
+            let h = self.hierarchies[i];
+            let line = self.g.line(i);
+            if is_held(i) {
+                if h.before(j).is_none() {
+                    // The start of an open polyline: an end, not a vertex.
+                    return;
+                }
+                let v = line.vertices()[j];
+                let cone = h.vertex_cone(j);
+                let place = Place::new(Aabb::from_points(v, v), cone, j, j + 1);
+                self.sc.places.push(place);
+            } else {
+                let (p, q) = line.segment(j);
+                let t = h.theta[j];
+                self.sc.places.push(Place {
+                    tangent: line.tangent(j),
+                    spread: 0.0,
+                    ..Place::new(Aabb::from_points(p, q), [t, t], j, j + 1)
+                });
+            }
+            self.sc.places[i].interface = self.g.steps[i].interface;
+        }
+        if self.pruned() {
+            return;
+        }
+        self.stats.solves += 1;
+        let nw = &mut self.sc.nw;
+        for (i, &j) in segs.iter().enumerate() {
+            let line = self.g.line(i);
+            nw.seg[i] = j;
+            if is_held(i) {
+                nw.pin[i] = Pin::Vertex;
+                nw.s[i] = line.start(j);
+            } else {
+                nw.pin[i] = Pin::Free;
+                // Consecutive points on one segment start apart.
+                let f = (i + 1) as f64 / (k + 1) as f64;
+                nw.s[i] = line.start(j) + f * (line.start(j + 1) - line.start(j));
+            }
+        }
+        let (settled, iterations) = self.minimise(held);
+        match settled {
+            Settled::Yes => {}
+            Settled::Degenerate => return,
+            Settled::No => {
+                self.stats.complete = false;
+                return;
+            }
+        }
+        let nw = &self.sc.nw;
+        let e = &nw.eval;
+        // Free points strictly inside their segments.
+        for (i, &j) in segs.iter().enumerate() {
+            let line = self.g.line(i);
+            let inside = nw.s[i] > line.start(j) && nw.s[i] < line.start(j + 1);
+            if !is_held(i) && !inside {
+                return;
+            }
+        }
+        // Held points: the one-sided derivatives bracket zero.
+        let w = self.g.slowness;
+        let mut kink = None;
+        for (i, &j) in segs.iter().enumerate() {
+            if !is_held(i) {
+                continue;
+            }
+            let line = self.g.line(i);
+            let before = if j > 0 {
+                j - 1
+            } else {
+                line.num_segments() - 1
+            };
+            let v = e.u[i] * w[i] - e.u[i + 1] * w[i + 1];
+            let (r_before, r_after) = (v.dot(line.tangent(before)), v.dot(line.tangent(j)));
+            let this = if r_before < 0.0 && r_after > 0.0 {
+                Kink::Minimum
+            } else if r_before > 0.0 && r_after < 0.0 {
+                Kink::Maximum
+            } else {
+                return;
+            };
+            kink = Some(match kink {
+                None => this,
+                Some(k) if k == this => this,
+                Some(_) => Kink::Mixed,
+            });
+        }
+        let sol = Solution {
+            outcome: if held == 0 {
+                Outcome::Converged
+            } else {
+                Outcome::Vertex
+            },
+            time: e.time,
+            iterations,
+            residual: e.rmax,
+        };
+        let record = self.classifier.classify(
+            self.g.scene,
+            self.path,
+            self.g.source,
+            self.g.receiver,
+            &sol,
+            nw,
+            &mut self.sc.points,
+        );
+        if !record.status.has_time() {
+            return;
+        }
+        out.push(Arrival {
+            status: record.status,
+            time: record.time,
+            points: self.sc.points.clone(),
+            parameters: nw.s[..k].to_vec(),
+            segments: segs.to_vec(),
+            media: Vec::new(),
+            reason: record.reason,
+            kink: (record.status == Status::Vertex).then_some(kink).flatten(),
+            residual: record.residual,
+            complete: true,
+        });
+    }
+
+    /// Minimises the time over the free points on the lines of their segments (the held ones
+    /// stay on their vertices) from the state in `self.sc.nw`: damped Newton steps on the
+    /// analytic Hessian of `problem` with backtracking on `T` itself, which is convex there.
+    /// Returns how it ended and the steps taken; leaves the evaluation at the end in
+    /// `self.sc.nw.eval`.
+    fn minimise(&mut self, held: usize) -> (Settled, usize) {
+        let k = self.g.k();
+        let is_held = |i: usize| held >> i & 1 == 1;
+        let tol = self.tolerance;
+        let mut steps = 0;
+        loop {
+            let nw = &mut self.sc.nw;
+            self.g
+                .evaluate(&nw.s, &nw.seg, &nw.pin, &mut nw.eval, true, false);
+            let e = &nw.eval;
+            if e.vanished > 0 || (1..k).any(|j| e.len[j] <= e.vanish) {
+                return (Settled::Degenerate, steps);
+            }
+            if !e.rmax.is_finite() {
+                return (Settled::No, steps);
+            }
+            if e.rmax <= tol || k == 0 || held == (1 << k) - 1 {
+                return (Settled::Yes, steps);
+            }
+            if steps >= MAX_STEPS {
+                return (collapsing(e, k), steps);
+            }
+            for i in 0..k {
+                let free = !is_held(i);
+                self.sc.diag[i] = if free { e.diag[i] } else { 1.0 };
+                self.sc.rhs[i] = if free { -e.r[i] } else { 0.0 };
+                if i + 1 < k {
+                    self.sc.off[i] = if free && !is_held(i + 1) {
+                        e.off[i]
+                    } else {
+                        0.0
+                    };
+                }
+            }
+            let off = &self.sc.off[..k.saturating_sub(1)];
+            if !thomas(
+                &self.sc.diag,
+                off,
+                &self.sc.rhs,
+                &mut self.sc.delta,
+                &mut self.sc.cp,
+            ) {
+                // A singular Hessian (legs along a segment's line): damp it.
+                let scale = self.sc.diag.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+                for d in &mut self.sc.diag {
+                    *d += 1e-9 * scale + f64::MIN_POSITIVE;
+                }
+                if !thomas(
+                    &self.sc.diag,
+                    off,
+                    &self.sc.rhs,
+                    &mut self.sc.delta,
+                    &mut self.sc.cp,
+                ) {
+                    return (Settled::No, steps);
+                }
+            }
+            let tiny = (0..k).all(|i| {
+                self.sc.delta[i].abs()
+                    <= 4.0 * f64::EPSILON * (nw.s[i].abs() + e.len[i] + e.len[i + 1])
+            });
+            if tiny {
+                return (Settled::Yes, steps);
+            }
+            // No point moves further than twice its longer leg at once.
+            let mut cap = 1.0f64;
+            for i in 0..k {
+                let reach = 2.0 * e.len[i].max(e.len[i + 1]);
+                if self.sc.delta[i].abs() > reach {
+                    cap = cap.min(reach / self.sc.delta[i].abs());
+                }
+            }
+            let slope: f64 = (0..k).map(|i| e.r[i] * self.sc.delta[i]).sum();
+            let (t0, rmax0) = (e.time, e.rmax);
+            let mut alpha = cap;
+            let accepted = loop {
+                for i in 0..k {
+                    self.sc.s_try[i] = nw.s[i] + alpha * self.sc.delta[i];
+                }
+                self.g.evaluate(
+                    &self.sc.s_try,
+                    &nw.seg,
+                    &nw.pin,
+                    &mut self.sc.trial,
+                    false,
+                    false,
+                );
+                let t = self.sc.trial.time;
+                let drop = t0 - t;
+                // Descent on T, or (within round-off of T) on the residual.
+                let round_off = 4.0 * f64::EPSILON * t0;
+                if drop >= -1e-4 * alpha * slope
+                    || (drop >= -round_off && self.sc.trial.rmax < rmax0)
+                {
+                    break true;
+                }
+                alpha *= 0.5;
+                if alpha < 1e-12 {
+                    break false;
+                }
+            };
+            if !accepted {
+                // Stalled within round-off of the minimum, or not settled.
+                let e = &self.sc.nw.eval;
+                let settled = if rmax0 <= 1e-8 {
+                    Settled::Yes
+                } else {
+                    collapsing(e, k)
+                };
+                return (settled, steps);
+            }
+            nw.s[..k].copy_from_slice(&self.sc.s_try);
+            steps += 1;
+        }
+    }
+}
