@@ -70,7 +70,8 @@ pub struct Nearest {
 /// on the cumulative lengths, `O(log M)` for `M` segments.
 ///
 /// ```
-/// use eigenray::{Point, Polyline};
+/// use eigenray::Point;
+/// use eigenray::geometry::Polyline;
 /// let p = Polyline::new(vec![Point::new(0.0, 0.0), Point::new(3.0, 0.0), Point::new(3.0, 4.0)], false).unwrap();
 /// assert_eq!(p.length(), 7.0);
 /// assert_eq!(p.segment_at(4.0), 1);
