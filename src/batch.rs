@@ -4,6 +4,7 @@ use rayon::prelude::*;
 
 use crate::geom::{Point, Vec2};
 use crate::problem::{Frame, coord};
+use crate::scene::SceneError;
 use crate::solver::{
     OneStepNewton, Outcome, ReceiverSensitivity, one_step_sensitivity, receiver_sensitivity,
 };
@@ -299,9 +300,86 @@ fn spatial_order(points: &[Point]) -> Vec<usize> {
 }
 
 impl Tracer<'_> {
+    /// [`trace_batch`](Self::trace_batch), with an error instead of an abort when the
+    /// batch's arrays cannot be allocated (a scene of more rays than the machine can hold):
+    /// the memory is reserved before any ray is solved.
+    ///
+    /// ```
+    /// use eigenray::{BatchOptions, Scene, Tracer};
+    /// let scene = Scene::from_spec(&eigenray::demo::air_water(100, 7)).unwrap();
+    /// let batch = Tracer::new(&scene).unwrap().try_trace_batch(&BatchOptions::default()).unwrap();
+    /// assert_eq!(batch.len(), 100);
+    /// ```
+    ///
+    /// # Errors
+    /// `paths` (the batch's size: sources × receivers × paths), saying how many bytes it
+    /// needs.
+    pub fn try_trace_batch(&self, opts: &BatchOptions) -> Result<Batch, SceneError> {
+        let mut batch = Batch::default();
+        self.try_trace_batch_into(opts, &mut batch)?;
+        Ok(batch)
+    }
+
+    /// [`trace_batch_into`](Self::trace_batch_into), with an error instead of an abort when
+    /// the batch's arrays cannot be allocated (see [`try_trace_batch`](Self::try_trace_batch)).
+    ///
+    /// # Errors
+    /// As [`try_trace_batch`](Self::try_trace_batch).
+    pub fn try_trace_batch_into(
+        &self,
+        opts: &BatchOptions,
+        batch: &mut Batch,
+    ) -> Result<(), SceneError> {
+        let scene = self.scene();
+        let size = scene.batch_size();
+        // Results in solving order as well when the receivers are put in a spatial order.
+        let spatial = opts.warm_start
+            && !scene.sources().is_empty()
+            && !coherent(scene.receivers(), scene.sources()[0]);
+        let needs =
+            |records: &mut Vec<RayRecord>, points: &mut Vec<Point>, media: &mut Vec<u32>| {
+                let grow = |have: usize, want: usize| want.saturating_sub(have);
+                records
+                    .try_reserve_exact(grow(records.len(), size.rays))
+                    .and_then(|()| points.try_reserve_exact(grow(points.len(), size.points)))
+                    .and_then(|()| media.try_reserve_exact(grow(media.len(), size.legs)))
+            };
+        let mut reserved = needs(&mut batch.records, &mut batch.points, &mut batch.media);
+        if spatial && reserved.is_ok() {
+            let arrays = batch.spatial.get_or_insert_with(Box::default);
+            let (r, p, m) = &mut **arrays;
+            reserved = needs(r, p, m);
+        }
+        if reserved.is_err() {
+            let bytes = size
+                .bytes(
+                    std::mem::size_of::<RayRecord>(),
+                    std::mem::size_of::<Point>(),
+                    std::mem::size_of::<u32>(),
+                )
+                .map_or("more than the address space holds".to_string(), |b| {
+                    format!("{} bytes", b * (1 + usize::from(spatial)))
+                });
+            return Err(SceneError::new(
+                "paths",
+                format!(
+                    "a batch of {} rays needs {bytes} for its records, points and leg media, \
+                     which cannot be allocated",
+                    size.rays
+                ),
+            ));
+        }
+        self.trace_batch_into(opts, batch);
+        Ok(())
+    }
+
     /// Solves every ray of the scene in parallel (rayon, one workspace per work unit), with
     /// the same results as solving them one by one (up to the start each ray is solved from
     /// when `warm_start` is on), in ray order.
+    ///
+    /// # Panics
+    /// Aborts when its arrays cannot be allocated (as every allocation in Rust does);
+    /// [`try_trace_batch`](Self::try_trace_batch) returns an error instead.
     pub fn trace_batch(&self, opts: &BatchOptions) -> Batch {
         let mut batch = Batch::default();
         self.trace_batch_into(opts, &mut batch);

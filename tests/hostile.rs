@@ -244,6 +244,37 @@ fn too_many_rays_for_memory_exit_2_saying_how_much() {
     run.assert_refused("paths: the batch needs about");
 }
 
+/// The library's batch: an error saying how much, not an abort, where the arrays cannot be
+/// allocated (10^11 rays: terabytes).
+#[test]
+fn library_batch_too_big_for_memory_is_an_error() {
+    let overcommit = std::fs::read_to_string("/proc/sys/vm/overcommit_memory").unwrap_or_default();
+    if overcommit.trim() == "1" {
+        // Every allocation succeeds there, to be killed on first use: nothing to test.
+        eprintln!("skipped: the kernel overcommits every allocation");
+        return;
+    }
+    let pts: Vec<Value> = (0..10_000).map(|i| json!([i as f64 * 1e-3, 1.0])).collect();
+    let rec: Vec<Value> = (0..10_000)
+        .map(|i| json!([i as f64 * 1e-3, -1.0]))
+        .collect();
+    let paths: Vec<Value> = (0..1000)
+        .map(|_| json!({"steps": [], "media": ["air"]}))
+        .collect();
+    let doc =
+        json!({"media": {"air": {"speed": 1.0}}, "sources": pts, "receivers": rec, "paths": paths});
+    let s = scene(&doc).expect("valid");
+    let tracer = Tracer::new(&s).expect("tracer");
+    let e = tracer
+        .try_trace_batch(&eigenray::BatchOptions::default())
+        .expect_err("terabytes");
+    assert_eq!(e.key, "paths");
+    assert!(
+        e.message.contains("100000000000 rays") && e.message.contains("cannot be allocated"),
+        "{e}"
+    );
+}
+
 #[test]
 fn long_path_times_many_receivers_exit_2_saying_how_much() {
     // A 100,000-step path × 10,000 receivers: about 16 GB of points (issue 19, item 7).
