@@ -228,9 +228,8 @@ fn batch_sizes_are_counted_at_validation() {
     assert_eq!(size.bytes(usize::MAX, 1, 1), None, "bytes overflow is None");
 }
 
-#[test]
-fn too_many_rays_for_memory_exit_2_saying_how_much() {
-    // 10^4 sources × 10^4 receivers × 10^3 paths: 10^11 rays from a file of about 150 kB.
+/// 10^4 sources × 10^4 receivers × 10^3 paths: 10^11 rays from a file of about 150 kB.
+fn hundred_billion_rays() -> Value {
     let pts: Vec<Value> = (0..10_000).map(|i| json!([i as f64 * 1e-3, 1.0])).collect();
     let rec: Vec<Value> = (0..10_000)
         .map(|i| json!([i as f64 * 1e-3, -1.0]))
@@ -238,8 +237,12 @@ fn too_many_rays_for_memory_exit_2_saying_how_much() {
     let paths: Vec<Value> = (0..1000)
         .map(|_| json!({"steps": [], "media": ["air"]}))
         .collect();
-    let doc =
-        json!({"media": {"air": {"speed": 1.0}}, "sources": pts, "receivers": rec, "paths": paths});
+    json!({"media": {"air": {"speed": 1.0}}, "sources": pts, "receivers": rec, "paths": paths})
+}
+
+#[test]
+fn too_many_rays_for_memory_exit_2_saying_how_much() {
+    let doc = hundred_billion_rays();
     let run = solve_file(&doc.to_string());
     run.assert_refused("paths: the batch needs about");
 }
@@ -254,16 +257,7 @@ fn library_batch_too_big_for_memory_is_an_error() {
         eprintln!("skipped: the kernel overcommits every allocation");
         return;
     }
-    let pts: Vec<Value> = (0..10_000).map(|i| json!([i as f64 * 1e-3, 1.0])).collect();
-    let rec: Vec<Value> = (0..10_000)
-        .map(|i| json!([i as f64 * 1e-3, -1.0]))
-        .collect();
-    let paths: Vec<Value> = (0..1000)
-        .map(|_| json!({"steps": [], "media": ["air"]}))
-        .collect();
-    let doc =
-        json!({"media": {"air": {"speed": 1.0}}, "sources": pts, "receivers": rec, "paths": paths});
-    let s = scene(&doc).expect("valid");
+    let s = scene(&hundred_billion_rays()).expect("valid");
     let tracer = Tracer::new(&s).expect("tracer");
     let e = tracer
         .try_trace_batch(&eigenray::BatchOptions::default())
