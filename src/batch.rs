@@ -357,8 +357,9 @@ impl Tracer<'_> {
                     std::mem::size_of::<Point>(),
                     std::mem::size_of::<u32>(),
                 )
+                .and_then(|b| b.checked_mul(1 + usize::from(spatial)))
                 .map_or("more than the address space holds".to_string(), |b| {
-                    format!("{} bytes", b * (1 + usize::from(spatial)))
+                    format!("{b} bytes")
                 });
             return Err(SceneError::new(
                 "paths",

@@ -47,7 +47,7 @@ pub use output::{Format, write_batch, write_names, write_rays, write_rays_json};
 pub use problem::{PathProblem, Tridiagonal};
 pub use scene::{
     InterfaceSpec, MediumSpec, PathSpec, Scene, SceneError, SceneSpec, SolverOptions, SolverSpec,
-    StepSpec,
+    StepSpec, escape_text,
 };
 pub use trace::{
     Arrival, InitialGuess, Kernels, Kink, Ray, RayRecord, Reason, Stationary, StationaryError,
@@ -66,6 +66,7 @@ pub mod limits {
         DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, MAX_COORDINATE, MAX_ITERATIONS_LIMIT,
         MAX_SPEED_RATIO, MIN_COORDINATE, REGION_RANGE_BITS,
     };
+    pub use crate::trace::MAX_STATIONARY_STEPS;
 }
 
 /// The geometry beneath a scene: polylines and their queries, boxes, and the robust

@@ -53,7 +53,7 @@ impl fmt::Display for SceneError {
 
 /// Whether `c` must not reach a terminal or a log as it is: control characters (C0, DEL, C1),
 /// line and paragraph separators, bidirectional overrides and isolates, and non-characters.
-pub(crate) fn needs_escape(c: char) -> bool {
+fn needs_escape(c: char) -> bool {
     c.is_control()
         || matches!(
             c,
@@ -65,16 +65,24 @@ pub(crate) fn needs_escape(c: char) -> bool {
         || (c as u32) & 0xfffe == 0xfffe
 }
 
-/// Writes `text` with every character that [`needs_escape`] as `\u{hex}`.
-fn write_escaped(f: &mut fmt::Formatter<'_>, text: &str) -> fmt::Result {
+/// `text` with every character that must not reach a terminal or a log as it is (control
+/// characters, line separators, bidirectional overrides, non-characters) as `\u{hex}`: what
+/// [`SceneError`]'s `Display` does to the names it quotes.
+pub fn escape_text(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
     for c in text.chars() {
         if needs_escape(c) {
-            write!(f, "\\u{{{:x}}}", c as u32)?;
+            let _ = fmt::Write::write_fmt(&mut out, format_args!("\\u{{{:x}}}", c as u32));
         } else {
-            fmt::Write::write_char(f, c)?;
+            out.push(c);
         }
     }
-    Ok(())
+    out
+}
+
+/// Writes `text` as [`escape_text`] gives it.
+fn write_escaped(f: &mut fmt::Formatter<'_>, text: &str) -> fmt::Result {
+    f.write_str(&escape_text(text))
 }
 
 impl std::error::Error for SceneError {}

@@ -105,6 +105,7 @@ fn kernels_do_not_reach_up_to_the_tracer() {
     let trace = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/trace");
     for name in [
         "classify.rs",
+        "complete.rs",
         "flat.rs",
         "one_step.rs",
         "plan.rs",

@@ -628,7 +628,7 @@ fn vertex_met(
 }
 
 /// The solution at the present state when the iteration gives up.
-fn not_converged(e: &Eval, iterations: usize) -> Solution {
+pub(super) fn not_converged(e: &Eval, iterations: usize) -> Solution {
     Solution {
         outcome: Outcome::NotConverged,
         time: e.time,

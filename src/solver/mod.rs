@@ -247,12 +247,7 @@ fn fast_newton(
         }
         let residual = e.rmax;
         if !finite(residual) || fast.iterations >= max_iterations {
-            return Some(Solution {
-                outcome: Outcome::NotConverged,
-                time: e.time,
-                iterations: fast.iterations,
-                residual,
-            });
+            return Some(general::not_converged(e, fast.iterations));
         }
         if !e.factored {
             // A tiny pivot: the general loop takes the damped step.

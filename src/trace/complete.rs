@@ -31,9 +31,10 @@
 //! An assignment's solve is damped Newton on the analytic Hessian of `problem` with
 //! backtracking on `T` itself (convex there). It cannot be the solver's own loop, which moves
 //! points across vertices: here each point stays on its segment's line. A solve that stalls
-//! next to a collapsed leg (within [`COLLAPSE`] of the path's length) or with a leg along its
-//! segment's line is taken to approach a minimum where `T` is not differentiable, which holds
-//! no stationary path; any other solve that does not settle marks the search incomplete.
+//! next to a collapsed leg (within [`COLLAPSE`] of the path's length), or with a leg whose sine
+//! with its segment's line is below [`ALONG`], is taken to approach a minimum that holds no
+//! stationary path (a vanishing leg, or a leg running along its interface): a rule with these
+//! thresholds, not a proof. Any other solve that does not settle marks the search incomplete.
 
 use std::f64::consts::PI;
 use std::fmt;
@@ -98,7 +99,9 @@ pub struct Arrival {
 pub struct Stationary {
     /// Whether every stationary path of the triple is listed: `false` when the search reached
     /// its limit of tuples, or an assignment's solve did not settle (the list may then be
-    /// short). With `true`, an empty list proves that the sequence has no stationary path.
+    /// short). With `true`, an empty list says that the sequence has no stationary path: the
+    /// pruning is certain, and an assignment is ruled out by its solve, with the thresholds
+    /// of the module's documentation for solves that stall at a vanishing or grazing leg.
     pub complete: bool,
     /// Tuples of hierarchy nodes visited.
     pub tuples: usize,
@@ -124,7 +127,20 @@ pub enum StationaryError {
         /// The path's index.
         path: usize,
     },
+    /// The path has more steps than the search takes: each assignment of segments is tried
+    /// with every choice of held vertices, `2^steps` of them.
+    ///
+    /// How to fix: search sequences of at most [`MAX_STATIONARY_STEPS`] steps.
+    TooManySteps {
+        /// The path's index.
+        path: usize,
+        /// Its steps.
+        steps: usize,
+    },
 }
+
+/// Steps a path may have for the search (see [`StationaryError::TooManySteps`]).
+pub const MAX_STATIONARY_STEPS: usize = 12;
 
 impl fmt::Display for StationaryError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -134,6 +150,11 @@ impl fmt::Display for StationaryError {
                 f,
                 "path {path} gives no `media`: the search for every stationary path needs \
                  the leg media given (region lookup is not supported there yet)"
+            ),
+            StationaryError::TooManySteps { path, steps } => write!(
+                f,
+                "path {path} has {steps} steps: the search for every stationary path takes at \
+                 most {MAX_STATIONARY_STEPS}"
             ),
         }
     }
@@ -596,6 +617,9 @@ pub(crate) fn stationary_paths(
         .as_deref()
         .ok_or(StationaryError::MediaNotGiven { path })?;
     let k = spec.steps.len();
+    if k > MAX_STATIONARY_STEPS {
+        return Err(StationaryError::TooManySteps { path, steps: k });
+    }
     let mut sc = *SCRATCH.with(|c| c.take()).unwrap_or_default();
     sc.resize(k);
     let mut slowness = std::mem::take(&mut sc.slowness);

@@ -38,7 +38,7 @@ const MAX_INPUT_BYTES: u64 = 256 << 20;
                   interfaces.\n\nWithout a command, runs the built-in demo (`eigenray demo`).\n\n\
                   Exit status: 0 success (also when some rays find no path); 2 invalid scene, \
                   unreadable or too large input, a batch beyond the available memory, or usage \
-                  error; 1 output could not be written (also a closed standard output)."
+                  error; 1 output could not be written (a full disk, a closed pipe)."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -161,7 +161,7 @@ impl Failure {
         if let Some(m) = message {
             // One line, whatever the message holds, with control characters escaped (names and
             // paths come from the user); a failing stderr has nowhere to report to.
-            let line = escape_controls(&m);
+            let line = eigenray::escape_text(&m);
             let _ = writeln!(io::stderr().lock(), "error: {line}");
         }
         ExitCode::from(code)
@@ -192,49 +192,6 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => f.exit(),
     }
-}
-
-/// `text` with control characters (and the other characters a terminal could act on) as
-/// `\u{..}`.
-fn escape_controls(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        let bidi = matches!(
-            c,
-            '\u{2028}' | '\u{2029}' | '\u{200e}' | '\u{200f}' | '\u{061c}'
-        ) || ('\u{202a}'..='\u{202e}').contains(&c)
-            || ('\u{2066}'..='\u{2069}').contains(&c);
-        if c.is_control() || bidi || (c as u32) & 0xfffe == 0xfffe {
-            let _ = write!(out, "\\u{{{:x}}}", c as u32);
-        } else {
-            out.push(c);
-        }
-    }
-    out
-}
-
-/// Fails when standard output is closed (`>&-`): the run would otherwise end with status 0
-/// and no output.
-fn check_stdout_open() -> Result<(), Failure> {
-    use std::os::fd::AsFd;
-    let closed = || Failure::Output("standard output: cannot write: it is closed".to_string());
-    // Duplicating the descriptor fails exactly when it is not open.
-    if io::stdout().as_fd().try_clone_to_owned().is_err() {
-        return Err(closed());
-    }
-    // The standard library reopens a descriptor closed at start-up on /dev/null for reading
-    // and writing (Linux shows it in /proc); a shell's `>/dev/null` opens it for writing only.
-    let null = fs::read_link("/proc/self/fd/1").is_ok_and(|t| t == Path::new("/dev/null"));
-    let read_write = fs::read_to_string("/proc/self/fdinfo/1").is_ok_and(|info| {
-        info.lines()
-            .find_map(|l| l.strip_prefix("flags:"))
-            .and_then(|f| u32::from_str_radix(f.trim(), 8).ok())
-            .is_some_and(|f| f & 3 == 2)
-    });
-    if null && read_write {
-        return Err(closed());
-    }
-    Ok(())
 }
 
 /// Refuses a batch whose arrays would not fit in the memory this machine has available, before
@@ -294,7 +251,6 @@ fn available_memory() -> Option<u64> {
 
 /// `eigenray solve`: everything is computed before anything is written.
 fn solve(args: &SolveArgs) -> Result<(), Failure> {
-    check_stdout_open()?;
     if args.format == Format::Npy && std::io::IsTerminal::is_terminal(&io::stdout()) {
         return Err(Failure::Input(
             "--format npy: binary output; redirect standard output to a file".into(),
@@ -304,7 +260,7 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
     let scene = Scene::from_json(&text).map_err(Failure::scene)?;
     check_batch_memory(&scene, !args.no_warm_start)?;
     let tracer = Tracer::new(&scene).map_err(Failure::scene)?;
-    let batch = trace(&tracer, !args.no_warm_start);
+    let batch = trace(&tracer, !args.no_warm_start)?;
 
     if let Some(path) = &args.names {
         let mut names = Vec::new();
@@ -322,7 +278,7 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
 const PROGRESS_RAYS: usize = 1_000_000;
 
 /// Solves every ray; a progress bar on standard error for big batches when it is a terminal.
-fn trace(tracer: &Tracer, warm_start: bool) -> Batch {
+fn trace(tracer: &Tracer, warm_start: bool) -> Result<Batch, Failure> {
     let n = tracer.scene().num_rays();
     let bar = (n >= PROGRESS_RAYS && std::io::IsTerminal::is_terminal(&io::stderr())).then(|| {
         let bar = ProgressBar::new(n as u64);
@@ -341,11 +297,13 @@ fn trace(tracer: &Tracer, warm_start: bool) -> Batch {
         progress: Some(&progress),
         ..BatchOptions::default()
     };
-    let batch = tracer.trace_batch(&opts);
+    // Where the memory check could not tell (no `MemAvailable`, or other processes took it
+    // meanwhile), the allocation itself fails with a message instead of an abort.
+    let batch = tracer.try_trace_batch(&opts).map_err(Failure::scene)?;
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
-    batch
+    Ok(batch)
 }
 
 /// The scene file as text: `-` is standard input; errors name the path.
@@ -385,7 +343,6 @@ fn read_scene_text(path: &Path) -> Result<String, Failure> {
 
 /// `eigenray demo`: the air-over-water scene, a one-line summary and a picture.
 fn demo(args: &DemoArgs) -> Result<(), Failure> {
-    check_stdout_open()?;
     // The range check on `--receivers` keeps this conversion exact.
     let n = usize::try_from(args.receivers)
         .map_err(|_| Failure::Input("--receivers: too large".into()))?;
@@ -395,7 +352,7 @@ fn demo(args: &DemoArgs) -> Result<(), Failure> {
     // Start the worker threads first: the wall time is the solve's, not the pool's start-up.
     rayon::broadcast(|_| ());
     let start = Instant::now();
-    let batch = trace(&tracer, true);
+    let batch = trace(&tracer, true)?;
     let wall = start.elapsed().as_secs_f64();
 
     let index = |name: &str| scene.medium_index(name).map(|i| scene.media()[i].slowness);
