@@ -142,6 +142,7 @@ fn versus_argmin(c: &mut Criterion) {
             .set_solver(SolverOptions {
                 tolerance: TOL,
                 max_iterations: 100,
+                ..SolverOptions::default()
             })
             .expect("valid solver options");
         let source = scene.sources()[0];
@@ -153,6 +154,7 @@ fn versus_argmin(c: &mut Criterion) {
             .set_solver(SolverOptions {
                 tolerance: TOL,
                 max_iterations: 0,
+                ..SolverOptions::default()
             })
             .expect("valid solver options");
         let guesses: Vec<Vec<f64>> = {

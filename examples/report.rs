@@ -303,6 +303,7 @@ mod report {
                 .set_solver(SolverOptions {
                     tolerance: 1e-300,
                     max_iterations,
+                    ..SolverOptions::default()
                 })
                 .expect("valid solver options");
             let tracer = Tracer::new(scene)
@@ -430,6 +431,7 @@ mod report {
                 SolverOptions {
                     tolerance: tol,
                     max_iterations: 100,
+                    ..SolverOptions::default()
                 },
                 InitialGuess::Paraxial,
             );
@@ -440,6 +442,7 @@ mod report {
                 SolverOptions {
                     tolerance: tol,
                     max_iterations: 100,
+                    ..SolverOptions::default()
                 },
                 InitialGuess::RayParameter,
             );
@@ -456,6 +459,7 @@ mod report {
                 SolverOptions {
                     tolerance: 1e-300,
                     max_iterations: it,
+                    ..SolverOptions::default()
                 },
                 InitialGuess::Paraxial,
             );

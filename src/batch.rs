@@ -722,7 +722,7 @@ impl Tracer<'_> {
         guess: Option<&[f64]>,
         ws: &mut Workspace,
     ) -> RayRecord {
-        let start = guess.map_or(Start::Default, Start::Given);
+        let start = guess.map_or(Start::Default, Start::Trial);
         let s = self.solve_indexed_start(source, receiver, p, start, ws);
         if guess.is_none() || s.status == Status::Converged {
             return s;
@@ -740,8 +740,8 @@ impl Tracer<'_> {
     /// `warm`), without the workspace: each ray's start, Newton steps ([`OneStepNewton`], the
     /// steps of one-by-one solving) and classification in registers. A ray that leaves this
     /// common case (no crossing or specular point to start from, a step leaving its segment,
-    /// any status but `converged` after a warm start) is solved one by one from the same
-    /// start. A refraction at a one-segment interface goes through the flat kernel instead,
+    /// any status but `converged` after a warm start, no time) is solved one by one from the
+    /// same start. A refraction at a one-segment interface goes through the flat kernel instead,
     /// never warm-started, as one by one.
     fn one_step_chain(
         &self,
@@ -788,7 +788,9 @@ impl Tracer<'_> {
                     .one_step_fast(&path, source, link.here, guess, seg)
                     .map(|ray| (ray.record, ray.points, Some((ray.newton, ray.seg)))),
             };
-            match fast {
+            // A ray without a time goes one by one: where the start led to no stationary
+            // path, the complete search answers.
+            match fast.filter(|(record, _, _)| record.status.has_time()) {
                 Some((record, points, newton)) => {
                     unit.write_one(b, p, &record, &points, one.media);
                     chain.have = record.status == Status::Converged;

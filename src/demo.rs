@@ -92,6 +92,7 @@ pub fn air_water(receivers: usize, seed: u64) -> SceneSpec {
     spec.solver = Some(SolverSpec {
         tolerance: Some(1e-12),
         max_iterations: Some(50),
+        ..Default::default()
     });
     spec
 }
@@ -185,6 +186,7 @@ pub fn layer_stack(n_layers: usize, receivers: usize) -> SceneSpec {
     spec.solver = Some(SolverSpec {
         tolerance: Some(1e-12),
         max_iterations: Some(100),
+        ..Default::default()
     });
     spec
 }
@@ -325,6 +327,7 @@ pub fn sea_floor(segments: usize, receivers: usize) -> SceneSpec {
     spec.solver = Some(SolverSpec {
         tolerance: Some(1e-12),
         max_iterations: Some(100),
+        ..Default::default()
     });
     spec
 }

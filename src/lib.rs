@@ -46,8 +46,8 @@ pub use geom::{Point, Vec2};
 pub use output::{Format, write_batch, write_names, write_rays, write_rays_json};
 pub use problem::{PathProblem, Tridiagonal};
 pub use scene::{
-    InterfaceSpec, MediumSpec, PathSpec, Scene, SceneError, SceneSpec, SolverOptions, SolverSpec,
-    StepSpec, escape_text,
+    InterfaceSpec, MediumSpec, PathSpec, Scene, SceneError, SceneSpec, SearchOptions, SearchSpec,
+    SolverOptions, SolverSpec, StationaryMode, StepSpec, escape_text,
 };
 pub use trace::{
     Arrival, InitialGuess, Kernels, Kink, Ray, RayRecord, Reason, Stationary, StationaryError,
@@ -64,9 +64,8 @@ pub mod scene_parts {
 pub mod limits {
     pub use crate::scene::{
         DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, MAX_COORDINATE, MAX_ITERATIONS_LIMIT,
-        MAX_SPEED_RATIO, MIN_COORDINATE, REGION_RANGE_BITS,
+        MAX_SPEED_RATIO, MAX_STATIONARY_STEPS, MIN_COORDINATE, REGION_RANGE_BITS,
     };
-    pub use crate::trace::MAX_STATIONARY_STEPS;
 }
 
 /// The geometry beneath a scene: polylines and their queries, boxes, and the robust

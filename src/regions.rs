@@ -638,6 +638,29 @@ impl Regions {
         }
     }
 
+    /// Every distinct pair of media on the two sides of interface `interface`, over all its
+    /// segments (and their pieces), in a fixed order: what a ray may meet at that interface.
+    /// Empty for an invalid index.
+    pub fn interface_sides(&self, interface: usize) -> Vec<Sides> {
+        let (Some(&first), Some(&end)) = (
+            self.seg_offset.get(interface),
+            self.seg_offset.get(interface + 1),
+        ) else {
+            return Vec::new();
+        };
+        let mut out: Vec<Sides> = Vec::new();
+        for p in &self.pieces[self.piece_offset[first]..self.piece_offset[end]] {
+            let sides = Sides {
+                left: self.medium_of_region(p.left),
+                right: self.medium_of_region(p.right),
+            };
+            if !out.contains(&sides) {
+                out.push(sides);
+            }
+        }
+        out
+    }
+
     /// The medium on the side of the segment opposite to `from` at arclength `s`: what a ray
     /// coming from `from` refracts into. The side of `from` is decided exactly against the
     /// segment's line; `None` when `from` lies on that line (or the index is invalid).

@@ -125,11 +125,15 @@ pub struct SceneSpec {
     pub sources: Vec<[f64; 2]>,
     /// Receiver points.
     pub receivers: Vec<[f64; 2]>,
-    /// Paths: sequences of interactions.
+    /// Paths: sequences of interactions (none when the scene only asks for a `search`).
+    #[serde(default)]
     pub paths: Vec<PathSpec>,
     /// Solver settings.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub solver: Option<SolverSpec>,
+    /// Automatic sequences: let the tracer generate the step sequences itself.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub search: Option<SearchSpec>,
 }
 
 /// A JSON object of names: like a `BTreeMap`, but a name given twice is an error (serde's
@@ -226,6 +230,57 @@ pub struct SolverSpec {
     /// Iteration limit per ray.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_iterations: Option<u64>,
+    /// `"one"` (the default): each ray reports the stationary path its start reaches; `"all"`:
+    /// each ray reports every stationary path of its sequence.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stationary: Option<StationaryMode>,
+}
+
+/// Which stationary paths a ray reports.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum StationaryMode {
+    /// The one stationary path that the documented start reaches (or, where that is not
+    /// admissible, the earliest admissible one a complete search finds).
+    #[default]
+    One,
+    /// Every stationary path of the sequence, ordered by time.
+    All,
+}
+
+/// The `search` section: which step sequences the tracer generates.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SearchSpec {
+    /// Every sequence of 0 to `max_steps` steps is considered (0: the direct ray).
+    pub max_steps: u64,
+    /// The interfaces the steps may use (default: all).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interfaces: Option<Vec<String>>,
+    /// Whether steps may reflect (default true).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reflect: Option<bool>,
+    /// Whether steps may refract (default true).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refract: Option<bool>,
+    /// Whether obstructed paths are listed too (default false).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub obstructed: Option<bool>,
+}
+
+/// The search settings of a validated scene (see [`SearchSpec`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SearchOptions {
+    /// The longest sequence considered.
+    pub max_steps: usize,
+    /// Indices of the interfaces the steps may use, increasing.
+    pub interfaces: Vec<usize>,
+    /// Whether steps may reflect.
+    pub reflect: bool,
+    /// Whether steps may refract.
+    pub refract: bool,
+    /// Whether obstructed paths are listed too.
+    pub obstructed: bool,
 }
 
 /// A medium of a validated scene.
@@ -284,6 +339,8 @@ pub struct SolverOptions {
     pub tolerance: f64,
     /// Iteration limit per ray.
     pub max_iterations: usize,
+    /// Which stationary paths a ray reports.
+    pub stationary: StationaryMode,
 }
 
 impl SolverOptions {
@@ -316,6 +373,7 @@ impl Default for SolverOptions {
         SolverOptions {
             tolerance: DEFAULT_TOLERANCE,
             max_iterations: DEFAULT_MAX_ITERATIONS,
+            stationary: StationaryMode::One,
         }
     }
 }
@@ -349,6 +407,7 @@ pub struct Scene {
     receivers: Vec<Point>,
     paths: Vec<Path>,
     solver: SolverOptions,
+    search: Option<SearchOptions>,
     segments: Vec<SegmentRef>,
     /// End points of `segments`, in the same order.
     segment_ends: Vec<(Point, Point)>,
@@ -428,6 +487,56 @@ fn positive(key: String, v: f64) -> Result<f64, SceneError> {
     } else {
         Ok(v)
     }
+}
+
+/// Steps a sequence may have for the complete search of its stationary paths (each assignment
+/// of segments is tried with every choice of held vertices, `2^steps` of them), and so the
+/// largest `search.max_steps`.
+pub const MAX_STATIONARY_STEPS: usize = 12;
+
+/// The validated `search` section.
+fn search_options(
+    spec: &SearchSpec,
+    interfaces: &[Interface],
+) -> Result<SearchOptions, SceneError> {
+    if spec.max_steps > MAX_STATIONARY_STEPS as u64 {
+        return Err(SceneError::new(
+            "search.max_steps",
+            format!("must be at most {MAX_STATIONARY_STEPS}"),
+        ));
+    }
+    let interfaces = match &spec.interfaces {
+        None => (0..interfaces.len()).collect(),
+        Some(names) => {
+            let mut idx: Vec<usize> = Vec::with_capacity(names.len());
+            for (j, name) in names.iter().enumerate() {
+                let key = format!("search.interfaces[{j}]");
+                let i = by_name(interfaces, |i| &i.name, name)
+                    .ok_or_else(|| SceneError::new(&key, format!("unknown interface `{name}`")))?;
+                if idx.contains(&i) {
+                    return Err(SceneError::new(key, format!("`{name}` is listed twice")));
+                }
+                idx.push(i);
+            }
+            idx.sort_unstable();
+            idx
+        }
+    };
+    let (reflect, refract) = (spec.reflect.unwrap_or(true), spec.refract.unwrap_or(true));
+    if !reflect && !refract && spec.max_steps > 0 {
+        return Err(SceneError::new(
+            "search",
+            "`reflect` and `refract` are both false: no step is allowed (set `max_steps` to 0 \
+             for the direct ray alone)",
+        ));
+    }
+    Ok(SearchOptions {
+        max_steps: spec.max_steps as usize,
+        interfaces,
+        reflect,
+        refract,
+        obstructed: spec.obstructed.unwrap_or(false),
+    })
 }
 
 impl Scene {
@@ -561,7 +670,7 @@ impl Scene {
         let sources = points("sources", &spec.sources)?;
         let receivers = points("receivers", &spec.receivers)?;
 
-        let needs_regions = spec.paths.iter().any(|p| p.media.is_none());
+        let needs_regions = spec.paths.iter().any(|p| p.media.is_none()) || spec.search.is_some();
         if needs_regions {
             for (k, &p) in sources.iter().enumerate() {
                 source_in_a_region(&interfaces, &segments, &segment_bvh, domain, k, p)?;
@@ -635,8 +744,15 @@ impl Scene {
                     ));
                 }
             }
+            if let Some(m) = s.stationary {
+                solver.stationary = m;
+            }
             solver.validate()?;
         }
+        let search = match &spec.search {
+            Some(s) => Some(search_options(s, &interfaces)?),
+            None => None,
+        };
         let batch_size = batch_size(sources.len(), receivers.len(), &paths)?;
         let scene_points = || {
             interfaces
@@ -668,6 +784,7 @@ impl Scene {
             receivers,
             paths,
             solver,
+            search,
             segment_ends,
             segments,
             segment_bvh,
@@ -714,6 +831,10 @@ impl Scene {
     /// Solver settings.
     pub fn solver(&self) -> SolverOptions {
         self.solver
+    }
+    /// The `search` section's settings, when the scene asks for automatic sequences.
+    pub fn search(&self) -> Option<&SearchOptions> {
+        self.search.as_ref()
     }
     /// Replaces the solver settings, after the checks that a scene document's `solver` gets.
     ///
@@ -766,9 +887,10 @@ impl Scene {
         }
         Ok(())
     }
-    /// Whether some path needs region lookup (gives no `media`).
+    /// Whether some path needs region lookup (gives no `media`), or the scene asks for a
+    /// `search` (whose media come from the regions).
     pub fn needs_regions(&self) -> bool {
-        self.paths.iter().any(|p| p.media.is_none())
+        self.paths.iter().any(|p| p.media.is_none()) || self.search.is_some()
     }
     /// Bounding box of everything in the scene (interfaces, sources, receivers, `at` points,
     /// domain).

@@ -445,6 +445,7 @@ fn set_solver_validates_like_the_scene_document() {
             .set_solver(SolverOptions {
                 tolerance,
                 max_iterations,
+                ..Default::default()
             })
             .expect_err("invalid");
         assert_eq!(e.key, key);
@@ -454,6 +455,7 @@ fn set_solver_validates_like_the_scene_document() {
     s.set_solver(SolverOptions {
         tolerance: 1e-12,
         max_iterations: 0,
+        ..Default::default()
     })
     .expect("0 iterations");
 }

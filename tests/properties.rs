@@ -473,6 +473,7 @@ fn build(raw: &RawScene) -> SceneSpec {
         spec.solver = Some(SolverSpec {
             tolerance: raw.tolerance,
             max_iterations: raw.max_iterations,
+            ..Default::default()
         });
     }
     spec

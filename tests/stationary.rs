@@ -3,7 +3,10 @@
 //! random scenes, each minimised on its own (dense Newton on plain numbers), classified by
 //! the contract's rules, and deduplicated. Then the issue's named cases.
 
-use eigenray::{Arrival, Kink, Point, Scene, StationaryError, Status, Tracer, demo::SplitMix64};
+use eigenray::{
+    Arrival, Kink, Point, Reason, Scene, StationaryError, Status, Tracer, Workspace,
+    demo::SplitMix64,
+};
 
 type P = [f64; 2];
 
@@ -926,43 +929,25 @@ fn direct_ray_is_one_path() {
     assert_eq!(arrivals[0].status, Status::Converged);
 }
 
-/// A path that leaves its media to region lookup is refused, not answered wrongly; so is a
-/// path index out of range.
+/// A path index out of range and a path longer than the search takes are refused, and the
+/// caller's list is emptied first, whatever the answer.
 #[test]
-fn media_from_regions_are_refused() {
-    let scene = Scene::from_json(
-        r#"{ "media": { "air": { "speed": 1.0 } }, "background": "air",
-             "interfaces": { "wall": { "points": [[-1, 0], [1, 0]] } },
-             "sources": [[0, 1]], "receivers": [[0.5, 1]],
-             "paths": [{ "steps": [{ "reflect": "wall" }] }] }"#,
-    )
+fn bad_paths_are_refused() {
+    let wall = r#""interfaces": { "wall": { "points": [[-1, 0], [1, 0]] } },
+                  "sources": [[0, 1]], "receivers": [[0.5, 1]]"#;
+    let scene = Scene::from_json(&format!(
+        r#"{{ "media": {{ "a": {{ "speed": 1.0 }} }}, {wall},
+             "paths": [{{ "steps": [{{ "reflect": "wall" }}], "media": ["a", "a"] }}] }}"#
+    ))
     .unwrap();
     let tracer = Tracer::new(&scene).unwrap();
     let (s, r) = (scene.sources()[0], scene.receivers()[0]);
-    // The caller's list is emptied first, whatever the answer.
     let stale = || {
         let mut out = Vec::new();
-        let wall = Scene::from_json(
-            r#"{ "media": { "a": { "speed": 1.0 } },
-                 "interfaces": { "wall": { "points": [[-1, 0], [1, 0]] } },
-                 "sources": [[0, 1]], "receivers": [[0.5, 1]],
-                 "paths": [{ "steps": [{ "reflect": "wall" }], "media": ["a", "a"] }] }"#,
-        )
-        .unwrap();
-        let (s, r) = (wall.sources()[0], wall.receivers()[0]);
-        Tracer::new(&wall)
-            .unwrap()
-            .stationary_paths(s, r, 0, &mut out)
-            .unwrap();
+        tracer.stationary_paths(s, r, 0, &mut out).unwrap();
         assert_eq!(out.len(), 1);
         out
     };
-    let mut out = stale();
-    assert_eq!(
-        tracer.stationary_paths(s, r, 0, &mut out),
-        Err(StationaryError::MediaNotGiven { path: 0 })
-    );
-    assert!(out.is_empty());
     let mut out = stale();
     assert_eq!(
         tracer.stationary_paths(s, r, 1, &mut out),
@@ -990,6 +975,267 @@ fn media_from_regions_are_refused() {
         Err(StationaryError::TooManySteps { path: 0, steps: 13 })
     );
     assert!(out.is_empty());
+}
+
+/// The default mode on the random scenes: every `no_path` it gives is `no_path` for the brute
+/// force (no stationary path of any status), every sequence with a path gets one of the
+/// reference's paths (time and status), and nothing ends `not_converged`.
+#[test]
+fn default_mode_no_path_is_a_proof() {
+    let mut rng = SplitMix64(1818);
+    let (mut compared, mut proofs, mut searched) = (0, 0, 0);
+    let mut failures = Vec::new();
+    while compared < 1000 {
+        let case = random_case(&mut rng);
+        let Reference::Paths(want) = reference(&case) else {
+            continue;
+        };
+        compared += 1;
+        let scene = Scene::from_json(&case.json()).unwrap();
+        let tracer = Tracer::new(&scene).unwrap();
+        let ray = tracer.trace(0, 0, 0, &mut Workspace::new());
+        if ray.reason == Some(Reason::NoStationaryPath) {
+            searched += 1;
+        }
+        let ok = match ray.status {
+            Status::NoPath => {
+                proofs += 1;
+                want.is_empty()
+            }
+            Status::NotConverged => false,
+            _ => want
+                .iter()
+                .any(|p| p.status == ray.status && (p.time - ray.time).abs() <= 1e-10 * p.time),
+        };
+        if !ok {
+            failures.push(format!(
+                "{case:?}\nreference {:?}\ndefault {:?} {} {:?}",
+                want.iter().map(|p| (p.status, p.time)).collect::<Vec<_>>(),
+                ray.status,
+                ray.time,
+                ray.reason
+            ));
+        }
+    }
+    println!("{compared} scenes: {proofs} no_path ({searched} by the complete search)");
+    for f in failures.iter().take(3) {
+        println!("{f}\n");
+    }
+    assert!(failures.is_empty(), "{} failures", failures.len());
+    assert!(proofs >= 100 && searched >= 50, "{proofs} {searched}");
+}
+
+/// A random scene whose media come from the regions: a closed lens (glass, claimed by an
+/// `at` point at its centre) in air (the background), with an open reflector beside it, and
+/// up to three steps off or through them.
+struct LookupCase {
+    lens: Line,
+    centre: P,
+    reflector: Line,
+    steps: Vec<(bool, usize)>,
+    source: P,
+    receiver: P,
+}
+
+const AIR: f64 = 1.0;
+const GLASS: f64 = 1.5;
+
+impl LookupCase {
+    fn random(rng: &mut SplitMix64) -> LookupCase {
+        loop {
+            let mut r = || rng.next_f64();
+            let n = 3 + (r() * 5.0) as usize;
+            let (cx, cy, rad, ph) = (r() - 0.5, r() - 0.5, 0.8 + 0.6 * r(), r());
+            let points: Vec<P> = (0..n)
+                .map(|i| {
+                    let a = std::f64::consts::TAU * (i as f64 + ph) / n as f64;
+                    let rr = rad * (0.6 + 0.6 * r());
+                    [cx + rr * a.cos(), cy + rr * a.sin()]
+                })
+                .collect();
+            let lens = Line {
+                points,
+                closed: true,
+            };
+            let y = -2.6 + 0.4 * r();
+            let reflector = Line {
+                points: vec![
+                    [-3.0, y + 0.3 * r()],
+                    [0.0, y - 0.3 * r()],
+                    [3.0, y + 0.3 * r()],
+                ],
+                closed: false,
+            };
+            if too_close(&lens, &reflector) {
+                continue;
+            }
+            let k = 1 + (r() * 3.0) as usize;
+            let steps = (0..k)
+                .map(|_| if r() < 0.2 { (true, 1) } else { (r() < 0.3, 0) })
+                .collect();
+            let mut end = || loop {
+                let p = [r() * 8.0 - 4.0, r() * 4.0 - 1.5];
+                if norm(sub(p, [cx, cy])) > 1.8 {
+                    return p;
+                }
+            };
+            let (source, receiver) = (end(), end());
+            return LookupCase {
+                lens,
+                centre: [cx, cy],
+                reflector,
+                steps,
+                source,
+                receiver,
+            };
+        }
+    }
+
+    fn json(&self) -> String {
+        let pts = |l: &Line| {
+            l.points
+                .iter()
+                .map(|p| format!("[{:e}, {:e}]", p[0], p[1]))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let steps: Vec<String> = self
+            .steps
+            .iter()
+            .map(|&(reflect, i)| {
+                let kind = if reflect { "reflect" } else { "refract" };
+                format!(r#"{{ "{kind}": "i{i}" }}"#)
+            })
+            .collect();
+        format!(
+            r#"{{ "media": {{ "air": {{ "index": {AIR:e} }},
+                             "glass": {{ "index": {GLASS:e}, "at": [{:e}, {:e}] }} }},
+                 "background": "air",
+                 "interfaces": {{ "i0": {{ "points": [{}], "closed": true }},
+                                  "i1": {{ "points": [{}] }} }},
+                 "sources": [[{:e}, {:e}]], "receivers": [[{:e}, {:e}]],
+                 "paths": [{{ "steps": [{}] }}] }}"#,
+            self.centre[0],
+            self.centre[1],
+            pts(&self.lens),
+            pts(&self.reflector),
+            self.source[0],
+            self.source[1],
+            self.receiver[0],
+            self.receiver[1],
+            steps.join(", ")
+        )
+    }
+
+    /// Whether `p` lies inside the lens (crossing number).
+    fn inside(&self, p: P) -> bool {
+        let mut inside = false;
+        for j in 0..self.lens.segments() {
+            let (a, b) = self.lens.segment(j);
+            if (a[1] > p[1]) != (b[1] > p[1]) {
+                let x = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+                if x > p[0] {
+                    inside = !inside;
+                }
+            }
+        }
+        inside
+    }
+
+    /// The brute force: every sequence of leg slownesses (air or glass), each searched by the
+    /// reference, keeping the paths whose legs lie in the media they were solved with (a
+    /// leg's midpoint inside the lens exactly when its medium is glass). Paths that reach
+    /// interfaces only from one side have unobstructed legs in one region each, so only
+    /// `converged` and `vertex` paths are compared.
+    fn reference(&self) -> Option<Vec<RefPath>> {
+        let k = self.steps.len();
+        let mut found = Vec::new();
+        for code in 0..(1usize << (k + 1)) {
+            let glass = |leg: usize| code >> leg & 1 == 1;
+            let case = Case {
+                lines: vec![self.lens.clone(), self.reflector.clone()],
+                slowness: (0..=k)
+                    .map(|l| if glass(l) { GLASS } else { AIR })
+                    .collect(),
+                steps: self.steps.clone(),
+                source: self.source,
+                receiver: self.receiver,
+            };
+            let Reference::Paths(paths) = reference(&case) else {
+                return None;
+            };
+            for p in paths {
+                let legs_agree = (0..=k).all(|l| {
+                    let (a, b) = (p.points[l], p.points[l + 1]);
+                    self.inside([0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])]) == glass(l)
+                });
+                if legs_agree && p.status != Status::Obstructed {
+                    found.push(p);
+                }
+            }
+        }
+        found.sort_by(|a, b| a.time.total_cmp(&b.time));
+        Some(found)
+    }
+}
+
+/// Paths without `media` on random lens scenes: the engine's arrivals (media from the
+/// regions) are the brute force's over every sequence of media, kept where each leg lies in
+/// its medium; the default mode's answer is one of them, or `no_path` where there is none.
+#[test]
+fn media_from_regions_match_brute_force() {
+    let mut rng = SplitMix64(77);
+    let (mut compared, mut paths, mut through) = (0, 0, 0);
+    let mut failures = Vec::new();
+    while compared < 300 {
+        let case = LookupCase::random(&mut rng);
+        let Some(want) = case.reference() else {
+            continue;
+        };
+        compared += 1;
+        let scene = Scene::from_json(&case.json()).unwrap();
+        let tracer = Tracer::new(&scene).unwrap();
+        let mut got = Vec::new();
+        let (s, r) = (scene.sources()[0], scene.receivers()[0]);
+        let search = tracer.stationary_paths(s, r, 0, &mut got).unwrap();
+        assert!(search.complete);
+        got.retain(|a| a.status != Status::Obstructed);
+        let same = want.len() == got.len()
+            && want
+                .iter()
+                .zip(&got)
+                .all(|(p, a)| p.status == a.status && (p.time - a.time).abs() <= 1e-10 * p.time);
+        paths += want.len();
+        through += got.iter().filter(|a| a.media.contains(&1)).count();
+        let ray = tracer.trace(0, 0, 0, &mut Workspace::new());
+        let default_ok = match ray.status {
+            Status::NoPath => want.is_empty(),
+            Status::NotConverged => false,
+            // An obstructed answer is a stationary path of another kind.
+            Status::Obstructed => true,
+            _ => want
+                .iter()
+                .any(|p| (p.time - ray.time).abs() <= 1e-10 * p.time),
+        };
+        if !same || !default_ok {
+            failures.push(format!(
+                "{}\nreference {:?}\nengine {:?}\ndefault {:?} {}",
+                case.json(),
+                want.iter().map(|p| (p.status, p.time)).collect::<Vec<_>>(),
+                got.iter()
+                    .map(|a| (a.status, a.time, a.media.clone()))
+                    .collect::<Vec<_>>(),
+                ray.status,
+                ray.time
+            ));
+        }
+    }
+    println!("{compared} scenes, {paths} paths, {through} through glass");
+    for f in failures.iter().take(3) {
+        println!("{f}\n");
+    }
+    assert!(failures.is_empty(), "{} failures", failures.len());
+    assert!(paths >= 100 && through >= 50, "{paths} {through}");
 }
 
 /// The search's cost grows with log M: one reflection off a digitised sea floor of 1,000 and

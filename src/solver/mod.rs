@@ -163,12 +163,6 @@ pub(crate) fn thomas(diag: &[f64], off: &[f64], d: &[f64], x: &mut [f64], cp: &m
     finite
 }
 
-/// The merit `Σ (rᵢ / (wᵢ + wᵢ₊₁))²` at the parameters in `ws` (all points free).
-pub(crate) fn merit_at(g: &ProblemRef, ws: &mut NewtonWorkspace) -> f64 {
-    g.evaluate(&ws.s, &ws.seg, &ws.pin, &mut ws.eval, false, false);
-    ws.eval.phi
-}
-
 /// Runs the iteration from the parameters, segments and pins already in `ws` (set by the
 /// start): the fast path while it applies (every point free, full steps inside the segments),
 /// then the general loop. Leaves the final state in `ws` (`s`, `seg`, `pin`, `eval`).

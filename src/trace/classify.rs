@@ -93,7 +93,27 @@ impl Classifier {
         nw: &NewtonWorkspace,
         points: &mut Vec<Point>,
     ) -> RayRecord {
-        let steps = &scene.paths()[path].steps;
+        let of = Sequence::of(scene, path);
+        self.classify_sequence(scene, of, source, receiver, sol, nw, points)
+    }
+
+    /// [`classify`](Self::classify) for any step sequence (a scene path's, or one that a
+    /// search generated).
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the parts of a ray, none of which the classifier owns"
+    )]
+    pub(crate) fn classify_sequence(
+        &self,
+        scene: &Scene,
+        of: Sequence<'_>,
+        source: Point,
+        receiver: Point,
+        sol: &Solution,
+        nw: &NewtonWorkspace,
+        points: &mut Vec<Point>,
+    ) -> RayRecord {
+        let steps = of.steps;
         let k = steps.len();
         points.clear();
         points.push(source);
@@ -136,7 +156,11 @@ impl Classifier {
         if let Some(step) = wrong_side(scene, steps, nw) {
             return no_path(Reason::WrongSide { step });
         }
-        if let Some(crossing) = self.obstruction(scene, path, points, &nw.seg[..k]) {
+        let crossing = match of.path {
+            Some(path) => self.obstruction(scene, path, points, &nw.seg[..k]),
+            None => first_crossing_any(scene, steps, points, &nw.seg[..k]),
+        };
+        if let Some(crossing) = crossing {
             return crossing.record(sol);
         }
         if let Some(step) = nw.pin.iter().position(|p| *p == Pin::Vertex).or(at_vertex) {
@@ -258,6 +282,60 @@ impl Classifier {
         }
         None
     }
+}
+
+/// A step sequence to classify: a scene path's (whose legs' candidate segments the classifier
+/// prepared) or any other.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Sequence<'a> {
+    /// The steps.
+    pub steps: &'a [Step],
+    /// The scene path they are, if they are one.
+    pub path: Option<usize>,
+}
+
+impl<'a> Sequence<'a> {
+    /// Path `path` of `scene`.
+    pub(crate) fn of(scene: &'a Scene, path: usize) -> Sequence<'a> {
+        Sequence {
+            steps: &scene.paths()[path].steps,
+            path: Some(path),
+        }
+    }
+}
+
+/// The first leg of the points `pts` (source, interactions, receiver) that crosses an
+/// interface strictly between its ends, tested against every segment of the scene (the
+/// classifier's test for a sequence without prepared candidates).
+pub(crate) fn first_crossing_any(
+    scene: &Scene,
+    steps: &[Step],
+    pts: &[Point],
+    seg: &[usize],
+) -> Option<Crossing> {
+    let k = seg.len();
+    let mut own_a = SegmentRef::NONE;
+    for leg in 0..=k {
+        let (a, b) = (pts[leg], pts[leg + 1]);
+        let own_b = if leg < k {
+            SegmentRef {
+                interface: steps[leg].interface as u32,
+                segment: seg[leg] as u32,
+            }
+        } else {
+            SegmentRef::NONE
+        };
+        if a != b
+            && let Some(r) = scene.first_crossing(a, b, END_MARGIN, [own_a, own_b])
+        {
+            return Some(Crossing {
+                leg,
+                interface: r.interface as usize,
+            });
+        }
+        own_a = own_b;
+    }
+    None
 }
 
 /// Leg media from the regions at the points in `nw` into `media`: the source's region

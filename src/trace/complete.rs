@@ -45,6 +45,7 @@ use crate::problem::{Eval, Pin, ProblemRef};
 use crate::scene::Scene;
 use crate::solver::{NewtonWorkspace, Outcome, Solution, thomas};
 
+use super::classify::Sequence;
 use super::{Classifier, Reason, Status};
 
 /// How the time behaves at the held vertices of a `vertex` path.
@@ -84,6 +85,8 @@ pub struct Arrival {
     pub segments: Vec<usize>,
     /// Leg media, as indices into [`Scene::media`].
     pub media: Vec<usize>,
+    /// Newton steps of its assignment's solve.
+    pub iterations: usize,
     /// Why it is not `converged`, when it is not.
     pub reason: Option<Reason>,
     /// For a `vertex` path: how the time behaves at its held vertices.
@@ -119,14 +122,6 @@ pub enum StationaryError {
         /// The index asked for.
         path: usize,
     },
-    /// The path does not give its leg media; the complete search does not look them up in
-    /// the regions yet.
-    ///
-    /// How to fix: give the path's `media` (one per leg).
-    MediaNotGiven {
-        /// The path's index.
-        path: usize,
-    },
     /// The path has more steps than the search takes: each assignment of segments is tried
     /// with every choice of held vertices, `2^steps` of them.
     ///
@@ -139,18 +134,12 @@ pub enum StationaryError {
     },
 }
 
-/// Steps a path may have for the search (see [`StationaryError::TooManySteps`]).
-pub const MAX_STATIONARY_STEPS: usize = 12;
+pub use crate::scene::MAX_STATIONARY_STEPS;
 
 impl fmt::Display for StationaryError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             StationaryError::NoSuchPath { path } => write!(f, "there is no path {path}"),
-            StationaryError::MediaNotGiven { path } => write!(
-                f,
-                "path {path} gives no `media`: the search for every stationary path needs \
-                 the leg media given (region lookup is not supported there yet)"
-            ),
             StationaryError::TooManySteps { path, steps } => write!(
                 f,
                 "path {path} has {steps} steps: the search for every stationary path takes at \
@@ -498,7 +487,8 @@ fn pruned(places: &[Place], source: Point, receiver: Point, w: &[f64]) -> bool {
 /// The search's scratch and settings for one triple.
 struct Search<'a> {
     g: ProblemRef<'a>,
-    path: usize,
+    sequence: Sequence<'a>,
+    media: &'a [usize],
     classifier: &'a Classifier,
     hierarchies: &'a [&'a Hierarchy],
     tolerance: f64,
@@ -591,52 +581,48 @@ fn collapsing(e: &Eval, k: usize) -> Settled {
     }
 }
 
-/// Every stationary path of path `path` from `source` to `receiver` into `out` (see
-/// [`Tracer::stationary_paths`](super::Tracer::stationary_paths)).
-#[expect(
-    clippy::too_many_arguments,
-    reason = "the tracer's parts that the search borrows"
-)]
-pub(crate) fn stationary_paths(
-    scene: &Scene,
-    classifier: &Classifier,
-    hierarchies: &[&Hierarchy],
-    tolerance: f64,
-    source: Point,
-    receiver: Point,
-    path: usize,
+/// What a search of one sequence with given leg media borrows.
+#[derive(Clone, Copy)]
+pub(crate) struct SequenceSearch<'a> {
+    pub scene: &'a Scene,
+    pub classifier: &'a Classifier,
+    /// The segment hierarchy of each step's interface.
+    pub hierarchies: &'a [&'a Hierarchy],
+    pub tolerance: f64,
+    pub sequence: Sequence<'a>,
+    /// Leg media (steps + 1), as indices into [`Scene::media`].
+    pub media: &'a [usize],
+    pub source: Point,
+    pub receiver: Point,
+}
+
+/// Every stationary path of one sequence with given leg media, appended to `out` unsorted
+/// (see [`finish`]); adds what it did to `stats`.
+pub(crate) fn search_sequence(
+    input: SequenceSearch<'_>,
     out: &mut Vec<Arrival>,
-) -> Result<Stationary, StationaryError> {
-    out.clear();
-    let spec = scene
-        .paths()
-        .get(path)
-        .ok_or(StationaryError::NoSuchPath { path })?;
-    let media = spec
-        .media
-        .as_deref()
-        .ok_or(StationaryError::MediaNotGiven { path })?;
-    let k = spec.steps.len();
-    if k > MAX_STATIONARY_STEPS {
-        return Err(StationaryError::TooManySteps { path, steps: k });
-    }
+    stats: &mut Stationary,
+) {
+    let k = input.sequence.steps.len();
+    debug_assert!(k <= MAX_STATIONARY_STEPS && input.media.len() == k + 1);
     let mut sc = *SCRATCH.with(|c| c.take()).unwrap_or_default();
     sc.resize(k);
     let mut slowness = std::mem::take(&mut sc.slowness);
     slowness.clear();
-    slowness.extend(media.iter().map(|&m| scene.media()[m].slowness));
+    slowness.extend(input.media.iter().map(|&m| input.scene.media()[m].slowness));
     let mut search = Search {
         g: ProblemRef {
-            scene,
-            steps: &spec.steps,
+            scene: input.scene,
+            steps: input.sequence.steps,
             slowness: &slowness,
-            source,
-            receiver,
+            source: input.source,
+            receiver: input.receiver,
         },
-        path,
-        classifier,
-        hierarchies,
-        tolerance,
+        sequence: input.sequence,
+        media: input.media,
+        classifier: input.classifier,
+        hierarchies: input.hierarchies,
+        tolerance: input.tolerance,
         sc,
         stats: Stationary {
             complete: true,
@@ -645,17 +631,17 @@ pub(crate) fn stationary_paths(
         },
     };
     search.run(out);
-    let stats = search.stats;
+    stats.complete &= search.stats.complete;
+    stats.tuples += search.stats.tuples;
+    stats.solves += search.stats.solves;
     let mut sc = search.sc;
     sc.slowness = slowness;
     SCRATCH.with(|c| c.set(Some(Box::new(sc))));
-    finish(out, media, stats.complete);
-    Ok(stats)
 }
 
 /// Orders the arrivals by time, drops repeats of one path (a vertex path kept over an
-/// interior path on the same points), and fills in what every arrival shares.
-fn finish(out: &mut Vec<Arrival>, media: &[usize], complete: bool) {
+/// interior path on the same points), and marks whether the search was complete.
+pub(crate) fn finish(out: &mut Vec<Arrival>, complete: bool) {
     out.sort_by(|a, b| a.time.total_cmp(&b.time).then(a.segments.cmp(&b.segments)));
     let same = |a: &Arrival, b: &Arrival| {
         let scale = a
@@ -682,8 +668,6 @@ fn finish(out: &mut Vec<Arrival>, media: &[usize], complete: bool) {
     }
     kept.sort_by(|a, b| a.time.total_cmp(&b.time).then(a.segments.cmp(&b.segments)));
     for a in &mut kept {
-        a.media.clear();
-        a.media.extend_from_slice(media);
         a.complete = complete;
     }
     *out = kept;
@@ -870,9 +854,9 @@ impl Search<'_> {
             iterations,
             residual: e.rmax,
         };
-        let record = self.classifier.classify(
+        let record = self.classifier.classify_sequence(
             self.g.scene,
-            self.path,
+            self.sequence,
             self.g.source,
             self.g.receiver,
             &sol,
@@ -888,7 +872,8 @@ impl Search<'_> {
             points: self.sc.points.clone(),
             parameters: nw.s[..k].to_vec(),
             segments: segs.to_vec(),
-            media: Vec::new(),
+            media: self.media.to_vec(),
+            iterations,
             reason: record.reason,
             kink: (record.status == Status::Vertex).then_some(kink).flatten(),
             residual: record.residual,

@@ -23,17 +23,18 @@ mod plan;
 mod result;
 mod stack;
 mod start;
+mod stationary;
 mod straight;
 
 pub(crate) use classify::Classifier;
-pub use complete::{Arrival, Kink, MAX_STATIONARY_STEPS, Stationary, StationaryError};
+pub use complete::{Arrival, Kink, Stationary, StationaryError};
 pub(crate) use one_step::{OneStepStart, flat_status};
 pub use plan::Kernels;
 pub(crate) use plan::{OneStepPath, PathPlan};
 pub use result::{Ray, RayRecord, Reason, Status};
 pub(crate) use start::given_param;
 
-use start::{StartScratch, given_start, initial_guess, refraction_guess, warm_start};
+use start::{StartScratch, given_start, initial_guess, refraction_guess};
 use straight::StraightStart;
 
 /// Where a solve starts.
@@ -41,10 +42,12 @@ use straight::StraightStart;
 pub(crate) enum Start<'a> {
     /// The documented initial guess.
     Default,
-    /// Whichever of these parameters and the default guess has the smaller residual.
-    Compare(&'a [f64]),
-    /// These parameters (a neighbouring receiver's solution in a batch).
+    /// These parameters (a caller's start).
     Given(&'a [f64]),
+    /// These parameters as a trial (a neighbouring receiver's solution in a batch): where
+    /// they lead to no stationary path the ray ends there, without the complete search, and
+    /// the caller tries the default start next.
+    Trial(&'a [f64]),
 }
 
 /// The documented start of a ray, and how it refines the start of refraction paths.
@@ -208,6 +211,8 @@ pub struct Tracer<'s> {
     kernels: Kernels,
     /// Per interface: its segment hierarchy for the complete search, built on first use.
     hierarchies: Vec<std::sync::OnceLock<complete::Hierarchy>>,
+    /// Per interface: the pairs of media on its sides (with regions), found on first use.
+    sides: Vec<std::sync::OnceLock<Vec<crate::regions::Sides>>>,
 }
 
 impl<'s> Tracer<'s> {
@@ -240,6 +245,11 @@ impl<'s> Tracer<'s> {
             guess: InitialGuess::default(),
             kernels: Kernels::default(),
             hierarchies: scene
+                .interfaces()
+                .iter()
+                .map(|_| Default::default())
+                .collect(),
+            sides: scene
                 .interfaces()
                 .iter()
                 .map(|_| Default::default())
@@ -295,79 +305,6 @@ impl<'s> Tracer<'s> {
         self.kernels = kernels;
         self.plan();
         self
-    }
-
-    /// Every stationary path of path `path` from `source` to `receiver` into `out` (emptied
-    /// first): `converged`, `vertex` (with its [`Kink`]) and `obstructed` ones, each once,
-    /// ordered by time. A search that is [`complete`](Stationary::complete) lists them all (an
-    /// empty `out` then says that the sequence has no stationary path).
-    ///
-    /// On one assignment of segments the time is convex in the parameters; the search runs
-    /// a branch-and-bound over each polyline's segment hierarchy with certain bounds on the
-    /// residuals, and solves each surviving assignment, with every choice of held vertices, to
-    /// the solver's tolerance. The path must give its leg media and have at most
-    /// [`MAX_STATIONARY_STEPS`](crate::limits::MAX_STATIONARY_STEPS) steps. The first call on an interface builds its
-    /// hierarchy (`O(M)`); a later one visits about `log M` nodes per arrival and interface
-    /// (measured on a digitised sea floor: 24 tuples per ray at M = 1e3, 40 at 1e5).
-    ///
-    /// ```
-    /// use eigenray::{Kink, Point, Scene, Status, Tracer};
-    /// // A mirror bent into a valley, seen from above: a specular point on each slope, and
-    /// // the bottom, where the time has a maximum-type kink.
-    /// let scene = Scene::from_json(r#"{
-    ///     "media": { "air": { "speed": 1.0 } },
-    ///     "interfaces": { "valley": { "points": [[-3, 0], [0, -2], [3, 0]] } },
-    ///     "sources": [[-0.5, 2]], "receivers": [[0.5, 2]],
-    ///     "paths": [{ "steps": [{ "reflect": "valley" }], "media": ["air", "air"] }]
-    /// }"#).unwrap();
-    /// let tracer = Tracer::new(&scene).unwrap();
-    /// let mut arrivals = Vec::new();
-    /// let search = tracer
-    ///     .stationary_paths(Point::new(-0.5, 2.0), Point::new(0.5, 2.0), 0, &mut arrivals)
-    ///     .unwrap();
-    /// assert!(search.complete);
-    /// let statuses: Vec<Status> = arrivals.iter().map(|a| a.status).collect();
-    /// assert_eq!(statuses, [Status::Converged, Status::Converged, Status::Vertex]);
-    /// assert_eq!(arrivals[2].kink, Some(Kink::Maximum));
-    /// assert!((arrivals[0].time - 45f64.sqrt()).abs() < 1e-12);
-    /// assert!(arrivals.windows(2).all(|w| w[0].time <= w[1].time));
-    /// ```
-    ///
-    /// # Errors
-    /// A path index out of range, a path without `media`, or one of more than
-    /// [`MAX_STATIONARY_STEPS`](crate::limits::MAX_STATIONARY_STEPS) steps.
-    pub fn stationary_paths(
-        &self,
-        source: Point,
-        receiver: Point,
-        path: usize,
-        out: &mut Vec<Arrival>,
-    ) -> Result<Stationary, StationaryError> {
-        out.clear();
-        let spec = self
-            .scene
-            .paths()
-            .get(path)
-            .ok_or(StationaryError::NoSuchPath { path })?;
-        let hierarchies: Vec<&complete::Hierarchy> = spec
-            .steps
-            .iter()
-            .map(|step| {
-                self.hierarchies[step.interface].get_or_init(|| {
-                    complete::Hierarchy::new(&self.scene.interfaces()[step.interface].polyline)
-                })
-            })
-            .collect();
-        complete::stationary_paths(
-            self.scene,
-            &self.classifier,
-            &hierarchies,
-            self.newton.tolerance,
-            source,
-            receiver,
-            path,
-            out,
-        )
     }
 
     /// The scene.
@@ -445,10 +382,11 @@ impl<'s> Tracer<'s> {
         record
     }
 
-    /// [`solve`](Self::solve) with a warm start: `guess` holds interaction parameters (for
-    /// example those of a neighbouring receiver's solution, [`Workspace::parameters`]); the
-    /// solver starts from whichever of `guess` and the default initial guess has the smaller
-    /// residual.
+    /// [`solve`](Self::solve) from a start of the caller's: `guess` holds interaction
+    /// parameters (for example those of a neighbouring receiver's solution,
+    /// [`Workspace::parameters`]), and the solver starts there (each parameter clamped to its
+    /// open polyline, wrapped on a closed one). Where that start leads to no stationary path,
+    /// the answer is that of a complete search, as for [`solve`](Self::solve).
     ///
     /// # Panics
     /// If `guess` does not have one parameter per step of the path, or as
@@ -468,14 +406,14 @@ impl<'s> Tracer<'s> {
             "one parameter per step"
         );
         let src_medium = self.regions.as_ref().and_then(|r| r.medium_at(source));
-        let start = Start::Compare(guess);
+        let start = Start::Given(guess);
         let record = self.solve_planned(source, src_medium, receiver, path, start, ws);
         ws.forget_points_without_time(&record);
         record
     }
 
-    /// Solves ray (`source`, `receiver`, `path`) of the scene, optionally warm-started
-    /// (see [`solve_from`](Self::solve_from)); the points stay in `ws`.
+    /// Solves ray (`source`, `receiver`, `path`) of the scene, optionally from the caller's
+    /// start (see [`solve_from`](Self::solve_from)); the points stay in `ws`.
     ///
     /// # Panics
     /// If an index is out of range.
@@ -487,7 +425,7 @@ impl<'s> Tracer<'s> {
         guess: Option<&[f64]>,
         ws: &mut Workspace,
     ) -> RayRecord {
-        let start = guess.map_or(Start::Default, Start::Compare);
+        let start = guess.map_or(Start::Default, Start::Given);
         let record = self.solve_indexed_start(source, receiver, path, start, ws);
         ws.forget_points_without_time(&record);
         record
@@ -569,19 +507,24 @@ impl<'s> Tracer<'s> {
         start: Start,
         ws: &mut Workspace,
     ) -> RayRecord {
-        match &self.plans[path] {
+        let record = match &self.plans[path] {
             PathPlan::FlatRefraction(one, flat) => {
                 if let Start::Default = start
                     && let Some(sol) = flat.solve(source, receiver)
                 {
                     let cx = self.context();
-                    return one.flat_ray(&cx, flat, path, source, receiver, sol, ws);
+                    one.flat_ray(&cx, flat, path, source, receiver, sol, ws)
+                } else {
+                    one.solve(&self.context(), path, source, receiver, start, ws)
                 }
-                one.solve(&self.context(), path, source, receiver, start, ws)
             }
             PathPlan::OneStep(one) => one.solve(&self.context(), path, source, receiver, start, ws),
             plan => self.solve_general(plan, source, src_medium, receiver, path, start, ws),
+        };
+        if record.status.has_time() || matches!(start, Start::Trial(_)) {
+            return record;
         }
+        self.search_instead(record, source, src_medium, receiver, path, ws)
     }
 
     /// The general solve (after the stack kernel, where the plan has it): the start, the
@@ -617,8 +560,10 @@ impl<'s> Tracer<'s> {
         ws.ray.points.clear();
         let mut beyond = None;
         match start {
-            Start::Given(params) => given_start(scene, &spec.steps, params, &mut ws.newton),
-            Start::Default | Start::Compare(_) => {
+            Start::Given(params) | Start::Trial(params) => {
+                given_start(scene, &spec.steps, params, &mut ws.newton);
+            }
+            Start::Default => {
                 let images = self.guess == InitialGuess::RayParameter;
                 match plan
                     .straight()
@@ -642,23 +587,13 @@ impl<'s> Tracer<'s> {
             return RayRecord::failed(Status::NoPath, reason);
         }
         if let Some(step) = beyond {
-            return RayRecord::failed(Status::NoPath, Reason::LeavesEnd { step });
+            return RayRecord::failed(Status::NoPath, Reason::BeyondEnd { step });
         }
         ws.ray
             .slowness
             .extend(ws.ray.media.iter().map(|&m| scene.media()[m].slowness));
-        if !matches!(start, Start::Given(_)) {
+        if let Start::Default = start {
             refraction_guess(scene, &spec.steps, source, receiver, self.guess, ws);
-        }
-        if let Start::Compare(guess) = start {
-            let g = ProblemRef {
-                scene,
-                steps: &spec.steps,
-                slowness: &ws.ray.slowness,
-                source,
-                receiver,
-            };
-            warm_start(&g, guess, &mut ws.newton, &mut ws.start);
         }
 
         let mut total_iterations = 0;

@@ -11,7 +11,6 @@ use super::flat::{FlatRefraction, FlatSolution};
 use super::plan::OneStepPath;
 use super::start::{
     Placed, given_start, initial_guess, nearest_crossing, paraxial_one, refraction_guess,
-    warm_start,
 };
 use super::straight::{StraightStart, specular_point};
 use super::{Context, RayRecord, Reason, Start, Status, Workspace};
@@ -60,7 +59,7 @@ impl OneStepPath {
             source,
             receiver,
         };
-        if let Start::Given(params) = start {
+        if let Start::Given(params) | Start::Trial(params) = start {
             given_start(scene, steps, params, &mut ws.newton);
         } else {
             match self.crossing_start(step.kind, line, source, receiver) {
@@ -77,15 +76,12 @@ impl OneStepPath {
                     ws.ray.points.clear();
                     ws.ray.media.clear();
                     ws.ray.media.extend_from_slice(&self.media);
-                    return RayRecord::failed(Status::NoPath, Reason::LeavesEnd { step: 0 });
+                    return RayRecord::failed(Status::NoPath, Reason::BeyondEnd { step: 0 });
                 }
                 OneStepStart::General => {
                     initial_guess(scene, steps, source, receiver, ws);
                     refraction_guess(scene, steps, source, receiver, cx.guess, ws);
                 }
-            }
-            if let Start::Compare(guess) = start {
-                warm_start(&g, guess, &mut ws.newton, &mut ws.start);
             }
         }
         let sol = solve(&g, &mut ws.newton, cx.newton);

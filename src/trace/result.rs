@@ -17,12 +17,14 @@ pub enum Status {
     /// Time is stationary only with an interaction held on a polyline vertex (a kink: an
     /// edge-diffracted path, not a specular one).
     Vertex,
-    /// No such path exists from the solver's start: it would leave an open polyline's end, or
-    /// the side conditions cannot hold.
+    /// No such path exists: the sequence has no stationary path whose interactions lie inside
+    /// their interfaces with every leg on the side its step demands (a proof: where the
+    /// documented start leads to none, a complete search rules every one out).
     NoPath,
     /// The stationary path exists but a leg crosses another interface.
     Obstructed,
-    /// The solver gave up.
+    /// The search for the sequence's stationary paths reached a limit before it could rule
+    /// one out.
     NotConverged,
 }
 
@@ -93,6 +95,20 @@ pub enum Reason {
     },
     /// The iteration limit was reached.
     IterationLimit,
+    /// Interaction `step` lies beyond the end of its open interface at the one stationary
+    /// point of the sequence (the image method through one-segment mirrors, where the time
+    /// is convex): no path.
+    BeyondEnd {
+        /// Index of the step.
+        step: usize,
+    },
+    /// A complete search of the sequence found no stationary path (where the documented
+    /// start led to none).
+    NoStationaryPath,
+    /// The search for the sequence's stationary paths reached a limit (more steps than
+    /// [`MAX_STATIONARY_STEPS`](crate::limits::MAX_STATIONARY_STEPS), or its limit of tuples)
+    /// before it could rule out a path.
+    SearchLimit,
 }
 
 impl Reason {
@@ -132,6 +148,18 @@ impl fmt::Display for Reason {
                 )
             }
             Reason::IterationLimit => f.write_str("iteration limit reached"),
+            Reason::BeyondEnd { step } => write!(
+                f,
+                "step {step} lies beyond the end of its open interface at the sequence's one \
+                 stationary point"
+            ),
+            Reason::NoStationaryPath => {
+                f.write_str("a complete search of the sequence found no stationary path")
+            }
+            Reason::SearchLimit => f.write_str(
+                "the search for the sequence's stationary paths reached its limit (steps or \
+                 tuples)",
+            ),
         }
     }
 }

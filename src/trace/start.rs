@@ -4,7 +4,7 @@
 
 use crate::geom::{Point, Vec2};
 use crate::polyline::Polyline;
-use crate::problem::{Pin, ProblemRef};
+use crate::problem::Pin;
 use crate::scene::{Scene, Step, StepKind};
 use crate::solver::NewtonWorkspace;
 
@@ -40,25 +40,6 @@ impl StartScratch {
 pub(crate) struct Placed {
     pub s: f64,
     pub seg: usize,
-}
-
-/// Replaces the default guess already in `nw` by `guess` if the residual is smaller there.
-pub(super) fn warm_start(
-    g: &ProblemRef,
-    guess: &[f64],
-    nw: &mut NewtonWorkspace,
-    scratch: &mut StartScratch,
-) {
-    let default_merit = crate::solver::merit_at(g, nw);
-    scratch.s_alt.copy_from_slice(&nw.s);
-    scratch.seg_alt.copy_from_slice(&nw.seg);
-    given_start(g.scene, g.steps, guess, nw);
-    let warm_merit = crate::solver::merit_at(g, nw);
-    // Keep the default guess unless the warm one is better (NaN counts as worse).
-    if warm_merit.partial_cmp(&default_merit) != Some(std::cmp::Ordering::Less) {
-        nw.s.copy_from_slice(&scratch.s_alt);
-        nw.seg.copy_from_slice(&scratch.seg_alt);
-    }
 }
 
 /// Starts from given parameters (wrapped on closed polylines, clamped to open ones).
