@@ -139,9 +139,35 @@ struct Choice {
 }
 
 /// Minimises `T` over the free points of `choice` (fractions along their segments' lines):
-/// dense Newton with backtracking on `T`. Returns the fractions, or `None` when it does not
-/// settle or a leg vanishes.
+/// dense Newton with backtracking on `T`. Where a leg between two interactions vanishes on
+/// the way, `T` has a kink there: the minimum of `T` with that kink smoothed away
+/// (`|v| → √(|v|² + ε²)` on the legs between interactions, ε shrinking by 100 each time) is
+/// followed down to ε = 1e-10 of the path's length; if its leg stays, the plain solve runs
+/// again from there, else the minimum is the collapse (no path). Returns the fractions, or
+/// why not.
 fn minimise(case: &Case, choice: &[Choice]) -> Result<Vec<f64>, &'static str> {
+    match minimise_from(case, choice, None, 0.0) {
+        Err("vanished") => {}
+        other => return other,
+    }
+    let total = (norm(sub(case.receiver, case.source)) + 1.0) * 4.0;
+    let mut t = None;
+    let mut eps = 1e-2 * total;
+    while eps >= 1e-10 * total {
+        t = Some(minimise_from(case, choice, t.as_deref(), eps)?);
+        eps *= 1e-2;
+    }
+    minimise_from(case, choice, t.as_deref(), 0.0)
+}
+
+/// [`minimise`] from `start` (else the middle of each segment), with the legs between
+/// interactions smoothed by `eps`.
+fn minimise_from(
+    case: &Case,
+    choice: &[Choice],
+    start: Option<&[f64]>,
+    eps: f64,
+) -> Result<Vec<f64>, &'static str> {
     let k = choice.len();
     let w = &case.slowness;
     let seg = |i: usize| case.lines[case.steps[i].1].segment(choice[i].seg);
@@ -155,19 +181,30 @@ fn minimise(case: &Case, choice: &[Choice]) -> Result<Vec<f64>, &'static str> {
         v.push(case.receiver);
         v
     };
+    // A leg's length, smoothed between interactions.
+    let length = |l: usize, d: P| {
+        if l == 0 || l == k || eps == 0.0 {
+            norm(d)
+        } else {
+            (dot(d, d) + eps * eps).sqrt()
+        }
+    };
     let time = |t: &[f64]| -> f64 {
         let x = all(t);
-        (0..=k).map(|l| w[l] * norm(sub(x[l + 1], x[l]))).sum()
+        (0..=k).map(|l| w[l] * length(l, sub(x[l + 1], x[l]))).sum()
     };
-    let mut t: Vec<f64> = (0..k)
-        .map(|i| {
-            if choice[i].held {
-                0.0
-            } else {
-                0.5 + 0.1 * i as f64
-            }
-        })
-        .collect();
+    let mut t: Vec<f64> = match start {
+        Some(s) => s.to_vec(),
+        None => (0..k)
+            .map(|i| {
+                if choice[i].held {
+                    0.0
+                } else {
+                    0.5 + 0.1 * i as f64
+                }
+            })
+            .collect(),
+    };
     let free: Vec<usize> = (0..k).filter(|&i| !choice[i].held).collect();
     // A solve that does not settle approaches a minimum where `T` is not differentiable (a
     // leg between two interactions vanishing) or not strict (a leg along its interface's
@@ -192,12 +229,15 @@ fn minimise(case: &Case, choice: &[Choice]) -> Result<Vec<f64>, &'static str> {
     for _ in 0..200 {
         let x = all(&t);
         let legs: Vec<P> = (0..=k).map(|l| sub(x[l + 1], x[l])).collect();
-        let len: Vec<f64> = legs.iter().map(|&d| norm(d)).collect();
+        let len: Vec<f64> = (0..=k).map(|l| length(l, legs[l])).collect();
         let total: f64 = len.iter().sum();
         if len.iter().any(|&l| l <= 1e-9 * total) {
             return Err("vanished");
         }
-        let u: Vec<P> = legs.iter().map(|&d| unit(d)).collect();
+        // ∂|v|/∂v (a unit vector unless smoothed).
+        let u: Vec<P> = (0..=k)
+            .map(|l| [legs[l][0] / len[l], legs[l][1] / len[l]])
+            .collect();
         let d: Vec<P> = (0..k)
             .map(|i| {
                 let (a, b) = seg(i);
@@ -216,7 +256,7 @@ fn minimise(case: &Case, choice: &[Choice]) -> Result<Vec<f64>, &'static str> {
             grad[a] = w[i] * dot(u[i], d[i]) - w[i + 1] * dot(u[i + 1], d[i]);
             worst = worst.max(grad[a].abs() / (norm(d[i]) * (w[i] + w[i + 1])));
         }
-        if worst <= 1e-14 {
+        if worst <= 1e-14 || (eps > 0.0 && worst <= 1e-12) {
             return Ok(t);
         }
         // Leg `l` joins point l−1 and point l: Hessian of w|x_l − x_{l−1}|. How leg `l` moves
@@ -1070,9 +1110,14 @@ impl LookupCase {
                 continue;
             }
             let k = 1 + (r() * 3.0) as usize;
-            let steps = (0..k)
-                .map(|_| if r() < 0.2 { (true, 1) } else { (r() < 0.3, 0) })
-                .collect();
+            // Half of them through the lens (in and out), the rest any mix.
+            let steps = if r() < 0.5 {
+                vec![(false, 0), (false, 0)]
+            } else {
+                (0..k)
+                    .map(|_| if r() < 0.2 { (true, 1) } else { (r() < 0.3, 0) })
+                    .collect()
+            };
             let mut end = || loop {
                 let p = [r() * 8.0 - 4.0, r() * 4.0 - 1.5];
                 if norm(sub(p, [cx, cy])) > 1.8 {
@@ -1142,9 +1187,10 @@ impl LookupCase {
         inside
     }
 
-    /// The brute force: every sequence of leg slownesses (air or glass), each searched by the
-    /// reference, keeping the paths whose legs lie in the media they were solved with (a
-    /// leg's midpoint inside the lens exactly when its medium is glass). Paths that reach
+    /// The brute force: every sequence of leg slownesses (air or glass) that changes medium at
+    /// each refraction through the lens and nowhere else, each searched by the reference,
+    /// keeping the paths whose legs lie in the media they were solved with (a leg's midpoint
+    /// inside the lens exactly when its medium is glass). Paths that reach
     /// interfaces only from one side have unobstructed legs in one region each, so only
     /// `converged` and `vertex` paths are compared.
     fn reference(&self) -> Option<Vec<RefPath>> {
@@ -1152,6 +1198,14 @@ impl LookupCase {
         let mut found = Vec::new();
         for code in 0..(1usize << (k + 1)) {
             let glass = |leg: usize| code >> leg & 1 == 1;
+            // A refraction at the lens crosses into the other medium, a reflection keeps it.
+            let follows = (0..k).all(|i| {
+                let refracts = !self.steps[i].0 && self.steps[i].1 == 0;
+                (glass(i) != glass(i + 1)) == refracts
+            });
+            if !follows {
+                continue;
+            }
             let case = Case {
                 lines: vec![self.lens.clone(), self.reflector.clone()],
                 slowness: (0..=k)
@@ -1169,7 +1223,7 @@ impl LookupCase {
                     let (a, b) = (p.points[l], p.points[l + 1]);
                     self.inside([0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])]) == glass(l)
                 });
-                if legs_agree && p.status != Status::Obstructed {
+                if legs_agree && p.status == Status::Converged {
                     found.push(p);
                 }
             }
@@ -1187,7 +1241,7 @@ fn media_from_regions_match_brute_force() {
     let mut rng = SplitMix64(77);
     let (mut compared, mut paths, mut through) = (0, 0, 0);
     let mut failures = Vec::new();
-    while compared < 300 {
+    while compared < 1000 {
         let case = LookupCase::random(&mut rng);
         let Some(want) = case.reference() else {
             continue;
@@ -1199,7 +1253,7 @@ fn media_from_regions_match_brute_force() {
         let (s, r) = (scene.sources()[0], scene.receivers()[0]);
         let search = tracer.stationary_paths(s, r, 0, &mut got).unwrap();
         assert!(search.complete);
-        got.retain(|a| a.status != Status::Obstructed);
+        got.retain(|a| a.status == Status::Converged);
         let same = want.len() == got.len()
             && want
                 .iter()
@@ -1211,8 +1265,8 @@ fn media_from_regions_match_brute_force() {
         let default_ok = match ray.status {
             Status::NoPath => want.is_empty(),
             Status::NotConverged => false,
-            // An obstructed answer is a stationary path of another kind.
-            Status::Obstructed => true,
+            // Stationary paths of the kinds not compared here.
+            Status::Obstructed | Status::Vertex => true,
             _ => want
                 .iter()
                 .any(|p| (p.time - ray.time).abs() <= 1e-10 * p.time),
@@ -1235,7 +1289,7 @@ fn media_from_regions_match_brute_force() {
         println!("{f}\n");
     }
     assert!(failures.is_empty(), "{} failures", failures.len());
-    assert!(paths >= 100 && through >= 50, "{paths} {through}");
+    assert!(paths >= 60 && through >= 40, "{paths} {through}");
 }
 
 /// The search's cost grows with log M: one reflection off a digitised sea floor of 1,000 and

@@ -11,6 +11,7 @@
 //! fails.
 
 use crate::geom::{Aabb, Point, Vec2};
+use crate::polyline::Polyline;
 use crate::problem::Pin;
 use crate::regions::Regions;
 use crate::scene::{Scene, SegmentRef, Step, StepKind};
@@ -359,14 +360,45 @@ pub(crate) fn lookup_media(
         let line = &scene.interfaces()[step.interface].polyline;
         let here = line.point_on(nw.seg[i], nw.s[i]);
         if step.kind == StepKind::Refract {
-            m = regions
-                .medium_across(step.interface, nw.seg[i], nw.s[i], prev)
+            m = medium_across(regions, line, step.interface, nw.seg[i], nw.s[i], prev)
                 .ok_or(Reason::NoMedium { leg: i + 1 })?;
         }
         media.push(m);
         prev = here;
     }
     Ok(())
+}
+
+/// The medium that a ray from `from` refracts into at parameter `s` of segment `seg` of
+/// interface `interface` (`line`): across the segment's line from `from`; at a vertex between
+/// two segments, across the sum of their normals (the side test's rule there).
+pub(crate) fn medium_across(
+    regions: &Regions,
+    line: &Polyline,
+    interface: usize,
+    seg: usize,
+    s: f64,
+    from: Point,
+) -> Option<usize> {
+    let m = line.num_segments();
+    let wraps = line.is_closed();
+    let (before, after) = if s <= line.start(seg) && (seg > 0 || wraps) {
+        ((seg + m - 1) % m, seg)
+    } else if s >= line.start(seg + 1) && (seg + 1 < m || wraps) {
+        (seg, (seg + 1) % m)
+    } else {
+        return regions.medium_across(interface, seg, s, from);
+    };
+    let vertex = line.vertices()[after];
+    let side = (line.normal(before) + line.normal(after)).dot(from - vertex);
+    let sides = regions.sides(interface, after, line.start(after));
+    if side > 0.0 {
+        sides.right
+    } else if side < 0.0 {
+        sides.left
+    } else {
+        None
+    }
 }
 
 /// The first step whose legs are not on the sides it demands, for points in any state (held

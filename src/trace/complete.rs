@@ -97,6 +97,25 @@ pub struct Arrival {
     pub complete: bool,
 }
 
+impl Arrival {
+    /// An arrival with empty vectors, to be filled.
+    fn empty() -> Arrival {
+        Arrival {
+            status: Status::NoPath,
+            time: f64::NAN,
+            points: Vec::new(),
+            parameters: Vec::new(),
+            segments: Vec::new(),
+            media: Vec::new(),
+            iterations: 0,
+            reason: None,
+            kink: None,
+            residual: f64::NAN,
+            complete: true,
+        }
+    }
+}
+
 /// What a search of one triple did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Stationary {
@@ -492,7 +511,7 @@ struct Search<'a> {
     classifier: &'a Classifier,
     hierarchies: &'a [&'a Hierarchy],
     tolerance: f64,
-    sc: Scratch,
+    sc: Box<Scratch>,
     stats: Stationary,
 }
 
@@ -514,6 +533,8 @@ struct Scratch {
     stack: Vec<u32>,
     tuple: Vec<u32>,
     segs: Vec<usize>,
+    /// Arrivals no longer listed, whose vectors the next ones reuse.
+    spare: Vec<Arrival>,
 }
 
 impl Scratch {
@@ -564,23 +585,6 @@ const COLLAPSE: f64 = 1e-3;
 /// is taken to run along the segment's line.
 const ALONG: f64 = 1e-7;
 
-/// How a solve that stalled or ran out of steps at evaluation `e` ended: [`Settled::Degenerate`]
-/// when a leg between two interactions is collapsing, else not settled.
-fn collapsing(e: &Eval, k: usize) -> Settled {
-    let total: f64 = e.len[..=k].iter().sum();
-    // A leg along the line of an interaction it ends at: `T` is flat along that line
-    // (the minimum is not unique), and the leg lies on neither side (the classifier's
-    // `wrong_side`).
-    let along = |i: usize| {
-        e.u[i].cross(e.tan[i]).abs() <= ALONG || e.u[i + 1].cross(e.tan[i]).abs() <= ALONG
-    };
-    if (1..k).any(|j| e.len[j] <= COLLAPSE * total) || (0..k).any(along) {
-        Settled::Degenerate
-    } else {
-        Settled::No
-    }
-}
-
 /// What a search of one sequence with given leg media borrows.
 #[derive(Clone, Copy)]
 pub(crate) struct SequenceSearch<'a> {
@@ -605,7 +609,7 @@ pub(crate) fn search_sequence(
 ) {
     let k = input.sequence.steps.len();
     debug_assert!(k <= MAX_STATIONARY_STEPS && input.media.len() == k + 1);
-    let mut sc = *SCRATCH.with(|c| c.take()).unwrap_or_default();
+    let mut sc = SCRATCH.with(|c| c.take()).unwrap_or_default();
     sc.resize(k);
     let mut slowness = std::mem::take(&mut sc.slowness);
     slowness.clear();
@@ -636,13 +640,42 @@ pub(crate) fn search_sequence(
     stats.solves += search.stats.solves;
     let mut sc = search.sc;
     sc.slowness = slowness;
-    SCRATCH.with(|c| c.set(Some(Box::new(sc))));
+    SCRATCH.with(|c| c.set(Some(sc)));
+}
+
+/// Runs `f` on this thread's scratch (made on first use).
+fn with_scratch<R>(f: impl FnOnce(&mut Scratch) -> R) -> R {
+    let mut sc = SCRATCH.with(|c| c.take()).unwrap_or_default();
+    let r = f(&mut sc);
+    SCRATCH.with(|c| c.set(Some(sc)));
+    r
+}
+
+/// Empties `out`, keeping its arrivals' vectors for the next ones this thread finds: once
+/// warm, a search allocates nothing.
+pub(crate) fn recycle(out: &mut Vec<Arrival>) {
+    with_scratch(|sc| sc.spare.append(out));
+}
+
+/// Keeps the arrivals for which `keep` holds, in order; the others' vectors are kept for
+/// reuse.
+pub(crate) fn retain(out: &mut Vec<Arrival>, mut keep: impl FnMut(&Arrival) -> bool) {
+    let mut w = 0;
+    for r in 0..out.len() {
+        if keep(&out[r]) {
+            out.swap(w, r);
+            w += 1;
+        }
+    }
+    with_scratch(|sc| sc.spare.extend(out.drain(w..)));
 }
 
 /// Orders the arrivals by time, drops repeats of one path (a vertex path kept over an
 /// interior path on the same points), and marks whether the search was complete.
 pub(crate) fn finish(out: &mut Vec<Arrival>, complete: bool) {
-    out.sort_by(|a, b| a.time.total_cmp(&b.time).then(a.segments.cmp(&b.segments)));
+    let order =
+        |a: &Arrival, b: &Arrival| a.time.total_cmp(&b.time).then(a.segments.cmp(&b.segments));
+    out.sort_unstable_by(order);
     let same = |a: &Arrival, b: &Arrival| {
         let scale = a
             .points
@@ -655,22 +688,27 @@ pub(crate) fn finish(out: &mut Vec<Arrival>, complete: bool) {
                 .zip(&b.points)
                 .all(|(p, q)| (*p - *q).length() <= 1e-9 * scale)
     };
-    let mut kept: Vec<Arrival> = Vec::with_capacity(out.len());
-    for a in out.drain(..) {
-        match kept.iter_mut().rev().find(|b| same(b, &a)) {
-            Some(b) => {
-                if a.status == Status::Vertex && b.status != Status::Vertex {
-                    *b = a;
+    // Kept ones move to the front (`out[..w]`); a repeat stays behind, or swaps places with
+    // the one it repeats when it is the vertex path of the two.
+    let mut w = 0;
+    for r in 0..out.len() {
+        match (0..w).rev().find(|&j| same(&out[j], &out[r])) {
+            Some(j) => {
+                if out[r].status == Status::Vertex && out[j].status != Status::Vertex {
+                    out.swap(j, r);
                 }
             }
-            None => kept.push(a),
+            None => {
+                out.swap(w, r);
+                w += 1;
+            }
         }
     }
-    kept.sort_by(|a, b| a.time.total_cmp(&b.time).then(a.segments.cmp(&b.segments)));
-    for a in &mut kept {
+    with_scratch(|sc| sc.spare.extend(out.drain(w..)));
+    out.sort_unstable_by(order);
+    for a in out.iter_mut() {
         a.complete = complete;
     }
-    *out = kept;
 }
 
 impl Search<'_> {
@@ -866,19 +904,120 @@ impl Search<'_> {
         if !record.status.has_time() {
             return;
         }
-        out.push(Arrival {
-            status: record.status,
-            time: record.time,
-            points: self.sc.points.clone(),
-            parameters: nw.s[..k].to_vec(),
-            segments: segs.to_vec(),
-            media: self.media.to_vec(),
-            iterations,
-            reason: record.reason,
-            kink: (record.status == Status::Vertex).then_some(kink).flatten(),
-            residual: record.residual,
-            complete: true,
-        });
+        let mut a = self.sc.spare.pop().unwrap_or_else(Arrival::empty);
+        a.status = record.status;
+        a.time = record.time;
+        a.points.clear();
+        a.points.extend_from_slice(&self.sc.points);
+        a.parameters.clear();
+        a.parameters.extend_from_slice(&nw.s[..k]);
+        a.segments.clear();
+        a.segments.extend_from_slice(segs);
+        a.media.clear();
+        a.media.extend_from_slice(self.media);
+        a.iterations = iterations;
+        a.reason = record.reason;
+        a.kink = (record.status == Status::Vertex).then_some(kink).flatten();
+        a.residual = record.residual;
+        a.complete = true;
+        out.push(a);
+    }
+
+    /// A solve that stalled or ran out of steps at the evaluation in `self.sc.nw`: next to
+    /// a collapsing leg between two interactions, [`collapse`](Self::collapse) decides; next to
+    /// a vanishing leg to the source or the receiver, or with a leg along its interaction's
+    /// line, no stationary path ([`Settled::Degenerate`]: the thresholds [`COLLAPSE`] and
+    /// [`ALONG`]); otherwise not settled. `None`: restarted.
+    fn stalled(&mut self, held: usize, restarts: &mut usize) -> Option<Settled> {
+        let k = self.g.k();
+        let e = &self.sc.nw.eval;
+        let total: f64 = e.len[..=k].iter().sum();
+        if (1..k).any(|j| e.len[j] <= COLLAPSE * total) {
+            return self.collapse(held, restarts);
+        }
+        let along = |i: usize| {
+            e.u[i].cross(e.tan[i]).abs() <= ALONG || e.u[i + 1].cross(e.tan[i]).abs() <= ALONG
+        };
+        let end = e.len[0] <= COLLAPSE * total || e.len[k] <= COLLAPSE * total;
+        Some(if end || (0..k).any(along) {
+            Settled::Degenerate
+        } else {
+            Settled::No
+        })
+    }
+
+    /// A leg between two interactions collapsing (shortest against the path's length, within
+    /// [`COLLAPSE`]), where `T` has a kink. With both points free on lines that cross, the
+    /// collapsed spot is the lines' crossing `X`, and `T` has its minimum there exactly when
+    /// some `g` with `|g| ≤ 1` in place of the leg's direction makes both points' residuals
+    /// vanish: `w g · tₐ = wᵢₙ uᵢₙ · tₐ` and `w g · t_b = wₒᵤₜ uₒᵤₜ · t_b`, two equations
+    /// for `g`. With `|g| ≤ 1` the minimum is the collapse: no stationary path. With
+    /// `|g| > 1` it is not: the two points restart on either side of `X` with the leg along
+    /// `g` (`None`), at most twice. Where the other free points have not settled, points are
+    /// held on vertices, the lines are parallel or several legs collapse: no stationary path,
+    /// by the rule of [`COLLAPSE`].
+    fn collapse(&mut self, held: usize, restarts: &mut usize) -> Option<Settled> {
+        let k = self.g.k();
+        let is_held = |i: usize| held >> i & 1 == 1;
+        let nw = &self.sc.nw;
+        let e = &nw.eval;
+        let total: f64 = e.len[..=k].iter().sum();
+        let mut short = (1..k).filter(|&j| e.len[j] <= COLLAPSE * total);
+        let (Some(j), None) = (short.next(), short.next()) else {
+            return Some(Settled::Degenerate);
+        };
+        let (a, b) = (j - 1, j);
+        if is_held(a) || is_held(b) {
+            return Some(Settled::Degenerate);
+        }
+        let (la, lb) = (self.g.line(a), self.g.line(b));
+        let (ta, tb) = (la.tangent(nw.seg[a]), lb.tangent(nw.seg[b]));
+        let det = ta.cross(tb);
+        if det.abs() <= 1e-9 {
+            // One line (or parallel ones): the points meet along it.
+            return Some(Settled::Degenerate);
+        }
+        let w = self.g.slowness;
+        // The test speaks of the minimum only where the other free points have settled.
+        let settled = (0..k)
+            .filter(|&i| i != a && i != b && !is_held(i))
+            .all(|i| e.r[i].abs() <= 1e-9 * (w[i] + w[i + 1]));
+        let (pa, pb) = (
+            la.point_on(nw.seg[a], nw.s[a]),
+            lb.point_on(nw.seg[b], nw.s[b]),
+        );
+        let d = pb - pa;
+        let (tau, mu) = (d.cross(tb) / det, d.cross(ta) / det);
+        let x = pa + ta * tau;
+        let point = |i: usize| self.g.line(i).point_on(nw.seg[i], nw.s[i]);
+        let prev = if a == 0 { self.g.source } else { point(a - 1) };
+        let next = if b + 1 == k { self.g.receiver } else { point(b + 1) };
+        let unit = |v: Vec2| v * (1.0 / v.length());
+        let (u_in, u_out) = (unit(x - prev), unit(next - x));
+        let alpha = w[a] * u_in.dot(ta) / w[j];
+        let beta = w[j + 1] * u_out.dot(tb) / w[j];
+        let g = Vec2::new(
+            (alpha * tb.y - ta.y * beta) / det,
+            (ta.x * beta - alpha * tb.x) / det,
+        );
+        let n = g.length();
+        if !n.is_finite() {
+            return Some(Settled::No);
+        }
+        if n <= 1.0 + 1e-9 || !settled {
+            return Some(Settled::Degenerate);
+        }
+        if *restarts >= 2 {
+            return Some(Settled::No);
+        }
+        *restarts += 1;
+        // σ_b t_b − σ_a tₐ = δ ĝ: the leg along g, a hundredth of the path long.
+        let v = g * (0.01 * total / n);
+        let (sigma_a, sigma_b) = (-v.cross(tb) / det, ta.cross(v) / det);
+        let nw = &mut self.sc.nw;
+        nw.s[a] += tau + sigma_a;
+        nw.s[b] += mu + sigma_b;
+        None
     }
 
     /// Minimises the time over the free points on the lines of their segments (the held ones
@@ -890,13 +1029,24 @@ impl Search<'_> {
         let k = self.g.k();
         let is_held = |i: usize| held >> i & 1 == 1;
         let tol = self.tolerance;
-        let mut steps = 0;
+        let (mut steps, mut budget, mut restarts) = (0, MAX_STEPS, 0);
         loop {
             let nw = &mut self.sc.nw;
             self.g
                 .evaluate(&nw.s, &nw.seg, &nw.pin, &mut nw.eval, true, false);
             let e = &nw.eval;
-            if e.vanished > 0 || (1..k).any(|j| e.len[j] <= e.vanish) {
+            if (1..k).any(|j| e.len[j] <= e.vanish) {
+                // Two points on one spot: the minimum there, or a restart away from it.
+                match self.collapse(held, &mut restarts) {
+                    Some(settled) => return (settled, steps),
+                    None => {
+                        budget = steps + MAX_STEPS;
+                        continue;
+                    }
+                }
+            }
+            if e.vanished > 0 {
+                // The source or the receiver on an interaction's spot.
                 return (Settled::Degenerate, steps);
             }
             if !e.rmax.is_finite() {
@@ -905,8 +1055,14 @@ impl Search<'_> {
             if e.rmax <= tol || k == 0 || held == (1 << k) - 1 {
                 return (Settled::Yes, steps);
             }
-            if steps >= MAX_STEPS {
-                return (collapsing(e, k), steps);
+            if steps >= budget {
+                match self.stalled(held, &mut restarts) {
+                    Some(settled) => return (settled, steps),
+                    None => {
+                        budget = steps + MAX_STEPS;
+                        continue;
+                    }
+                }
             }
             for i in 0..k {
                 let free = !is_held(i);
@@ -988,14 +1144,17 @@ impl Search<'_> {
                 }
             };
             if !accepted {
-                // Stalled within round-off of the minimum, or not settled.
-                let e = &self.sc.nw.eval;
-                let settled = if rmax0 <= 1e-8 {
-                    Settled::Yes
-                } else {
-                    collapsing(e, k)
-                };
-                return (settled, steps);
+                // Stalled within round-off of the minimum, or next to a kink of `T`.
+                if rmax0 <= 1e-8 {
+                    return (Settled::Yes, steps);
+                }
+                match self.stalled(held, &mut restarts) {
+                    Some(settled) => return (settled, steps),
+                    None => {
+                        budget = steps + MAX_STEPS;
+                        continue;
+                    }
+                }
             }
             nw.s[..k].copy_from_slice(&self.sc.s_try);
             steps += 1;

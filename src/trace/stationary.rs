@@ -13,7 +13,7 @@ use crate::geom::Point;
 use crate::regions::Regions;
 use crate::scene::{MAX_STATIONARY_STEPS, StepKind};
 
-use super::classify::Sequence;
+use super::classify::{Sequence, medium_across};
 use super::complete::{self, Arrival, Hierarchy, SequenceSearch};
 use super::{RayRecord, Reason, Stationary, StationaryError, Status, Tracer, Workspace};
 
@@ -118,7 +118,7 @@ impl Tracer<'_> {
         receiver: Point,
         out: &mut Vec<Arrival>,
     ) -> Stationary {
-        out.clear();
+        complete::recycle(out);
         let mut stats = Stationary {
             complete: true,
             tuples: 0,
@@ -151,10 +151,12 @@ impl Tracer<'_> {
                 complete::search_sequence(SequenceSearch { media, ..base }, out, &mut stats);
             }
             (None, Some(regions), Some(first)) => {
-                let mut legs = Vec::with_capacity(k + 1);
-                legs.push(first);
+                let mut legs = Legs {
+                    media: [first; MAX_STATIONARY_STEPS + 1],
+                    len: 1,
+                };
                 self.search_media(base, &mut legs, out, &mut stats);
-                out.retain(|a| media_hold(regions, &base, a));
+                complete::retain(out, |a| media_hold(regions, &base, a));
             }
             // No medium at the source: no path.
             (None, _, _) => {}
@@ -168,25 +170,25 @@ impl Tracer<'_> {
     fn search_media(
         &self,
         base: SequenceSearch<'_>,
-        legs: &mut Vec<usize>,
+        legs: &mut Legs,
         out: &mut Vec<Arrival>,
         stats: &mut Stationary,
     ) {
-        let i = legs.len() - 1;
+        let i = legs.len - 1;
         let Some(step) = base.sequence.steps.get(i) else {
             let search = SequenceSearch {
-                media: legs,
+                media: &legs.media[..legs.len],
                 ..base
             };
             complete::search_sequence(search, out, stats);
             return;
         };
-        let here = legs[i];
+        let here = legs.media[i];
         match step.kind {
             StepKind::Reflect => {
                 legs.push(here);
                 self.search_media(base, legs, out, stats);
-                legs.pop();
+                legs.len -= 1;
             }
             StepKind::Refract => {
                 let sides = self.interface_sides(step.interface);
@@ -205,7 +207,7 @@ impl Tracer<'_> {
                     if !seen {
                         legs.push(next);
                         self.search_media(base, legs, out, stats);
-                        legs.pop();
+                        legs.len -= 1;
                     }
                 }
             }
@@ -244,11 +246,13 @@ impl Tracer<'_> {
         ws: &mut Workspace,
     ) -> RayRecord {
         // Already proofs: the image method's one stationary point beyond an end, and a
-        // source where no medium is.
-        if matches!(
+        // source where no medium is. With no iterations allowed, the start is the answer (a
+        // way to inspect it).
+        let proof = matches!(
             record.reason,
             Some(Reason::BeyondEnd { .. } | Reason::NoMedium { leg: 0 })
-        ) {
+        );
+        if proof || self.newton.max_iterations == 0 {
             return record;
         }
         let spec = &self.scene.paths()[path];
@@ -314,16 +318,37 @@ impl Tracer<'_> {
     }
 }
 
-/// Whether the lookup at arrival `a`'s points gives the media it was solved with: at each
-/// refraction, the medium across its segment from the point before it.
+/// The media of the legs of a sequence so far.
+struct Legs {
+    media: [usize; MAX_STATIONARY_STEPS + 1],
+    len: usize,
+}
+
+impl Legs {
+    fn push(&mut self, medium: usize) {
+        self.media[self.len] = medium;
+        self.len += 1;
+    }
+}
+
+/// Whether arrival `a`'s legs lie in the media it was solved with: each leg of an
+/// unobstructed path in the region of its medium (looked up at its middle); an obstructed
+/// path's legs cross regions, so there the lookup rule of the default mode decides (a
+/// reflection keeps the medium, a refraction takes the one across the interface).
 fn media_hold(regions: &Regions, search: &SequenceSearch<'_>, a: &Arrival) -> bool {
+    if a.status != Status::Obstructed {
+        return a.points.windows(2).zip(&a.media).all(|(leg, &m)| {
+            leg[0] == leg[1] || regions.medium_at(leg[0].lerp(leg[1], 0.5)) == Some(m)
+        });
+    }
     search.sequence.steps.iter().enumerate().all(|(i, step)| {
         let after = a.media[i + 1];
         match step.kind {
             StepKind::Reflect => after == a.media[i],
             StepKind::Refract => {
-                regions.medium_across(step.interface, a.segments[i], a.parameters[i], a.points[i])
-                    == Some(after)
+                let line = &search.scene.interfaces()[step.interface].polyline;
+                let (seg, s) = (a.segments[i], a.parameters[i]);
+                medium_across(regions, line, step.interface, seg, s, a.points[i]) == Some(after)
             }
         }
     })
