@@ -62,12 +62,6 @@ impl Wall {
         self.n.dot(x - self.p)
     }
 
-    /// `x` mirrored in the wall's line.
-    #[inline(always)]
-    fn mirror(&self, x: Point) -> Point {
-        x - self.n * (2.0 * self.height(x))
-    }
-
     /// The point at fraction `u` of the way from `p` to `q`.
     #[inline(always)]
     fn at(&self, u: f64) -> Point {
@@ -862,6 +856,321 @@ mod tests {
             paths > 100 * ROOMS && obstructed > 20 * ROOMS,
             "{paths} paths, {obstructed} obstructed"
         );
+    }
+
+    /// The rooms of `benches/pyroomacoustics_rooms.py` (`fixtures/pyroomacoustics/rooms.json`):
+    /// name, room, and per (source, receiver) pyroomacoustics' visible images (distance and
+    /// the wall sequences that give each image).
+    fn pyroomacoustics_rooms() -> Vec<(String, Room, Vec<Vec<Vec<(f64, Vec<Vec<usize>>)>>>)> {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/fixtures/pyroomacoustics/rooms.json"
+        );
+        let doc: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let points = |v: &serde_json::Value| -> Vec<Point> {
+            v.as_array()
+                .unwrap()
+                .iter()
+                .map(|p| Point::new(p[0].as_f64().unwrap(), p[1].as_f64().unwrap()))
+                .collect()
+        };
+        doc["rooms"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| {
+                let room = Room {
+                    corners: points(&r["corners"]),
+                    sources: points(&r["sources"]),
+                    receivers: points(&r["receivers"]),
+                };
+                let mut images = vec![vec![Vec::new(); room.receivers.len()]; room.sources.len()];
+                for p in r["paths"].as_array().unwrap() {
+                    let (s, rec) = (
+                        p["source"].as_u64().unwrap(),
+                        p["receiver"].as_u64().unwrap(),
+                    );
+                    images[s as usize][rec as usize] = p["images"]
+                        .as_array()
+                        .unwrap()
+                        .iter()
+                        .map(|i| {
+                            let seqs = i["sequences"]
+                                .as_array()
+                                .unwrap()
+                                .iter()
+                                .map(|q| {
+                                    q.as_array()
+                                        .unwrap()
+                                        .iter()
+                                        .map(|w| w.as_u64().unwrap() as usize)
+                                        .collect()
+                                })
+                                .collect();
+                            (i["distance"].as_f64().unwrap(), seqs)
+                        })
+                        .collect();
+                }
+                (r["name"].as_str().unwrap().to_string(), room, images)
+            })
+            .collect()
+    }
+
+    /// The mirror search on pyroomacoustics' two rooms against its image source model: the
+    /// paths both find (same wall sequence, distances within its float32 round-off), and
+    /// those only one finds, each checked against the general solve of its sequence.
+    #[test]
+    fn pyroomacoustics_rooms_agree() {
+        for (name, room, images) in pyroomacoustics_rooms() {
+            let scene = room_scene(&room, &sequences(room.corners.len(), 4));
+            let found = mirror_listing(&scene, 4, false);
+            let tracer = Tracer::new(&scene).unwrap();
+            let path_of: BTreeMap<Vec<usize>, usize> = scene
+                .paths()
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (p.steps.iter().map(|s| s.interface).collect(), i))
+                .collect();
+            let mut ws = crate::Workspace::new();
+            let (mut both, mut disagreements) = (0, Vec::new());
+            for (s, per_receiver) in images.iter().enumerate() {
+                for (r, visible) in per_receiver.iter().enumerate() {
+                    let mut matched = vec![false; visible.len()];
+                    for ((fs, fr, walls), f) in found.range((s, r, Vec::new())..) {
+                        if (*fs, *fr) != (s, r) {
+                            break;
+                        }
+                        let distance = f.time * 343.0;
+                        let hit = visible.iter().position(|(d, seqs)| {
+                            seqs.contains(walls) && (d - distance).abs() <= 1e-5 * d
+                        });
+                        match hit {
+                            Some(i) if !matched[i] => {
+                                both += 1;
+                                matched[i] = true;
+                            }
+                            _ => {
+                                let (src, rec) = (room.sources[s], room.receivers[r]);
+                                let ray = tracer.solve(src, rec, path_of[walls], &mut ws);
+                                disagreements.push(format!(
+                                    "({s}, {r}) {walls:?} eigenray only: {distance}, \
+                                     general solve {:?}",
+                                    ray.status
+                                ));
+                            }
+                        }
+                    }
+                    for (i, (d, seqs)) in visible.iter().enumerate() {
+                        if matched[i] {
+                            continue;
+                        }
+                        for seq in seqs {
+                            let (src, rec) = (room.sources[s], room.receivers[r]);
+                            let ray = tracer.solve(src, rec, path_of[seq], &mut ws);
+                            disagreements.push(format!(
+                                "({s}, {r}) {seq:?} pyroomacoustics only: {d}, general solve \
+                                 {:?} {:?}",
+                                ray.status, ray.reason
+                            ));
+                        }
+                    }
+                }
+            }
+            eprintln!("{name}: {both} paths found by both");
+            assert!(both > 500, "{name}: {both} paths");
+            assert!(disagreements.is_empty(), "{name}: {disagreements:#?}");
+        }
+    }
+
+    /// In a rectangle every image of order `|i| + |j|` is `(i a + x or a − x, j b + y or
+    /// b − y)` (by the parity of `i` and `j`) and every one is seen: 41 paths up to order 4,
+    /// their times the images' distances.
+    #[test]
+    fn rectangle_times_are_the_closed_form() {
+        let (a, b) = (4.0, 3.0);
+        let room = Room {
+            corners: vec![
+                Point::new(0.0, 0.0),
+                Point::new(a, 0.0),
+                Point::new(a, b),
+                Point::new(0.0, b),
+            ],
+            sources: vec![Point::new(1.3, 0.7), Point::new(2.9, 2.2)],
+            receivers: vec![Point::new(3.1, 2.45), Point::new(0.55, 1.6)],
+        };
+        let scene = room_scene(&room, &[Vec::new()]);
+        let found = mirror_listing(&scene, 4, false);
+        let slowness = scene.media()[0].slowness;
+        for (s, source) in room.sources.iter().enumerate() {
+            for (r, receiver) in room.receivers.iter().enumerate() {
+                let image = |i: i32, len: f64, x: f64| {
+                    i as f64 * len + if i % 2 == 0 { x } else { len - x }
+                };
+                let mut expected: Vec<f64> = Vec::new();
+                for i in -4i32..=4 {
+                    for j in -4i32..=4 {
+                        if i.abs() + j.abs() <= 4 {
+                            let p = Point::new(image(i, a, source.x), image(j, b, source.y));
+                            expected.push(slowness * p.distance(*receiver));
+                        }
+                    }
+                }
+                expected.sort_by(f64::total_cmp);
+                let mut times: Vec<f64> = found
+                    .iter()
+                    .filter(|((fs, fr, _), f)| {
+                        (*fs, *fr) == (s, r) && f.status == Status::Converged
+                    })
+                    .map(|(_, f)| f.time)
+                    .collect();
+                times.sort_by(f64::total_cmp);
+                assert_eq!(times.len(), 41);
+                for (t, e) in times.iter().zip(&expected) {
+                    assert!((t - e).abs() <= 1e-12 * e, "{t} vs {e}");
+                }
+            }
+        }
+    }
+
+    /// A receiver exactly on a beam's boundary: the path of two reflections between parallel
+    /// mirrors whose second point is a wall's end (exact in floating point) has no path; a
+    /// receiver just inside the beam has one (its time the image's distance), one just outside
+    /// none. The complete search says the same.
+    #[test]
+    fn a_path_through_a_wall_end_is_no_path() {
+        let doc = r#"{
+            "media": { "air": { "speed": 1.0 } },
+            "interfaces": { "high": { "points": [[0, 2], [4, 2]] },
+                            "low": { "points": [[0, 0], [4, 0]] } },
+            "sources": [[1, 1]], "receivers": [[5, 1], [4.999, 1], [5.001, 1]],
+            "paths": [{ "steps": [{ "reflect": "low" }, { "reflect": "high" }],
+                        "media": ["air", "air", "air"] }]
+        }"#;
+        let scene = Scene::from_json(doc).unwrap();
+        let (high, low) = (0, 1);
+        let mirrors = MirrorWalls::new(&scene, &[high, low]);
+        let (mut scratch, mut out) = (MirrorScratch::default(), Vec::new());
+        let source = scene.sources()[0];
+        let receivers = scene.receivers();
+        mirrors.arrivals(
+            &scene,
+            source,
+            receivers,
+            2,
+            1.0,
+            true,
+            &mut scratch,
+            &mut out,
+        );
+        let two: Vec<&MirrorArrival> = out.iter().filter(|a| a.walls == [low, high]).collect();
+        assert_eq!(two.len(), 1, "{two:?}");
+        assert_eq!(two[0].receiver, 1);
+        // The source's image in `low`, then in `high`: (1, 5).
+        let expected = Point::new(1.0, 5.0).distance(receivers[1]);
+        assert!((two[0].time - expected).abs() <= 1e-15 * expected);
+        let tracer = Tracer::new(&scene).unwrap();
+        let mut arrivals = Vec::new();
+        for (r, &receiver) in receivers.iter().enumerate() {
+            tracer
+                .stationary_paths(source, receiver, 0, &mut arrivals)
+                .unwrap();
+            assert_eq!(
+                arrivals.len(),
+                usize::from(r == 1),
+                "receiver {r}: {arrivals:?}"
+            );
+        }
+    }
+
+    /// Once its scratch has grown, a search allocates only its results: one vector of points
+    /// per path and one of walls per reflected path.
+    #[test]
+    fn a_warm_search_allocates_only_its_results() {
+        let mut rng = SplitMix64(77);
+        let room = random_room(1, 1, 6, &mut rng);
+        let scene = room_scene(&room, &[Vec::new()]);
+        let walls: Vec<usize> = (0..scene.interfaces().len()).collect();
+        let mirrors = MirrorWalls::new(&scene, &walls);
+        let (mut scratch, mut out) = (MirrorScratch::default(), Vec::new());
+        let source = room.sources[0];
+        mirrors.arrivals(
+            &scene,
+            source,
+            &room.receivers,
+            4,
+            1.0,
+            true,
+            &mut scratch,
+            &mut out,
+        );
+        let expected = out.len() + out.iter().filter(|a| !a.walls.is_empty()).count();
+        assert!(out.len() > 50, "{} paths", out.len());
+        out.clear();
+        let info = allocation_counter::measure(|| {
+            mirrors.arrivals(
+                &scene,
+                source,
+                &room.receivers,
+                4,
+                1.0,
+                true,
+                &mut scratch,
+                &mut out,
+            );
+        });
+        assert_eq!(info.count_total as usize, expected);
+    }
+
+    /// A measurement, not a test: the mirror search's time per room on pyroomacoustics' two
+    /// rooms (every source against every receiver, order 4, unobstructed paths), the median
+    /// of many repetitions. Run in release:
+    /// `cargo test --release --lib mirrors -- --ignored --nocapture`.
+    #[test]
+    #[ignore = "a measurement; run in release with --ignored --nocapture"]
+    fn measure_pyroomacoustics_rooms() {
+        for (name, room, _) in pyroomacoustics_rooms() {
+            let scene = room_scene(&room, &[Vec::new()]);
+            let walls: Vec<usize> = (0..scene.interfaces().len()).collect();
+            let slowness = scene.media()[0].slowness;
+            let (mut scratch, mut out) = (MirrorScratch::default(), Vec::new());
+            let mut run = |out: &mut Vec<MirrorArrival>| {
+                let mirrors = MirrorWalls::new(&scene, &walls);
+                out.clear();
+                for &source in &room.sources {
+                    mirrors.arrivals(
+                        &scene,
+                        source,
+                        &room.receivers,
+                        4,
+                        slowness,
+                        false,
+                        &mut scratch,
+                        out,
+                    );
+                }
+            };
+            for _ in 0..200 {
+                run(&mut out);
+            }
+            let mut times: Vec<f64> = (0..2000)
+                .map(|_| {
+                    let t = std::time::Instant::now();
+                    run(&mut out);
+                    t.elapsed().as_secs_f64() * 1e3
+                })
+                .collect();
+            times.sort_by(f64::total_cmp);
+            eprintln!(
+                "{name}: {} sources x {} receivers, {} paths: median {:.4} ms, fastest {:.4} ms \
+                 (of 2000)",
+                room.sources.len(),
+                room.receivers.len(),
+                out.len(),
+                times[times.len() / 2],
+                times[0]
+            );
+        }
     }
 
     /// Random rooms the comparison runs on.
