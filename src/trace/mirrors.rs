@@ -820,34 +820,44 @@ mod tests {
     /// without and with the obstructed ones.
     #[test]
     fn rooms_agree_with_the_complete_search() {
+        use rayon::prelude::*;
         let mut rng = SplitMix64(2024);
         let order = 4;
-        let (mut paths, mut obstructed, mut missed) = (0, 0, 0);
-        for room_index in 0..ROOMS {
-            let kind = room_index % 4;
-            let room = random_room(kind, 2, 2, &mut rng);
-            let scene = room_scene(&room, &sequences(room.corners.len(), order));
-            let scale = room
-                .corners
-                .iter()
-                .fold(1.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
-            let (reference, general_only) = reference_listing(&scene, true);
-            missed += general_only;
-            for asked in [false, true] {
-                let mut reference = reference.clone();
-                reference.retain(|_, f| asked || f.status == Status::Converged);
-                let found = mirror_listing(&scene, order, asked);
-                let what = format!("room {room_index} (kind {kind}), obstructed {asked}");
-                assert_same(&scene, &found, &reference, scale, &what);
-                if asked {
-                    paths += found.len();
-                    obstructed += found
-                        .values()
-                        .filter(|f| f.status == Status::Obstructed)
-                        .count();
+        let rooms: Vec<(usize, Room)> = (0..ROOMS)
+            .map(|i| (i % 4, random_room(i % 4, 2, 2, &mut rng)))
+            .collect();
+        // Per room: paths, obstructed paths, paths only the general solve found.
+        let counts: Vec<[usize; 3]> = rooms
+            .par_iter()
+            .enumerate()
+            .map(|(room_index, (kind, room))| {
+                let scene = room_scene(room, &sequences(room.corners.len(), order));
+                let scale = room
+                    .corners
+                    .iter()
+                    .fold(1.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
+                let (reference, general_only) = reference_listing(&scene, true);
+                let mut counts = [0, 0, general_only];
+                for asked in [false, true] {
+                    let mut reference = reference.clone();
+                    reference.retain(|_, f| asked || f.status == Status::Converged);
+                    let found = mirror_listing(&scene, order, asked);
+                    let what = format!("room {room_index} (kind {kind}), obstructed {asked}");
+                    assert_same(&scene, &found, &reference, scale, &what);
+                    if asked {
+                        counts[0] = found.len();
+                        counts[1] = found
+                            .values()
+                            .filter(|f| f.status == Status::Obstructed)
+                            .count();
+                    }
                 }
-            }
-        }
+                counts
+            })
+            .collect();
+        let [paths, obstructed, missed] = counts
+            .iter()
+            .fold([0; 3], |t, c| [t[0] + c[0], t[1] + c[1], t[2] + c[2]]);
         eprintln!(
             "{paths} paths, {obstructed} obstructed, {missed} found by the general solve only"
         );
@@ -858,10 +868,14 @@ mod tests {
         );
     }
 
+    /// Per source, per receiver: pyroomacoustics' visible images, each its distance and the
+    /// wall sequences that give it.
+    type Visible = Vec<Vec<Vec<(f64, Vec<Vec<usize>>)>>>;
+
     /// The rooms of `benches/pyroomacoustics_rooms.py` (`fixtures/pyroomacoustics/rooms.json`):
     /// name, room, and per (source, receiver) pyroomacoustics' visible images (distance and
     /// the wall sequences that give each image).
-    fn pyroomacoustics_rooms() -> Vec<(String, Room, Vec<Vec<Vec<(f64, Vec<Vec<usize>>)>>>)> {
+    fn pyroomacoustics_rooms() -> Vec<(String, Room, Visible)> {
         let path = concat!(
             env!("CARGO_MANIFEST_DIR"),
             "/fixtures/pyroomacoustics/rooms.json"
@@ -1174,5 +1188,5 @@ mod tests {
     }
 
     /// Random rooms the comparison runs on.
-    const ROOMS: usize = 40;
+    const ROOMS: usize = 240;
 }
