@@ -632,7 +632,7 @@ pub(crate) fn sides_suit(kind: StepKind, a: f64, b: f64) -> bool {
 }
 
 /// Crossings closer than this fraction of a leg to its ends are the leg's own end points.
-const END_MARGIN: f64 = 1e-10;
+pub(crate) const END_MARGIN: f64 = 1e-10;
 
 #[cfg(test)]
 mod tests {

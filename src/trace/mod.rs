@@ -18,6 +18,7 @@ use crate::solver::{NewtonOptions, NewtonWorkspace, solve};
 mod classify;
 mod complete;
 mod flat;
+mod mirrors;
 mod one_step;
 mod plan;
 mod result;

@@ -1,0 +1,1192 @@
+//! Every reflect-only path through a room of one-segment mirrors, by the image-source tree
+//! with beam pruning: the fast path of the automatic search for rooms whose walls are each
+//! an open interface of one segment, with one slowness on every leg.
+//!
+//! A depth-first walk over wall sequences from the source, shared by every receiver. Each
+//! node of the tree holds the source's image (mirrored in each wall's line in turn) and its
+//! beam: the wedge from the image through the part of the last wall that rays can reach
+//! (clipped by the parent's beam), beyond that wall's line. A child wall is visited only where
+//! part of it lies in the beam; an empty clip prunes the whole subtree. At each node, each
+//! receiver in the beam gets the image method's path (the line from the image to the
+//! receiver meets the last wall's line, the line from the image before to that point the wall
+//! before's, …), validated as the classifier validates a ray: each point strictly inside its
+//! segment, both legs of each reflection strictly on one side of its wall
+//! ([`leg_sides`], [`sides_suit`]), no vanished leg between two reflections, and no leg
+//! crossing an interface strictly between its ends ([`Scene::first_crossing`] with the
+//! classifier's margin and the legs' own segments left out).
+//!
+//! The pruning is certain: every beam test is widened by [`BEAM_MARGIN`] of the coordinates'
+//! magnitude (far more than the round-off of the images, which grows by a few ulps a level),
+//! so that a path the validation would accept is never pruned by rounding; the per-path
+//! validation alone decides. Where the side of a wall's line an image lies on is within that
+//! margin, the child's beam is the whole plane (no pruning below it).
+
+#![cfg_attr(
+    not(test),
+    expect(
+        dead_code,
+        reason = "the automatic search, its caller, is being written"
+    )
+)]
+
+use crate::geom::{Point, Vec2};
+use crate::scene::{Scene, SegmentRef, StepKind};
+
+use super::classify::{END_MARGIN, leg_sides, sides_suit};
+use super::{Reason, Status};
+
+/// The beam tests' margin, relative to the largest coordinate an image can have: each
+/// mirroring and clip adds a few ulps (about 1e-16) of it, so this covers thousands of levels.
+const BEAM_MARGIN: f64 = 1e-11;
+
+/// One wall: an open interface of one segment `p → q`.
+#[derive(Clone, Copy, Debug)]
+struct Wall {
+    /// The interface's index in the scene.
+    interface: usize,
+    /// Its segment, as the obstruction test names it.
+    own: SegmentRef,
+    /// Start and end.
+    p: Point,
+    q: Point,
+    /// `q − p`.
+    e: Vec2,
+    /// The unit normal (the polyline's: `e` turned left, normalised).
+    n: Vec2,
+}
+
+impl Wall {
+    /// Signed distance of `x` from the wall's line (positive on the side `n` points to).
+    #[inline(always)]
+    fn height(&self, x: Point) -> f64 {
+        self.n.dot(x - self.p)
+    }
+
+    /// The point at fraction `u` of the way from `p` to `q`.
+    #[inline(always)]
+    fn at(&self, u: f64) -> Point {
+        self.p + self.e * u
+    }
+}
+
+/// The walls a search may reflect off: interfaces of one segment (open, 2 vertices).
+#[derive(Clone, Debug)]
+pub(crate) struct MirrorWalls {
+    /// Per wall: its interface, ends, direction and unit normal.
+    walls: Vec<Wall>,
+    /// The largest absolute coordinate of any wall end.
+    extent: f64,
+}
+
+/// The beam of a node of the image-source tree: the rays from the node's image through the
+/// part `a → b` of its wall (a at the lower fraction along the wall) that continue beyond
+/// the wall's line.
+#[derive(Clone, Copy, Debug)]
+struct Beam {
+    /// Which side of the wall's line the reflected rays travel on: +1 or −1 (the side of the
+    /// image before the mirroring, opposite the node's image).
+    side: f64,
+    /// `a − image` and `b − image`, the wedge's edges.
+    to_a: Vec2,
+    to_b: Vec2,
+    /// `|to_a|₁` and `|to_b|₁`, for the tests' margins.
+    reach_a: f64,
+    reach_b: f64,
+}
+
+/// A node of the image-source tree on the search's stack.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    /// The index (into [`MirrorWalls`]) of the last wall, `usize::MAX` at the root.
+    wall: usize,
+    /// The source mirrored in each wall of the sequence in turn.
+    image: Point,
+    /// Its beam; `None` where it is the whole plane (at the root, and below an image whose
+    /// side of its wall's line is within the margin).
+    beam: Option<Beam>,
+    /// The next child wall to try.
+    next: usize,
+}
+
+/// The search's reusable state: the stack of the beam tree and the points of the path under
+/// validation. Once grown to the longest sequence, a search allocates nothing but its
+/// results.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct MirrorScratch {
+    /// The nodes from the root to the present one.
+    stack: Vec<Node>,
+    /// Source, reflection points, receiver of the path under validation.
+    points: Vec<Point>,
+    /// The points relative to the source.
+    rel: Vec<Vec2>,
+    /// The legs' lengths.
+    lens: Vec<f64>,
+}
+
+/// One path that [`MirrorWalls::arrivals`] found.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct MirrorArrival {
+    /// The receiver's index in the receivers given.
+    pub receiver: usize,
+    /// The interface index of each reflection, in order.
+    pub walls: Vec<usize>,
+    /// Source, reflection points, receiver.
+    pub points: Vec<Point>,
+    /// Travel time: the slowness times the path's length.
+    pub time: f64,
+    /// [`Status::Converged`], or [`Status::Obstructed`] when a leg crosses an interface.
+    pub status: Status,
+    /// For an obstructed path, the first leg that crosses an interface and that interface.
+    pub reason: Option<Reason>,
+}
+
+/// How a beam test of a point came out, with the margin it is widened by.
+#[derive(Clone, Copy, Debug)]
+struct Gauge {
+    /// The three constraints' values: beyond the wall's line, inside edge `a`, inside edge
+    /// `b` (each must be at least minus its margin).
+    values: [f64; 3],
+    /// Their margins.
+    margins: [f64; 3],
+}
+
+impl Beam {
+    /// The constraints of point `x` (`image` the node's image, `wall` its wall, `delta` the
+    /// absolute margin on positions).
+    #[inline(always)]
+    fn gauge(&self, wall: &Wall, image: Point, x: Point, delta: f64) -> Gauge {
+        let v = x - image;
+        let reach = v.x.abs() + v.y.abs();
+        // The wedge turns from `a` to `b` clockwise when the rays run on the positive side
+        // (its orientation is −side: the image lies on the negative side, see the module).
+        let o = -self.side;
+        Gauge {
+            values: [
+                self.side * wall.height(x),
+                o * self.to_a.cross(v),
+                o * v.cross(self.to_b),
+            ],
+            margins: [
+                2.0 * delta,
+                delta * (self.reach_a + 2.0 * reach),
+                delta * (self.reach_b + 2.0 * reach),
+            ],
+        }
+    }
+
+    /// Whether `x` may lie in the beam (certainly so when it lies in it).
+    #[inline(always)]
+    fn holds(&self, wall: &Wall, image: Point, x: Point, delta: f64) -> bool {
+        let g = self.gauge(wall, image, x, delta);
+        (g.values[0] >= -g.margins[0])
+            & (g.values[1] >= -g.margins[1])
+            & (g.values[2] >= -g.margins[2])
+    }
+}
+
+/// The fractions `[lo, hi]` of a segment from `x(0)` to `x(1)` where an affine constraint
+/// with values `g0` and `g1` at the ends is at least `-margin`, intersected with `range`;
+/// `None` when empty.
+#[inline(always)]
+fn restrict(range: [f64; 2], g0: f64, g1: f64, margin: f64) -> Option<[f64; 2]> {
+    let (f0, f1) = (g0 + margin, g1 + margin);
+    let [mut lo, mut hi] = range;
+    if f0 >= 0.0 && f1 >= 0.0 {
+        return Some(range);
+    }
+    if !(f0 >= 0.0 || f1 >= 0.0) {
+        return None;
+    }
+    // One end in, one out: the root, widened outward by its round-off.
+    let u = f0 / (f0 - f1);
+    if f0 < 0.0 {
+        lo = lo.max(u - 4.0 * f64::EPSILON);
+    } else {
+        hi = hi.min(u + 4.0 * f64::EPSILON);
+    }
+    (lo <= hi).then_some([lo, hi])
+}
+
+impl MirrorWalls {
+    /// `walls`: interface indices; each must be an open polyline of one segment (checked in
+    /// debug builds; the caller filters).
+    pub(crate) fn new(scene: &Scene, walls: &[usize]) -> MirrorWalls {
+        let walls: Vec<Wall> = walls
+            .iter()
+            .map(|&interface| {
+                let line = &scene.interfaces()[interface].polyline;
+                debug_assert!(line.num_segments() == 1 && !line.is_closed());
+                let (p, q) = line.segment(0);
+                Wall {
+                    interface,
+                    own: SegmentRef {
+                        interface: interface as u32,
+                        segment: 0,
+                    },
+                    p,
+                    q,
+                    e: q - p,
+                    n: line.normal(0),
+                }
+            })
+            .collect();
+        let extent = walls
+            .iter()
+            .flat_map(|w| [w.p, w.q])
+            .fold(0.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
+        MirrorWalls { walls, extent }
+    }
+
+    /// Every reflect-only sequence of 0..=`max_steps` walls from `source` to each receiver
+    /// whose path exists, appended to `out` (not cleared) in the order of the tree's walk:
+    /// each reflection point strictly inside its wall, both legs of each reflection strictly
+    /// on one side of it, no vanished leg between reflections, and (unless `obstructed`, which
+    /// lists obstructed paths too, with [`Status::Obstructed`] and [`Reason::Crosses`]) no leg
+    /// crossing an interface of the scene strictly between its ends (the classifier's test).
+    /// Sequence 0 is the direct ray. `slowness` is the one slowness of every leg (time =
+    /// slowness × length).
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the search's inputs, its scratch and its output"
+    )]
+    pub(crate) fn arrivals(
+        &self,
+        scene: &Scene,
+        source: Point,
+        receivers: &[Point],
+        max_steps: usize,
+        slowness: f64,
+        obstructed: bool,
+        scratch: &mut MirrorScratch,
+        out: &mut Vec<MirrorArrival>,
+    ) {
+        let big = |p: &Point| p.x.abs().max(p.y.abs());
+        let far = receivers.iter().map(big).fold(0.0f64, f64::max);
+        // |image| ≤ |source| + 2 k |wall point| (a mirroring keeps distances to its line's
+        // points), in the max-norm within a factor √2.
+        let scale = 1.5 * big(&source) + (3 * max_steps + 1) as f64 * self.extent + far;
+        let delta = BEAM_MARGIN * scale;
+        let stack = &mut scratch.stack;
+        stack.clear();
+        stack.push(Node {
+            wall: usize::MAX,
+            image: source,
+            beam: None,
+            next: 0,
+        });
+        let mut validation = Validation {
+            scene,
+            walls: &self.walls,
+            source,
+            slowness,
+            obstructed,
+            points: &mut scratch.points,
+            rel: &mut scratch.rel,
+            lens: &mut scratch.lens,
+        };
+        validation.node(stack, receivers, delta, out);
+        while !stack.is_empty() {
+            let depth = stack.len() - 1;
+            let top = &mut stack[depth];
+            if depth >= max_steps || top.next >= self.walls.len() {
+                stack.pop();
+                continue;
+            }
+            let w = top.next;
+            top.next += 1;
+            if w == top.wall {
+                continue;
+            }
+            let node = *top;
+            let Some(child) = self.child(&node, w, delta) else {
+                continue;
+            };
+            stack.push(child);
+            validation.node(stack, receivers, delta, out);
+        }
+    }
+
+    /// The child of `node` through wall `w`, if part of the wall lies in the node's beam.
+    #[inline]
+    fn child(&self, node: &Node, w: usize, delta: f64) -> Option<Node> {
+        let wall = &self.walls[w];
+        let mut range = [0.0, 1.0];
+        if let Some(beam) = &node.beam {
+            let last = &self.walls[node.wall];
+            let gp = beam.gauge(last, node.image, wall.p, delta);
+            let gq = beam.gauge(last, node.image, wall.q, delta);
+            for c in 0..3 {
+                let margin = gp.margins[c].max(gq.margins[c]);
+                range = restrict(range, gp.values[c], gq.values[c], margin)?;
+            }
+        }
+        let h = wall.height(node.image);
+        let image = node.image - wall.n * (2.0 * h);
+        // Where the image's side of the line is not certain, the beam is the whole plane.
+        let beam = (h.abs() > 2.0 * delta).then(|| {
+            let (a, b) = (wall.at(range[0]), wall.at(range[1]));
+            let (to_a, to_b) = (a - image, b - image);
+            Beam {
+                side: h.signum(),
+                to_a,
+                to_b,
+                reach_a: to_a.x.abs() + to_a.y.abs(),
+                reach_b: to_b.x.abs() + to_b.y.abs(),
+            }
+        });
+        Some(Node {
+            wall: w,
+            image,
+            beam,
+            next: 0,
+        })
+    }
+}
+
+/// What the validation of a node's paths needs: the scene, the walls, the source, the
+/// slowness, whether obstructed paths are listed, and the scratch for one path.
+struct Validation<'a> {
+    scene: &'a Scene,
+    walls: &'a [Wall],
+    source: Point,
+    slowness: f64,
+    obstructed: bool,
+    points: &'a mut Vec<Point>,
+    rel: &'a mut Vec<Vec2>,
+    lens: &'a mut Vec<f64>,
+}
+
+impl Validation<'_> {
+    /// The paths of the node on top of `stack` to each receiver in its beam, validated, into
+    /// `out`.
+    #[inline]
+    fn node(
+        &mut self,
+        stack: &[Node],
+        receivers: &[Point],
+        delta: f64,
+        out: &mut Vec<MirrorArrival>,
+    ) {
+        let top = stack[stack.len() - 1];
+        for (r, &receiver) in receivers.iter().enumerate() {
+            let inside = match &top.beam {
+                Some(beam) => beam.holds(&self.walls[top.wall], top.image, receiver, delta),
+                None => true,
+            };
+            if inside && let Some(arrival) = self.path(stack, r, receiver) {
+                out.push(arrival);
+            }
+        }
+    }
+
+    /// The image method's path of the sequence on `stack` to `receiver`, if it is valid.
+    #[inline]
+    fn path(&mut self, stack: &[Node], r: usize, receiver: Point) -> Option<MirrorArrival> {
+        let k = stack.len() - 1;
+        let source = self.source;
+        let points = &mut *self.points;
+        points.clear();
+        points.resize(k + 2, source);
+        points[k + 1] = receiver;
+        // Backwards: the point of each wall's line that the point after sees its image at.
+        let mut to = receiver;
+        for i in (1..=k).rev() {
+            let node = &stack[i];
+            let wall = &self.walls[node.wall];
+            let d = to - node.image;
+            let den = d.cross(wall.e);
+            let u = (wall.p - node.image).cross(d) / den;
+            // Strictly inside the segment (NaN, for a leg along the line, fails too).
+            if !(u > 0.0 && u < 1.0) {
+                return None;
+            }
+            to = wall.at(u);
+            points[i] = to;
+        }
+        let lens = &mut *self.lens;
+        lens.clear();
+        lens.extend(points.windows(2).map(|p| (p[1] - p[0]).length()));
+        let total: f64 = lens.iter().sum();
+        // A leg between two reflections that vanished (the classifier's threshold).
+        let coord = crate::problem::coord(source, receiver);
+        let vanish = 1e-12 * total + 8.0 * f64::EPSILON * coord;
+        if lens[1..k.max(1)].iter().any(|&l| l <= vanish) {
+            return None;
+        }
+        let rel = &mut *self.rel;
+        rel.clear();
+        rel.extend(points.iter().map(|&p| p - source));
+        for i in 0..k {
+            let n = self.walls[stack[i + 1].wall].n;
+            let (a, b) = leg_sides(n, 1.0, &rel[i..i + 3], &lens[i..i + 2]);
+            if !sides_suit(StepKind::Reflect, a, b) {
+                return None;
+            }
+        }
+        let mut reason = None;
+        let mut own_a = SegmentRef::NONE;
+        for leg in 0..=k {
+            let own_b = if leg < k {
+                self.walls[stack[leg + 1].wall].own
+            } else {
+                SegmentRef::NONE
+            };
+            let (a, b) = (points[leg], points[leg + 1]);
+            if a != b
+                && let Some(hit) = self.scene.first_crossing(a, b, END_MARGIN, [own_a, own_b])
+            {
+                if !self.obstructed {
+                    return None;
+                }
+                reason = Some(Reason::Crosses {
+                    leg,
+                    interface: hit.interface as usize,
+                });
+                break;
+            }
+            own_a = own_b;
+        }
+        Some(MirrorArrival {
+            receiver: r,
+            walls: stack[1..]
+                .iter()
+                .map(|n| self.walls[n.wall].interface)
+                .collect(),
+            points: points.clone(),
+            time: self.slowness * total,
+            status: if reason.is_some() {
+                Status::Obstructed
+            } else {
+                Status::Converged
+            },
+            reason,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::demo::SplitMix64;
+    use crate::trace::Tracer;
+    use std::collections::BTreeMap;
+
+    /// A room: its corners (counter-clockwise, each wall from one corner to the next), its
+    /// sources and receivers.
+    struct Room {
+        corners: Vec<Point>,
+        sources: Vec<Point>,
+        receivers: Vec<Point>,
+    }
+
+    /// Whether `x` lies inside the polygon `corners` (even-odd rule).
+    fn inside(corners: &[Point], x: Point) -> bool {
+        let n = corners.len();
+        let mut odd = false;
+        for i in 0..n {
+            let (a, b) = (corners[i], corners[(i + 1) % n]);
+            if (a.y > x.y) != (b.y > x.y) && x.x < a.x + (x.y - a.y) * (b.x - a.x) / (b.y - a.y) {
+                odd = !odd;
+            }
+        }
+        odd
+    }
+
+    /// Distance from `x` to segment `a–b`.
+    fn distance_to_segment(x: Point, a: Point, b: Point) -> f64 {
+        let e = b - a;
+        let t = ((x - a).dot(e) / e.dot(e)).clamp(0.0, 1.0);
+        x.distance(a + e * t)
+    }
+
+    /// `count` points inside the room, each at least 0.05 from every wall.
+    fn points_inside(corners: &[Point], count: usize, rng: &mut SplitMix64) -> Vec<Point> {
+        let b = crate::geom::Aabb::around(corners);
+        let n = corners.len();
+        let mut found = Vec::new();
+        while found.len() < count {
+            let x = Point::new(
+                b.min.x + (b.max.x - b.min.x) * rng.next_f64(),
+                b.min.y + (b.max.y - b.min.y) * rng.next_f64(),
+            );
+            let clear =
+                (0..n).all(|i| distance_to_segment(x, corners[i], corners[(i + 1) % n]) >= 0.05);
+            if inside(corners, x) && clear {
+                found.push(x);
+            }
+        }
+        found
+    }
+
+    /// A random room of kind `kind` (0: a convex polygon of 5 to 8 walls on an ellipse; 1, 2,
+    /// 3: an L, a U or a T with jittered corners), turned and moved at random, with
+    /// `sources` sources and `receivers` receivers inside.
+    fn random_room(kind: usize, sources: usize, receivers: usize, rng: &mut SplitMix64) -> Room {
+        let mut r = |lo: f64, hi: f64| lo + (hi - lo) * rng.next_f64();
+        let shape: Vec<[f64; 2]> = match kind {
+            0 => {
+                let n = 5 + (r(0.0, 4.0) as usize).min(3);
+                let (rx, ry) = (r(2.0, 6.0), r(2.0, 6.0));
+                (0..n)
+                    .map(|i| {
+                        let theta = std::f64::consts::TAU * (i as f64 + r(0.0, 0.8)) / n as f64;
+                        [rx * theta.cos(), ry * theta.sin()]
+                    })
+                    .collect()
+            }
+            _ => {
+                let (w, h) = (r(4.0, 8.0), r(4.0, 8.0));
+                let mut corners = match kind {
+                    1 => {
+                        let (a, b) = (r(0.3, 0.7) * w, r(0.3, 0.7) * h);
+                        vec![[0.0, 0.0], [w, 0.0], [w, b], [a, b], [a, h], [0.0, h]]
+                    }
+                    2 => {
+                        let (t, b) = (r(0.25, 0.4) * w, r(0.3, 0.6) * h);
+                        vec![
+                            [0.0, 0.0],
+                            [w, 0.0],
+                            [w, h],
+                            [w - t, h],
+                            [w - t, b],
+                            [t, b],
+                            [t, h],
+                            [0.0, h],
+                        ]
+                    }
+                    _ => {
+                        let (a, b) = (r(0.25, 0.4) * w, r(0.4, 0.7) * h);
+                        vec![
+                            [a, 0.0],
+                            [w - a, 0.0],
+                            [w - a, b],
+                            [w, b],
+                            [w, h],
+                            [0.0, h],
+                            [0.0, b],
+                            [a, b],
+                        ]
+                    }
+                };
+                for c in &mut corners {
+                    c[0] += r(-0.15, 0.15);
+                    c[1] += r(-0.15, 0.15);
+                }
+                corners
+            }
+        };
+        let (turn, dx, dy) = (
+            r(0.0, std::f64::consts::TAU),
+            r(-20.0, 20.0),
+            r(-20.0, 20.0),
+        );
+        let (c, s) = (turn.cos(), turn.sin());
+        let corners: Vec<Point> = shape
+            .iter()
+            .map(|&[x, y]| Point::new(c * x - s * y + dx, s * x + c * y + dy))
+            .collect();
+        let sources = points_inside(&corners, sources, rng);
+        let receivers = points_inside(&corners, receivers, rng);
+        Room {
+            corners,
+            sources,
+            receivers,
+        }
+    }
+
+    /// Every sequence of `1..=order` of `walls` walls without a wall twice in a row, the
+    /// empty one first.
+    fn sequences(walls: usize, order: usize) -> Vec<Vec<usize>> {
+        let mut all = vec![Vec::new()];
+        let mut level = vec![Vec::new()];
+        for _ in 0..order {
+            let mut next = Vec::new();
+            for seq in &level {
+                for w in 0..walls {
+                    if seq.last() != Some(&w) {
+                        let mut longer: Vec<usize> = seq.clone();
+                        longer.push(w);
+                        next.push(longer);
+                    }
+                }
+            }
+            all.extend(next.iter().cloned());
+            level = next;
+        }
+        all
+    }
+
+    /// The room as a scene: wall `i` the interface `w{i}` from corner `i` to the next, medium
+    /// `air` (speed 343) inside, and `paths` (wall sequences) with their media given.
+    fn room_scene(room: &Room, paths: &[Vec<usize>]) -> Scene {
+        let n = room.corners.len();
+        let xy = |p: &Point| [p.x, p.y];
+        let interfaces: serde_json::Map<String, serde_json::Value> = (0..n)
+            .map(|i| {
+                let (a, b) = (room.corners[i], room.corners[(i + 1) % n]);
+                (
+                    format!("w{i}"),
+                    serde_json::json!({ "points": [xy(&a), xy(&b)] }),
+                )
+            })
+            .collect();
+        let paths: Vec<serde_json::Value> = paths
+            .iter()
+            .map(|seq| {
+                let steps: Vec<_> = seq
+                    .iter()
+                    .map(|w| serde_json::json!({ "reflect": format!("w{w}") }))
+                    .collect();
+                serde_json::json!({ "steps": steps, "media": vec!["air"; seq.len() + 1] })
+            })
+            .collect();
+        let doc = serde_json::json!({
+            "media": { "air": { "speed": 343.0, "at": xy(&room.sources[0]) } },
+            "interfaces": interfaces,
+            "sources": room.sources.iter().map(xy).collect::<Vec<_>>(),
+            "receivers": room.receivers.iter().map(xy).collect::<Vec<_>>(),
+            "paths": paths,
+        });
+        Scene::from_json(&doc.to_string()).unwrap()
+    }
+
+    /// One path found, as compared: its time, points, status and reason.
+    #[derive(Clone, Debug)]
+    struct Found {
+        time: f64,
+        points: Vec<Point>,
+        status: Status,
+        reason: Option<Reason>,
+    }
+
+    /// Per (source, receiver, interface sequence): the path the mirror search finds.
+    type Listing = BTreeMap<(usize, usize, Vec<usize>), Found>;
+
+    /// The mirror search's paths of every source of `scene` (every interface a wall).
+    fn mirror_listing(scene: &Scene, order: usize, obstructed: bool) -> Listing {
+        let walls: Vec<usize> = (0..scene.interfaces().len()).collect();
+        let mirrors = MirrorWalls::new(scene, &walls);
+        let slowness = scene.media()[0].slowness;
+        let (mut scratch, mut out) = (MirrorScratch::default(), Vec::new());
+        let mut listing = Listing::new();
+        for (s, &source) in scene.sources().iter().enumerate() {
+            out.clear();
+            mirrors.arrivals(
+                scene,
+                source,
+                scene.receivers(),
+                order,
+                slowness,
+                obstructed,
+                &mut scratch,
+                &mut out,
+            );
+            for a in &out {
+                let found = Found {
+                    time: a.time,
+                    points: a.points.clone(),
+                    status: a.status,
+                    reason: a.reason,
+                };
+                let previous = listing.insert((s, a.receiver, a.walls.clone()), found);
+                assert!(previous.is_none(), "{:?} listed twice", a.walls);
+            }
+        }
+        listing
+    }
+
+    /// The reference's paths of every path of `scene` (each an interface sequence) between
+    /// each source and receiver, those `converged` and `obstructed` ones if asked, and how
+    /// many of them only the general solve found: the complete search
+    /// ([`Tracer::stationary_paths`]), and where it lists nothing, the general solve from the
+    /// paraxial start without kernels (no image method); also where the complete search
+    /// reports itself incomplete, for the path it may have missed. The complete search's solve of an
+    /// assignment can stall where a leg between two walls collapses at their shared corner,
+    /// which it takes for a degenerate minimum (a rule, not a proof, in its documentation);
+    /// the time being convex on the walls' lines, the general solve finds the one stationary
+    /// path there, from the paraxial start, or where that start leaves a wall's end on the
+    /// way, from the documented start (the image method's points, which the Newton solve
+    /// confirms and the classifier judges).
+    fn reference_listing(scene: &Scene, obstructed: bool) -> (Listing, usize) {
+        let tracer = Tracer::new(scene).unwrap();
+        let general = Tracer::new(scene)
+            .unwrap()
+            .with_initial_guess(crate::InitialGuess::Paraxial)
+            .with_kernels(crate::Kernels::GeneralOnly);
+        let keep = |status: Status| {
+            status == Status::Converged || (obstructed && status == Status::Obstructed)
+        };
+        let (mut out, mut ws) = (Vec::new(), crate::Workspace::new());
+        let (mut listing, mut general_only) = (Listing::new(), 0);
+        for (s, &source) in scene.sources().iter().enumerate() {
+            for (r, &receiver) in scene.receivers().iter().enumerate() {
+                for (p, path) in scene.paths().iter().enumerate() {
+                    let search = tracer
+                        .stationary_paths(source, receiver, p, &mut out)
+                        .unwrap();
+                    let walls: Vec<usize> = path.steps.iter().map(|s| s.interface).collect();
+                    let mut found: Vec<Found> = out
+                        .iter()
+                        .filter(|a| keep(a.status))
+                        .map(|a| Found {
+                            time: a.time,
+                            points: a.points.clone(),
+                            status: a.status,
+                            reason: a.reason,
+                        })
+                        .collect();
+                    if out.is_empty() || !search.complete {
+                        let mut ray = general.solve(source, receiver, p, &mut ws);
+                        if !ray.status.has_time() {
+                            ray = tracer.solve(source, receiver, p, &mut ws);
+                        }
+                        if out.is_empty() && keep(ray.status) {
+                            general_only += 1;
+                            found.push(Found {
+                                time: ray.time,
+                                points: ws.points().to_vec(),
+                                status: ray.status,
+                                reason: ray.reason,
+                            });
+                        }
+                    }
+                    assert!(found.len() <= 1, "{walls:?}: two stationary paths");
+                    if let Some(f) = found.pop() {
+                        listing.insert((s, r, walls), f);
+                    }
+                }
+            }
+        }
+        (listing, general_only)
+    }
+
+    /// The two listings hold the same (source, receiver, sequence) with the same status and
+    /// obstructed leg (crossing the interface named: of two crossed, either may be named), times within 1e-12 relative and points within 1e-9 of the scene's scale.
+    fn assert_same(scene: &Scene, found: &Listing, reference: &Listing, scale: f64, what: &str) {
+        let missing: Vec<_> = reference
+            .keys()
+            .filter(|k| !found.contains_key(k))
+            .collect();
+        let extra: Vec<_> = found
+            .keys()
+            .filter(|k| !reference.contains_key(k))
+            .collect();
+        assert!(
+            missing.is_empty() && extra.is_empty(),
+            "{what}: missing {missing:?}, extra {extra:?}"
+        );
+        for (key, a) in found {
+            let b = &reference[key];
+            // A leg that crosses two interfaces may name either: the classifier takes the
+            // first among the path's candidates, the scene's query the first it meets.
+            let leg = |r: Option<Reason>| match r {
+                Some(Reason::Crosses { leg, interface }) => Some((leg, interface)),
+                _ => None,
+            };
+            assert_eq!(a.status, b.status, "{what}: {key:?}");
+            assert_eq!(
+                leg(a.reason).map(|l| l.0),
+                leg(b.reason).map(|l| l.0),
+                "{what}: {key:?}: {:?} vs {:?}",
+                a.reason,
+                b.reason
+            );
+            if let Some((l, interface)) = leg(a.reason) {
+                let (p, q) = scene.interfaces()[interface].polyline.segment(0);
+                let t = crate::polyline::segment_intersection(a.points[l], a.points[l + 1], p, q);
+                assert!(
+                    t.is_some_and(|(t, _)| t > END_MARGIN && t < 1.0 - END_MARGIN),
+                    "{what}: {key:?}: leg {l} does not cross interface {interface}"
+                );
+            }
+            assert!(
+                (a.time - b.time).abs() <= 1e-12 * b.time,
+                "{what}: {key:?}: {} vs {}",
+                a.time,
+                b.time
+            );
+            assert_eq!(a.points.len(), b.points.len());
+            for (p, q) in a.points.iter().zip(&b.points) {
+                assert!(
+                    p.distance(*q) <= 1e-9 * scale,
+                    "{what}: {key:?}: {p:?} vs {q:?}"
+                );
+            }
+        }
+    }
+
+    /// The mirror search against the complete search of every wall sequence up to order 4
+    /// (no wall twice in a row), in random convex, L-, U- and T-shaped rooms: the same paths,
+    /// without and with the obstructed ones.
+    #[test]
+    fn rooms_agree_with_the_complete_search() {
+        use rayon::prelude::*;
+        let mut rng = SplitMix64(2024);
+        let order = 4;
+        let rooms: Vec<(usize, Room)> = (0..ROOMS)
+            .map(|i| (i % 4, random_room(i % 4, 2, 2, &mut rng)))
+            .collect();
+        // Per room: paths, obstructed paths, paths only the general solve found.
+        let counts: Vec<[usize; 3]> = rooms
+            .par_iter()
+            .enumerate()
+            .map(|(room_index, (kind, room))| {
+                let scene = room_scene(room, &sequences(room.corners.len(), order));
+                let scale = room
+                    .corners
+                    .iter()
+                    .fold(1.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
+                let (reference, general_only) = reference_listing(&scene, true);
+                let mut counts = [0, 0, general_only];
+                for asked in [false, true] {
+                    let mut reference = reference.clone();
+                    reference.retain(|_, f| asked || f.status == Status::Converged);
+                    let found = mirror_listing(&scene, order, asked);
+                    let what = format!("room {room_index} (kind {kind}), obstructed {asked}");
+                    assert_same(&scene, &found, &reference, scale, &what);
+                    if asked {
+                        counts[0] = found.len();
+                        counts[1] = found
+                            .values()
+                            .filter(|f| f.status == Status::Obstructed)
+                            .count();
+                    }
+                }
+                counts
+            })
+            .collect();
+        let [paths, obstructed, missed] = counts
+            .iter()
+            .fold([0; 3], |t, c| [t[0] + c[0], t[1] + c[1], t[2] + c[2]]);
+        eprintln!(
+            "{paths} paths, {obstructed} obstructed, {missed} found by the general solve only"
+        );
+        // Enough of both kinds for the comparison to say something.
+        assert!(
+            paths > 100 * ROOMS && obstructed > 20 * ROOMS,
+            "{paths} paths, {obstructed} obstructed"
+        );
+    }
+
+    /// Per source, per receiver: pyroomacoustics' visible images, each its distance and the
+    /// wall sequences that give it.
+    type Visible = Vec<Vec<Vec<(f64, Vec<Vec<usize>>)>>>;
+
+    /// The rooms of `benches/pyroomacoustics_rooms.py` (`fixtures/pyroomacoustics/rooms.json`):
+    /// name, room, and per (source, receiver) pyroomacoustics' visible images (distance and
+    /// the wall sequences that give each image).
+    fn pyroomacoustics_rooms() -> Vec<(String, Room, Visible)> {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/fixtures/pyroomacoustics/rooms.json"
+        );
+        let doc: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let points = |v: &serde_json::Value| -> Vec<Point> {
+            v.as_array()
+                .unwrap()
+                .iter()
+                .map(|p| Point::new(p[0].as_f64().unwrap(), p[1].as_f64().unwrap()))
+                .collect()
+        };
+        doc["rooms"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| {
+                let room = Room {
+                    corners: points(&r["corners"]),
+                    sources: points(&r["sources"]),
+                    receivers: points(&r["receivers"]),
+                };
+                let mut images = vec![vec![Vec::new(); room.receivers.len()]; room.sources.len()];
+                for p in r["paths"].as_array().unwrap() {
+                    let (s, rec) = (
+                        p["source"].as_u64().unwrap(),
+                        p["receiver"].as_u64().unwrap(),
+                    );
+                    images[s as usize][rec as usize] = p["images"]
+                        .as_array()
+                        .unwrap()
+                        .iter()
+                        .map(|i| {
+                            let seqs = i["sequences"]
+                                .as_array()
+                                .unwrap()
+                                .iter()
+                                .map(|q| {
+                                    q.as_array()
+                                        .unwrap()
+                                        .iter()
+                                        .map(|w| w.as_u64().unwrap() as usize)
+                                        .collect()
+                                })
+                                .collect();
+                            (i["distance"].as_f64().unwrap(), seqs)
+                        })
+                        .collect();
+                }
+                (r["name"].as_str().unwrap().to_string(), room, images)
+            })
+            .collect()
+    }
+
+    /// The mirror search on pyroomacoustics' two rooms against its image source model: the
+    /// paths both find (same wall sequence, distances within its float32 round-off), and
+    /// those only one finds, each checked against the general solve of its sequence.
+    #[test]
+    fn pyroomacoustics_rooms_agree() {
+        for (name, room, images) in pyroomacoustics_rooms() {
+            let scene = room_scene(&room, &sequences(room.corners.len(), 4));
+            let found = mirror_listing(&scene, 4, false);
+            let tracer = Tracer::new(&scene).unwrap();
+            let path_of: BTreeMap<Vec<usize>, usize> = scene
+                .paths()
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (p.steps.iter().map(|s| s.interface).collect(), i))
+                .collect();
+            let mut ws = crate::Workspace::new();
+            let (mut both, mut disagreements) = (0, Vec::new());
+            for (s, per_receiver) in images.iter().enumerate() {
+                for (r, visible) in per_receiver.iter().enumerate() {
+                    let mut matched = vec![false; visible.len()];
+                    for ((fs, fr, walls), f) in found.range((s, r, Vec::new())..) {
+                        if (*fs, *fr) != (s, r) {
+                            break;
+                        }
+                        let distance = f.time * 343.0;
+                        let hit = visible.iter().position(|(d, seqs)| {
+                            seqs.contains(walls) && (d - distance).abs() <= 1e-5 * d
+                        });
+                        match hit {
+                            Some(i) if !matched[i] => {
+                                both += 1;
+                                matched[i] = true;
+                            }
+                            _ => {
+                                let (src, rec) = (room.sources[s], room.receivers[r]);
+                                let ray = tracer.solve(src, rec, path_of[walls], &mut ws);
+                                disagreements.push(format!(
+                                    "({s}, {r}) {walls:?} eigenray only: {distance}, \
+                                     general solve {:?}",
+                                    ray.status
+                                ));
+                            }
+                        }
+                    }
+                    for (i, (d, seqs)) in visible.iter().enumerate() {
+                        if matched[i] {
+                            continue;
+                        }
+                        for seq in seqs {
+                            let (src, rec) = (room.sources[s], room.receivers[r]);
+                            let ray = tracer.solve(src, rec, path_of[seq], &mut ws);
+                            disagreements.push(format!(
+                                "({s}, {r}) {seq:?} pyroomacoustics only: {d}, general solve \
+                                 {:?} {:?}",
+                                ray.status, ray.reason
+                            ));
+                        }
+                    }
+                }
+            }
+            eprintln!("{name}: {both} paths found by both");
+            assert!(both > 500, "{name}: {both} paths");
+            assert!(disagreements.is_empty(), "{name}: {disagreements:#?}");
+        }
+    }
+
+    /// In a rectangle every image of order `|i| + |j|` is `(i a + x or a − x, j b + y or
+    /// b − y)` (by the parity of `i` and `j`) and every one is seen: 41 paths up to order 4,
+    /// their times the images' distances.
+    #[test]
+    fn rectangle_times_are_the_closed_form() {
+        let (a, b) = (4.0, 3.0);
+        let room = Room {
+            corners: vec![
+                Point::new(0.0, 0.0),
+                Point::new(a, 0.0),
+                Point::new(a, b),
+                Point::new(0.0, b),
+            ],
+            sources: vec![Point::new(1.3, 0.7), Point::new(2.9, 2.2)],
+            receivers: vec![Point::new(3.1, 2.45), Point::new(0.55, 1.6)],
+        };
+        let scene = room_scene(&room, &[Vec::new()]);
+        let found = mirror_listing(&scene, 4, false);
+        let slowness = scene.media()[0].slowness;
+        for (s, source) in room.sources.iter().enumerate() {
+            for (r, receiver) in room.receivers.iter().enumerate() {
+                let image = |i: i32, len: f64, x: f64| {
+                    i as f64 * len + if i % 2 == 0 { x } else { len - x }
+                };
+                let mut expected: Vec<f64> = Vec::new();
+                for i in -4i32..=4 {
+                    for j in -4i32..=4 {
+                        if i.abs() + j.abs() <= 4 {
+                            let p = Point::new(image(i, a, source.x), image(j, b, source.y));
+                            expected.push(slowness * p.distance(*receiver));
+                        }
+                    }
+                }
+                expected.sort_by(f64::total_cmp);
+                let mut times: Vec<f64> = found
+                    .iter()
+                    .filter(|((fs, fr, _), f)| {
+                        (*fs, *fr) == (s, r) && f.status == Status::Converged
+                    })
+                    .map(|(_, f)| f.time)
+                    .collect();
+                times.sort_by(f64::total_cmp);
+                assert_eq!(times.len(), 41);
+                for (t, e) in times.iter().zip(&expected) {
+                    assert!((t - e).abs() <= 1e-12 * e, "{t} vs {e}");
+                }
+            }
+        }
+    }
+
+    /// A receiver exactly on a beam's boundary: the path of two reflections between parallel
+    /// mirrors whose second point is a wall's end (exact in floating point) has no path; a
+    /// receiver just inside the beam has one (its time the image's distance), one just outside
+    /// none. The complete search says the same.
+    #[test]
+    fn a_path_through_a_wall_end_is_no_path() {
+        let doc = r#"{
+            "media": { "air": { "speed": 1.0 } },
+            "interfaces": { "high": { "points": [[0, 2], [4, 2]] },
+                            "low": { "points": [[0, 0], [4, 0]] } },
+            "sources": [[1, 1]], "receivers": [[5, 1], [4.999, 1], [5.001, 1]],
+            "paths": [{ "steps": [{ "reflect": "low" }, { "reflect": "high" }],
+                        "media": ["air", "air", "air"] }]
+        }"#;
+        let scene = Scene::from_json(doc).unwrap();
+        let (high, low) = (0, 1);
+        let mirrors = MirrorWalls::new(&scene, &[high, low]);
+        let (mut scratch, mut out) = (MirrorScratch::default(), Vec::new());
+        let source = scene.sources()[0];
+        let receivers = scene.receivers();
+        mirrors.arrivals(
+            &scene,
+            source,
+            receivers,
+            2,
+            1.0,
+            true,
+            &mut scratch,
+            &mut out,
+        );
+        let two: Vec<&MirrorArrival> = out.iter().filter(|a| a.walls == [low, high]).collect();
+        assert_eq!(two.len(), 1, "{two:?}");
+        assert_eq!(two[0].receiver, 1);
+        // The source's image in `low`, then in `high`: (1, 5).
+        let expected = Point::new(1.0, 5.0).distance(receivers[1]);
+        assert!((two[0].time - expected).abs() <= 1e-15 * expected);
+        let tracer = Tracer::new(&scene).unwrap();
+        let mut arrivals = Vec::new();
+        for (r, &receiver) in receivers.iter().enumerate() {
+            tracer
+                .stationary_paths(source, receiver, 0, &mut arrivals)
+                .unwrap();
+            assert_eq!(
+                arrivals.len(),
+                usize::from(r == 1),
+                "receiver {r}: {arrivals:?}"
+            );
+        }
+    }
+
+    /// Once its scratch has grown, a search allocates only its results: one vector of points
+    /// per path and one of walls per reflected path.
+    #[test]
+    fn a_warm_search_allocates_only_its_results() {
+        let mut rng = SplitMix64(77);
+        let room = random_room(1, 1, 6, &mut rng);
+        let scene = room_scene(&room, &[Vec::new()]);
+        let walls: Vec<usize> = (0..scene.interfaces().len()).collect();
+        let mirrors = MirrorWalls::new(&scene, &walls);
+        let (mut scratch, mut out) = (MirrorScratch::default(), Vec::new());
+        let source = room.sources[0];
+        mirrors.arrivals(
+            &scene,
+            source,
+            &room.receivers,
+            4,
+            1.0,
+            true,
+            &mut scratch,
+            &mut out,
+        );
+        let expected = out.len() + out.iter().filter(|a| !a.walls.is_empty()).count();
+        assert!(out.len() > 50, "{} paths", out.len());
+        out.clear();
+        let info = allocation_counter::measure(|| {
+            mirrors.arrivals(
+                &scene,
+                source,
+                &room.receivers,
+                4,
+                1.0,
+                true,
+                &mut scratch,
+                &mut out,
+            );
+        });
+        assert_eq!(info.count_total as usize, expected);
+    }
+
+    /// A measurement, not a test: the mirror search's time per room on pyroomacoustics' two
+    /// rooms (every source against every receiver, order 4, unobstructed paths), the median
+    /// of many repetitions. Run in release:
+    /// `cargo test --release --lib mirrors -- --ignored --nocapture`.
+    #[test]
+    #[ignore = "a measurement; run in release with --ignored --nocapture"]
+    fn measure_pyroomacoustics_rooms() {
+        for (name, room, _) in pyroomacoustics_rooms() {
+            let scene = room_scene(&room, &[Vec::new()]);
+            let walls: Vec<usize> = (0..scene.interfaces().len()).collect();
+            let slowness = scene.media()[0].slowness;
+            let (mut scratch, mut out) = (MirrorScratch::default(), Vec::new());
+            let mut run = |out: &mut Vec<MirrorArrival>| {
+                let mirrors = MirrorWalls::new(&scene, &walls);
+                out.clear();
+                for &source in &room.sources {
+                    mirrors.arrivals(
+                        &scene,
+                        source,
+                        &room.receivers,
+                        4,
+                        slowness,
+                        false,
+                        &mut scratch,
+                        out,
+                    );
+                }
+            };
+            for _ in 0..200 {
+                run(&mut out);
+            }
+            let mut times: Vec<f64> = (0..2000)
+                .map(|_| {
+                    let t = std::time::Instant::now();
+                    run(&mut out);
+                    t.elapsed().as_secs_f64() * 1e3
+                })
+                .collect();
+            times.sort_by(f64::total_cmp);
+            eprintln!(
+                "{name}: {} sources x {} receivers, {} paths: median {:.4} ms, fastest {:.4} ms \
+                 (of 2000)",
+                room.sources.len(),
+                room.receivers.len(),
+                out.len(),
+                times[times.len() / 2],
+                times[0]
+            );
+        }
+    }
+
+    /// Random rooms the comparison runs on.
+    const ROOMS: usize = 240;
+}
