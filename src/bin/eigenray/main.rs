@@ -648,3 +648,95 @@ fn io_message(e: &io::Error) -> String {
         _ => s,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The `solve` arguments of a command line.
+    fn solve_args(args: &[&str]) -> SolveArgs {
+        let cli = Cli::try_parse_from(["eigenray", "solve"].iter().chain(args)).unwrap();
+        match cli.command {
+            Some(Command::Solve(args)) => args,
+            other => panic!("{other:?}"),
+        }
+    }
+
+    /// A scene with a `search` section and no rays (nothing goes to standard output).
+    const SEARCH: &str = r#"{
+        "media": { "air": { "speed": 1.0 } },
+        "interfaces": { "floor": { "points": [[-3, 0], [3, 0]] } },
+        "sources": [], "receivers": [[1, 1]],
+        "search": { "max_steps": 1 }
+    }"#;
+
+    fn arrival(scene: &Scene) -> SearchArrival {
+        SearchArrival {
+            source: 0,
+            receiver: 0,
+            steps: vec![eigenray::scene_parts::Step {
+                kind: eigenray::scene_parts::StepKind::Reflect,
+                interface: 0,
+            }],
+            arrival: eigenray::Arrival {
+                status: Status::Converged,
+                time: 2.0,
+                points: vec![
+                    eigenray::Point::new(0.0, 1.0),
+                    eigenray::Point::new(0.5, 0.0),
+                    eigenray::Point::new(1.0, 1.0),
+                ],
+                parameters: vec![3.5],
+                segments: vec![0],
+                media: vec![scene.medium_index("air").unwrap(); 2],
+                iterations: 1,
+                reason: None,
+                kink: None,
+                residual: 0.0,
+                complete: true,
+            },
+        }
+    }
+
+    #[test]
+    fn csv_and_npy_need_a_file_for_the_arrivals() {
+        let scene = Scene::from_json(SEARCH).unwrap();
+        let solved = Solved::Stationary(StationaryRays::default());
+        let arrivals = [arrival(&scene)];
+        for format in ["csv", "npy"] {
+            let args = solve_args(&["scene.json", "--format", format]);
+            match write_outputs(&args, &scene, &solved, Some(&arrivals)) {
+                Err(Failure::Input(m)) => {
+                    assert!(m.starts_with(&format!("--format {format}: ")), "{m}");
+                    assert!(m.contains("--arrivals FILE"), "{m}");
+                }
+                other => panic!("{other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn arrivals_go_to_their_own_file_in_the_chosen_format() {
+        let scene = Scene::from_json(SEARCH).unwrap();
+        let solved = Solved::Stationary(StationaryRays::default());
+        let arrivals = [arrival(&scene)];
+        let path = std::env::temp_dir().join(format!(
+            "eigenray-main-test-{}-arrivals.csv",
+            std::process::id()
+        ));
+        let path_text = path.to_string_lossy().into_owned();
+        let args = solve_args(&["scene.json", "--format", "csv", "--arrivals", &path_text]);
+        let written = write_outputs(&args, &scene, &solved, Some(&arrivals));
+        let text = fs::read_to_string(&path);
+        let _ = fs::remove_file(&path);
+        assert!(written.is_ok(), "{written:?}");
+        let text = text.unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 2, "{text}");
+        assert!(lines[0].starts_with("source,receiver,steps,media,status"));
+        assert!(
+            lines[1].starts_with("0,0,reflect:floor,air;air,converged,,2.0,"),
+            "{text}"
+        );
+    }
+}

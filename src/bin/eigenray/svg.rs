@@ -1635,4 +1635,168 @@ mod tests {
         assert!(elements.iter().any(|(_, c)| c == "axes"));
         assert!(!svg.contains("inf") && !svg.contains("NaN"));
     }
+
+    /// A search arrival built by hand: `steps` off the scene's interfaces, through `points`.
+    fn search_arrival(
+        scene: &Scene,
+        steps: &[(StepKind, &str)],
+        status: Status,
+        time: f64,
+        points: &[[f64; 2]],
+    ) -> SearchArrival {
+        let air = scene.medium_index("air").unwrap();
+        SearchArrival {
+            source: 0,
+            receiver: 0,
+            steps: steps
+                .iter()
+                .map(|&(kind, name)| Step {
+                    kind,
+                    interface: scene.interface_index(name).unwrap(),
+                })
+                .collect(),
+            arrival: eigenray::Arrival {
+                status,
+                time,
+                points: points.iter().map(|p| Point::new(p[0], p[1])).collect(),
+                parameters: vec![0.0; steps.len()],
+                segments: vec![0; steps.len()],
+                media: vec![air; steps.len() + 1],
+                iterations: 1,
+                reason: None,
+                kink: None,
+                residual: 0.0,
+                complete: true,
+            },
+        }
+    }
+
+    #[test]
+    fn search_arrivals_are_drawn_with_their_sequences_in_the_legend() {
+        let scene = Scene::from_json(ROOM).unwrap();
+        let batch = Tracer::new(&scene)
+            .unwrap()
+            .trace_batch(&BatchOptions::default());
+        let arrivals = [
+            search_arrival(
+                &scene,
+                &[],
+                Status::Converged,
+                0.01,
+                &[[1.5, 1.2], [4.5, 2.5]],
+            ),
+            search_arrival(
+                &scene,
+                &[(StepKind::Reflect, "north"), (StepKind::Reflect, "east")],
+                Status::Converged,
+                0.03,
+                &[[1.5, 1.2], [5.0, 4.0], [6.0, 3.5], [4.5, 2.5]],
+            ),
+            search_arrival(
+                &scene,
+                &[(StepKind::Reflect, "north"), (StepKind::Reflect, "east")],
+                Status::Obstructed,
+                0.05,
+                &[[1.5, 1.2], [2.0, 4.0], [6.0, 1.0], [4.5, 2.5]],
+            ),
+        ];
+        // By sequence: paths and arrivals of one sequence share a line.
+        let svg = scene_svg(
+            &scene,
+            RaySet::Batch(&batch),
+            &arrivals,
+            "t",
+            Colouring::Sequence,
+        );
+        let (elements, texts) = parse(&svg);
+        assert!(elements.iter().any(|(_, c)| c == "legend"));
+        for want in [
+            "sequence (paths drawn)",
+            "direct (3)",
+            "reflect north (2)",
+            "reflect west (2)",
+            "reflect north → reflect east (2)",
+        ] {
+            assert!(texts.iter().any(|t| t == want), "{want} not in {texts:?}");
+        }
+        assert!(
+            texts
+                .iter()
+                .any(|t| t.starts_with("9 of 9 rays and search arrivals drawn")),
+            "{texts:?}"
+        );
+        // By path: the paths by name, then the arrivals' sequences.
+        let svg = scene_svg(
+            &scene,
+            RaySet::Batch(&batch),
+            &arrivals,
+            "t",
+            Colouring::Path,
+        );
+        let (_, texts) = parse(&svg);
+        for want in [
+            "direct (2)",
+            "north (2)",
+            "west (2)",
+            "direct (1)",
+            "reflect north → reflect east (2)",
+        ] {
+            assert!(texts.iter().any(|t| t == want), "{want} not in {texts:?}");
+        }
+        // By time: the colour bar spans the arrivals' times too.
+        let svg = scene_svg(
+            &scene,
+            RaySet::Batch(&batch),
+            &arrivals,
+            "t",
+            Colouring::Time,
+        );
+        let (_, texts) = parse(&svg);
+        assert!(texts.iter().any(|t| t == "0.05000"), "{texts:?}");
+        assert!(svg.contains("search arrival, reflect north → reflect east: obstructed"));
+    }
+
+    #[test]
+    fn a_long_legend_stops_at_its_limit_and_counts_the_rest() {
+        let scene = Scene::from_json(ROOM).unwrap();
+        let walls = ["north", "east", "south", "west"];
+        // 4³ = 64 sequences of three reflections, one arrival each.
+        let mut arrivals = Vec::new();
+        for a in walls {
+            for b in walls {
+                for c in walls {
+                    arrivals.push(search_arrival(
+                        &scene,
+                        &[
+                            (StepKind::Reflect, a),
+                            (StepKind::Reflect, b),
+                            (StepKind::Reflect, c),
+                        ],
+                        Status::Converged,
+                        0.02,
+                        &[[1.5, 1.2], [3.0, 4.0], [6.0, 2.0], [3.0, 0.0], [4.5, 2.5]],
+                    ));
+                }
+            }
+        }
+        let svg = scene_svg(
+            &scene,
+            RaySet::Rays(&[]),
+            &arrivals,
+            "t",
+            Colouring::Sequence,
+        );
+        let (_, texts) = parse(&svg);
+        let lines = texts.iter().filter(|t| t.starts_with("reflect ")).count();
+        assert_eq!(lines, MAX_LEGEND_LINES);
+        assert!(
+            texts.iter().any(|t| t
+                == &format!(
+                    "… {} more ({})",
+                    64 - MAX_LEGEND_LINES,
+                    64 - MAX_LEGEND_LINES
+                )),
+            "{texts:?}"
+        );
+    }
 }
