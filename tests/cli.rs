@@ -799,7 +799,30 @@ fn the_svg_draws_every_stationary_path_by_sequence_and_by_time() {
     let texts = svg_texts(&std::fs::read_to_string(svg.path()).unwrap());
     assert!(texts.iter().any(|t| t == "travel time"), "{texts:?}");
     let ticks: Vec<f64> = texts.iter().filter_map(|t| t.parse().ok()).collect();
-    assert!(ticks.iter().any(|&t| t == 1.0), "{ticks:?}");
+    assert!(ticks.contains(&1.0), "{ticks:?}");
     // The latest: the valley's bottom from source 0 to receiver 1, √16.25 + √146.25 ≈ 16.12.
-    assert!(ticks.iter().any(|&t| t == 16.12), "{ticks:?}");
+    assert!(ticks.contains(&16.12), "{ticks:?}");
+}
+
+/// docs/scene-format.md's scene for `"stationary": "all"` gives the lines the page shows.
+#[test]
+fn the_format_page_shows_its_stationary_output() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let page = std::fs::read_to_string(format!("{root}/docs/scene-format.md")).expect("page");
+    let heading = "## Every stationary path";
+    let section = &page[page.find(heading).expect(heading)..];
+    let block = |fence: &str| -> String {
+        let start = section.find(fence).expect(fence) + fence.len();
+        section[start..][..section[start..].find("```").expect("closing fence")].to_string()
+    };
+    let scene = TempFile::with("format-page-every.json", block("```json\n"));
+    let out = run([
+        OsStr::new("solve"),
+        scene.path().as_os_str(),
+        OsStr::new("--format"),
+        OsStr::new("jsonl"),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
+    let shown = block("```text\n");
+    assert_eq!(text(&out.stdout), shown);
 }
