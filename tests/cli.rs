@@ -826,3 +826,25 @@ fn the_format_page_shows_its_stationary_output() {
     let shown = block("```text\n");
     assert_eq!(text(&out.stdout), shown);
 }
+
+/// The README's every-stationary-path scene gives the CSV it shows.
+#[test]
+fn the_readme_valley_gives_its_output() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let readme = std::fs::read_to_string(format!("{root}/README.md")).expect("README");
+    let heading = "## Every stationary path of a sequence";
+    let section = &readme[readme.find(heading).expect(heading)..];
+    let block = |fence: &str| -> String {
+        let start = section.find(fence).expect(fence) + fence.len();
+        section[start..][..section[start..].find("```").expect("closing fence")].to_string()
+    };
+    let scene = TempFile::with("valley.json", block("```json\n"));
+    let out = run([
+        OsStr::new("solve"),
+        scene.path().as_os_str(),
+        OsStr::new("--format"),
+        OsStr::new("csv"),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
+    assert_eq!(text(&out.stdout), block("```text\n"));
+}
