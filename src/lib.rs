@@ -9,7 +9,8 @@
 //! (an `O(k)` step for `k` interactions), then classifies each ray.
 //!
 //! Dependency direction (each module uses only those to its left):
-//! `geom ← bvh ← polyline ← scene ← regions ← problem ← solver ← trace ← batch ← output`.
+//! `geom ← bvh ← polyline ← scene ← regions ← problem ← solver ← trace ← batch ← arrivals ←
+//! output`.
 //!
 //! ```
 //! use eigenray::{Scene, Status, Tracer};
@@ -25,6 +26,7 @@
 //! assert!((rays[0].time - 2.6017642).abs() < 1e-6);
 //! ```
 
+mod arrivals;
 mod batch;
 mod bvh;
 pub mod demo;
@@ -41,9 +43,13 @@ mod trace;
 pub mod argmin_bridge;
 
 // The vocabulary: scenes, the tracer and its options, ray results, batches, outputs.
+pub use arrivals::{SearchArrival, StationaryRays, TripleArrivals};
 pub use batch::{Batch, BatchOptions};
 pub use geom::{Point, Vec2};
-pub use output::{Format, write_batch, write_names, write_rays, write_rays_json};
+pub use output::{
+    Format, RaySet, write_arrivals, write_batch, write_names, write_rays, write_rays_and_arrivals,
+    write_rays_json, write_stationary,
+};
 pub use problem::{PathProblem, Tridiagonal};
 pub use scene::{
     InterfaceSpec, MediumSpec, PathSpec, Scene, SceneError, SceneSpec, SearchOptions, SearchSpec,
@@ -81,10 +87,10 @@ pub mod lookup {
     pub use crate::regions::{LocateHint, Regions, Sides};
 }
 
-/// The fixed codes of the `.npy` format: the status codes, and the index marking a leg medium
-/// that was not found.
+/// The fixed codes of the `.npy` format: the status and kink codes, the index marking a leg
+/// medium that was not found, and the padding of an arrival's steps.
 pub mod npy {
-    pub use crate::output::{NO_MEDIUM, STATUS_CODES};
+    pub use crate::output::{KINK_CODES, NO_INTERFACE, NO_MEDIUM, NO_STEP_KIND, STATUS_CODES};
 }
 
 /// The README's examples, compiled and run as doctests.

@@ -2,34 +2,49 @@
 //! name tables that give the `.npy` file's indices their names.
 //!
 //! Written by hand with `zmij` (shortest round-trip floats, as `serde_json` prints them: it
-//! uses `zmij` too) and `itoa`, straight from either owned [`Ray`]s or a flat [`Batch`], and
-//! formatted in parallel (rayon) a window of rays at a time, so that writing a large batch
-//! costs less than solving it.
+//! uses `zmij` too) and `itoa`, straight from owned [`Ray`]s, a flat [`Batch`] or the
+//! [`StationaryRays`] of `"stationary": "all"`, and formatted in parallel (rayon) a window of
+//! rays at a time, so that writing a large batch costs less than solving it. A search's
+//! [`SearchArrival`]s follow the rays in JSON and JSON Lines, or go to a file of their own
+//! ([`write_arrivals`]).
 
 use std::io::{self, Write};
 
 use rayon::prelude::*;
 
+use crate::arrivals::{SearchArrival, StationaryRays};
 use crate::batch::Batch;
 use crate::geom::Point;
-use crate::scene::Scene;
-use crate::trace::{Ray, Reason, Status};
+use crate::scene::{Scene, StepKind};
+use crate::trace::{Kink, Ray, Reason, Status};
 
 /// Output formats of `eigenray solve`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Format {
     /// One JSON document, `{"rays": [...]}`: one object per ray, in ray order (see
-    /// [`write_rays_json`] for its fields).
+    /// [`write_rays_json`] for its fields). With `"stationary": "all"` ([`write_stationary`])
+    /// one object per stationary path, each with three more fields: `arrival` (0, 1, … within
+    /// its triple, by time), `kink` (`"minimum"`, `"maximum"` or `"mixed"`, on `vertex`
+    /// entries) and `complete` (whether its triple's search was complete); a triple without a
+    /// stationary path is one entry, `no_path` (or `not_converged` when its search was not
+    /// complete), `arrival` 0. A scene's search arrivals follow as a second key,
+    /// `{"rays": [...], "arrivals": [...]}` ([`write_rays_and_arrivals`]; the fields are
+    /// listed at [`write_arrivals`]).
     #[default]
     Json,
-    /// One ray object per line (the same objects as in `Json`).
+    /// One ray object per line (the same objects as in `Json`), then one line per search
+    /// arrival: the arrival objects of `Json` with `"kind": "arrival"` first (ray lines have
+    /// no `kind`).
     Jsonl,
     /// A header line, then one line per ray:
     /// `source,receiver,path,status,time,iterations,residual,points,path_name,media,reason`,
     /// with the points as `x y;x y;…` and the leg media as names joined by `;`. Empty fields
     /// where the ray has no such value (`time` and `points` without a time, `residual` when
     /// not finite, `path_name` for an unnamed path, `media` when unknown, `reason` when
-    /// converged). A field holding `,`, `"` or a line break is quoted as RFC 4180 says.
+    /// converged). A field holding `,`, `"` or a line break is quoted as RFC 4180 says. With
+    /// `"stationary": "all"` three columns follow: `arrival`, `kink` (empty but on `vertex`
+    /// entries) and `complete` (`true` or `false`). Search arrivals are a table of their own,
+    /// written to a second file by [`write_arrivals`].
     Csv,
     /// NumPy's `.npy` file (format version 1.0): one record per ray, in ray order, of a packed
     /// little-endian structured array that `numpy.load` reads as it is:
@@ -41,7 +56,10 @@ pub enum Format {
     /// [`Scene::media`], which lists the media in the order of their names, padded with
     /// `2³² − 1`, all of it when unknown). Names and reasons are left out: [`write_names`]
     /// writes the tables that turn `status`, `path` and `media` into names. Binary, fixed-size
-    /// records: the compact format for large batches.
+    /// records: the compact format for large batches. With `"stationary": "all"` three fields
+    /// follow: `arrival` (`<u4`), `kink` (`u1`: 0 none, 1 `minimum`, 2 `maximum`, 3 `mixed`,
+    /// the places in [`KINK_CODES`]) and `complete` (`u1`: 0 or 1). Search arrivals are records
+    /// of their own, written to a second file by [`write_arrivals`].
     Npy,
 }
 
@@ -56,6 +74,33 @@ pub const STATUS_CODES: [Status; 5] = [
 
 /// The [`Format::Npy`] `media` entry of a leg whose medium is not known.
 pub const NO_MEDIUM: u32 = u32::MAX;
+
+/// The kinks in the order of their [`Format::Npy`] `kink` codes (0 to 3; 0: not a `vertex`
+/// entry).
+pub const KINK_CODES: [Option<Kink>; 4] = [
+    None,
+    Some(Kink::Minimum),
+    Some(Kink::Maximum),
+    Some(Kink::Mixed),
+];
+
+/// The [`write_arrivals`] `.npy` `step_kind` codes: 0 reflect, 1 refract; this one pads the
+/// steps beyond an arrival's own.
+pub const NO_STEP_KIND: u8 = u8::MAX;
+
+/// The [`write_arrivals`] `.npy` `step_interface` entry that pads the steps beyond an
+/// arrival's own.
+pub const NO_INTERFACE: u32 = u32::MAX;
+
+/// Code of a kink in [`Format::Npy`]: its place in [`KINK_CODES`].
+fn kink_code(kink: Option<Kink>) -> u8 {
+    match kink {
+        None => 0,
+        Some(Kink::Minimum) => 1,
+        Some(Kink::Maximum) => 2,
+        Some(Kink::Mixed) => 3,
+    }
+}
 
 /// Code of a status in [`Format::Npy`]: its place in [`STATUS_CODES`].
 fn status_code(status: Status) -> u8 {
@@ -92,17 +137,9 @@ impl NpyShape {
 }
 
 /// The `.npy` header (magic, version 1.0, the dictionary padded to a multiple of 64 bytes) of
-/// `n` records of `shape`.
-fn npy_header(n: usize, shape: NpyShape) -> Vec<u8> {
-    let dict = format!(
-        "{{'descr': [('source', '<u4'), ('receiver', '<u4'), ('path', '<u4'), \
-         ('status', '|u1'), ('iterations', '<u4'), ('time', '<f8'), ('residual', '<f8'), \
-         ('points', '<f8', ({}, 2)), ('media', '<u4', ({},))], \
-         'fortran_order': False, 'shape': ({},), }}",
-        shape.points(),
-        shape.legs(),
-        n
-    );
+/// `n` records whose fields `descr` lists.
+fn npy_header_of(n: usize, descr: &str) -> Vec<u8> {
+    let dict = format!("{{'descr': [{descr}], 'fortran_order': False, 'shape': ({n},), }}");
     let mut header = b"\x93NUMPY\x01\x00".to_vec();
     // The dictionary ends in a newline, padded with spaces so that the data starts at a
     // multiple of 64 bytes.
@@ -114,6 +151,54 @@ fn npy_header(n: usize, shape: NpyShape) -> Vec<u8> {
     header
 }
 
+/// The `.npy` header of `n` ray records of `shape`, with the stationary-all fields when
+/// `layout` has them.
+fn npy_header(n: usize, shape: NpyShape, layout: Layout) -> Vec<u8> {
+    let mut descr = format!(
+        "('source', '<u4'), ('receiver', '<u4'), ('path', '<u4'), \
+         ('status', '|u1'), ('iterations', '<u4'), ('time', '<f8'), ('residual', '<f8'), \
+         ('points', '<f8', ({}, 2)), ('media', '<u4', ({},))",
+        shape.points(),
+        shape.legs(),
+    );
+    if layout == Layout::Stationary {
+        descr.push_str(", ('arrival', '<u4'), ('kink', '|u1'), ('complete', '|u1')");
+    }
+    npy_header_of(n, &descr)
+}
+
+/// A count as a `.npy` `<u4` (saturating).
+fn u32_le(buf: &mut Vec<u8>, v: usize) {
+    buf.extend_from_slice(&u32::try_from(v).unwrap_or(u32::MAX).to_le_bytes());
+}
+
+/// `points` padded with NaN rows to `rows` (all NaN when `points` is empty), then `media`
+/// padded with [`NO_MEDIUM`] to `legs`.
+fn points_media_npy(
+    buf: &mut Vec<u8>,
+    points: &[Point],
+    rows: usize,
+    media: Option<impl Iterator<Item = usize>>,
+    legs: usize,
+) {
+    for i in 0..rows {
+        let p = points
+            .get(i)
+            .copied()
+            .unwrap_or(Point::new(f64::NAN, f64::NAN));
+        buf.extend_from_slice(&p.x.to_le_bytes());
+        buf.extend_from_slice(&p.y.to_le_bytes());
+    }
+    let mut media = media;
+    for _ in 0..legs {
+        let m = media
+            .as_mut()
+            .and_then(|m| m.next())
+            .map_or(NO_MEDIUM, |m| u32::try_from(m).unwrap_or(NO_MEDIUM));
+        buf.extend_from_slice(&m.to_le_bytes());
+    }
+}
+
 fn ray_npy<M: Iterator<Item = usize>>(buf: &mut Vec<u8>, shape: NpyShape, r: View<'_, M>) {
     for v in [r.source, r.receiver, r.path] {
         buf.extend_from_slice(&(v as u32).to_le_bytes());
@@ -123,22 +208,33 @@ fn ray_npy<M: Iterator<Item = usize>>(buf: &mut Vec<u8>, shape: NpyShape, r: Vie
     buf.extend_from_slice(&r.time.unwrap_or(f64::NAN).to_le_bytes());
     buf.extend_from_slice(&r.residual.to_le_bytes());
     let points = if r.time.is_some() { r.points } else { &[] };
-    for i in 0..shape.points() {
-        let p = points
-            .get(i)
-            .copied()
-            .unwrap_or(Point::new(f64::NAN, f64::NAN));
-        buf.extend_from_slice(&p.x.to_le_bytes());
-        buf.extend_from_slice(&p.y.to_le_bytes());
+    points_media_npy(buf, points, shape.points(), r.media, shape.legs());
+    if let Some(e) = r.every {
+        u32_le(buf, e.arrival);
+        buf.push(kink_code(e.kink));
+        buf.push(u8::from(e.complete));
     }
-    let mut media = r.media;
-    for _ in 0..shape.legs() {
-        let m = media
-            .as_mut()
-            .and_then(|m| m.next())
-            .map_or(NO_MEDIUM, |m| m as u32);
-        buf.extend_from_slice(&m.to_le_bytes());
-    }
+}
+
+/// Which fields the ray entries of a document have.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Layout {
+    /// One entry per ray (`"stationary": "one"`).
+    Rays,
+    /// One entry per stationary path, with `arrival`, `kink` and `complete`
+    /// (`"stationary": "all"`).
+    Stationary,
+}
+
+/// The fields of an entry of every stationary path of its triple.
+#[derive(Clone, Copy, Debug)]
+struct EveryFields {
+    /// Its place within its triple, by time.
+    arrival: usize,
+    /// How the time behaves at its held vertices (a `vertex` entry).
+    kink: Option<Kink>,
+    /// Whether its triple's search was complete.
+    complete: bool,
 }
 
 /// One ray as the writers see it.
@@ -153,9 +249,11 @@ struct View<'a, M: Iterator<Item = usize>> {
     residual: f64,
     media: Option<M>,
     reason: Option<Reason>,
+    /// Present exactly in [`Layout::Stationary`].
+    every: Option<EveryFields>,
 }
 
-/// The medium and path names as each format writes them, made once per document.
+/// The medium, path and interface names as each format writes them, made once per document.
 struct Names {
     /// Escaped JSON strings of the media.
     media: Vec<Vec<u8>>,
@@ -165,6 +263,8 @@ struct Names {
     paths_csv: Vec<Vec<u8>>,
     /// The medium names for CSV, when none needs quoting (else the field is quoted whole).
     media_csv: Option<Vec<Vec<u8>>>,
+    /// Escaped JSON strings of the interface names.
+    interfaces: Vec<Vec<u8>>,
 }
 
 /// `s` as a JSON string.
@@ -205,11 +305,17 @@ impl Names {
             .iter()
             .map(|m| (!m.name.contains([',', '"', '\n', '\r'])).then(|| m.name.as_bytes().to_vec()))
             .collect();
+        let interfaces = scene
+            .interfaces()
+            .iter()
+            .map(|i| json_string(&i.name))
+            .collect();
         Names {
             media,
             paths,
             paths_csv,
             media_csv,
+            interfaces,
         }
     }
 }
@@ -224,6 +330,34 @@ fn float(buf: &mut Vec<u8>, v: f64) {
 
 fn int(buf: &mut Vec<u8>, v: usize) {
     buf.extend_from_slice(itoa::Buffer::new().format(v).as_bytes());
+}
+
+/// `[[x,y],…]`.
+fn points_json(buf: &mut Vec<u8>, points: &[Point]) {
+    buf.push(b'[');
+    for (i, p) in points.iter().enumerate() {
+        if i > 0 {
+            buf.push(b',');
+        }
+        buf.push(b'[');
+        float(buf, p.x);
+        buf.push(b',');
+        float(buf, p.y);
+        buf.push(b']');
+    }
+    buf.push(b']');
+}
+
+/// `["air",…]` (an index beyond the scene's media as `"?"`).
+fn media_json(buf: &mut Vec<u8>, names: &Names, media: impl Iterator<Item = usize>) {
+    buf.push(b'[');
+    for (i, m) in media.enumerate() {
+        if i > 0 {
+            buf.push(b',');
+        }
+        buf.extend_from_slice(names.media.get(m).map_or(b"\"?\"", Vec::as_slice));
+    }
+    buf.push(b']');
 }
 
 fn ray_json<M: Iterator<Item = usize>>(
@@ -242,24 +376,23 @@ fn ray_json<M: Iterator<Item = usize>>(
         buf.extend_from_slice(b",\"path_name\":");
         buf.extend_from_slice(name);
     }
+    if let Some(e) = r.every {
+        buf.extend_from_slice(b",\"arrival\":");
+        int(buf, e.arrival);
+    }
     buf.extend_from_slice(b",\"status\":\"");
     buf.extend_from_slice(r.status.as_str().as_bytes());
     buf.push(b'"');
+    if let Some(kink) = r.every.and_then(|e| e.kink) {
+        buf.extend_from_slice(b",\"kink\":\"");
+        buf.extend_from_slice(kink.as_str().as_bytes());
+        buf.push(b'"');
+    }
     if let Some(t) = r.time {
         buf.extend_from_slice(b",\"time\":");
         float(buf, t);
-        buf.extend_from_slice(b",\"points\":[");
-        for (i, p) in r.points.iter().enumerate() {
-            if i > 0 {
-                buf.push(b',');
-            }
-            buf.push(b'[');
-            float(buf, p.x);
-            buf.push(b',');
-            float(buf, p.y);
-            buf.push(b']');
-        }
-        buf.push(b']');
+        buf.extend_from_slice(b",\"points\":");
+        points_json(buf, r.points);
     }
     buf.extend_from_slice(b",\"iterations\":");
     int(buf, r.iterations);
@@ -268,20 +401,58 @@ fn ray_json<M: Iterator<Item = usize>>(
         float(buf, r.residual);
     }
     if let Some(media) = r.media {
-        buf.extend_from_slice(b",\"media\":[");
-        for (i, m) in media.enumerate() {
-            if i > 0 {
-                buf.push(b',');
-            }
-            buf.extend_from_slice(&names.media[m]);
-        }
-        buf.push(b']');
+        buf.extend_from_slice(b",\"media\":");
+        media_json(buf, names, media);
     }
     if let Some(reason) = r.reason {
         buf.extend_from_slice(b",\"reason\":");
         buf.extend_from_slice(&json_string(&reason.describe(scene)));
     }
+    if let Some(e) = r.every {
+        buf.extend_from_slice(if e.complete {
+            b",\"complete\":true"
+        } else {
+            b",\"complete\":false"
+        });
+    }
     buf.push(b'}');
+}
+
+/// `x y;x y;…`.
+fn points_csv(buf: &mut Vec<u8>, points: &[Point]) {
+    for (i, p) in points.iter().enumerate() {
+        if i > 0 {
+            buf.push(b';');
+        }
+        float(buf, p.x);
+        buf.push(b' ');
+        float(buf, p.y);
+    }
+}
+
+/// The leg media's names joined by `;` (quoted whole when a name needs it).
+fn media_csv(buf: &mut Vec<u8>, scene: &Scene, names: &Names, media: impl Iterator<Item = usize>) {
+    match &names.media_csv {
+        // No name needs quoting: the names as they are, joined by `;`.
+        Some(plain) => {
+            for (i, m) in media.enumerate() {
+                if i > 0 {
+                    buf.push(b';');
+                }
+                buf.extend_from_slice(plain.get(m).map_or(b"?", Vec::as_slice));
+            }
+        }
+        None => {
+            let mut joined = String::new();
+            for (i, m) in media.enumerate() {
+                if i > 0 {
+                    joined.push(';');
+                }
+                joined.push_str(scene.media().get(m).map_or("?", |m| m.name.as_str()));
+            }
+            csv_field(buf, &joined);
+        }
+    }
 }
 
 fn ray_csv<M: Iterator<Item = usize>>(
@@ -309,14 +480,7 @@ fn ray_csv<M: Iterator<Item = usize>>(
     }
     buf.push(b',');
     if r.time.is_some() {
-        for (i, p) in r.points.iter().enumerate() {
-            if i > 0 {
-                buf.push(b';');
-            }
-            float(buf, p.x);
-            buf.push(b' ');
-            float(buf, p.y);
-        }
+        points_csv(buf, r.points);
     }
     buf.push(b',');
     if let Some(name) = names.paths_csv.get(r.path) {
@@ -324,31 +488,21 @@ fn ray_csv<M: Iterator<Item = usize>>(
     }
     buf.push(b',');
     if let Some(media) = r.media {
-        match &names.media_csv {
-            // No name needs quoting: the names as they are, joined by `;`.
-            Some(plain) => {
-                for (i, m) in media.enumerate() {
-                    if i > 0 {
-                        buf.push(b';');
-                    }
-                    buf.extend_from_slice(plain.get(m).map_or(b"?", Vec::as_slice));
-                }
-            }
-            None => {
-                let mut joined = String::new();
-                for (i, m) in media.enumerate() {
-                    if i > 0 {
-                        joined.push(';');
-                    }
-                    joined.push_str(scene.media().get(m).map_or("?", |m| m.name.as_str()));
-                }
-                csv_field(buf, &joined);
-            }
-        }
+        media_csv(buf, scene, names, media);
     }
     buf.push(b',');
     if let Some(reason) = r.reason {
         csv_field(buf, &reason.describe(scene));
+    }
+    if let Some(e) = r.every {
+        buf.push(b',');
+        int(buf, e.arrival);
+        buf.push(b',');
+        if let Some(kink) = e.kink {
+            buf.extend_from_slice(kink.as_str().as_bytes());
+        }
+        buf.push(b',');
+        buf.extend_from_slice(if e.complete { b"true" } else { b"false" });
     }
     buf.push(b'\n');
 }
@@ -357,26 +511,50 @@ fn ray_csv<M: Iterator<Item = usize>>(
 const CSV_HEADER: &[u8] =
     b"source,receiver,path,status,time,iterations,residual,points,path_name,media,reason\n";
 
+/// The header line of [`Format::Csv`] with `"stationary": "all"`.
+const CSV_HEADER_STATIONARY: &[u8] = b"source,receiver,path,status,time,iterations,residual,\
+points,path_name,media,reason,arrival,kink,complete\n";
+
 /// Rays formatted at a time (in [`PIECE`]s, in parallel) before they are written out in order.
 const WINDOW: usize = 1 << 14;
 /// Rays per parallel piece of a window.
 const PIECE: usize = 1 << 10;
 
+/// The error of a request for arrivals beside the rays in a format that holds one table.
+fn one_table(format: Format) -> io::Error {
+    io::Error::new(
+        io::ErrorKind::InvalidInput,
+        format!(
+            "{} holds one table: write the search arrivals to a second file (write_arrivals)",
+            if format == Format::Csv { "CSV" } else { ".npy" }
+        ),
+    )
+}
+
 /// Writes `n` rays produced by `view` in `format`: a window of rays at a time, formatted in
-/// parallel pieces (rayon) while the previous window is written, in order.
+/// parallel pieces (rayon) while the previous window is written, in order; then, in JSON and
+/// JSON Lines, `arrivals` (refused before anything is written in CSV and `.npy`).
 fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
     scene: &Scene,
     n: usize,
+    layout: Layout,
+    arrivals: Option<&[SearchArrival]>,
     format: Format,
     mut out: W,
     view: impl Fn(usize) -> View<'a, M> + Sync,
 ) -> io::Result<()> {
+    if arrivals.is_some() && matches!(format, Format::Csv | Format::Npy) {
+        return Err(one_table(format));
+    }
     let names = Names::new(scene);
     let shape = NpyShape::of(scene);
     match format {
-        Format::Npy => out.write_all(&npy_header(n, shape))?,
+        Format::Npy => out.write_all(&npy_header(n, shape, layout))?,
         Format::Json => out.write_all(b"{\"rays\":[")?,
-        Format::Csv => out.write_all(CSV_HEADER)?,
+        Format::Csv => out.write_all(match layout {
+            Layout::Rays => CSV_HEADER,
+            Layout::Stationary => CSV_HEADER_STATIONARY,
+        })?,
         Format::Jsonl => {}
     }
     let format_piece = |buf: &mut Vec<u8>, rays: std::ops::Range<usize>| {
@@ -427,8 +605,17 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
         written?;
         std::mem::swap(&mut ready, &mut next);
     }
-    if format == Format::Json {
-        out.write_all(b"]}\n")?;
+    match (format, arrivals) {
+        (Format::Json, None) => out.write_all(b"]}\n")?,
+        (Format::Json, Some(arrivals)) => {
+            out.write_all(b"],\"arrivals\":[")?;
+            arrival_lines(scene, &names, arrivals, format, &mut out)?;
+            out.write_all(b"]}\n")?;
+        }
+        (Format::Jsonl, Some(arrivals)) => {
+            arrival_lines(scene, &names, arrivals, format, &mut out)?;
+        }
+        _ => {}
     }
     out.flush()
 }
@@ -450,21 +637,7 @@ pub fn write_rays_json<W: Write>(scene: &Scene, rays: &[Ray], out: W) -> io::Res
 /// # Errors
 /// Any error of the writer.
 pub fn write_rays<W: Write>(scene: &Scene, rays: &[Ray], format: Format, out: W) -> io::Result<()> {
-    write_all(scene, rays.len(), format, out, |i| {
-        let r = &rays[i];
-        View {
-            source: r.source,
-            receiver: r.receiver,
-            path: r.path,
-            status: r.status,
-            time: r.status.has_time().then_some(r.time),
-            points: &r.points,
-            iterations: r.iterations,
-            residual: r.residual,
-            media: (!r.media.is_empty()).then(|| r.media.iter().copied()),
-            reason: r.reason,
-        }
-    })
+    write_rays_and_arrivals(scene, RaySet::Rays(rays), None, format, out)
 }
 
 /// Writes every ray of a batch in `format`, in ray order.
@@ -477,23 +650,439 @@ pub fn write_batch<W: Write>(
     format: Format,
     out: W,
 ) -> io::Result<()> {
-    write_all(scene, batch.len(), format, out, |i| {
-        let r = batch.record(i);
-        let (source, receiver, path) = batch.triple(i);
-        let has = r.status.has_time();
-        View {
-            source,
-            receiver,
-            path,
-            status: r.status,
-            time: has.then_some(r.time),
-            points: batch.points(i),
-            iterations: r.iterations as usize,
-            residual: r.residual,
-            media: batch.media(i),
-            reason: r.reason,
+    write_rays_and_arrivals(scene, RaySet::Batch(batch), None, format, out)
+}
+
+/// Writes every stationary path of every ray (`"stationary": "all"`) in `format`: one entry
+/// per stationary path, in ray order and within a triple by time, with the fields of a ray
+/// plus `arrival`, `kink` and `complete` (see [`Format`]); one `no_path` entry (or
+/// `not_converged`, when the triple's search was not complete) for a triple without any.
+///
+/// ```
+/// use eigenray::{Format, Scene, Tracer, write_stationary};
+/// let scene = Scene::from_json(r#"{
+///     "media": { "air": { "speed": 1.0 } },
+///     "interfaces": { "valley": { "points": [[-3, 0], [0, -2], [3, 0]] } },
+///     "sources": [[-0.5, 2]], "receivers": [[0.5, 2]],
+///     "paths": [{ "steps": [{ "reflect": "valley" }], "media": ["air", "air"] }],
+///     "solver": { "stationary": "all" }
+/// }"#).unwrap();
+/// let rays = Tracer::new(&scene).unwrap().trace_stationary().unwrap();
+/// let mut out = Vec::new();
+/// write_stationary(&scene, &rays, Format::Jsonl, &mut out).unwrap();
+/// let lines: Vec<serde_json::Value> = out
+///     .split(|&b| b == b'\n')
+///     .filter(|l| !l.is_empty())
+///     .map(|l| serde_json::from_slice(l).unwrap())
+///     .collect();
+/// assert_eq!(lines.len(), 3);
+/// assert_eq!(lines[2]["arrival"], 2);
+/// assert_eq!(lines[2]["status"], "vertex");
+/// assert_eq!(lines[2]["kink"], "maximum");
+/// assert_eq!(lines[2]["complete"], true);
+/// ```
+///
+/// # Errors
+/// Any error of the writer.
+pub fn write_stationary<W: Write>(
+    scene: &Scene,
+    rays: &StationaryRays,
+    format: Format,
+    out: W,
+) -> io::Result<()> {
+    write_rays_and_arrivals(scene, RaySet::Stationary(rays), None, format, out)
+}
+
+/// The rays of an `eigenray solve` document, in any of the forms the library gives them.
+#[derive(Clone, Copy, Debug)]
+pub enum RaySet<'a> {
+    /// One ray per triple, as [`Tracer::trace_all`](crate::Tracer::trace_all) gives them.
+    Rays(&'a [Ray]),
+    /// One ray per triple, in flat arrays ([`Tracer::trace_batch`](crate::Tracer::trace_batch)).
+    Batch(&'a Batch),
+    /// Every stationary path of every triple
+    /// ([`Tracer::trace_stationary`](crate::Tracer::trace_stationary)).
+    Stationary(&'a StationaryRays),
+}
+
+/// Writes `rays` in `format` and, when `arrivals` is given (a scene with a `search` section),
+/// the search's arrivals after them: in JSON the document `{"rays": [...], "arrivals": [...]}`,
+/// in JSON Lines one line per arrival after the rays' lines, marked `"kind": "arrival"` (the
+/// arrival fields are listed at [`write_arrivals`]). Without `arrivals` this is
+/// [`write_rays`], [`write_batch`] or [`write_stationary`].
+///
+/// # Errors
+/// Any error of the writer; arrivals asked for in [`Format::Csv`] or [`Format::Npy`], which
+/// hold one table each ([`io::ErrorKind::InvalidInput`], before anything is written: write
+/// them to a second file with [`write_arrivals`]).
+pub fn write_rays_and_arrivals<W: Write>(
+    scene: &Scene,
+    rays: RaySet<'_>,
+    arrivals: Option<&[SearchArrival]>,
+    format: Format,
+    out: W,
+) -> io::Result<()> {
+    match rays {
+        RaySet::Rays(rays) => write_all(
+            scene,
+            rays.len(),
+            Layout::Rays,
+            arrivals,
+            format,
+            out,
+            |i| {
+                let r = &rays[i];
+                View {
+                    source: r.source,
+                    receiver: r.receiver,
+                    path: r.path,
+                    status: r.status,
+                    time: r.status.has_time().then_some(r.time),
+                    points: &r.points,
+                    iterations: r.iterations,
+                    residual: r.residual,
+                    media: (!r.media.is_empty()).then(|| r.media.iter().copied()),
+                    reason: r.reason,
+                    every: None,
+                }
+            },
+        ),
+        RaySet::Batch(batch) => write_all(
+            scene,
+            batch.len(),
+            Layout::Rays,
+            arrivals,
+            format,
+            out,
+            |i| {
+                let r = batch.record(i);
+                let (source, receiver, path) = batch.triple(i);
+                let has = r.status.has_time();
+                View {
+                    source,
+                    receiver,
+                    path,
+                    status: r.status,
+                    time: has.then_some(r.time),
+                    points: batch.points(i),
+                    iterations: r.iterations as usize,
+                    residual: r.residual,
+                    media: batch.media(i),
+                    reason: r.reason,
+                    every: None,
+                }
+            },
+        ),
+        RaySet::Stationary(rays) => {
+            // Where each triple's entries start.
+            let mut starts = Vec::with_capacity(rays.triples.len());
+            let mut n = 0;
+            for t in &rays.triples {
+                starts.push(n);
+                n += t.arrivals.len().max(1);
+            }
+            write_all(scene, n, Layout::Stationary, arrivals, format, out, |i| {
+                let k = starts.partition_point(|&s| s <= i) - 1;
+                let t = &rays.triples[k];
+                let arrival = i - starts[k];
+                match t.arrivals.get(arrival) {
+                    Some(a) => View {
+                        source: t.source,
+                        receiver: t.receiver,
+                        path: t.path,
+                        status: a.status,
+                        time: Some(a.time),
+                        points: &a.points,
+                        iterations: a.iterations,
+                        residual: a.residual,
+                        media: Some(a.media.iter().copied()),
+                        reason: a.reason,
+                        every: Some(EveryFields {
+                            arrival,
+                            kink: a.kink,
+                            complete: t.complete,
+                        }),
+                    },
+                    // No stationary path: a proof when the search was complete.
+                    None => View {
+                        source: t.source,
+                        receiver: t.receiver,
+                        path: t.path,
+                        status: if t.complete {
+                            Status::NoPath
+                        } else {
+                            Status::NotConverged
+                        },
+                        time: None,
+                        points: &[],
+                        iterations: 0,
+                        residual: f64::NAN,
+                        media: scene
+                            .paths()
+                            .get(t.path)
+                            .and_then(|p| p.media.as_ref())
+                            .map(|m| m.iter().copied()),
+                        reason: Some(if t.complete {
+                            Reason::NoStationaryPath
+                        } else {
+                            Reason::SearchLimit
+                        }),
+                        every: Some(EveryFields {
+                            arrival: 0,
+                            kink: None,
+                            complete: t.complete,
+                        }),
+                    },
+                }
+            })
         }
-    })
+    }
+}
+
+/// The most steps of an arrival (at least the search's `max_steps`), which fixes the shape of
+/// an arrivals `.npy` record.
+fn arrival_steps(scene: &Scene, arrivals: &[SearchArrival]) -> usize {
+    let most = arrivals.iter().map(|a| a.steps.len()).max().unwrap_or(0);
+    most.max(scene.search().map_or(0, |s| s.max_steps))
+}
+
+/// The `.npy` header of `n` arrival records of at most `k` steps.
+fn arrivals_npy_header(n: usize, k: usize) -> Vec<u8> {
+    let descr = format!(
+        "('source', '<u4'), ('receiver', '<u4'), ('steps', '<u4'), ('step_kind', '|u1', ({k},)), \
+         ('step_interface', '<u4', ({k},)), ('status', '|u1'), ('kink', '|u1'), \
+         ('complete', '|u1'), ('iterations', '<u4'), ('time', '<f8'), ('residual', '<f8'), \
+         ('points', '<f8', ({}, 2)), ('media', '<u4', ({},))",
+        k + 2,
+        k + 1
+    );
+    npy_header_of(n, &descr)
+}
+
+/// One search arrival as a JSON object (`"kind": "arrival"` first when `marked`).
+fn arrival_json(buf: &mut Vec<u8>, scene: &Scene, names: &Names, s: &SearchArrival, marked: bool) {
+    let a = &s.arrival;
+    buf.extend_from_slice(if marked {
+        b"{\"kind\":\"arrival\",\"source\":"
+    } else {
+        b"{\"source\":"
+    });
+    int(buf, s.source);
+    buf.extend_from_slice(b",\"receiver\":");
+    int(buf, s.receiver);
+    buf.extend_from_slice(b",\"steps\":[");
+    for (i, step) in s.steps.iter().enumerate() {
+        if i > 0 {
+            buf.push(b',');
+        }
+        buf.extend_from_slice(match step.kind {
+            StepKind::Reflect => b"{\"reflect\":",
+            StepKind::Refract => b"{\"refract\":",
+        });
+        buf.extend_from_slice(
+            names
+                .interfaces
+                .get(step.interface)
+                .map_or(b"\"?\"", Vec::as_slice),
+        );
+        buf.push(b'}');
+    }
+    buf.extend_from_slice(b"],\"media\":");
+    media_json(buf, names, a.media.iter().copied());
+    buf.extend_from_slice(b",\"status\":\"");
+    buf.extend_from_slice(a.status.as_str().as_bytes());
+    buf.push(b'"');
+    if let Some(kink) = a.kink {
+        buf.extend_from_slice(b",\"kink\":\"");
+        buf.extend_from_slice(kink.as_str().as_bytes());
+        buf.push(b'"');
+    }
+    buf.extend_from_slice(b",\"time\":");
+    float(buf, a.time);
+    buf.extend_from_slice(b",\"points\":");
+    points_json(buf, &a.points);
+    buf.extend_from_slice(b",\"iterations\":");
+    int(buf, a.iterations);
+    if a.residual.is_finite() {
+        buf.extend_from_slice(b",\"residual\":");
+        float(buf, a.residual);
+    }
+    if let Some(reason) = a.reason {
+        buf.extend_from_slice(b",\"reason\":");
+        buf.extend_from_slice(&json_string(&reason.describe(scene)));
+    }
+    buf.extend_from_slice(if a.complete {
+        b",\"complete\":true}"
+    } else {
+        b",\"complete\":false}"
+    });
+}
+
+/// One search arrival as a CSV line.
+fn arrival_csv(buf: &mut Vec<u8>, scene: &Scene, names: &Names, s: &SearchArrival) {
+    let a = &s.arrival;
+    int(buf, s.source);
+    buf.push(b',');
+    int(buf, s.receiver);
+    buf.push(b',');
+    let steps: Vec<String> = s
+        .steps
+        .iter()
+        .map(|step| {
+            let kind = match step.kind {
+                StepKind::Reflect => "reflect",
+                StepKind::Refract => "refract",
+            };
+            let name = scene
+                .interfaces()
+                .get(step.interface)
+                .map_or("?", |i| i.name.as_str());
+            format!("{kind}:{name}")
+        })
+        .collect();
+    csv_field(buf, &steps.join(";"));
+    buf.push(b',');
+    media_csv(buf, scene, names, a.media.iter().copied());
+    buf.push(b',');
+    buf.extend_from_slice(a.status.as_str().as_bytes());
+    buf.push(b',');
+    if let Some(kink) = a.kink {
+        buf.extend_from_slice(kink.as_str().as_bytes());
+    }
+    buf.push(b',');
+    float(buf, a.time);
+    buf.push(b',');
+    points_csv(buf, &a.points);
+    buf.push(b',');
+    int(buf, a.iterations);
+    buf.push(b',');
+    if a.residual.is_finite() {
+        float(buf, a.residual);
+    }
+    buf.push(b',');
+    if let Some(reason) = a.reason {
+        csv_field(buf, &reason.describe(scene));
+    }
+    buf.push(b',');
+    buf.extend_from_slice(if a.complete { b"true" } else { b"false" });
+    buf.push(b'\n');
+}
+
+/// One search arrival as a `.npy` record of at most `k` steps.
+fn arrival_npy(buf: &mut Vec<u8>, k: usize, s: &SearchArrival) {
+    let a = &s.arrival;
+    u32_le(buf, s.source);
+    u32_le(buf, s.receiver);
+    u32_le(buf, s.steps.len());
+    for j in 0..k {
+        buf.push(s.steps.get(j).map_or(NO_STEP_KIND, |step| match step.kind {
+            StepKind::Reflect => 0,
+            StepKind::Refract => 1,
+        }));
+    }
+    for j in 0..k {
+        let i = s.steps.get(j).map_or(NO_INTERFACE, |step| {
+            u32::try_from(step.interface).unwrap_or(NO_INTERFACE)
+        });
+        buf.extend_from_slice(&i.to_le_bytes());
+    }
+    buf.push(status_code(a.status));
+    buf.push(kink_code(a.kink));
+    buf.push(u8::from(a.complete));
+    u32_le(buf, a.iterations);
+    buf.extend_from_slice(&a.time.to_le_bytes());
+    buf.extend_from_slice(&a.residual.to_le_bytes());
+    points_media_npy(buf, &a.points, k + 2, Some(a.media.iter().copied()), k + 1);
+}
+
+/// Bytes gathered before they are handed to the writer.
+const CHUNK: usize = 1 << 16;
+
+/// The arrivals' entries in `format` (no header, no document around them; in JSON separated
+/// by commas, in JSON Lines one marked line each).
+fn arrival_lines<W: Write>(
+    scene: &Scene,
+    names: &Names,
+    arrivals: &[SearchArrival],
+    format: Format,
+    out: &mut W,
+) -> io::Result<()> {
+    let k = arrival_steps(scene, arrivals);
+    let mut buf = Vec::with_capacity(CHUNK + 1024);
+    for (i, a) in arrivals.iter().enumerate() {
+        match format {
+            Format::Json => {
+                if i > 0 {
+                    buf.push(b',');
+                }
+                arrival_json(&mut buf, scene, names, a, false);
+            }
+            Format::Jsonl => {
+                arrival_json(&mut buf, scene, names, a, true);
+                buf.push(b'\n');
+            }
+            Format::Csv => arrival_csv(&mut buf, scene, names, a),
+            Format::Npy => arrival_npy(&mut buf, k, a),
+        }
+        if buf.len() >= CHUNK {
+            out.write_all(&buf)?;
+            buf.clear();
+        }
+    }
+    out.write_all(&buf)
+}
+
+/// The header line of [`write_arrivals`]'s CSV.
+const ARRIVALS_CSV_HEADER: &[u8] =
+    b"source,receiver,steps,media,status,kink,time,points,iterations,residual,reason,complete\n";
+
+/// Writes the arrivals of a scene's automatic search on their own, in `format` (the second
+/// file of `eigenray solve --arrivals`; JSON and JSON Lines can also hold them beside the rays:
+/// [`write_rays_and_arrivals`]). Each arrival has `source` and `receiver` (indices), `steps`
+/// (the step sequence in the scene's notation), the leg `media`, `status` (`converged`,
+/// `vertex` or `obstructed`), `kink` (on `vertex` arrivals), `time`, `points` (source,
+/// interaction points, receiver), `iterations`, `residual` (when finite), a `reason` when it
+/// is not converged, and `complete` (whether the search of its sequence was complete).
+///
+/// - [`Format::Json`]: `{"arrivals": [{"source": 0, "receiver": 0, "steps": [{"reflect":
+///   "w0"}], "media": ["air", "air"], "status": "converged", "time": …, "points": […], …}]}`.
+/// - [`Format::Jsonl`]: one arrival object per line, `"kind": "arrival"` first.
+/// - [`Format::Csv`]: the header
+///   `source,receiver,steps,media,status,kink,time,points,iterations,residual,reason,complete`,
+///   then one line per arrival; `steps` as `reflect:w0;refract:surface` (empty for the direct
+///   ray), `media` and `points` as in the rays' CSV.
+/// - [`Format::Npy`]: one record per arrival: `source`, `receiver`, `steps` (the number of
+///   steps) (`<u4`), `step_kind` (`u1`, shape `(K,)`: 0 reflect, 1 refract,
+///   [`NO_STEP_KIND`] beyond the arrival's steps), `step_interface` (`<u4`, shape `(K,)`:
+///   indices into [`Scene::interfaces`], [`NO_INTERFACE`] beyond), `status`, `kink` (the
+///   codes of [`Format::Npy`]), `complete` (`u1`), `iterations` (`<u4`), `time`, `residual`
+///   (`<f8`), `points` (`<f8`, shape `(K + 2, 2)`, padded with NaN) and `media` (`<u4`, shape
+///   `(K + 1,)`, padded with [`NO_MEDIUM`]), with `K` the search's `max_steps` (or the most
+///   steps of an arrival, when more).
+///
+/// # Errors
+/// Any error of the writer.
+pub fn write_arrivals<W: Write>(
+    scene: &Scene,
+    arrivals: &[SearchArrival],
+    format: Format,
+    mut out: W,
+) -> io::Result<()> {
+    let names = Names::new(scene);
+    match format {
+        Format::Json => out.write_all(b"{\"arrivals\":[")?,
+        Format::Jsonl => {}
+        Format::Csv => out.write_all(ARRIVALS_CSV_HEADER)?,
+        Format::Npy => out.write_all(&arrivals_npy_header(
+            arrivals.len(),
+            arrival_steps(scene, arrivals),
+        ))?,
+    }
+    arrival_lines(scene, &names, arrivals, format, &mut out)?;
+    if format == Format::Json {
+        out.write_all(b"]}\n")?;
+    }
+    out.flush()
 }
 
 /// Writes the name tables of `scene` as one JSON document: what the indices of the other

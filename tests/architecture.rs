@@ -16,6 +16,7 @@ const ORDER: &[&str] = &[
     "solver",
     "trace",
     "batch",
+    "arrivals",
     "output",
     "argmin_bridge",
 ];

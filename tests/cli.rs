@@ -632,3 +632,219 @@ fn a_big_demo_draws_a_sample() {
         "rays and the surface"
     );
 }
+
+/// A valley (a maximum-type kink), a roof (a minimum-type kink) and the direct ray, every
+/// stationary path of each.
+const EVERY: &str = r#"{
+    "media": { "air": { "speed": 1.0 } },
+    "interfaces": {
+        "valley": { "points": [[-3, 0], [0, -2], [3, 0]] },
+        "roof": { "points": [[7, 0], [10, 2], [13, 0]] }
+    },
+    "sources": [[-0.5, 2], [9.5, 4]], "receivers": [[0.5, 2], [10.5, 4]],
+    "paths": [
+        { "name": "valley", "steps": [{ "reflect": "valley" }], "media": ["air", "air"] },
+        { "name": "roof", "steps": [{ "reflect": "roof" }], "media": ["air", "air"] },
+        { "steps": [], "media": ["air"] }
+    ],
+    "solver": { "stationary": "all" }
+}"#;
+
+#[test]
+fn solve_lists_every_stationary_path_when_the_scene_asks() {
+    let doc = solve(EVERY);
+    let rays = doc["rays"].as_array().expect("rays");
+    // 12 triples; the valley gives three paths to (0, 0) and two to (0, 1), (1, 0); the
+    // roof none to (0, 0) and the valley none to (1, 1): one `no_path` entry each.
+    assert_eq!(rays.len(), 16, "{doc}");
+    let first: Vec<(&str, Option<&str>)> = rays[..3]
+        .iter()
+        .map(|r| (r["status"].as_str().unwrap(), r["kink"].as_str()))
+        .collect();
+    assert_eq!(
+        first,
+        [
+            ("converged", None),
+            ("converged", None),
+            ("vertex", Some("maximum"))
+        ]
+    );
+    assert_eq!(
+        rays.iter()
+            .map(|r| r["arrival"].as_u64().unwrap())
+            .collect::<Vec<_>>(),
+        [0, 1, 2, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0, 0]
+    );
+    let no_path: Vec<&Value> = rays.iter().filter(|r| r["status"] == "no_path").collect();
+    assert_eq!(no_path.len(), 2);
+    assert!(
+        no_path
+            .iter()
+            .all(|r| r["arrival"] == 0 && r.get("time").is_none())
+    );
+    assert!(rays.iter().all(|r| r["complete"] == true));
+    assert!(rays.iter().any(|r| r["kink"] == "minimum"));
+
+    // The other formats: the same entries.
+    let file = TempFile::with("every.json", EVERY);
+    let csv = run([
+        OsStr::new("solve"),
+        file.path().as_os_str(),
+        OsStr::new("--format"),
+        OsStr::new("csv"),
+    ]);
+    assert_eq!(csv.status.code(), Some(0));
+    let csv = text(&csv.stdout);
+    assert!(csv.starts_with(
+        "source,receiver,path,status,time,iterations,residual,points,path_name,media,reason,\
+         arrival,kink,complete\n"
+    ));
+    assert_eq!(csv.lines().count(), 17);
+    let jsonl = run([
+        OsStr::new("solve"),
+        file.path().as_os_str(),
+        OsStr::new("--format"),
+        OsStr::new("jsonl"),
+    ]);
+    assert_eq!(text(&jsonl.stdout).lines().count(), 16);
+    let npy = run([
+        OsStr::new("solve"),
+        file.path().as_os_str(),
+        OsStr::new("--format"),
+        OsStr::new("npy"),
+    ]);
+    assert_eq!(npy.status.code(), Some(0));
+    let len = u16::from_le_bytes([npy.stdout[8], npy.stdout[9]]) as usize;
+    let header = String::from_utf8_lossy(&npy.stdout[10..10 + len]);
+    assert!(header.contains("('arrival', '<u4'), ('kink', '|u1'), ('complete', '|u1')"));
+    assert!(header.contains("'shape': (16,)"), "{header}");
+}
+
+#[test]
+fn arrivals_without_a_search_section_exit_2() {
+    let file = TempFile::with("every.json", EVERY);
+    let target = TempFile::path_only("arrivals.csv");
+    let out = run([
+        OsStr::new("solve"),
+        file.path().as_os_str(),
+        OsStr::new("--arrivals"),
+        target.path().as_os_str(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.is_empty());
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.starts_with("error: --arrivals: ") && stderr.contains("`search`"),
+        "{stderr}"
+    );
+    assert!(!target.path().exists());
+}
+
+/// The SVG as XML: its `text` elements.
+fn svg_texts(svg: &str) -> Vec<String> {
+    let doc = roxmltree::Document::parse(svg).expect("well-formed SVG");
+    doc.descendants()
+        .filter(|n| n.has_tag_name("text"))
+        .map(|n| n.text().unwrap_or("").to_string())
+        .collect()
+}
+
+#[test]
+fn the_svg_draws_every_stationary_path_by_sequence_and_by_time() {
+    let file = TempFile::with("every.json", EVERY);
+    let svg = TempFile::path_only("every.svg");
+    let out = run([
+        OsStr::new("solve"),
+        file.path().as_os_str(),
+        OsStr::new("--svg"),
+        svg.path().as_os_str(),
+        OsStr::new("--svg-color"),
+        OsStr::new("sequence"),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let picture = std::fs::read_to_string(svg.path()).expect("SVG written");
+    let texts = svg_texts(&picture);
+    // 14 stationary paths (16 entries less the two `no_path`), by sequence: 4 direct, 7 off the
+    // valley, 3 off the roof.
+    for want in [
+        "sequence (paths drawn)",
+        "direct (4)",
+        "reflect roof (3)",
+        "reflect valley (7)",
+    ] {
+        assert!(texts.iter().any(|t| t == want), "{want} not in {texts:?}");
+    }
+    assert!(
+        texts.iter().any(|t| t.starts_with(
+            "14 of 14 stationary paths drawn (2 rays have no stationary path), coloured by step sequence"
+        )),
+        "{texts:?}"
+    );
+    assert!(
+        texts
+            .iter()
+            .any(|t| t.contains("14 stationary paths of 12 rays"))
+    );
+    // 14 paths and the two interfaces.
+    assert_eq!(picture.matches("<polyline").count(), 14 + 2);
+
+    // By time: a colour bar with the range of the times, 1 to about 16.12.
+    let out = run([
+        OsStr::new("solve"),
+        file.path().as_os_str(),
+        OsStr::new("--svg"),
+        svg.path().as_os_str(),
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    let texts = svg_texts(&std::fs::read_to_string(svg.path()).unwrap());
+    assert!(texts.iter().any(|t| t == "travel time"), "{texts:?}");
+    let ticks: Vec<f64> = texts.iter().filter_map(|t| t.parse().ok()).collect();
+    assert!(ticks.contains(&1.0), "{ticks:?}");
+    // The latest: the valley's bottom from source 0 to receiver 1, √16.25 + √146.25 ≈ 16.12.
+    assert!(ticks.contains(&16.12), "{ticks:?}");
+}
+
+/// docs/scene-format.md's scene for `"stationary": "all"` gives the lines the page shows.
+#[test]
+fn the_format_page_shows_its_stationary_output() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let page = std::fs::read_to_string(format!("{root}/docs/scene-format.md")).expect("page");
+    let heading = "## Every stationary path";
+    let section = &page[page.find(heading).expect(heading)..];
+    let block = |fence: &str| -> String {
+        let start = section.find(fence).expect(fence) + fence.len();
+        section[start..][..section[start..].find("```").expect("closing fence")].to_string()
+    };
+    let scene = TempFile::with("format-page-every.json", block("```json\n"));
+    let out = run([
+        OsStr::new("solve"),
+        scene.path().as_os_str(),
+        OsStr::new("--format"),
+        OsStr::new("jsonl"),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
+    let shown = block("```text\n");
+    assert_eq!(text(&out.stdout), shown);
+}
+
+/// The README's every-stationary-path scene gives the CSV it shows.
+#[test]
+fn the_readme_valley_gives_its_output() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let readme = std::fs::read_to_string(format!("{root}/README.md")).expect("README");
+    let heading = "## Every stationary path of a sequence";
+    let section = &readme[readme.find(heading).expect(heading)..];
+    let block = |fence: &str| -> String {
+        let start = section.find(fence).expect(fence) + fence.len();
+        section[start..][..section[start..].find("```").expect("closing fence")].to_string()
+    };
+    let scene = TempFile::with("valley.json", block("```json\n"));
+    let out = run([
+        OsStr::new("solve"),
+        scene.path().as_os_str(),
+        OsStr::new("--format"),
+        OsStr::new("csv"),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
+    assert_eq!(text(&out.stdout), block("```text\n"));
+}

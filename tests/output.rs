@@ -1,7 +1,12 @@
 //! The output formats read back: every field of JSON, JSON Lines, CSV and `.npy` (with its name
 //! tables) against the JSON document and against values worked out by hand.
 
-use eigenray::{BatchOptions, Format, Scene, Tracer, write_batch, write_names, write_rays};
+use eigenray::scene_parts::{Step, StepKind};
+use eigenray::{
+    Arrival, BatchOptions, Format, Kink, Point, RaySet, Reason, Scene, SearchArrival, Status,
+    Tracer, write_arrivals, write_batch, write_names, write_rays, write_rays_and_arrivals,
+    write_stationary,
+};
 use serde_json::Value;
 
 /// Media listed water first, so that file order and name order differ; a path name that CSV
@@ -414,4 +419,511 @@ fn csv_quotes_a_media_field_whose_names_need_it() {
     let line = csv.lines().nth(1).unwrap();
     assert!(line.contains(",\"air, dry;water\","), "{line}");
     assert_eq!(csv_fields(line)[9], "air, dry;water");
+}
+
+/// A valley (a maximum-type kink at its bottom), a roof (a minimum-type kink at its apex) and
+/// the direct ray, every stationary path of each (`"stationary": "all"`).
+const EVERY: &str = r#"{
+    "media": { "air": { "speed": 1.0 } },
+    "interfaces": {
+        "valley": { "points": [[-3, 0], [0, -2], [3, 0]] },
+        "roof": { "points": [[7, 0], [10, 2], [13, 0]] }
+    },
+    "sources": [[-0.5, 2], [9.5, 4]], "receivers": [[0.5, 2], [10.5, 4]],
+    "paths": [
+        { "name": "valley", "steps": [{ "reflect": "valley" }], "media": ["air", "air"] },
+        { "name": "roof", "steps": [{ "reflect": "roof" }], "media": ["air", "air"] },
+        { "steps": [], "media": ["air"] }
+    ],
+    "solver": { "stationary": "all" }
+}"#;
+
+fn stationary_written(format: Format) -> (Scene, eigenray::StationaryRays, Vec<u8>) {
+    let scene = Scene::from_json(EVERY).expect("valid scene");
+    let rays = Tracer::new(&scene)
+        .expect("tracer")
+        .trace_stationary()
+        .expect("at most 12 steps");
+    let mut out = Vec::new();
+    write_stationary(&scene, &rays, format, &mut out).expect("write");
+    (scene, rays, out)
+}
+
+fn stationary_json() -> Vec<Value> {
+    let (_, _, out) = stationary_written(Format::Json);
+    let doc: Value = serde_json::from_slice(&out).expect("JSON");
+    assert_eq!(doc.as_object().unwrap().len(), 1, "rays only: {doc}");
+    doc["rays"].as_array().expect("rays").clone()
+}
+
+#[test]
+fn every_stationary_path_is_one_entry_with_its_arrival_kink_and_completeness() {
+    let rays = stationary_json();
+    let (_, st, _) = stationary_written(Format::Json);
+    assert_eq!(rays.len(), st.entries());
+    // Triple order, then time; `arrival` counts within the triple from 0.
+    let key = |r: &Value| {
+        (
+            r["source"].as_u64().unwrap(),
+            r["receiver"].as_u64().unwrap(),
+            r["path"].as_u64().unwrap(),
+        )
+    };
+    for w in rays.windows(2) {
+        if key(&w[0]) == key(&w[1]) {
+            assert_eq!(w[1]["arrival"], w[0]["arrival"].as_u64().unwrap() + 1);
+            assert!(w[0]["time"].as_f64() <= w[1]["time"].as_f64(), "{w:?}");
+        } else {
+            assert!(key(&w[0]) < key(&w[1]), "{w:?}");
+            assert_eq!(w[1]["arrival"], 0);
+        }
+    }
+    for r in &rays {
+        assert_eq!(r["complete"], true, "{r}");
+        let vertex = r["status"] == "vertex";
+        assert_eq!(
+            r.get("kink").is_some(),
+            vertex,
+            "kink on vertex entries only: {r}"
+        );
+    }
+    // By hand, source 0 to receiver 0 off the valley: the two slopes' specular points, at
+    // (±1.875, −0.75), each 2 × √11.25 = √45 away, then the bottom (0, −2), 2 × √16.25, a
+    // maximum-type kink.
+    let valley: Vec<&Value> = rays.iter().filter(|r| key(r) == (0, 0, 0)).collect();
+    assert_eq!(valley.len(), 3);
+    for (k, x) in [(0, -1.875), (1, 1.875)] {
+        assert_eq!(valley[k]["status"], "converged");
+        assert!(close(valley[k]["time"].as_f64().unwrap(), 45f64.sqrt()));
+        let p = points(&valley[k]["points"]);
+        assert!(close(p[1][0], x) && close(p[1][1], -0.75), "{p:?}");
+    }
+    assert_eq!(valley[2]["status"], "vertex");
+    assert_eq!(valley[2]["kink"], "maximum");
+    assert_eq!(points(&valley[2]["points"])[1], [0.0, -2.0]);
+    assert!(close(
+        valley[2]["time"].as_f64().unwrap(),
+        2.0 * 16.25f64.sqrt()
+    ));
+    // Source 1 to receiver 1 off the roof: only its apex (10, 2), a minimum-type kink.
+    let roof: Vec<&Value> = rays.iter().filter(|r| key(r) == (1, 1, 1)).collect();
+    assert_eq!(roof.len(), 1);
+    assert_eq!(roof[0]["status"], "vertex");
+    assert_eq!(roof[0]["kink"], "minimum");
+    assert!(close(
+        roof[0]["time"].as_f64().unwrap(),
+        2.0 * 4.25f64.sqrt()
+    ));
+    // Source 0 sees no reflection off the roof at receiver 0: one `no_path` entry, a proof.
+    let none: Vec<&Value> = rays.iter().filter(|r| key(r) == (0, 0, 1)).collect();
+    assert_eq!(none.len(), 1);
+    assert_eq!(none[0]["status"], "no_path");
+    assert_eq!(none[0]["arrival"], 0);
+    assert!(none[0].get("time").is_none() && none[0].get("points").is_none());
+    assert_eq!(none[0]["path_name"], "roof");
+    assert_eq!(none[0]["media"], serde_json::json!(["air", "air"]));
+    // JSON Lines: the same objects.
+    let (_, _, jsonl) = stationary_written(Format::Jsonl);
+    let lines: Vec<Value> = String::from_utf8(jsonl)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines, rays);
+}
+
+#[test]
+fn an_incomplete_triple_says_so_on_every_entry_and_is_never_no_path() {
+    let scene = Scene::from_json(EVERY).unwrap();
+    let mut st = Tracer::new(&scene).unwrap().trace_stationary().unwrap();
+    // As a search that reached its limit leaves them: the valley's triple with its first
+    // arrival only, the roof's with none.
+    st.triples[0].arrivals.truncate(1);
+    st.triples[0].complete = false;
+    st.triples[1].complete = false;
+    assert!(st.triples[1].arrivals.is_empty());
+    let mut out = Vec::new();
+    write_stationary(&scene, &st, Format::Json, &mut out).unwrap();
+    let doc: Value = serde_json::from_slice(&out).unwrap();
+    let rays = doc["rays"].as_array().unwrap();
+    assert_eq!(rays[0]["complete"], false);
+    assert_eq!(rays[0]["status"], "converged");
+    assert_eq!(rays[1]["path"], 1);
+    assert_eq!(rays[1]["complete"], false);
+    assert_eq!(rays[1]["status"], "not_converged");
+    assert!(
+        rays[1]["reason"].as_str().unwrap().contains("limit"),
+        "{}",
+        rays[1]
+    );
+    assert!(rays[2..].iter().all(|r| r["complete"] == true));
+}
+
+#[test]
+fn csv_of_every_stationary_path_appends_arrival_kink_and_complete() {
+    let rays = stationary_json();
+    let (_, _, out) = stationary_written(Format::Csv);
+    let text = String::from_utf8(out).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "source,receiver,path,status,time,iterations,residual,points,path_name,media,reason,\
+         arrival,kink,complete"
+    );
+    let records: Vec<Vec<String>> = lines.map(csv_fields).collect();
+    assert_eq!(records.len(), rays.len());
+    for (f, r) in records.iter().zip(&rays) {
+        assert_eq!(f.len(), 14, "{f:?}");
+        assert_eq!(f[3], r["status"].as_str().unwrap());
+        assert_eq!(f[11].parse::<u64>().ok(), r["arrival"].as_u64());
+        assert_eq!(f[12], r["kink"].as_str().unwrap_or(""));
+        assert_eq!(f[13], "true");
+        match r["time"].as_f64() {
+            Some(t) => assert_eq!(f[4].parse::<f64>().unwrap().to_bits(), t.to_bits()),
+            None => assert_eq!(f[4], ""),
+        }
+    }
+    assert!(records.iter().any(|f| f[12] == "maximum"));
+    assert!(records.iter().any(|f| f[12] == "minimum"));
+}
+
+/// The header dictionary and the data of a `.npy` file.
+fn npy_parts(bytes: &[u8]) -> (String, &[u8]) {
+    assert_eq!(&bytes[..8], b"\x93NUMPY\x01\x00");
+    let len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    assert_eq!((10 + len) % 64, 0, "data aligned to 64 bytes");
+    let header = String::from_utf8(bytes[10..10 + len].to_vec()).unwrap();
+    assert!(header.ends_with('\n'));
+    (header, &bytes[10 + len..])
+}
+
+#[test]
+fn npy_of_every_stationary_path_appends_arrival_kink_and_complete() {
+    let rays = stationary_json();
+    let (_, _, out) = stationary_written(Format::Npy);
+    let (header, data) = npy_parts(&out);
+    assert!(
+        header.contains(
+            "('points', '<f8', (3, 2)), ('media', '<u4', (2,)), ('arrival', '<u4'), \
+             ('kink', '|u1'), ('complete', '|u1')]"
+        ),
+        "{header}"
+    );
+    assert!(header.contains(&format!("'shape': ({},)", rays.len())));
+    // The rays' record (3 points, 2 legs), then 4 + 1 + 1 bytes.
+    let size = 3 * 4 + 1 + 4 + 8 + 8 + 16 * 3 + 4 * 2 + 6;
+    assert_eq!(data.len(), size * rays.len());
+    for (rec, r) in data.chunks(size).zip(&rays) {
+        assert_eq!(Some(u64::from(u32_at(rec, 8))), r["path"].as_u64());
+        match r["time"].as_f64() {
+            Some(t) => assert_eq!(f64_at(rec, 17).to_bits(), t.to_bits(), "{r}"),
+            None => assert!(f64_at(rec, 17).is_nan()),
+        }
+        assert_eq!(
+            Some(u64::from(u32_at(rec, 89))),
+            r["arrival"].as_u64(),
+            "{r}"
+        );
+        // The documented kink codes, by hand.
+        let kink = match r["kink"].as_str() {
+            None => 0,
+            Some("minimum") => 1,
+            Some("maximum") => 2,
+            Some(other) => panic!("kink {other}"),
+        };
+        assert_eq!(rec[93], kink, "{r}");
+        assert_eq!(
+            eigenray::npy::KINK_CODES[usize::from(rec[93])].map(|k| k.as_str()),
+            r["kink"].as_str()
+        );
+        assert_eq!(rec[94], 1);
+    }
+}
+
+/// Search arrivals built by hand, as the search gives them: the direct ray, then a vertex
+/// arrival off the valley, then an obstructed one from an incomplete search.
+fn hand_built_arrivals(scene: &Scene) -> Vec<SearchArrival> {
+    let valley = scene.interface_index("valley").expect("valley");
+    let roof = scene.interface_index("roof").expect("roof");
+    let air = scene.medium_index("air").expect("air");
+    let arrival = |status, time, points: Vec<Point>, kink, reason, complete| Arrival {
+        status,
+        time,
+        parameters: vec![0.0; points.len() - 2],
+        segments: vec![0; points.len() - 2],
+        media: vec![air; points.len() - 1],
+        points,
+        iterations: 2,
+        reason,
+        kink,
+        residual: 1e-16,
+        complete,
+    };
+    vec![
+        SearchArrival {
+            source: 0,
+            receiver: 0,
+            steps: vec![],
+            arrival: arrival(
+                Status::Converged,
+                1.0,
+                vec![Point::new(-0.5, 2.0), Point::new(0.5, 2.0)],
+                None,
+                None,
+                true,
+            ),
+        },
+        SearchArrival {
+            source: 0,
+            receiver: 0,
+            steps: vec![Step {
+                kind: StepKind::Reflect,
+                interface: valley,
+            }],
+            arrival: arrival(
+                Status::Vertex,
+                2.0 * 16.25f64.sqrt(),
+                vec![
+                    Point::new(-0.5, 2.0),
+                    Point::new(0.0, -2.0),
+                    Point::new(0.5, 2.0),
+                ],
+                Some(Kink::Maximum),
+                Some(Reason::AtVertex { step: 0 }),
+                true,
+            ),
+        },
+        SearchArrival {
+            source: 0,
+            receiver: 1,
+            steps: vec![
+                Step {
+                    kind: StepKind::Reflect,
+                    interface: roof,
+                },
+                Step {
+                    kind: StepKind::Refract,
+                    interface: valley,
+                },
+            ],
+            arrival: arrival(
+                Status::Obstructed,
+                20.5,
+                vec![
+                    Point::new(-0.5, 2.0),
+                    Point::new(9.0, 1.0),
+                    Point::new(1.5, -1.0),
+                    Point::new(10.5, 4.0),
+                ],
+                None,
+                Some(Reason::Crosses {
+                    leg: 1,
+                    interface: valley,
+                }),
+                false,
+            ),
+        },
+    ]
+}
+
+/// The arrival objects the JSON formats write for [`hand_built_arrivals`], worked out by hand.
+fn hand_built_json() -> Value {
+    serde_json::json!([
+        { "source": 0, "receiver": 0, "steps": [], "media": ["air"], "status": "converged",
+          "time": 1.0, "points": [[-0.5, 2.0], [0.5, 2.0]], "iterations": 2,
+          "residual": 1e-16, "complete": true },
+        { "source": 0, "receiver": 0, "steps": [{ "reflect": "valley" }],
+          "media": ["air", "air"], "status": "vertex", "kink": "maximum",
+          "time": 2.0 * 16.25f64.sqrt(), "points": [[-0.5, 2.0], [0.0, -2.0], [0.5, 2.0]],
+          "iterations": 2, "residual": 1e-16, "reason": "step 0 is held on a polyline vertex",
+          "complete": true },
+        { "source": 0, "receiver": 1, "steps": [{ "reflect": "roof" }, { "refract": "valley" }],
+          "media": ["air", "air", "air"], "status": "obstructed", "time": 20.5,
+          "points": [[-0.5, 2.0], [9.0, 1.0], [1.5, -1.0], [10.5, 4.0]], "iterations": 2,
+          "residual": 1e-16, "reason": "leg 1 crosses interface `valley`", "complete": false }
+    ])
+}
+
+#[test]
+fn search_arrivals_follow_the_rays_in_json_and_json_lines() {
+    let (scene, st, _) = stationary_written(Format::Json);
+    let arrivals = hand_built_arrivals(&scene);
+    let want = hand_built_json();
+    // JSON: a second top-level key.
+    let mut out = Vec::new();
+    write_rays_and_arrivals(
+        &scene,
+        RaySet::Stationary(&st),
+        Some(&arrivals),
+        Format::Json,
+        &mut out,
+    )
+    .unwrap();
+    let doc: Value = serde_json::from_slice(&out).expect("one JSON document");
+    assert_eq!(doc["arrivals"], want);
+    assert_eq!(doc["rays"].as_array().unwrap().len(), st.entries());
+    let keys: Vec<&String> = doc.as_object().unwrap().keys().collect();
+    assert_eq!(keys, ["arrivals", "rays"]);
+    // Without arrivals the document is the rays' alone, byte for byte.
+    let mut alone = Vec::new();
+    write_stationary(&scene, &st, Format::Json, &mut alone).unwrap();
+    let mut none = Vec::new();
+    write_rays_and_arrivals(
+        &scene,
+        RaySet::Stationary(&st),
+        None,
+        Format::Json,
+        &mut none,
+    )
+    .unwrap();
+    assert_eq!(none, alone);
+    // An empty search is an empty list, not a missing key.
+    let mut empty = Vec::new();
+    write_rays_and_arrivals(
+        &scene,
+        RaySet::Stationary(&st),
+        Some(&[]),
+        Format::Json,
+        &mut empty,
+    )
+    .unwrap();
+    let doc: Value = serde_json::from_slice(&empty).unwrap();
+    assert_eq!(doc["arrivals"], serde_json::json!([]));
+
+    // JSON Lines: the rays' lines, then one marked line per arrival.
+    let mut out = Vec::new();
+    write_rays_and_arrivals(
+        &scene,
+        RaySet::Stationary(&st),
+        Some(&arrivals),
+        Format::Jsonl,
+        &mut out,
+    )
+    .unwrap();
+    let lines: Vec<Value> = String::from_utf8(out)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let (rays, marked) = lines.split_at(st.entries());
+    assert!(rays.iter().all(|r| r.get("kind").is_none()));
+    for (line, want) in marked.iter().zip(want.as_array().unwrap()) {
+        let mut line = line.clone();
+        assert_eq!(
+            line.as_object_mut().unwrap().remove("kind"),
+            Some("arrival".into())
+        );
+        assert_eq!(&line, want);
+    }
+    assert_eq!(marked.len(), 3);
+    // On their own: `{"arrivals": [...]}` and the marked lines.
+    let mut own = Vec::new();
+    write_arrivals(&scene, &arrivals, Format::Json, &mut own).unwrap();
+    assert_eq!(
+        serde_json::from_slice::<Value>(&own).unwrap(),
+        serde_json::json!({ "arrivals": want })
+    );
+    let mut own = Vec::new();
+    write_arrivals(&scene, &arrivals, Format::Jsonl, &mut own).unwrap();
+    assert_eq!(String::from_utf8(own).unwrap().lines().count(), 3);
+}
+
+#[test]
+fn csv_and_npy_refuse_arrivals_beside_the_rays_and_write_them_on_their_own() {
+    let (scene, st, _) = stationary_written(Format::Json);
+    let arrivals = hand_built_arrivals(&scene);
+    for format in [Format::Csv, Format::Npy] {
+        let mut out = Vec::new();
+        let err = write_rays_and_arrivals(
+            &scene,
+            RaySet::Stationary(&st),
+            Some(&arrivals),
+            format,
+            &mut out,
+        )
+        .unwrap_err();
+        assert_eq!(err.kind(), std::io::ErrorKind::InvalidInput);
+        assert!(err.to_string().contains("write_arrivals"), "{err}");
+        assert!(out.is_empty(), "nothing half-written");
+    }
+
+    // CSV: a table of its own.
+    let mut out = Vec::new();
+    write_arrivals(&scene, &arrivals, Format::Csv, &mut out).unwrap();
+    let text = String::from_utf8(out).unwrap();
+    let lines: Vec<Vec<String>> = text.lines().map(csv_fields).collect();
+    assert_eq!(
+        lines[0],
+        [
+            "source",
+            "receiver",
+            "steps",
+            "media",
+            "status",
+            "kink",
+            "time",
+            "points",
+            "iterations",
+            "residual",
+            "reason",
+            "complete"
+        ]
+    );
+    assert_eq!(lines.len(), 4);
+    assert_eq!(lines[1][2], "");
+    assert_eq!(lines[1][3], "air");
+    assert_eq!(lines[1][7], "-0.5 2.0;0.5 2.0");
+    assert_eq!(lines[2][2], "reflect:valley");
+    assert_eq!(lines[2][4], "vertex");
+    assert_eq!(lines[2][5], "maximum");
+    assert_eq!(lines[2][6].parse::<f64>().unwrap(), 2.0 * 16.25f64.sqrt());
+    assert_eq!(lines[3][2], "reflect:roof;refract:valley");
+    assert_eq!(lines[3][3], "air;air;air");
+    assert_eq!(lines[3][10], "leg 1 crosses interface `valley`");
+    assert_eq!(lines[3][11], "false");
+
+    // `.npy`: records of their own, sized by the most steps (2 here: no `search` section).
+    let mut out = Vec::new();
+    write_arrivals(&scene, &arrivals, Format::Npy, &mut out).unwrap();
+    let (header, data) = npy_parts(&out);
+    assert!(
+        header.contains(
+            "[('source', '<u4'), ('receiver', '<u4'), ('steps', '<u4'), \
+             ('step_kind', '|u1', (2,)), ('step_interface', '<u4', (2,)), ('status', '|u1'), \
+             ('kink', '|u1'), ('complete', '|u1'), ('iterations', '<u4'), ('time', '<f8'), \
+             ('residual', '<f8'), ('points', '<f8', (4, 2)), ('media', '<u4', (3,))]"
+        ),
+        "{header}"
+    );
+    assert!(header.contains("'shape': (3,)"), "{header}");
+    let size = 12 + 2 + 8 + 3 + 4 + 16 + 64 + 12;
+    assert_eq!(data.len(), 3 * size);
+    let recs: Vec<&[u8]> = data.chunks(size).collect();
+    // By hand: interfaces in the order of their names (roof 0, valley 1).
+    assert_eq!(u32_at(recs[0], 8), 0);
+    assert_eq!(&recs[0][12..14], [255, 255]);
+    assert_eq!(u32_at(recs[2], 8), 2);
+    assert_eq!(&recs[2][12..14], [0, 1]);
+    assert_eq!([u32_at(recs[2], 14), u32_at(recs[2], 18)], [0, 1]);
+    assert_eq!([u32_at(recs[1], 14), u32_at(recs[1], 18)], [1, u32::MAX]);
+    // status, kink, complete
+    assert_eq!(recs[1][22..25], [1, 2, 1]);
+    assert_eq!(recs[2][22..25], [3, 0, 0]);
+    assert_eq!(u32_at(recs[1], 25), 2);
+    assert_eq!(f64_at(recs[1], 29), 2.0 * 16.25f64.sqrt());
+    assert_eq!(f64_at(recs[1], 37), 1e-16);
+    // Points from byte 45: the direct ray's two, then NaN.
+    assert_eq!([f64_at(recs[0], 45), f64_at(recs[0], 53)], [-0.5, 2.0]);
+    assert_eq!([f64_at(recs[0], 61), f64_at(recs[0], 69)], [0.5, 2.0]);
+    assert!(f64_at(recs[0], 77).is_nan() && f64_at(recs[0], 101).is_nan());
+    // Media from byte 109: air is medium 0; the direct ray's one leg, then the mark.
+    assert_eq!(
+        [
+            u32_at(recs[0], 109),
+            u32_at(recs[0], 113),
+            u32_at(recs[0], 117)
+        ],
+        [0, u32::MAX, u32::MAX]
+    );
+    assert_eq!(u32_at(recs[2], 117), 0);
 }

@@ -14,7 +14,10 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use eigenray::{Batch, BatchOptions, Scene, SceneError, Status, Tracer, write_batch};
+use eigenray::{
+    Batch, BatchOptions, RaySet, Scene, SceneError, SearchArrival, StationaryError, StationaryMode,
+    StationaryRays, Status, Tracer,
+};
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Receivers of the demo scene by default.
@@ -76,13 +79,21 @@ struct SolveArgs {
     /// their names). The `.npy` format holds numbers only; this file names them.
     #[arg(long, value_name = "PATH")]
     names: Option<PathBuf>,
+    /// Write the arrivals of the scene's `search` section to this file, in the format of
+    /// `--format`, instead of beside the rays (JSON: `{"arrivals": [...]}`; JSON Lines: one
+    /// arrival per line; CSV: a table of their own; npy: records of their own). CSV and npy
+    /// hold one table each, so a scene with a `search` section needs it with them.
+    #[arg(long, value_name = "PATH")]
+    arrivals: Option<PathBuf>,
     /// Also draw the scene and its rays to this SVG file (with axes; past 2,000 rays a
     /// sample of them).
     #[arg(long, value_name = "PATH")]
     svg: Option<PathBuf>,
-    /// What colours the rays in the picture: `time` (travel time, with a colour bar) or `path`
-    /// (one colour per path, with a legend of path names).
-    #[arg(long, value_enum, value_name = "BY", default_value_t = svg::Colouring::Time)]
+    /// What colours the rays in the picture: `time` (travel time, with a colour bar giving the
+    /// range), `path` (one colour per path, with a legend of path names) or `sequence` (one
+    /// colour per step sequence, with a legend listing the sequences).
+    #[arg(long, visible_alias = "svg-color", value_enum, value_name = "BY",
+          default_value_t = svg::Colouring::Time)]
     colour_by: svg::Colouring,
 }
 
@@ -195,13 +206,19 @@ fn main() -> ExitCode {
 }
 
 /// Refuses a batch whose arrays would not fit in the memory this machine has available, before
-/// anything is allocated, saying how much it needs and why.
+/// anything is allocated, saying how much it needs and why (with `"stationary": "all"`, what
+/// one stationary path per ray needs: at least that much).
 fn check_batch_memory(scene: &Scene, warm_start: bool) -> Result<(), Failure> {
     let size = scene.batch_size();
-    let per_ray = std::mem::size_of::<eigenray::RayRecord>();
+    let all = scene.solver().stationary == StationaryMode::All;
+    let per_ray = if all {
+        std::mem::size_of::<eigenray::TripleArrivals>() + std::mem::size_of::<eigenray::Arrival>()
+    } else {
+        std::mem::size_of::<eigenray::RayRecord>()
+    };
     let per_point = std::mem::size_of::<eigenray::Point>();
     // Solving in a spatial order keeps a second copy of the arrays.
-    let copies = if warm_start { 2 } else { 1 };
+    let copies = if warm_start && !all { 2 } else { 1 };
     let need = size
         .bytes(per_ray, per_point, 4)
         .and_then(|b| b.checked_mul(copies));
@@ -249,6 +266,23 @@ fn available_memory() -> Option<u64> {
     kb.checked_mul(1024)
 }
 
+/// What `eigenray solve` found: one ray per triple, or every stationary path of each.
+enum Solved {
+    /// `"stationary": "one"`.
+    Batch(Batch),
+    /// `"stationary": "all"`.
+    Stationary(StationaryRays),
+}
+
+impl Solved {
+    fn rays(&self) -> RaySet<'_> {
+        match self {
+            Solved::Batch(b) => RaySet::Batch(b),
+            Solved::Stationary(st) => RaySet::Stationary(st),
+        }
+    }
+}
+
 /// `eigenray solve`: everything is computed before anything is written.
 fn solve(args: &SolveArgs) -> Result<(), Failure> {
     if args.format == Format::Npy && std::io::IsTerminal::is_terminal(&io::stdout()) {
@@ -258,20 +292,120 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
     }
     let text = read_scene_text(&args.scene)?;
     let scene = Scene::from_json(&text).map_err(Failure::scene)?;
+    if args.arrivals.is_some() && scene.search().is_none() {
+        return Err(Failure::Input(
+            "--arrivals: the scene has no `search` section, so it has no arrivals to write".into(),
+        ));
+    }
     check_batch_memory(&scene, !args.no_warm_start)?;
     let tracer = Tracer::new(&scene).map_err(Failure::scene)?;
-    let batch = trace(&tracer, !args.no_warm_start)?;
+    let solved = match scene.solver().stationary {
+        StationaryMode::One => Solved::Batch(trace(&tracer, !args.no_warm_start)?),
+        StationaryMode::All => Solved::Stationary(trace_stationary(&tracer)?),
+    };
+    write_outputs(args, &scene, &solved, None)
+}
 
+/// Writes what `solve` found: the name tables and the picture when asked for, the arrivals of
+/// a scene's search (`Some` exactly for a scene with a `search` section) to `--arrivals` when
+/// given, and the rays (and, in JSON and JSON Lines without `--arrivals`, the arrivals) to
+/// standard output. Nothing is written when the arrivals cannot go anywhere.
+fn write_outputs(
+    args: &SolveArgs,
+    scene: &Scene,
+    solved: &Solved,
+    arrivals: Option<&[SearchArrival]>,
+) -> Result<(), Failure> {
+    let format = eigenray::Format::from(args.format);
+    if arrivals.is_some()
+        && args.arrivals.is_none()
+        && matches!(args.format, Format::Csv | Format::Npy)
+    {
+        let name = if args.format == Format::Csv {
+            "csv"
+        } else {
+            "npy"
+        };
+        return Err(Failure::Input(format!(
+            "--format {name}: the scene's `search` arrivals are a table of their own; give              --arrivals FILE to write them"
+        )));
+    }
     if let Some(path) = &args.names {
         let mut names = Vec::new();
-        eigenray::write_names(&scene, &mut names).map_err(|e| write_failure(path, &e))?;
+        eigenray::write_names(scene, &mut names).map_err(|e| write_failure(path, &e))?;
         fs::write(path, names).map_err(|e| write_failure(path, &e))?;
     }
     if let Some(path) = &args.svg {
-        let title = format!("{}: {}", display_name(&args.scene), batch_summary(&batch));
-        write_svg(path, &scene, &batch, &title, args.colour_by)?;
+        let title = format!(
+            "{}: {}",
+            display_name(&args.scene),
+            solved_summary(solved, arrivals)
+        );
+        let svg = svg::scene_svg(
+            scene,
+            solved.rays(),
+            arrivals.unwrap_or_default(),
+            &title,
+            args.colour_by,
+        );
+        fs::write(path, svg).map_err(|e| write_failure(path, &e))?;
     }
-    write_batch(&scene, &batch, args.format.into(), io::stdout().lock()).map_err(Failure::stdout)
+    let inline = match (arrivals, &args.arrivals) {
+        (Some(arrivals), Some(path)) => {
+            let mut file = Vec::new();
+            eigenray::write_arrivals(scene, arrivals, format, &mut file)
+                .map_err(|e| write_failure(path, &e))?;
+            fs::write(path, file).map_err(|e| write_failure(path, &e))?;
+            None
+        }
+        (arrivals, _) => arrivals,
+    };
+    eigenray::write_rays_and_arrivals(scene, solved.rays(), inline, format, io::stdout().lock())
+        .map_err(Failure::stdout)
+}
+
+/// Every stationary path of every ray (`"stationary": "all"`), with a progress bar on standard
+/// error for many rays when it is a terminal; a path beyond the search's step limit is refused
+/// with its key.
+fn trace_stationary(tracer: &Tracer) -> Result<StationaryRays, Failure> {
+    let n = tracer.scene().num_rays();
+    let bar = progress_bar(n, STATIONARY_PROGRESS_RAYS);
+    let progress = |done: usize| {
+        if let Some(bar) = &bar {
+            bar.inc(done as u64);
+        }
+    };
+    let rays = tracer
+        .trace_stationary_with_progress(&progress)
+        .map_err(|e| match e {
+            StationaryError::TooManySteps { path, steps } => Failure::Input(format!(
+                "paths[{path}].steps: {steps} steps; \"stationary\": \"all\" searches paths \
+                 of at most {} steps (each assignment of segments is tried with every choice \
+                 of held vertices, 2^steps of them)",
+                eigenray::limits::MAX_STATIONARY_STEPS
+            )),
+            other => Failure::Input(format!("paths: {other}")),
+        })?;
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    Ok(rays)
+}
+
+/// Rays searched for every stationary path in about a second: beyond this a progress bar is
+/// shown.
+const STATIONARY_PROGRESS_RAYS: usize = 20_000;
+
+/// A progress bar on standard error over `n` rays when there are at least `threshold` and it is
+/// a terminal.
+fn progress_bar(n: usize, threshold: usize) -> Option<ProgressBar> {
+    (n >= threshold && std::io::IsTerminal::is_terminal(&io::stderr())).then(|| {
+        let bar = ProgressBar::new(n as u64);
+        if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} rays, {eta} left") {
+            bar.set_style(style);
+        }
+        bar
+    })
 }
 
 /// Rays expected to take about a second to solve: beyond this a progress bar is shown.
@@ -280,13 +414,7 @@ const PROGRESS_RAYS: usize = 1_000_000;
 /// Solves every ray; a progress bar on standard error for big batches when it is a terminal.
 fn trace(tracer: &Tracer, warm_start: bool) -> Result<Batch, Failure> {
     let n = tracer.scene().num_rays();
-    let bar = (n >= PROGRESS_RAYS && std::io::IsTerminal::is_terminal(&io::stderr())).then(|| {
-        let bar = ProgressBar::new(n as u64);
-        if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} rays, {eta} left") {
-            bar.set_style(style);
-        }
-        bar
-    });
+    let bar = progress_bar(n, PROGRESS_RAYS);
     let progress = |done: usize| {
         if let Some(bar) = &bar {
             bar.inc(done as u64);
@@ -388,31 +516,76 @@ fn demo(args: &DemoArgs) -> Result<(), Failure> {
 /// `500 rays: 498 converged, 2 no_path` (statuses in the order of their `.npy` codes, zeros
 /// left out).
 fn batch_summary(batch: &Batch) -> String {
-    const ORDER: [Status; 5] = [
-        Status::Converged,
-        Status::Vertex,
-        Status::NoPath,
-        Status::Obstructed,
-        Status::NotConverged,
-    ];
+    let plural = if batch.len() == 1 { "ray" } else { "rays" };
+    let head = format!("{} {plural}", batch.len());
+    status_summary(head, batch.records().iter().map(|r| r.status))
+}
+
+/// `head: 3 converged, 1 vertex` over `statuses` (in the order of their `.npy` codes, zeros
+/// left out; `head` alone when there are none).
+fn status_summary(head: String, statuses: impl Iterator<Item = Status>) -> String {
     let mut counts = [0usize; 5];
-    for r in batch.records() {
-        if let Some(i) = ORDER.iter().position(|&s| s == r.status) {
+    for status in statuses {
+        if let Some(i) = eigenray::npy::STATUS_CODES
+            .iter()
+            .position(|&s| s == status)
+        {
             counts[i] += 1;
         }
     }
-    let parts: Vec<String> = ORDER
+    let parts: Vec<String> = eigenray::npy::STATUS_CODES
         .iter()
         .zip(counts)
         .filter(|(_, n)| *n > 0)
         .map(|(s, n)| format!("{n} {s}"))
         .collect();
-    let plural = if batch.len() == 1 { "ray" } else { "rays" };
     if parts.is_empty() {
-        format!("{} {plural}", batch.len())
+        head
     } else {
-        format!("{} {plural}: {}", batch.len(), parts.join(", "))
+        format!("{head}: {}", parts.join(", "))
     }
+}
+
+/// The picture's summary of what `solve` found: the batch's, or for every stationary path
+/// `12 stationary paths of 5 rays: 10 converged, 2 vertex` (and the arrivals of a search).
+fn solved_summary(solved: &Solved, arrivals: Option<&[SearchArrival]>) -> String {
+    let mut summary = match solved {
+        Solved::Batch(b) => batch_summary(b),
+        Solved::Stationary(st) => {
+            let (n, k) = (st.arrivals(), st.triples.len());
+            let head = format!(
+                "{n} stationary {} of {k} {}",
+                if n == 1 { "path" } else { "paths" },
+                if k == 1 { "ray" } else { "rays" }
+            );
+            let none = st
+                .triples
+                .iter()
+                .filter(|t| t.arrivals.is_empty())
+                .map(|t| {
+                    if t.complete {
+                        Status::NoPath
+                    } else {
+                        Status::NotConverged
+                    }
+                });
+            let found = st
+                .triples
+                .iter()
+                .flat_map(|t| &t.arrivals)
+                .map(|a| a.status);
+            status_summary(head, found.chain(none))
+        }
+    };
+    if let Some(a) = arrivals {
+        let _ = write!(
+            summary,
+            "; {} search {}",
+            a.len(),
+            if a.len() == 1 { "arrival" } else { "arrivals" }
+        );
+    }
+    summary
 }
 
 /// Smallest and largest travel time of the rays that have one.
@@ -435,7 +608,7 @@ fn write_svg(
     title: &str,
     colouring: svg::Colouring,
 ) -> Result<(), Failure> {
-    let svg = svg::scene_svg(scene, batch, title, colouring);
+    let svg = svg::scene_svg(scene, RaySet::Batch(batch), &[], title, colouring);
     fs::write(path, svg).map_err(|e| write_failure(path, &e))
 }
 
@@ -473,5 +646,97 @@ fn io_message(e: &io::Error) -> String {
     match s.rfind(" (os error ") {
         Some(i) if s.ends_with(')') => s[..i].to_string(),
         _ => s,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The `solve` arguments of a command line.
+    fn solve_args(args: &[&str]) -> SolveArgs {
+        let cli = Cli::try_parse_from(["eigenray", "solve"].iter().chain(args)).unwrap();
+        match cli.command {
+            Some(Command::Solve(args)) => args,
+            other => panic!("{other:?}"),
+        }
+    }
+
+    /// A scene with a `search` section and no rays (nothing goes to standard output).
+    const SEARCH: &str = r#"{
+        "media": { "air": { "speed": 1.0 } },
+        "interfaces": { "floor": { "points": [[-3, 0], [3, 0]] } },
+        "sources": [], "receivers": [[1, 1]],
+        "search": { "max_steps": 1 }
+    }"#;
+
+    fn arrival(scene: &Scene) -> SearchArrival {
+        SearchArrival {
+            source: 0,
+            receiver: 0,
+            steps: vec![eigenray::scene_parts::Step {
+                kind: eigenray::scene_parts::StepKind::Reflect,
+                interface: 0,
+            }],
+            arrival: eigenray::Arrival {
+                status: Status::Converged,
+                time: 2.0,
+                points: vec![
+                    eigenray::Point::new(0.0, 1.0),
+                    eigenray::Point::new(0.5, 0.0),
+                    eigenray::Point::new(1.0, 1.0),
+                ],
+                parameters: vec![3.5],
+                segments: vec![0],
+                media: vec![scene.medium_index("air").unwrap(); 2],
+                iterations: 1,
+                reason: None,
+                kink: None,
+                residual: 0.0,
+                complete: true,
+            },
+        }
+    }
+
+    #[test]
+    fn csv_and_npy_need_a_file_for_the_arrivals() {
+        let scene = Scene::from_json(SEARCH).unwrap();
+        let solved = Solved::Stationary(StationaryRays::default());
+        let arrivals = [arrival(&scene)];
+        for format in ["csv", "npy"] {
+            let args = solve_args(&["scene.json", "--format", format]);
+            match write_outputs(&args, &scene, &solved, Some(&arrivals)) {
+                Err(Failure::Input(m)) => {
+                    assert!(m.starts_with(&format!("--format {format}: ")), "{m}");
+                    assert!(m.contains("--arrivals FILE"), "{m}");
+                }
+                other => panic!("{other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn arrivals_go_to_their_own_file_in_the_chosen_format() {
+        let scene = Scene::from_json(SEARCH).unwrap();
+        let solved = Solved::Stationary(StationaryRays::default());
+        let arrivals = [arrival(&scene)];
+        let path = std::env::temp_dir().join(format!(
+            "eigenray-main-test-{}-arrivals.csv",
+            std::process::id()
+        ));
+        let path_text = path.to_string_lossy().into_owned();
+        let args = solve_args(&["scene.json", "--format", "csv", "--arrivals", &path_text]);
+        let written = write_outputs(&args, &scene, &solved, Some(&arrivals));
+        let text = fs::read_to_string(&path);
+        let _ = fs::remove_file(&path);
+        assert!(written.is_ok(), "{written:?}");
+        let text = text.unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 2, "{text}");
+        assert!(lines[0].starts_with("source,receiver,steps,media,status"));
+        assert!(
+            lines[1].starts_with("0,0,reflect:floor,air;air,converged,,2.0,"),
+            "{text}"
+        );
     }
 }

@@ -1,11 +1,13 @@
-//! A hand-written SVG picture of a scene and its rays: axes with coordinates, the rays coloured
-//! by travel time (viridis, with a colour bar) or by path (with a legend), labelled interfaces
-//! and media. Big batches are drawn as a sample, and the picture says so.
+//! A hand-written SVG picture of a scene and its rays: axes with coordinates, the rays (one per
+//! triple, every stationary path of each, and a search's arrivals) coloured by travel time
+//! (viridis, with a colour bar), by path or by step sequence (with a legend), labelled
+//! interfaces and media. Big batches are drawn as a sample, and the picture says so.
 
 use std::fmt::Write as _;
 
 use eigenray::geometry::Aabb;
-use eigenray::{Batch, Point, Ray, Scene, Status};
+use eigenray::scene_parts::{Step, StepKind};
+use eigenray::{Point, RaySet, Scene, SearchArrival, Status};
 
 /// Viridis (matplotlib's perceptually uniform colormap) at 0, 1/8, …, 1; linear in between.
 const VIRIDIS: [[u8; 3]; 9] = [
@@ -51,6 +53,8 @@ const BOTTOM: f64 = 48.0;
 const BAR_AREA: f64 = 170.0;
 /// Height of one line of the path legend.
 const LEGEND_LINE: f64 = 17.0;
+/// At most this many lines of a legend are drawn; a last line counts the rest.
+const MAX_LEGEND_LINES: usize = 40;
 
 /// What gives a ray its colour.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -58,8 +62,12 @@ pub enum Colouring {
     /// Travel time, on viridis, with a colour bar.
     #[default]
     Time,
-    /// The path (sequence of steps), with a legend of path names.
+    /// The path, with a legend of path names (a search arrival, which has no path: its step
+    /// sequence).
     Path,
+    /// The step sequence: one colour per distinct sequence of steps, with a legend listing the
+    /// sequences (`reflect w0 → refract surface`).
+    Sequence,
 }
 
 /// Viridis at `t ∈ [0, 1]` (clamped; NaN is 0) as `#rrggbb`.
@@ -119,8 +127,285 @@ impl View {
     }
 }
 
-/// Whether a ray is drawn: it has a finite time and at least two finite points.
-fn drawable(r: &Ray) -> bool {
+/// One entry of the picture: a ray, one stationary path of a ray, or a search arrival.
+#[derive(Clone, Debug)]
+struct Item {
+    source: usize,
+    receiver: usize,
+    /// The path (`None` for a search arrival).
+    path: Option<usize>,
+    /// The step sequence.
+    steps: Vec<Step>,
+    /// Its place among its triple's stationary paths (`"stationary": "all"` only).
+    arrival: Option<usize>,
+    status: Status,
+    /// Travel time; NaN when it has none.
+    time: f64,
+    points: Vec<Point>,
+    /// Leg media (indices into [`Scene::media`]), when known.
+    media: Vec<usize>,
+}
+
+/// The entries a picture draws from: its rays (in any form) and a search's arrivals.
+struct Entries<'a> {
+    scene: &'a Scene,
+    rays: RaySet<'a>,
+    /// Where each triple's entries start (`RaySet::Stationary` only).
+    starts: Vec<usize>,
+    arrivals: &'a [SearchArrival],
+}
+
+impl<'a> Entries<'a> {
+    fn new(scene: &'a Scene, rays: RaySet<'a>, arrivals: &'a [SearchArrival]) -> Entries<'a> {
+        let mut starts = Vec::new();
+        if let RaySet::Stationary(st) = rays {
+            let mut n = 0;
+            for t in &st.triples {
+                starts.push(n);
+                n += t.arrivals.len().max(1);
+            }
+        }
+        Entries {
+            scene,
+            rays,
+            starts,
+            arrivals,
+        }
+    }
+
+    /// Entries of the rays (one per ray, or per stationary path and per triple without one).
+    fn rays_len(&self) -> usize {
+        match self.rays {
+            RaySet::Rays(r) => r.len(),
+            RaySet::Batch(b) => b.len(),
+            RaySet::Stationary(st) => st.entries(),
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.rays_len() + self.arrivals.len()
+    }
+
+    /// The steps of path `p`.
+    fn steps(&self, p: usize) -> Vec<Step> {
+        self.scene
+            .paths()
+            .get(p)
+            .map(|p| p.steps.clone())
+            .unwrap_or_default()
+    }
+
+    /// Entry `i`: the rays' entries first, then the arrivals.
+    fn item(&self, i: usize) -> Item {
+        let n = self.rays_len();
+        if i >= n {
+            let a = &self.arrivals[i - n];
+            return Item {
+                source: a.source,
+                receiver: a.receiver,
+                path: None,
+                steps: a.steps.clone(),
+                arrival: None,
+                status: a.arrival.status,
+                time: a.arrival.time,
+                points: a.arrival.points.clone(),
+                media: a.arrival.media.clone(),
+            };
+        }
+        let ray = |r: eigenray::Ray| Item {
+            source: r.source,
+            receiver: r.receiver,
+            path: Some(r.path),
+            steps: self.steps(r.path),
+            arrival: None,
+            status: r.status,
+            time: r.time,
+            points: r.points,
+            media: r.media,
+        };
+        match self.rays {
+            RaySet::Rays(rays) => ray(rays[i].clone()),
+            RaySet::Batch(batch) => ray(batch.ray(i)),
+            RaySet::Stationary(st) => {
+                let k = self.starts.partition_point(|&s| s <= i) - 1;
+                let t = &st.triples[k];
+                let arrival = i - self.starts[k];
+                let mut item = Item {
+                    source: t.source,
+                    receiver: t.receiver,
+                    path: Some(t.path),
+                    steps: self.steps(t.path),
+                    arrival: Some(arrival),
+                    status: if t.complete {
+                        Status::NoPath
+                    } else {
+                        Status::NotConverged
+                    },
+                    time: f64::NAN,
+                    points: Vec::new(),
+                    media: Vec::new(),
+                };
+                if let Some(a) = t.arrivals.get(arrival) {
+                    item.status = a.status;
+                    item.time = a.time;
+                    item.points = a.points.clone();
+                    item.media = a.media.clone();
+                }
+                item
+            }
+        }
+    }
+
+    /// Entries without a time (never drawn).
+    fn timeless(&self) -> usize {
+        let has = |status: Status, time: f64| status.has_time() && time.is_finite();
+        match self.rays {
+            RaySet::Rays(r) => r.iter().filter(|r| !has(r.status, r.time)).count(),
+            RaySet::Batch(b) => b
+                .records()
+                .iter()
+                .filter(|r| !has(r.status, r.time))
+                .count(),
+            RaySet::Stationary(st) => {
+                let none = st.triples.iter().filter(|t| t.arrivals.is_empty()).count();
+                let bad = st
+                    .triples
+                    .iter()
+                    .flat_map(|t| &t.arrivals)
+                    .filter(|a| !has(a.status, a.time))
+                    .count();
+                none + bad
+            }
+        }
+    }
+}
+
+/// The sequence in the scene's words: `reflect w0 → refract surface`, or `direct`.
+pub fn sequence_label(scene: &Scene, steps: &[Step]) -> String {
+    if steps.is_empty() {
+        return "direct".to_string();
+    }
+    let words: Vec<String> = steps
+        .iter()
+        .map(|s| {
+            let kind = match s.kind {
+                StepKind::Reflect => "reflect",
+                StepKind::Refract => "refract",
+            };
+            let name = scene
+                .interfaces()
+                .get(s.interface)
+                .map_or("?", |i| i.name.as_str());
+            format!("{kind} {name}")
+        })
+        .collect();
+    words.join(" → ")
+}
+
+/// A sequence as a sort key: by number of steps, then step by step (interface, reflect first).
+fn sequence_key(steps: &[Step]) -> (usize, Vec<(usize, bool)>) {
+    (
+        steps.len(),
+        steps
+            .iter()
+            .map(|s| (s.interface, s.kind == StepKind::Refract))
+            .collect(),
+    )
+}
+
+/// One line of a legend.
+struct LegendEntry {
+    label: String,
+    /// Its index into [`PATH_COLOURS`] (and [`path_dash`]).
+    colour: usize,
+    /// Entries drawn.
+    count: usize,
+}
+
+/// The legend of a colouring and the legend line of each drawn item (none by time).
+struct Legend {
+    entries: Vec<LegendEntry>,
+    of_item: Vec<usize>,
+    /// The legend's heading.
+    heading: &'static str,
+}
+
+impl Legend {
+    fn new(scene: &Scene, items: &[Item], colouring: Colouring) -> Legend {
+        let heading = match colouring {
+            Colouring::Time => {
+                return Legend {
+                    entries: Vec::new(),
+                    of_item: Vec::new(),
+                    heading: "",
+                };
+            }
+            Colouring::Path => "path (rays drawn)",
+            Colouring::Sequence => "sequence (paths drawn)",
+        };
+        // The groups: paths by index, then search sequences in order of their keys (by path);
+        // every sequence in order of its key (by sequence).
+        let paths = scene.paths().len();
+        let mut sequences: Vec<Vec<Step>> = items
+            .iter()
+            .filter(|r| colouring == Colouring::Sequence || r.path.is_none())
+            .map(|r| r.steps.clone())
+            .collect();
+        sequences.sort_by_key(|s| sequence_key(s));
+        sequences.dedup();
+        let sequence_of = |steps: &[Step]| {
+            sequences
+                .binary_search_by_key(&sequence_key(steps), |s| sequence_key(s))
+                .unwrap_or(0)
+        };
+        // Group of each item: a path index, or `paths` + a sequence's place.
+        let group = |r: &Item| match (colouring, r.path) {
+            (Colouring::Path, Some(p)) => p,
+            _ => paths + sequence_of(&r.steps),
+        };
+        let mut count = vec![0usize; paths + sequences.len()];
+        for r in items {
+            count[group(r)] += 1;
+        }
+        let mut entries = Vec::new();
+        let mut line = vec![usize::MAX; count.len()];
+        for (g, &c) in count.iter().enumerate() {
+            if c == 0 {
+                continue;
+            }
+            let (label, colour) = if g < paths {
+                (path_label(scene, g), g)
+            } else {
+                let k = g - paths;
+                let colour = match colouring {
+                    Colouring::Sequence => k,
+                    _ => paths + k,
+                };
+                (sequence_label(scene, &sequences[k]), colour)
+            };
+            line[g] = entries.len();
+            entries.push(LegendEntry {
+                label,
+                colour,
+                count: c,
+            });
+        }
+        let of_item = items.iter().map(|r| line[group(r)]).collect();
+        Legend {
+            entries,
+            of_item,
+            heading,
+        }
+    }
+
+    /// Lines drawn: at most [`MAX_LEGEND_LINES`], the last then counting the rest.
+    fn lines(&self) -> usize {
+        self.entries.len().min(MAX_LEGEND_LINES + 1)
+    }
+}
+
+/// Whether an item is drawn: it has a finite time and at least two finite points.
+fn drawable(r: &Item) -> bool {
     r.status.has_time()
         && r.time.is_finite()
         && r.points.len() >= 2
@@ -129,7 +414,7 @@ fn drawable(r: &Ray) -> bool {
 
 /// The world to show: centre and half extents holding the scene and the drawn rays, never
 /// degenerate, with a margin. Computed in halves so that huge coordinates do not overflow.
-fn world(scene: &Scene, rays: &[Ray]) -> (Point, f64, f64) {
+fn world(scene: &Scene, rays: &[Item]) -> (Point, f64, f64) {
     let mut b = scene.bbox();
     for r in rays {
         for p in &r.points {
@@ -358,12 +643,11 @@ fn halo_text(s: &mut String, x: f64, y: f64, attrs: &str, fill: &str, text: &str
     );
 }
 
-/// The rays to draw: every ray, or past [`MAX_RAYS`] a stratified sample (one ray at a
-/// pseudo-random place in each of [`MAX_RAYS`] equal runs of the ray order), so that a regular
-/// grid of receivers or a set of paths does not alias with a stride. The second value says
-/// whether it is a sample.
-fn sample(batch: &Batch) -> (Vec<usize>, bool) {
-    let n = batch.len();
+/// The entries to draw out of `n`: every one, or past [`MAX_RAYS`] a stratified sample (one
+/// at a pseudo-random place in each of [`MAX_RAYS`] equal runs of the ray order), so that a
+/// regular grid of receivers or a set of paths does not alias with a stride. The second value
+/// says whether it is a sample.
+fn sample(n: usize) -> (Vec<usize>, bool) {
     if n <= MAX_RAYS {
         return ((0..n).collect(), false);
     }
@@ -399,17 +683,25 @@ fn path_label(scene: &Scene, p: usize) -> String {
     }
 }
 
-/// An SVG picture of `scene` and the rays of `batch`: the axes with coordinates, the domain box
-/// (dashed), the interfaces (closed ones closed) labelled at their middle, each drawn ray as a
-/// polyline coloured as `colouring` says (obstructed rays dashed, vertex rays dotted), sources
-/// as stars, receivers as dots, the media labelled, a colour bar (travel time) or a legend
-/// (paths), and `title`. The y axis points up. Past [`MAX_RAYS`] rays a sample is drawn; past
-/// [`MAX_ASPECT`] one axis is stretched; the caption says both.
-pub fn scene_svg(scene: &Scene, batch: &Batch, title: &str, colouring: Colouring) -> String {
-    let (picked, sampled) = sample(batch);
-    let rays: Vec<Ray> = picked
+/// An SVG picture of `scene`, its `rays` and a search's `arrivals`: the axes with coordinates,
+/// the domain box (dashed), the interfaces (closed ones closed) labelled at their middle, each
+/// drawn ray (every stationary path of a ray in `"stationary": "all"`, each arrival) as a
+/// polyline coloured as `colouring` says (obstructed ones dashed, vertex ones dotted), sources
+/// as stars, receivers as dots, the media labelled, a colour bar (travel time, with its range)
+/// or a legend (paths or step sequences), and `title`. The y axis points up. Past [`MAX_RAYS`]
+/// entries a sample is drawn; past [`MAX_ASPECT`] one axis is stretched; the caption says both.
+pub fn scene_svg(
+    scene: &Scene,
+    rays: RaySet<'_>,
+    arrivals: &[SearchArrival],
+    title: &str,
+    colouring: Colouring,
+) -> String {
+    let entries = Entries::new(scene, rays, arrivals);
+    let (picked, sampled) = sample(entries.len());
+    let rays: Vec<Item> = picked
         .iter()
-        .map(|&i| batch.ray(i))
+        .map(|&i| entries.item(i))
         .filter(drawable)
         .collect();
     let (centre, mut hw, mut hh) = world(scene, &rays);
@@ -434,26 +726,24 @@ pub fn scene_svg(scene: &Scene, batch: &Batch, title: &str, colouring: Colouring
     let fit = (PLOT_MAX_W / plot_w).min(PLOT_MAX_H / plot_h).min(1.0);
     let (plot_w, plot_h) = (plot_w * fit, plot_h * fit);
 
-    // Paths drawn, for the legend.
-    let mut per_path = vec![0usize; scene.paths().len()];
-    for r in &rays {
-        if let Some(c) = per_path.get_mut(r.path) {
-            *c += 1;
-        }
-    }
-    let legend: Vec<usize> = (0..per_path.len()).filter(|&p| per_path[p] > 0).collect();
+    // Paths or sequences drawn, for the legend.
+    let legend = Legend::new(scene, &rays, colouring);
     let legend_h = match colouring {
-        Colouring::Path => 40.0 + LEGEND_LINE * legend.len() as f64,
+        Colouring::Path | Colouring::Sequence => 40.0 + LEGEND_LINE * legend.lines() as f64,
         Colouring::Time => 0.0,
     };
     let longest = legend
+        .entries
         .iter()
-        .map(|&p| path_label(scene, p).chars().count() + thousands(per_path[p]).len() + 3)
+        .take(MAX_LEGEND_LINES)
+        .map(|e| e.label.chars().count() + thousands(e.count).len() + 3)
         .max()
         .unwrap_or(0);
     let side = match colouring {
         Colouring::Time => BAR_AREA,
-        Colouring::Path => (60.0 + 7.0 * longest as f64).clamp(BAR_AREA, 360.0),
+        Colouring::Path | Colouring::Sequence => {
+            (60.0 + 7.0 * longest as f64).clamp(BAR_AREA, 360.0)
+        }
     };
 
     let (area_w, area_h) = (plot_w.max(AREA_MIN_W), plot_h.max(AREA_MIN_H).max(legend_h));
@@ -474,9 +764,12 @@ pub fn scene_svg(scene: &Scene, batch: &Batch, title: &str, colouring: Colouring
             None => Some((t, t)),
             Some((lo, hi)) => Some((lo.min(t), hi.max(t))),
         });
-    let colour = |r: &Ray| -> String {
+    let colour = |k: usize, r: &Item| -> String {
         match colouring {
-            Colouring::Path => PATH_COLOURS[r.path % PATH_COLOURS.len()].to_string(),
+            Colouring::Path | Colouring::Sequence => {
+                let c = legend.entries[legend.of_item[k]].colour;
+                PATH_COLOURS[c % PATH_COLOURS.len()].to_string()
+            }
             Colouring::Time => {
                 let t = r.time;
                 match range {
@@ -508,34 +801,57 @@ pub fn scene_svg(scene: &Scene, batch: &Batch, title: &str, colouring: Colouring
         r##"<text x="12" y="24" font-size="16" font-weight="bold" fill="#222">{}</text>"##,
         esc(title)
     );
-    let mut caption = format!(
-        "{} of {} rays drawn",
-        thousands(rays.len()),
-        thousands(batch.len())
-    );
-    let timeless = batch
-        .records()
-        .iter()
-        .filter(|r| !(r.status.has_time() && r.time.is_finite()))
-        .count();
+    let mut caption = match (entries.rays, arrivals.len()) {
+        (RaySet::Stationary(st), 0) => format!(
+            "{} of {} stationary paths drawn",
+            thousands(rays.len()),
+            thousands(st.arrivals())
+        ),
+        (RaySet::Stationary(st), a) => format!(
+            "{} of {} stationary paths and search arrivals drawn",
+            thousands(rays.len()),
+            thousands(st.arrivals() + a)
+        ),
+        (_, 0) => format!(
+            "{} of {} rays drawn",
+            thousands(rays.len()),
+            thousands(entries.rays_len())
+        ),
+        (_, a) => format!(
+            "{} of {} rays and search arrivals drawn",
+            thousands(rays.len()),
+            thousands(entries.rays_len() + a)
+        ),
+    };
+    let timeless = entries.timeless();
+    let without = match entries.rays {
+        RaySet::Stationary(_) => "rays have no stationary path",
+        _ => "no time",
+    };
+    let without = |n: usize| match entries.rays {
+        RaySet::Stationary(_) if n == 1 => "ray has no stationary path".to_string(),
+        RaySet::Stationary(_) => without.to_string(),
+        _ => format!("{} {without}", have(n)),
+    };
     match (sampled, timeless) {
         (false, 0) => {}
         (true, 0) => caption.push_str(" (a sample spread over all rays)"),
         (false, n) => {
-            let _ = write!(caption, " ({} {} no time)", thousands(n), have(n));
+            let _ = write!(caption, " ({} {})", thousands(n), without(n));
         }
         (true, n) => {
             let _ = write!(
                 caption,
-                " (a sample spread over all rays; {} {} no time)",
+                " (a sample spread over all rays; {} {})",
                 thousands(n),
-                have(n)
+                without(n)
             );
         }
     }
     caption.push_str(match colouring {
         Colouring::Time => ", coloured by travel time",
         Colouring::Path => ", coloured by path",
+        Colouring::Sequence => ", coloured by step sequence",
     });
     if rays.iter().any(|r| r.status == Status::Obstructed) {
         caption.push_str("; dashed: obstructed");
@@ -642,22 +958,32 @@ pub fn scene_svg(scene: &Scene, batch: &Batch, title: &str, colouring: Colouring
         s,
         r#"<g class="rays" fill="none" stroke-width="{stroke}" stroke-opacity="0.85" stroke-linejoin="round" stroke-linecap="round">"#
     );
-    for r in &rays {
+    for (k, r) in rays.iter().enumerate() {
         let t = r.time;
         let dash = match r.status {
             Status::Obstructed => r#" stroke-dasharray="5 3""#,
             Status::Vertex => r#" stroke-dasharray="1 3""#,
-            _ if colouring == Colouring::Path => path_dash(r.path),
+            _ if colouring != Colouring::Time => {
+                path_dash(legend.entries[legend.of_item[k]].colour)
+            }
             _ => "",
+        };
+        let what = match r.path {
+            Some(p) => path_label(scene, p),
+            None => format!("search arrival, {}", sequence_label(scene, &r.steps)),
+        };
+        let arrival = match r.arrival {
+            Some(a) => format!(", arrival {a}"),
+            None => String::new(),
         };
         let _ = writeln!(
             s,
-            r#"<polyline points="{}" stroke="{}"{dash}><title>source {}, receiver {}, {}: {}, time {t}</title></polyline>"#,
+            r#"<polyline points="{}" stroke="{}"{dash}><title>source {}, receiver {}, {}: {}{arrival}, time {t}</title></polyline>"#,
             view.points(&r.points),
-            colour(r),
+            colour(k, r),
             r.source,
             r.receiver,
-            esc(&path_label(scene, r.path)),
+            esc(&what),
             r.status
         );
     }
@@ -805,7 +1131,7 @@ pub fn scene_svg(scene: &Scene, batch: &Batch, title: &str, colouring: Colouring
     let key_x = LEFT + area_w + 26.0;
     match colouring {
         Colouring::Time => colour_bar(&mut s, key_x, TOP, area_h, range),
-        Colouring::Path => path_legend(&mut s, scene, key_x, TOP, &legend, &per_path),
+        Colouring::Path | Colouring::Sequence => path_legend(&mut s, key_x, TOP, &legend),
     }
     let _ = writeln!(s, "</svg>");
     s
@@ -889,7 +1215,7 @@ fn interface_label_spot(
 
 /// Where each medium's name goes: at its `at` point, or else at the middle of the drawn legs in
 /// that medium (the centroid of their midpoints); media with neither are not labelled.
-fn medium_spots(scene: &Scene, view: &View, rays: &[Ray]) -> Vec<(usize, (f64, f64))> {
+fn medium_spots(scene: &Scene, view: &View, rays: &[Item]) -> Vec<(usize, (f64, f64))> {
     let n = scene.media().len();
     let mut sum = vec![(0.0, 0.0, 0usize); n];
     for r in rays {
@@ -984,22 +1310,17 @@ fn colour_bar(s: &mut String, x: f64, top: f64, area_h: f64, range: Option<(f64,
     let _ = writeln!(s, "</g>");
 }
 
-/// The legend of paths: a line of each drawn path's colour, its name and its drawn rays.
-fn path_legend(
-    s: &mut String,
-    scene: &Scene,
-    x: f64,
-    top: f64,
-    legend: &[usize],
-    per_path: &[usize],
-) {
+/// The legend of paths or sequences: a line of each drawn one's colour, its name and its drawn
+/// rays (past [`MAX_LEGEND_LINES`], a last line counts the rest).
+fn path_legend(s: &mut String, x: f64, top: f64, legend: &Legend) {
     let _ = writeln!(
         s,
-        r##"<g class="legend" font-size="12" fill="#222"><text x="{:.2}" y="{:.2}">path (rays drawn)</text>"##,
+        r##"<g class="legend" font-size="12" fill="#222"><text x="{:.2}" y="{:.2}">{}</text>"##,
         x - 8.0,
-        top + 10.0
+        top + 10.0,
+        legend.heading
     );
-    if legend.is_empty() {
+    if legend.entries.is_empty() {
         let _ = writeln!(
             s,
             r##"<text x="{:.2}" y="{:.2}" fill="#555">no ray has a time</text>"##,
@@ -1007,19 +1328,31 @@ fn path_legend(
             top + 30.0
         );
     }
-    for (k, &p) in legend.iter().enumerate() {
+    for (k, e) in legend.entries.iter().take(MAX_LEGEND_LINES).enumerate() {
         let y = top + 32.0 + LEGEND_LINE * k as f64;
         let _ = writeln!(
             s,
             r#"<path d="M{:.2},{:.2}h22" stroke="{}" stroke-width="3"{}/><text x="{:.2}" y="{:.2}">{} ({})</text>"#,
             x - 8.0,
             y - 4.0,
-            PATH_COLOURS[p % PATH_COLOURS.len()],
-            path_dash(p),
+            PATH_COLOURS[e.colour % PATH_COLOURS.len()],
+            path_dash(e.colour),
             x + 20.0,
             y,
-            esc(&path_label(scene, p)),
-            thousands(per_path[p])
+            esc(&e.label),
+            thousands(e.count)
+        );
+    }
+    if legend.entries.len() > MAX_LEGEND_LINES {
+        let rest = &legend.entries[MAX_LEGEND_LINES..];
+        let drawn: usize = rest.iter().map(|e| e.count).sum();
+        let y = top + 32.0 + LEGEND_LINE * MAX_LEGEND_LINES as f64;
+        let _ = writeln!(
+            s,
+            r##"<text x="{:.2}" y="{y:.2}" fill="#555">… {} more ({})</text>"##,
+            x - 8.0,
+            thousands(rest.len()),
+            thousands(drawn)
         );
     }
     let _ = writeln!(s, "</g>");
@@ -1092,7 +1425,7 @@ mod tests {
         let batch = Tracer::new(&scene)
             .expect("tracer")
             .trace_batch(&BatchOptions::default());
-        scene_svg(&scene, &batch, "test", colouring)
+        scene_svg(&scene, RaySet::Batch(&batch), &[], "test", colouring)
     }
 
     /// Parses the picture as XML and returns its elements' (name, class) pairs and texts.
@@ -1201,7 +1534,7 @@ mod tests {
         let batch = Tracer::new(&scene)
             .unwrap()
             .trace_batch(&BatchOptions::default());
-        let svg = scene_svg(&scene, &batch, "demo", Colouring::Time);
+        let svg = scene_svg(&scene, RaySet::Batch(&batch), &[], "demo", Colouring::Time);
         let (elements, texts) = parse(&svg);
         let drawn = elements.iter().filter(|(n, _)| n == "polyline").count() - 1;
         assert!(drawn <= MAX_RAYS, "{drawn}");
@@ -1301,5 +1634,169 @@ mod tests {
         let (elements, _) = parse(&svg);
         assert!(elements.iter().any(|(_, c)| c == "axes"));
         assert!(!svg.contains("inf") && !svg.contains("NaN"));
+    }
+
+    /// A search arrival built by hand: `steps` off the scene's interfaces, through `points`.
+    fn search_arrival(
+        scene: &Scene,
+        steps: &[(StepKind, &str)],
+        status: Status,
+        time: f64,
+        points: &[[f64; 2]],
+    ) -> SearchArrival {
+        let air = scene.medium_index("air").unwrap();
+        SearchArrival {
+            source: 0,
+            receiver: 0,
+            steps: steps
+                .iter()
+                .map(|&(kind, name)| Step {
+                    kind,
+                    interface: scene.interface_index(name).unwrap(),
+                })
+                .collect(),
+            arrival: eigenray::Arrival {
+                status,
+                time,
+                points: points.iter().map(|p| Point::new(p[0], p[1])).collect(),
+                parameters: vec![0.0; steps.len()],
+                segments: vec![0; steps.len()],
+                media: vec![air; steps.len() + 1],
+                iterations: 1,
+                reason: None,
+                kink: None,
+                residual: 0.0,
+                complete: true,
+            },
+        }
+    }
+
+    #[test]
+    fn search_arrivals_are_drawn_with_their_sequences_in_the_legend() {
+        let scene = Scene::from_json(ROOM).unwrap();
+        let batch = Tracer::new(&scene)
+            .unwrap()
+            .trace_batch(&BatchOptions::default());
+        let arrivals = [
+            search_arrival(
+                &scene,
+                &[],
+                Status::Converged,
+                0.01,
+                &[[1.5, 1.2], [4.5, 2.5]],
+            ),
+            search_arrival(
+                &scene,
+                &[(StepKind::Reflect, "north"), (StepKind::Reflect, "east")],
+                Status::Converged,
+                0.03,
+                &[[1.5, 1.2], [5.0, 4.0], [6.0, 3.5], [4.5, 2.5]],
+            ),
+            search_arrival(
+                &scene,
+                &[(StepKind::Reflect, "north"), (StepKind::Reflect, "east")],
+                Status::Obstructed,
+                0.05,
+                &[[1.5, 1.2], [2.0, 4.0], [6.0, 1.0], [4.5, 2.5]],
+            ),
+        ];
+        // By sequence: paths and arrivals of one sequence share a line.
+        let svg = scene_svg(
+            &scene,
+            RaySet::Batch(&batch),
+            &arrivals,
+            "t",
+            Colouring::Sequence,
+        );
+        let (elements, texts) = parse(&svg);
+        assert!(elements.iter().any(|(_, c)| c == "legend"));
+        for want in [
+            "sequence (paths drawn)",
+            "direct (3)",
+            "reflect north (2)",
+            "reflect west (2)",
+            "reflect north → reflect east (2)",
+        ] {
+            assert!(texts.iter().any(|t| t == want), "{want} not in {texts:?}");
+        }
+        assert!(
+            texts
+                .iter()
+                .any(|t| t.starts_with("9 of 9 rays and search arrivals drawn")),
+            "{texts:?}"
+        );
+        // By path: the paths by name, then the arrivals' sequences.
+        let svg = scene_svg(
+            &scene,
+            RaySet::Batch(&batch),
+            &arrivals,
+            "t",
+            Colouring::Path,
+        );
+        let (_, texts) = parse(&svg);
+        for want in [
+            "direct (2)",
+            "north (2)",
+            "west (2)",
+            "direct (1)",
+            "reflect north → reflect east (2)",
+        ] {
+            assert!(texts.iter().any(|t| t == want), "{want} not in {texts:?}");
+        }
+        // By time: the colour bar spans the arrivals' times too.
+        let svg = scene_svg(
+            &scene,
+            RaySet::Batch(&batch),
+            &arrivals,
+            "t",
+            Colouring::Time,
+        );
+        let (_, texts) = parse(&svg);
+        assert!(texts.iter().any(|t| t == "0.05000"), "{texts:?}");
+        assert!(svg.contains("search arrival, reflect north → reflect east: obstructed"));
+    }
+
+    #[test]
+    fn a_long_legend_stops_at_its_limit_and_counts_the_rest() {
+        let scene = Scene::from_json(ROOM).unwrap();
+        let walls = ["north", "east", "south", "west"];
+        // 4³ = 64 sequences of three reflections, one arrival each.
+        let mut arrivals = Vec::new();
+        for a in walls {
+            for b in walls {
+                for c in walls {
+                    arrivals.push(search_arrival(
+                        &scene,
+                        &[
+                            (StepKind::Reflect, a),
+                            (StepKind::Reflect, b),
+                            (StepKind::Reflect, c),
+                        ],
+                        Status::Converged,
+                        0.02,
+                        &[[1.5, 1.2], [3.0, 4.0], [6.0, 2.0], [3.0, 0.0], [4.5, 2.5]],
+                    ));
+                }
+            }
+        }
+        let svg = scene_svg(
+            &scene,
+            RaySet::Rays(&[]),
+            &arrivals,
+            "t",
+            Colouring::Sequence,
+        );
+        let (_, texts) = parse(&svg);
+        let lines = texts.iter().filter(|t| t.starts_with("reflect ")).count();
+        assert_eq!(lines, MAX_LEGEND_LINES);
+        assert!(
+            texts.iter().any(|t| t
+                == &format!(
+                    "… {} more ({})",
+                    64 - MAX_LEGEND_LINES,
+                    64 - MAX_LEGEND_LINES
+                )),
+            "{texts:?}"
+        );
     }
 }
