@@ -4,8 +4,13 @@
 
 use rayon::prelude::*;
 
-use crate::scene::{MAX_STATIONARY_STEPS, Step};
-use crate::trace::{Arrival, StationaryError, Tracer};
+use std::fmt;
+
+use crate::geom::Point;
+use crate::scene::{MAX_STATIONARY_STEPS, SearchOptions, Step, StepKind};
+use crate::trace::{
+    Arrival, MirrorArrival, MirrorScratch, MirrorWalls, Sequence, StationaryError, Status, Tracer,
+};
 
 /// Every stationary path of one (source, receiver, path) triple.
 #[derive(Clone, Debug, PartialEq)]
@@ -214,5 +219,289 @@ mod tests {
                 steps: MAX_STATIONARY_STEPS + 1
             }
         );
+    }
+}
+
+/// Sequence-and-pair searches a `search` may ask for: beyond it the search is refused before
+/// it starts (each one is a complete search of one sequence between one source and one
+/// receiver).
+pub const MAX_SEARCH_WORK: u64 = 5_000_000;
+
+/// Why a scene's `search` cannot run.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum SearchError {
+    /// The scene has no `search` section.
+    NoSearch,
+    /// More sequences × (source, receiver) pairs than [`MAX_SEARCH_WORK`].
+    ///
+    /// How to fix: fewer `max_steps`, fewer `interfaces`, or fewer sources and receivers.
+    TooLarge {
+        /// Step sequences the search would generate.
+        sequences: u64,
+        /// (source, receiver) pairs.
+        pairs: u64,
+    },
+}
+
+impl fmt::Display for SearchError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SearchError::NoSearch => f.write_str("the scene has no `search` section"),
+            SearchError::TooLarge { sequences, pairs } => write!(
+                f,
+                "{sequences} step sequences for {pairs} source-receiver pairs: more than the \
+                 {MAX_SEARCH_WORK} searches allowed (lower `max_steps`, list fewer \
+                 `interfaces`, or use fewer sources and receivers)"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for SearchError {}
+
+/// The steps a search may take next, in a fixed order.
+fn step_choices(options: &SearchOptions) -> Vec<Step> {
+    let mut out = Vec::new();
+    for &interface in &options.interfaces {
+        if options.reflect {
+            out.push(Step {
+                kind: StepKind::Reflect,
+                interface,
+            });
+        }
+        if options.refract {
+            out.push(Step {
+                kind: StepKind::Refract,
+                interface,
+            });
+        }
+    }
+    out
+}
+
+/// Every step sequence of 0 to `max_steps` steps from `choices`, shortest first (a step that
+/// reflects off the one-segment interface of the step before it is left out: its two points
+/// would lie on one line, where no path exists).
+fn sequences(tracer: &Tracer<'_>, options: &SearchOptions) -> Vec<Vec<Step>> {
+    let choices = step_choices(options);
+    let one_segment = |i: usize| tracer.scene().interfaces()[i].polyline.num_segments() == 1;
+    let mut out: Vec<Vec<Step>> = vec![Vec::new()];
+    let mut level: Vec<Vec<Step>> = vec![Vec::new()];
+    for _ in 0..options.max_steps {
+        let mut next = Vec::new();
+        for seq in &level {
+            for &c in &choices {
+                let repeat = seq.last().is_some_and(|l: &Step| {
+                    l.interface == c.interface
+                        && l.kind == StepKind::Reflect
+                        && c.kind == StepKind::Reflect
+                        && one_segment(c.interface)
+                });
+                if !repeat {
+                    let mut s = seq.clone();
+                    s.push(c);
+                    next.push(s);
+                }
+            }
+        }
+        out.extend(next.iter().cloned());
+        level = next;
+    }
+    out
+}
+
+/// How many sequences [`sequences`] generates, without generating them.
+fn count_sequences(options: &SearchOptions) -> u64 {
+    let c = (step_choices(options).len() as u64).max(1);
+    let mut total: u64 = 1;
+    let mut level: u64 = 1;
+    for _ in 0..options.max_steps {
+        level = level.saturating_mul(c);
+        total = total.saturating_add(level);
+    }
+    total
+}
+
+impl Tracer<'_> {
+    /// The arrivals of the scene's `search`: every step sequence of 0 to `max_steps` steps
+    /// through the allowed interfaces and kinds, each searched completely (as
+    /// [`stationary_paths`](Tracer::stationary_paths) does) with its leg media from the
+    /// regions, for every (source, receiver) pair in parallel. Listed: every `converged` and
+    /// `vertex` arrival (and `obstructed` ones when the search asks), ordered by source,
+    /// receiver and time.
+    ///
+    /// A room of one-segment walls searched for reflections only goes through the
+    /// image-source tree with beam pruning instead (once per source, for all receivers): the
+    /// same arrivals, checked against the sequence-by-sequence search in the tests.
+    ///
+    /// ```
+    /// use eigenray::{Scene, Tracer};
+    /// // A square room, each wall its own interface: the direct ray and one reflection off
+    /// // each wall.
+    /// let scene = Scene::from_json(r#"{
+    ///     "media": { "air": { "speed": 1.0, "at": [0.5, 0.5] } },
+    ///     "interfaces": {
+    ///         "s": { "points": [[0, 0], [1, 0]] }, "e": { "points": [[1, 0], [1, 1]] },
+    ///         "n": { "points": [[1, 1], [0, 1]] }, "w": { "points": [[0, 1], [0, 0]] } },
+    ///     "sources": [[0.3, 0.4]], "receivers": [[0.7, 0.5]],
+    ///     "search": { "max_steps": 1, "refract": false }
+    /// }"#).unwrap();
+    /// let arrivals = Tracer::new(&scene).unwrap().search().unwrap();
+    /// assert_eq!(arrivals.len(), 5);
+    /// assert!(arrivals[0].steps.is_empty()); // the direct ray comes first
+    /// ```
+    ///
+    /// # Errors
+    /// [`SearchError::NoSearch`] without a `search` section; [`SearchError::TooLarge`] when
+    /// the sequences times the pairs exceed [`MAX_SEARCH_WORK`].
+    pub fn search(&self) -> Result<Vec<SearchArrival>, SearchError> {
+        let scene = self.scene();
+        let options = scene.search().ok_or(SearchError::NoSearch)?;
+        let pairs = (scene.sources().len() as u64) * (scene.receivers().len() as u64);
+        let count = count_sequences(options);
+        if count.saturating_mul(pairs) > MAX_SEARCH_WORK {
+            return Err(SearchError::TooLarge {
+                sequences: count,
+                pairs,
+            });
+        }
+        debug_assert!(options.max_steps <= MAX_STATIONARY_STEPS);
+        let rooms = !options.refract
+            && options.interfaces.iter().all(|&i| {
+                let line = &scene.interfaces()[i].polyline;
+                !line.is_closed() && line.num_segments() == 1
+            });
+        let mut out = if rooms {
+            self.search_rooms(options)
+        } else {
+            self.search_sequences(options)
+        };
+        out.sort_by(|a, b| {
+            (a.source, a.receiver)
+                .cmp(&(b.source, b.receiver))
+                .then(a.arrival.time.total_cmp(&b.arrival.time))
+                .then_with(|| a.steps.len().cmp(&b.steps.len()))
+                .then_with(|| {
+                    let key = |s: &Vec<Step>| -> Vec<(usize, bool)> {
+                        s.iter()
+                            .map(|t| (t.interface, t.kind == StepKind::Refract))
+                            .collect()
+                    };
+                    key(&a.steps).cmp(&key(&b.steps))
+                })
+        });
+        Ok(out)
+    }
+
+    /// Whether an arrival of this status is listed.
+    fn listed(status: Status, options: &SearchOptions) -> bool {
+        matches!(status, Status::Converged | Status::Vertex)
+            || (options.obstructed && status == Status::Obstructed)
+    }
+
+    /// [`search`](Self::search) sequence by sequence, pair by pair in parallel.
+    fn search_sequences(&self, options: &SearchOptions) -> Vec<SearchArrival> {
+        let scene = self.scene();
+        let seqs = sequences(self, options);
+        let nr = scene.receivers().len();
+        (0..scene.sources().len() * nr)
+            .into_par_iter()
+            .flat_map_iter(|pair| {
+                let (source, receiver) = (pair / nr, pair % nr);
+                let (s, r) = (scene.sources()[source], scene.receivers()[receiver]);
+                let medium = self.source_medium(false, s);
+                let mut found = Vec::new();
+                let mut arrivals = Vec::new();
+                for steps in &seqs {
+                    let sequence = Sequence { steps, path: None };
+                    self.stationary_of(sequence, None, s, medium, r, &mut arrivals);
+                    for a in arrivals.drain(..) {
+                        if Self::listed(a.status, options) {
+                            found.push(SearchArrival {
+                                source,
+                                receiver,
+                                steps: steps.clone(),
+                                arrival: a,
+                            });
+                        }
+                    }
+                }
+                found
+            })
+            .collect()
+    }
+
+    /// [`search`](Self::search) for reflections off one-segment walls: the image-source tree
+    /// once per source, for all receivers (every leg in the source's medium).
+    fn search_rooms(&self, options: &SearchOptions) -> Vec<SearchArrival> {
+        let scene = self.scene();
+        let walls = MirrorWalls::new(scene, &options.interfaces);
+        (0..scene.sources().len())
+            .into_par_iter()
+            .flat_map_iter(|source| {
+                let s = scene.sources()[source];
+                let Some(medium) = self.source_medium(false, s) else {
+                    return Vec::new();
+                };
+                let slowness = scene.media()[medium].slowness;
+                let mut found: Vec<MirrorArrival> = Vec::new();
+                walls.arrivals(
+                    scene,
+                    s,
+                    scene.receivers(),
+                    options.max_steps,
+                    slowness,
+                    options.obstructed,
+                    &mut MirrorScratch::default(),
+                    &mut found,
+                );
+                found
+                    .into_iter()
+                    .map(|m| mirror_arrival(scene, source, medium, m))
+                    .collect::<Vec<_>>()
+            })
+            .collect()
+    }
+}
+
+/// A [`MirrorArrival`] as a [`SearchArrival`]: one-segment walls, so segment 0 and the
+/// arclength from the wall's first vertex.
+fn mirror_arrival(
+    scene: &crate::Scene,
+    source: usize,
+    medium: usize,
+    m: MirrorArrival,
+) -> SearchArrival {
+    let k = m.walls.len();
+    let parameters = m
+        .walls
+        .iter()
+        .zip(&m.points[1..=k])
+        .map(|(&w, &p): (&usize, &Point)| scene.interfaces()[w].polyline.vertices()[0].distance(p))
+        .collect();
+    SearchArrival {
+        source,
+        receiver: m.receiver,
+        steps: m
+            .walls
+            .iter()
+            .map(|&interface| Step {
+                kind: StepKind::Reflect,
+                interface,
+            })
+            .collect(),
+        arrival: Arrival {
+            status: m.status,
+            time: m.time,
+            points: m.points,
+            parameters,
+            segments: vec![0; k],
+            media: vec![medium; k + 1],
+            iterations: 0,
+            reason: m.reason,
+            kink: None,
+            residual: 0.0,
+            complete: true,
+        },
     }
 }

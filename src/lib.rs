@@ -43,7 +43,7 @@ mod trace;
 pub mod argmin_bridge;
 
 // The vocabulary: scenes, the tracer and its options, ray results, batches, outputs.
-pub use arrivals::{SearchArrival, StationaryRays, TripleArrivals};
+pub use arrivals::{MAX_SEARCH_WORK, SearchArrival, SearchError, StationaryRays, TripleArrivals};
 pub use batch::{Batch, BatchOptions};
 pub use geom::{Point, Vec2};
 pub use output::{

@@ -991,7 +991,11 @@ impl Search<'_> {
         let x = pa + ta * tau;
         let point = |i: usize| self.g.line(i).point_on(nw.seg[i], nw.s[i]);
         let prev = if a == 0 { self.g.source } else { point(a - 1) };
-        let next = if b + 1 == k { self.g.receiver } else { point(b + 1) };
+        let next = if b + 1 == k {
+            self.g.receiver
+        } else {
+            point(b + 1)
+        };
         let unit = |v: Vec2| v * (1.0 / v.length());
         let (u_in, u_out) = (unit(x - prev), unit(next - x));
         let alpha = w[a] * u_in.dot(ta) / w[j];

@@ -21,14 +21,6 @@
 //! validation alone decides. Where the side of a wall's line an image lies on is within that
 //! margin, the child's beam is the whole plane (no pruning below it).
 
-#![cfg_attr(
-    not(test),
-    expect(
-        dead_code,
-        reason = "the automatic search, its caller, is being written"
-    )
-)]
-
 use crate::geom::{Point, Vec2};
 use crate::scene::{Scene, SegmentRef, StepKind};
 
@@ -1188,5 +1180,5 @@ mod tests {
     }
 
     /// Random rooms the comparison runs on.
-    const ROOMS: usize = 240;
+    const ROOMS: usize = 80;
 }

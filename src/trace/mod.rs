@@ -27,8 +27,9 @@ mod start;
 mod stationary;
 mod straight;
 
-pub(crate) use classify::Classifier;
+pub(crate) use classify::{Classifier, Sequence};
 pub use complete::{Arrival, Kink, Stationary, StationaryError};
+pub(crate) use mirrors::{MirrorArrival, MirrorScratch, MirrorWalls};
 pub(crate) use one_step::{OneStepStart, flat_status};
 pub use plan::Kernels;
 pub(crate) use plan::{OneStepPath, PathPlan};

@@ -303,7 +303,15 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         StationaryMode::One => Solved::Batch(trace(&tracer, !args.no_warm_start)?),
         StationaryMode::All => Solved::Stationary(trace_stationary(&tracer)?),
     };
-    write_outputs(args, &scene, &solved, None)
+    let arrivals = match scene.search() {
+        Some(_) => Some(
+            tracer
+                .search()
+                .map_err(|e| Failure::Input(format!("search: {e}")))?,
+        ),
+        None => None,
+    };
+    write_outputs(args, &scene, &solved, arrivals.as_deref())
 }
 
 /// Writes what `solve` found: the name tables and the picture when asked for, the arrivals of

@@ -1,0 +1,67 @@
+//! Automatic sequences (`search`): the image-source tree of rooms against the complete search
+//! of every sequence, one by one; the refusal of searches too large to run.
+
+use eigenray::{Scene, SearchError, Status, Tracer};
+
+fn fixture(name: &str) -> serde_json::Value {
+    let path = format!(
+        "{}/fixtures/pyroomacoustics/{name}.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// In the hexagon and the L-shaped room (each wall its own interface, order 4), the search
+/// for reflections alone takes the image-source tree, and finds as many paths as
+/// pyroomacoustics' image-source model. Allowing refractions too (into the outside, where no
+/// medium is: none can happen) sends every sequence through the complete search one by one:
+/// every path it lists is one of the tree's (sequence, status, time to 1e-12). It still
+/// misses a few that collapse two reflections into a corner on the way (see the complete
+/// search's `COLLAPSE` rule): their count is printed, and bounded here.
+#[test]
+fn rooms_image_tree_matches_the_sequence_search() {
+    for (name, expected) in [("hexagon", 794), ("l_shape", 893)] {
+        let mut doc = fixture(name);
+        doc["search"] = serde_json::json!({ "max_steps": 4, "refract": false });
+        let rooms = Scene::from_json(&doc.to_string()).unwrap();
+        doc["search"] = serde_json::json!({ "max_steps": 4 });
+        let sequences = Scene::from_json(&doc.to_string()).unwrap();
+        let a = Tracer::new(&rooms).unwrap().search().unwrap();
+        let b = Tracer::new(&sequences).unwrap().search().unwrap();
+        assert_eq!(a.len(), expected, "{name}");
+        for y in &b {
+            let same = a.iter().any(|x| {
+                (x.source, x.receiver, &x.steps, x.arrival.status)
+                    == (y.source, y.receiver, &y.steps, y.arrival.status)
+                    && (x.arrival.time - y.arrival.time).abs() <= 1e-12 * x.arrival.time
+            });
+            assert!(same, "{name}: {y:?} is not the tree's");
+        }
+        println!("{name}: tree {}, sequence by sequence {}", a.len(), b.len());
+        assert!(
+            b.len() * 5 >= a.len() * 4,
+            "{name}: {} of {}",
+            b.len(),
+            a.len()
+        );
+        assert!(a.iter().all(|x| x.arrival.status == Status::Converged));
+        // Ordered by source, receiver, time.
+        assert!(a.windows(2).all(|w| {
+            (w[0].source, w[0].receiver) < (w[1].source, w[1].receiver)
+                || w[0].arrival.time <= w[1].arrival.time
+        }));
+    }
+}
+/// A search whose sequences times pairs would exceed the limit is refused before it starts.
+#[test]
+fn huge_searches_are_refused() {
+    let mut doc = fixture("hexagon");
+    doc["search"] = serde_json::json!({ "max_steps": 12 });
+    let scene = Scene::from_json(&doc.to_string()).unwrap();
+    match Tracer::new(&scene).unwrap().search() {
+        Err(SearchError::TooLarge { sequences, pairs }) => {
+            assert!(sequences > 1_000_000_000 && pairs > 0);
+        }
+        other => panic!("{other:?}"),
+    }
+}
