@@ -523,10 +523,7 @@ impl<'s> Tracer<'s> {
             PathPlan::OneStep(one) => one.solve(&self.context(), path, source, receiver, start, ws),
             plan => self.solve_general(plan, source, src_medium, receiver, path, start, ws),
         };
-        // A time is the answer, except at a vertex, which the complete search confirms as a
-        // kink (the solver holds points on vertices by a weaker test).
-        let answered = record.status.has_time() && record.status != Status::Vertex;
-        if answered || matches!(start, Start::Trial(_)) {
+        if record.status.has_time() || matches!(start, Start::Trial(_)) {
             return record;
         }
         self.search_instead(record, source, src_medium, receiver, path, ws)

@@ -275,6 +275,15 @@ impl Tracer<'_> {
             receiver,
             &mut arrivals,
         );
+        // A vertex answer that the search confirms (the same path) stands.
+        let confirmed = record.status == Status::Vertex
+            && arrivals
+                .iter()
+                .any(|a| (a.time - record.time).abs() <= 1e-9 * record.time);
+        if confirmed {
+            FALLBACK.set(arrivals);
+            return record;
+        }
         let best = arrivals
             .iter()
             .find(|a| a.status != Status::Obstructed)
