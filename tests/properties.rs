@@ -808,7 +808,7 @@ enum Breakage {
 
 fn breakage() -> impl Strategy<Value = Breakage> {
     prop_oneof![
-        (0..4usize).prop_map(Breakage::DropTopLevel),
+        (0..3usize).prop_map(Breakage::DropTopLevel),
         Just(Breakage::DropPoints),
         Just(Breakage::DropSteps),
         prop_oneof![Just(0.0), Just(-0.0), -10.0..0.0f64].prop_map(Breakage::NonPositiveSpeed),
@@ -832,7 +832,7 @@ fn apply(doc: &mut Value, b: &Breakage) -> Option<String> {
         .and_then(|m| m.keys().next().cloned())?;
     match *b {
         Breakage::DropTopLevel(k) => {
-            let key = ["media", "sources", "receivers", "paths"][k];
+            let key = ["media", "sources", "receivers"][k];
             doc.as_object_mut()?.remove(key);
             Some(key.into())
         }
