@@ -172,8 +172,10 @@ impl std::error::Error for StationaryError {}
 
 /// Tuples a search visits at most before it gives up (and says it is not complete).
 const MAX_TUPLES: usize = 1 << 26;
-/// Newton steps per assignment.
+/// Newton steps per assignment (again after each pin or restart).
 const MAX_STEPS: usize = 200;
+/// Restarts away from collapses per assignment (see `Search::unpin`).
+const MAX_RESTARTS: usize = 6;
 
 /// A range of consecutive segments of a polyline: its box and tangent cone.
 #[derive(Clone, Copy, Debug)]
@@ -513,6 +515,9 @@ struct Search<'a> {
     tolerance: f64,
     sc: Box<Scratch>,
     stats: Stationary,
+    /// The legs (bits) whose two points [`minimise`](Search::minimise) holds together at a
+    /// collapse while the others settle.
+    pinned: usize,
 }
 
 /// What a search reuses from one triple to the next (per thread): the solve's state and
@@ -571,8 +576,42 @@ enum Settled {
     /// At a minimiser where a leg vanished (no stationary path: the classifier's
     /// `coincident`).
     Degenerate,
+    /// At the minimum over the segments, with a point at an end of its segment that `T`
+    /// pushes outwards: `T` being convex, no stationary point lies inside the segments.
+    Outside,
     /// Not settled (the search is then not complete).
     No,
+}
+
+/// What a collapse or a stall of an assignment's solve leads to.
+enum Kinked {
+    /// The solve ends so.
+    Settled(Settled),
+    /// Points were pinned at a collapse, or moved away from one that is not the minimum:
+    /// the solve goes on.
+    Restarted,
+}
+
+/// What [`Search::kink_direction`] finds of a pinned leg.
+struct KinkDirection {
+    /// The direction that makes both points' residuals vanish.
+    both: Vec2,
+    /// The least `|g|` that makes the collapse a minimum over the segments.
+    least: f64,
+    /// Whether the collapse sits at an end of either segment.
+    at_end: bool,
+}
+
+/// How one Newton step of an assignment's solve went.
+enum NewtonStep {
+    /// The points moved.
+    Moved,
+    /// The step is below round-off: at the minimum.
+    Done,
+    /// No step descends.
+    Stalled,
+    /// The Hessian cannot be solved, even damped.
+    Singular,
 }
 
 /// Shortest leg between two interactions, relative to the path's length, below which a solve
@@ -633,6 +672,7 @@ pub(crate) fn search_sequence(
             tuples: 0,
             solves: 0,
         },
+        pinned: 0,
     };
     search.run(out);
     stats.complete &= search.stats.complete;
@@ -838,7 +878,7 @@ impl Search<'_> {
         let (settled, iterations) = self.minimise(held);
         match settled {
             Settled::Yes => {}
-            Settled::Degenerate => return,
+            Settled::Degenerate | Settled::Outside => return,
             Settled::No => {
                 self.stats.complete = false;
                 return;
@@ -923,245 +963,449 @@ impl Search<'_> {
         out.push(a);
     }
 
-    /// A solve that stalled or ran out of steps at the evaluation in `self.sc.nw`: next to
-    /// a collapsing leg between two interactions, [`collapse`](Self::collapse) decides; next to
-    /// a vanishing leg to the source or the receiver, or with a leg along its interaction's
-    /// line, no stationary path ([`Settled::Degenerate`]: the thresholds [`COLLAPSE`] and
-    /// [`ALONG`]); otherwise not settled. `None`: restarted.
-    fn stalled(&mut self, held: usize, restarts: &mut usize) -> Option<Settled> {
+    /// Minimises the time over the free points on the lines of their segments (the held ones
+    /// stay on their vertices) from the state in `self.sc.nw`: damped Newton steps on the
+    /// analytic Hessian of `problem` with backtracking on `T` itself, which is convex there.
+    ///
+    /// Where a leg between two free points collapses, `T` has a kink: the two points are held
+    /// together at their lines' crossing (the leg *pinned*) while the others settle, and then
+    /// the subgradient decides ([`kink_direction`](Self::kink_direction)): when every pinned
+    /// leg's `|g| ≤ 1`, `0 ∈ ∂T` and the minimum is the collapse (no stationary path); a
+    /// pinned leg with `|g| > 1` is not at the minimum, and its points restart apart along `g`.
+    /// Returns how it ended and the steps taken; leaves the evaluation at the end in
+    /// `self.sc.nw.eval`.
+    fn minimise(&mut self, held: usize) -> (Settled, usize) {
+        let k = self.g.k();
+        let tol = self.tolerance;
+        let (mut steps, mut budget, mut restarts) = (0, MAX_STEPS, 0);
+        self.pinned = 0;
+        loop {
+            let nw = &mut self.sc.nw;
+            self.g
+                .evaluate(&nw.s, &nw.seg, &nw.pin, &mut nw.eval, true, false);
+            let e = &nw.eval;
+            let pinned = self.pinned;
+            let collapsed = (1..k).find(|&j| pinned >> j & 1 == 0 && e.len[j] <= e.vanish);
+            // Free points at an end of their segment that T pushes outwards stay there.
+            let outward = self.outward(held | self.pinned_points());
+            let now = held | self.pinned_points() | outward;
+            let verdict = if let Some(j) = collapsed {
+                // Two points on one spot: held there while the others settle.
+                Some(self.pin(held, j))
+            } else if self.sc.nw.eval.vanished > 0 {
+                // The source or the receiver on an interaction's spot.
+                return (Settled::Degenerate, steps);
+            } else if !self.sc.nw.eval.rmax.is_finite() {
+                return (Settled::No, steps);
+            } else if self.residual(now) <= tol || k == 0 || now == (1 << k) - 1 {
+                self.settled(held, outward, &mut restarts)
+            } else if steps >= budget {
+                Some(self.stalled(held))
+            } else {
+                match self.newton_step(now) {
+                    NewtonStep::Moved => {
+                        steps += 1;
+                        None
+                    }
+                    NewtonStep::Done => self.settled(held, outward, &mut restarts),
+                    NewtonStep::Singular => return (Settled::No, steps),
+                    // Within round-off of the minimum, or next to a kink of `T`.
+                    NewtonStep::Stalled if self.residual(now) <= 1e-8 => {
+                        self.settled(held, outward, &mut restarts)
+                    }
+                    NewtonStep::Stalled => Some(self.stalled(held)),
+                }
+            };
+            match verdict {
+                None => {}
+                Some(Kinked::Settled(settled)) => return (settled, steps),
+                Some(Kinked::Restarted) => budget = steps + MAX_STEPS,
+            }
+        }
+    }
+
+    /// The minimum over the segments is reached (the points not in `outward` settled): with
+    /// pinned legs, first the subgradient test ([`unpin`](Self::unpin)), which may restart;
+    /// then, with a point held at a segment's end by `T` pushing outwards, the minimum of the
+    /// convex `T` lies outside the segments and no stationary path is inside them; otherwise
+    /// the minimiser (or the collapse's verdict).
+    fn settled(&mut self, held: usize, outward: usize, restarts: &mut usize) -> Option<Kinked> {
+        let pinned = if self.pinned != 0 {
+            match self.unpin(restarts) {
+                Kinked::Settled(settled) => Some(settled),
+                restarted => return Some(restarted),
+            }
+        } else {
+            None
+        };
+        Some(Kinked::Settled(match (outward, pinned) {
+            (0, None) if self.minimiser_inside(held) => Settled::Yes,
+            (0, Some(settled)) => settled,
+            _ => Settled::Outside,
+        }))
+    }
+
+    /// Whether one more Newton step from the settled points leaves every free point strictly
+    /// inside its segment: the minimiser of `T` on the segments' lines itself, not a point the
+    /// tolerance accepted next to a segment's end while the minimiser lies on or beyond it.
+    fn minimiser_inside(&mut self, held: usize) -> bool {
+        if !self.newton_direction(held) {
+            return true;
+        }
+        (0..self.g.k()).filter(|&i| held >> i & 1 == 0).all(|i| {
+            let [lo, hi] = self.extent(i);
+            let s = self.sc.nw.s[i] + self.sc.delta[i];
+            s > lo && s < hi
+        })
+    }
+
+    /// The extent `[start, end]` of point `i`'s segment, in its polyline's parameter.
+    fn extent(&self, i: usize) -> [f64; 2] {
+        let (line, j) = (self.g.line(i), self.sc.nw.seg[i]);
+        [line.start(j), line.start(j + 1)]
+    }
+
+    /// The points not in `fixed` that sit at an end of their segment with the residual
+    /// pushing them out of it.
+    fn outward(&self, fixed: usize) -> usize {
+        let nw = &self.sc.nw;
+        (0..self.g.k())
+            .filter(|&i| fixed >> i & 1 == 0)
+            .filter(|&i| {
+                let [lo, hi] = self.extent(i);
+                let r = nw.eval.r[i];
+                (nw.s[i] <= lo && r > 0.0) || (nw.s[i] >= hi && r < 0.0)
+            })
+            .fold(0, |m, i| m | 1 << i)
+    }
+
+    /// The largest relative residual of the points not in `fixed`.
+    fn residual(&self, fixed: usize) -> f64 {
+        let (e, w) = (&self.sc.nw.eval, self.g.slowness);
+        (0..self.g.k())
+            .filter(|&i| fixed >> i & 1 == 0)
+            .map(|i| e.r[i].abs() / (w[i] + w[i + 1]))
+            .fold(0.0, f64::max)
+    }
+
+    /// The points of the pinned legs (leg `j` joins points `j − 1` and `j`).
+    fn pinned_points(&self) -> usize {
+        self.pinned | (self.pinned >> 1)
+    }
+
+    /// The Newton step in `self.sc.delta` for the points not in `fixed` (0 for those), from
+    /// the evaluation in `self.sc.nw`; damped where the Hessian is singular (legs along a
+    /// segment's line). `false` when even the damped one cannot be solved.
+    fn newton_direction(&mut self, fixed: usize) -> bool {
+        let k = self.g.k();
+        let is_fixed = |i: usize| fixed >> i & 1 == 1;
+        let sc = &mut *self.sc;
+        let e = &sc.nw.eval;
+        for i in 0..k {
+            let free = !is_fixed(i);
+            sc.diag[i] = if free { e.diag[i] } else { 1.0 };
+            sc.rhs[i] = if free { -e.r[i] } else { 0.0 };
+            if i + 1 < k {
+                sc.off[i] = if free && !is_fixed(i + 1) {
+                    e.off[i]
+                } else {
+                    0.0
+                };
+            }
+        }
+        let n = k.saturating_sub(1);
+        if thomas(&sc.diag, &sc.off[..n], &sc.rhs, &mut sc.delta, &mut sc.cp) {
+            return true;
+        }
+        let scale = sc.diag.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+        for d in &mut sc.diag {
+            *d += 1e-9 * scale + f64::MIN_POSITIVE;
+        }
+        thomas(&sc.diag, &sc.off[..n], &sc.rhs, &mut sc.delta, &mut sc.cp)
+    }
+
+    /// One damped Newton step of [`minimise`](Self::minimise) from the evaluation in
+    /// `self.sc.nw` for the points not in `held`, with backtracking on `T` along the step
+    /// projected onto the segments (held points do not move: their step is 0).
+    fn newton_step(&mut self, held: usize) -> NewtonStep {
+        let k = self.g.k();
+        let mut extent = [[f64::NEG_INFINITY, f64::INFINITY]; MAX_STATIONARY_STEPS];
+        for (i, x) in extent.iter_mut().enumerate().take(k) {
+            *x = self.extent(i);
+        }
+        // A point at an end of its segment that the step would push out of it stays there:
+        // the step again without it (the Hessian of the rest stays positive definite).
+        let mut fixed = held;
+        loop {
+            if !self.newton_direction(fixed) {
+                return NewtonStep::Singular;
+            }
+            let (s, delta) = (&self.sc.nw.s, &self.sc.delta);
+            let out = (0..k)
+                .filter(|&i| fixed >> i & 1 == 0)
+                .filter(|&i| {
+                    let [lo, hi] = extent[i];
+                    (s[i] <= lo && delta[i] < 0.0) || (s[i] >= hi && delta[i] > 0.0)
+                })
+                .fold(0, |m, i| m | 1 << i);
+            if out == 0 {
+                break;
+            }
+            fixed |= out;
+        }
+        let sc = &mut *self.sc;
+        let (s, e) = (&sc.nw.s, &sc.nw.eval);
+        let tiny = (0..k).all(|i| {
+            sc.delta[i].abs() <= 4.0 * f64::EPSILON * (s[i].abs() + e.len[i] + e.len[i + 1])
+        });
+        if tiny {
+            return NewtonStep::Done;
+        }
+        // No point moves further than twice its longer leg at once.
+        let mut cap = 1.0f64;
+        for i in 0..k {
+            let reach = 2.0 * e.len[i].max(e.len[i + 1]);
+            if sc.delta[i].abs() > reach {
+                cap = cap.min(reach / sc.delta[i].abs());
+            }
+        }
+        let slope: f64 = (0..k).map(|i| e.r[i] * sc.delta[i]).sum();
+        // The residual of the moving points (the others' is held where it is).
+        let w = self.g.slowness;
+        let moving = |r: &[f64]| {
+            (0..k)
+                .filter(|&i| fixed >> i & 1 == 0)
+                .map(|i| r[i].abs() / (w[i] + w[i + 1]))
+                .fold(0.0, f64::max)
+        };
+        let (t0, rmax0) = (e.time, moving(&e.r));
+        let mut alpha = cap;
+        loop {
+            for i in 0..k {
+                let [lo, hi] = extent[i];
+                sc.s_try[i] = (sc.nw.s[i] + alpha * sc.delta[i]).clamp(lo, hi);
+            }
+            let nw = &sc.nw;
+            self.g
+                .evaluate(&sc.s_try, &nw.seg, &nw.pin, &mut sc.trial, false, false);
+            let drop = t0 - sc.trial.time;
+            // Descent on T, or (within round-off of T) on the residual.
+            let round_off = 4.0 * f64::EPSILON * t0;
+            if drop >= -1e-4 * alpha * slope || (drop >= -round_off && moving(&sc.trial.r) < rmax0)
+            {
+                sc.nw.s[..k].copy_from_slice(&sc.s_try[..k]);
+                return NewtonStep::Moved;
+            }
+            alpha *= 0.5;
+            if alpha < 1e-12 {
+                return NewtonStep::Stalled;
+            }
+        }
+    }
+
+    /// A solve that stalled or ran out of steps at the evaluation in `self.sc.nw`, where `T`
+    /// is smooth only away from collapsed legs: the shortest leg between two free points on
+    /// crossing lines is pinned ([`pin`](Self::pin); the subgradient test then decides
+    /// exactly). Without such a leg: next to a vanishing leg (within [`COLLAPSE`] of the
+    /// path's length), or with a leg along its interaction's line (within [`ALONG`]), no
+    /// stationary path ([`Settled::Degenerate`], by these thresholds); otherwise not settled.
+    fn stalled(&mut self, held: usize) -> Kinked {
         let k = self.g.k();
         let e = &self.sc.nw.eval;
         let total: f64 = e.len[..=k].iter().sum();
-        if (1..k).any(|j| e.len[j] <= COLLAPSE * total) {
-            return self.collapse(held, restarts);
+        let fixed = held | self.pinned_points();
+        let pinnable = |j: usize| {
+            e.len[j] <= COLLAPSE * total
+                && fixed & ((1 << (j - 1)) | (1 << j)) == 0
+                && self.crossing(j).is_some()
+        };
+        let shortest = (1..k)
+            .filter(|&j| pinnable(j))
+            .min_by(|&x, &y| e.len[x].total_cmp(&e.len[y]));
+        if let Some(j) = shortest {
+            return self.pin(held, j);
         }
         let along = |i: usize| {
             e.u[i].cross(e.tan[i]).abs() <= ALONG || e.u[i + 1].cross(e.tan[i]).abs() <= ALONG
         };
-        let end = e.len[0] <= COLLAPSE * total || e.len[k] <= COLLAPSE * total;
-        Some(if end || (0..k).any(along) {
+        let short = (0..=k).any(|j| e.len[j] <= COLLAPSE * total);
+        Kinked::Settled(if short || (0..k).any(along) {
             Settled::Degenerate
         } else {
             Settled::No
         })
     }
 
-    /// A leg between two interactions collapsing (shortest against the path's length, within
-    /// [`COLLAPSE`]), where `T` has a kink. With both points free on lines that cross, the
-    /// collapsed spot is the lines' crossing `X`, and `T` has its minimum there exactly when
-    /// some `g` with `|g| ≤ 1` in place of the leg's direction makes both points' residuals
-    /// vanish: `w g · tₐ = wᵢₙ uᵢₙ · tₐ` and `w g · t_b = wₒᵤₜ uₒᵤₜ · t_b`, two equations
-    /// for `g`. With `|g| ≤ 1` the minimum is the collapse: no stationary path. With
-    /// `|g| > 1` it is not: the two points restart on either side of `X` with the leg along
-    /// `g` (`None`), at most twice. Where the other free points have not settled, points are
-    /// held on vertices, the lines are parallel or several legs collapse: no stationary path,
-    /// by the rule of [`COLLAPSE`].
-    fn collapse(&mut self, held: usize, restarts: &mut usize) -> Option<Settled> {
-        let k = self.g.k();
-        let is_held = |i: usize| held >> i & 1 == 1;
+    /// Where points `j − 1` and `j` meet if their leg collapses: their parameters at the
+    /// crossing of their segments' lines, when the lines cross (not parallel) inside both
+    /// segments (to round-off).
+    fn crossing(&self, j: usize) -> Option<[f64; 2]> {
+        let (a, b) = (j - 1, j);
         let nw = &self.sc.nw;
         let e = &nw.eval;
-        let total: f64 = e.len[..=k].iter().sum();
-        let mut short = (1..k).filter(|&j| e.len[j] <= COLLAPSE * total);
-        let (Some(j), None) = (short.next(), short.next()) else {
-            return Some(Settled::Degenerate);
-        };
-        let (a, b) = (j - 1, j);
-        if is_held(a) || is_held(b) {
-            return Some(Settled::Degenerate);
-        }
-        let (la, lb) = (self.g.line(a), self.g.line(b));
-        let (ta, tb) = (la.tangent(nw.seg[a]), lb.tangent(nw.seg[b]));
+        let (ta, tb) = (e.tan[a], e.tan[b]);
         let det = ta.cross(tb);
         if det.abs() <= 1e-9 {
-            // One line (or parallel ones): the points meet along it.
-            return Some(Settled::Degenerate);
+            return None;
+        }
+        let d = e.rel[b + 1] - e.rel[a + 1];
+        let at = [nw.s[a] + d.cross(tb) / det, nw.s[b] + d.cross(ta) / det];
+        let mut out = at;
+        for (x, i) in out.iter_mut().zip([a, b]) {
+            let [lo, hi] = self.extent(i);
+            let pad = 1e-9 * (hi - lo);
+            if !(*x >= lo - pad && *x <= hi + pad) {
+                return None;
+            }
+            *x = x.clamp(lo, hi);
+        }
+        Some(out)
+    }
+
+    /// Pins collapsing leg `j`: its two points to the crossing of their segments' lines, held
+    /// there while the others settle. Points held on vertices, a point already held by a
+    /// pinned neighbour (three points on one spot), or no crossing inside the segments
+    /// (points meeting along one line, where no side holds): no stationary path, by the rule
+    /// of [`COLLAPSE`].
+    fn pin(&mut self, held: usize, j: usize) -> Kinked {
+        let (a, b) = (j - 1, j);
+        let fixed = (held | self.pinned_points()) & ((1 << a) | (1 << b)) != 0;
+        let Some([sa, sb]) = self.crossing(j).filter(|_| !fixed) else {
+            return Kinked::Settled(Settled::Degenerate);
+        };
+        let nw = &mut self.sc.nw;
+        (nw.s[a], nw.s[b]) = (sa, sb);
+        (nw.pin[a], nw.pin[b]) = (Pin::Vertex, Pin::Vertex);
+        self.pinned |= 1 << j;
+        Kinked::Restarted
+    }
+
+    /// The other points settled with the pinned legs held: every pinned leg whose collapse is
+    /// not at the minimum ([`kink_direction`](Self::kink_direction) `|g| > 1`) restarts
+    /// ([`restart_apart`](Self::restart_apart); at most [`MAX_RESTARTS`] times in a solve,
+    /// then not settled); when none does, `0 ∈ ∂T` at the collapse: no stationary path.
+    fn unpin(&mut self, restarts: &mut usize) -> Kinked {
+        let k = self.g.k();
+        let total: f64 = self.sc.nw.eval.len[..=k].iter().sum();
+        let (mut moved, mut at_end) = (false, false);
+        for j in 1..k {
+            if self.pinned >> j & 1 == 0 {
+                continue;
+            }
+            let Some(kink) = self.kink_direction(j) else {
+                return Kinked::Settled(Settled::No);
+            };
+            if kink.least <= 1.0 {
+                at_end |= kink.at_end;
+                continue;
+            }
+            if *restarts >= MAX_RESTARTS {
+                return Kinked::Settled(Settled::No);
+            }
+            let n = kink.both.length();
+            self.restart_apart(j, kink.both * (1.0 / n), total);
+            moved = true;
+        }
+        if moved {
+            *restarts += 1;
+            Kinked::Restarted
+        } else if at_end {
+            // The minimum over the segments has points at their ends.
+            Kinked::Settled(Settled::Outside)
+        } else {
+            Kinked::Settled(Settled::Degenerate)
+        }
+    }
+
+    /// Frees pinned leg `j`'s two points, apart along the unit direction `dir` (`σ_b t_b −
+    /// σₐ tₐ = δ dir`): `δ` the one of 10⁻¹ … 10⁻⁶ of the path's length `total` where `T` is
+    /// least (the leg of the minimum is short where `|g|` is near 1).
+    fn restart_apart(&mut self, j: usize, dir: Vec2, total: f64) {
+        let (a, b) = (j - 1, j);
+        let (ea, eb) = (self.extent(a), self.extent(b));
+        let sc = &mut *self.sc;
+        let (ta, tb) = (sc.nw.eval.tan[a], sc.nw.eval.tan[b]);
+        let det = ta.cross(tb);
+        (sc.nw.pin[a], sc.nw.pin[b]) = (Pin::Free, Pin::Free);
+        let (sa, sb) = (sc.nw.s[a], sc.nw.s[b]);
+        let k = self.g.k();
+        let mut best = (f64::INFINITY, 0.0);
+        let mut delta = 0.1 * total;
+        for _ in 0..6 {
+            let v = dir * delta;
+            sc.s_try[..k].copy_from_slice(&sc.nw.s[..k]);
+            sc.s_try[a] = (sa - v.cross(tb) / det).clamp(ea[0], ea[1]);
+            sc.s_try[b] = (sb + ta.cross(v) / det).clamp(eb[0], eb[1]);
+            let nw = &sc.nw;
+            self.g
+                .evaluate(&sc.s_try, &nw.seg, &nw.pin, &mut sc.trial, false, false);
+            if sc.trial.time < best.0 {
+                best = (sc.trial.time, delta);
+            }
+            delta *= 0.1;
+        }
+        let v = dir * best.1;
+        sc.nw.s[a] = (sa - v.cross(tb) / det).clamp(ea[0], ea[1]);
+        sc.nw.s[b] = (sb + ta.cross(v) / det).clamp(eb[0], eb[1]);
+        self.pinned &= !(1 << j);
+    }
+
+    /// For pinned leg `j` (points `a = j − 1`, `b = j` on one spot `X`): the directions `g`
+    /// that in place of the leg's would make `X` a minimum over the segments, given the
+    /// others: `w g · tₐ = wᵢₙ uᵢₙ · tₐ` and `w g · t_b = wₒᵤₜ uₒᵤₜ · t_b`, each equation an
+    /// inequality where its point sits at an end of its segment (`T` may only rise inwards).
+    /// `T` being convex, `X` is the minimum exactly when one of them has `|g| ≤ 1`. `None`
+    /// when a neighbouring leg has vanished too.
+    fn kink_direction(&self, j: usize) -> Option<KinkDirection> {
+        let (a, b) = (j - 1, j);
+        let e = &self.sc.nw.eval;
+        let (ta, tb) = (e.tan[a], e.tan[b]);
+        let det = ta.cross(tb);
+        if e.len[a] <= e.vanish || e.len[j + 1] <= e.vanish {
+            return None;
         }
         let w = self.g.slowness;
-        // The test speaks of the minimum only where the other free points have settled.
-        let settled = (0..k)
-            .filter(|&i| i != a && i != b && !is_held(i))
-            .all(|i| e.r[i].abs() <= 1e-9 * (w[i] + w[i + 1]));
-        let (pa, pb) = (
-            la.point_on(nw.seg[a], nw.s[a]),
-            lb.point_on(nw.seg[b], nw.s[b]),
-        );
-        let d = pb - pa;
-        let (tau, mu) = (d.cross(tb) / det, d.cross(ta) / det);
-        let x = pa + ta * tau;
-        let point = |i: usize| self.g.line(i).point_on(nw.seg[i], nw.s[i]);
-        let prev = if a == 0 { self.g.source } else { point(a - 1) };
-        let next = if b + 1 == k {
-            self.g.receiver
-        } else {
-            point(b + 1)
-        };
-        let unit = |v: Vec2| v * (1.0 / v.length());
-        let (u_in, u_out) = (unit(x - prev), unit(next - x));
-        let alpha = w[a] * u_in.dot(ta) / w[j];
-        let beta = w[j + 1] * u_out.dot(tb) / w[j];
-        let g = Vec2::new(
+        let alpha = w[a] * e.u[a].dot(ta) / w[j];
+        let beta = w[j + 1] * e.u[j + 1].dot(tb) / w[j];
+        // Both equations: the direction to restart along.
+        let both = Vec2::new(
             (alpha * tb.y - ta.y * beta) / det,
             (ta.x * beta - alpha * tb.x) / det,
         );
-        let n = g.length();
-        if !n.is_finite() {
-            return Some(Settled::No);
-        }
-        if n <= 1.0 + 1e-9 || !settled {
-            return Some(Settled::Degenerate);
-        }
-        if *restarts >= 2 {
-            return Some(Settled::No);
-        }
-        *restarts += 1;
-        // σ_b t_b − σ_a tₐ = δ ĝ: the leg along g, a hundredth of the path long.
-        let v = g * (0.01 * total / n);
-        let (sigma_a, sigma_b) = (-v.cross(tb) / det, ta.cross(v) / det);
-        let nw = &mut self.sc.nw;
-        nw.s[a] += tau + sigma_a;
-        nw.s[b] += mu + sigma_b;
-        None
-    }
-
-    /// Minimises the time over the free points on the lines of their segments (the held ones
-    /// stay on their vertices) from the state in `self.sc.nw`: damped Newton steps on the
-    /// analytic Hessian of `problem` with backtracking on `T` itself, which is convex there.
-    /// Returns how it ended and the steps taken; leaves the evaluation at the end in
-    /// `self.sc.nw.eval`.
-    fn minimise(&mut self, held: usize) -> (Settled, usize) {
-        let k = self.g.k();
-        let is_held = |i: usize| held >> i & 1 == 1;
-        let tol = self.tolerance;
-        let (mut steps, mut budget, mut restarts) = (0, MAX_STEPS, 0);
-        loop {
-            let nw = &mut self.sc.nw;
-            self.g
-                .evaluate(&nw.s, &nw.seg, &nw.pin, &mut nw.eval, true, false);
-            let e = &nw.eval;
-            if (1..k).any(|j| e.len[j] <= e.vanish) {
-                // Two points on one spot: the minimum there, or a restart away from it.
-                match self.collapse(held, &mut restarts) {
-                    Some(settled) => return (settled, steps),
-                    None => {
-                        budget = steps + MAX_STEPS;
-                        continue;
-                    }
-                }
+        // Where a point sits at an end, its equation holds as `g · t ≤ c` or `≥ c`
+        // (∂T/∂s ≥ 0 at the start, ≤ 0 at the end; ∂T/∂sₐ = w (c − g · tₐ) for `a`,
+        // ∂T/∂s_b = w (g · t_b − c) for `b`).
+        let nw = &self.sc.nw;
+        let side = |i: usize| {
+            let [lo, hi] = self.extent(i);
+            if nw.s[i] <= lo {
+                -1
+            } else if nw.s[i] >= hi {
+                1
+            } else {
+                0
             }
-            if e.vanished > 0 {
-                // The source or the receiver on an interaction's spot.
-                return (Settled::Degenerate, steps);
-            }
-            if !e.rmax.is_finite() {
-                return (Settled::No, steps);
-            }
-            if e.rmax <= tol || k == 0 || held == (1 << k) - 1 {
-                return (Settled::Yes, steps);
-            }
-            if steps >= budget {
-                match self.stalled(held, &mut restarts) {
-                    Some(settled) => return (settled, steps),
-                    None => {
-                        budget = steps + MAX_STEPS;
-                        continue;
-                    }
-                }
-            }
-            for i in 0..k {
-                let free = !is_held(i);
-                self.sc.diag[i] = if free { e.diag[i] } else { 1.0 };
-                self.sc.rhs[i] = if free { -e.r[i] } else { 0.0 };
-                if i + 1 < k {
-                    self.sc.off[i] = if free && !is_held(i + 1) {
-                        e.off[i]
-                    } else {
-                        0.0
-                    };
-                }
-            }
-            let off = &self.sc.off[..k.saturating_sub(1)];
-            if !thomas(
-                &self.sc.diag,
-                off,
-                &self.sc.rhs,
-                &mut self.sc.delta,
-                &mut self.sc.cp,
-            ) {
-                // A singular Hessian (legs along a segment's line): damp it.
-                let scale = self.sc.diag.iter().fold(0.0f64, |m, d| m.max(d.abs()));
-                for d in &mut self.sc.diag {
-                    *d += 1e-9 * scale + f64::MIN_POSITIVE;
-                }
-                if !thomas(
-                    &self.sc.diag,
-                    off,
-                    &self.sc.rhs,
-                    &mut self.sc.delta,
-                    &mut self.sc.cp,
-                ) {
-                    return (Settled::No, steps);
-                }
-            }
-            let tiny = (0..k).all(|i| {
-                self.sc.delta[i].abs()
-                    <= 4.0 * f64::EPSILON * (nw.s[i].abs() + e.len[i] + e.len[i + 1])
-            });
-            if tiny {
-                return (Settled::Yes, steps);
-            }
-            // No point moves further than twice its longer leg at once.
-            let mut cap = 1.0f64;
-            for i in 0..k {
-                let reach = 2.0 * e.len[i].max(e.len[i + 1]);
-                if self.sc.delta[i].abs() > reach {
-                    cap = cap.min(reach / self.sc.delta[i].abs());
-                }
-            }
-            let slope: f64 = (0..k).map(|i| e.r[i] * self.sc.delta[i]).sum();
-            let (t0, rmax0) = (e.time, e.rmax);
-            let mut alpha = cap;
-            let accepted = loop {
-                for i in 0..k {
-                    self.sc.s_try[i] = nw.s[i] + alpha * self.sc.delta[i];
-                }
-                self.g.evaluate(
-                    &self.sc.s_try,
-                    &nw.seg,
-                    &nw.pin,
-                    &mut self.sc.trial,
-                    false,
-                    false,
-                );
-                let t = self.sc.trial.time;
-                let drop = t0 - t;
-                // Descent on T, or (within round-off of T) on the residual.
-                let round_off = 4.0 * f64::EPSILON * t0;
-                if drop >= -1e-4 * alpha * slope
-                    || (drop >= -round_off && self.sc.trial.rmax < rmax0)
-                {
-                    break true;
-                }
-                alpha *= 0.5;
-                if alpha < 1e-12 {
-                    break false;
-                }
+        };
+        let holds = |g: Vec2| {
+            let pad = 1e-12;
+            let ok = |v: f64, c: f64, sense: i32| match sense {
+                0 => (v - c).abs() <= pad,
+                s if s < 0 => v <= c + pad,
+                _ => v >= c - pad,
             };
-            if !accepted {
-                // Stalled within round-off of the minimum, or next to a kink of `T`.
-                if rmax0 <= 1e-8 {
-                    return (Settled::Yes, steps);
-                }
-                match self.stalled(held, &mut restarts) {
-                    Some(settled) => return (settled, steps),
-                    None => {
-                        budget = steps + MAX_STEPS;
-                        continue;
-                    }
-                }
-            }
-            nw.s[..k].copy_from_slice(&self.sc.s_try);
-            steps += 1;
-        }
+            // At its start, g · tₐ ≤ α for `a` and g · t_b ≥ β for `b`.
+            ok(g.dot(ta), alpha, side(a)) && ok(g.dot(tb), beta, -side(b))
+        };
+        let least = [Vec2::default(), ta * alpha, tb * beta]
+            .into_iter()
+            .filter(|&g| holds(g))
+            .map(Vec2::length)
+            .fold(both.length(), f64::min);
+        let at_end = side(a) != 0 || side(b) != 0;
+        (both.length().is_finite()).then_some(KinkDirection {
+            both,
+            least,
+            at_end,
+        })
     }
 }
