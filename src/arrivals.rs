@@ -279,38 +279,37 @@ fn step_choices(options: &SearchOptions) -> Vec<Step> {
     out
 }
 
-/// Every step sequence of 0 to `max_steps` steps from `choices`, shortest first (a step that
-/// reflects off the one-segment interface of the step before it is left out: its two points
-/// would lie on one line, where no path exists).
-fn sequences(tracer: &Tracer<'_>, options: &SearchOptions) -> Vec<Vec<Step>> {
-    let choices = step_choices(options);
-    let one_segment = |i: usize| tracer.scene().interfaces()[i].polyline.num_segments() == 1;
-    let mut out: Vec<Vec<Step>> = vec![Vec::new()];
-    let mut level: Vec<Vec<Step>> = vec![Vec::new()];
-    for _ in 0..options.max_steps {
-        let mut next = Vec::new();
-        for seq in &level {
-            for &c in &choices {
-                let repeat = seq.last().is_some_and(|l: &Step| {
-                    l.interface == c.interface
-                        && l.kind == StepKind::Reflect
-                        && c.kind == StepKind::Reflect
-                        && one_segment(c.interface)
-                });
-                if !repeat {
-                    let mut s = seq.clone();
-                    s.push(c);
-                    next.push(s);
-                }
-            }
-        }
-        out.extend(next.iter().cloned());
-        level = next;
+/// Calls `visit` with every step sequence of 0 to `max_steps` steps from `choices`, depth
+/// first, each extending `steps` (a step that reflects off the one-segment interface of the
+/// step before it is left out: its two points would lie on one line, where no path exists).
+fn for_each_sequence(
+    scene: &crate::Scene,
+    choices: &[Step],
+    max_steps: usize,
+    steps: &mut Vec<Step>,
+    visit: &mut impl FnMut(&[Step]),
+) {
+    visit(steps);
+    if steps.len() == max_steps {
+        return;
     }
-    out
+    for &c in choices {
+        let repeat = steps.last().is_some_and(|l| {
+            l.interface == c.interface
+                && l.kind == StepKind::Reflect
+                && c.kind == StepKind::Reflect
+                && scene.interfaces()[c.interface].polyline.num_segments() == 1
+        });
+        if !repeat {
+            steps.push(c);
+            for_each_sequence(scene, choices, max_steps, steps, visit);
+            steps.pop();
+        }
+    }
 }
 
-/// How many sequences [`sequences`] generates, without generating them.
+/// How many sequences [`for_each_sequence`] visits at most (without leaving out repeated
+/// reflections), without visiting them.
 fn count_sequences(options: &SearchOptions) -> u64 {
     let c = (step_choices(options).len() as u64).max(1);
     let mut total: u64 = 1;
@@ -376,19 +375,16 @@ impl Tracer<'_> {
         } else {
             self.search_sequences(options)
         };
+        // By pair and time; ties (none but equal times) by the sequence, for a fixed order.
+        fn key(s: &[Step]) -> impl Iterator<Item = (usize, bool)> + '_ {
+            s.iter().map(|t| (t.interface, t.kind == StepKind::Refract))
+        }
         out.sort_by(|a, b| {
             (a.source, a.receiver)
                 .cmp(&(b.source, b.receiver))
                 .then(a.arrival.time.total_cmp(&b.arrival.time))
                 .then_with(|| a.steps.len().cmp(&b.steps.len()))
-                .then_with(|| {
-                    let key = |s: &Vec<Step>| -> Vec<(usize, bool)> {
-                        s.iter()
-                            .map(|t| (t.interface, t.kind == StepKind::Refract))
-                            .collect()
-                    };
-                    key(&a.steps).cmp(&key(&b.steps))
-                })
+                .then_with(|| key(&a.steps).cmp(key(&b.steps)))
         });
         Ok(out)
     }
@@ -402,7 +398,7 @@ impl Tracer<'_> {
     /// [`search`](Self::search) sequence by sequence, pair by pair in parallel.
     fn search_sequences(&self, options: &SearchOptions) -> Vec<SearchArrival> {
         let scene = self.scene();
-        let seqs = sequences(self, options);
+        let choices = step_choices(options);
         let nr = scene.receivers().len();
         (0..scene.sources().len() * nr)
             .into_par_iter()
@@ -412,7 +408,7 @@ impl Tracer<'_> {
                 let medium = self.source_medium(false, s);
                 let mut found = Vec::new();
                 let mut arrivals = Vec::new();
-                for steps in &seqs {
+                let mut visit = |steps: &[Step]| {
                     let sequence = Sequence { steps, path: None };
                     self.stationary_of(sequence, None, s, medium, r, &mut arrivals);
                     for a in arrivals.drain(..) {
@@ -420,12 +416,14 @@ impl Tracer<'_> {
                             found.push(SearchArrival {
                                 source,
                                 receiver,
-                                steps: steps.clone(),
+                                steps: steps.to_vec(),
                                 arrival: a,
                             });
                         }
                     }
-                }
+                };
+                let mut steps = Vec::with_capacity(options.max_steps);
+                for_each_sequence(scene, &choices, options.max_steps, &mut steps, &mut visit);
                 found
             })
             .collect()
@@ -500,7 +498,8 @@ fn mirror_arrival(
             iterations: 0,
             reason: m.reason,
             kink: None,
-            residual: 0.0,
+            // The image method's points: no solve, no residual.
+            residual: f64::NAN,
             complete: true,
         },
     }

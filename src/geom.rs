@@ -236,6 +236,27 @@ impl Aabb {
     }
 }
 
+/// The side of a polyline at one of its vertices that a direction lies on, from its sides of
+/// the two segments' lines (`before`, `after`: positive on the left, the side the normals
+/// point to) and whether the polyline turns left there (`turns_left`). Near the vertex the
+/// side on the inside of the turn is a wedge narrower than a half-plane (both lines' side),
+/// the other one the rest: `1.0` left, `-1.0` right, `0.0` on a boundary.
+#[inline]
+pub(crate) fn vertex_side(turns_left: bool, before: f64, after: f64) -> f64 {
+    let (left, right) = if turns_left {
+        (before > 0.0 && after > 0.0, before < 0.0 || after < 0.0)
+    } else {
+        (before > 0.0 || after > 0.0, before < 0.0 && after < 0.0)
+    };
+    if left && !right {
+        1.0
+    } else if right && !left {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
 /// Exact orientation of `c` relative to the directed line `a → b`: positive when `c` is to the
 /// left, negative to the right, zero when the three are collinear.
 ///

@@ -12,7 +12,7 @@ use spade::{
     MIN_ALLOWED_VALUE, Point2, PositionInTriangulation, Triangulation,
 };
 
-use crate::geom::{Aabb, Point, orient};
+use crate::geom::{Aabb, Point, orient, vertex_side};
 use crate::scene::{Scene, SceneError};
 
 type Cdt = ConstrainedDelaunayTriangulation<Point2<f64>, (), (), (), QuietHint>;
@@ -663,7 +663,11 @@ impl Regions {
 
     /// The medium on the side of the segment opposite to `from` at arclength `s`: what a ray
     /// coming from `from` refracts into. The side of `from` is decided exactly against the
-    /// segment's line; `None` when `from` lies on that line (or the index is invalid).
+    /// segment's line; at a vertex between two segments (`s` at the segment's start or end),
+    /// the side of the polyline there (the side test's rule: on the inside of the turn, the
+    /// side of both segments' lines; elsewhere the other side), with the media of the segment
+    /// after the vertex. `None` when `from` lies on that line (or the index is
+    /// invalid).
     pub fn medium_across(
         &self,
         interface: usize,
@@ -674,13 +678,33 @@ impl Regions {
         let g = self.segment_index(interface, segment)?;
         let first = self.vert_offset[interface];
         let n = self.vert_offset[interface + 1] - first;
+        let nseg = self.seg_offset[interface + 1] - self.seg_offset[interface];
+        let closed = nseg == n;
         let local = g - self.seg_offset[interface];
-        let (a, b) = (
-            self.verts[first + local],
-            self.verts[first + (local + 1) % n],
-        );
-        let side = orient(a, b, from);
-        let sides = self.sides(interface, segment, s);
+        let vert = |j: usize| self.verts[first + j % n];
+        let (a, b) = (vert(local), vert(local + 1));
+        let start = self.pieces[self.piece_offset[g]].start;
+        // The vertex `s` sits on, as (segment before it, segment after it), if any.
+        let vertex = if s <= start && (local > 0 || closed) {
+            Some(((local + nseg - 1) % nseg, local))
+        } else if (local + 1 < nseg && s >= self.pieces[self.piece_offset[g + 1]].start)
+            || (local + 1 == nseg && closed && s >= start + a.distance(b))
+        {
+            Some((local, (local + 1) % nseg))
+        } else {
+            None
+        };
+        let (side, sides) = match vertex {
+            None => (orient(a, b, from), self.sides(interface, segment, s)),
+            Some((before, after)) => {
+                let v = vert(after);
+                let (p, q) = (vert(before), vert(after + 1));
+                let left = (v - p).cross(q - v) > 0.0;
+                let side = vertex_side(left, orient(p, v, from), orient(v, q, from));
+                let after_start = self.pieces[self.piece_offset[g - local + after]].start;
+                (side, self.sides(interface, after, after_start))
+            }
+        };
         if side > 0.0 {
             sides.right
         } else if side < 0.0 {
@@ -1638,6 +1662,15 @@ mod tests {
         }
         assert_eq!(r.medium_across(0, 3, 3.5, p(-1.0, 0.5)), glass);
         assert_eq!(r.medium_across(0, 3, 3.5, p(0.5, 0.5)), air);
+        // At the corner (1, 1), where the top segment starts: from (2, 0.5), below the top's
+        // line but outside the square, the sum of the two normals says outside, so glass lies
+        // across (the top's line alone would say air); from inside, air. The same corner as the
+        // end of the right-hand segment, and the corner (0, 0) where the polygon closes.
+        assert_eq!(r.medium_across(0, 2, 2.0, p(2.0, 0.5)), glass);
+        assert_eq!(r.medium_across(0, 1, 2.0, p(2.0, 0.5)), glass);
+        assert_eq!(r.medium_across(0, 2, 2.0, p(0.5, 0.9)), air);
+        assert_eq!(r.medium_across(0, 0, 0.0, p(0.5, -2.0)), glass);
+        assert_eq!(r.medium_across(0, 3, 4.0, p(0.5, -2.0)), glass);
     }
 
     #[test]

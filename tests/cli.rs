@@ -635,20 +635,7 @@ fn a_big_demo_draws_a_sample() {
 
 /// A valley (a maximum-type kink), a roof (a minimum-type kink) and the direct ray, every
 /// stationary path of each.
-const EVERY: &str = r#"{
-    "media": { "air": { "speed": 1.0 } },
-    "interfaces": {
-        "valley": { "points": [[-3, 0], [0, -2], [3, 0]] },
-        "roof": { "points": [[7, 0], [10, 2], [13, 0]] }
-    },
-    "sources": [[-0.5, 2], [9.5, 4]], "receivers": [[0.5, 2], [10.5, 4]],
-    "paths": [
-        { "name": "valley", "steps": [{ "reflect": "valley" }], "media": ["air", "air"] },
-        { "name": "roof", "steps": [{ "reflect": "roof" }], "media": ["air", "air"] },
-        { "steps": [], "media": ["air"] }
-    ],
-    "solver": { "stationary": "all" }
-}"#;
+const EVERY: &str = include_str!("../fixtures/every_stationary.json");
 
 #[test]
 fn solve_lists_every_stationary_path_when_the_scene_asks() {

@@ -423,20 +423,7 @@ fn csv_quotes_a_media_field_whose_names_need_it() {
 
 /// A valley (a maximum-type kink at its bottom), a roof (a minimum-type kink at its apex) and
 /// the direct ray, every stationary path of each (`"stationary": "all"`).
-const EVERY: &str = r#"{
-    "media": { "air": { "speed": 1.0 } },
-    "interfaces": {
-        "valley": { "points": [[-3, 0], [0, -2], [3, 0]] },
-        "roof": { "points": [[7, 0], [10, 2], [13, 0]] }
-    },
-    "sources": [[-0.5, 2], [9.5, 4]], "receivers": [[0.5, 2], [10.5, 4]],
-    "paths": [
-        { "name": "valley", "steps": [{ "reflect": "valley" }], "media": ["air", "air"] },
-        { "name": "roof", "steps": [{ "reflect": "roof" }], "media": ["air", "air"] },
-        { "steps": [], "media": ["air"] }
-    ],
-    "solver": { "stationary": "all" }
-}"#;
+const EVERY: &str = include_str!("../fixtures/every_stationary.json");
 
 fn stationary_written(format: Format) -> (Scene, eigenray::StationaryRays, Vec<u8>) {
     let scene = Scene::from_json(EVERY).expect("valid scene");

@@ -60,3 +60,59 @@ fn huge_searches_are_refused() {
         other => panic!("{other:?}"),
     }
 }
+
+/// `eigenray solve` on the hexagon room writes the search's arrivals under `arrivals`: as
+/// many as the library's search, in its order, each with its steps in the scene's notation
+/// and a time equal to the slowness times the length of its points (recomputed here).
+#[test]
+fn the_cli_writes_the_arrivals() {
+    let path = format!(
+        "{}/fixtures/pyroomacoustics/hexagon.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_eigenray"))
+        .args(["solve", &path])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let written = doc["arrivals"].as_array().unwrap();
+    let scene = Scene::from_json(&fixture("hexagon").to_string()).unwrap();
+    let found = Tracer::new(&scene).unwrap().search().unwrap();
+    assert_eq!(written.len(), found.len());
+    let slowness = scene.media()[0].slowness;
+    for (w, f) in written.iter().zip(&found) {
+        assert_eq!(w["source"], f.source);
+        assert_eq!(w["receiver"], f.receiver);
+        assert_eq!(w["status"], "converged");
+        let steps: Vec<String> = w["steps"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| s["reflect"].as_str().unwrap().to_string())
+            .collect();
+        let names: Vec<String> = f
+            .steps
+            .iter()
+            .map(|s| scene.interfaces()[s.interface].name.clone())
+            .collect();
+        assert_eq!(steps, names);
+        let points: Vec<[f64; 2]> = w["points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| [p[0].as_f64().unwrap(), p[1].as_f64().unwrap()])
+            .collect();
+        let length: f64 = points
+            .windows(2)
+            .map(|l| (l[1][0] - l[0][0]).hypot(l[1][1] - l[0][1]))
+            .sum();
+        let time = w["time"].as_f64().unwrap();
+        assert_eq!(time, f.arrival.time);
+        assert!((time - slowness * length).abs() <= 1e-14 * time, "{w}");
+    }
+}

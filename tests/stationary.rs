@@ -86,14 +86,7 @@ impl Case {
             .enumerate()
             .map(|(i, w)| format!(r#""m{i}": {{ "index": {w:e} }}"#))
             .collect();
-        let steps: Vec<String> = self
-            .steps
-            .iter()
-            .map(|&(reflect, i)| {
-                let kind = if reflect { "reflect" } else { "refract" };
-                format!(r#"{{ "{kind}": "i{i}" }}"#)
-            })
-            .collect();
+        let steps = steps_json(&self.steps);
         let leg_media: Vec<String> = (0..self.slowness.len())
             .map(|i| format!(r#""m{i}""#))
             .collect();
@@ -107,10 +100,22 @@ impl Case {
             self.source[1],
             self.receiver[0],
             self.receiver[1],
-            steps.join(", "),
+            steps,
             leg_media.join(", ")
         )
     }
+}
+
+/// Steps `(reflect, interface)` in the scene format, off interfaces named `i0`, `i1`, ….
+fn steps_json(steps: &[(bool, usize)]) -> String {
+    let each: Vec<String> = steps
+        .iter()
+        .map(|&(reflect, i)| {
+            let kind = if reflect { "reflect" } else { "refract" };
+            format!(r#"{{ "{kind}": "i{i}" }}"#)
+        })
+        .collect();
+    each.join(", ")
 }
 
 /// A path of the reference.
@@ -522,28 +527,46 @@ fn candidate(
             Some(_) => Kink::Mixed,
         });
     }
-    // Sides: a reflection's legs on one side, a refraction's on opposite sides (at a vertex,
-    // against the sum of the two segments' normals).
+    // Sides: a reflection's legs on one side, a refraction's on opposite sides. At a vertex
+    // `v` between `p` (before) and `q` (after), the left side near `v` is the sector of
+    // directions counter-clockwise from `q − v` to `p − v`, the right side the rest.
     for i in 0..k {
-        let normal = |s: usize| {
-            let (a, b) = lines[i].segment(s);
-            let t = unit(sub(b, a));
-            [-t[1], t[0]]
+        let angle = |d: P| d[1].atan2(d[0]);
+        let ccw = |from: f64, to: f64| (to - from).rem_euclid(std::f64::consts::TAU);
+        let side = |leg: P| -> Result<f64, &'static str> {
+            let (a, b) = lines[i].segment(choice[i].seg);
+            if !choice[i].held {
+                let t = unit(sub(b, a));
+                let c = cross(t, unit(leg));
+                return if c.abs() < 1e-8 {
+                    Err("a leg along its interface")
+                } else {
+                    Ok(c.signum())
+                };
+            }
+            let (p, _) = lines[i].segment(lines[i].before(choice[i].seg).unwrap());
+            let (v, q) = (a, b);
+            let (start, end) = (angle(sub(q, v)), angle(sub(p, v)));
+            let (width, at) = (ccw(start, end), ccw(start, angle(leg)));
+            // Along a segment next to the vertex (to round-off): on neither side.
+            let gap = [0.0, width, std::f64::consts::TAU]
+                .iter()
+                .map(|b| (at - b).abs())
+                .fold(f64::INFINITY, f64::min);
+            if gap < 1e-12 {
+                Ok(0.0)
+            } else if gap < 1e-8 {
+                Err("a leg along its interface")
+            } else if at < width {
+                Ok(1.0)
+            } else {
+                Ok(-1.0)
+            }
         };
-        let mut n = normal(choice[i].seg);
-        if choice[i].held {
-            let m = normal(lines[i].before(choice[i].seg).unwrap());
-            n = [n[0] + m[0], n[1] + m[1]];
-        }
-        let n = unit(n);
-        let a = dot(n, sub(x[i], x[i + 1])) / norm(sub(x[i], x[i + 1]));
-        let b = dot(n, sub(x[i + 2], x[i + 1])) / norm(sub(x[i + 2], x[i + 1]));
-        if a.abs() < 1e-8 || b.abs() < 1e-8 {
-            return Err("a leg along its interface");
-        }
+        let a = side(sub(x[i], x[i + 1]))?;
+        let b = side(sub(x[i + 2], x[i + 1]))?;
         let reflect = case.steps[i].0;
-        let same_side = (a > 0.0) == (b > 0.0);
-        if same_side != reflect {
+        if a == 0.0 || b == 0.0 || (a == b) != reflect {
             return Ok(None);
         }
     }
@@ -787,10 +810,7 @@ fn every_stationary_path_of_random_scenes_matches_brute_force() {
     println!(
         "{compared} scenes, {paths} paths ({by_status:?}), {ambiguous} ambiguous skipped ({skipped:?})"
     );
-    for f in failures.iter().take(3) {
-        println!("{f}\n");
-    }
-    assert!(failures.is_empty(), "{} failures", failures.len());
+    assert_no_failures(&failures);
     // The scenes exercise every kind of path.
     for s in ["converged", "vertex", "obstructed"] {
         assert!(
@@ -801,6 +821,14 @@ fn every_stationary_path_of_random_scenes_matches_brute_force() {
     // Close calls (a leg along its interface, a minimiser on a segment's end, a reference
     // solve that does not settle next to a collapse) are skipped, not compared: few.
     assert!(ambiguous * 4 < compared, "{ambiguous} ambiguous");
+}
+
+/// Prints the first few failures of a randomised test, then fails if there are any.
+fn assert_no_failures(failures: &[String]) {
+    for f in failures.iter().take(3) {
+        println!("{f}\n");
+    }
+    assert!(failures.is_empty(), "{} failures", failures.len());
 }
 
 /// The reference's paths of `case` (which must not be a close call) against the engine's:
@@ -1061,10 +1089,7 @@ fn default_mode_no_path_is_a_proof() {
         }
     }
     println!("{compared} scenes: {proofs} no_path ({searched} by the complete search)");
-    for f in failures.iter().take(3) {
-        println!("{f}\n");
-    }
-    assert!(failures.is_empty(), "{} failures", failures.len());
+    assert_no_failures(&failures);
     assert!(proofs >= 100 && searched >= 50, "{proofs} {searched}");
 }
 
@@ -1147,14 +1172,7 @@ impl LookupCase {
                 .collect::<Vec<_>>()
                 .join(", ")
         };
-        let steps: Vec<String> = self
-            .steps
-            .iter()
-            .map(|&(reflect, i)| {
-                let kind = if reflect { "reflect" } else { "refract" };
-                format!(r#"{{ "{kind}": "i{i}" }}"#)
-            })
-            .collect();
+        let steps = steps_json(&self.steps);
         format!(
             r#"{{ "media": {{ "air": {{ "index": {AIR:e} }},
                              "glass": {{ "index": {GLASS:e}, "at": [{:e}, {:e}] }} }},
@@ -1171,7 +1189,7 @@ impl LookupCase {
             self.source[1],
             self.receiver[0],
             self.receiver[1],
-            steps.join(", ")
+            steps
         )
     }
 
@@ -1288,10 +1306,7 @@ fn media_from_regions_match_brute_force() {
         }
     }
     println!("{compared} scenes, {paths} paths, {through} through glass");
-    for f in failures.iter().take(3) {
-        println!("{f}\n");
-    }
-    assert!(failures.is_empty(), "{} failures", failures.len());
+    assert_no_failures(&failures);
     assert!(paths >= 60 && through >= 40, "{paths} {through}");
 }
 

@@ -40,7 +40,7 @@ pub(super) fn run(
 
         let residual = ws.eval.rmax;
         if residual <= tol && ws.eval.held == k {
-            return finished(ws, it.iterations);
+            return finished_at_kinks(g, ws, it.iterations, tol);
         }
         if !residual.is_finite() || it.iterations >= max_iterations {
             return not_converged(&ws.eval, it.iterations);
@@ -61,7 +61,7 @@ pub(super) fn run(
             continue;
         }
         if step.tiny {
-            return finished(ws, it.iterations);
+            return finished_at_kinks(g, ws, it.iterations, tol);
         }
         if residual <= tol
             || (it.stalled && at_round_off_floor(&ws.eval, &ws.s, &ws.pin, g.slowness, tol))
@@ -76,7 +76,7 @@ pub(super) fn run(
                     || ws.delta[i].abs() <= tol.sqrt() * (e.len[i] + e.len[i + 1])
             });
             if small || it.polishes >= 2 {
-                return finished(ws, it.iterations);
+                return finished_at_kinks(g, ws, it.iterations, tol);
             }
             it.polishes += 1;
         }
@@ -634,6 +634,31 @@ pub(super) fn not_converged(e: &Eval, iterations: usize) -> Solution {
         time: e.time,
         iterations,
         residual: e.rmax,
+    }
+}
+
+/// [`finished`], where every point held on a vertex sits on a kink of `T` (its one-sided
+/// residuals bracket zero, to the tolerance: the test that keeps a held point in
+/// `release_held`, which a point held only until the others settle skips); otherwise the
+/// solve has not found a stationary path (`not_converged`, which the tracer's complete search
+/// then settles).
+fn finished_at_kinks(g: &ProblemRef, ws: &NewtonWorkspace, iterations: usize, tol: f64) -> Solution {
+    let (k, w, e) = (g.k(), g.slowness, &ws.eval);
+    let no_kink = (0..k).any(|i| {
+        if ws.pin[i] != Pin::Vertex {
+            return false;
+        }
+        let Some(before) = segment_before(g, i, ws.seg[i]) else {
+            return true;
+        };
+        let scale = tol * (w[i] + w[i + 1]);
+        let (rp, rm) = (e.r[i], residual_on(g, e, i, before));
+        (rp < -scale && rm < -scale) || (rp > scale && rm > scale)
+    });
+    if no_kink {
+        not_converged(e, iterations)
+    } else {
+        finished(ws, iterations)
     }
 }
 

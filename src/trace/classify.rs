@@ -10,8 +10,7 @@
 //! interactions fall on one spot or a side is wrong; `obstructed` when only the crossing test
 //! fails.
 
-use crate::geom::{Aabb, Point, Vec2};
-use crate::polyline::Polyline;
+use crate::geom::{Aabb, Point, Vec2, vertex_side};
 use crate::problem::Pin;
 use crate::regions::Regions;
 use crate::scene::{Scene, SegmentRef, Step, StepKind};
@@ -77,34 +76,15 @@ impl Classifier {
         }
     }
 
-    /// The record of ray `path` from `source` to `receiver` after the solve `sol` left its
-    /// state in `nw`: its points into `points`, then the end, vanished-leg, vertex, side and
-    /// obstruction tests.
+    /// The record of a ray of the step sequence `of` (a scene path's, or one that a search
+    /// generated) from `source` to `receiver` after the solve `sol` left its state in `nw`:
+    /// its points into `points`, then the end, vanished-leg, vertex, side and obstruction
+    /// tests.
     #[expect(
         clippy::too_many_arguments,
         reason = "the parts of a ray, none of which the classifier owns"
     )]
     pub(crate) fn classify(
-        &self,
-        scene: &Scene,
-        path: usize,
-        source: Point,
-        receiver: Point,
-        sol: &Solution,
-        nw: &NewtonWorkspace,
-        points: &mut Vec<Point>,
-    ) -> RayRecord {
-        let of = Sequence::of(scene, path);
-        self.classify_sequence(scene, of, source, receiver, sol, nw, points)
-    }
-
-    /// [`classify`](Self::classify) for any step sequence (a scene path's, or one that a
-    /// search generated).
-    #[expect(
-        clippy::too_many_arguments,
-        reason = "the parts of a ray, none of which the classifier owns"
-    )]
-    pub(crate) fn classify_sequence(
         &self,
         scene: &Scene,
         of: Sequence<'_>,
@@ -159,7 +139,7 @@ impl Classifier {
         }
         let crossing = match of.path {
             Some(path) => self.obstruction(scene, path, points, &nw.seg[..k]),
-            None => first_crossing_any(scene, steps, points, &nw.seg[..k]),
+            None => self.obstruction_tested(scene, steps, None, points, &nw.seg[..k]),
         };
         if let Some(crossing) = crossing {
             return crossing.record(sol);
@@ -234,20 +214,23 @@ impl Classifier {
         if self.clear[path] && self.ends[0].contains(a) && self.ends[1].contains(b) {
             return None;
         }
-        self.obstruction_tested(scene, path, pts, seg)
+        let steps = &scene.paths()[path].steps;
+        self.obstruction_tested(scene, steps, Some(&self.leg_candidates[path]), pts, seg)
     }
 
-    /// [`obstruction`](Self::obstruction) leg by leg.
+    /// [`obstruction`](Self::obstruction) leg by leg, for the legs of `steps` with their
+    /// prepared candidate segments (`candidates`: per leg, of a scene path) or against every
+    /// segment of the scene (`None`: a sequence without prepared candidates).
     fn obstruction_tested(
         &self,
         scene: &Scene,
-        path: usize,
+        steps: &[Step],
+        candidates: Option<&[Option<Box<[u32]>>]>,
         pts: &[Point],
         seg: &[usize],
     ) -> Option<Crossing> {
         let k = seg.len();
-        let (pts, steps) = (&pts[..k + 2], &scene.paths()[path].steps[..k]);
-        let legs = &self.leg_candidates[path][..k + 1];
+        let (pts, steps) = (&pts[..k + 2], &steps[..k]);
         // The end legs' candidates hold for a source and a receiver within the scene's.
         let usable = [
             self.ends[0].contains(pts[0]),
@@ -266,7 +249,8 @@ impl Classifier {
             };
             if a != b {
                 let own = [own_a, own_b];
-                let hit = match legs[leg].as_deref() {
+                let listed = candidates.and_then(|c| c[leg].as_deref());
+                let hit = match listed {
                     Some(c) if (leg > 0 || usable[0]) && (leg < k || usable[1]) => {
                         scene.first_crossing_among(a, b, END_MARGIN, c, own)
                     }
@@ -305,40 +289,6 @@ impl<'a> Sequence<'a> {
     }
 }
 
-/// The first leg of the points `pts` (source, interactions, receiver) that crosses an
-/// interface strictly between its ends, tested against every segment of the scene (the
-/// classifier's test for a sequence without prepared candidates).
-pub(crate) fn first_crossing_any(
-    scene: &Scene,
-    steps: &[Step],
-    pts: &[Point],
-    seg: &[usize],
-) -> Option<Crossing> {
-    let k = seg.len();
-    let mut own_a = SegmentRef::NONE;
-    for leg in 0..=k {
-        let (a, b) = (pts[leg], pts[leg + 1]);
-        let own_b = if leg < k {
-            SegmentRef {
-                interface: steps[leg].interface as u32,
-                segment: seg[leg] as u32,
-            }
-        } else {
-            SegmentRef::NONE
-        };
-        if a != b
-            && let Some(r) = scene.first_crossing(a, b, END_MARGIN, [own_a, own_b])
-        {
-            return Some(Crossing {
-                leg,
-                interface: r.interface as usize,
-            });
-        }
-        own_a = own_b;
-    }
-    None
-}
-
 /// Leg media from the regions at the points in `nw` into `media`: the source's region
 /// (`source_medium`) for leg 0; a reflection keeps the medium, a refraction takes the one
 /// across the interface.
@@ -360,45 +310,14 @@ pub(crate) fn lookup_media(
         let line = &scene.interfaces()[step.interface].polyline;
         let here = line.point_on(nw.seg[i], nw.s[i]);
         if step.kind == StepKind::Refract {
-            m = medium_across(regions, line, step.interface, nw.seg[i], nw.s[i], prev)
+            m = regions
+                .medium_across(step.interface, nw.seg[i], nw.s[i], prev)
                 .ok_or(Reason::NoMedium { leg: i + 1 })?;
         }
         media.push(m);
         prev = here;
     }
     Ok(())
-}
-
-/// The medium that a ray from `from` refracts into at parameter `s` of segment `seg` of
-/// interface `interface` (`line`): across the segment's line from `from`; at a vertex between
-/// two segments, across the sum of their normals (the side test's rule there).
-pub(crate) fn medium_across(
-    regions: &Regions,
-    line: &Polyline,
-    interface: usize,
-    seg: usize,
-    s: f64,
-    from: Point,
-) -> Option<usize> {
-    let m = line.num_segments();
-    let wraps = line.is_closed();
-    let (before, after) = if s <= line.start(seg) && (seg > 0 || wraps) {
-        ((seg + m - 1) % m, seg)
-    } else if s >= line.start(seg + 1) && (seg + 1 < m || wraps) {
-        (seg, (seg + 1) % m)
-    } else {
-        return regions.medium_across(interface, seg, s, from);
-    };
-    let vertex = line.vertices()[after];
-    let side = (line.normal(before) + line.normal(after)).dot(from - vertex);
-    let sides = regions.sides(interface, after, line.start(after));
-    if side > 0.0 {
-        sides.right
-    } else if side < 0.0 {
-        sides.left
-    } else {
-        None
-    }
 }
 
 /// The first step whose legs are not on the sides it demands, for points in any state (held
@@ -410,19 +329,21 @@ fn wrong_side(scene: &Scene, steps: &[Step], nw: &NewtonWorkspace) -> Option<usi
     for (i, step) in steps.iter().enumerate() {
         let line = &scene.interfaces()[step.interface].polyline;
         let j = seg[i];
-        let mut n = line.normal(j);
-        // |n|: 1 for a segment's unit normal; at a vertex, of the sum of the two.
-        let mut n_len = 1.0;
-        if pin[i] == Pin::Vertex {
+        let (near, legs) = (&rel[i..i + 3], &len[i..i + 2]);
+        let (a, b) = leg_sides(line.normal(j), 1.0, near, legs);
+        // At a vertex, each leg's side of the polyline there (see `vertex_side`).
+        let (a, b) = if pin[i] == Pin::Vertex {
             let before = if j > 0 {
                 j - 1
             } else {
                 line.num_segments() - 1
             };
-            n += line.normal(before);
-            n_len = n.length();
-        }
-        let (a, b) = leg_sides(n, n_len, &rel[i..i + 3], &len[i..i + 2]);
+            let (a0, b0) = leg_sides(line.normal(before), 1.0, near, legs);
+            let left = line.tangent(before).cross(line.tangent(j)) > 0.0;
+            (vertex_side(left, a0, a), vertex_side(left, b0, b))
+        } else {
+            (a, b)
+        };
         let (la, lb) = (len[i], len[i + 1]);
         // A vanished leg (an end point on the interface there) lies on both sides: the
         // other leg must still lie on one.

@@ -932,7 +932,7 @@ impl Search<'_> {
             iterations,
             residual: e.rmax,
         };
-        let record = self.classifier.classify_sequence(
+        let record = self.classifier.classify(
             self.g.scene,
             self.sequence,
             self.g.source,
@@ -1008,7 +1008,8 @@ impl Search<'_> {
                         None
                     }
                     NewtonStep::Done => self.settled(held, outward, &mut restarts),
-                    NewtonStep::Singular => return (Settled::No, steps),
+                    // A singular Hessian: legs along their lines, or next to a kink.
+                    NewtonStep::Singular => Some(self.stalled(held)),
                     // Within round-off of the minimum, or next to a kink of `T`.
                     NewtonStep::Stalled if self.residual(now) <= 1e-8 => {
                         self.settled(held, outward, &mut restarts)

@@ -638,7 +638,7 @@ impl<'s> Tracer<'s> {
         };
         cx.classifier.classify(
             scene,
-            path,
+            Sequence::of(scene, path),
             source,
             receiver,
             &sol,

@@ -13,7 +13,7 @@ use super::start::{
     Placed, given_start, initial_guess, nearest_crossing, paraxial_one, refraction_guess,
 };
 use super::straight::{StraightStart, specular_point};
-use super::{Context, RayRecord, Reason, Start, Status, Workspace};
+use super::{Context, RayRecord, Reason, Sequence, Start, Status, Workspace};
 use crate::geom::{Point, Vec2};
 use crate::polyline::Polyline;
 use crate::problem::{Pin, ProblemRef};
@@ -91,7 +91,7 @@ impl OneStepPath {
         if sol.outcome != Outcome::Converged || nw.pin[0] != Pin::Free || nw.eval.vanished > 0 {
             return cx.classifier.classify(
                 scene,
-                path,
+                Sequence::of(scene, path),
                 source,
                 receiver,
                 &sol,

@@ -13,7 +13,7 @@ use crate::geom::Point;
 use crate::regions::Regions;
 use crate::scene::{MAX_STATIONARY_STEPS, StepKind};
 
-use super::classify::{Sequence, medium_across};
+use super::classify::Sequence;
 use super::complete::{self, Arrival, Hierarchy, SequenceSearch};
 use super::{RayRecord, Reason, Stationary, StationaryError, Status, Tracer, Workspace};
 
@@ -355,9 +355,8 @@ fn media_hold(regions: &Regions, search: &SequenceSearch<'_>, a: &Arrival) -> bo
         match step.kind {
             StepKind::Reflect => after == a.media[i],
             StepKind::Refract => {
-                let line = &search.scene.interfaces()[step.interface].polyline;
                 let (seg, s) = (a.segments[i], a.parameters[i]);
-                medium_across(regions, line, step.interface, seg, s, a.points[i]) == Some(after)
+                regions.medium_across(step.interface, seg, s, a.points[i]) == Some(after)
             }
         }
     })
