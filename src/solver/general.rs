@@ -642,7 +642,12 @@ pub(super) fn not_converged(e: &Eval, iterations: usize) -> Solution {
 /// `release_held`, which a point held only until the others settle skips); otherwise the
 /// solve has not found a stationary path (`not_converged`, which the tracer's complete search
 /// then settles).
-fn finished_at_kinks(g: &ProblemRef, ws: &NewtonWorkspace, iterations: usize, tol: f64) -> Solution {
+fn finished_at_kinks(
+    g: &ProblemRef,
+    ws: &NewtonWorkspace,
+    iterations: usize,
+    tol: f64,
+) -> Solution {
     let (k, w, e) = (g.k(), g.slowness, &ws.eval);
     let no_kink = (0..k).any(|i| {
         if ws.pin[i] != Pin::Vertex {

@@ -692,13 +692,11 @@ mod tests {
     /// many of them only the general solve found: the complete search
     /// ([`Tracer::stationary_paths`]), and where it lists nothing, the general solve from the
     /// paraxial start without kernels (no image method); also where the complete search
-    /// reports itself incomplete, for the path it may have missed. The complete search's solve of an
-    /// assignment can stall where a leg between two walls collapses at their shared corner,
-    /// which it takes for a degenerate minimum (a rule, not a proof, in its documentation);
-    /// the time being convex on the walls' lines, the general solve finds the one stationary
-    /// path there, from the paraxial start, or where that start leaves a wall's end on the
-    /// way, from the documented start (the image method's points, which the Newton solve
-    /// confirms and the classifier judges).
+    /// reports itself incomplete, for the path it may have missed. The time being convex on
+    /// the walls' lines, the general solve finds the one stationary path there, from the
+    /// paraxial start, or where that start leaves a wall's end on the way, from the documented
+    /// start (the image method's points, which the Newton solve confirms and the classifier
+    /// judges).
     fn reference_listing(scene: &Scene, obstructed: bool) -> (Listing, usize) {
         let tracer = Tracer::new(scene).unwrap();
         let general = Tracer::new(scene)
@@ -853,6 +851,8 @@ mod tests {
         eprintln!(
             "{paths} paths, {obstructed} obstructed, {missed} found by the general solve only"
         );
+        // The complete search misses nothing that the general solve finds.
+        assert_eq!(missed, 0, "paths only the general solve found");
         // Enough of both kinds for the comparison to say something.
         assert!(
             paths > 100 * ROOMS && obstructed > 20 * ROOMS,
