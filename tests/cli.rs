@@ -835,3 +835,25 @@ fn the_readme_valley_gives_its_output() {
     assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
     assert_eq!(text(&out.stdout), block("```text\n"));
 }
+
+/// The README's search scene gives the arrivals it shows.
+#[test]
+fn the_readme_square_room_gives_its_arrivals() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let readme = std::fs::read_to_string(format!("{root}/README.md")).expect("README");
+    let heading = "## Automatic sequences: `search`";
+    let section = &readme[readme.find(heading).expect(heading)..];
+    let block = |fence: &str| -> String {
+        let start = section.find(fence).expect(fence) + fence.len();
+        section[start..][..section[start..].find("```").expect("closing fence")].to_string()
+    };
+    let scene = TempFile::with("square.json", block("```json\n"));
+    let out = run([
+        OsStr::new("solve"),
+        scene.path().as_os_str(),
+        OsStr::new("--format"),
+        OsStr::new("jsonl"),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
+    assert_eq!(text(&out.stdout), block("```text\n"));
+}

@@ -29,12 +29,17 @@
 //! point, each choice bounded again first with its own segment's tangent or its vertex's cone.
 //!
 //! An assignment's solve is damped Newton on the analytic Hessian of `problem` with
-//! backtracking on `T` itself (convex there). It cannot be the solver's own loop, which moves
-//! points across vertices: here each point stays on its segment's line. A solve that stalls
-//! next to a collapsed leg (within [`COLLAPSE`] of the path's length), or with a leg whose sine
-//! with its segment's line is below [`ALONG`], is taken to approach a minimum that holds no
-//! stationary path (a vanishing leg, or a leg running along its interface): a rule with these
-//! thresholds, not a proof. Any other solve that does not settle marks the search incomplete.
+//! backtracking on `T` itself (convex there), each point kept on its segment (a point that `T`
+//! pushes out at an end stays there: the minimum then lies outside and no path is inside).
+//! It cannot be the solver's own loop, which moves points across vertices. Where two points
+//! collapse onto the crossing of their lines (`T` has a kink there), they are held there while
+//! the others settle, and the subgradient decides whether the collapse is the minimum (no
+//! path) or the points restart apart; where three points share one spot, the minimum of `T`
+//! with its kinks smoothed away decides. A solve that stalls next to a collapse that cannot be
+//! tested (points held on vertices, parallel lines; within [`COLLAPSE`] of the path's length),
+//! or with a leg whose sine with its segment's line is below [`ALONG`], is taken to approach a
+//! minimum that holds no stationary path: a rule with these thresholds, not a proof. Any other
+//! solve that does not settle marks the search incomplete.
 
 use std::f64::consts::PI;
 use std::fmt;
