@@ -1192,8 +1192,7 @@ impl Search<'_> {
         let (t0, rmax0) = (e.time, moving(&e.r));
         let mut alpha = cap;
         loop {
-            for i in 0..k {
-                let [lo, hi] = extent[i];
+            for (i, &[lo, hi]) in extent.iter().enumerate().take(k) {
                 sc.s_try[i] = (sc.nw.s[i] + alpha * sc.delta[i]).clamp(lo, hi);
             }
             let nw = &sc.nw;
@@ -1403,9 +1402,9 @@ impl Search<'_> {
             std::array::from_fn(|i| if i < k { self.sc.nw.s[i] } else { 0.0 });
         let mut alpha = 1.0;
         while alpha > 1e-10 {
-            for i in 0..k {
+            for (i, &start) in saved.iter().enumerate().take(k) {
                 let [lo, hi] = self.extent(i);
-                self.sc.nw.s[i] = (saved[i] + alpha * self.sc.delta[i]).clamp(lo, hi);
+                self.sc.nw.s[i] = (start + alpha * self.sc.delta[i]).clamp(lo, hi);
             }
             if time(self) < t0 {
                 return true;
