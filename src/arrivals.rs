@@ -222,6 +222,10 @@ mod tests {
     }
 }
 
+/// Tuples (and assignments solved) of the search of one sequence between one pair, beyond
+/// which that search gives up and its arrivals say `complete: false`.
+const SEARCH_TUPLES: usize = 1 << 20;
+
 /// Sequence-and-pair searches a `search` may ask for: beyond it the search is refused before
 /// it starts (each one is a complete search of one sequence between one source and one
 /// receiver).
@@ -410,7 +414,8 @@ impl Tracer<'_> {
                 let mut arrivals = Vec::new();
                 let mut visit = |steps: &[Step]| {
                     let sequence = Sequence { steps, path: None };
-                    self.stationary_of(sequence, None, s, medium, r, &mut arrivals);
+                    let limit = SEARCH_TUPLES;
+                    self.stationary_of(sequence, None, s, medium, r, limit, &mut arrivals);
                     for a in arrivals.drain(..) {
                         if Self::listed(a.status, options) {
                             found.push(SearchArrival {

@@ -175,8 +175,9 @@ impl fmt::Display for StationaryError {
 
 impl std::error::Error for StationaryError {}
 
-/// Tuples a search visits at most before it gives up (and says it is not complete).
-const MAX_TUPLES: usize = 1 << 26;
+/// Tuples (and assignments solved) a search of one sequence visits at most when asked for
+/// every stationary path, before it gives up and says it is not complete.
+pub(crate) const MAX_TUPLES: usize = 1 << 26;
 /// Newton steps per assignment (again after each pin or restart).
 const MAX_STEPS: usize = 200;
 /// Restarts away from collapses per assignment (see `Search::unpin`).
@@ -515,6 +516,8 @@ struct Search<'a> {
     g: ProblemRef<'a>,
     sequence: Sequence<'a>,
     media: &'a [usize],
+    /// See [`SequenceSearch::max_tuples`].
+    max_tuples: usize,
     classifier: &'a Classifier,
     hierarchies: &'a [&'a Hierarchy],
     tolerance: f64,
@@ -645,6 +648,8 @@ pub(crate) struct SequenceSearch<'a> {
     pub media: &'a [usize],
     pub source: Point,
     pub receiver: Point,
+    /// Tuples, and assignments solved, after which the search gives up (incomplete).
+    pub max_tuples: usize,
 }
 
 /// Every stationary path of one sequence with given leg media, appended to `out` unsorted
@@ -671,6 +676,7 @@ pub(crate) fn search_sequence(
         },
         sequence: input.sequence,
         media: input.media,
+        max_tuples: input.max_tuples,
         classifier: input.classifier,
         hierarchies: input.hierarchies,
         tolerance: input.tolerance,
@@ -797,7 +803,7 @@ impl Search<'_> {
             tuple.copy_from_slice(&stack[at..]);
             stack.truncate(at);
             self.stats.tuples += 1;
-            if self.stats.tuples > MAX_TUPLES {
+            if self.stats.tuples > self.max_tuples {
                 self.stats.complete = false;
                 return;
             }
@@ -870,6 +876,10 @@ impl Search<'_> {
             return;
         }
         self.stats.solves += 1;
+        if self.stats.solves > self.max_tuples {
+            self.stats.complete = false;
+            return;
+        }
         let nw = &mut self.sc.nw;
         for (i, &j) in segs.iter().enumerate() {
             let line = self.g.line(i);

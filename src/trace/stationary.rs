@@ -17,6 +17,12 @@ use super::classify::Sequence;
 use super::complete::{self, Arrival, Hierarchy, SequenceSearch};
 use super::{RayRecord, Reason, Stationary, StationaryError, Status, Tracer, Workspace};
 
+/// Tuples (and assignments solved) of the default mode's search of one ray, beyond which it
+/// answers `not_converged` (`Reason::SearchLimit`): the search of a ray stays within about a
+/// millisecond, where a sequence over long polylines with many steps could otherwise take
+/// minutes.
+const FALLBACK_TUPLES: usize = 1 << 14;
+
 thread_local! {
     /// Each thread's arrivals for the default mode's fallback, reused from ray to ray.
     static FALLBACK: Cell<Vec<Arrival>> = const { Cell::new(Vec::new()) };
@@ -93,6 +99,7 @@ impl Tracer<'_> {
             source,
             source_medium,
             receiver,
+            complete::MAX_TUPLES,
             out,
         ))
     }
@@ -116,6 +123,7 @@ impl Tracer<'_> {
         source: Point,
         source_medium: Option<usize>,
         receiver: Point,
+        max_tuples: usize,
         out: &mut Vec<Arrival>,
     ) -> Stationary {
         complete::recycle(out);
@@ -145,6 +153,7 @@ impl Tracer<'_> {
             media: &[],
             source,
             receiver,
+            max_tuples,
         };
         match (media, self.regions.as_ref(), source_medium) {
             (Some(media), _, _) => {
@@ -273,17 +282,9 @@ impl Tracer<'_> {
             source,
             if given { None } else { source_medium },
             receiver,
+            FALLBACK_TUPLES,
             &mut arrivals,
         );
-        // A vertex answer that the search confirms (the same path) stands.
-        let confirmed = record.status == Status::Vertex
-            && arrivals
-                .iter()
-                .any(|a| (a.time - record.time).abs() <= 1e-9 * record.time);
-        if confirmed {
-            FALLBACK.set(arrivals);
-            return record;
-        }
         let best = arrivals
             .iter()
             .find(|a| a.status != Status::Obstructed)
@@ -300,9 +301,9 @@ impl Tracer<'_> {
                 RayRecord {
                     status: a.status,
                     time: a.time,
-                    iterations: record
-                        .iterations
-                        .saturating_add(u32::try_from(a.iterations).unwrap_or(u32::MAX)),
+                    // The solve's iterations, within `max_iterations`; the search's own steps
+                    // are not iterations of that solve.
+                    iterations: record.iterations,
                     residual: a.residual,
                     reason: a.reason,
                 }
