@@ -116,6 +116,10 @@ impl Tracer<'_> {
     /// `media` given, one search; otherwise one per sequence of media the interfaces allow
     /// from `source_medium` (none: no path), each arrival kept when the lookup at its points
     /// agrees.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "a ray's ends, its sequence and media, the search's limit and its output"
+    )]
     pub(crate) fn stationary_of(
         &self,
         sequence: Sequence<'_>,
