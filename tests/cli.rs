@@ -793,69 +793,57 @@ fn the_svg_draws_every_stationary_path_by_sequence_and_by_time() {
     assert!(ticks.contains(&16.03), "{ticks:?}");
 }
 
-/// docs/scene-format.md's scene for `"stationary": "all"` gives the lines the page shows.
-#[test]
-fn the_format_page_shows_its_stationary_output() {
+/// Solves the first ```` ```json ```` block after `heading` in the document `doc` (a path in
+/// the repository) with `--format FORMAT` and checks that the output is the first
+/// ```` ```text ```` block after it, as the document shows it.
+fn document_example_gives_its_output(doc: &str, heading: &str, file: &str, format: &str) {
     let root = env!("CARGO_MANIFEST_DIR");
-    let page = std::fs::read_to_string(format!("{root}/docs/scene-format.md")).expect("page");
-    let heading = "## Every stationary path";
+    let page = std::fs::read_to_string(format!("{root}/{doc}")).expect(doc);
     let section = &page[page.find(heading).expect(heading)..];
     let block = |fence: &str| -> String {
         let start = section.find(fence).expect(fence) + fence.len();
         section[start..][..section[start..].find("```").expect("closing fence")].to_string()
     };
-    let scene = TempFile::with("format-page-every.json", block("```json\n"));
+    let scene = TempFile::with(file, block("```json\n"));
     let out = run([
         OsStr::new("solve"),
         scene.path().as_os_str(),
         OsStr::new("--format"),
-        OsStr::new("jsonl"),
+        OsStr::new(format),
     ]);
     assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
-    let shown = block("```text\n");
-    assert_eq!(text(&out.stdout), shown);
+    assert_eq!(text(&out.stdout), block("```text\n"), "{doc}: {heading}");
+}
+
+/// docs/scene-format.md's scene for `"stationary": "all"` gives the lines the page shows.
+#[test]
+fn the_format_page_shows_its_stationary_output() {
+    document_example_gives_its_output(
+        "docs/scene-format.md",
+        "## Every stationary path",
+        "format-page-every.json",
+        "jsonl",
+    );
 }
 
 /// The README's every-stationary-path scene gives the CSV it shows.
 #[test]
 fn the_readme_valley_gives_its_output() {
-    let root = env!("CARGO_MANIFEST_DIR");
-    let readme = std::fs::read_to_string(format!("{root}/README.md")).expect("README");
-    let heading = "## Every stationary path of a sequence";
-    let section = &readme[readme.find(heading).expect(heading)..];
-    let block = |fence: &str| -> String {
-        let start = section.find(fence).expect(fence) + fence.len();
-        section[start..][..section[start..].find("```").expect("closing fence")].to_string()
-    };
-    let scene = TempFile::with("valley.json", block("```json\n"));
-    let out = run([
-        OsStr::new("solve"),
-        scene.path().as_os_str(),
-        OsStr::new("--format"),
-        OsStr::new("csv"),
-    ]);
-    assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
-    assert_eq!(text(&out.stdout), block("```text\n"));
+    document_example_gives_its_output(
+        "README.md",
+        "## Every stationary path of a sequence",
+        "valley.json",
+        "csv",
+    );
 }
 
 /// The README's search scene gives the arrivals it shows.
 #[test]
 fn the_readme_square_room_gives_its_arrivals() {
-    let root = env!("CARGO_MANIFEST_DIR");
-    let readme = std::fs::read_to_string(format!("{root}/README.md")).expect("README");
-    let heading = "## Automatic sequences: `search`";
-    let section = &readme[readme.find(heading).expect(heading)..];
-    let block = |fence: &str| -> String {
-        let start = section.find(fence).expect(fence) + fence.len();
-        section[start..][..section[start..].find("```").expect("closing fence")].to_string()
-    };
-    let scene = TempFile::with("square.json", block("```json\n"));
-    let out = run([
-        OsStr::new("solve"),
-        scene.path().as_os_str(),
-        OsStr::new("--format"),
-        OsStr::new("jsonl"),
-    ]);
-    assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
-    assert_eq!(text(&out.stdout), block("```text\n"));
+    document_example_gives_its_output(
+        "README.md",
+        "## Automatic sequences: `search`",
+        "square.json",
+        "jsonl",
+    );
 }
