@@ -1,0 +1,874 @@
+//! Python bindings of eigenray (the `eigenray._eigenray` extension module).
+//!
+//! Everything here converts: Python values to the library's types (with the library's own
+//! validation and error messages) and the library's results to numpy arrays. The Python
+//! package (`python/eigenray/`) re-exports these classes and adds the plotting helper.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Duration;
+
+use eigenray::{
+    Arrival, Batch, BatchOptions, Kink, Point, RayRecord, Scene, SceneError, SearchArrival,
+    Status, Tracer, Workspace, npy::STATUS_CODES, scene_parts::StepKind,
+};
+use numpy::ndarray::{Array2, Array3};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::{PyIOError, PyIndexError, PyKeyError, PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList, PyString};
+
+pyo3::create_exception!(
+    _eigenray,
+    EigenrayError,
+    PyValueError,
+    "An invalid scene or argument: `key` names where the problem is, `message` what it is."
+);
+
+/// The status names in the order of their codes (the `.npy` output's codes).
+fn status_names() -> Vec<&'static str> {
+    STATUS_CODES.iter().map(|s| s.as_str()).collect()
+}
+
+fn status_code(status: Status) -> u8 {
+    STATUS_CODES
+        .iter()
+        .position(|&s| s == status)
+        .expect("every status has a code") as u8
+}
+
+/// The Python exception of a scene error: `EigenrayError(str)` with `key` and `message`.
+fn scene_error(py: Python<'_>, e: &SceneError) -> PyErr {
+    let err = EigenrayError::new_err(e.to_string());
+    let value = err.value(py);
+    // Setting attributes on a fresh exception instance cannot fail.
+    let _ = value.setattr("key", e.key.as_str());
+    let _ = value.setattr("message", e.message.as_str());
+    err
+}
+
+/// An error at `key` from an argument of a call (not from the scene).
+fn argument_error(py: Python<'_>, key: &str, message: impl Into<String>) -> PyErr {
+    scene_error(py, &SceneError::new(key, message))
+}
+
+/// A point from any Python sequence of two numbers (tuple, list, numpy array).
+fn point_arg(py: Python<'_>, key: &str, value: &Bound<'_, PyAny>) -> PyResult<Point> {
+    let xy: [f64; 2] = value
+        .extract()
+        .map_err(|_| argument_error(py, key, "needs a point: a sequence of two numbers"))?;
+    Ok(Point::new(xy[0], xy[1]))
+}
+
+/// Points from an array-like of shape `(n, 2)`.
+fn points_arg(py: Python<'_>, key: &str, value: &Bound<'_, PyAny>) -> PyResult<Vec<Point>> {
+    let numpy = py.import("numpy")?;
+    let array = numpy
+        .call_method1("asarray", (value, "float64"))
+        .map_err(|_| argument_error(py, key, "needs an array of numbers of shape (n, 2)"))?;
+    let array: PyReadonlyArray2<'_, f64> = array
+        .extract()
+        .map_err(|_| argument_error(py, key, "needs an array of shape (n, 2)"))?;
+    let view = array.as_array();
+    if view.ncols() != 2 {
+        return Err(argument_error(
+            py,
+            key,
+            format!("needs an array of shape (n, 2), not {:?}", view.shape()),
+        ));
+    }
+    Ok(view.rows().into_iter().map(|r| Point::new(r[0], r[1])).collect())
+}
+
+/// A scene: media, interfaces, sources, receivers and paths, validated.
+///
+/// Build one with `Scene(source)` from a JSON string, a `dict` of the same shape, or a path to
+/// a scene file (`str` ending in `.json` or `os.PathLike`); or with `Scene.from_json`,
+/// `Scene.from_dict`, `Scene.from_file`. An invalid scene raises `EigenrayError` naming the
+/// key, with the same message as the command-line tool.
+#[pyclass(module = "eigenray", name = "Scene", frozen)]
+struct PyScene {
+    scene: Scene,
+}
+
+impl PyScene {
+    fn parse(py: Python<'_>, text: &str) -> PyResult<PyScene> {
+        let scene = py.detach(|| Scene::from_json(text));
+        scene
+            .map(|scene| PyScene { scene })
+            .map_err(|e| scene_error(py, &e))
+    }
+}
+
+#[pymethods]
+impl PyScene {
+    #[new]
+    fn new(py: Python<'_>, source: &Bound<'_, PyAny>) -> PyResult<PyScene> {
+        if source.is_instance_of::<PyDict>() {
+            return PyScene::from_dict(py, source);
+        }
+        if let Ok(text) = source.cast::<PyString>() {
+            let text = text.to_str()?;
+            if text.trim_start().starts_with('{') {
+                return PyScene::parse(py, text);
+            }
+            return PyScene::from_file(py, source);
+        }
+        if source.hasattr("__fspath__")? {
+            return PyScene::from_file(py, source);
+        }
+        Err(argument_error(
+            py,
+            "scene",
+            "needs a JSON string, a dict or a path to a scene file",
+        ))
+    }
+
+    /// A scene from its JSON text.
+    #[staticmethod]
+    fn from_json(py: Python<'_>, text: &str) -> PyResult<PyScene> {
+        PyScene::parse(py, text)
+    }
+
+    /// A scene from a `dict` (or any value `json.dumps` accepts) of the JSON's shape.
+    #[staticmethod]
+    fn from_dict(py: Python<'_>, scene: &Bound<'_, PyAny>) -> PyResult<PyScene> {
+        let json = py.import("json")?;
+        let kwargs = PyDict::new(py);
+        kwargs.set_item("allow_nan", false)?;
+        let text = json
+            .call_method("dumps", (scene,), Some(&kwargs))
+            .map_err(|e| argument_error(py, "scene", format!("is not JSON: {e}")))?;
+        PyScene::parse(py, text.extract::<&str>()?)
+    }
+
+    /// A scene from a file.
+    #[staticmethod]
+    fn from_file(py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<PyScene> {
+        let os = py.import("os")?;
+        let path: String = os.call_method1("fspath", (path,))?.extract()?;
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| PyIOError::new_err(format!("{path}: {e}")))?;
+        PyScene::parse(py, &text)
+    }
+
+    /// Medium names, in the scene's order (the indices of `Rays.media`).
+    #[getter]
+    fn media_names(&self) -> Vec<String> {
+        self.scene.media().iter().map(|m| m.name.clone()).collect()
+    }
+
+    /// Slowness of each medium (1 / speed, or the refractive index), in the scene's order.
+    #[getter]
+    fn slowness<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let w: Vec<f64> = self.scene.media().iter().map(|m| m.slowness).collect();
+        w.into_pyarray(py)
+    }
+
+    /// Interface names, in the scene's order.
+    #[getter]
+    fn interface_names(&self) -> Vec<String> {
+        self.scene
+            .interfaces()
+            .iter()
+            .map(|i| i.name.clone())
+            .collect()
+    }
+
+    /// Each interface's vertices as an array of shape `(n, 2)`, by name (a closed
+    /// interface's first vertex is not repeated at its end).
+    #[getter]
+    fn interfaces<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let out = PyDict::new(py);
+        for i in self.scene.interfaces() {
+            out.set_item(&i.name, points_array(py, i.polyline.vertices()))?;
+        }
+        Ok(out)
+    }
+
+    /// Whether each interface is closed, by name.
+    #[getter]
+    fn closed<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let out = PyDict::new(py);
+        for i in self.scene.interfaces() {
+            out.set_item(&i.name, i.polyline.is_closed())?;
+        }
+        Ok(out)
+    }
+
+    /// Path names (`None` for an unnamed path), in the scene's order.
+    #[getter]
+    fn path_names(&self) -> Vec<Option<String>> {
+        self.scene.paths().iter().map(|p| p.name.clone()).collect()
+    }
+
+    /// Sources, shape `(n, 2)`.
+    #[getter]
+    fn sources<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        points_array(py, self.scene.sources())
+    }
+
+    /// Receivers, shape `(n, 2)`.
+    #[getter]
+    fn receivers<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        points_array(py, self.scene.receivers())
+    }
+
+    /// Rays of the scene: sources × receivers × paths.
+    #[getter]
+    fn num_rays(&self) -> usize {
+        self.scene.num_rays()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Scene({} media, {} interfaces, {} sources, {} receivers, {} paths)",
+            self.scene.media().len(),
+            self.scene.interfaces().len(),
+            self.scene.sources().len(),
+            self.scene.receivers().len(),
+            self.scene.paths().len()
+        )
+    }
+}
+
+fn points_array<'py>(py: Python<'py>, points: &[Point]) -> Bound<'py, PyArray2<f64>> {
+    let flat: Vec<f64> = points.iter().flat_map(|p| [p.x, p.y]).collect();
+    Array2::from_shape_vec((points.len(), 2), flat)
+        .expect("two coordinates a point")
+        .into_pyarray(py)
+}
+
+self_cell::self_cell!(
+    /// A scene and its tracer, in one value that Python can hold.
+    struct Engine {
+        owner: Scene,
+        #[covariant]
+        dependent: Tracer,
+    }
+);
+
+/// Traces the rays of a scene. `Tracer(scene)` prepares it once (region lookup, segment
+/// hierarchies); every call after that reuses it.
+#[pyclass(module = "eigenray", name = "Tracer")]
+struct PyTracer {
+    engine: Engine,
+    workspace: Workspace,
+    arrivals: Vec<Arrival>,
+}
+
+/// One ray: its status, time, points and leg media.
+#[pyclass(module = "eigenray", name = "Ray", frozen, get_all)]
+struct PyRay {
+    /// `converged`, `vertex`, `no_path`, `obstructed` or `not_converged`.
+    status: String,
+    /// Travel time; NaN when the status has none.
+    time: f64,
+    /// Source, interaction points and receiver, shape `(k + 2, 2)`; empty without a time.
+    points: Py<PyArray2<f64>>,
+    /// Leg media's names, when known.
+    media: Vec<String>,
+    /// Solver iterations.
+    iterations: usize,
+    /// Final relative residual (NaN where the solver did not run).
+    residual: f64,
+    /// Why it is not `converged` (`None` when it is).
+    reason: Option<String>,
+    /// Among the stationary paths of its triple, its place by time (0: the first); `None`
+    /// for a ray of `Tracer.solve`.
+    arrival: Option<usize>,
+    /// On a `vertex` path of `stationary_paths`: `"minimum"` or `"maximum"`.
+    kink: Option<String>,
+}
+
+#[pymethods]
+impl PyRay {
+    fn __repr__(&self) -> String {
+        format!(
+            "Ray(status={:?}, time={}, iterations={})",
+            self.status, self.time, self.iterations
+        )
+    }
+}
+
+fn medium_names(scene: &Scene, media: impl Iterator<Item = usize>) -> Vec<String> {
+    media.map(|m| scene.media()[m].name.clone()).collect()
+}
+
+fn kink_name(kink: Option<Kink>) -> Option<String> {
+    kink.map(|k| k.as_str().to_string())
+}
+
+impl PyRay {
+    fn from_record(
+        py: Python<'_>,
+        scene: &Scene,
+        record: &RayRecord,
+        points: &[Point],
+        media: &[usize],
+    ) -> PyRay {
+        PyRay {
+            status: record.status.as_str().to_string(),
+            time: record.time,
+            points: points_array(py, points).unbind(),
+            media: medium_names(scene, media.iter().copied()),
+            iterations: record.iterations as usize,
+            residual: record.residual,
+            reason: record.reason.map(|r| r.describe(scene)),
+            arrival: None,
+            kink: None,
+        }
+    }
+
+    fn from_arrival(py: Python<'_>, scene: &Scene, index: usize, a: &Arrival) -> PyRay {
+        PyRay {
+            status: a.status.as_str().to_string(),
+            time: a.time,
+            points: points_array(py, &a.points).unbind(),
+            media: medium_names(scene, a.media.iter().copied()),
+            iterations: a.iterations,
+            residual: a.residual,
+            reason: a.reason.map(|r| r.describe(scene)),
+            arrival: Some(index),
+            kink: kink_name(a.kink),
+        }
+    }
+}
+
+/// Every ray of a scene as numpy arrays, in ray order (source-major, then receiver, then
+/// path). Rays without a time have `time` NaN and NaN points.
+#[pyclass(module = "eigenray", name = "Rays", frozen, get_all)]
+struct PyRays {
+    /// Source index of each ray, shape `(n,)`.
+    source: Py<PyArray1<i64>>,
+    /// Receiver index of each ray.
+    receiver: Py<PyArray1<i64>>,
+    /// Path index of each ray.
+    path: Py<PyArray1<i64>>,
+    /// Status code of each ray (an index into `status_names`), `uint8`.
+    status: Py<PyArray1<u8>>,
+    /// Travel time; NaN for a ray without one.
+    time: Py<PyArray1<f64>>,
+    /// Source, interaction points and receiver, shape `(n, P, 2)`, NaN-padded past a path's
+    /// own points (P: the most points of any path) and NaN for a ray without a time.
+    points: Py<PyArray3<f64>>,
+    /// Points of each ray's path (`k + 2` for `k` steps), shape `(n,)`.
+    num_points: Py<PyArray1<i64>>,
+    /// Leg media, shape `(n, P − 1)`: indices into `media_names`, −1 where unknown or past the
+    /// path's legs.
+    media: Py<PyArray2<i32>>,
+    /// Solver iterations.
+    iterations: Py<PyArray1<u32>>,
+    /// Final relative residual (NaN where the solver did not run).
+    residual: Py<PyArray1<f64>>,
+    /// Why each ray is not `converged` (`None` where it is).
+    reason: Vec<Option<String>>,
+    /// The status names, by code.
+    status_names: Vec<&'static str>,
+    /// The scene's path names (`None` for an unnamed path), by path index.
+    path_names: Vec<Option<String>>,
+    /// The scene's medium names, by medium index.
+    media_names: Vec<String>,
+}
+
+#[pymethods]
+impl PyRays {
+    fn __len__(&self, py: Python<'_>) -> usize {
+        self.time.bind(py).len()
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        format!("Rays({} rays)", self.time.bind(py).len())
+    }
+}
+
+/// Growing columns of rays (the arrays of `Rays`).
+#[derive(Default)]
+struct Columns {
+    source: Vec<i64>,
+    receiver: Vec<i64>,
+    path: Vec<i64>,
+    status: Vec<u8>,
+    time: Vec<f64>,
+    points: Vec<f64>,
+    num_points: Vec<i64>,
+    media: Vec<i32>,
+    iterations: Vec<u32>,
+    residual: Vec<f64>,
+    reason: Vec<Option<String>>,
+}
+
+impl Columns {
+    fn with_capacity(rays: usize, width: usize) -> Columns {
+        Columns {
+            source: Vec::with_capacity(rays),
+            receiver: Vec::with_capacity(rays),
+            path: Vec::with_capacity(rays),
+            status: Vec::with_capacity(rays),
+            time: Vec::with_capacity(rays),
+            points: Vec::with_capacity(rays * width * 2),
+            num_points: Vec::with_capacity(rays),
+            media: Vec::with_capacity(rays * width.saturating_sub(1)),
+            iterations: Vec::with_capacity(rays),
+            residual: Vec::with_capacity(rays),
+            reason: Vec::with_capacity(rays),
+        }
+    }
+
+    #[allow(clippy::too_many_arguments, reason = "one column each")]
+    fn push(
+        &mut self,
+        scene: &Scene,
+        width: usize,
+        triple: [usize; 3],
+        record: &RayRecord,
+        points: &[Point],
+        media: impl Iterator<Item = Option<usize>>,
+    ) {
+        let [source, receiver, path] = triple;
+        self.source.push(source as i64);
+        self.receiver.push(receiver as i64);
+        self.path.push(path as i64);
+        self.status.push(status_code(record.status));
+        self.time.push(record.time);
+        let own = scene.paths()[path].steps.len() + 2;
+        self.num_points.push(own as i64);
+        let with_time = record.status.has_time() && points.len() == own;
+        for i in 0..width {
+            match points.get(i).filter(|_| with_time) {
+                Some(p) => self.points.extend_from_slice(&[p.x, p.y]),
+                None => self.points.extend_from_slice(&[f64::NAN, f64::NAN]),
+            }
+        }
+        let start = self.media.len();
+        self.media
+            .extend(media.take(width - 1).map(|m| m.map_or(-1, |m| m as i32)));
+        self.media.resize(start + width - 1, -1);
+        self.iterations.push(record.iterations);
+        self.residual.push(record.residual);
+        self.reason.push(record.reason.map(|r| r.describe(scene)));
+    }
+
+    fn finish(self, py: Python<'_>, scene: &Scene, width: usize) -> PyRays {
+        let n = self.time.len();
+        PyRays {
+            source: self.source.into_pyarray(py).unbind(),
+            receiver: self.receiver.into_pyarray(py).unbind(),
+            path: self.path.into_pyarray(py).unbind(),
+            status: self.status.into_pyarray(py).unbind(),
+            time: self.time.into_pyarray(py).unbind(),
+            points: Array3::from_shape_vec((n, width, 2), self.points)
+                .expect("width points a ray")
+                .into_pyarray(py)
+                .unbind(),
+            num_points: self.num_points.into_pyarray(py).unbind(),
+            media: Array2::from_shape_vec((n, width - 1), self.media)
+                .expect("width − 1 legs a ray")
+                .into_pyarray(py)
+                .unbind(),
+            iterations: self.iterations.into_pyarray(py).unbind(),
+            residual: self.residual.into_pyarray(py).unbind(),
+            reason: self.reason,
+            status_names: status_names(),
+            path_names: scene.paths().iter().map(|p| p.name.clone()).collect(),
+            media_names: scene.media().iter().map(|m| m.name.clone()).collect(),
+        }
+    }
+}
+
+/// The most points of any path of `scene` (at least 2: the source and the receiver).
+fn width(scene: &Scene) -> usize {
+    scene
+        .paths()
+        .iter()
+        .map(|p| p.steps.len() + 2)
+        .max()
+        .unwrap_or(2)
+}
+
+fn batch_columns(scene: &Scene, batch: &Batch) -> Columns {
+    let width = width(scene);
+    let mut columns = Columns::with_capacity(batch.len(), width);
+    for ray in 0..batch.len() {
+        let (s, r, p) = batch.triple(ray);
+        let media: Vec<Option<usize>> = match batch.media(ray) {
+            Some(m) => m.map(Some).collect(),
+            None => Vec::new(),
+        };
+        columns.push(
+            scene,
+            width,
+            [s, r, p],
+            batch.record(ray),
+            batch.points(ray),
+            media.into_iter(),
+        );
+    }
+    columns
+}
+
+/// Where a long batch reports its progress.
+enum Progress<'py> {
+    /// A tqdm bar (tqdm.auto: a widget in a notebook, text in a terminal).
+    Bar(Bound<'py, PyAny>),
+    /// The caller's `progress(done, total)`.
+    Callback(Bound<'py, PyAny>),
+}
+
+impl<'py> Progress<'py> {
+    fn new(py: Python<'py>, arg: Option<&Bound<'py, PyAny>>, total: usize) -> PyResult<Option<Self>> {
+        let Some(arg) = arg else { return Ok(None) };
+        if arg.is_none() {
+            return Ok(None);
+        }
+        if arg.is_callable() {
+            return Ok(Some(Progress::Callback(arg.clone())));
+        }
+        if !arg.is_truthy()? {
+            return Ok(None);
+        }
+        let kwargs = PyDict::new(py);
+        kwargs.set_item("total", total)?;
+        kwargs.set_item("unit", "ray")?;
+        let bar = py
+            .import("tqdm.auto")
+            .and_then(|m| m.getattr("tqdm"))
+            .map_err(|_| {
+                PyRuntimeError::new_err("progress=True needs the tqdm package (pip install tqdm)")
+            })?
+            .call((), Some(&kwargs))?;
+        Ok(Some(Progress::Bar(bar)))
+    }
+
+    fn report(&self, done: usize, shown: usize, total: usize) -> PyResult<()> {
+        match self {
+            Progress::Bar(bar) => {
+                bar.call_method1("update", (done - shown,))?;
+            }
+            Progress::Callback(f) => {
+                f.call1((done, total))?;
+            }
+        }
+        Ok(())
+    }
+
+    fn close(&self) -> PyResult<()> {
+        if let Progress::Bar(bar) = self {
+            bar.call_method0("close")?;
+        }
+        Ok(())
+    }
+}
+
+impl PyTracer {
+    fn inner_scene(&self) -> &Scene {
+        self.engine.borrow_owner()
+    }
+
+    fn path_index(&self, py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<usize> {
+        let scene = self.inner_scene();
+        if let Ok(name) = path.extract::<&str>() {
+            return scene
+                .paths()
+                .iter()
+                .position(|p| p.name.as_deref() == Some(name))
+                .ok_or_else(|| PyKeyError::new_err(format!("no path is named `{name}`")));
+        }
+        let index: i64 = path
+            .extract()
+            .map_err(|_| argument_error(py, "path", "needs a path index or a path name"))?;
+        usize::try_from(index)
+            .ok()
+            .filter(|&i| i < scene.paths().len())
+            .ok_or_else(|| {
+                PyIndexError::new_err(format!(
+                    "path index {index} is out of range (the scene has {} paths)",
+                    scene.paths().len()
+                ))
+            })
+    }
+
+    fn checked_points(
+        &self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: usize,
+    ) -> PyResult<(Point, Point)> {
+        let source = point_arg(py, "source", source)?;
+        let receiver = point_arg(py, "receiver", receiver)?;
+        self.inner_scene()
+            .check_solve(source, receiver, path)
+            .map_err(|e| scene_error(py, &e))?;
+        Ok((source, receiver))
+    }
+}
+
+#[pymethods]
+impl PyTracer {
+    #[new]
+    fn new(py: Python<'_>, scene: &Bound<'_, PyScene>) -> PyResult<PyTracer> {
+        let owner = scene.get().scene.clone();
+        let engine = py.detach(|| Engine::try_new(owner, |scene| Tracer::new(scene)));
+        let engine = engine.map_err(|e| scene_error(py, &e))?;
+        Ok(PyTracer {
+            engine,
+            workspace: Workspace::new(),
+            arrivals: Vec::new(),
+        })
+    }
+
+    /// The tracer's scene.
+    #[getter]
+    fn scene(&self) -> PyScene {
+        PyScene {
+            scene: self.inner_scene().clone(),
+        }
+    }
+
+    /// Every ray of the scene, in parallel (the GIL released), as numpy arrays (`Rays`).
+    ///
+    /// `warm_start`: start each receiver from its neighbour's solution (see the library's
+    /// `BatchOptions::warm_start`). `progress`: `True` for a tqdm bar, or a callable
+    /// `progress(done, total)` called from the calling thread.
+    #[pyo3(signature = (*, warm_start = true, progress = None))]
+    fn trace(
+        &self,
+        py: Python<'_>,
+        warm_start: bool,
+        progress: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyRays> {
+        let tracer = self.engine.borrow_dependent();
+        let scene = self.inner_scene();
+        let total = scene.num_rays();
+        let progress = Progress::new(py, progress, total)?;
+        let done = AtomicUsize::new(0);
+        let count = |n: usize| {
+            done.fetch_add(n, Ordering::Relaxed);
+        };
+        let opts = BatchOptions {
+            warm_start,
+            progress: progress.as_ref().map(|_| &count as &(dyn Fn(usize) + Sync)),
+            ..BatchOptions::default()
+        };
+        let batch = match &progress {
+            None => py.detach(|| tracer.try_trace_batch(&opts)),
+            Some(progress) => {
+                let (finished, mut shown) = (AtomicUsize::new(0), 0);
+                let result = std::thread::scope(|scope| {
+                    let worker = scope.spawn(|| {
+                        let batch = tracer.try_trace_batch(&opts);
+                        finished.store(1, Ordering::Release);
+                        batch
+                    });
+                    let mut reported = Ok(());
+                    while finished.load(Ordering::Acquire) == 0 {
+                        py.detach(|| std::thread::sleep(Duration::from_millis(50)));
+                        let now = done.load(Ordering::Relaxed);
+                        if reported.is_ok() && now > shown {
+                            reported = progress.report(now, shown, total);
+                            shown = now;
+                        }
+                    }
+                    let batch = py.detach(|| worker.join());
+                    (batch, reported)
+                });
+                let (batch, reported) = result;
+                let batch = batch.map_err(|_| PyRuntimeError::new_err("the batch panicked"))?;
+                reported?;
+                if shown < total {
+                    progress.report(total, shown, total)?;
+                }
+                progress.close()?;
+                batch
+            }
+        };
+        let batch = batch.map_err(|e| scene_error(py, &e))?;
+        let columns = py.detach(|| batch_columns(scene, &batch));
+        Ok(columns.finish(py, scene, width(scene)))
+    }
+
+    /// One ray of path `path` (index or name) between any two points.
+    #[pyo3(signature = (source, receiver, path = None))]
+    fn solve(
+        &mut self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyRay> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let record = self
+            .engine
+            .borrow_dependent()
+            .solve(source, receiver, path, &mut self.workspace);
+        let scene = self.engine.borrow_owner();
+        let ws = &self.workspace;
+        Ok(PyRay::from_record(py, scene, &record, ws.points(), ws.media()))
+    }
+
+    /// The travel time of one ray (NaN without one): `solve` without building a `Ray`.
+    #[pyo3(signature = (source, receiver, path = None))]
+    fn time(
+        &mut self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<f64> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let record = self
+            .engine
+            .borrow_dependent()
+            .solve(source, receiver, path, &mut self.workspace);
+        Ok(record.time)
+    }
+
+    /// Rays of path `path` between `sources[i]` and `receivers[i]` (arrays of shape `(n, 2)`),
+    /// one by one with the GIL released, as `Rays` (their `source` and `receiver` hold `i`).
+    #[pyo3(signature = (sources, receivers, path = None))]
+    fn solve_pairs(
+        &mut self,
+        py: Python<'_>,
+        sources: &Bound<'_, PyAny>,
+        receivers: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyRays> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let sources = points_arg(py, "sources", sources)?;
+        let receivers = points_arg(py, "receivers", receivers)?;
+        if sources.len() != receivers.len() {
+            return Err(argument_error(
+                py,
+                "receivers",
+                format!(
+                    "has {} points where sources has {}",
+                    receivers.len(),
+                    sources.len()
+                ),
+            ));
+        }
+        let scene = self.engine.borrow_owner();
+        for (i, (&s, &r)) in sources.iter().zip(&receivers).enumerate() {
+            scene.check_solve(s, r, path).map_err(|e| {
+                let key = format!("{}s[{i}]", e.key);
+                scene_error(py, &SceneError::new(key, e.message))
+            })?;
+        }
+        let tracer = self.engine.borrow_dependent();
+        let ws = &mut self.workspace;
+        let width = width(scene);
+        let columns = py.detach(|| {
+            let mut columns = Columns::with_capacity(sources.len(), width);
+            for (i, (&s, &r)) in sources.iter().zip(&receivers).enumerate() {
+                let record = tracer.solve(s, r, path, ws);
+                let media = ws.media().iter().map(|&m| Some(m));
+                columns.push(scene, width, [i, i, path], &record, ws.points(), media);
+            }
+            columns
+        });
+        Ok(columns.finish(py, scene, width))
+    }
+
+    /// Every stationary path of path `path` between two points, ordered by time (a `Ray`
+    /// each, with its `arrival` index and, on `vertex` paths, its `kink`). Returns the list
+    /// and whether the search was complete (with `True`, an empty list proves there is none).
+    #[pyo3(signature = (source, receiver, path = None))]
+    fn stationary_paths(
+        &mut self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<(Vec<PyRay>, bool)> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let tracer = self.engine.borrow_dependent();
+        let out = &mut self.arrivals;
+        let search = py
+            .detach(|| tracer.stationary_paths(source, receiver, path, out))
+            .map_err(|e| argument_error(py, "path", e.to_string()))?;
+        let scene = self.engine.borrow_owner();
+        let rays = self
+            .arrivals
+            .iter()
+            .enumerate()
+            .map(|(i, a)| PyRay::from_arrival(py, scene, i, a))
+            .collect();
+        Ok((rays, search.complete))
+    }
+
+    /// The scene's `search` (its `"search"` section): every arrival per (source, receiver),
+    /// ordered by time, as a list of dicts with `source`, `receiver`, `steps` (as in the
+    /// scene: `{"reflect": name}`), `media`, `status`, `time`, `points`, `iterations`,
+    /// `complete`.
+    fn search<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let tracer = self.engine.borrow_dependent();
+        let arrivals = py
+            .detach(|| tracer.search())
+            .map_err(|e| argument_error(py, "search", e.to_string()))?;
+        let scene = self.inner_scene();
+        let list = PyList::empty(py);
+        for a in &arrivals {
+            list.append(search_arrival(py, scene, a)?)?;
+        }
+        Ok(list)
+    }
+}
+
+fn search_arrival<'py>(
+    py: Python<'py>,
+    scene: &Scene,
+    a: &SearchArrival,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("source", a.source)?;
+    d.set_item("receiver", a.receiver)?;
+    let steps = PyList::empty(py);
+    for step in &a.steps {
+        let s = PyDict::new(py);
+        let kind = match step.kind {
+            StepKind::Reflect => "reflect",
+            StepKind::Refract => "refract",
+        };
+        s.set_item(kind, &scene.interfaces()[step.interface].name)?;
+        steps.append(s)?;
+    }
+    d.set_item("steps", steps)?;
+    let arrival = &a.arrival;
+    d.set_item("media", medium_names(scene, arrival.media.iter().copied()))?;
+    d.set_item("status", arrival.status.as_str())?;
+    d.set_item("time", arrival.time)?;
+    d.set_item("points", points_array(py, &arrival.points))?;
+    d.set_item("iterations", arrival.iterations)?;
+    d.set_item("residual", arrival.residual)?;
+    d.set_item("reason", arrival.reason.map(|r| r.describe(scene)))?;
+    d.set_item("kink", kink_name(arrival.kink))?;
+    d.set_item("complete", arrival.complete)?;
+    Ok(d)
+}
+
+/// The compiled core of the `eigenray` package.
+#[pymodule]
+fn _eigenray(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyScene>()?;
+    m.add_class::<PyTracer>()?;
+    m.add_class::<PyRay>()?;
+    m.add_class::<PyRays>()?;
+    m.add("EigenrayError", m.py().get_type::<EigenrayError>())?;
+    m.add("STATUS_NAMES", status_names())?;
+    Ok(())
+}
