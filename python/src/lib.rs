@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use eigenray::{
     Arrival, Batch, BatchOptions, Kink, Point, RayRecord, Scene, SceneError, SearchArrival,
-    Status, Tracer, Workspace, npy::STATUS_CODES, scene_parts::StepKind,
+    StationaryRays, Status, Tracer, Workspace, npy::STATUS_CODES, scene_parts::StepKind,
 };
 use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -76,7 +76,11 @@ fn points_arg(py: Python<'_>, key: &str, value: &Bound<'_, PyAny>) -> PyResult<V
             format!("needs an array of shape (n, 2), not {:?}", view.shape()),
         ));
     }
-    Ok(view.rows().into_iter().map(|r| Point::new(r[0], r[1])).collect())
+    Ok(view
+        .rows()
+        .into_iter()
+        .map(|r| Point::new(r[0], r[1]))
+        .collect())
 }
 
 /// A scene: media, interfaces, sources, receivers and paths, validated.
@@ -368,6 +372,13 @@ struct PyRays {
     path_names: Vec<Option<String>>,
     /// The scene's medium names, by medium index.
     media_names: Vec<String>,
+    /// From `trace_stationary`: each entry's place by time among its triple's stationary
+    /// paths (0 for a triple without any); `None` from `trace`.
+    arrival: Option<Py<PyArray1<i64>>>,
+    /// From `trace_stationary`: `"minimum"`, `"maximum"` or `"mixed"` on `vertex` entries.
+    kink: Option<Vec<Option<String>>>,
+    /// From `trace_stationary`: whether the triple's search was complete.
+    complete: Option<Py<PyArray1<bool>>>,
 }
 
 #[pymethods]
@@ -395,6 +406,10 @@ struct Columns {
     iterations: Vec<u32>,
     residual: Vec<f64>,
     reason: Vec<Option<String>>,
+    /// The columns of every stationary path (empty for rays of the default mode).
+    arrival: Vec<i64>,
+    kink: Vec<Option<String>>,
+    complete: Vec<bool>,
 }
 
 impl Columns {
@@ -411,6 +426,7 @@ impl Columns {
             iterations: Vec::with_capacity(rays),
             residual: Vec::with_capacity(rays),
             reason: Vec::with_capacity(rays),
+            ..Columns::default()
         }
     }
 
@@ -450,6 +466,7 @@ impl Columns {
 
     fn finish(self, py: Python<'_>, scene: &Scene, width: usize) -> PyRays {
         let n = self.time.len();
+        let stationary = !self.complete.is_empty();
         PyRays {
             source: self.source.into_pyarray(py).unbind(),
             receiver: self.receiver.into_pyarray(py).unbind(),
@@ -471,8 +488,51 @@ impl Columns {
             status_names: status_names(),
             path_names: scene.paths().iter().map(|p| p.name.clone()).collect(),
             media_names: scene.media().iter().map(|m| m.name.clone()).collect(),
+            arrival: stationary.then(|| self.arrival.into_pyarray(py).unbind()),
+            kink: stationary.then_some(self.kink),
+            complete: stationary.then(|| self.complete.into_pyarray(py).unbind()),
         }
     }
+}
+
+/// The entries of every stationary path, as the command-line tool writes them: one per
+/// stationary path, and one (`no_path` or `not_converged`) per triple that has none.
+fn stationary_columns(scene: &Scene, rays: &StationaryRays) -> Columns {
+    let width = width(scene);
+    let mut columns = Columns::with_capacity(rays.entries(), width);
+    for t in &rays.triples {
+        let triple = [t.source, t.receiver, t.path];
+        for (i, a) in t.arrivals.iter().enumerate() {
+            let record = RayRecord {
+                status: a.status,
+                time: a.time,
+                iterations: a.iterations.try_into().unwrap_or(u32::MAX),
+                residual: a.residual,
+                reason: a.reason,
+            };
+            let media = a.media.iter().map(|&m| Some(m));
+            columns.push(scene, width, triple, &record, &a.points, media);
+            columns.arrival.push(i as i64);
+            columns.kink.push(kink_name(a.kink));
+            columns.complete.push(t.complete);
+        }
+        if t.arrivals.is_empty() {
+            let record = RayRecord {
+                status: t.status_without_arrivals(),
+                time: f64::NAN,
+                iterations: 0,
+                residual: f64::NAN,
+                reason: Some(t.reason_without_arrivals()),
+            };
+            let given = scene.paths()[t.path].media.as_deref().unwrap_or(&[]);
+            let media = given.iter().map(|&m| Some(m));
+            columns.push(scene, width, triple, &record, &[], media);
+            columns.arrival.push(0);
+            columns.kink.push(None);
+            columns.complete.push(t.complete);
+        }
+    }
+    columns
 }
 
 /// The most points of any path of `scene` (at least 2: the source and the receiver).
@@ -515,7 +575,11 @@ enum Progress<'py> {
 }
 
 impl<'py> Progress<'py> {
-    fn new(py: Python<'py>, arg: Option<&Bound<'py, PyAny>>, total: usize) -> PyResult<Option<Self>> {
+    fn new(
+        py: Python<'py>,
+        arg: Option<&Bound<'py, PyAny>>,
+        total: usize,
+    ) -> PyResult<Option<Self>> {
         let Some(arg) = arg else { return Ok(None) };
         if arg.is_none() {
             return Ok(None);
@@ -687,6 +751,20 @@ impl PyTracer {
         Ok(columns.finish(py, scene, width(scene)))
     }
 
+    /// Every stationary path of every ray of the scene (not only the one the default start
+    /// reaches), in parallel with the GIL released, as `Rays` with `arrival`, `kink` and
+    /// `complete`: one entry per stationary path, ordered by time within its triple, and one
+    /// `no_path` (a proof) or `not_converged` entry per triple that has none.
+    fn trace_stationary(&self, py: Python<'_>) -> PyResult<PyRays> {
+        let tracer = self.engine.borrow_dependent();
+        let scene = self.inner_scene();
+        let rays = py
+            .detach(|| tracer.trace_stationary())
+            .map_err(|e| scene_error(py, &e.into()))?;
+        let columns = py.detach(|| stationary_columns(scene, &rays));
+        Ok(columns.finish(py, scene, width(scene)))
+    }
+
     /// One ray of path `path` (index or name) between any two points.
     #[pyo3(signature = (source, receiver, path = None))]
     fn solve(
@@ -701,13 +779,19 @@ impl PyTracer {
             None => 0,
         };
         let (source, receiver) = self.checked_points(py, source, receiver, path)?;
-        let record = self
-            .engine
-            .borrow_dependent()
-            .solve(source, receiver, path, &mut self.workspace);
+        let record =
+            self.engine
+                .borrow_dependent()
+                .solve(source, receiver, path, &mut self.workspace);
         let scene = self.engine.borrow_owner();
         let ws = &self.workspace;
-        Ok(PyRay::from_record(py, scene, &record, ws.points(), ws.media()))
+        Ok(PyRay::from_record(
+            py,
+            scene,
+            &record,
+            ws.points(),
+            ws.media(),
+        ))
     }
 
     /// The travel time of one ray (NaN without one): `solve` without building a `Ray`.
@@ -724,10 +808,10 @@ impl PyTracer {
             None => 0,
         };
         let (source, receiver) = self.checked_points(py, source, receiver, path)?;
-        let record = self
-            .engine
-            .borrow_dependent()
-            .solve(source, receiver, path, &mut self.workspace);
+        let record =
+            self.engine
+                .borrow_dependent()
+                .solve(source, receiver, path, &mut self.workspace);
         Ok(record.time)
     }
 
@@ -800,7 +884,7 @@ impl PyTracer {
         let out = &mut self.arrivals;
         let search = py
             .detach(|| tracer.stationary_paths(source, receiver, path, out))
-            .map_err(|e| argument_error(py, "path", e.to_string()))?;
+            .map_err(|e| scene_error(py, &e.into()))?;
         let scene = self.engine.borrow_owner();
         let rays = self
             .arrivals
