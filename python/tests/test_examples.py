@@ -46,3 +46,24 @@ def test_plot_colours_by_path_with_a_legend_and_samples_many_rays():
     assert ax.get_title() == "10 of 15 rays drawn"
     with pytest.raises(ValueError):
         eigenray.plot(scene, rays, colour_by="speed")
+
+
+def python_block(document, heading):
+    """The first ```python block after `heading` in a document of the repository."""
+    text = (pathlib.Path(__file__).parents[2] / document).read_text()
+    section = text[text.index(heading):]
+    start = section.index("```python\n") + len("```python\n")
+    return section[start:section.index("```", start)]
+
+
+@pytest.mark.parametrize(
+    "document, heading", [("README.md", "## From Python"), ("docs/python.md", "## Use")]
+)
+def test_the_documented_snippet_runs(document, heading):
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    namespace = {}
+    exec(compile(python_block(document, heading), document, "exec"), namespace)
+    rays = namespace["rays"]
+    assert len(rays) == 500 and (rays.status == 0).all()
+    assert rays.points.shape == (500, 3, 2)
