@@ -10,7 +10,9 @@ use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
-    let path = args.next().ok_or("usage: batch_timing SCENE.json [REPETITIONS]")?;
+    let path = args
+        .next()
+        .ok_or("usage: batch_timing SCENE.json [REPETITIONS]")?;
     let repetitions: usize = args.next().map_or(Ok(5), |r| r.parse())?;
     let scene = Scene::from_json(&std::fs::read_to_string(&path)?)?;
     let tracer = Tracer::new(&scene)?;

@@ -256,6 +256,8 @@ self_cell::self_cell!(
 #[pyclass(module = "eigenray", name = "Tracer")]
 struct PyTracer {
     engine: Engine,
+    /// The last batch's arrays, reused by the next `trace`.
+    batch: Batch,
     workspace: Workspace,
     arrivals: Vec<Arrival>,
 }
@@ -392,9 +394,10 @@ impl PyRays {
     }
 }
 
-/// Growing columns of rays (the arrays of `Rays`).
-#[derive(Default)]
-struct Columns {
+/// The arrays of `Rays`, allocated for their rays and filled in place (in parallel for
+/// batches): `width` points a ray.
+struct Table {
+    width: usize,
     source: Vec<i64>,
     receiver: Vec<i64>,
     path: Vec<i64>,
@@ -406,67 +409,112 @@ struct Columns {
     iterations: Vec<u32>,
     residual: Vec<f64>,
     reason: Vec<Option<String>>,
-    /// The columns of every stationary path (empty for rays of the default mode).
+    /// The columns of every stationary path's entries, for `trace_stationary`.
+    stationary: Option<StationaryColumns>,
+}
+
+/// The columns of every stationary path's entries (see `stationary_columns`).
+struct StationaryColumns {
     arrival: Vec<i64>,
     kink: Vec<Option<String>>,
     complete: Vec<bool>,
 }
 
-impl Columns {
-    fn with_capacity(rays: usize, width: usize) -> Columns {
-        Columns {
-            source: Vec::with_capacity(rays),
-            receiver: Vec::with_capacity(rays),
-            path: Vec::with_capacity(rays),
-            status: Vec::with_capacity(rays),
-            time: Vec::with_capacity(rays),
-            points: Vec::with_capacity(rays * width * 2),
-            num_points: Vec::with_capacity(rays),
-            media: Vec::with_capacity(rays * width.saturating_sub(1)),
-            iterations: Vec::with_capacity(rays),
-            residual: Vec::with_capacity(rays),
-            reason: Vec::with_capacity(rays),
-            ..Columns::default()
+/// Rows of a [`Table`]: one slice per column, all of the same rows.
+struct Rows<'a> {
+    width: usize,
+    source: &'a mut [i64],
+    receiver: &'a mut [i64],
+    path: &'a mut [i64],
+    status: &'a mut [u8],
+    time: &'a mut [f64],
+    points: &'a mut [f64],
+    num_points: &'a mut [i64],
+    media: &'a mut [i32],
+    iterations: &'a mut [u32],
+    residual: &'a mut [f64],
+    reason: &'a mut [Option<String>],
+}
+
+/// Rows written by one task of a parallel fill.
+const ROWS_PER_TASK: usize = 4096;
+
+impl Table {
+    fn new(rays: usize, width: usize) -> Table {
+        Table {
+            width,
+            source: vec![0; rays],
+            receiver: vec![0; rays],
+            path: vec![0; rays],
+            status: vec![0; rays],
+            time: vec![0.0; rays],
+            points: vec![0.0; rays * width * 2],
+            num_points: vec![0; rays],
+            media: vec![0; rays * (width - 1)],
+            iterations: vec![0; rays],
+            residual: vec![0.0; rays],
+            reason: vec![None; rays],
+            stationary: None,
         }
     }
 
-    #[allow(clippy::too_many_arguments, reason = "one column each")]
-    fn push(
+    fn rows(&mut self) -> Rows<'_> {
+        Rows {
+            width: self.width,
+            source: &mut self.source,
+            receiver: &mut self.receiver,
+            path: &mut self.path,
+            status: &mut self.status,
+            time: &mut self.time,
+            points: &mut self.points,
+            num_points: &mut self.num_points,
+            media: &mut self.media,
+            iterations: &mut self.iterations,
+            residual: &mut self.residual,
+            reason: &mut self.reason,
+        }
+    }
+
+    /// Fills every row with `write(state, ray, rows, row)` in parallel, each task with its
+    /// own `state` from `init` (a workspace, say).
+    fn fill_parallel<S>(
         &mut self,
-        scene: &Scene,
-        width: usize,
-        triple: [usize; 3],
-        record: &RayRecord,
-        points: &[Point],
-        media: impl Iterator<Item = Option<usize>>,
+        init: &(impl Fn() -> S + Sync),
+        write: &(impl Fn(&mut S, usize, &mut Rows<'_>, usize) + Sync),
     ) {
-        let [source, receiver, path] = triple;
-        self.source.push(source as i64);
-        self.receiver.push(receiver as i64);
-        self.path.push(path as i64);
-        self.status.push(status_code(record.status));
-        self.time.push(record.time);
-        let own = scene.paths()[path].steps.len() + 2;
-        self.num_points.push(own as i64);
-        let with_time = record.status.has_time() && points.len() == own;
-        for i in 0..width {
-            match points.get(i).filter(|_| with_time) {
-                Some(p) => self.points.extend_from_slice(&[p.x, p.y]),
-                None => self.points.extend_from_slice(&[f64::NAN, f64::NAN]),
+        fn fill<S>(
+            mut rows: Rows<'_>,
+            first: usize,
+            init: &(impl Fn() -> S + Sync),
+            write: &(impl Fn(&mut S, usize, &mut Rows<'_>, usize) + Sync),
+        ) {
+            let n = rows.time.len();
+            if n <= ROWS_PER_TASK {
+                let mut state = init();
+                for i in 0..n {
+                    write(&mut state, first + i, &mut rows, i);
+                }
+            } else {
+                let (a, b) = rows.split_at(n / 2);
+                rayon::join(
+                    || fill(a, first, init, write),
+                    || fill(b, first + n / 2, init, write),
+                );
             }
         }
-        let start = self.media.len();
-        self.media
-            .extend(media.take(width - 1).map(|m| m.map_or(-1, |m| m as i32)));
-        self.media.resize(start + width - 1, -1);
-        self.iterations.push(record.iterations);
-        self.residual.push(record.residual);
-        self.reason.push(record.reason.map(|r| r.describe(scene)));
+        fill(self.rows(), 0, init, write);
     }
 
-    fn finish(self, py: Python<'_>, scene: &Scene, width: usize) -> PyRays {
-        let n = self.time.len();
-        let stationary = !self.complete.is_empty();
+    fn finish(self, py: Python<'_>, scene: &Scene) -> PyRays {
+        let (n, width) = (self.time.len(), self.width);
+        let (arrival, kink, complete) = match self.stationary {
+            Some(c) => (
+                Some(c.arrival.into_pyarray(py).unbind()),
+                Some(c.kink),
+                Some(c.complete.into_pyarray(py).unbind()),
+            ),
+            None => (None, None, None),
+        };
         PyRays {
             source: self.source.into_pyarray(py).unbind(),
             receiver: self.receiver.into_pyarray(py).unbind(),
@@ -488,18 +536,115 @@ impl Columns {
             status_names: status_names(),
             path_names: scene.paths().iter().map(|p| p.name.clone()).collect(),
             media_names: scene.media().iter().map(|m| m.name.clone()).collect(),
-            arrival: stationary.then(|| self.arrival.into_pyarray(py).unbind()),
-            kink: stationary.then_some(self.kink),
-            complete: stationary.then(|| self.complete.into_pyarray(py).unbind()),
+            arrival,
+            kink,
+            complete,
         }
+    }
+}
+
+impl Rows<'_> {
+    /// The rows before `k` and from `k` on.
+    fn split_at(self, k: usize) -> (Self, Self) {
+        let w = self.width;
+        let (source, source_b) = self.source.split_at_mut(k);
+        let (receiver, receiver_b) = self.receiver.split_at_mut(k);
+        let (path, path_b) = self.path.split_at_mut(k);
+        let (status, status_b) = self.status.split_at_mut(k);
+        let (time, time_b) = self.time.split_at_mut(k);
+        let (points, points_b) = self.points.split_at_mut(k * w * 2);
+        let (num_points, num_points_b) = self.num_points.split_at_mut(k);
+        let (media, media_b) = self.media.split_at_mut(k * (w - 1));
+        let (iterations, iterations_b) = self.iterations.split_at_mut(k);
+        let (residual, residual_b) = self.residual.split_at_mut(k);
+        let (reason, reason_b) = self.reason.split_at_mut(k);
+        (
+            Rows {
+                width: w,
+                source,
+                receiver,
+                path,
+                status,
+                time,
+                points,
+                num_points,
+                media,
+                iterations,
+                residual,
+                reason,
+            },
+            Rows {
+                width: w,
+                source: source_b,
+                receiver: receiver_b,
+                path: path_b,
+                status: status_b,
+                time: time_b,
+                points: points_b,
+                num_points: num_points_b,
+                media: media_b,
+                iterations: iterations_b,
+                residual: residual_b,
+                reason: reason_b,
+            },
+        )
+    }
+
+    /// Row `i`: ray `triple` with its record, points (read only when it has a time) and leg
+    /// media (`None`, or fewer than its legs, where unknown: −1).
+    #[allow(clippy::too_many_arguments, reason = "the parts of one ray")]
+    fn write(
+        &mut self,
+        i: usize,
+        scene: &Scene,
+        triple: [usize; 3],
+        record: &RayRecord,
+        points: &[Point],
+        media: Option<impl Iterator<Item = usize>>,
+    ) {
+        let [source, receiver, path] = triple;
+        let w = self.width;
+        self.source[i] = source as i64;
+        self.receiver[i] = receiver as i64;
+        self.path[i] = path as i64;
+        self.status[i] = status_code(record.status);
+        self.time[i] = record.time;
+        let own = scene.paths()[path].steps.len() + 2;
+        self.num_points[i] = own as i64;
+        let with_time = record.status.has_time() && points.len() == own;
+        let row = &mut self.points[i * w * 2..(i + 1) * w * 2];
+        row.fill(f64::NAN);
+        if with_time {
+            for (xy, p) in row.chunks_exact_mut(2).zip(points) {
+                xy[0] = p.x;
+                xy[1] = p.y;
+            }
+        }
+        let legs = &mut self.media[i * (w - 1)..(i + 1) * (w - 1)];
+        legs.fill(-1);
+        if let Some(media) = media {
+            for (leg, m) in legs.iter_mut().zip(media) {
+                *leg = i32::try_from(m).unwrap_or(-1);
+            }
+        }
+        self.iterations[i] = record.iterations;
+        self.residual[i] = record.residual;
+        self.reason[i] = record.reason.map(|r| r.describe(scene));
     }
 }
 
 /// The entries of every stationary path, as the command-line tool writes them: one per
 /// stationary path, and one (`no_path` or `not_converged`) per triple that has none.
-fn stationary_columns(scene: &Scene, rays: &StationaryRays) -> Columns {
-    let width = width(scene);
-    let mut columns = Columns::with_capacity(rays.entries(), width);
+fn stationary_table(scene: &Scene, rays: &StationaryRays) -> Table {
+    let n = rays.entries();
+    let mut table = Table::new(n, width(scene));
+    let mut columns = StationaryColumns {
+        arrival: Vec::with_capacity(n),
+        kink: Vec::with_capacity(n),
+        complete: Vec::with_capacity(n),
+    };
+    let mut rows = table.rows();
+    let mut row = 0;
     for t in &rays.triples {
         let triple = [t.source, t.receiver, t.path];
         for (i, a) in t.arrivals.iter().enumerate() {
@@ -510,8 +655,9 @@ fn stationary_columns(scene: &Scene, rays: &StationaryRays) -> Columns {
                 residual: a.residual,
                 reason: a.reason,
             };
-            let media = a.media.iter().map(|&m| Some(m));
-            columns.push(scene, width, triple, &record, &a.points, media);
+            let media = Some(a.media.iter().copied());
+            rows.write(row, scene, triple, &record, &a.points, media);
+            row += 1;
             columns.arrival.push(i as i64);
             columns.kink.push(kink_name(a.kink));
             columns.complete.push(t.complete);
@@ -524,15 +670,19 @@ fn stationary_columns(scene: &Scene, rays: &StationaryRays) -> Columns {
                 residual: f64::NAN,
                 reason: Some(t.reason_without_arrivals()),
             };
-            let given = scene.paths()[t.path].media.as_deref().unwrap_or(&[]);
-            let media = given.iter().map(|&m| Some(m));
-            columns.push(scene, width, triple, &record, &[], media);
+            let media = scene.paths()[t.path]
+                .media
+                .as_deref()
+                .map(|m| m.iter().copied());
+            rows.write(row, scene, triple, &record, &[], media);
+            row += 1;
             columns.arrival.push(0);
             columns.kink.push(None);
             columns.complete.push(t.complete);
         }
     }
-    columns
+    table.stationary = Some(columns);
+    table
 }
 
 /// The most points of any path of `scene` (at least 2: the source and the receiver).
@@ -545,25 +695,21 @@ fn width(scene: &Scene) -> usize {
         .unwrap_or(2)
 }
 
-fn batch_columns(scene: &Scene, batch: &Batch) -> Columns {
-    let width = width(scene);
-    let mut columns = Columns::with_capacity(batch.len(), width);
-    for ray in 0..batch.len() {
+fn batch_table(scene: &Scene, batch: &Batch) -> Table {
+    let mut table = Table::new(batch.len(), width(scene));
+    table.fill_parallel(&|| (), &|(), ray, rows, i| {
         let (s, r, p) = batch.triple(ray);
-        let media: Vec<Option<usize>> = match batch.media(ray) {
-            Some(m) => m.map(Some).collect(),
-            None => Vec::new(),
-        };
-        columns.push(
+        let record = batch.record(ray);
+        rows.write(
+            i,
             scene,
-            width,
             [s, r, p],
-            batch.record(ray),
+            record,
             batch.points(ray),
-            media.into_iter(),
+            batch.media(ray),
         );
-    }
-    columns
+    });
+    table
 }
 
 /// Where a long batch reports its progress.
@@ -676,6 +822,7 @@ impl PyTracer {
         let engine = engine.map_err(|e| scene_error(py, &e))?;
         Ok(PyTracer {
             engine,
+            batch: Batch::default(),
             workspace: Workspace::new(),
             arrivals: Vec::new(),
         })
@@ -696,13 +843,14 @@ impl PyTracer {
     /// `progress(done, total)` called from the calling thread.
     #[pyo3(signature = (*, warm_start = true, progress = None))]
     fn trace(
-        &self,
+        &mut self,
         py: Python<'_>,
         warm_start: bool,
         progress: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyRays> {
         let tracer = self.engine.borrow_dependent();
-        let scene = self.inner_scene();
+        let scene = self.engine.borrow_owner();
+        let batch = &mut self.batch;
         let total = scene.num_rays();
         let progress = Progress::new(py, progress, total)?;
         let done = AtomicUsize::new(0);
@@ -714,15 +862,15 @@ impl PyTracer {
             progress: progress.as_ref().map(|_| &count as &(dyn Fn(usize) + Sync)),
             ..BatchOptions::default()
         };
-        let batch = match &progress {
-            None => py.detach(|| tracer.try_trace_batch(&opts)),
+        let solved = match &progress {
+            None => py.detach(|| tracer.try_trace_batch_into(&opts, batch)),
             Some(progress) => {
                 let (finished, mut shown) = (AtomicUsize::new(0), 0);
                 let result = std::thread::scope(|scope| {
                     let worker = scope.spawn(|| {
-                        let batch = tracer.try_trace_batch(&opts);
+                        let solved = tracer.try_trace_batch_into(&opts, batch);
                         finished.store(1, Ordering::Release);
-                        batch
+                        solved
                     });
                     let mut reported = Ok(());
                     while finished.load(Ordering::Acquire) == 0 {
@@ -733,22 +881,23 @@ impl PyTracer {
                             shown = now;
                         }
                     }
-                    let batch = py.detach(|| worker.join());
-                    (batch, reported)
+                    let solved = py.detach(|| worker.join());
+                    (solved, reported)
                 });
-                let (batch, reported) = result;
-                let batch = batch.map_err(|_| PyRuntimeError::new_err("the batch panicked"))?;
+                let (solved, reported) = result;
+                let solved = solved.map_err(|_| PyRuntimeError::new_err("the batch panicked"))?;
                 reported?;
                 if shown < total {
                     progress.report(total, shown, total)?;
                 }
                 progress.close()?;
-                batch
+                solved
             }
         };
-        let batch = batch.map_err(|e| scene_error(py, &e))?;
-        let columns = py.detach(|| batch_columns(scene, &batch));
-        Ok(columns.finish(py, scene, width(scene)))
+        solved.map_err(|e| scene_error(py, &e))?;
+        let batch = &self.batch;
+        let table = py.detach(|| batch_table(scene, batch));
+        Ok(table.finish(py, scene))
     }
 
     /// Every stationary path of every ray of the scene (not only the one the default start
@@ -761,8 +910,8 @@ impl PyTracer {
         let rays = py
             .detach(|| tracer.trace_stationary())
             .map_err(|e| scene_error(py, &e.into()))?;
-        let columns = py.detach(|| stationary_columns(scene, &rays));
-        Ok(columns.finish(py, scene, width(scene)))
+        let table = py.detach(|| stationary_table(scene, &rays));
+        Ok(table.finish(py, scene))
     }
 
     /// One ray of path `path` (index or name) between any two points.
@@ -816,7 +965,7 @@ impl PyTracer {
     }
 
     /// Rays of path `path` between `sources[i]` and `receivers[i]` (arrays of shape `(n, 2)`),
-    /// one by one with the GIL released, as `Rays` (their `source` and `receiver` hold `i`).
+    /// in parallel with the GIL released, as `Rays` (their `source` and `receiver` hold `i`).
     #[pyo3(signature = (sources, receivers, path = None))]
     fn solve_pairs(
         &mut self,
@@ -850,18 +999,16 @@ impl PyTracer {
             })?;
         }
         let tracer = self.engine.borrow_dependent();
-        let ws = &mut self.workspace;
-        let width = width(scene);
-        let columns = py.detach(|| {
-            let mut columns = Columns::with_capacity(sources.len(), width);
-            for (i, (&s, &r)) in sources.iter().zip(&receivers).enumerate() {
-                let record = tracer.solve(s, r, path, ws);
-                let media = ws.media().iter().map(|&m| Some(m));
-                columns.push(scene, width, [i, i, path], &record, ws.points(), media);
-            }
-            columns
+        let table = py.detach(|| {
+            let mut table = Table::new(sources.len(), width(scene));
+            table.fill_parallel(&Workspace::new, &|ws, i, rows, row| {
+                let record = tracer.solve(sources[i], receivers[i], path, ws);
+                let media = Some(ws.media().iter().copied());
+                rows.write(row, scene, [i, i, path], &record, ws.points(), media);
+            });
+            table
         });
-        Ok(columns.finish(py, scene, width))
+        Ok(table.finish(py, scene))
     }
 
     /// Every stationary path of path `path` between two points, ordered by time (a `Ray`
