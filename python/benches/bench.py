@@ -7,9 +7,11 @@ y = 0 from x = -1 to 2, source (0, 1)) to 100,000 receivers on a jittered grid, 
     python python/benches/bench.py [rounds]
 
 Prints a Markdown table:
-- a batch of every ray through Python (`Tracer.trace`, numpy arrays out) beside the Rust
-  library's `Tracer::trace_batch_into` (the example `batch_timing`, run as a subprocess),
-  alternating, the median of each over the rounds;
+- a batch of every ray through Python (`Tracer.trace(out=rays)`, into the arrays of the
+  previous result, as the Rust batch reuses its own) beside the Rust library's
+  `Tracer::trace_batch_into` (the example `batch_timing`, run as a subprocess), alternating,
+  the median of each over the rounds; and `Tracer.trace()` into new arrays (the first touch
+  of fresh memory costs as much as the rays here);
 - one-ray calls from Python (`Tracer.time` and `Tracer.solve`), per call;
 - the seed's method: gradient descent on all crossing points as one numpy vector, gradients by
   autograd, run until every time is within 1e-12 (relative) of eigenray's.
@@ -61,12 +63,17 @@ def rust_batch_seconds(scene_file, repetitions):
     return float(out.stdout)
 
 
-def python_batch_seconds(tracer, repetitions):
-    tracer.trace()  # warm-up
+def python_batch_seconds(tracer, repetitions, reuse):
+    """The median time of `Tracer.trace()`: into new arrays, or (`reuse`) into the arrays
+    of the previous result (`out=`), as the Rust batch reuses its own."""
+    rays = tracer.trace()  # warm-up
     runs = []
     for _ in range(repetitions):
         start = time.perf_counter()
-        tracer.trace()
+        if reuse:
+            tracer.trace(out=rays)
+        else:
+            tracer.trace()
         runs.append(time.perf_counter() - start)
     return statistics.median(runs)
 
@@ -112,12 +119,14 @@ def main():
         tracer = eigenray.Tracer(scene)
         rays = tracer.trace()
         assert (rays.status == 0).all()
-        rust, python = [], []
+        rust, python, fresh = [], [], []
         for _ in range(rounds):  # alternating
             rust.append(rust_batch_seconds(scene_file, 5))
-            python.append(python_batch_seconds(tracer, 5))
+            python.append(python_batch_seconds(tracer, 5, reuse=True))
+            fresh.append(python_batch_seconds(tracer, 5, reuse=False))
     n = len(receivers)
     rust_s, python_s = statistics.median(rust), statistics.median(python)
+    fresh_s = statistics.median(fresh)
 
     one = eigenray.Tracer(eigenray.Scene(scene_dict(receivers[:1])))
     pairs = [(SOURCE, tuple(r)) for r in receivers[:1000]]
@@ -138,9 +147,11 @@ def main():
     print("| --- | ---: | ---: |")
     print(f"| Rust `Tracer::trace_batch_into` (2 threads) | {rust_s * 1e3:.1f} ms "
           f"| {rust_s / n * 1e9:.0f} ns |")
-    print(f"| Python `Tracer.trace()` into numpy (2 threads) | {python_s * 1e3:.1f} ms "
-          f"| {python_s / n * 1e9:.0f} ns |")
+    print(f"| Python `Tracer.trace(out=rays)` into the same arrays (2 threads) "
+          f"| {python_s * 1e3:.1f} ms | {python_s / n * 1e9:.0f} ns |")
     print(f"| Python over Rust | {python_s / rust_s:.3f}× | |")
+    print(f"| Python `Tracer.trace()` into new arrays (2 threads) | {fresh_s * 1e3:.1f} ms "
+          f"| {fresh_s / n * 1e9:.0f} ns |")
     print(f"| Python `Tracer.time(s, r)`, one ray per call | | {time_call * 1e9:.0f} ns |")
     print(f"| Python `Tracer.solve(s, r)`, one `Ray` per call | | {solve_call * 1e9:.0f} ns |")
     print(f"| seed: numpy + autograd gradient descent, {gd_iterations} iterations to "

@@ -91,6 +91,7 @@ class Tracer:
         *,
         warm_start: bool = True,
         progress: Union[None, bool, Callable[[int, int], Any]] = None,
+        out: Optional[Rays] = None,
     ) -> Rays: ...
     def trace_stationary(self) -> Rays: ...
     def solve(

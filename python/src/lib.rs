@@ -4,6 +4,7 @@
 //! validation and error messages) and the library's results to numpy arrays. The Python
 //! package (`python/eigenray/`) re-exports these classes and adds the plotting helper.
 
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 
@@ -12,7 +13,10 @@ use eigenray::{
     StationaryRays, Status, Tracer, Workspace, npy::STATUS_CODES, scene_parts::StepKind,
 };
 use numpy::ndarray::{Array2, Array3};
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray2,
+    PyUntypedArrayMethods,
+};
 use pyo3::exceptions::{PyIOError, PyIndexError, PyKeyError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
@@ -342,49 +346,72 @@ impl PyRay {
 
 /// Every ray of a scene as numpy arrays, in ray order (source-major, then receiver, then
 /// path). Rays without a time have `time` NaN and NaN points.
-#[pyclass(module = "eigenray", name = "Rays", frozen, get_all)]
+#[pyclass(module = "eigenray", name = "Rays", frozen)]
 struct PyRays {
     /// Source index of each ray, shape `(n,)`.
+    #[pyo3(get)]
     source: Py<PyArray1<i64>>,
     /// Receiver index of each ray.
+    #[pyo3(get)]
     receiver: Py<PyArray1<i64>>,
     /// Path index of each ray.
+    #[pyo3(get)]
     path: Py<PyArray1<i64>>,
     /// Status code of each ray (an index into `status_names`), `uint8`.
+    #[pyo3(get)]
     status: Py<PyArray1<u8>>,
     /// Travel time; NaN for a ray without one.
+    #[pyo3(get)]
     time: Py<PyArray1<f64>>,
     /// Source, interaction points and receiver, shape `(n, P, 2)`, NaN-padded past a path's
     /// own points (P: the most points of any path) and NaN for a ray without a time.
+    #[pyo3(get)]
     points: Py<PyArray3<f64>>,
     /// Points of each ray's path (`k + 2` for `k` steps), shape `(n,)`.
+    #[pyo3(get)]
     num_points: Py<PyArray1<i64>>,
     /// Leg media, shape `(n, P − 1)`: indices into `media_names`, −1 where unknown or past the
     /// path's legs.
+    #[pyo3(get)]
     media: Py<PyArray2<i32>>,
     /// Solver iterations.
+    #[pyo3(get)]
     iterations: Py<PyArray1<u32>>,
     /// Final relative residual (NaN where the solver did not run).
+    #[pyo3(get)]
     residual: Py<PyArray1<f64>>,
-    /// Why each ray is not `converged` (`None` where it is).
-    reason: Vec<Option<String>>,
+    /// Why each ray is not `converged` (`None` where it is): read through the `reason`
+    /// getter (a list), rewritten by `trace(out=...)`.
+    reasons: Mutex<Vec<Option<String>>>,
     /// The status names, by code.
+    #[pyo3(get)]
     status_names: Vec<&'static str>,
     /// The scene's path names (`None` for an unnamed path), by path index.
+    #[pyo3(get)]
     path_names: Vec<Option<String>>,
     /// The scene's medium names, by medium index.
+    #[pyo3(get)]
     media_names: Vec<String>,
     /// From `trace_stationary`: each entry's place by time among its triple's stationary
     /// paths (0 for a triple without any); `None` from `trace`.
+    #[pyo3(get)]
     arrival: Option<Py<PyArray1<i64>>>,
     /// From `trace_stationary`: `"minimum"`, `"maximum"` or `"mixed"` on `vertex` entries.
+    #[pyo3(get)]
     kink: Option<Vec<Option<String>>>,
     /// From `trace_stationary`: whether the triple's search was complete.
+    #[pyo3(get)]
     complete: Option<Py<PyArray1<bool>>>,
 }
 
 #[pymethods]
 impl PyRays {
+    /// Why each ray is not `converged` (`None` where it is), naming interfaces.
+    #[getter]
+    fn reason(&self) -> Vec<Option<String>> {
+        self.reasons.lock().map(|r| r.clone()).unwrap_or_default()
+    }
+
     fn __len__(&self, py: Python<'_>) -> usize {
         self.time.bind(py).len()
     }
@@ -475,36 +502,6 @@ impl Table {
         }
     }
 
-    /// Fills every row with `write(state, ray, rows, row)` in parallel, each task with its
-    /// own `state` from `init` (a workspace, say).
-    fn fill_parallel<S>(
-        &mut self,
-        init: &(impl Fn() -> S + Sync),
-        write: &(impl Fn(&mut S, usize, &mut Rows<'_>, usize) + Sync),
-    ) {
-        fn fill<S>(
-            mut rows: Rows<'_>,
-            first: usize,
-            init: &(impl Fn() -> S + Sync),
-            write: &(impl Fn(&mut S, usize, &mut Rows<'_>, usize) + Sync),
-        ) {
-            let n = rows.time.len();
-            if n <= ROWS_PER_TASK {
-                let mut state = init();
-                for i in 0..n {
-                    write(&mut state, first + i, &mut rows, i);
-                }
-            } else {
-                let (a, b) = rows.split_at(n / 2);
-                rayon::join(
-                    || fill(a, first, init, write),
-                    || fill(b, first + n / 2, init, write),
-                );
-            }
-        }
-        fill(self.rows(), 0, init, write);
-    }
-
     fn finish(self, py: Python<'_>, scene: &Scene) -> PyRays {
         let (n, width) = (self.time.len(), self.width);
         let (arrival, kink, complete) = match self.stationary {
@@ -532,7 +529,7 @@ impl Table {
                 .unbind(),
             iterations: self.iterations.into_pyarray(py).unbind(),
             residual: self.residual.into_pyarray(py).unbind(),
-            reason: self.reason,
+            reasons: Mutex::new(self.reason),
             status_names: status_names(),
             path_names: scene.paths().iter().map(|p| p.name.clone()).collect(),
             media_names: scene.media().iter().map(|m| m.name.clone()).collect(),
@@ -540,6 +537,29 @@ impl Table {
             kink,
             complete,
         }
+    }
+}
+
+/// Fills every row of `rows` with `write(state, ray, rows, row)` in parallel (`ray` counts
+/// from `first`), each task with its own `state` from `init` (a workspace, say).
+fn fill_parallel<S>(
+    mut rows: Rows<'_>,
+    first: usize,
+    init: &(impl Fn() -> S + Sync),
+    write: &(impl Fn(&mut S, usize, &mut Rows<'_>, usize) + Sync),
+) {
+    let n = rows.time.len();
+    if n <= ROWS_PER_TASK {
+        let mut state = init();
+        for i in 0..n {
+            write(&mut state, first + i, &mut rows, i);
+        }
+    } else {
+        let (a, b) = rows.split_at(n / 2);
+        rayon::join(
+            || fill_parallel(a, first, init, write),
+            || fill_parallel(b, first + n / 2, init, write),
+        );
     }
 }
 
@@ -695,9 +715,9 @@ fn width(scene: &Scene) -> usize {
         .unwrap_or(2)
 }
 
-fn batch_table(scene: &Scene, batch: &Batch) -> Table {
-    let mut table = Table::new(batch.len(), width(scene));
-    table.fill_parallel(&|| (), &|(), ray, rows, i| {
+/// Writes every ray of `batch` into `rows`, in parallel.
+fn write_batch(scene: &Scene, batch: &Batch, rows: Rows<'_>) {
+    fill_parallel(rows, 0, &|| (), &|(), ray, rows, i| {
         let (s, r, p) = batch.triple(ray);
         let record = batch.record(ray);
         rows.write(
@@ -709,7 +729,68 @@ fn batch_table(scene: &Scene, batch: &Batch) -> Table {
             batch.media(ray),
         );
     });
-    table
+}
+
+/// Writes a batch into the arrays of `out` (a `Rays` of the same shape, from `trace`), in
+/// place: a layout loop's arrays are allocated once.
+fn write_batch_into(py: Python<'_>, scene: &Scene, batch: &Batch, out: &PyRays) -> PyResult<()> {
+    let (n, w) = (batch.len(), width(scene));
+    let shape_error = || {
+        argument_error(
+            py,
+            "out",
+            format!("needs the Rays of an earlier trace() of {n} rays of {w} points"),
+        )
+    };
+    if out.arrival.is_some() || out.time.bind(py).len() != n {
+        return Err(shape_error());
+    }
+    if out.points.bind(py).shape() != [n, w, 2] || out.media.bind(py).shape() != [n, w - 1] {
+        return Err(shape_error());
+    }
+    let busy = |_| argument_error(py, "out", "its arrays are in use or not writeable");
+    let contiguous = |_| argument_error(py, "out", "its arrays must stay contiguous");
+    let source = out.source.bind(py);
+    let mut source = source.try_readwrite().map_err(busy)?;
+    let receiver = out.receiver.bind(py);
+    let mut receiver = receiver.try_readwrite().map_err(busy)?;
+    let path = out.path.bind(py);
+    let mut path = path.try_readwrite().map_err(busy)?;
+    let status = out.status.bind(py);
+    let mut status = status.try_readwrite().map_err(busy)?;
+    let time = out.time.bind(py);
+    let mut time = time.try_readwrite().map_err(busy)?;
+    let points = out.points.bind(py);
+    let mut points = points.try_readwrite().map_err(busy)?;
+    let num_points = out.num_points.bind(py);
+    let mut num_points = num_points.try_readwrite().map_err(busy)?;
+    let media = out.media.bind(py);
+    let mut media = media.try_readwrite().map_err(busy)?;
+    let iterations = out.iterations.bind(py);
+    let mut iterations = iterations.try_readwrite().map_err(busy)?;
+    let residual = out.residual.bind(py);
+    let mut residual = residual.try_readwrite().map_err(busy)?;
+    let mut reasons = out
+        .reasons
+        .lock()
+        .map_err(|_| PyRuntimeError::new_err("an earlier call failed while writing these rays"))?;
+    reasons.resize(n, None);
+    let rows = Rows {
+        width: w,
+        source: source.as_slice_mut().map_err(contiguous)?,
+        receiver: receiver.as_slice_mut().map_err(contiguous)?,
+        path: path.as_slice_mut().map_err(contiguous)?,
+        status: status.as_slice_mut().map_err(contiguous)?,
+        time: time.as_slice_mut().map_err(contiguous)?,
+        points: points.as_slice_mut().map_err(contiguous)?,
+        num_points: num_points.as_slice_mut().map_err(contiguous)?,
+        media: media.as_slice_mut().map_err(contiguous)?,
+        iterations: iterations.as_slice_mut().map_err(contiguous)?,
+        residual: residual.as_slice_mut().map_err(contiguous)?,
+        reason: &mut reasons,
+    };
+    py.detach(|| write_batch(scene, batch, rows));
+    Ok(())
 }
 
 /// Where a long batch reports its progress.
@@ -840,14 +921,17 @@ impl PyTracer {
     ///
     /// `warm_start`: start each receiver from its neighbour's solution (see the library's
     /// `BatchOptions::warm_start`). `progress`: `True` for a tqdm bar, or a callable
-    /// `progress(done, total)` called from the calling thread.
-    #[pyo3(signature = (*, warm_start = true, progress = None))]
+    /// `progress(done, total)` called from the calling thread. `out`: the `Rays` of an
+    /// earlier `trace()` of this many rays, rewritten in place and returned (a loop then
+    /// allocates its arrays once).
+    #[pyo3(signature = (*, warm_start = true, progress = None, out = None))]
     fn trace(
         &mut self,
         py: Python<'_>,
         warm_start: bool,
         progress: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<PyRays> {
+        out: Option<Bound<'_, PyRays>>,
+    ) -> PyResult<Py<PyRays>> {
         let tracer = self.engine.borrow_dependent();
         let scene = self.engine.borrow_owner();
         let batch = &mut self.batch;
@@ -896,8 +980,16 @@ impl PyTracer {
         };
         solved.map_err(|e| scene_error(py, &e))?;
         let batch = &self.batch;
-        let table = py.detach(|| batch_table(scene, batch));
-        Ok(table.finish(py, scene))
+        if let Some(out) = out {
+            write_batch_into(py, scene, batch, out.get())?;
+            return Ok(out.unbind());
+        }
+        let table = py.detach(|| {
+            let mut table = Table::new(batch.len(), width(scene));
+            write_batch(scene, batch, table.rows());
+            table
+        });
+        Py::new(py, table.finish(py, scene))
     }
 
     /// Every stationary path of every ray of the scene (not only the one the default start
@@ -1001,7 +1093,7 @@ impl PyTracer {
         let tracer = self.engine.borrow_dependent();
         let table = py.detach(|| {
             let mut table = Table::new(sources.len(), width(scene));
-            table.fill_parallel(&Workspace::new, &|ws, i, rows, row| {
+            fill_parallel(table.rows(), 0, &Workspace::new, &|ws, i, rows, row| {
                 let record = tracer.solve(sources[i], receivers[i], path, ws);
                 let media = Some(ws.media().iter().copied());
                 rows.write(row, scene, [i, i, path], &record, ws.points(), media);

@@ -212,3 +212,37 @@ def test_scene_properties():
     assert scene.path_names == ["down"]
     assert scene.sources.tolist() == [[0.0, 1.0]]
     assert scene.num_rays == 1
+
+
+def test_trace_into_an_earlier_result_rewrites_it_in_place():
+    scene = eigenray.Scene(VALLEY)
+    tracer = eigenray.Tracer(scene)
+    first = tracer.trace()
+    time_array, points_array = first.time, first.points
+    time_array[:] = -1.0
+    points_array[:] = 0.0
+    again = tracer.trace(out=first)
+    assert again is first
+    assert first.time is time_array  # the same arrays, rewritten
+    fresh = tracer.trace()
+    for name in ("source", "receiver", "path", "status", "num_points", "media", "iterations"):
+        assert (getattr(first, name) == getattr(fresh, name)).all(), name
+    assert np.array_equal(first.time, fresh.time, equal_nan=True)
+    assert np.array_equal(first.points, fresh.points, equal_nan=True)
+    assert np.array_equal(first.residual, fresh.residual, equal_nan=True)
+    assert first.reason == fresh.reason
+
+
+def test_trace_into_rays_of_another_shape_is_refused():
+    small = eigenray.Tracer(eigenray.Scene(AIR_WATER)).trace()
+    valley = eigenray.Tracer(eigenray.Scene(VALLEY))
+    with pytest.raises(eigenray.EigenrayError) as caught:
+        valley.trace(out=small)
+    assert caught.value.key == "out"
+    with pytest.raises(eigenray.EigenrayError):
+        valley.trace(out=valley.trace_stationary())
+    rays = valley.trace()
+    rays.time.flags.writeable = False
+    with pytest.raises(eigenray.EigenrayError) as caught:
+        valley.trace(out=rays)
+    assert "not writeable" in str(caught.value)
