@@ -44,7 +44,7 @@ pub mod argmin_bridge;
 
 // The vocabulary: scenes, the tracer and its options, ray results, batches, outputs.
 pub use arrivals::{MAX_SEARCH_WORK, SearchArrival, SearchError, StationaryRays, TripleArrivals};
-pub use batch::{Batch, BatchOptions};
+pub use batch::{Batch, BatchOptions, BatchRay, BatchRays};
 pub use geom::{Point, Vec2};
 pub use output::{
     Format, RaySet, write_arrivals, write_batch, write_names, write_rays, write_rays_and_arrivals,

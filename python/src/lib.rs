@@ -540,20 +540,19 @@ impl Table {
     }
 }
 
-/// Fills every row of `rows` with `write(state, ray, rows, row)` in parallel (`ray` counts
-/// from `first`), each task with its own `state` from `init` (a workspace, say).
+/// Fills `rows` in parallel: `write(state, first, rows)` writes the rows of rays `first..`
+/// (tasks of at most `ROWS_PER_TASK` rows), each task with its own `state` from `init` (a
+/// workspace, say).
 fn fill_parallel<S>(
-    mut rows: Rows<'_>,
+    rows: Rows<'_>,
     first: usize,
     init: &(impl Fn() -> S + Sync),
-    write: &(impl Fn(&mut S, usize, &mut Rows<'_>, usize) + Sync),
+    write: &(impl Fn(&mut S, usize, &mut Rows<'_>) + Sync),
 ) {
     let n = rows.time.len();
     if n <= ROWS_PER_TASK {
-        let mut state = init();
-        for i in 0..n {
-            write(&mut state, first + i, &mut rows, i);
-        }
+        let mut rows = rows;
+        write(&mut init(), first, &mut rows);
     } else {
         let (a, b) = rows.split_at(n / 2);
         rayon::join(
@@ -717,17 +716,12 @@ fn width(scene: &Scene) -> usize {
 
 /// Writes every ray of `batch` into `rows`, in parallel.
 fn write_batch(scene: &Scene, batch: &Batch, rows: Rows<'_>) {
-    fill_parallel(rows, 0, &|| (), &|(), ray, rows, i| {
-        let (s, r, p) = batch.triple(ray);
-        let record = batch.record(ray);
-        rows.write(
-            i,
-            scene,
-            [s, r, p],
-            record,
-            batch.points(ray),
-            batch.media(ray),
-        );
+    fill_parallel(rows, 0, &|| (), &|(), first, rows| {
+        let n = rows.time.len();
+        for (i, ray) in batch.rays(first..first + n).enumerate() {
+            let triple = [ray.source, ray.receiver, ray.path];
+            rows.write(i, scene, triple, ray.record, ray.points, ray.media());
+        }
     });
 }
 
@@ -1093,10 +1087,13 @@ impl PyTracer {
         let tracer = self.engine.borrow_dependent();
         let table = py.detach(|| {
             let mut table = Table::new(sources.len(), width(scene));
-            fill_parallel(table.rows(), 0, &Workspace::new, &|ws, i, rows, row| {
-                let record = tracer.solve(sources[i], receivers[i], path, ws);
-                let media = Some(ws.media().iter().copied());
-                rows.write(row, scene, [i, i, path], &record, ws.points(), media);
+            fill_parallel(table.rows(), 0, &Workspace::new, &|ws, first, rows| {
+                for row in 0..rows.time.len() {
+                    let i = first + row;
+                    let record = tracer.solve(sources[i], receivers[i], path, ws);
+                    let media = Some(ws.media().iter().copied());
+                    rows.write(row, scene, [i, i, path], &record, ws.points(), media);
+                }
             });
             table
         });
