@@ -415,6 +415,14 @@ pub struct Scene {
     batch_size: BatchSize,
 }
 
+/// A copy of the scene in an `Arc`: what lets [`Tracer::new`](crate::Tracer::new) take a
+/// `&Scene` (the tracer owns its copy; the caller keeps its own).
+impl From<&Scene> for std::sync::Arc<Scene> {
+    fn from(scene: &Scene) -> Self {
+        std::sync::Arc::new(scene.clone())
+    }
+}
+
 /// The sizes of a whole batch of a scene, computed once at validation with checked
 /// arithmetic (a scene whose counts would overflow is refused), so that code that allocates
 /// for every ray can rely on them.
