@@ -52,8 +52,8 @@ pub use output::{
 };
 pub use problem::{PathProblem, Tridiagonal};
 pub use scene::{
-    InterfaceSpec, MediumSpec, PathSpec, Scene, SceneError, SceneSpec, SearchOptions, SearchSpec,
-    SolverOptions, SolverSpec, StationaryMode, StepSpec, escape_text,
+    InterfaceSpec, MediumSpec, PathSpec, Scene, SceneBuilder, SceneError, SceneSpec, SearchOptions,
+    SearchSpec, SolverOptions, SolverSpec, StationaryMode, StepSpec, escape_text,
 };
 pub use trace::{
     Arrival, InitialGuess, Kernels, Kink, Ray, RayRecord, Reason, Stationary, StationaryError,

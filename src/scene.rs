@@ -9,7 +9,10 @@ use crate::bvh::Bvh;
 use crate::geom::{Aabb, Point, SegmentContact, orient, segment_contact};
 use crate::polyline::{Polyline, PolylineError};
 
+mod builder;
 mod crossings;
+
+pub use builder::SceneBuilder;
 
 /// Default relative tolerance on the stationarity residual.
 pub const DEFAULT_TOLERANCE: f64 = 1e-12;
