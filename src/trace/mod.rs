@@ -28,6 +28,7 @@ mod stack;
 mod start;
 mod stationary;
 mod straight;
+mod update;
 
 pub(crate) use classify::{Classifier, Sequence};
 pub use complete::{Arrival, Kink, Stationary, StationaryError};
