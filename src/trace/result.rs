@@ -7,7 +7,7 @@ use crate::geom::Point;
 use crate::scene::Scene;
 use crate::solver::Solution;
 
-/// How a ray ended (the contract's `status`).
+/// How a ray ended (`status` in every output format).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Status {
@@ -29,7 +29,8 @@ pub enum Status {
 }
 
 impl Status {
-    /// The contract's name: `converged`, `vertex`, `no_path`, `obstructed`, `not_converged`.
+    /// Its name in every output format: `converged`, `vertex`, `no_path`, `obstructed`,
+    /// `not_converged`.
     pub fn as_str(self) -> &'static str {
         match self {
             Status::Converged => "converged",
