@@ -52,14 +52,17 @@ impl Layout {
         let direct = self.tracer.solve_indexed_from(0, 0, 0, None, &mut self.ws);
         let panel = self.tracer.solve_indexed_from(0, 0, 1, None, &mut self.ws);
         (direct.status == Status::Converged && panel.status == Status::Converged)
-            .then(|| panel.time - direct.time)
+            .then_some(panel.time - direct.time)
     }
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut layout = Layout::new()?;
     let tilts = [-1.0, -0.5, 0.0, 0.5, 1.0, 1.5];
-    println!("seat x   best panel end y   delay (ms)   reflections found (of {})", tilts.len());
+    println!(
+        "seat x   best panel end y   delay (ms)   reflections found (of {})",
+        tilts.len()
+    );
     for seat in 0..6 {
         let x = 6.0 + 1.5 * seat as f64;
         layout.tracer.set_receiver(0, Point::new(x, 1.2))?;
@@ -78,10 +81,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         match best {
-            Some((y, delay)) => println!(
-                "{x:6.1}   {y:16.1}   {:10.2}   {found}",
-                1e3 * delay
-            ),
+            Some((y, delay)) => println!("{x:6.1}   {y:16.1}   {:10.2}   {found}", 1e3 * delay),
             None => println!("{x:6.1}   {:>16}   {:>10}   0", "-", "-"),
         }
     }
