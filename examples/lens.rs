@@ -10,7 +10,7 @@
 //!
 //! Run with `cargo run --release --example lens`.
 
-use eigenray::{InterfaceSpec, MediumSpec, PathSpec, Scene, SceneSpec, StepSpec, Tracer};
+use eigenray::{InterfaceSpec, MediumSpec, PathSpec, Scene, StepSpec, Tracer};
 
 /// The two faces of a biconvex lens: circular arcs of `radius` meeting at (0, ±half_height),
 /// each of `n` segments, from the top down.
@@ -32,42 +32,23 @@ fn biconvex(radius: f64, half_height: f64, n: usize) -> (Vec<[f64; 2]>, Vec<[f64
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let mut spec = SceneSpec::default();
-    spec.media.insert(
-        "air".into(),
-        MediumSpec {
-            index: Some(1.0),
-            ..MediumSpec::default()
-        },
-    );
-    spec.media.insert(
-        "glass".into(),
-        MediumSpec {
-            index: Some(1.5),
-            ..MediumSpec::default()
-        },
-    );
     let (front, back) = biconvex(5.0, 2.0, 24);
-    for (name, points) in [("front face", front), ("back face", back)] {
-        spec.interfaces.insert(
-            name.into(),
-            InterfaceSpec {
-                points,
-                closed: false,
-            },
-        );
-    }
-    spec.sources = vec![[-8.0, 0.0]];
-    spec.receivers = (0..5).map(|k| [20.0, -1.0 + 0.5 * k as f64]).collect();
-    spec.paths = vec![PathSpec {
-        name: Some("through the lens".into()),
-        steps: vec![
-            StepSpec::Refract("front face".into()),
-            StepSpec::Refract("back face".into()),
-        ],
-        media: Some(vec!["air".into(), "glass".into(), "air".into()]),
-    }];
-    let scene = Scene::from_spec(&spec)?;
+    let scene = Scene::builder()
+        .medium("air", MediumSpec::index(1.0))
+        .medium("glass", MediumSpec::index(1.5))
+        .interface("front face", InterfaceSpec::open(front))
+        .interface("back face", InterfaceSpec::open(back))
+        .source([-8.0, 0.0])
+        .receivers((0..5).map(|k| [20.0, -1.0 + 0.5 * k as f64]))
+        .path(
+            PathSpec::new([
+                StepSpec::refract("front face"),
+                StepSpec::refract("back face"),
+            ])
+            .named("through the lens")
+            .media(["air", "glass", "air"]),
+        )
+        .build()?;
     let tracer = Tracer::new(&scene)?;
 
     // Optical path length: time with c = 1 (index × length).

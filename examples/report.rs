@@ -306,7 +306,7 @@ mod report {
                     ..SolverOptions::default()
                 })
                 .expect("valid solver options");
-            let tracer = Tracer::new(scene)
+            let tracer = Tracer::new(&*scene)
                 .expect("tracer")
                 .with_initial_guess(InitialGuess::Paraxial);
             let mut ws = Workspace::new();

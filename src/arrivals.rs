@@ -92,7 +92,7 @@ pub struct SearchArrival {
     pub arrival: Arrival,
 }
 
-impl Tracer<'_> {
+impl Tracer {
     /// Every stationary path of every (source, receiver, path) triple of the scene, as
     /// [`Tracer::stationary_paths`] finds them for one triple, solved in parallel (rayon), in
     /// ray order. This is what a scene with `"solver": {"stationary": "all"}` asks for.
@@ -347,7 +347,7 @@ fn count_sequences(options: &SearchOptions) -> u64 {
     total
 }
 
-impl Tracer<'_> {
+impl Tracer {
     /// The arrivals of the scene's `search`: every step sequence of 0 to `max_steps` steps
     /// through the allowed interfaces and kinds, each searched completely (as
     /// [`stationary_paths`](Tracer::stationary_paths) does) with its leg media from the

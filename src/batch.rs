@@ -401,7 +401,7 @@ fn spatial_order(points: &[Point]) -> Vec<usize> {
     keyed.into_iter().map(|(_, i)| i).collect()
 }
 
-impl Tracer<'_> {
+impl Tracer {
     /// [`trace_batch`](Self::trace_batch), with an error instead of an abort when the
     /// batch's arrays cannot be allocated (a scene of more rays than the machine can hold):
     /// the memory is reserved before any ray is solved.
@@ -785,7 +785,7 @@ impl Chain {
     }
 }
 
-impl Tracer<'_> {
+impl Tracer {
     /// Path `p` of every block of `unit`, one block after the other, each starting from the
     /// last one's solution when that receiver is near.
     fn path_chain(

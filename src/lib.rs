@@ -8,23 +8,49 @@
 //! equations by damped Newton iteration on the analytic, symmetric tridiagonal Hessian of `T`
 //! (an `O(k)` step for `k` interactions), then classifies each ray.
 //!
-//! Dependency direction (each module uses only those to its left):
-//! `geom ← bvh ← polyline ← scene ← regions ← problem ← solver ← trace ← batch ← arrivals ←
-//! output`.
+//! # Start here
+//!
+//! 1. **A scene**: [`Scene::from_json`] reads the scene document (its format:
+//!    `docs/scene-format.md`), [`Scene::builder`] writes the same keys in code
+//!    ([`SceneBuilder`], [`MediumSpec::speed`], [`InterfaceSpec::open`], [`PathSpec::new`],
+//!    [`StepSpec::reflect`]). Either validates everything and names the key of the first
+//!    problem ([`SceneError`]).
+//! 2. **A tracer**: [`Tracer::new`] takes the scene (moved in, an `Arc`, or a `&Scene` it
+//!    copies) and prepares it once; it owns what it needs (`'static`, `Send`, `Sync`).
+//! 3. **Rays**: [`Tracer::trace_all`] solves every (source, receiver, path) of the scene into
+//!    [`Ray`]s, in parallel; [`Tracer::trace_batch`] into flat arrays ([`Batch`]);
+//!    [`Tracer::solve`] one ray between any two points into a reusable [`Workspace`];
+//!    [`Tracer::stationary_paths`] every stationary path of one sequence;
+//!    [`Tracer::search`] every sequence up to a number of steps. Each ray has a [`Status`];
+//!    one that is not `converged` says why ([`Reason`]); [`Ray::describe`] writes it with the
+//!    scene's names.
+//! 4. **Change and trace again**: [`Tracer::set_receiver`], [`Tracer::set_source`],
+//!    [`Tracer::set_interface_points`], [`Tracer::set_medium_speed`] edit the tracer's scene,
+//!    validated as the document is, and prepare again only what depends on the change.
+//! 5. **Write**: [`write_rays`], [`write_batch`] and their siblings write JSON, JSON Lines,
+//!    CSV or `.npy` ([`Format`]).
 //!
 //! ```
-//! use eigenray::{Scene, Status, Tracer};
-//! let scene = Scene::from_json(r#"{
-//!     "media": { "air": { "index": 1.0 }, "water": { "index": 1.333 } },
-//!     "interfaces": { "surface": { "points": [[-1, 0], [2, 0]] } },
-//!     "sources": [[0, 1]], "receivers": [[1, -1]],
-//!     "paths": [{ "steps": [{ "refract": "surface" }], "media": ["air", "water"] }]
-//! }"#).unwrap();
-//! let tracer = Tracer::new(&scene).unwrap();
+//! use eigenray::{InterfaceSpec, MediumSpec, PathSpec, Point, Scene, Status, StepSpec, Tracer};
+//! let scene = Scene::builder()
+//!     .medium("air", MediumSpec::index(1.0))
+//!     .medium("water", MediumSpec::index(1.333))
+//!     .interface("surface", InterfaceSpec::open([[-1.0, 0.0], [2.0, 0.0]]))
+//!     .source([0.0, 1.0])
+//!     .receiver([1.0, -1.0])
+//!     .path(PathSpec::new([StepSpec::refract("surface")]).media(["air", "water"]))
+//!     .build()?;
+//! let mut tracer = Tracer::new(scene)?;
 //! let rays = tracer.trace_all();
 //! assert_eq!(rays[0].status, Status::Converged);
 //! assert!((rays[0].time - 2.6017642).abs() < 1e-6);
+//!
+//! tracer.set_receiver(0, Point::new(1.5, -2.0))?;
+//! assert!(tracer.trace_all()[0].time > rays[0].time);
+//! # Ok::<(), eigenray::SceneError>(())
 //! ```
+//!
+//! The modules and how they depend on each other: `ARCHITECTURE.md`.
 
 mod arrivals;
 mod batch;
@@ -52,8 +78,8 @@ pub use output::{
 };
 pub use problem::{PathProblem, Tridiagonal};
 pub use scene::{
-    InterfaceSpec, MediumSpec, PathSpec, Scene, SceneError, SceneSpec, SearchOptions, SearchSpec,
-    SolverOptions, SolverSpec, StationaryMode, StepSpec, escape_text,
+    InterfaceSpec, MediumSpec, PathSpec, Scene, SceneBuilder, SceneError, SceneSpec, SearchOptions,
+    SearchSpec, SolverOptions, SolverSpec, StationaryMode, StepSpec, escape_text,
 };
 pub use trace::{
     Arrival, InitialGuess, Kernels, Kink, Ray, RayRecord, Reason, Stationary, StationaryError,

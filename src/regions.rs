@@ -196,13 +196,7 @@ impl Regions {
             }
         }
         for (k, &p) in scene.sources().iter().enumerate() {
-            if self.medium_at(p).is_none() {
-                return Err(SceneError::new(
-                    format!("sources[{k}]"),
-                    "lies in a region that no medium fills (no `at` point claims it and there \
-                     is no `background`)",
-                ));
-            }
+            self.check_source(k, p)?;
         }
         let divides: Vec<bool> = (0..scene.interfaces().len())
             .map(|i| {
@@ -232,6 +226,19 @@ impl Regions {
                     ));
                 }
             }
+        }
+        Ok(())
+    }
+
+    /// Refuses source `k` at `p` when no medium fills its region (part of the checks of
+    /// [`build`](Self::build); alone when a source moves).
+    pub(crate) fn check_source(&self, k: usize, p: Point) -> Result<(), SceneError> {
+        if self.medium_at(p).is_none() {
+            return Err(SceneError::new(
+                format!("sources[{k}]"),
+                "lies in a region that no medium fills (no `at` point claims it and there is \
+                 no `background`)",
+            ));
         }
         Ok(())
     }

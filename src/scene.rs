@@ -9,7 +9,11 @@ use crate::bvh::Bvh;
 use crate::geom::{Aabb, Point, SegmentContact, orient, segment_contact};
 use crate::polyline::{Polyline, PolylineError};
 
+mod builder;
 mod crossings;
+mod update;
+
+pub use builder::SceneBuilder;
 
 /// Default relative tolerance on the stationarity residual.
 pub const DEFAULT_TOLERANCE: f64 = 1e-12;
@@ -415,6 +419,14 @@ pub struct Scene {
     batch_size: BatchSize,
 }
 
+/// A copy of the scene in an `Arc`: what lets [`Tracer::new`](crate::Tracer::new) take a
+/// `&Scene` (the tracer owns its copy; the caller keeps its own).
+impl From<&Scene> for std::sync::Arc<Scene> {
+    fn from(scene: &Scene) -> Self {
+        std::sync::Arc::new(scene.clone())
+    }
+}
+
 /// The sizes of a whole batch of a scene, computed once at validation with checked
 /// arithmetic (a scene whose counts would overflow is refused), so that code that allocates
 /// for every ray can rely on them.
@@ -613,22 +625,9 @@ impl Scene {
 
         let mut interfaces = Vec::with_capacity(spec.interfaces.len());
         for (name, i) in &spec.interfaces {
-            let key = format!("interfaces.{name}.points");
-            let mut pts = Vec::with_capacity(i.points.len());
-            for (k, p) in i.points.iter().enumerate() {
-                pts.push(point(&format!("{key}[{k}]"), *p)?);
-            }
-            let polyline = Polyline::new(pts, i.closed).map_err(|e| match e {
-                PolylineError::NotFinite { index } | PolylineError::ZeroLengthSegment { index } => {
-                    SceneError::new(format!("{key}[{index}]"), e.to_string())
-                }
-                PolylineError::TooFewPoints { .. } | PolylineError::Collinear => {
-                    SceneError::new(&key, e.to_string())
-                }
-            })?;
             interfaces.push(Interface {
                 name: name.clone(),
-                polyline,
+                polyline: interface_polyline(name, &i.points, i.closed)?,
             });
         }
         let (segments, segment_bvh) = index_segments(&interfaces);
@@ -637,12 +636,7 @@ impl Scene {
         for m in &media {
             if let Some(at) = m.at {
                 let key = format!("media.{}.at", m.name);
-                if on_interface(&interfaces, &segments, &segment_bvh, at).is_some() {
-                    return Err(SceneError::new(
-                        key,
-                        "lies on an interface; it must be strictly inside a region",
-                    ));
-                }
+                at_off_interfaces(m, &interfaces, &segments, &segment_bvh)?;
                 if let Some(d) = domain {
                     if !d.contains(at) {
                         return Err(SceneError::new(
@@ -754,27 +748,17 @@ impl Scene {
             None => None,
         };
         let batch_size = batch_size(sources.len(), receivers.len(), &paths)?;
-        let scene_points = || {
-            interfaces
-                .iter()
-                .flat_map(|i| i.polyline.vertices().iter().copied())
-                .chain(sources.iter().copied())
-                .chain(receivers.iter().copied())
-                .chain(media.iter().filter_map(|m| m.at))
-                .chain(domain.into_iter().flat_map(|d| [d.min, d.max]))
-        };
         if needs_regions {
-            check_region_range(scene_points())?;
+            check_region_range(scene_points(
+                &interfaces,
+                &sources,
+                &receivers,
+                &media,
+                domain,
+            ))?;
         }
 
-        let segment_ends = segments
-            .iter()
-            .map(|r| {
-                interfaces[r.interface as usize]
-                    .polyline
-                    .segment(r.segment as usize)
-            })
-            .collect();
+        let segment_ends = segment_ends(&interfaces, &segments);
         Ok(Scene {
             media,
             background,
@@ -1246,6 +1230,74 @@ fn index_segments(interfaces: &[Interface]) -> (Vec<SegmentRef>, Bvh) {
     }
     let bvh = Bvh::build(&boxes);
     (segments, bvh)
+}
+
+/// The polyline of interface `name` from its `points`, validated as the scene format says
+/// (errors at `interfaces.NAME.points` or one of its points).
+fn interface_polyline(
+    name: &str,
+    points: &[[f64; 2]],
+    closed: bool,
+) -> Result<Polyline, SceneError> {
+    let key = format!("interfaces.{name}.points");
+    let mut pts = Vec::with_capacity(points.len());
+    for (k, p) in points.iter().enumerate() {
+        pts.push(point(&format!("{key}[{k}]"), *p)?);
+    }
+    Polyline::new(pts, closed).map_err(|e| match e {
+        PolylineError::NotFinite { index } | PolylineError::ZeroLengthSegment { index } => {
+            SceneError::new(format!("{key}[{index}]"), e.to_string())
+        }
+        PolylineError::TooFewPoints { .. } | PolylineError::Collinear => {
+            SceneError::new(&key, e.to_string())
+        }
+    })
+}
+
+/// End points of `segments`, in the same order.
+fn segment_ends(interfaces: &[Interface], segments: &[SegmentRef]) -> Vec<(Point, Point)> {
+    segments
+        .iter()
+        .map(|r| {
+            interfaces[r.interface as usize]
+                .polyline
+                .segment(r.segment as usize)
+        })
+        .collect()
+}
+
+/// A medium's `at` point must not lie on an interface.
+fn at_off_interfaces(
+    medium: &Medium,
+    interfaces: &[Interface],
+    segments: &[SegmentRef],
+    bvh: &Bvh,
+) -> Result<(), SceneError> {
+    match medium.at {
+        Some(at) if on_interface(interfaces, segments, bvh, at).is_some() => Err(SceneError::new(
+            format!("media.{}.at", medium.name),
+            "lies on an interface; it must be strictly inside a region",
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Every point of a scene whose magnitude region lookup must hold: the interfaces' vertices,
+/// the sources, the receivers, the `at` points and the domain's corners.
+fn scene_points<'a>(
+    interfaces: &'a [Interface],
+    sources: &'a [Point],
+    receivers: &'a [Point],
+    media: &'a [Medium],
+    domain: Option<Aabb>,
+) -> impl Iterator<Item = Point> + Clone + 'a {
+    interfaces
+        .iter()
+        .flat_map(|i| i.polyline.vertices().iter().copied())
+        .chain(sources.iter().copied())
+        .chain(receivers.iter().copied())
+        .chain(media.iter().filter_map(|m| m.at))
+        .chain(domain.into_iter().flat_map(|d| [d.min, d.max]))
 }
 
 fn on_interface(

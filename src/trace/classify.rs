@@ -76,6 +76,11 @@ impl Classifier {
         }
     }
 
+    /// The boxes of the scene's sources and receivers that the candidates were found for.
+    pub(crate) fn ends(&self) -> [Aabb; 2] {
+        self.ends
+    }
+
     /// The record of a ray of the step sequence `of` (a scene path's, or one that a search
     /// generated) from `source` to `receiver` after the solve `sol` left its state in `nw`:
     /// its points into `points`, then the end, vanished-leg, vertex, side and obstruction

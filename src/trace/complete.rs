@@ -65,7 +65,7 @@ pub enum Kink {
 }
 
 impl Kink {
-    /// The contract's name: `minimum`, `maximum` (and `mixed`).
+    /// Its name in every output format: `minimum`, `maximum` (and `mixed`).
     pub fn as_str(self) -> &'static str {
         match self {
             Kink::Minimum => "minimum",

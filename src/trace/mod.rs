@@ -7,6 +7,8 @@
 //! `straight`), the Newton solve (`crate::solver`), the media lookup and the classification
 //! (`classify`). Every kernel ends in the same classifier.
 
+use std::sync::Arc;
+
 use rayon::prelude::*;
 
 use crate::geom::Point;
@@ -26,6 +28,7 @@ mod stack;
 mod start;
 mod stationary;
 mod straight;
+mod update;
 
 pub(crate) use classify::{Classifier, Sequence};
 pub use complete::{Arrival, Kink, Stationary, StationaryError};
@@ -200,8 +203,8 @@ pub(crate) struct Context<'a> {
 /// Common cases take a kernel (see [`Kernels`]): a single refraction at a flat interface, a
 /// stack of parallel flat layers, one interaction with its media given. Every kernel ends in
 /// the same classification and hands the rays outside its case to the general code.
-pub struct Tracer<'s> {
-    scene: &'s Scene,
+pub struct Tracer {
+    scene: Arc<Scene>,
     regions: Option<Regions>,
     /// Medium at each source (when regions exist).
     source_media: Vec<Option<usize>>,
@@ -217,14 +220,26 @@ pub struct Tracer<'s> {
     sides: Vec<std::sync::OnceLock<Vec<crate::regions::Sides>>>,
 }
 
-impl<'s> Tracer<'s> {
+/// A tracer owns what it needs: a layout tool keeps one in a struct, threads share it, a
+/// binding to another language holds it.
+const _: fn() = || {
+    fn owned<T: Send + Sync + 'static>() {}
+    owned::<Tracer>();
+};
+
+impl Tracer {
     /// Prepares a scene for tracing: builds the region lookup only if some path needs it.
+    ///
+    /// The tracer owns its scene (`'static`, `Send` and `Sync`: keep it in a struct, share it
+    /// between threads). `scene` is a [`Scene`] (moved in), an `Arc<Scene>` (shared with
+    /// other tracers) or a `&Scene` (copied: the caller keeps its own).
     ///
     /// # Errors
     /// A scene whose regions are inconsistent (two `at` points in one region).
-    pub fn new(scene: &'s Scene) -> Result<Tracer<'s>, SceneError> {
+    pub fn new(scene: impl Into<Arc<Scene>>) -> Result<Tracer, SceneError> {
+        let scene: Arc<Scene> = scene.into();
         let regions = if scene.needs_regions() {
-            Some(Regions::build(scene)?)
+            Some(Regions::build(&scene)?)
         } else {
             None
         };
@@ -233,11 +248,22 @@ impl<'s> Tracer<'s> {
             None => Vec::new(),
         };
         let opts = scene.solver();
+        let classifier = Classifier::new(&scene);
+        let hierarchies = scene
+            .interfaces()
+            .iter()
+            .map(|_| Default::default())
+            .collect();
+        let sides = scene
+            .interfaces()
+            .iter()
+            .map(|_| Default::default())
+            .collect();
         let mut tracer = Tracer {
             scene,
             regions,
             source_media,
-            classifier: Classifier::new(scene),
+            classifier,
             plans: Vec::new(),
             newton: NewtonOptions {
                 tolerance: opts.tolerance,
@@ -246,16 +272,8 @@ impl<'s> Tracer<'s> {
             },
             guess: InitialGuess::default(),
             kernels: Kernels::default(),
-            hierarchies: scene
-                .interfaces()
-                .iter()
-                .map(|_| Default::default())
-                .collect(),
-            sides: scene
-                .interfaces()
-                .iter()
-                .map(|_| Default::default())
-                .collect(),
+            hierarchies,
+            sides,
         };
         tracer.plan();
         Ok(tracer)
@@ -263,7 +281,7 @@ impl<'s> Tracer<'s> {
 
     /// Decides each path's plan for the present start and kernels.
     fn plan(&mut self) {
-        let scene = self.scene;
+        let scene = &*self.scene;
         self.plans = (0..scene.paths().len())
             .map(|p| PathPlan::of(scene, p, self.guess, self.kernels))
             .collect();
@@ -310,8 +328,8 @@ impl<'s> Tracer<'s> {
     }
 
     /// The scene.
-    pub fn scene(&self) -> &'s Scene {
-        self.scene
+    pub fn scene(&self) -> &Scene {
+        &self.scene
     }
 
     /// The region lookup, if the scene needed one.
@@ -323,7 +341,7 @@ impl<'s> Tracer<'s> {
     #[inline(always)]
     pub(crate) fn context(&self) -> Context<'_> {
         Context {
-            scene: self.scene,
+            scene: &self.scene,
             classifier: &self.classifier,
             newton: self.newton,
             guess: self.guess,
@@ -553,7 +571,7 @@ impl<'s> Tracer<'s> {
         {
             return ray;
         }
-        let scene = self.scene;
+        let scene = &*self.scene;
         let spec = &scene.paths()[path];
         let k = spec.steps.len();
         ws.resize(k);
@@ -658,7 +676,7 @@ impl<'s> Tracer<'s> {
     ) -> Result<(), Reason> {
         classify::lookup_media(
             self.regions.as_ref(),
-            self.scene,
+            &self.scene,
             source,
             src_medium,
             &self.scene.paths()[path].steps,

@@ -7,7 +7,7 @@ use crate::geom::Point;
 use crate::scene::Scene;
 use crate::solver::Solution;
 
-/// How a ray ended (the contract's `status`).
+/// How a ray ended (`status` in every output format).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Status {
@@ -29,7 +29,8 @@ pub enum Status {
 }
 
 impl Status {
-    /// The contract's name: `converged`, `vertex`, `no_path`, `obstructed`, `not_converged`.
+    /// Its name in every output format: `converged`, `vertex`, `no_path`, `obstructed`,
+    /// `not_converged`.
     pub fn as_str(self) -> &'static str {
         match self {
             Status::Converged => "converged",
@@ -124,6 +125,8 @@ impl Reason {
     }
 }
 
+/// The reason with indices only (`leg 1 crosses interface 2`); [`Reason::describe`] and
+/// [`Ray::describe`] name the interfaces, paths and media from the scene.
 impl fmt::Display for Reason {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -292,4 +295,81 @@ pub struct Ray {
     pub media: Vec<usize>,
     /// Why it is not `converged`, when it is not.
     pub reason: Option<Reason>,
+}
+
+impl Ray {
+    /// The ray in one line, with the names `scene` gives its path, its steps' interfaces,
+    /// its leg media and the interface a reason names, for example
+    /// ``source 0, receiver 1, path `north wall` (reflect `north`): converged, time
+    /// 0.014577259475218658, media air, air`` or ``…: obstructed (leg 1 crosses interface
+    /// `screen`), time …``: the status and its reason, then the time and the leg media when
+    /// the ray has them. Names are escaped as [`SceneError`](crate::SceneError)'s are.
+    ///
+    /// ```
+    /// use eigenray::{Scene, Tracer};
+    /// let scene = Scene::from_json(r#"{
+    ///     "media": { "air": { "speed": 1.0 } },
+    ///     "interfaces": { "north": { "points": [[0, 4], [6, 4]] } },
+    ///     "sources": [[1, 1]], "receivers": [[5, 1], [15, 1]],
+    ///     "paths": [{ "name": "north wall", "steps": [{ "reflect": "north" }],
+    ///                 "media": ["air", "air"] }]
+    /// }"#).unwrap();
+    /// let tracer = Tracer::new(&scene).unwrap();
+    /// let rays = tracer.trace_all();
+    /// assert_eq!(rays[0].describe(&scene),
+    ///            "source 0, receiver 0, path `north wall` (reflect `north`): converged, \
+    ///             time 7.211102550927978, media air, air");
+    /// assert_eq!(rays[1].describe(&scene),
+    ///            "source 0, receiver 1, path `north wall` (reflect `north`): no_path (step 0 \
+    ///             lies beyond the end of its open interface at the sequence's one stationary \
+    ///             point), media air, air");
+    /// ```
+    pub fn describe(&self, scene: &Scene) -> String {
+        use fmt::Write as _;
+        let esc = crate::scene::escape_text;
+        let mut out = format!("source {}, receiver {}, ", self.source, self.receiver);
+        let path = scene.paths().get(self.path);
+        match path.and_then(|p| p.name.as_deref()) {
+            Some(name) => {
+                let _ = write!(out, "path `{}`", esc(name));
+            }
+            None => {
+                let _ = write!(out, "path {}", self.path);
+            }
+        }
+        let steps: Vec<String> = path
+            .map(|p| p.steps.as_slice())
+            .unwrap_or(&[])
+            .iter()
+            .map(|s| {
+                let kind = match s.kind {
+                    crate::scene::StepKind::Reflect => "reflect",
+                    crate::scene::StepKind::Refract => "refract",
+                };
+                let name = scene.interfaces().get(s.interface).map_or("?", |i| &i.name);
+                format!("{kind} `{}`", esc(name))
+            })
+            .collect();
+        if steps.is_empty() {
+            out.push_str(" (direct)");
+        } else {
+            let _ = write!(out, " ({})", steps.join(", "));
+        }
+        let _ = write!(out, ": {}", self.status);
+        if let Some(reason) = &self.reason {
+            let _ = write!(out, " ({})", esc(&reason.describe(scene)));
+        }
+        if self.status.has_time() {
+            let _ = write!(out, ", time {}", self.time);
+        }
+        if !self.media.is_empty() {
+            let names: Vec<String> = self
+                .media
+                .iter()
+                .map(|&m| scene.media().get(m).map_or("?".into(), |m| esc(&m.name)))
+                .collect();
+            let _ = write!(out, ", media {}", names.join(", "));
+        }
+        out
+    }
 }

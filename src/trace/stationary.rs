@@ -28,7 +28,7 @@ thread_local! {
     static FALLBACK: Cell<Vec<Arrival>> = const { Cell::new(Vec::new()) };
 }
 
-impl Tracer<'_> {
+impl Tracer {
     /// Every stationary path of path `path` from `source` to `receiver` into `out` (emptied
     /// first): `converged`, `vertex` (with its [`Kink`](crate::Kink)) and `obstructed` ones, each once,
     /// ordered by time. A search that is [`complete`](Stationary::complete) lists them all (an
@@ -94,7 +94,7 @@ impl Tracer<'_> {
         self.assert_solvable(source, receiver, path, "Tracer::stationary_paths");
         let source_medium = self.source_medium(spec.media.is_some(), source);
         Ok(self.stationary_of(
-            Sequence::of(self.scene, path),
+            Sequence::of(&self.scene, path),
             spec.media.as_deref(),
             source,
             source_medium,
@@ -149,7 +149,7 @@ impl Tracer<'_> {
             }
         };
         let base = SequenceSearch {
-            scene: self.scene,
+            scene: &self.scene,
             classifier: &self.classifier,
             hierarchies,
             tolerance: self.newton.tolerance,
@@ -281,7 +281,7 @@ impl Tracer<'_> {
         }
         let mut arrivals = FALLBACK.take();
         let stats = self.stationary_of(
-            Sequence::of(self.scene, path),
+            Sequence::of(&self.scene, path),
             spec.media.as_deref(),
             source,
             if given { None } else { source_medium },

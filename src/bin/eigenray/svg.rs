@@ -414,7 +414,7 @@ fn drawable(r: &Item) -> bool {
 
 /// The world to show: centre and half extents holding the scene and the drawn rays, never
 /// degenerate, with a margin. Computed in halves so that huge coordinates do not overflow.
-fn world(scene: &Scene, rays: &[Item]) -> (Point, f64, f64) {
+fn world(scene: &Scene, rays: &[Item]) -> (Point, f64, f64, f64) {
     let mut b = scene.bbox();
     for r in rays {
         for p in &r.points {
@@ -442,11 +442,7 @@ fn world(scene: &Scene, rays: &[Item]) -> (Point, f64, f64) {
         let m = c.x.abs().max(c.y.abs()).min(limit);
         if m > 0.0 { m } else { 1.0 }
     };
-    (
-        c,
-        hw.max(0.05 * ext) + 0.08 * ext,
-        hh.max(0.05 * ext) + 0.08 * ext,
-    )
+    (c, hw.max(0.05 * ext), hh.max(0.05 * ext), 0.08 * ext)
 }
 
 /// XML-escapes text for element content and attribute values; characters that XML 1.0 does
@@ -704,23 +700,28 @@ pub fn scene_svg(
         .map(|&i| entries.item(i))
         .filter(drawable)
         .collect();
-    let (centre, mut hw, mut hh) = world(scene, &rays);
+    let (centre, rw, rh, pad) = world(scene, &rays);
 
-    // Stretch the short axis of a flat (or tall) scene so that the plot stays readable.
+    // Stretch the short axis of a flat (or tall) scene so that the plot stays readable: its
+    // scale becomes `factor` times the other's. The margin around the scene is the same on
+    // every side on the screen, so it is `pad / factor` in the world along the stretched axis.
     let mut stretch = None;
-    if hw > MAX_ASPECT * hh {
-        let factor = hw / (MAX_ASPECT * hh);
-        hh *= factor;
-        stretch = Some(("vertical", factor));
-    } else if hh > MAX_ASPECT * hw {
-        let factor = hh / (MAX_ASPECT * hw);
-        hw *= factor;
-        stretch = Some(("horizontal", factor));
+    let (mut fx, mut fy) = (1.0, 1.0);
+    if rw > MAX_ASPECT * rh {
+        fy = rw / (MAX_ASPECT * rh);
+        stretch = Some(("vertical", fy));
+    } else if rh > MAX_ASPECT * rw {
+        fx = rh / (MAX_ASPECT * rw);
+        stretch = Some(("horizontal", fx));
     }
-    let (plot_w, plot_h) = if hw >= hh {
-        (PLOT_MAX_W, (PLOT_MAX_W * (hh / hw)).min(PLOT_MAX_H))
+    // The half extents shown, in the world and on the screen (in the world's units of the
+    // unstretched axis).
+    let (hw, hh) = (rw + pad / fx, rh + pad / fy);
+    let (sw, sh) = (hw * fx, hh * fy);
+    let (plot_w, plot_h) = if sw >= sh {
+        (PLOT_MAX_W, (PLOT_MAX_W * (sh / sw)).min(PLOT_MAX_H))
     } else {
-        ((PLOT_MAX_H * (hw / hh)).min(PLOT_MAX_W), PLOT_MAX_H)
+        ((PLOT_MAX_H * (sw / sh)).min(PLOT_MAX_W), PLOT_MAX_H)
     };
     // Both fit within the maxima.
     let fit = (PLOT_MAX_W / plot_w).min(PLOT_MAX_H / plot_h).min(1.0);
@@ -1009,13 +1010,21 @@ pub fn scene_svg(
     }
     let _ = writeln!(s, "</g>");
 
-    // Labels: interfaces at their middle, where they cover the fewest rays and no other label;
-    // then the media.
+    // Labels: interfaces at their middle, where they cover the fewest rays and no other label
+    // (the names of media with `at` points, which stay beside them, are placed first); then
+    // the other media.
     let ray_segments: Vec<PixelSegment> = rays
         .iter()
         .flat_map(|r| r.points.windows(2).map(|w| (view.px(w[0]), view.px(w[1]))))
         .collect();
-    let mut taken: Vec<LabelBox> = Vec::new();
+    let mut taken: Vec<LabelBox> = scene
+        .media()
+        .iter()
+        .filter_map(|m| {
+            let (x, y) = view.px(m.at?);
+            Some(text_box(x + 6.0, y - 6.0, m.name.chars().count(), 13.0))
+        })
+        .collect();
     let _ = writeln!(s, r#"<g class="labels" font-size="12">"#);
     for i in scene.interfaces() {
         let (x, y) = interface_label_spot(&view, i, &ray_segments, &taken);
@@ -1595,6 +1604,34 @@ mod tests {
         assert!(texts.iter().any(|t| t.starts_with("path 1 (")), "{texts:?}");
     }
 
+    /// An interface's label keeps clear of a medium's name beside its `at` point (here the
+    /// bedrock's middle, where its label would go, lies just above the rock's `at` point).
+    #[test]
+    fn interface_labels_keep_clear_of_medium_names() {
+        let svg = picture(
+            r#"{
+            "media": { "water": { "speed": 1500, "at": [500, -5] },
+                       "rock": { "speed": 2500, "at": [500, -46] } },
+            "domain": [[0, -50], [1000, 0]],
+            "interfaces": { "bedrock": { "points": [[0, -40], [500, -42], [1000, -39]] } },
+            "sources": [[10, -2]], "receivers": [[600, -10]],
+            "paths": [{ "steps": [{ "reflect": "bedrock" }] }]
+        }"#,
+            Colouring::Time,
+        );
+        let doc = roxmltree::Document::parse(&svg).unwrap();
+        let label = |name: &str, size: f64| {
+            let n = doc
+                .descendants()
+                .find(|n| n.tag_name().name() == "text" && n.text() == Some(name))
+                .unwrap();
+            let at = |a: &str| n.attribute(a).unwrap().parse::<f64>().unwrap();
+            text_box(at("x"), at("y"), name.chars().count(), size)
+        };
+        let (bedrock, rock) = (label("bedrock", 12.0), label("rock", 13.0));
+        assert!(!boxes_overlap(bedrock, rock), "{bedrock:?} and {rock:?}");
+    }
+
     #[test]
     fn a_wide_shallow_scene_is_stretched_and_says_so() {
         let svg = picture(
@@ -1616,6 +1653,44 @@ mod tests {
         let h: f64 = root.attribute("height").unwrap().parse().unwrap();
         let w: f64 = root.attribute("width").unwrap().parse().unwrap();
         assert!(h > 0.35 * w, "{w} × {h}");
+        // The scales differ by the factor the caption gives: the bed is 1000 wide and 1 below
+        // the source, which stands at its left end.
+        let caption = texts.iter().find(|t| t.contains("stretched ×")).unwrap();
+        let factor: f64 = caption.rsplit('×').next().unwrap().parse().unwrap();
+        let bed = doc
+            .descendants()
+            .find(|n| {
+                n.is_element()
+                    && n.parent().and_then(|p| p.attribute("class")) == Some("interfaces")
+            })
+            .unwrap();
+        let xy: Vec<f64> = bed
+            .attribute("points")
+            .unwrap()
+            .split([' ', ','])
+            .map(|v| v.parse().unwrap())
+            .collect();
+        let source = doc
+            .descendants()
+            .find(|n| {
+                n.is_element() && n.parent().and_then(|p| p.attribute("class")) == Some("sources")
+            })
+            .unwrap();
+        let star: Vec<f64> = source
+            .attribute("points")
+            .unwrap()
+            .split([' ', ','])
+            .map(|v| v.parse().unwrap())
+            .collect();
+        // The star's centre: the mean of its ten corners.
+        let cy = star.iter().skip(1).step_by(2).sum::<f64>() / 10.0;
+        let per_unit_x = (xy[2] - xy[0]) / 1000.0;
+        let per_unit_y = xy[1] - cy;
+        let ratio = per_unit_y / per_unit_x;
+        assert!(
+            (ratio / factor - 1.0).abs() < 2e-3,
+            "{ratio} against ×{factor}"
+        );
     }
 
     #[test]
