@@ -4,8 +4,8 @@
 //! validation and error messages) and the library's results to numpy arrays. The Python
 //! package (`python/eigenray/`) re-exports these classes and adds the plotting helper.
 
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use eigenray::{
@@ -95,14 +95,17 @@ fn points_arg(py: Python<'_>, key: &str, value: &Bound<'_, PyAny>) -> PyResult<V
 /// key, with the same message as the command-line tool.
 #[pyclass(module = "eigenray", name = "Scene", frozen)]
 struct PyScene {
-    scene: Scene,
+    /// Shared with the tracers made from it (a tracer's updates copy it first).
+    scene: Arc<Scene>,
 }
 
 impl PyScene {
     fn parse(py: Python<'_>, text: &str) -> PyResult<PyScene> {
         let scene = py.detach(|| Scene::from_json(text));
         scene
-            .map(|scene| PyScene { scene })
+            .map(|scene| PyScene {
+                scene: Arc::new(scene),
+            })
             .map_err(|e| scene_error(py, &e))
     }
 }
@@ -246,20 +249,11 @@ fn points_array<'py>(py: Python<'py>, points: &[Point]) -> Bound<'py, PyArray2<f
         .into_pyarray(py)
 }
 
-self_cell::self_cell!(
-    /// A scene and its tracer, in one value that Python can hold.
-    struct Engine {
-        owner: Scene,
-        #[covariant]
-        dependent: Tracer,
-    }
-);
-
 /// Traces the rays of a scene. `Tracer(scene)` prepares it once (region lookup, segment
 /// hierarchies); every call after that reuses it.
 #[pyclass(module = "eigenray", name = "Tracer")]
 struct PyTracer {
-    engine: Engine,
+    tracer: Tracer,
     /// The last batch's arrays, reused by the next `trace`.
     batch: Batch,
     workspace: Workspace,
@@ -787,6 +781,30 @@ fn write_batch_into(py: Python<'_>, scene: &Scene, batch: &Batch, out: &PyRays) 
     Ok(())
 }
 
+/// An index into a list of `len` named things (`what`: interface, medium) from a name (via
+/// `lookup`) or an integer.
+fn named_index(
+    py: Python<'_>,
+    what: &str,
+    value: &Bound<'_, PyAny>,
+    len: usize,
+    lookup: impl Fn(&str) -> Option<usize>,
+) -> PyResult<usize> {
+    if let Ok(name) = value.extract::<&str>() {
+        return lookup(name)
+            .ok_or_else(|| PyKeyError::new_err(format!("no {what} is named `{name}`")));
+    }
+    let index: i64 = value
+        .extract()
+        .map_err(|_| argument_error(py, what, format!("needs a {what} name or index")))?;
+    usize::try_from(index)
+        .ok()
+        .filter(|&i| i < len)
+        .ok_or_else(|| {
+            PyIndexError::new_err(format!("{what} index {index} is out of range ({len})"))
+        })
+}
+
 /// Where a long batch reports its progress.
 enum Progress<'py> {
     /// A tqdm bar (tqdm.auto: a widget in a notebook, text in a terminal).
@@ -846,7 +864,7 @@ impl<'py> Progress<'py> {
 
 impl PyTracer {
     fn inner_scene(&self) -> &Scene {
-        self.engine.borrow_owner()
+        self.tracer.scene()
     }
 
     fn path_index(&self, py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<usize> {
@@ -872,6 +890,24 @@ impl PyTracer {
             })
     }
 
+    fn interface_index(&self, py: Python<'_>, interface: &Bound<'_, PyAny>) -> PyResult<usize> {
+        let scene = self.inner_scene();
+        named_index(
+            py,
+            "interface",
+            interface,
+            scene.interfaces().len(),
+            |name| scene.interface_index(name),
+        )
+    }
+
+    fn medium_index(&self, py: Python<'_>, medium: &Bound<'_, PyAny>) -> PyResult<usize> {
+        let scene = self.inner_scene();
+        named_index(py, "medium", medium, scene.media().len(), |name| {
+            scene.medium_index(name)
+        })
+    }
+
     fn checked_points(
         &self,
         py: Python<'_>,
@@ -892,11 +928,11 @@ impl PyTracer {
 impl PyTracer {
     #[new]
     fn new(py: Python<'_>, scene: &Bound<'_, PyScene>) -> PyResult<PyTracer> {
-        let owner = scene.get().scene.clone();
-        let engine = py.detach(|| Engine::try_new(owner, |scene| Tracer::new(scene)));
-        let engine = engine.map_err(|e| scene_error(py, &e))?;
+        let shared = Arc::clone(&scene.get().scene);
+        let tracer = py.detach(|| Tracer::new(shared));
+        let tracer = tracer.map_err(|e| scene_error(py, &e))?;
         Ok(PyTracer {
-            engine,
+            tracer,
             batch: Batch::default(),
             workspace: Workspace::new(),
             arrivals: Vec::new(),
@@ -907,7 +943,7 @@ impl PyTracer {
     #[getter]
     fn scene(&self) -> PyScene {
         PyScene {
-            scene: self.inner_scene().clone(),
+            scene: Arc::new(self.inner_scene().clone()),
         }
     }
 
@@ -926,8 +962,8 @@ impl PyTracer {
         progress: Option<&Bound<'_, PyAny>>,
         out: Option<Bound<'_, PyRays>>,
     ) -> PyResult<Py<PyRays>> {
-        let tracer = self.engine.borrow_dependent();
-        let scene = self.engine.borrow_owner();
+        let tracer = &self.tracer;
+        let scene = self.tracer.scene();
         let batch = &mut self.batch;
         let total = scene.num_rays();
         let progress = Progress::new(py, progress, total)?;
@@ -991,7 +1027,7 @@ impl PyTracer {
     /// `complete`: one entry per stationary path, ordered by time within its triple, and one
     /// `no_path` (a proof) or `not_converged` entry per triple that has none.
     fn trace_stationary(&self, py: Python<'_>) -> PyResult<PyRays> {
-        let tracer = self.engine.borrow_dependent();
+        let tracer = &self.tracer;
         let scene = self.inner_scene();
         let rays = py
             .detach(|| tracer.trace_stationary())
@@ -1014,11 +1050,10 @@ impl PyTracer {
             None => 0,
         };
         let (source, receiver) = self.checked_points(py, source, receiver, path)?;
-        let record =
-            self.engine
-                .borrow_dependent()
-                .solve(source, receiver, path, &mut self.workspace);
-        let scene = self.engine.borrow_owner();
+        let record = self
+            .tracer
+            .solve(source, receiver, path, &mut self.workspace);
+        let scene = self.tracer.scene();
         let ws = &self.workspace;
         Ok(PyRay::from_record(
             py,
@@ -1043,10 +1078,9 @@ impl PyTracer {
             None => 0,
         };
         let (source, receiver) = self.checked_points(py, source, receiver, path)?;
-        let record =
-            self.engine
-                .borrow_dependent()
-                .solve(source, receiver, path, &mut self.workspace);
+        let record = self
+            .tracer
+            .solve(source, receiver, path, &mut self.workspace);
         Ok(record.time)
     }
 
@@ -1077,14 +1111,14 @@ impl PyTracer {
                 ),
             ));
         }
-        let scene = self.engine.borrow_owner();
+        let scene = self.tracer.scene();
         for (i, (&s, &r)) in sources.iter().zip(&receivers).enumerate() {
             scene.check_solve(s, r, path).map_err(|e| {
                 let key = format!("{}s[{i}]", e.key);
                 scene_error(py, &SceneError::new(key, e.message))
             })?;
         }
-        let tracer = self.engine.borrow_dependent();
+        let tracer = &self.tracer;
         let table = py.detach(|| {
             let mut table = Table::new(sources.len(), width(scene));
             fill_parallel(table.rows(), 0, &Workspace::new, &|ws, first, rows| {
@@ -1116,12 +1150,12 @@ impl PyTracer {
             None => 0,
         };
         let (source, receiver) = self.checked_points(py, source, receiver, path)?;
-        let tracer = self.engine.borrow_dependent();
+        let tracer = &self.tracer;
         let out = &mut self.arrivals;
         let search = py
             .detach(|| tracer.stationary_paths(source, receiver, path, out))
             .map_err(|e| scene_error(py, &e.into()))?;
-        let scene = self.engine.borrow_owner();
+        let scene = self.tracer.scene();
         let rays = self
             .arrivals
             .iter()
@@ -1131,12 +1165,102 @@ impl PyTracer {
         Ok((rays, search.complete))
     }
 
+    /// Moves source `index` to `point`, checked as `sources[index]` of a scene file (a
+    /// refused move leaves the tracer as it was). Cheap: nothing is rebuilt.
+    fn set_source(
+        &mut self,
+        py: Python<'_>,
+        index: usize,
+        point: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let p = point_arg(py, &format!("sources[{index}]"), point)?;
+        self.tracer
+            .set_source(index, p)
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// Moves receiver `index` to `point`, checked as `receivers[index]`. Cheap.
+    fn set_receiver(
+        &mut self,
+        py: Python<'_>,
+        index: usize,
+        point: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let p = point_arg(py, &format!("receivers[{index}]"), point)?;
+        self.tracer
+            .set_receiver(index, p)
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// Moves every receiver: `points` of shape `(n, 2)`, `n` the scene's receivers. Moves
+    /// are checked one by one; a refused one raises, and the receivers before it stay moved.
+    fn set_receivers(&mut self, py: Python<'_>, points: &Bound<'_, PyAny>) -> PyResult<()> {
+        let points = points_arg(py, "receivers", points)?;
+        let n = self.inner_scene().receivers().len();
+        if points.len() != n {
+            return Err(argument_error(
+                py,
+                "receivers",
+                format!("has {} points; the scene has {n} receivers", points.len()),
+            ));
+        }
+        for (i, p) in points.into_iter().enumerate() {
+            self.tracer
+                .set_receiver(i, p)
+                .map_err(|e| scene_error(py, &e))?;
+        }
+        Ok(())
+    }
+
+    /// Gives interface `interface` (a name or an index) new vertices, `points` of shape
+    /// `(n, 2)`, checked as `interfaces.NAME.points` of a scene file (a refused change leaves
+    /// the tracer as it was). Rebuilds what depends on the interfaces.
+    fn set_interface_points(
+        &mut self,
+        py: Python<'_>,
+        interface: &Bound<'_, PyAny>,
+        points: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let index = self.interface_index(py, interface)?;
+        let name = &self.inner_scene().interfaces()[index].name;
+        let points = points_arg(py, &format!("interfaces.{name}.points"), points)?;
+        self.tracer
+            .set_interface_points(index, &points)
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// Gives medium `medium` (a name or an index) the speed `speed`.
+    fn set_medium_speed(
+        &mut self,
+        py: Python<'_>,
+        medium: &Bound<'_, PyAny>,
+        speed: f64,
+    ) -> PyResult<()> {
+        let index = self.medium_index(py, medium)?;
+        self.tracer
+            .set_medium_speed(index, speed)
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// Gives medium `medium` (a name or an index) the refractive index `index`.
+    fn set_medium_index(
+        &mut self,
+        py: Python<'_>,
+        medium: &Bound<'_, PyAny>,
+        index: f64,
+    ) -> PyResult<()> {
+        let medium = self.medium_index(py, medium)?;
+        self.tracer
+            .set_medium_index(medium, index)
+            .map_err(|e| scene_error(py, &e))
+    }
+
     /// The scene's `search` (its `"search"` section): every arrival per (source, receiver),
     /// ordered by time, as a list of dicts with `source`, `receiver`, `steps` (as in the
     /// scene: `{"reflect": name}`), `media`, `status`, `time`, `points`, `iterations`,
     /// `complete`.
     fn search<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
-        let tracer = self.engine.borrow_dependent();
+        let tracer = &self.tracer;
         let arrivals = py
             .detach(|| tracer.search())
             .map_err(|e| argument_error(py, "search", e.to_string()))?;

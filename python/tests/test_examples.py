@@ -4,6 +4,7 @@ import pathlib
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 import eigenray
@@ -67,3 +68,17 @@ def test_the_documented_snippet_runs(document, heading):
     rays = namespace["rays"]
     assert len(rays) == 500 and (rays.status == 0).all()
     assert rays.points.shape == (500, 3, 2)
+
+
+def test_the_documented_layout_loop_runs():
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    namespace = {}
+    exec(compile(python_block("docs/python.md", "## Use"), "use", "exec"), namespace)
+    loop = python_block("docs/python.md", "### Changing the scene in a loop")
+    exec(compile(loop, "loop", "exec"), namespace)
+    rays, tracer = namespace["rays"], namespace["tracer"]
+    # Through the bent surface some rays cross at its middle vertex (`vertex`, code 1).
+    assert np.isin(rays.status, [0, 1]).all() and (rays.status == 0).sum() > 400
+    assert np.allclose(rays.points[:, 2, 1], -3.0)
+    assert tracer.scene.interfaces["surface"].shape == (3, 2)
