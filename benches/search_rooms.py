@@ -16,9 +16,9 @@ exact distance over 343 m/s, to 40 digits. eigenray's arrivals must be those pat
 within 1e-12 relative; pyroomacoustics' visible images are compared with them too.
 
 How to run (pyroomacoustics in a venv outside the repository):
-  python3 -m venv /work/venv-pra && /work/venv-pra/bin/pip install pyroomacoustics numpy
+  python3 -m venv ../venv-pra && ../venv-pra/bin/pip install pyroomacoustics numpy
   cargo build --release --example search_rooms
-  /work/venv-pra/bin/python benches/search_rooms.py [ROUNDS] [REPETITIONS]
+  ../venv-pra/bin/python benches/search_rooms.py [ROUNDS] [REPETITIONS]
 """
 
 import decimal
