@@ -10,7 +10,7 @@
 //!
 //! Dependency direction (each module uses only those to its left):
 //! `geom ← bvh ← polyline ← scene ← regions ← problem ← solver ← trace ← batch ← arrivals ←
-//! output`.
+//! derivatives ← output`.
 //!
 //! ```
 //! use eigenray::{Scene, Status, Tracer};
@@ -30,6 +30,7 @@ mod arrivals;
 mod batch;
 mod bvh;
 pub mod demo;
+mod derivatives;
 mod geom;
 mod output;
 mod polyline;
@@ -45,6 +46,9 @@ pub mod argmin_bridge;
 // The vocabulary: scenes, the tracer and its options, ray results, batches, outputs.
 pub use arrivals::{MAX_SEARCH_WORK, SearchArrival, SearchError, StationaryRays, TripleArrivals};
 pub use batch::{Batch, BatchOptions};
+pub use derivatives::{
+    Axis, BatchGradients, DerivativeError, Gradient, Parameter, PointSensitivities, VertexGradient,
+};
 pub use geom::{Point, Vec2};
 pub use output::{
     Format, RaySet, write_arrivals, write_batch, write_names, write_rays, write_rays_and_arrivals,
