@@ -579,3 +579,71 @@ fn warm_calls_allocate_nothing() {
     });
     assert_eq!(info.count_total, 0);
 }
+
+/// `"derivatives": true` puts the contract's `"gradient"` on every ray with a time, in JSON
+/// (one ray per triple and every stationary path), JSON Lines, CSV and `.npy`.
+#[test]
+fn outputs_carry_the_gradient() {
+    use eigenray::{Format, RaySet, write_rays_and_arrivals};
+    let text = r#"{
+        "media": { "air": { "index": 1.0 }, "water": { "index": 1.333 } },
+        "interfaces": { "surface": { "points": [[-1, 0], [2, 0]] } },
+        "sources": [[0, 1]], "receivers": [[1, -1], [1, 2]],
+        "paths": [{ "steps": [{ "refract": "surface" }], "media": ["air", "water"] }],
+        "solver": { "derivatives": true }
+    }"#;
+    let scene = Scene::from_json(text).unwrap();
+    let tracer = Tracer::new(&scene).unwrap();
+    let batch = tracer.trace_batch(&BatchOptions::default());
+    let write = |format| {
+        let mut out = Vec::new();
+        write_rays_and_arrivals(&scene, RaySet::Batch(&batch), None, format, &mut out).unwrap();
+        out
+    };
+    let doc: Value = serde_json::from_slice(&write(eigenray::Format::Json)).unwrap();
+    let ray = &doc["rays"][0];
+    let want = Gradient::of_ray(&scene, &batch.ray(0)).unwrap();
+    let g = &ray["gradient"];
+    assert_eq!(g["receiver"], json!([want.receiver.x, want.receiver.y]));
+    assert_eq!(g["source"], json!([want.source.x, want.source.y]));
+    assert_eq!(g["slowness"]["air"], json!(want.slowness[0]));
+    assert_eq!(g["slowness"]["water"], json!(want.slowness[1]));
+    assert_eq!(g["vertices"][1]["interface"], "surface");
+    assert_eq!(g["vertices"][1]["vertex"], 1);
+    assert_eq!(
+        g["vertices"][1]["d"],
+        json!([want.vertices[1].d.x, want.vertices[1].d.y])
+    );
+    // No time, no gradient.
+    assert_eq!(doc["rays"][1]["status"], "no_path");
+    assert!(doc["rays"][1].get("gradient").is_none());
+    let lines = String::from_utf8(write(Format::Jsonl)).unwrap();
+    let first: Value = serde_json::from_str(lines.lines().next().unwrap()).unwrap();
+    assert_eq!(first["gradient"], *g);
+    let csv = String::from_utf8(write(Format::Csv)).unwrap();
+    let mut rows = csv.lines();
+    assert!(rows.next().unwrap().ends_with(
+        ",reason,gradient_source,gradient_receiver,gradient_slowness,gradient_vertices"
+    ));
+    let row: Vec<&str> = rows.next().unwrap().split(',').collect();
+    assert_eq!(row.len(), 15);
+    assert_eq!(row[14].split(';').count(), 2);
+    assert!(rows.next().unwrap().ends_with(",,,,"));
+    let npy = write(Format::Npy);
+    let header = String::from_utf8_lossy(&npy[..npy.len().min(1024)]);
+    assert!(
+        header.contains("('gradient_vertices', '<f8', (2, 2))"),
+        "{header}"
+    );
+    // Every stationary path carries its own.
+    let all = Scene::from_json(&text.replace(
+        r#""derivatives": true"#,
+        r#""derivatives": true, "stationary": "all""#,
+    ))
+    .unwrap();
+    let rays = Tracer::new(&all).unwrap().trace_stationary().unwrap();
+    let mut out = Vec::new();
+    eigenray::write_stationary(&all, &rays, Format::Json, &mut out).unwrap();
+    let doc: Value = serde_json::from_slice(&out).unwrap();
+    assert_eq!(doc["rays"][0]["gradient"], *g);
+}
