@@ -647,3 +647,343 @@ fn outputs_carry_the_gradient() {
     let doc: Value = serde_json::from_slice(&out).unwrap();
     assert_eq!(doc["rays"][0]["gradient"], *g);
 }
+
+/// A forward-mode dual number `re + eps ε`, `ε² = 0`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Dual {
+    re: f64,
+    eps: f64,
+}
+
+impl Dual {
+    fn constant(re: f64) -> Dual {
+        Dual { re, eps: 0.0 }
+    }
+    fn seeded(re: f64, seed: bool) -> Dual {
+        Dual {
+            re,
+            eps: if seed { 1.0 } else { 0.0 },
+        }
+    }
+    fn sqrt(self) -> Dual {
+        let r = self.re.sqrt();
+        Dual {
+            re: r,
+            eps: self.eps / (2.0 * r),
+        }
+    }
+}
+
+impl std::ops::Add for Dual {
+    type Output = Dual;
+    fn add(self, o: Dual) -> Dual {
+        Dual {
+            re: self.re + o.re,
+            eps: self.eps + o.eps,
+        }
+    }
+}
+impl std::ops::Sub for Dual {
+    type Output = Dual;
+    fn sub(self, o: Dual) -> Dual {
+        Dual {
+            re: self.re - o.re,
+            eps: self.eps - o.eps,
+        }
+    }
+}
+impl std::ops::Mul for Dual {
+    type Output = Dual;
+    fn mul(self, o: Dual) -> Dual {
+        Dual {
+            re: self.re * o.re,
+            eps: self.re * o.eps + self.eps * o.re,
+        }
+    }
+}
+impl std::ops::Div for Dual {
+    type Output = Dual;
+    fn div(self, o: Dual) -> Dual {
+        Dual {
+            re: self.re / o.re,
+            eps: (self.eps * o.re - self.re * o.eps) / (o.re * o.re),
+        }
+    }
+}
+
+/// A point or vector of dual numbers.
+#[derive(Clone, Copy, Debug, Default)]
+struct D2 {
+    x: Dual,
+    y: Dual,
+}
+
+impl D2 {
+    fn of(p: Point, seed: Option<Axis>) -> D2 {
+        D2 {
+            x: Dual::seeded(p.x, seed == Some(Axis::X)),
+            y: Dual::seeded(p.y, seed == Some(Axis::Y)),
+        }
+    }
+    fn sub(self, o: D2) -> D2 {
+        D2 {
+            x: self.x - o.x,
+            y: self.y - o.y,
+        }
+    }
+    fn lerp(self, o: D2, t: Dual) -> D2 {
+        D2 {
+            x: self.x + (o.x - self.x) * t,
+            y: self.y + (o.y - self.y) * t,
+        }
+    }
+    fn dot(self, o: D2) -> Dual {
+        self.x * o.x + self.y * o.y
+    }
+}
+
+/// Where an interaction point lies, found by the test itself: its segment's vertex indices
+/// and its fraction, or the vertex it is held on.
+#[derive(Clone, Copy, Debug)]
+enum Place {
+    On { a: usize, b: usize, lambda: f64 },
+    Held { vertex: usize },
+}
+
+fn place_of(line: &eigenray::geometry::Polyline, p: Point) -> Place {
+    let v = line.vertices();
+    let mut best = (f64::INFINITY, Place::Held { vertex: 0 });
+    for j in 0..line.num_segments() {
+        let (a, b) = line.segment(j);
+        let e = b - a;
+        let t = ((p - a).dot(e) / e.dot(e)).clamp(0.0, 1.0);
+        let q = a + e * t;
+        let dist = (p - q).length();
+        if dist < best.0 {
+            let bj = (j + 1) % v.len();
+            let place = if (p - a).length() <= 1e-9 * e.length() {
+                Place::Held { vertex: j }
+            } else if (p - b).length() <= 1e-9 * e.length() {
+                Place::Held { vertex: bj }
+            } else {
+                Place::On {
+                    a: j,
+                    b: bj,
+                    lambda: t,
+                }
+            };
+            best = (dist, place);
+        }
+    }
+    best.1
+}
+
+/// The time and points of one ray differentiated with respect to `param` by carrying dual
+/// numbers through Newton's iteration on the fractions of its free points (on the segments the
+/// ray was solved on, from its solution), to a fixed point: `(dT/dθ, d(points)/dθ)`.
+fn dual_solve(
+    scene: &Scene,
+    path: usize,
+    points: &[Point],
+    media: &[usize],
+    param: Parameter,
+) -> (f64, Vec<Vec2>) {
+    let steps = &scene.paths()[path].steps;
+    let k = steps.len();
+    let seed_point =
+        |which: fn(Axis) -> Parameter| [Axis::X, Axis::Y].into_iter().find(|&a| param == which(a));
+    let source = D2::of(points[0], seed_point(Parameter::Source));
+    let receiver = D2::of(points[k + 1], seed_point(Parameter::Receiver));
+    let w: Vec<Dual> = media
+        .iter()
+        .map(|&m| {
+            Dual::seeded(
+                scene.media()[m].slowness,
+                param == Parameter::Slowness { medium: m },
+            )
+        })
+        .collect();
+    let vertex = |interface: usize, v: usize| {
+        let p = scene.interfaces()[interface].polyline.vertices()[v];
+        let seed = [Axis::X, Axis::Y].into_iter().find(|&axis| {
+            param
+                == Parameter::Vertex {
+                    interface,
+                    vertex: v,
+                    axis,
+                }
+        });
+        D2::of(p, seed)
+    };
+    let places: Vec<Place> = (0..k)
+        .map(|i| {
+            place_of(
+                &scene.interfaces()[steps[i].interface].polyline,
+                points[i + 1],
+            )
+        })
+        .collect();
+    let mut lambda: Vec<Dual> = places
+        .iter()
+        .map(|p| match *p {
+            Place::On { lambda, .. } => Dual::constant(lambda),
+            Place::Held { .. } => Dual::constant(0.0),
+        })
+        .collect();
+    // The path's points, time and λ-residuals at fractions `lambda`.
+    let evaluate = |lambda: &[Dual]| {
+        let mut xs = vec![source];
+        let mut ends = Vec::new();
+        for i in 0..k {
+            let interface = steps[i].interface;
+            match places[i] {
+                Place::On { a, b, .. } => {
+                    let (a, b) = (vertex(interface, a), vertex(interface, b));
+                    xs.push(a.lerp(b, lambda[i]));
+                    ends.push(Some(b.sub(a)));
+                }
+                Place::Held { vertex: v } => {
+                    xs.push(vertex(interface, v));
+                    ends.push(None);
+                }
+            }
+        }
+        xs.push(receiver);
+        let mut time = Dual::constant(0.0);
+        let mut u = Vec::new();
+        for j in 0..=k {
+            let d = xs[j + 1].sub(xs[j]);
+            let l = d.dot(d).sqrt();
+            time = time + w[j] * l;
+            u.push(D2 {
+                x: d.x / l,
+                y: d.y / l,
+            });
+        }
+        let r: Vec<Dual> = (0..k)
+            .map(|i| match ends[i] {
+                Some(e) => {
+                    let g = D2 {
+                        x: w[i] * u[i].x - w[i + 1] * u[i + 1].x,
+                        y: w[i] * u[i].y - w[i + 1] * u[i + 1].y,
+                    };
+                    g.dot(e)
+                }
+                None => Dual::constant(0.0),
+            })
+            .collect();
+        (xs, time, r)
+    };
+    let free: Vec<usize> = (0..k)
+        .filter(|&i| matches!(places[i], Place::On { .. }))
+        .collect();
+    for _ in 0..6 {
+        let (_, _, r) = evaluate(&lambda);
+        // The Newton matrix from central differences of the real residual (only the fixed
+        // point matters: its dual part is exact for any matrix near the Jacobian).
+        let n = free.len();
+        let mut m = vec![vec![0.0; n]; n];
+        for (c, &j) in free.iter().enumerate() {
+            let h = 1e-7;
+            let mut plus = lambda.clone();
+            let mut minus = lambda.clone();
+            plus[j].re += h;
+            minus[j].re -= h;
+            let (_, _, rp) = evaluate(&plus);
+            let (_, _, rm) = evaluate(&minus);
+            for (row, &i) in free.iter().enumerate() {
+                m[row][c] = (rp[i].re - rm[i].re) / (2.0 * h);
+            }
+        }
+        // Gaussian elimination with partial pivoting, right-hand sides re and eps.
+        let mut rhs: Vec<[f64; 2]> = free.iter().map(|&i| [r[i].re, r[i].eps]).collect();
+        for col in 0..n {
+            let p = (col..n)
+                .max_by(|&a, &b| m[a][col].abs().total_cmp(&m[b][col].abs()))
+                .unwrap();
+            m.swap(col, p);
+            rhs.swap(col, p);
+            for row in col + 1..n {
+                let f = m[row][col] / m[col][col];
+                for c in col..n {
+                    m[row][c] -= f * m[col][c];
+                }
+                rhs[row] = [rhs[row][0] - f * rhs[col][0], rhs[row][1] - f * rhs[col][1]];
+            }
+        }
+        let mut step = vec![[0.0; 2]; n];
+        for row in (0..n).rev() {
+            let mut acc = rhs[row];
+            for c in row + 1..n {
+                acc = [
+                    acc[0] - m[row][c] * step[c][0],
+                    acc[1] - m[row][c] * step[c][1],
+                ];
+            }
+            step[row] = [acc[0] / m[row][row], acc[1] / m[row][row]];
+        }
+        for (row, &i) in free.iter().enumerate() {
+            lambda[i] = lambda[i]
+                - Dual {
+                    re: step[row][0],
+                    eps: step[row][1],
+                };
+        }
+    }
+    let (xs, time, _) = evaluate(&lambda);
+    (
+        time.eps,
+        xs.iter().map(|p| Vec2::new(p.x.eps, p.y.eps)).collect(),
+    )
+}
+
+/// Every derivative of every timed ray of the random scenes against dual numbers carried
+/// through the whole Newton solve (from the solution, on its segments, with the vertices held).
+#[test]
+fn derivatives_match_dual_numbers_through_the_solve() {
+    let (mut time_abs, mut time_rel, mut point_abs, mut compared) = (0.0f64, 0.0f64, 0.0f64, 0);
+    for doc in random_docs() {
+        let scene = Scene::from_json(&doc.to_string()).unwrap();
+        let tracer = Tracer::new(&scene).unwrap();
+        let mut ws = Workspace::new();
+        for r in 0..scene.receivers().len() {
+            for p in 0..scene.paths().len() {
+                let rec = tracer.solve(scene.sources()[0], scene.receivers()[r], p, &mut ws);
+                if !rec.status.has_time() {
+                    continue;
+                }
+                let g = tracer.gradient(p, &ws).unwrap();
+                let sens = tracer.point_sensitivities(p, &ws).unwrap();
+                for (row, &param) in sens.parameters().iter().enumerate() {
+                    let (dt, dx) = dual_solve(&scene, p, ws.points(), ws.media(), param);
+                    let an = analytic(&g, param);
+                    let err = (dt - an).abs();
+                    assert!(
+                        err <= 1e-9 * (1.0 + an.abs()),
+                        "dT/d{param:?}: analytic {an}, dual {dt}, path {p} receiver {r} in {doc}"
+                    );
+                    time_abs = time_abs.max(err);
+                    if an.abs() >= 0.01 {
+                        time_rel = time_rel.max(err / an.abs());
+                    }
+                    for (i, d) in dx.iter().enumerate() {
+                        let err = (*d - sens.d_point(row, i)).length();
+                        assert!(
+                            err <= 1e-8 * (1.0 + d.length()),
+                            "d(point {i})/d{param:?}: analytic {:?}, dual {d:?}, path {p} \
+                             receiver {r} in {doc}",
+                            sens.d_point(row, i)
+                        );
+                        point_abs = point_abs.max(err);
+                    }
+                    compared += 1;
+                }
+            }
+        }
+    }
+    println!(
+        "dual numbers: {compared} parameters, time abs {time_abs:e} rel {time_rel:e}, points abs \
+         {point_abs:e}"
+    );
+    assert!(compared >= 1000);
+}
