@@ -27,6 +27,10 @@
 //!   search can break down there; the outcome is then the last iterate, typically within a
 //!   relative residual of `10⁻⁸` (see [`solve_bfgs`]).
 
+mod layout;
+
+pub use layout::{ObservedArrival, SourceLocation, SourceMisfit};
+
 use std::cell::RefCell;
 use std::rc::Rc;
 
