@@ -168,11 +168,11 @@ fn locate(line: &Polyline, p: Point, hint: Option<usize>) -> Option<Contact> {
         let len = line.segment_length(j);
         let d = p - a;
         let t = line.tangent(j);
-        let scale = p.x.abs().max(p.y.abs()).max(a.x.abs()).max(a.y.abs());
+        let scale = (p.x.abs() + p.y.abs()) + (a.x.abs() + a.y.abs());
         let slack = 1e-9 * len + 64.0 * f64::EPSILON * scale;
         let along = d.dot(t);
         let fits = d.cross(t).abs() <= slack && along >= -slack && along <= len + slack;
-        (fits, along.clamp(0.0, len), len, scale)
+        (fits, along.max(0.0).min(len), len, scale)
     };
     let mut chosen = hint.filter(|&j| j < nseg).map(|j| (j, on(j)));
     if !matches!(chosen, Some((_, (true, ..)))) {
@@ -258,8 +258,9 @@ struct EndGradients {
 }
 
 /// The gradient of the ray through `points` with leg media `media`: `slowness` (one entry per
-/// medium of the scene) and `vertices` (room for `2 × steps`) filled, the number of vertices
-/// returned beside the source's and receiver's gradients. Allocates nothing.
+/// medium of the scene) filled, every vertex share given to `put` (up to `2 × steps`, in the
+/// order of the points, not yet merged: see [`merge`]), the source's and receiver's gradients
+/// returned. Allocates nothing.
 fn gradient_parts(
     scene: &Scene,
     steps: &[Step],
@@ -267,8 +268,8 @@ fn gradient_parts(
     mut media: impl Iterator<Item = usize>,
     hint: Option<&[usize]>,
     slowness: &mut [f64],
-    vertices: &mut [VertexGradient],
-) -> Result<(EndGradients, usize), DerivativeError> {
+    mut put: impl FnMut(VertexGradient),
+) -> Result<EndGradients, DerivativeError> {
     check_points(steps, points)?;
     let all_media = scene.media();
     let mut medium = || {
@@ -284,7 +285,6 @@ fn gradient_parts(
     let mut w_prev = all_media[m0].slowness;
     slowness[m0] += l0;
     let source = u_prev * -w_prev;
-    let mut count = 0;
     for (i, step) in steps.iter().enumerate() {
         let m = medium()?;
         let (u, l) = leg(points[i + 1], points[i + 2]);
@@ -294,19 +294,24 @@ fn gradient_parts(
         let line = &scene.interfaces()[step.interface].polyline;
         let c = locate(line, points[i + 1], hint.map(|h| h[i]))
             .ok_or(DerivativeError::OffInterface { step: i })?;
-        let mut put = |vertex: usize, d: Vec2| {
-            vertices[count] = VertexGradient {
-                interface: step.interface,
-                vertex,
-                d,
-            };
-            count += 1;
-        };
+        let interface = step.interface;
         match c.at_vertex {
-            Some(v) => put(v, g),
+            Some(vertex) => put(VertexGradient {
+                interface,
+                vertex,
+                d: g,
+            }),
             None => {
-                put(c.a, g * (1.0 - c.lambda));
-                put(c.b, g * c.lambda);
+                put(VertexGradient {
+                    interface,
+                    vertex: c.a,
+                    d: g * (1.0 - c.lambda),
+                });
+                put(VertexGradient {
+                    interface,
+                    vertex: c.b,
+                    d: g * c.lambda,
+                });
             }
         }
         (u_prev, w_prev) = (u, w);
@@ -315,18 +320,26 @@ fn gradient_parts(
         return Err(DerivativeError::Media);
     }
     let receiver = u_prev * w_prev;
-    Ok((
-        EndGradients { source, receiver },
-        merge(&mut vertices[..count]),
-    ))
+    Ok(EndGradients { source, receiver })
 }
 
 /// Sorts `v` by interface and vertex and adds up the entries of one vertex into one; returns
 /// how many are left at the front.
 fn merge(v: &mut [VertexGradient]) -> usize {
-    v.sort_unstable_by_key(|e| (e.interface, e.vertex));
-    let mut n = 0;
-    for i in 0..v.len() {
+    let key = |e: &VertexGradient| (e.interface, e.vertex);
+    if v.len() < 2 {
+        return v.len();
+    }
+    // The shares come in order but for a closed polyline's last segment and interfaces met
+    // out of order: sort only then.
+    if !v.is_sorted_by_key(key) {
+        v.sort_unstable_by_key(key);
+    }
+    let Some(first) = (1..v.len()).find(|&i| key(&v[i - 1]) == key(&v[i])) else {
+        return v.len();
+    };
+    let mut n = first;
+    for i in first..v.len() {
         if n > 0 && v[n - 1].interface == v[i].interface && v[n - 1].vertex == v[i].vertex {
             v[n - 1].d += v[i].d;
         } else {
@@ -410,8 +423,8 @@ impl Gradient {
         segments: Option<&[usize]>,
     ) -> Result<(), DerivativeError> {
         self.slowness.resize(scene.media().len(), 0.0);
-        self.vertices
-            .resize(2 * steps.len(), VertexGradient::default());
+        self.vertices.clear();
+        let vertices = &mut self.vertices;
         let result = gradient_parts(
             scene,
             steps,
@@ -419,12 +432,13 @@ impl Gradient {
             media,
             segments,
             &mut self.slowness,
-            &mut self.vertices,
+            |v| vertices.push(v),
         );
         match result {
-            Ok((ends, n)) => {
+            Ok(ends) => {
                 self.source = ends.source;
                 self.receiver = ends.receiver;
+                let n = merge(&mut self.vertices);
                 self.vertices.truncate(n);
                 Ok(())
             }
@@ -979,6 +993,7 @@ impl BatchGradients {
                     };
                     let slow = &mut slow[j * media..(j + 1) * media];
                     let verts = &mut verts[j * slots..j * slots + 2 * steps.len()];
+                    let mut used = 0;
                     let parts = gradient_parts(
                         scene,
                         steps,
@@ -986,13 +1001,16 @@ impl BatchGradients {
                         ray_media,
                         None,
                         slow,
-                        verts,
+                        |v| {
+                            verts[used] = v;
+                            used += 1;
+                        },
                     );
                     match parts {
-                        Ok((ends, used)) => {
+                        Ok(ends) => {
                             src[j] = ends.source;
                             rec[j] = ends.receiver;
-                            *count = used as u32;
+                            *count = merge(&mut verts[..used]) as u32;
                         }
                         Err(_) => slow.fill(f64::NAN),
                     }
