@@ -161,47 +161,48 @@ struct Contact {
 
 /// Where `p` lies on `line`: on segment `hint` when it lies there (the solver's segment), else
 /// on the nearest segment. `None` when it is not on the polyline (beyond round-off).
+#[inline(always)]
 fn locate(line: &Polyline, p: Point, hint: Option<usize>) -> Option<Contact> {
-    let nseg = line.num_segments();
-    let on = |j: usize| {
-        let (a, _) = line.segment(j);
-        let len = line.segment_length(j);
-        let d = p - a;
-        let t = line.tangent(j);
-        let scale = (p.x.abs() + p.y.abs()) + (a.x.abs() + a.y.abs());
-        let slack = 1e-9 * len + 64.0 * f64::EPSILON * scale;
-        let along = d.dot(t);
-        let fits = d.cross(t).abs() <= slack && along >= -slack && along <= len + slack;
-        (fits, along.max(0.0).min(len), len, scale)
-    };
-    let mut chosen = hint.filter(|&j| j < nseg).map(|j| (j, on(j)));
-    if !matches!(chosen, Some((_, (true, ..)))) {
-        let j = line.nearest(p).seg;
-        chosen = Some((j, on(j)));
+    if let Some(j) = hint
+        && j < line.num_segments()
+        && let Some(c) = contact_on(line, j, p)
+    {
+        return Some(c);
     }
-    let (seg, (fits, along, len, scale)) = chosen?;
-    if !fits {
+    contact_on(line, line.nearest(p).seg, p)
+}
+
+/// Where `p` lies on segment `j` of `line`, if it lies there (to round-off).
+#[inline(always)]
+fn contact_on(line: &Polyline, j: usize, p: Point) -> Option<Contact> {
+    let (a, _) = line.segment(j);
+    let len = line.segment_length(j);
+    let t = line.tangent(j);
+    let d = p - a;
+    let along = d.dot(t);
+    let round = 16.0 * f64::EPSILON * ((p.x.abs() + p.y.abs()) + (a.x.abs() + a.y.abs()));
+    let slack = 1e-9 * len + 4.0 * round;
+    if !(d.cross(t).abs() <= slack && along >= -slack && along <= len + slack) {
         return None;
     }
-    let a = seg;
-    let b = if seg + 1 == line.vertices().len() {
+    let b = if j + 1 == line.vertices().len() {
         0
     } else {
-        seg + 1
+        j + 1
     };
     // On a vertex: within round-off of it (where the solver holds a point, it is exact).
-    let snap = 1e-12 * len + 16.0 * f64::EPSILON * scale;
+    let snap = 1e-12 * len + round;
     let (at_vertex, lambda) = if along <= snap {
-        (Some(a), 0.0)
+        (Some(j), 0.0)
     } else if len - along <= snap {
         (Some(b), 1.0)
     } else {
         (None, along / len)
     };
     Some(Contact {
-        seg,
+        seg: j,
         lambda,
-        a,
+        a: j,
         b,
         at_vertex,
     })
@@ -327,11 +328,12 @@ fn gradient_parts(
 /// how many are left at the front.
 fn merge(v: &mut [VertexGradient]) -> usize {
     let key = |e: &VertexGradient| (e.interface, e.vertex);
-    if v.len() < 2 {
+    // The shares come in order, each vertex once, but for points on neighbouring segments or
+    // one segment, a closed polyline's last segment and interfaces met out of order: sort and
+    // add up only then.
+    if v.windows(2).all(|w| key(&w[0]) < key(&w[1])) {
         return v.len();
     }
-    // The shares come in order but for a closed polyline's last segment and interfaces met
-    // out of order: sort only then.
     if !v.is_sorted_by_key(key) {
         v.sort_unstable_by_key(key);
     }
@@ -380,6 +382,14 @@ impl Gradient {
     ) -> Result<(), DerivativeError> {
         let points = ws.points();
         let steps = path_steps(scene, path)?;
+        if let ([step], &[p0, p1, p2], &[m0, m1]) = (steps, points, ws.media()) {
+            let media_count = scene.media().len();
+            if self.slowness.len() != media_count {
+                self.slowness.resize(media_count, 0.0);
+            }
+            let hint = ws.newton.seg.first().copied();
+            return self.fill_one(scene, step, [p0, p1, p2], [m0, m1], hint);
+        }
         let hint = ws.newton.seg.get(..steps.len());
         self.fill(scene, steps, points, ws.media().iter().copied(), hint)
     }
@@ -419,11 +429,24 @@ impl Gradient {
         scene: &Scene,
         steps: &[Step],
         points: &[Point],
-        media: impl Iterator<Item = usize>,
+        mut media: impl Iterator<Item = usize>,
         segments: Option<&[usize]>,
     ) -> Result<(), DerivativeError> {
-        self.slowness.resize(scene.media().len(), 0.0);
+        let media_count = scene.media().len();
+        if self.slowness.len() != media_count {
+            self.slowness.resize(media_count, 0.0);
+        }
+        // One interaction (the common ray): written out, without the general bookkeeping.
+        if let ([step], &[p0, p1, p2]) = (steps, points) {
+            let media = match [media.next(), media.next(), media.next()] {
+                [Some(a), Some(b), None] => [a, b],
+                _ => return Err(DerivativeError::Media),
+            };
+            let hint = segments.and_then(|h| h.first().copied());
+            return self.fill_one(scene, step, [p0, p1, p2], media, hint);
+        }
         self.vertices.clear();
+        self.vertices.reserve(2 * steps.len());
         let vertices = &mut self.vertices;
         let result = gradient_parts(
             scene,
@@ -447,6 +470,57 @@ impl Gradient {
                 Err(e)
             }
         }
+    }
+
+    /// [`fill`](Self::fill) for a path of one interaction, its slowness entries already sized.
+    #[inline(always)]
+    fn fill_one(
+        &mut self,
+        scene: &Scene,
+        step: &Step,
+        [p0, p1, p2]: [Point; 3],
+        [m0, m1]: [usize; 2],
+        hint: Option<usize>,
+    ) -> Result<(), DerivativeError> {
+        let all = scene.media();
+        let (Some(medium0), Some(medium1)) = (all.get(m0), all.get(m1)) else {
+            return Err(DerivativeError::Media);
+        };
+        let line = &scene.interfaces()[step.interface].polyline;
+        let c = locate(line, p1, hint).ok_or(DerivativeError::OffInterface { step: 0 })?;
+        let ((u0, l0), (u1, l1)) = (leg(p0, p1), leg(p1, p2));
+        let (w0, w1) = (medium0.slowness, medium1.slowness);
+        let slowness = &mut self.slowness[..all.len()];
+        slowness.fill(0.0);
+        slowness[m0] += l0;
+        slowness[m1] += l1;
+        self.source = u0 * -w0;
+        self.receiver = u1 * w1;
+        let g = u0 * w0 - u1 * w1;
+        let interface = step.interface;
+        let share = |vertex, d| VertexGradient {
+            interface,
+            vertex,
+            d,
+        };
+        match c.at_vertex {
+            Some(v) => {
+                self.vertices.clear();
+                self.vertices.push(share(v, g));
+            }
+            None => {
+                let (a, b) = (share(c.a, g * (1.0 - c.lambda)), share(c.b, g * c.lambda));
+                let pair = if c.a < c.b { [a, b] } else { [b, a] };
+                // In place when the last ray had two too (no length or capacity checks).
+                if let Ok(two) = <&mut [VertexGradient; 2]>::try_from(&mut self.vertices[..]) {
+                    *two = pair;
+                } else {
+                    self.vertices.clear();
+                    self.vertices.extend_from_slice(&pair);
+                }
+            }
+        }
+        Ok(())
     }
 
     /// `(dT/dx, dT/dy)` of vertex `vertex` of interface `interface` (zero when the path does
