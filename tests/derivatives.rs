@@ -905,8 +905,9 @@ fn dual_solve(
             rhs.swap(col, p);
             for row in col + 1..n {
                 let f = m[row][col] / m[col][col];
-                for c in col..n {
-                    m[row][c] -= f * m[col][c];
+                let pivot_row = m[col].clone();
+                for (x, p) in m[row].iter_mut().zip(&pivot_row).skip(col) {
+                    *x -= f * p;
                 }
                 rhs[row] = [rhs[row][0] - f * rhs[col][0], rhs[row][1] - f * rhs[col][1]];
             }
