@@ -1,4 +1,7 @@
-//! The path problem as an argmin problem, and argmin's solvers run on it for cross-checks.
+//! The path problem as an argmin problem, and argmin's solvers run on it for cross-checks;
+//! and layout objectives built on whole rays and their derivatives ([`SourceLocation`]:
+//! locating a source from arrival times; [`ReflectorPlacement`]: placing a reflector for a
+//! prescribed delay), each an argmin [`CostFunction`] and [`Gradient`] for argmin's optimisers.
 //!
 //! [`ArgminPath`] wraps a [`PathProblem`] for argmin's solvers, with the interaction
 //! parameters (arclengths `s`) as a `nalgebra::DVector<f64>`:
@@ -29,7 +32,9 @@
 
 mod layout;
 
-pub use layout::{ObservedArrival, SourceLocation, SourceMisfit};
+pub use layout::{
+    ObservedArrival, Placement, PlacementMisfit, ReflectorPlacement, SourceLocation, SourceMisfit,
+};
 
 use std::cell::RefCell;
 use std::rc::Rc;

@@ -152,3 +152,228 @@ impl ArgminGradient for SourceLocation<'_> {
         Ok(DVector::from_vec(vec![g.x, g.y]))
     }
 }
+
+/// A straight reflector's placement: its centre and the angle of its direction (radians from
+/// the x axis).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placement {
+    /// The centre.
+    pub center: Point,
+    /// The angle of the direction from its first vertex to its second.
+    pub angle: f64,
+}
+
+impl Placement {
+    /// The end points of a reflector of `length` so placed.
+    pub fn endpoints(&self, length: f64) -> [Point; 2] {
+        let half = Vec2::new(self.angle.cos(), self.angle.sin()) * (0.5 * length);
+        [self.center - half, self.center + half]
+    }
+}
+
+/// How far a placement is from giving the prescribed delay.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlacementMisfit {
+    /// The objective (see [`ReflectorPlacement`]).
+    pub cost: f64,
+    /// Its gradient with respect to the centre's `x`, `y` and the angle.
+    pub gradient: [f64; 3],
+    /// The first reflection's delay after the direct sound.
+    pub delay: f64,
+}
+
+/// Placing and tilting a reflector (an interface of one segment of fixed length) so that a
+/// listener hears its first reflection a prescribed `delay` after the direct sound: minimise
+/// `½ (c (Δ − Δ*) / L)² + ½ μ (|C − C₀|² / L² + (θ − θ₀)² / 4)` over the centre `C` and angle
+/// `θ`, with `Δ` the reflection's time minus the direct ray's, `c` the speed of the direct
+/// ray's medium and `L` the reflector's length (so that every term is dimensionless and a unit
+/// step moves the reflector by about its length), the second term (`μ` small) choosing, among
+/// the placements that give the delay, the one nearest to the start. The time's derivative with respect to the reflector's two vertices ([`Gradient`])
+/// gives the gradient by the chain rule. Each evaluation builds the scene with the reflector
+/// placed and solves the two rays. As an argmin problem its parameter is `[x, y, θ]`.
+pub struct ReflectorPlacement {
+    spec: crate::scene::SceneSpec,
+    reflector: String,
+    length: f64,
+    reflection: usize,
+    direct: usize,
+    source: Point,
+    listener: Point,
+    delay: f64,
+    start: Placement,
+    weight: f64,
+}
+
+impl ReflectorPlacement {
+    /// The problem for the scene `spec` (which has an interface named `reflector`, whose
+    /// points are replaced, a path `reflection` that reflects off it and a path `direct`, the
+    /// direct ray, both with media given), the ray from `source` to `listener`, the reflector's
+    /// `length`, the prescribed `delay`, the `start` placement and the weight `μ` of staying
+    /// near it.
+    ///
+    /// # Errors
+    /// A `reflector` that the scene does not have, path indices out of range, the direct path
+    /// with steps, or a length, delay or weight that is not a finite number (the length
+    /// positive, the weight not negative).
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the parts of the problem, each named in the documentation"
+    )]
+    pub fn new(
+        spec: crate::scene::SceneSpec,
+        reflector: &str,
+        reflection: usize,
+        direct: usize,
+        source: Point,
+        listener: Point,
+        length: f64,
+        delay: f64,
+        start: Placement,
+        weight: f64,
+    ) -> Result<ReflectorPlacement, crate::scene::SceneError> {
+        use crate::scene::SceneError;
+        if !spec.interfaces.contains_key(reflector) {
+            return Err(SceneError::new(
+                format!("interfaces.{reflector}"),
+                "no such interface to place",
+            ));
+        }
+        for (what, p) in [("reflection", reflection), ("direct", direct)] {
+            if p >= spec.paths.len() {
+                return Err(SceneError::new(
+                    format!("paths[{p}]"),
+                    format!("no such path (the {what} path)"),
+                ));
+            }
+        }
+        if !spec.paths[direct].steps.is_empty() {
+            return Err(SceneError::new(
+                format!("paths[{direct}].steps"),
+                "the direct path has no steps",
+            ));
+        }
+        let fine = length.is_finite() && length > 0.0 && delay.is_finite();
+        if !(fine && weight.is_finite() && weight >= 0.0) {
+            return Err(SceneError::new(
+                "reflector",
+                "length (> 0), delay and weight (≥ 0) must be finite numbers",
+            ));
+        }
+        Ok(ReflectorPlacement {
+            spec,
+            reflector: reflector.to_string(),
+            length,
+            reflection,
+            direct,
+            source,
+            listener,
+            delay,
+            start,
+            weight,
+        })
+    }
+
+    /// The scene with the reflector placed at `p`.
+    ///
+    /// # Errors
+    /// A placement that makes the scene invalid (the reflector crossing another interface).
+    pub fn scene(&self, p: Placement) -> Result<crate::scene::Scene, crate::scene::SceneError> {
+        let mut spec = self.spec.clone();
+        let [a, b] = p.endpoints(self.length);
+        if let Some(i) = spec.interfaces.get_mut(&self.reflector) {
+            i.points = vec![[a.x, a.y], [b.x, b.y]];
+            i.closed = false;
+        }
+        crate::scene::Scene::from_spec(&spec)
+    }
+
+    /// The misfit of placement `p`.
+    ///
+    /// # Errors
+    /// An invalid scene, or a ray without a time (the reflection point off the reflector).
+    pub fn misfit(&self, p: Placement) -> Result<PlacementMisfit, Error> {
+        let scene = self.scene(p)?;
+        let tracer = Tracer::new(&scene)?;
+        let mut ws = Workspace::new();
+        let direct = tracer.solve(self.source, self.listener, self.direct, &mut ws);
+        if !direct.status.has_time() {
+            return Err(Error::msg("the direct ray has no time"));
+        }
+        let speed = ws
+            .media()
+            .first()
+            .map_or(1.0, |&m| 1.0 / scene.media()[m].slowness);
+        let reflected = tracer.solve(self.source, self.listener, self.reflection, &mut ws);
+        if !reflected.status.has_time() {
+            return Err(Error::msg(format!(
+                "no reflection off the placed reflector ({}) at centre ({}, {}), angle {}",
+                reflected.status, p.center.x, p.center.y, p.angle
+            )));
+        }
+        let g = Gradient::of_solved(&scene, self.reflection, &ws)?;
+        let iface = scene
+            .interfaces()
+            .iter()
+            .position(|i| i.name == self.reflector)
+            .ok_or_else(|| Error::msg("the reflector is not in the scene"))?;
+        let (da, db) = (g.vertex(iface, 0), g.vertex(iface, 1));
+        let delay = reflected.time - direct.time;
+        let l = self.length;
+        let miss = speed * (delay - self.delay) / l;
+        // d(endpoints)/dθ: a = C − h, b = C + h with h = (L/2)(cos θ, sin θ).
+        let dh = Vec2::new(-p.angle.sin(), p.angle.cos()) * (0.5 * l);
+        let dt = [da.x + db.x, da.y + db.y, db.dot(dh) - da.dot(dh)];
+        let moved = [
+            (p.center.x - self.start.center.x) / l,
+            (p.center.y - self.start.center.y) / l,
+            0.5 * (p.angle - self.start.angle),
+        ];
+        let cost = 0.5 * miss * miss
+            + 0.5 * self.weight * (moved[0] * moved[0] + moved[1] * moved[1] + moved[2] * moved[2]);
+        let k = miss * speed / l;
+        let gradient = [
+            k * dt[0] + self.weight * moved[0] / l,
+            k * dt[1] + self.weight * moved[1] / l,
+            k * dt[2] + self.weight * moved[2] * 0.5,
+        ];
+        Ok(PlacementMisfit {
+            cost,
+            gradient,
+            delay,
+        })
+    }
+}
+
+/// `[x, y, θ]` as a placement.
+fn placement_of(p: &DVector<f64>) -> Result<Placement, Error> {
+    match p.as_slice() {
+        [x, y, angle] => Ok(Placement {
+            center: Point::new(*x, *y),
+            angle: *angle,
+        }),
+        other => Err(Error::msg(format!(
+            "a placement is [x, y, angle], got {} numbers",
+            other.len()
+        ))),
+    }
+}
+
+impl CostFunction for ReflectorPlacement {
+    type Param = DVector<f64>;
+    type Output = f64;
+
+    fn cost(&self, p: &DVector<f64>) -> Result<f64, Error> {
+        Ok(self.misfit(placement_of(p)?)?.cost)
+    }
+}
+
+impl ArgminGradient for ReflectorPlacement {
+    type Param = DVector<f64>;
+    type Gradient = DVector<f64>;
+
+    fn gradient(&self, p: &DVector<f64>) -> Result<DVector<f64>, Error> {
+        Ok(DVector::from_vec(
+            self.misfit(placement_of(p)?)?.gradient.to_vec(),
+        ))
+    }
+}
