@@ -46,7 +46,7 @@ pub struct SourceMisfit {
 /// use eigenray::{Point, Scene, Tracer, Workspace};
 /// use nalgebra::DVector;
 /// let scene = Scene::from_json(r#"{
-///     "media": { "air": { "speed": 1.0 }, "water": { "speed": 0.7 } },
+///     "media": { "air": { "speed": 343.0 }, "water": { "speed": 1480.0 } },
 ///     "interfaces": { "surface": { "points": [[-20, 0], [20, 0]] } },
 ///     "sources": [[0, 2]], "receivers": [[-3, -2], [0, -3], [4, -2], [1, -1]],
 ///     "paths": [{ "steps": [{ "refract": "surface" }], "media": ["air", "water"] }]
@@ -59,7 +59,9 @@ pub struct SourceMisfit {
 ///     ObservedArrival { receiver, path: 0, time }
 /// }).collect();
 /// let problem = SourceLocation::new(&tracer, observed);
-/// let solver = LBFGS::new(MoreThuenteLineSearch::new(), 5).with_tolerance_grad(1e-12).unwrap();
+/// let solver = LBFGS::new(MoreThuenteLineSearch::new(), 5)
+///     .with_tolerance_grad(1e-14).unwrap()
+///     .with_tolerance_cost(0.0).unwrap();
 /// let result = Executor::new(problem, solver)
 ///     .configure(|s| s.param(DVector::from_vec(vec![-2.0, 4.0])).max_iters(100))
 ///     .run()
