@@ -1,7 +1,8 @@
 //! The path problem as an argmin problem, and argmin's solvers run on it for cross-checks;
 //! and layout objectives built on whole rays and their derivatives ([`SourceLocation`]:
 //! locating a source from arrival times; [`ReflectorPlacement`]: placing a reflector for a
-//! prescribed delay), each an argmin [`CostFunction`] and [`Gradient`] for argmin's optimisers.
+//! prescribed delay; [`LensProfile`]: shaping a lens for Fermat's imaging condition), each an
+//! argmin [`CostFunction`] and [`Gradient`] for argmin's optimisers.
 //!
 //! [`ArgminPath`] wraps a [`PathProblem`] for argmin's solvers, with the interaction
 //! parameters (arclengths `s`) as a `nalgebra::DVector<f64>`:
@@ -33,7 +34,8 @@
 mod layout;
 
 pub use layout::{
-    ObservedArrival, Placement, PlacementMisfit, ReflectorPlacement, SourceLocation, SourceMisfit,
+    LensProfile, ObservedArrival, Placement, PlacementMisfit, ProfileMisfit, ReflectorPlacement,
+    SourceLocation, SourceMisfit,
 };
 
 use std::cell::RefCell;

@@ -159,3 +159,74 @@ fn reflector_placement_gradient_and_solution() {
     let e = ReflectorPlacement::new(spec, "panel", 0, 1, s, l, 3.0, 0.015, start, 0.0);
     assert!(e.err().unwrap().to_string().contains("paths[1].steps"));
 }
+
+#[test]
+fn lens_profile_gradient_and_improvement() {
+    use eigenray::argmin_bridge::LensProfile;
+    let points: Vec<[f64; 2]> = (0..7).map(|i| [0.6, 1.8 - 0.6 * i as f64]).collect();
+    let spec: SceneSpec = serde_json::from_value(serde_json::json!({
+        "media": { "glass": { "index": 1.5 }, "air": { "index": 1.0 } },
+        "interfaces": { "back": { "points": points } },
+        "sources": [[0.0, 0.0]], "receivers": [[20.6, 0.0]],
+        "paths": [{ "steps": [{ "refract": "back" }], "media": ["glass", "air"] }]
+    }))
+    .unwrap();
+    let entries: Vec<Point> = (0..9)
+        .map(|i| Point::new(0.0, -1.6 + 0.4 * i as f64))
+        .collect();
+    let free = vec![0, 1, 2, 4, 5, 6];
+    let (source, focus) = (Point::new(-20.0, 0.0), Point::new(20.6, 0.0));
+    let make = || {
+        LensProfile::new(
+            spec.clone(),
+            "back",
+            free.clone(),
+            0,
+            source,
+            1.0,
+            entries.clone(),
+            focus,
+        )
+        .unwrap()
+    };
+    let problem = make();
+    // Off the flat start (every vertex at 0.6), where the paths meet the segments inside.
+    let x = [0.31, 0.45, 0.57, 0.58, 0.46, 0.33];
+    let m = problem.misfit(&x).unwrap();
+    let h = 1e-6;
+    for j in 0..x.len() {
+        let at = |s: f64| {
+            let mut y = x;
+            y[j] += s;
+            problem.misfit(&y).unwrap().cost
+        };
+        let fd = (at(h) - at(-h)) / (2.0 * h);
+        let an = m.gradient[j];
+        assert!(
+            (fd - an).abs() <= 1e-6 * an.abs().max(1e-9),
+            "{j}: {fd} vs {an}"
+        );
+    }
+    let solver = LBFGS::new(MoreThuenteLineSearch::new(), 7)
+        .with_tolerance_grad(1e-14)
+        .unwrap()
+        .with_tolerance_cost(0.0)
+        .unwrap();
+    let flat = vec![0.6; free.len()];
+    let before = make().misfit(&flat).unwrap().cost;
+    let result = Executor::new(problem, solver)
+        .configure(|s| s.param(DVector::from_vec(flat.clone())).max_iters(100))
+        .run();
+    // The objective has kinks where paths change segments: the line search may end the run.
+    let best = match result {
+        Ok(r) => r.state().best_param.clone().unwrap().as_slice().to_vec(),
+        Err(e) => panic!("{e}"),
+    };
+    let after = make().misfit(&best).unwrap().cost;
+    assert!(after < 1e-3 * before, "{before} → {after}");
+    // Convex: thinner towards the edges.
+    assert!(
+        best[0] < best[1] && best[1] < best[2] && best[2] < 0.6,
+        "{best:?}"
+    );
+}

@@ -379,3 +379,181 @@ impl ArgminGradient for ReflectorPlacement {
         ))
     }
 }
+
+/// Shaping a lens's back surface so that a point source images onto a focus: Fermat's imaging
+/// condition, every path from the source through the lens to the focus taking the same time.
+///
+/// The lens has a flat front face (not part of the scene) and a back surface, an open polyline
+/// of the scene between the glass (on the front side) and the air. A path from the source
+/// enters the front face at the point `Pᵢ` and then takes the ray from `Pᵢ` to the focus
+/// refracted by the back surface (path `path`, media given): its time is
+/// `τᵢ = w |Pᵢ − S| + T(Pᵢ, F)`, `w` the slowness before the lens. The objective is
+/// `½ Σᵢ (τᵢ − τ̄)² / n` over the `n` entry points (`τ̄` their mean), minimised over the `x`
+/// coordinates of the back surface's `free` vertices (the others stay put, which fixes the
+/// lens's thickness). The derivative of each `T` with respect to the vertices ([`Gradient`])
+/// gives the gradient: `Σᵢ (τᵢ − τ̄) ∂τᵢ/∂xⱼ / n`. As an argmin problem its parameter is
+/// those `x` coordinates, in the order of `free`.
+pub struct LensProfile {
+    spec: crate::scene::SceneSpec,
+    surface: String,
+    free: Vec<usize>,
+    path: usize,
+    source: Point,
+    slowness_before: f64,
+    entries: Vec<Point>,
+    focus: Point,
+}
+
+/// The times through a lens profile: the objective, its gradient, and each path's time.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProfileMisfit {
+    /// `½ Σ (τᵢ − τ̄)² / n`.
+    pub cost: f64,
+    /// Its gradient with respect to the free vertices' `x`.
+    pub gradient: Vec<f64>,
+    /// `τᵢ` of each entry point.
+    pub times: Vec<f64>,
+}
+
+impl LensProfile {
+    /// The problem for the scene `spec` whose interface `surface` is the back surface, its
+    /// vertices `free` moving along `x`, path `path` one refraction at it with media given,
+    /// the `source` in a medium of slowness `slowness_before` in front of the lens, the
+    /// `entries` on the front face and the `focus`.
+    ///
+    /// # Errors
+    /// A `surface` the scene does not have, a free vertex it does not have, a path out of
+    /// range, fewer than two entries, or a slowness that is not a positive number.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the parts of the problem, each named in the documentation"
+    )]
+    pub fn new(
+        spec: crate::scene::SceneSpec,
+        surface: &str,
+        free: Vec<usize>,
+        path: usize,
+        source: Point,
+        slowness_before: f64,
+        entries: Vec<Point>,
+        focus: Point,
+    ) -> Result<LensProfile, crate::scene::SceneError> {
+        use crate::scene::SceneError;
+        let Some(line) = spec.interfaces.get(surface) else {
+            return Err(SceneError::new(
+                format!("interfaces.{surface}"),
+                "no such interface to shape",
+            ));
+        };
+        if let Some(&v) = free.iter().find(|&&v| v >= line.points.len()) {
+            return Err(SceneError::new(
+                format!("interfaces.{surface}.points[{v}]"),
+                "no such vertex to move",
+            ));
+        }
+        if path >= spec.paths.len() {
+            return Err(SceneError::new(format!("paths[{path}]"), "no such path"));
+        }
+        if entries.len() < 2 || !(slowness_before.is_finite() && slowness_before > 0.0) {
+            return Err(SceneError::new(
+                "lens",
+                "needs two entry points or more and a positive slowness before the lens",
+            ));
+        }
+        Ok(LensProfile {
+            spec,
+            surface: surface.to_string(),
+            free,
+            path,
+            source,
+            slowness_before,
+            entries,
+            focus,
+        })
+    }
+
+    /// The scene with the free vertices at `x`.
+    ///
+    /// # Errors
+    /// `x` of the wrong length, or a profile that makes the scene invalid.
+    pub fn scene(&self, x: &[f64]) -> Result<crate::scene::Scene, crate::scene::SceneError> {
+        use crate::scene::SceneError;
+        if x.len() != self.free.len() {
+            return Err(SceneError::new(
+                "lens",
+                format!("{} free vertices, {} coordinates", self.free.len(), x.len()),
+            ));
+        }
+        let mut spec = self.spec.clone();
+        if let Some(line) = spec.interfaces.get_mut(&self.surface) {
+            for (&v, &xv) in self.free.iter().zip(x) {
+                line.points[v][0] = xv;
+            }
+        }
+        crate::scene::Scene::from_spec(&spec)
+    }
+
+    /// The misfit of the profile with the free vertices at `x`.
+    ///
+    /// # Errors
+    /// An invalid profile, or a path without a time.
+    pub fn misfit(&self, x: &[f64]) -> Result<ProfileMisfit, Error> {
+        let scene = self.scene(x)?;
+        let tracer = Tracer::new(&scene)?;
+        let iface = scene
+            .interfaces()
+            .iter()
+            .position(|i| i.name == self.surface)
+            .ok_or_else(|| Error::msg("the surface is not in the scene"))?;
+        let mut ws = Workspace::new();
+        let mut g = Gradient::default();
+        let n = self.entries.len();
+        let mut times = Vec::with_capacity(n);
+        let mut partials = vec![0.0; n * self.free.len()];
+        for (i, &p) in self.entries.iter().enumerate() {
+            let ray = tracer.solve(p, self.focus, self.path, &mut ws);
+            if !ray.status.has_time() {
+                return Err(Error::msg(format!(
+                    "no ray from the entry point ({}, {}) to the focus ({})",
+                    p.x, p.y, ray.status
+                )));
+            }
+            g.solved_into(&scene, self.path, &ws)?;
+            times.push(self.slowness_before * (p - self.source).length() + ray.time);
+            for (j, &v) in self.free.iter().enumerate() {
+                partials[i * self.free.len() + j] = g.vertex(iface, v).x;
+            }
+        }
+        let mean = times.iter().sum::<f64>() / n as f64;
+        let cost = times.iter().map(|t| (t - mean) * (t - mean)).sum::<f64>() / (2 * n) as f64;
+        let mut gradient = vec![0.0; self.free.len()];
+        for (i, t) in times.iter().enumerate() {
+            for (j, d) in gradient.iter_mut().enumerate() {
+                *d += (t - mean) * partials[i * self.free.len() + j] / n as f64;
+            }
+        }
+        Ok(ProfileMisfit {
+            cost,
+            gradient,
+            times,
+        })
+    }
+}
+
+impl CostFunction for LensProfile {
+    type Param = DVector<f64>;
+    type Output = f64;
+
+    fn cost(&self, x: &DVector<f64>) -> Result<f64, Error> {
+        Ok(self.misfit(x.as_slice())?.cost)
+    }
+}
+
+impl ArgminGradient for LensProfile {
+    type Param = DVector<f64>;
+    type Gradient = DVector<f64>;
+
+    fn gradient(&self, x: &DVector<f64>) -> Result<DVector<f64>, Error> {
+        Ok(DVector::from_vec(self.misfit(x.as_slice())?.gradient))
+    }
+}
