@@ -988,3 +988,84 @@ fn derivatives_match_dual_numbers_through_the_solve() {
     );
     assert!(compared >= 1000);
 }
+
+/// Every stationary path of a valley reflector (`"stationary": "all"`): two specular points on
+/// the slopes and the bottom, a maximum-type kink held on its vertex. Each arrival's gradient
+/// (from its points and media) against central differences of the same arrival re-solved.
+#[test]
+fn every_stationary_path_has_its_derivatives() {
+    let doc = json!({
+        "media": { "air": { "speed": 1.0 }, "slow": { "index": 1.7 } },
+        "interfaces": { "valley": { "points": [[-3.0, 0.0], [0.0, -2.0], [3.0, 0.0]] } },
+        "sources": [[-0.5, 2.0]], "receivers": [[0.7, 1.8]],
+        "paths": [
+            { "steps": [{ "reflect": "valley" }], "media": ["air", "air"] },
+            { "steps": [{ "reflect": "valley" }], "media": ["air", "slow"] }
+        ],
+        "solver": { "stationary": "all", "tolerance": 1e-15 }
+    });
+    let arrivals_of = |d: &Value, path: usize| {
+        let scene = Scene::from_json(&d.to_string()).unwrap();
+        let tracer = Tracer::new(&scene).unwrap();
+        let mut out = Vec::new();
+        tracer
+            .stationary_paths(scene.sources()[0], scene.receivers()[0], path, &mut out)
+            .unwrap();
+        out
+    };
+    let scene = Scene::from_json(&doc.to_string()).unwrap();
+    let mut vertex_arrivals = 0;
+    for path in 0..2 {
+        let arrivals = arrivals_of(&doc, path);
+        assert_eq!(arrivals.len(), 3, "{arrivals:?}");
+        let steps = &scene.paths()[path].steps;
+        for (a, arrival) in arrivals.iter().enumerate() {
+            let g = Gradient::of_points(&scene, steps, &arrival.points, &arrival.media).unwrap();
+            if arrival.status == Status::Vertex {
+                vertex_arrivals += 1;
+                // Held on the bottom vertex: that vertex alone.
+                assert_eq!(g.vertices.len(), 1);
+                assert_eq!(g.vertices[0].vertex, 1);
+            }
+            let mut params = vec![
+                Parameter::Source(Axis::X),
+                Parameter::Source(Axis::Y),
+                Parameter::Receiver(Axis::X),
+                Parameter::Receiver(Axis::Y),
+                Parameter::Slowness { medium: 0 },
+                Parameter::Slowness { medium: 1 },
+            ];
+            for vertex in 0..3 {
+                for axis in [Axis::X, Axis::Y] {
+                    params.push(Parameter::Vertex {
+                        interface: 0,
+                        vertex,
+                        axis,
+                    });
+                }
+            }
+            for param in params {
+                let time = |h: f64| {
+                    let moved = arrivals_of(&perturbed(&doc, &scene, param, h), path);
+                    // The same arrival: the same status, nearest in time.
+                    moved
+                        .iter()
+                        .filter(|m| m.status == arrival.status)
+                        .map(|m| m.time)
+                        .min_by(|x, y| {
+                            (x - arrival.time).abs().total_cmp(&(y - arrival.time).abs())
+                        })
+                        .unwrap()
+                };
+                let fd = (time(STEP) - time(-STEP)) / (2.0 * STEP);
+                let an = analytic(&g, param);
+                assert!(
+                    (fd - an).abs() <= 1e-7 * (1.0 + an.abs()),
+                    "arrival {a} ({:?}) of path {path}: dT/d{param:?} {an} vs {fd}",
+                    arrival.status
+                );
+            }
+        }
+    }
+    assert_eq!(vertex_arrivals, 2);
+}
