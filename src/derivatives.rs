@@ -1017,8 +1017,9 @@ impl BatchGradients {
     }
 
     /// Computes the gradients of `batch`'s rays (of `scene`) for which `wanted(ray)` holds, in
-    /// parallel, reusing this value's memory (allocates nothing once it has held a batch as
-    /// large). A ray that is not wanted costs nothing but its NaN entries.
+    /// parallel (rayon), reusing this value's arrays (they grow only for a larger batch, or a
+    /// scene of more media or longer paths). A ray that is not wanted costs nothing but its NaN
+    /// entries.
     pub fn compute(
         &mut self,
         scene: &Scene,

@@ -1053,7 +1053,9 @@ fn every_stationary_path_has_its_derivatives() {
                         .filter(|m| m.status == arrival.status)
                         .map(|m| m.time)
                         .min_by(|x, y| {
-                            (x - arrival.time).abs().total_cmp(&(y - arrival.time).abs())
+                            (x - arrival.time)
+                                .abs()
+                                .total_cmp(&(y - arrival.time).abs())
                         })
                         .unwrap()
                 };
