@@ -1,4 +1,5 @@
-//! Criterion benchmarks: single rays, a 100,000-segment reflector, batches, and argmin's solvers.
+//! Criterion benchmarks: single rays, a 100,000-segment reflector, batches, a ray's gradient,
+//! and argmin's solvers.
 //!
 //! `cargo bench` runs everything but the argmin comparison; `cargo bench --features argmin`
 //! adds it. Every benchmark shares one short configuration ([`config`]) so that the whole run
@@ -9,7 +10,7 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use eigenray::{BatchOptions, Point, Scene, Tracer, Workspace, demo};
+use eigenray::{BatchOptions, Gradient, Point, Scene, Tracer, Workspace, demo};
 
 /// The shared configuration: short warm-up and measurement, few samples.
 fn config() -> Criterion {
@@ -203,6 +204,44 @@ fn versus_argmin(c: &mut Criterion) {
     }
 }
 
+/// The cost of a ray's gradient: `Tracer::solve` alone and followed by
+/// `Gradient::solved_into` (reused, allocation-free), one receiver after the other, for one
+/// refraction (`demo::air_water`) and eight (`demo::layer_stack(8, …)`, `demo::dipping_stack`).
+fn gradient(c: &mut Criterion) {
+    let cases = [
+        ("one_refraction", scene(&demo::air_water(10_000, 1))),
+        ("stack8", scene(&demo::layer_stack(8, 2000))),
+        ("dipping8", scene(&demo::dipping_stack(8, 2000))),
+    ];
+    for (name, scene) in &cases {
+        let tracer = Tracer::new(scene).expect("tracer");
+        let source = scene.sources()[0];
+        let receivers = scene.receivers();
+        let mut group = c.benchmark_group(format!("gradient/{name}"));
+        group.throughput(Throughput::Elements(1));
+        let mut ws = Workspace::new();
+        let mut next = 0;
+        group.bench_function("ray", |b| {
+            b.iter(|| {
+                next = (next + 1) % receivers.len();
+                black_box(tracer.solve(source, receivers[next], 0, &mut ws))
+            })
+        });
+        let mut g = Gradient::default();
+        group.bench_function("ray_and_gradient", |b| {
+            b.iter(|| {
+                next = (next + 1) % receivers.len();
+                let record = tracer.solve(source, receivers[next], 0, &mut ws);
+                if record.status.has_time() {
+                    black_box(g.solved_into(scene, 0, &ws).is_ok());
+                }
+                black_box(record)
+            })
+        });
+        group.finish();
+    }
+}
+
 #[cfg(not(feature = "argmin"))]
 fn versus_argmin(_c: &mut Criterion) {
     eprintln!("versus_argmin: skipped (run `cargo bench --features argmin` to include it)");
@@ -211,6 +250,6 @@ fn versus_argmin(_c: &mut Criterion) {
 criterion_group! {
     name = benches;
     config = config();
-    targets = single_ray, reflector, batch, versus_argmin
+    targets = single_ray, reflector, batch, gradient, versus_argmin
 }
 criterion_main!(benches);

@@ -22,8 +22,8 @@ Writes:
 false}`).
 
 How to run (a venv outside the repository):
-  python3 -m venv /work/venv-pra && /work/venv-pra/bin/pip install pyroomacoustics numpy
-  /work/venv-pra/bin/python benches/pyroomacoustics_rooms.py [repetitions]
+  python3 -m venv ../venv-pra && ../venv-pra/bin/pip install pyroomacoustics numpy
+  ../venv-pra/bin/python benches/pyroomacoustics_rooms.py [repetitions]
 then eigenray's side, the comparison and its timing:
   cargo test --profile test-opt --lib mirrors::tests::pyroomacoustics -- --nocapture
   cargo test --release --lib mirrors -- --ignored --nocapture

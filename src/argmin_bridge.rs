@@ -1,4 +1,8 @@
-//! The path problem as an argmin problem, and argmin's solvers run on it for cross-checks.
+//! The path problem as an argmin problem, and argmin's solvers run on it for cross-checks;
+//! and layout objectives built on whole rays and their derivatives ([`SourceLocation`]:
+//! locating a source from arrival times; [`ReflectorPlacement`]: placing a reflector for a
+//! prescribed delay; [`LensProfile`]: shaping a lens for Fermat's imaging condition), each an
+//! argmin [`CostFunction`] and [`Gradient`] for argmin's optimisers.
 //!
 //! [`ArgminPath`] wraps a [`PathProblem`] for argmin's solvers, with the interaction
 //! parameters (arclengths `s`) as a `nalgebra::DVector<f64>`:
@@ -26,6 +30,13 @@
 //!   (`√(ε T / H)`) of a minimum. They usually reach round-off all the same, but their line
 //!   search can break down there; the outcome is then the last iterate, typically within a
 //!   relative residual of `10⁻⁸` (see [`solve_bfgs`]).
+
+mod layout;
+
+pub use layout::{
+    LensProfile, ObservedArrival, Placement, PlacementMisfit, ProfileMisfit, ReflectorPlacement,
+    SourceLocation, SourceMisfit,
+};
 
 use std::cell::RefCell;
 use std::rc::Rc;

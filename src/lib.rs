@@ -29,6 +29,10 @@
 //!    validated as the document is, and prepare again only what depends on the change.
 //! 5. **Write**: [`write_rays`], [`write_batch`] and their siblings write JSON, JSON Lines,
 //!    CSV or `.npy` ([`Format`]).
+//! 6. **Derivatives**: [`Tracer::gradient`] gives the derivatives of a solved ray's time with
+//!    respect to its source, receiver, each medium's slowness and the vertices it touches
+//!    ([`Gradient`]); [`PointSensitivities`] how its points move; [`BatchGradients`] both for
+//!    a whole batch.
 //!
 //! ```
 //! use eigenray::{InterfaceSpec, MediumSpec, PathSpec, Point, Scene, Status, StepSpec, Tracer};
@@ -56,6 +60,7 @@ mod arrivals;
 mod batch;
 mod bvh;
 pub mod demo;
+mod derivatives;
 mod geom;
 mod output;
 mod polyline;
@@ -71,6 +76,9 @@ pub mod argmin_bridge;
 // The vocabulary: scenes, the tracer and its options, ray results, batches, outputs.
 pub use arrivals::{MAX_SEARCH_WORK, SearchArrival, SearchError, StationaryRays, TripleArrivals};
 pub use batch::{Batch, BatchOptions, BatchRay, BatchRays};
+pub use derivatives::{
+    Axis, BatchGradients, DerivativeError, Gradient, Parameter, PointSensitivities, VertexGradient,
+};
 pub use geom::{Point, Vec2};
 pub use output::{
     Format, RaySet, write_arrivals, write_batch, write_names, write_rays, write_rays_and_arrivals,

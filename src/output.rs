@@ -14,6 +14,7 @@ use rayon::prelude::*;
 
 use crate::arrivals::{SearchArrival, StationaryRays};
 use crate::batch::Batch;
+use crate::derivatives::Gradient;
 use crate::geom::Point;
 use crate::scene::{Scene, StepKind};
 use crate::trace::{Kink, Ray, Reason, Status};
@@ -118,13 +119,18 @@ fn status_code(status: Status) -> u8 {
 #[derive(Clone, Copy, Debug)]
 struct NpyShape {
     k: usize,
+    /// With the gradient fields (`"derivatives": true`): the scene's media.
+    gradient_media: Option<usize>,
 }
 
 impl NpyShape {
     /// The shape for the scene's paths.
     fn of(scene: &Scene) -> NpyShape {
         let k = scene.paths().iter().map(|p| p.steps.len()).max();
-        NpyShape { k: k.unwrap_or(0) }
+        NpyShape {
+            k: k.unwrap_or(0),
+            gradient_media: scene.solver().derivatives.then_some(scene.media().len()),
+        }
     }
 
     fn points(self) -> usize {
@@ -164,6 +170,15 @@ fn npy_header(n: usize, shape: NpyShape, layout: Layout) -> Vec<u8> {
     if layout == Layout::Stationary {
         descr.push_str(", ('arrival', '<u4'), ('kink', '|u1'), ('complete', '|u1')");
     }
+    if let Some(media) = shape.gradient_media {
+        let slots = 2 * shape.k;
+        descr.push_str(&format!(
+            ", ('gradient_source', '<f8', (2,)), ('gradient_receiver', '<f8', (2,)), \
+             ('gradient_slowness', '<f8', ({media},)), \
+             ('gradient_vertex_interface', '<u4', ({slots},)), \
+             ('gradient_vertex', '<u4', ({slots},)), ('gradient_vertices', '<f8', ({slots}, 2))"
+        ));
+    }
     npy_header_of(n, &descr)
 }
 
@@ -199,7 +214,12 @@ fn points_media_npy(
     }
 }
 
-fn ray_npy<M: Iterator<Item = usize>>(buf: &mut Vec<u8>, shape: NpyShape, r: View<'_, M>) {
+fn ray_npy<M: Iterator<Item = usize>>(
+    buf: &mut Vec<u8>,
+    shape: NpyShape,
+    r: View<'_, M>,
+    gradient: Option<&Gradient>,
+) {
     for v in [r.source, r.receiver, r.path] {
         buf.extend_from_slice(&(v as u32).to_le_bytes());
     }
@@ -213,6 +233,45 @@ fn ray_npy<M: Iterator<Item = usize>>(buf: &mut Vec<u8>, shape: NpyShape, r: Vie
         u32_le(buf, e.arrival);
         buf.push(kink_code(e.kink));
         buf.push(u8::from(e.complete));
+    }
+    if let Some(media) = shape.gradient_media {
+        gradient_npy(buf, media, 2 * shape.k, gradient);
+    }
+}
+
+/// The gradient fields of a `.npy` record: NaN and [`NO_INTERFACE`] where there is none, the
+/// vertices padded to `slots`.
+fn gradient_npy(buf: &mut Vec<u8>, media: usize, slots: usize, gradient: Option<&Gradient>) {
+    let f = |buf: &mut Vec<u8>, v: f64| buf.extend_from_slice(&v.to_le_bytes());
+    let nan = f64::NAN;
+    match gradient {
+        Some(g) => {
+            for v in [g.source.x, g.source.y, g.receiver.x, g.receiver.y] {
+                f(buf, v);
+            }
+            for m in 0..media {
+                f(buf, g.slowness.get(m).copied().unwrap_or(nan));
+            }
+        }
+        None => {
+            for _ in 0..4 + media {
+                f(buf, nan);
+            }
+        }
+    }
+    let vertices = gradient.map_or(&[][..], |g| &g.vertices[..]);
+    for i in 0..slots {
+        let v = vertices.get(i).map_or(NO_INTERFACE, |v| v.interface as u32);
+        buf.extend_from_slice(&v.to_le_bytes());
+    }
+    for i in 0..slots {
+        let v = vertices.get(i).map_or(NO_INTERFACE, |v| v.vertex as u32);
+        buf.extend_from_slice(&v.to_le_bytes());
+    }
+    for i in 0..slots {
+        let d = vertices.get(i).map_or([nan, nan], |v| [v.d.x, v.d.y]);
+        f(buf, d[0]);
+        f(buf, d[1]);
     }
 }
 
@@ -365,6 +424,7 @@ fn ray_json<M: Iterator<Item = usize>>(
     scene: &Scene,
     names: &Names,
     r: View<'_, M>,
+    gradient: Option<&Gradient>,
 ) {
     buf.extend_from_slice(b"{\"source\":");
     int(buf, r.source);
@@ -394,6 +454,9 @@ fn ray_json<M: Iterator<Item = usize>>(
         buf.extend_from_slice(b",\"points\":");
         points_json(buf, r.points);
     }
+    if let Some(g) = gradient {
+        gradient_json(buf, names, g);
+    }
     buf.extend_from_slice(b",\"iterations\":");
     int(buf, r.iterations);
     if r.residual.is_finite() {
@@ -416,6 +479,87 @@ fn ray_json<M: Iterator<Item = usize>>(
         });
     }
     buf.push(b'}');
+}
+
+/// `[x,y]`.
+fn vec_json(buf: &mut Vec<u8>, v: crate::geom::Vec2) {
+    buf.push(b'[');
+    float(buf, v.x);
+    buf.push(b',');
+    float(buf, v.y);
+    buf.push(b']');
+}
+
+/// `,"gradient":{"source":[…],"receiver":[…],"slowness":{"air":…},"vertices":[{"interface":
+/// "surface","vertex":3,"d":[…]}]}`.
+fn gradient_json(buf: &mut Vec<u8>, names: &Names, g: &Gradient) {
+    buf.extend_from_slice(b",\"gradient\":{\"source\":");
+    vec_json(buf, g.source);
+    buf.extend_from_slice(b",\"receiver\":");
+    vec_json(buf, g.receiver);
+    buf.extend_from_slice(b",\"slowness\":{");
+    for (m, (name, d)) in names.media.iter().zip(&g.slowness).enumerate() {
+        if m > 0 {
+            buf.push(b',');
+        }
+        buf.extend_from_slice(name);
+        buf.push(b':');
+        float(buf, *d);
+    }
+    buf.extend_from_slice(b"},\"vertices\":[");
+    for (i, v) in g.vertices.iter().enumerate() {
+        if i > 0 {
+            buf.push(b',');
+        }
+        buf.extend_from_slice(b"{\"interface\":");
+        buf.extend_from_slice(
+            names
+                .interfaces
+                .get(v.interface)
+                .map_or(b"\"?\"", Vec::as_slice),
+        );
+        buf.extend_from_slice(b",\"vertex\":");
+        int(buf, v.vertex);
+        buf.extend_from_slice(b",\"d\":");
+        vec_json(buf, v.d);
+        buf.push(b'}');
+    }
+    buf.extend_from_slice(b"]}");
+}
+
+/// The four gradient columns of a CSV line (each after a comma; empty without a gradient):
+/// `x y`, `x y`, the media's `dT/dw` joined by `;`, and `interface vertex x y;…`.
+fn gradient_csv(buf: &mut Vec<u8>, gradient: Option<&Gradient>) {
+    let Some(g) = gradient else {
+        buf.extend_from_slice(b",,,,");
+        return;
+    };
+    for v in [g.source, g.receiver] {
+        buf.push(b',');
+        float(buf, v.x);
+        buf.push(b' ');
+        float(buf, v.y);
+    }
+    buf.push(b',');
+    for (m, d) in g.slowness.iter().enumerate() {
+        if m > 0 {
+            buf.push(b';');
+        }
+        float(buf, *d);
+    }
+    buf.push(b',');
+    for (i, v) in g.vertices.iter().enumerate() {
+        if i > 0 {
+            buf.push(b';');
+        }
+        int(buf, v.interface);
+        buf.push(b' ');
+        int(buf, v.vertex);
+        buf.push(b' ');
+        float(buf, v.d.x);
+        buf.push(b' ');
+        float(buf, v.d.y);
+    }
 }
 
 /// `x y;x y;…`.
@@ -460,6 +604,7 @@ fn ray_csv<M: Iterator<Item = usize>>(
     scene: &Scene,
     names: &Names,
     r: View<'_, M>,
+    gradient: Option<Option<&Gradient>>,
 ) {
     int(buf, r.source);
     buf.push(b',');
@@ -504,6 +649,9 @@ fn ray_csv<M: Iterator<Item = usize>>(
         buf.push(b',');
         buf.extend_from_slice(if e.complete { b"true" } else { b"false" });
     }
+    if let Some(g) = gradient {
+        gradient_csv(buf, g);
+    }
     buf.push(b'\n');
 }
 
@@ -514,6 +662,10 @@ const CSV_HEADER: &[u8] =
 /// The header line of [`Format::Csv`] with `"stationary": "all"`.
 const CSV_HEADER_STATIONARY: &[u8] = b"source,receiver,path,status,time,iterations,residual,\
 points,path_name,media,reason,arrival,kink,complete\n";
+
+/// The gradient columns that follow the others in [`Format::Csv`] with `"derivatives": true`.
+const CSV_GRADIENT_COLUMNS: &[u8] =
+    b",gradient_source,gradient_receiver,gradient_slowness,gradient_vertices\n";
 
 /// Rays formatted at a time (in [`PIECE`]s, in parallel) before they are written out in order.
 const WINDOW: usize = 1 << 14;
@@ -548,31 +700,53 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
     }
     let names = Names::new(scene);
     let shape = NpyShape::of(scene);
+    let derivatives = scene.solver().derivatives;
     match format {
         Format::Npy => out.write_all(&npy_header(n, shape, layout))?,
         Format::Json => out.write_all(b"{\"rays\":[")?,
-        Format::Csv => out.write_all(match layout {
-            Layout::Rays => CSV_HEADER,
-            Layout::Stationary => CSV_HEADER_STATIONARY,
-        })?,
+        Format::Csv => {
+            let header = match layout {
+                Layout::Rays => CSV_HEADER,
+                Layout::Stationary => CSV_HEADER_STATIONARY,
+            };
+            if derivatives {
+                out.write_all(&header[..header.len() - 1])?;
+                out.write_all(CSV_GRADIENT_COLUMNS)?;
+            } else {
+                out.write_all(header)?;
+            }
+        }
         Format::Jsonl => {}
     }
     let format_piece = |buf: &mut Vec<u8>, rays: std::ops::Range<usize>| {
         buf.clear();
+        let mut gradient = Gradient::default();
         for i in rays {
+            // The gradient from the ray's points and leg media (a first view of the ray).
+            let has_gradient = derivatives && {
+                let v = view(i);
+                let steps = scene.paths().get(v.path).map(|p| &p.steps[..]);
+                match (v.time, v.media, steps) {
+                    (Some(_), Some(media), Some(steps)) => {
+                        gradient.fill(scene, steps, v.points, media, None).is_ok()
+                    }
+                    _ => false,
+                }
+            };
+            let g = has_gradient.then_some(&gradient);
             match format {
                 Format::Json => {
                     if i > 0 {
                         buf.push(b',');
                     }
-                    ray_json(buf, scene, &names, view(i));
+                    ray_json(buf, scene, &names, view(i), g);
                 }
                 Format::Jsonl => {
-                    ray_json(buf, scene, &names, view(i));
+                    ray_json(buf, scene, &names, view(i), g);
                     buf.push(b'\n');
                 }
-                Format::Csv => ray_csv(buf, scene, &names, view(i)),
-                Format::Npy => ray_npy(buf, shape, view(i)),
+                Format::Csv => ray_csv(buf, scene, &names, view(i), derivatives.then_some(g)),
+                Format::Npy => ray_npy(buf, shape, view(i), g),
             }
         }
     };
@@ -893,6 +1067,12 @@ fn arrival_json(buf: &mut Vec<u8>, scene: &Scene, names: &Names, s: &SearchArriv
     float(buf, a.time);
     buf.extend_from_slice(b",\"points\":");
     points_json(buf, &a.points);
+    if scene.solver().derivatives {
+        let g = Gradient::of_points(scene, &s.steps, &a.points, &a.media);
+        if let Ok(g) = g {
+            gradient_json(buf, names, &g);
+        }
+    }
     buf.extend_from_slice(b",\"iterations\":");
     int(buf, a.iterations);
     if a.residual.is_finite() {

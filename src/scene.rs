@@ -238,6 +238,9 @@ pub struct SolverSpec {
     /// each ray reports every stationary path of its sequence.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stationary: Option<StationaryMode>,
+    /// Whether each ray with a time also carries the derivatives of its time (`"gradient"`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub derivatives: Option<bool>,
 }
 
 /// Which stationary paths a ray reports.
@@ -345,6 +348,8 @@ pub struct SolverOptions {
     pub max_iterations: usize,
     /// Which stationary paths a ray reports.
     pub stationary: StationaryMode,
+    /// Whether the output carries each timed ray's [`Gradient`](crate::Gradient).
+    pub derivatives: bool,
 }
 
 impl SolverOptions {
@@ -378,6 +383,7 @@ impl Default for SolverOptions {
             tolerance: DEFAULT_TOLERANCE,
             max_iterations: DEFAULT_MAX_ITERATIONS,
             stationary: StationaryMode::One,
+            derivatives: false,
         }
     }
 }
@@ -740,6 +746,9 @@ impl Scene {
             }
             if let Some(m) = s.stationary {
                 solver.stationary = m;
+            }
+            if let Some(d) = s.derivatives {
+                solver.derivatives = d;
             }
             solver.validate()?;
         }

@@ -17,6 +17,7 @@ const ORDER: &[&str] = &[
     "trace",
     "batch",
     "arrivals",
+    "derivatives",
     "output",
     "argmin_bridge",
 ];

@@ -786,6 +786,8 @@ fn every_stationary_path_of_random_scenes_matches_brute_force() {
     let (mut compared, mut paths, mut ambiguous) = (0, 0, 0);
     let mut by_status = std::collections::BTreeMap::new();
     let mut skipped = std::collections::BTreeMap::new();
+    // Triples (each case is one source, receiver and path) by their number of paths.
+    let mut by_count = std::collections::BTreeMap::new();
     let mut failures = Vec::new();
     while compared < 500 {
         let case = random_case(&mut rng);
@@ -803,6 +805,7 @@ fn every_stationary_path_of_random_scenes_matches_brute_force() {
         }
         compared += 1;
         paths += want.len();
+        *by_count.entry(want.len()).or_insert(0) += 1;
         for p in &want {
             *by_status.entry(p.status.as_str()).or_insert(0) += 1;
         }
@@ -810,7 +813,18 @@ fn every_stationary_path_of_random_scenes_matches_brute_force() {
     println!(
         "{compared} scenes, {paths} paths ({by_status:?}), {ambiguous} ambiguous skipped ({skipped:?})"
     );
+    let counts: Vec<String> = by_count.iter().map(|(n, t)| format!("{n}: {t}")).collect();
+    println!("triples by their number of paths: {}", counts.join(", "));
     assert_no_failures(&failures);
+    // Triples without a path, with one and with several, so that the comparison checks
+    // proofs of no path and complete lists alike.
+    let several: usize = by_count.range(2..).map(|(_, t)| t).sum();
+    assert!(
+        by_count.get(&0).copied().unwrap_or(0) >= 20
+            && by_count.get(&1).copied().unwrap_or(0) >= 20
+            && several >= 20,
+        "{by_count:?}"
+    );
     // The scenes exercise every kind of path.
     for s in ["converged", "vertex", "obstructed"] {
         assert!(
@@ -1261,6 +1275,7 @@ impl LookupCase {
 fn media_from_regions_match_brute_force() {
     let mut rng = SplitMix64(77);
     let (mut compared, mut paths, mut through) = (0, 0, 0);
+    let mut by_count = std::collections::BTreeMap::new();
     let mut failures = Vec::new();
     while compared < 1000 {
         let case = LookupCase::random(&mut rng);
@@ -1281,6 +1296,7 @@ fn media_from_regions_match_brute_force() {
                 .zip(&got)
                 .all(|(p, a)| p.status == a.status && (p.time - a.time).abs() <= 1e-10 * p.time);
         paths += want.len();
+        *by_count.entry(want.len()).or_insert(0) += 1;
         through += got.iter().filter(|a| a.media.contains(&1)).count();
         let ray = tracer.trace(0, 0, 0, &mut Workspace::new());
         let default_ok = match ray.status {
@@ -1306,6 +1322,11 @@ fn media_from_regions_match_brute_force() {
         }
     }
     println!("{compared} scenes, {paths} paths, {through} through glass");
+    let counts: Vec<String> = by_count.iter().map(|(n, t)| format!("{n}: {t}")).collect();
+    println!(
+        "triples by their number of converged paths: {}",
+        counts.join(", ")
+    );
     assert_no_failures(&failures);
     assert!(paths >= 60 && through >= 40, "{paths} {through}");
 }

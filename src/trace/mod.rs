@@ -592,7 +592,10 @@ impl Tracer {
                     Some(StraightStart::At) => {}
                     // With media given (a lookup decides before the geometry).
                     Some(StraightStart::Beyond { step }) if spec.media.is_some() => {
-                        beyond = Some(step);
+                        beyond = Some(Reason::BeyondEnd { step });
+                    }
+                    Some(StraightStart::Apart { .. }) if spec.media.is_some() => {
+                        beyond = Some(Reason::NoStationaryPath);
                     }
                     _ => initial_guess(scene, &spec.steps, source, receiver, ws),
                 }
@@ -606,8 +609,8 @@ impl Tracer {
             ws.ray.media.clear();
             return RayRecord::failed(Status::NoPath, reason);
         }
-        if let Some(step) = beyond {
-            return RayRecord::failed(Status::NoPath, Reason::BeyondEnd { step });
+        if let Some(reason) = beyond {
+            return RayRecord::failed(Status::NoPath, reason);
         }
         ws.ray
             .slowness

@@ -25,8 +25,10 @@ use crate::solver::{Outcome, Solution, solve};
 pub(crate) enum OneStepStart {
     /// At this parameter and segment.
     At(Placed),
-    /// The image method's specular point lies beyond the segment's end: no path (`s` the end).
-    Beyond { s: f64 },
+    /// The image method proves that there is no path (`reason`): its specular point lies
+    /// beyond the segment's end, or the receiver sees the source's image from behind the
+    /// mirror (`s` the specular point, kept on the segment).
+    NoPath { s: f64, reason: Reason },
     /// The general guess applies.
     General,
 }
@@ -68,7 +70,7 @@ impl OneStepPath {
                     ws.newton.seg[0] = at.seg;
                     ws.newton.pin[0] = Pin::Free;
                 }
-                OneStepStart::Beyond { s } => {
+                OneStepStart::NoPath { s, reason } => {
                     // As the general path leaves it: no points, the parameter at the end.
                     ws.newton.s[0] = s;
                     ws.newton.seg[0] = 0;
@@ -76,7 +78,7 @@ impl OneStepPath {
                     ws.ray.points.clear();
                     ws.ray.media.clear();
                     ws.ray.media.extend_from_slice(&self.media);
-                    return RayRecord::failed(Status::NoPath, Reason::BeyondEnd { step: 0 });
+                    return RayRecord::failed(Status::NoPath, reason);
                 }
                 OneStepStart::General => {
                     initial_guess(scene, steps, source, receiver, ws);
@@ -161,7 +163,14 @@ impl OneStepPath {
                     s: specular.s,
                     seg: 0,
                 }),
-                StraightStart::Beyond { .. } => OneStepStart::Beyond { s: specular.s },
+                StraightStart::Beyond { .. } => OneStepStart::NoPath {
+                    s: specular.s,
+                    reason: Reason::BeyondEnd { step: 0 },
+                },
+                StraightStart::Apart { .. } => OneStepStart::NoPath {
+                    s: specular.s,
+                    reason: Reason::NoStationaryPath,
+                },
                 StraightStart::Unsure => OneStepStart::General,
             };
         }

@@ -104,7 +104,8 @@ pub enum Reason {
         step: usize,
     },
     /// A complete search of the sequence found no stationary path (where the documented
-    /// start led to none).
+    /// start led to none); or, for reflections off one-segment mirrors, the image method
+    /// showed that a leg would reach its mirror from behind, so that no path exists.
     NoStationaryPath,
     /// The search for the sequence's stationary paths reached a limit (more steps than
     /// [`MAX_STATIONARY_STEPS`](crate::limits::MAX_STATIONARY_STEPS), or its limit of tuples)

@@ -258,12 +258,12 @@ impl Tracer {
         path: usize,
         ws: &mut Workspace,
     ) -> RayRecord {
-        // Already proofs: the image method's one stationary point beyond an end, and a
-        // source where no medium is. With no iterations allowed, the start is the answer (a
-        // way to inspect it).
+        // Already proofs: the image method's one stationary point beyond an end or a leg from
+        // behind a mirror, and a source where no medium is. With no iterations allowed, the
+        // start is the answer (a way to inspect it).
         let proof = matches!(
             record.reason,
-            Some(Reason::BeyondEnd { .. } | Reason::NoMedium { leg: 0 })
+            Some(Reason::BeyondEnd { .. } | Reason::NoStationaryPath | Reason::NoMedium { leg: 0 })
         );
         if proof || self.newton.max_iterations == 0 {
             return record;

@@ -1,0 +1,1095 @@
+//! Derivatives of a ray's travel time, and of its points, with respect to everything the scene
+//! fixes: the source and receiver positions, each medium's slowness and every polyline vertex
+//! that the path touches.
+//!
+//! A ray with a time is a stationary point of `T(s; θ) = Σⱼ wⱼ ℓⱼ` in its interaction
+//! parameters `s` (or holds a point on a vertex, where the time has a kink). With each free
+//! interaction point written as `xᵢ = aᵢ + λᵢ (bᵢ − aᵢ)` on its segment `[aᵢ, bᵢ]`, the
+//! envelope theorem gives the derivative of the solved time as the partial derivative at the
+//! solved points, the points held at their fractions `λᵢ`:
+//!
+//! ```text
+//! gᵢ       = ∂T/∂xᵢ = wᵢ uᵢ − wᵢ₊₁ uᵢ₊₁        (uⱼ the unit direction of leg j, leg j ends at point j)
+//! dT/dS    = −w₀ u₀            dT/dR = wₖ uₖ
+//! dT/dw_m  = Σ ℓⱼ over the legs j in medium m
+//! dT/daᵢ  += (1 − λᵢ) gᵢ       dT/dbᵢ += λᵢ gᵢ   (a point held on a vertex v: dT/dv += gᵢ)
+//! ```
+//!
+//! The points themselves move by the implicit function theorem. With `σᵢ` the distance of a
+//! free point along its segment's tangent `tᵢ` (at fixed `λᵢ`, `dσᵢ = |bᵢ − aᵢ| dλᵢ`),
+//! stationarity `rᵢ = gᵢ · tᵢ = 0` differentiates to `H dσ = −b`, with `H` the converged
+//! tridiagonal Hessian of `problem` (segment-wise) and
+//!
+//! ```text
+//! bᵢ = tᵢ · Σₘ (∂gᵢ/∂xₘ) δxₘ + tᵢ · (uᵢ dwᵢ − uᵢ₊₁ dwᵢ₊₁) + (gᵢ · nᵢ) nᵢ · (δbᵢ − δaᵢ) / |bᵢ − aᵢ|
+//! ∂gᵢ/∂xᵢ₋₁ = −wᵢ Pᵢ / ℓᵢ,   ∂gᵢ/∂xᵢ₊₁ = −wᵢ₊₁ Pᵢ₊₁ / ℓᵢ₊₁,   ∂gᵢ/∂xᵢ = −(the sum of both),
+//! ```
+//!
+//! `Pⱼ = I − uⱼ uⱼᵀ`, `δxₘ` the motion of point `m` at fixed fractions (the source, the receiver,
+//! a vertex) and the last term the turn of the segment. A point is then `δxᵢ + tᵢ dσᵢ`. A point
+//! held on a vertex moves with it and leaves the system (its row is the identity); so does a
+//! point next to a vanished leg (a source or receiver on the interface), where the time is not
+//! differentiable: there the derivatives are those of the point held at its fraction, and a
+//! vanished leg's direction counts as zero.
+//!
+//! Everything here is computed from a ray's points and leg media (and, after a solve, the
+//! segments the solver left in the [`Workspace`]): nothing in the solve itself changes, so rays
+//! that do not ask for derivatives cost what they did.
+
+use rayon::prelude::*;
+
+use crate::batch::Batch;
+use crate::geom::{Point, Vec2};
+use crate::polyline::Polyline;
+use crate::scene::{Scene, Step};
+use crate::solver::thomas;
+use crate::trace::{Ray, Tracer, Workspace};
+
+/// The derivative of a travel time with respect to one polyline vertex.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct VertexGradient {
+    /// Index of the interface in [`Scene::interfaces`].
+    pub interface: usize,
+    /// Index of the vertex in the interface's `points`.
+    pub vertex: usize,
+    /// `(dT/dx, dT/dy)` of the vertex.
+    pub d: Vec2,
+}
+
+/// The derivatives of one ray's travel time (the contract's `"gradient"`).
+///
+/// ```
+/// use eigenray::{Gradient, Scene, Tracer, Vec2, Workspace};
+/// let scene = Scene::from_json(r#"{
+///     "media": { "air": { "index": 1.0 }, "water": { "index": 1.333 } },
+///     "interfaces": { "surface": { "points": [[-1, 0], [2, 0]] } },
+///     "sources": [[0, 1]], "receivers": [[1, -1]],
+///     "paths": [{ "steps": [{ "refract": "surface" }], "media": ["air", "water"] }]
+/// }"#).unwrap();
+/// let tracer = Tracer::new(&scene).unwrap();
+/// let mut ws = Workspace::new();
+/// tracer.solve(scene.sources()[0], scene.receivers()[0], 0, &mut ws);
+/// let g = Gradient::of_solved(&scene, 0, &ws).unwrap();
+/// // Moving the receiver along the last leg lengthens it at the water's slowness.
+/// let p = ws.points();
+/// let last = (p[2] - p[1]) * (1.0 / (p[2] - p[1]).length());
+/// assert!((g.receiver.dot(last) - 1.333).abs() < 1e-9);
+/// // dT/dw of each medium is the length of the path in it.
+/// assert!((g.slowness[0] - (p[1] - p[0]).length()).abs() < 1e-12);
+/// assert_eq!(g.vertices.len(), 2); // both ends of the surface's one segment
+/// ```
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Gradient {
+    /// `(dT/dx, dT/dy)` of the source.
+    pub source: Vec2,
+    /// `(dT/dx, dT/dy)` of the receiver.
+    pub receiver: Vec2,
+    /// `dT/dw` of each medium, in the order of [`Scene::media`] (0 for a medium the ray does
+    /// not pass through). `w` is the slowness: 1/speed, or the index.
+    pub slowness: Vec<f64>,
+    /// Every vertex whose movement changes the time (those of the segments the path touches;
+    /// for a point held on a vertex, that vertex), each once, ordered by interface and vertex.
+    pub vertices: Vec<VertexGradient>,
+}
+
+/// Why derivatives could not be computed for a ray.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DerivativeError {
+    /// The ray has no time (`no_path`, `not_converged`): no points to differentiate at.
+    NoTime,
+    /// The path index is not one of the scene's paths.
+    UnknownPath {
+        /// The index given.
+        path: usize,
+    },
+    /// The ray has `points` points where its path has `expected` (steps + 2).
+    PointCount {
+        /// Points given.
+        points: usize,
+        /// Points the path has.
+        expected: usize,
+    },
+    /// The leg media are not known, or not one per leg of the scene's media.
+    Media,
+    /// Interaction point `step` does not lie on its interface.
+    OffInterface {
+        /// Index of the step.
+        step: usize,
+    },
+    /// The Hessian at the solution is singular (a caustic): the points do not move smoothly.
+    Singular,
+}
+
+impl std::fmt::Display for DerivativeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            DerivativeError::NoTime => f.write_str("the ray has no time (no path was found)"),
+            DerivativeError::UnknownPath { path } => write!(f, "no path {path} in the scene"),
+            DerivativeError::PointCount { points, expected } => write!(
+                f,
+                "the ray has {points} points where its path has {expected} (steps + 2)"
+            ),
+            DerivativeError::Media => {
+                f.write_str("the ray's leg media are not known (one per leg is needed)")
+            }
+            DerivativeError::OffInterface { step } => {
+                write!(f, "interaction point {step} does not lie on its interface")
+            }
+            DerivativeError::Singular => f.write_str(
+                "the Hessian at the solution is singular (a caustic): the points do not move \
+                 smoothly",
+            ),
+        }
+    }
+}
+
+impl std::error::Error for DerivativeError {}
+
+/// Where one interaction point lies on its polyline.
+#[derive(Clone, Copy, Debug, Default)]
+struct Contact {
+    /// Its segment.
+    seg: usize,
+    /// Its fraction along the segment from the start vertex, in `[0, 1]`.
+    lambda: f64,
+    /// The vertex indices of the segment's start and end.
+    a: usize,
+    b: usize,
+    /// The vertex it sits on, if any.
+    at_vertex: Option<usize>,
+}
+
+/// Where `p` lies on `line`: on segment `hint` when it lies there (the solver's segment), else
+/// on the nearest segment. `None` when it is not on the polyline (beyond round-off).
+#[inline(always)]
+fn locate(line: &Polyline, p: Point, hint: Option<usize>) -> Option<Contact> {
+    if let Some(j) = hint
+        && j < line.num_segments()
+        && let Some(c) = contact_on(line, j, p)
+    {
+        return Some(c);
+    }
+    contact_on(line, line.nearest(p).seg, p)
+}
+
+/// Where `p` lies on segment `j` of `line`, if it lies there (to round-off).
+#[inline(always)]
+fn contact_on(line: &Polyline, j: usize, p: Point) -> Option<Contact> {
+    let (a, _) = line.segment(j);
+    let len = line.segment_length(j);
+    let t = line.tangent(j);
+    let d = p - a;
+    let along = d.dot(t);
+    let round = 16.0 * f64::EPSILON * ((p.x.abs() + p.y.abs()) + (a.x.abs() + a.y.abs()));
+    let slack = 1e-9 * len + 4.0 * round;
+    if !(d.cross(t).abs() <= slack && along >= -slack && along <= len + slack) {
+        return None;
+    }
+    let b = if j + 1 == line.vertices().len() {
+        0
+    } else {
+        j + 1
+    };
+    // On a vertex: within round-off of it (where the solver holds a point, it is exact).
+    let snap = 1e-12 * len + round;
+    let (at_vertex, lambda) = if along <= snap {
+        (Some(j), 0.0)
+    } else if len - along <= snap {
+        (Some(b), 1.0)
+    } else {
+        (None, along / len)
+    };
+    Some(Contact {
+        seg: j,
+        lambda,
+        a: j,
+        b,
+        at_vertex,
+    })
+}
+
+/// The unit direction and length of the leg from `p` to `q` (a zero direction for a leg of
+/// zero length).
+#[inline]
+fn leg(p: Point, q: Point) -> (Vec2, f64) {
+    let d = q - p;
+    let l2 = d.x * d.x + d.y * d.y;
+    let l = if (f64::MIN_POSITIVE..1e300).contains(&l2) {
+        l2.sqrt()
+    } else {
+        d.length()
+    };
+    (
+        if l > 0.0 {
+            d * (1.0 / l)
+        } else {
+            Vec2::default()
+        },
+        l,
+    )
+}
+
+/// The steps of path `path`.
+fn path_steps(scene: &Scene, path: usize) -> Result<&[Step], DerivativeError> {
+    let spec = scene
+        .paths()
+        .get(path)
+        .ok_or(DerivativeError::UnknownPath { path })?;
+    Ok(&spec.steps)
+}
+
+/// Checks a ray's points against its steps.
+fn check_points(steps: &[Step], points: &[Point]) -> Result<(), DerivativeError> {
+    if points.is_empty() {
+        return Err(DerivativeError::NoTime);
+    }
+    if points.len() != steps.len() + 2 {
+        return Err(DerivativeError::PointCount {
+            points: points.len(),
+            expected: steps.len() + 2,
+        });
+    }
+    Ok(())
+}
+
+/// The parts of a gradient that have a fixed size: the source's and receiver's.
+struct EndGradients {
+    source: Vec2,
+    receiver: Vec2,
+}
+
+/// The gradient of the ray through `points` with leg media `media`: `slowness` (one entry per
+/// medium of the scene) filled, every vertex share given to `put` (up to `2 × steps`, in the
+/// order of the points, not yet merged: see [`merge`]), the source's and receiver's gradients
+/// returned. Allocates nothing.
+fn gradient_parts(
+    scene: &Scene,
+    steps: &[Step],
+    points: &[Point],
+    mut media: impl Iterator<Item = usize>,
+    hint: Option<&[usize]>,
+    slowness: &mut [f64],
+    mut put: impl FnMut(VertexGradient),
+) -> Result<EndGradients, DerivativeError> {
+    check_points(steps, points)?;
+    let all_media = scene.media();
+    let mut medium = || {
+        media
+            .next()
+            .filter(|&m| m < all_media.len())
+            .ok_or(DerivativeError::Media)
+    };
+    slowness.fill(0.0);
+    // Leg 0.
+    let m0 = medium()?;
+    let (mut u_prev, l0) = leg(points[0], points[1]);
+    let mut w_prev = all_media[m0].slowness;
+    slowness[m0] += l0;
+    let source = u_prev * -w_prev;
+    for (i, step) in steps.iter().enumerate() {
+        let m = medium()?;
+        let (u, l) = leg(points[i + 1], points[i + 2]);
+        let w = all_media[m].slowness;
+        slowness[m] += l;
+        let g = u_prev * w_prev - u * w;
+        let line = &scene.interfaces()[step.interface].polyline;
+        let c = locate(line, points[i + 1], hint.map(|h| h[i]))
+            .ok_or(DerivativeError::OffInterface { step: i })?;
+        let interface = step.interface;
+        match c.at_vertex {
+            Some(vertex) => put(VertexGradient {
+                interface,
+                vertex,
+                d: g,
+            }),
+            None => {
+                put(VertexGradient {
+                    interface,
+                    vertex: c.a,
+                    d: g * (1.0 - c.lambda),
+                });
+                put(VertexGradient {
+                    interface,
+                    vertex: c.b,
+                    d: g * c.lambda,
+                });
+            }
+        }
+        (u_prev, w_prev) = (u, w);
+    }
+    if media.next().is_some() {
+        return Err(DerivativeError::Media);
+    }
+    let receiver = u_prev * w_prev;
+    Ok(EndGradients { source, receiver })
+}
+
+/// Sorts `v` by interface and vertex and adds up the entries of one vertex into one; returns
+/// how many are left at the front.
+fn merge(v: &mut [VertexGradient]) -> usize {
+    let key = |e: &VertexGradient| (e.interface, e.vertex);
+    // The shares come in order, each vertex once, but for points on neighbouring segments or
+    // one segment, a closed polyline's last segment and interfaces met out of order: sort and
+    // add up only then.
+    if v.windows(2).all(|w| key(&w[0]) < key(&w[1])) {
+        return v.len();
+    }
+    if !v.is_sorted_by_key(key) {
+        v.sort_unstable_by_key(key);
+    }
+    let Some(first) = (1..v.len()).find(|&i| key(&v[i - 1]) == key(&v[i])) else {
+        return v.len();
+    };
+    let mut n = first;
+    for i in first..v.len() {
+        if n > 0 && v[n - 1].interface == v[i].interface && v[n - 1].vertex == v[i].vertex {
+            v[n - 1].d += v[i].d;
+        } else {
+            v[n] = v[i];
+            n += 1;
+        }
+    }
+    n
+}
+
+impl Gradient {
+    /// The gradient of the ray of path `path` that was last solved in `ws` (by
+    /// [`Tracer::solve`] or [`Tracer::trace`]).
+    ///
+    /// # Errors
+    /// See [`DerivativeError`]: a ray without a time, a path index out of range or not the
+    /// one solved.
+    pub fn of_solved(
+        scene: &Scene,
+        path: usize,
+        ws: &Workspace,
+    ) -> Result<Gradient, DerivativeError> {
+        let mut g = Gradient::default();
+        g.solved_into(scene, path, ws)?;
+        Ok(g)
+    }
+
+    /// [`of_solved`](Self::of_solved) into this gradient, reusing its memory: allocates
+    /// nothing once it has held a gradient of as many media and vertices.
+    ///
+    /// # Errors
+    /// As [`of_solved`](Self::of_solved).
+    pub fn solved_into(
+        &mut self,
+        scene: &Scene,
+        path: usize,
+        ws: &Workspace,
+    ) -> Result<(), DerivativeError> {
+        let points = ws.points();
+        let steps = path_steps(scene, path)?;
+        if let ([step], &[p0, p1, p2], &[m0, m1]) = (steps, points, ws.media()) {
+            let media_count = scene.media().len();
+            if self.slowness.len() != media_count {
+                self.slowness.resize(media_count, 0.0);
+            }
+            let hint = ws.newton.seg.first().copied();
+            return self.fill_one(scene, step, [p0, p1, p2], [m0, m1], hint);
+        }
+        let hint = ws.newton.seg.get(..steps.len());
+        self.fill(scene, steps, points, ws.media().iter().copied(), hint)
+    }
+
+    /// The gradient of an owned [`Ray`] (from [`Tracer::trace_all`] or a batch).
+    ///
+    /// # Errors
+    /// See [`DerivativeError`].
+    pub fn of_ray(scene: &Scene, ray: &Ray) -> Result<Gradient, DerivativeError> {
+        let steps = path_steps(scene, ray.path)?;
+        let mut g = Gradient::default();
+        g.fill(scene, steps, &ray.points, ray.media.iter().copied(), None)?;
+        Ok(g)
+    }
+
+    /// The gradient of the path through `points` (source, interaction points, receiver) by
+    /// `steps` with leg media `media` (indices into [`Scene::media`]): any path, also one of
+    /// the automatic search's sequences.
+    ///
+    /// # Errors
+    /// See [`DerivativeError`].
+    pub fn of_points(
+        scene: &Scene,
+        steps: &[Step],
+        points: &[Point],
+        media: &[usize],
+    ) -> Result<Gradient, DerivativeError> {
+        let mut g = Gradient::default();
+        g.fill(scene, steps, points, media.iter().copied(), None)?;
+        Ok(g)
+    }
+
+    /// [`of_points`](Self::of_points) into this gradient, reusing its memory; `segments`, when
+    /// given, the segment of each interaction point (tried before a search for it).
+    pub(crate) fn fill(
+        &mut self,
+        scene: &Scene,
+        steps: &[Step],
+        points: &[Point],
+        mut media: impl Iterator<Item = usize>,
+        segments: Option<&[usize]>,
+    ) -> Result<(), DerivativeError> {
+        let media_count = scene.media().len();
+        if self.slowness.len() != media_count {
+            self.slowness.resize(media_count, 0.0);
+        }
+        // One interaction (the common ray): written out, without the general bookkeeping.
+        if let ([step], &[p0, p1, p2]) = (steps, points) {
+            let media = match [media.next(), media.next(), media.next()] {
+                [Some(a), Some(b), None] => [a, b],
+                _ => return Err(DerivativeError::Media),
+            };
+            let hint = segments.and_then(|h| h.first().copied());
+            return self.fill_one(scene, step, [p0, p1, p2], media, hint);
+        }
+        self.vertices.clear();
+        self.vertices.reserve(2 * steps.len());
+        let vertices = &mut self.vertices;
+        let result = gradient_parts(
+            scene,
+            steps,
+            points,
+            media,
+            segments,
+            &mut self.slowness,
+            |v| vertices.push(v),
+        );
+        match result {
+            Ok(ends) => {
+                self.source = ends.source;
+                self.receiver = ends.receiver;
+                let n = merge(&mut self.vertices);
+                self.vertices.truncate(n);
+                Ok(())
+            }
+            Err(e) => {
+                self.vertices.clear();
+                Err(e)
+            }
+        }
+    }
+
+    /// [`fill`](Self::fill) for a path of one interaction, its slowness entries already sized.
+    #[inline(always)]
+    fn fill_one(
+        &mut self,
+        scene: &Scene,
+        step: &Step,
+        [p0, p1, p2]: [Point; 3],
+        [m0, m1]: [usize; 2],
+        hint: Option<usize>,
+    ) -> Result<(), DerivativeError> {
+        let all = scene.media();
+        let (Some(medium0), Some(medium1)) = (all.get(m0), all.get(m1)) else {
+            return Err(DerivativeError::Media);
+        };
+        let line = &scene.interfaces()[step.interface].polyline;
+        let c = locate(line, p1, hint).ok_or(DerivativeError::OffInterface { step: 0 })?;
+        let ((u0, l0), (u1, l1)) = (leg(p0, p1), leg(p1, p2));
+        let (w0, w1) = (medium0.slowness, medium1.slowness);
+        let slowness = &mut self.slowness[..all.len()];
+        slowness.fill(0.0);
+        slowness[m0] += l0;
+        slowness[m1] += l1;
+        self.source = u0 * -w0;
+        self.receiver = u1 * w1;
+        let g = u0 * w0 - u1 * w1;
+        let interface = step.interface;
+        let share = |vertex, d| VertexGradient {
+            interface,
+            vertex,
+            d,
+        };
+        match c.at_vertex {
+            Some(v) => {
+                self.vertices.clear();
+                self.vertices.push(share(v, g));
+            }
+            None => {
+                let (a, b) = (share(c.a, g * (1.0 - c.lambda)), share(c.b, g * c.lambda));
+                let pair = if c.a < c.b { [a, b] } else { [b, a] };
+                // In place when the last ray had two too (no length or capacity checks).
+                if let Ok(two) = <&mut [VertexGradient; 2]>::try_from(&mut self.vertices[..]) {
+                    *two = pair;
+                } else {
+                    self.vertices.clear();
+                    self.vertices.extend_from_slice(&pair);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// `(dT/dx, dT/dy)` of vertex `vertex` of interface `interface` (zero when the path does
+    /// not touch it).
+    pub fn vertex(&self, interface: usize, vertex: usize) -> Vec2 {
+        self.vertices
+            .iter()
+            .find(|v| v.interface == interface && v.vertex == vertex)
+            .map_or(Vec2::default(), |v| v.d)
+    }
+
+    /// `dT/dw` of the medium named `name` (`None` when the scene has no such medium).
+    pub fn slowness_of(&self, scene: &Scene, name: &str) -> Option<f64> {
+        let m = scene.media().iter().position(|m| m.name == name)?;
+        self.slowness.get(m).copied()
+    }
+}
+
+/// A coordinate axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Axis {
+    /// `x`.
+    X,
+    /// `y`.
+    Y,
+}
+
+impl Axis {
+    /// The unit vector along the axis.
+    pub fn unit(self) -> Vec2 {
+        match self {
+            Axis::X => Vec2::new(1.0, 0.0),
+            Axis::Y => Vec2::new(0.0, 1.0),
+        }
+    }
+}
+
+/// One scalar that the scene fixes and a ray depends on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Parameter {
+    /// A coordinate of the source.
+    Source(Axis),
+    /// A coordinate of the receiver.
+    Receiver(Axis),
+    /// The slowness of a medium (index into [`Scene::media`]).
+    Slowness {
+        /// The medium.
+        medium: usize,
+    },
+    /// A coordinate of a polyline vertex.
+    Vertex {
+        /// Index of the interface in [`Scene::interfaces`].
+        interface: usize,
+        /// Index of the vertex in its `points`.
+        vertex: usize,
+        /// The coordinate.
+        axis: Axis,
+    },
+}
+
+/// How the points of one ray move with every [`Parameter`] it depends on: `d(point)/dθ` by the
+/// implicit function theorem (one tridiagonal solve with the converged Hessian per parameter).
+///
+/// The parameters are the source's and receiver's coordinates, every medium's slowness and
+/// both coordinates of every vertex of the ray's [`Gradient`], in that order; the points are
+/// those of [`Workspace::points`] (source, interactions, receiver).
+///
+/// ```
+/// use eigenray::{Axis, Parameter, PointSensitivities, Scene, Tracer, Workspace};
+/// let scene = Scene::from_json(r#"{
+///     "media": { "air": { "speed": 1.0 } },
+///     "interfaces": { "mirror": { "points": [[-5, 0], [5, 0]] } },
+///     "sources": [[-1, 1]], "receivers": [[1, 1]],
+///     "paths": [{ "steps": [{ "reflect": "mirror" }], "media": ["air", "air"] }]
+/// }"#).unwrap();
+/// let tracer = Tracer::new(&scene).unwrap();
+/// let mut ws = Workspace::new();
+/// tracer.solve(scene.sources()[0], scene.receivers()[0], 0, &mut ws);
+/// let sens = PointSensitivities::of_solved(&scene, 0, &ws).unwrap();
+/// // The specular point of equal heights is midway: it moves half as far as the receiver.
+/// let rx = sens.find(Parameter::Receiver(Axis::X)).unwrap();
+/// assert!((sens.d_point(rx, 1).x - 0.5).abs() < 1e-12);
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct PointSensitivities {
+    parameters: Vec<Parameter>,
+    points: usize,
+    /// `d(point)/dθ`, one row of `points` per parameter.
+    d: Vec<Vec2>,
+    scratch: Scratch,
+}
+
+/// The scratch of [`PointSensitivities`] (reused).
+#[derive(Clone, Debug, Default)]
+struct Scratch {
+    gradient: Gradient,
+    contacts: Vec<Contact>,
+    /// Per leg: unit direction, length, slowness, medium.
+    u: Vec<Vec2>,
+    len: Vec<f64>,
+    w: Vec<f64>,
+    medium: Vec<usize>,
+    /// Per point: whether it is held (on a vertex, or next to a vanished leg), its tangent, the
+    /// couplings of its residual to the previous, own and next point, and the turn term.
+    held: Vec<bool>,
+    tan: Vec<Vec2>,
+    c_prev: Vec<Vec2>,
+    c_self: Vec<Vec2>,
+    c_next: Vec<Vec2>,
+    turn: Vec<f64>,
+    diag: Vec<f64>,
+    off: Vec<f64>,
+    rhs: Vec<f64>,
+    x: Vec<f64>,
+    cp: Vec<f64>,
+    /// Per point: its motion at fixed fractions under one parameter.
+    moved: Vec<Vec2>,
+}
+
+impl PointSensitivities {
+    /// The sensitivities of the ray of path `path` last solved in `ws`.
+    ///
+    /// # Errors
+    /// See [`DerivativeError`]; [`DerivativeError::Singular`] at a caustic.
+    pub fn of_solved(
+        scene: &Scene,
+        path: usize,
+        ws: &Workspace,
+    ) -> Result<PointSensitivities, DerivativeError> {
+        let mut s = PointSensitivities::default();
+        s.solved_into(scene, path, ws)?;
+        Ok(s)
+    }
+
+    /// [`of_solved`](Self::of_solved) into this value, reusing its memory: allocates nothing
+    /// once it has held the sensitivities of a ray as long.
+    ///
+    /// # Errors
+    /// As [`of_solved`](Self::of_solved).
+    pub fn solved_into(
+        &mut self,
+        scene: &Scene,
+        path: usize,
+        ws: &Workspace,
+    ) -> Result<(), DerivativeError> {
+        let points = ws.points();
+        let steps = path_steps(scene, path)?;
+        let hint = ws.newton.seg.get(..steps.len());
+        self.fill(scene, steps, points, ws.media(), hint)
+    }
+
+    /// The sensitivities of the path through `points` by `steps` with leg media `media` (see
+    /// [`Gradient::of_points`]).
+    ///
+    /// # Errors
+    /// See [`DerivativeError`].
+    pub fn of_points(
+        scene: &Scene,
+        steps: &[Step],
+        points: &[Point],
+        media: &[usize],
+    ) -> Result<PointSensitivities, DerivativeError> {
+        let mut s = PointSensitivities::default();
+        s.fill(scene, steps, points, media, None)?;
+        Ok(s)
+    }
+
+    /// The parameters, in the order of the rows.
+    pub fn parameters(&self) -> &[Parameter] {
+        &self.parameters
+    }
+
+    /// The row of `parameter`, if the ray depends on it.
+    pub fn find(&self, parameter: Parameter) -> Option<usize> {
+        self.parameters.iter().position(|&p| p == parameter)
+    }
+
+    /// Number of points per row (the ray's points: source, interactions, receiver).
+    pub fn points(&self) -> usize {
+        self.points
+    }
+
+    /// `d(points)/dθ` for the parameter of row `row`: one vector per point.
+    ///
+    /// # Panics
+    /// If `row` is not below `parameters().len()`.
+    pub fn row(&self, row: usize) -> &[Vec2] {
+        &self.d[row * self.points..(row + 1) * self.points]
+    }
+
+    /// `d(point)/dθ` of point `point` for the parameter of row `row`.
+    ///
+    /// # Panics
+    /// If `row` or `point` is out of range.
+    pub fn d_point(&self, row: usize, point: usize) -> Vec2 {
+        self.row(row)[point]
+    }
+
+    fn fill(
+        &mut self,
+        scene: &Scene,
+        steps: &[Step],
+        points: &[Point],
+        media: &[usize],
+        segments: Option<&[usize]>,
+    ) -> Result<(), DerivativeError> {
+        let sc = &mut self.scratch;
+        sc.gradient
+            .fill(scene, steps, points, media.iter().copied(), segments)?;
+        let k = steps.len();
+        let n = k + 2;
+        // Parameters.
+        self.parameters.clear();
+        self.parameters.extend([
+            Parameter::Source(Axis::X),
+            Parameter::Source(Axis::Y),
+            Parameter::Receiver(Axis::X),
+            Parameter::Receiver(Axis::Y),
+        ]);
+        self.parameters
+            .extend((0..scene.media().len()).map(|medium| Parameter::Slowness { medium }));
+        for v in &sc.gradient.vertices {
+            for axis in [Axis::X, Axis::Y] {
+                self.parameters.push(Parameter::Vertex {
+                    interface: v.interface,
+                    vertex: v.vertex,
+                    axis,
+                });
+            }
+        }
+        self.points = n;
+        // Legs.
+        sc.u.clear();
+        sc.len.clear();
+        sc.w.clear();
+        sc.medium.clear();
+        let mut total = 0.0;
+        for j in 0..=k {
+            let (u, l) = leg(points[j], points[j + 1]);
+            sc.u.push(u);
+            sc.len.push(l);
+            sc.w.push(scene.media()[media[j]].slowness);
+            sc.medium.push(media[j]);
+            total += l;
+        }
+        let coord = points
+            .iter()
+            .fold(0.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
+        let vanish = 1e-12 * total + 8.0 * f64::EPSILON * coord;
+        // Points.
+        sc.contacts.clear();
+        for (i, step) in steps.iter().enumerate() {
+            let line = &scene.interfaces()[step.interface].polyline;
+            let c = locate(line, points[i + 1], segments.map(|h| h[i]))
+                .ok_or(DerivativeError::OffInterface { step: i })?;
+            sc.contacts.push(c);
+        }
+        for v in [&mut sc.tan, &mut sc.c_prev, &mut sc.c_self, &mut sc.c_next] {
+            v.clear();
+            v.resize(k, Vec2::default());
+        }
+        for v in [
+            &mut sc.turn,
+            &mut sc.diag,
+            &mut sc.rhs,
+            &mut sc.x,
+            &mut sc.cp,
+        ] {
+            v.clear();
+            v.resize(k, 0.0);
+        }
+        sc.off.clear();
+        sc.off.resize(k.saturating_sub(1), 0.0);
+        sc.held.clear();
+        sc.held.resize(k, false);
+        sc.moved.clear();
+        sc.moved.resize(n, Vec2::default());
+        let project = |u: Vec2, v: Vec2| v - u * u.dot(v);
+        for (i, step) in steps.iter().enumerate() {
+            let line = &scene.interfaces()[step.interface].polyline;
+            let c = sc.contacts[i];
+            let t = line.tangent(c.seg);
+            sc.tan[i] = t;
+            let (ua, ub) = (sc.u[i], sc.u[i + 1]);
+            let (la, lb) = (sc.len[i], sc.len[i + 1]);
+            sc.held[i] = c.at_vertex.is_some() || la <= vanish || lb <= vanish;
+            if sc.held[i] {
+                sc.diag[i] = 1.0;
+                continue;
+            }
+            let (wa, wb) = (sc.w[i], sc.w[i + 1]);
+            let pa = project(ua, t) * (wa / la);
+            let pb = project(ub, t) * (wb / lb);
+            sc.c_prev[i] = -pa;
+            sc.c_self[i] = pa + pb;
+            sc.c_next[i] = -pb;
+            sc.diag[i] = t.dot(pa + pb);
+            let g = ua * wa - ub * wb;
+            sc.turn[i] = g.dot(t.perp()) / line.segment_length(c.seg);
+        }
+        for i in 0..k.saturating_sub(1) {
+            if !sc.held[i] && !sc.held[i + 1] {
+                sc.off[i] = sc.tan[i + 1].dot(sc.c_next[i]);
+            }
+        }
+        // One solve per parameter.
+        self.d.clear();
+        self.d.resize(self.parameters.len() * n, Vec2::default());
+        for (row, &param) in self.parameters.iter().enumerate() {
+            let moved = &mut sc.moved;
+            moved.fill(Vec2::default());
+            let (mut dw_medium, mut vertex) = (None, None);
+            match param {
+                Parameter::Source(axis) => moved[0] = axis.unit(),
+                Parameter::Receiver(axis) => moved[n - 1] = axis.unit(),
+                Parameter::Slowness { medium } => dw_medium = Some(medium),
+                Parameter::Vertex {
+                    interface,
+                    vertex: v,
+                    axis,
+                } => {
+                    vertex = Some((interface, v, axis.unit()));
+                    for (i, step) in steps.iter().enumerate() {
+                        if step.interface != interface {
+                            continue;
+                        }
+                        let c = sc.contacts[i];
+                        moved[i + 1] = match c.at_vertex {
+                            Some(at) if at == v => axis.unit(),
+                            Some(_) => Vec2::default(),
+                            None if c.a == v => axis.unit() * (1.0 - c.lambda),
+                            None if c.b == v => axis.unit() * c.lambda,
+                            None => Vec2::default(),
+                        };
+                    }
+                }
+            }
+            let dw = |j: usize| -> f64 {
+                if dw_medium == Some(sc.medium[j]) {
+                    1.0
+                } else {
+                    0.0
+                }
+            };
+            for i in 0..k {
+                if sc.held[i] {
+                    sc.rhs[i] = 0.0;
+                    continue;
+                }
+                let t = sc.tan[i];
+                let mut b = sc.c_prev[i].dot(moved[i])
+                    + sc.c_self[i].dot(moved[i + 1])
+                    + sc.c_next[i].dot(moved[i + 2])
+                    + dw(i) * t.dot(sc.u[i])
+                    - dw(i + 1) * t.dot(sc.u[i + 1]);
+                if let Some((interface, v, e)) = vertex
+                    && steps[i].interface == interface
+                {
+                    let c = sc.contacts[i];
+                    let turn_by = if c.b == v { e } else { Vec2::default() }
+                        - if c.a == v { e } else { Vec2::default() };
+                    b += sc.turn[i] * t.perp().dot(turn_by);
+                }
+                sc.rhs[i] = b;
+            }
+            if !thomas(&sc.diag, &sc.off, &sc.rhs, &mut sc.x, &mut sc.cp) {
+                return Err(DerivativeError::Singular);
+            }
+            let out = &mut self.d[row * n..(row + 1) * n];
+            out.copy_from_slice(moved);
+            for i in 0..k {
+                if !sc.held[i] {
+                    out[i + 1] += sc.tan[i] * -sc.x[i];
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Tracer {
+    /// The [`Gradient`] of the ray of path `path` last solved in `ws` (see
+    /// [`Gradient::of_solved`]).
+    ///
+    /// # Errors
+    /// See [`DerivativeError`].
+    pub fn gradient(&self, path: usize, ws: &Workspace) -> Result<Gradient, DerivativeError> {
+        Gradient::of_solved(self.scene(), path, ws)
+    }
+
+    /// The [`PointSensitivities`] of the ray of path `path` last solved in `ws`.
+    ///
+    /// # Errors
+    /// See [`DerivativeError`].
+    pub fn point_sensitivities(
+        &self,
+        path: usize,
+        ws: &Workspace,
+    ) -> Result<PointSensitivities, DerivativeError> {
+        PointSensitivities::of_solved(self.scene(), path, ws)
+    }
+}
+
+/// The gradients of a [`Batch`]'s rays in flat arrays: per ray the source's and receiver's
+/// gradients, one `dT/dw` per medium of the scene, and room for `2 × K` vertex gradients (`K`
+/// the most steps of a path), of which [`vertices`](Self::vertices) gives the ray's own.
+/// A ray without a time, or not asked for, has NaN gradients and no vertices.
+///
+/// ```
+/// use eigenray::{BatchGradients, BatchOptions, Scene, Tracer};
+/// let scene = Scene::from_spec(&eigenray::demo::air_water(100, 7)).unwrap();
+/// let tracer = Tracer::new(&scene).unwrap();
+/// let batch = tracer.trace_batch(&BatchOptions::default());
+/// let mut gradients = BatchGradients::default();
+/// gradients.compute(&scene, &batch, &|_ray| true);
+/// assert_eq!(gradients.len(), 100);
+/// assert!(gradients.source(0).x.is_finite());
+/// assert_eq!(gradients.slowness(0).len(), scene.media().len());
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct BatchGradients {
+    media: usize,
+    slots: usize,
+    source: Vec<Vec2>,
+    receiver: Vec<Vec2>,
+    slowness: Vec<f64>,
+    vertices: Vec<VertexGradient>,
+    counts: Vec<u32>,
+}
+
+/// Rays per parallel piece of [`BatchGradients::compute`].
+const GRADIENT_PIECE: usize = 1024;
+
+impl BatchGradients {
+    /// Number of rays.
+    pub fn len(&self) -> usize {
+        self.counts.len()
+    }
+    /// Whether there are no rays.
+    pub fn is_empty(&self) -> bool {
+        self.counts.is_empty()
+    }
+    /// Whether ray `ray` has a gradient (it has a time and was asked for).
+    pub fn has(&self, ray: usize) -> bool {
+        self.counts[ray] != u32::MAX
+    }
+    /// `(dT/dx, dT/dy)` of ray `ray`'s source (NaN when it has no gradient).
+    pub fn source(&self, ray: usize) -> Vec2 {
+        self.source[ray]
+    }
+    /// `(dT/dx, dT/dy)` of ray `ray`'s receiver (NaN when it has no gradient).
+    pub fn receiver(&self, ray: usize) -> Vec2 {
+        self.receiver[ray]
+    }
+    /// `dT/dw` of each medium for ray `ray`, in the order of [`Scene::media`].
+    pub fn slowness(&self, ray: usize) -> &[f64] {
+        &self.slowness[ray * self.media..(ray + 1) * self.media]
+    }
+    /// The vertex gradients of ray `ray` (ordered by interface and vertex, each vertex once).
+    pub fn vertices(&self, ray: usize) -> &[VertexGradient] {
+        let n = if self.has(ray) {
+            self.counts[ray] as usize
+        } else {
+            0
+        };
+        &self.vertices[ray * self.slots..ray * self.slots + n]
+    }
+    /// Ray `ray`'s gradient as an owned [`Gradient`], when it has one.
+    pub fn gradient(&self, ray: usize) -> Option<Gradient> {
+        self.has(ray).then(|| Gradient {
+            source: self.source(ray),
+            receiver: self.receiver(ray),
+            slowness: self.slowness(ray).to_vec(),
+            vertices: self.vertices(ray).to_vec(),
+        })
+    }
+    /// The flat arrays: sources' and receivers' gradients (one per ray), slowness gradients
+    /// (`media` per ray, see [`media`](Self::media)), vertex gradients (`slots` per ray, see
+    /// [`slots`](Self::slots); the ray's own first, [`count`](Self::count) of them).
+    pub fn arrays(&self) -> (&[Vec2], &[Vec2], &[f64], &[VertexGradient]) {
+        (&self.source, &self.receiver, &self.slowness, &self.vertices)
+    }
+    /// Slowness gradients per ray (the scene's media).
+    pub fn media(&self) -> usize {
+        self.media
+    }
+    /// Vertex slots per ray (twice the most steps of a path).
+    pub fn slots(&self) -> usize {
+        self.slots
+    }
+    /// Vertex gradients of ray `ray` (0 without a gradient).
+    pub fn count(&self, ray: usize) -> usize {
+        self.vertices(ray).len()
+    }
+
+    /// Computes the gradients of `batch`'s rays (of `scene`) for which `wanted(ray)` holds, in
+    /// parallel (rayon), reusing this value's arrays (they grow only for a larger batch, or a
+    /// scene of more media or longer paths). A ray that is not wanted costs nothing but its NaN
+    /// entries.
+    pub fn compute(
+        &mut self,
+        scene: &Scene,
+        batch: &Batch,
+        wanted: &(dyn Fn(usize) -> bool + Sync),
+    ) {
+        let n = batch.len();
+        let media = scene.media().len();
+        let slots = 2 * scene
+            .paths()
+            .iter()
+            .map(|p| p.steps.len())
+            .max()
+            .unwrap_or(0);
+        self.media = media;
+        self.slots = slots;
+        let nan = Vec2::new(f64::NAN, f64::NAN);
+        for v in [&mut self.source, &mut self.receiver] {
+            v.clear();
+            v.resize(n, nan);
+        }
+        self.slowness.clear();
+        self.slowness.resize(n * media, f64::NAN);
+        self.vertices.clear();
+        self.vertices.resize(n * slots, VertexGradient::default());
+        self.counts.clear();
+        self.counts.resize(n, u32::MAX);
+        let piece = GRADIENT_PIECE;
+        self.source
+            .par_chunks_mut(piece)
+            .zip(self.receiver.par_chunks_mut(piece))
+            .zip(self.slowness.par_chunks_mut(piece * media.max(1)))
+            .zip(self.vertices.par_chunks_mut(piece * slots.max(1)))
+            .zip(self.counts.par_chunks_mut(piece))
+            .enumerate()
+            .for_each(|(p, ((((src, rec), slow), verts), counts))| {
+                for (j, count) in counts.iter_mut().enumerate() {
+                    let ray = p * piece + j;
+                    if !(batch.record(ray).status.has_time() && wanted(ray)) {
+                        continue;
+                    }
+                    let (_, _, path) = batch.triple(ray);
+                    let steps = &scene.paths()[path].steps;
+                    let Some(ray_media) = batch.media(ray) else {
+                        continue;
+                    };
+                    let slow = &mut slow[j * media..(j + 1) * media];
+                    let verts = &mut verts[j * slots..j * slots + 2 * steps.len()];
+                    let mut used = 0;
+                    let parts = gradient_parts(
+                        scene,
+                        steps,
+                        batch.points(ray),
+                        ray_media,
+                        None,
+                        slow,
+                        |v| {
+                            verts[used] = v;
+                            used += 1;
+                        },
+                    );
+                    match parts {
+                        Ok(ends) => {
+                            src[j] = ends.source;
+                            rec[j] = ends.receiver;
+                            *count = merge(&mut verts[..used]) as u32;
+                        }
+                        Err(_) => slow.fill(f64::NAN),
+                    }
+                }
+            });
+    }
+}
