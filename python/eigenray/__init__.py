@@ -13,9 +13,11 @@ piecewise-linear interfaces between media of different speeds.
 2.601764
 """
 
-from ._eigenray import STATUS_NAMES, EigenrayError, Ray, Rays, Scene, Tracer
+from ._eigenray import STATUS_NAMES, EigenrayError, Gradient, Ray, Rays, Scene, Tracer
 
-__all__ = ["STATUS_NAMES", "EigenrayError", "Ray", "Rays", "Scene", "Tracer", "plot"]
+__all__ = [
+    "STATUS_NAMES", "EigenrayError", "Gradient", "Ray", "Rays", "Scene", "Tracer", "plot"
+]
 
 
 def plot(*args, **kwargs):

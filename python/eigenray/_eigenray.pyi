@@ -58,6 +58,16 @@ class Ray:
     arrival: Optional[int]
     kink: Optional[str]
 
+class Gradient:
+    """Derivatives of one ray's time: source, receiver, slowness per medium, touched vertices."""
+
+    status: str
+    time: float
+    source: npt.NDArray[np.float64]
+    receiver: npt.NDArray[np.float64]
+    slowness: dict[str, float]
+    vertices: list[dict[str, Any]]
+
 class Rays:
     """Rays as numpy arrays, in ray order (source-major, then receiver, then path)."""
 
@@ -109,6 +119,9 @@ class Tracer:
     def stationary_paths(
         self, source: PointLike, receiver: PointLike, path: Union[int, str, None] = None
     ) -> tuple[list[Ray], bool]: ...
+    def gradient(
+        self, source: PointLike, receiver: PointLike, path: Union[int, str, None] = None
+    ) -> Gradient: ...
     def search(self) -> list[dict[str, Any]]: ...
     def set_source(self, index: int, point: PointLike) -> None: ...
     def set_receiver(self, index: int, point: PointLike) -> None: ...

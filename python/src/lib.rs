@@ -9,8 +9,9 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use eigenray::{
-    Arrival, Batch, BatchOptions, Kink, Point, RayRecord, Scene, SceneError, SearchArrival,
-    StationaryRays, Status, Tracer, Workspace, npy::STATUS_CODES, scene_parts::StepKind,
+    Arrival, Batch, BatchOptions, Gradient, Kink, Point, RayRecord, Scene, SceneError,
+    SearchArrival, StationaryRays, Status, Tracer, Workspace, npy::STATUS_CODES,
+    scene_parts::StepKind,
 };
 use numpy::ndarray::{Array2, Array3};
 use numpy::{
@@ -258,6 +259,8 @@ struct PyTracer {
     batch: Batch,
     workspace: Workspace,
     arrivals: Vec<Arrival>,
+    /// The last `gradient`'s derivatives (reused).
+    gradient: Gradient,
 }
 
 /// One ray: its status, time, points and leg media.
@@ -335,6 +338,69 @@ impl PyRay {
             arrival: Some(index),
             kink: kink_name(a.kink),
         }
+    }
+}
+
+/// The derivatives of one ray's travel time (see `Tracer.gradient`): with respect to the
+/// source and receiver positions, each medium's slowness, and every polyline vertex the path
+/// touches. A ray without a time has `time` NaN, NaN derivatives and no vertices.
+#[pyclass(module = "eigenray", name = "Gradient", frozen, get_all)]
+struct PyGradient {
+    /// The ray's status.
+    status: String,
+    /// The ray's travel time (NaN without one).
+    time: f64,
+    /// `(dT/dx, dT/dy)` of the source.
+    source: Py<PyArray1<f64>>,
+    /// `(dT/dx, dT/dy)` of the receiver.
+    receiver: Py<PyArray1<f64>>,
+    /// `dT/dw` of each medium by name (`w`: the slowness, 1/speed or the index); 0 for a
+    /// medium the ray does not pass through.
+    slowness: Py<PyDict>,
+    /// Every vertex whose movement changes the time, each once: dicts with `interface`
+    /// (name), `vertex` (index in its points) and `d` (`(dT/dx, dT/dy)`).
+    vertices: Py<PyList>,
+}
+
+#[pymethods]
+impl PyGradient {
+    fn __repr__(&self) -> String {
+        format!("Gradient(status={:?}, time={})", self.status, self.time)
+    }
+}
+
+impl PyGradient {
+    fn new(
+        py: Python<'_>,
+        scene: &Scene,
+        record: &RayRecord,
+        g: Option<&Gradient>,
+    ) -> PyResult<Self> {
+        let nan = [f64::NAN, f64::NAN];
+        let (source, receiver) = match g {
+            Some(g) => ([g.source.x, g.source.y], [g.receiver.x, g.receiver.y]),
+            None => (nan, nan),
+        };
+        let slowness = PyDict::new(py);
+        for (i, m) in scene.media().iter().enumerate() {
+            slowness.set_item(&m.name, g.map_or(f64::NAN, |g| g.slowness[i]))?;
+        }
+        let vertices = PyList::empty(py);
+        for v in g.map_or(&[][..], |g| &g.vertices) {
+            let d = PyDict::new(py);
+            d.set_item("interface", &scene.interfaces()[v.interface].name)?;
+            d.set_item("vertex", v.vertex)?;
+            d.set_item("d", PyArray1::from_slice(py, &[v.d.x, v.d.y]))?;
+            vertices.append(d)?;
+        }
+        Ok(PyGradient {
+            status: record.status.as_str().to_string(),
+            time: record.time,
+            source: PyArray1::from_slice(py, &source).unbind(),
+            receiver: PyArray1::from_slice(py, &receiver).unbind(),
+            slowness: slowness.unbind(),
+            vertices: vertices.unbind(),
+        })
     }
 }
 
@@ -936,6 +1002,7 @@ impl PyTracer {
             batch: Batch::default(),
             workspace: Workspace::new(),
             arrivals: Vec::new(),
+            gradient: Gradient::default(),
         })
     }
 
@@ -1082,6 +1149,36 @@ impl PyTracer {
             .tracer
             .solve(source, receiver, path, &mut self.workspace);
         Ok(record.time)
+    }
+
+    /// Solves one ray of path `path` between any two points and returns the derivatives of
+    /// its time (`Gradient`): exact for the path as found (the envelope theorem at the solved
+    /// points), so they agree with differences of re-solved times. For a layout loop: move
+    /// things with the `set_*` calls, ask again.
+    #[pyo3(signature = (source, receiver, path = None))]
+    fn gradient(
+        &mut self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyGradient> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let record = self
+            .tracer
+            .solve(source, receiver, path, &mut self.workspace);
+        let scene = self.tracer.scene();
+        if !record.status.has_time() {
+            return PyGradient::new(py, scene, &record, None);
+        }
+        self.gradient
+            .solved_into(scene, path, &self.workspace)
+            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        PyGradient::new(py, scene, &record, Some(&self.gradient))
     }
 
     /// Rays of path `path` between `sources[i]` and `receivers[i]` (arrays of shape `(n, 2)`),
@@ -1312,6 +1409,7 @@ fn _eigenray(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyTracer>()?;
     m.add_class::<PyRay>()?;
     m.add_class::<PyRays>()?;
+    m.add_class::<PyGradient>()?;
     m.add("EigenrayError", m.py().get_type::<EigenrayError>())?;
     m.add("STATUS_NAMES", status_names())?;
     Ok(())
