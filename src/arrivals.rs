@@ -9,7 +9,8 @@ use std::fmt;
 use crate::geom::Point;
 use crate::scene::{MAX_STATIONARY_STEPS, SearchOptions, Step, StepKind};
 use crate::trace::{
-    Arrival, MirrorArrival, MirrorScratch, MirrorWalls, Sequence, StationaryError, Status, Tracer,
+    Arrival, MirrorArrival, MirrorScratch, MirrorWalls, Reason, Sequence, StationaryError, Status,
+    Tracer,
 };
 
 /// Every stationary path of one (source, receiver, path) triple.
@@ -27,6 +28,27 @@ pub struct TripleArrivals {
     /// with `true` the list holds every stationary path of the triple, and an empty list is a
     /// proof that it has none; with `false` it may be short.
     pub complete: bool,
+}
+
+impl TripleArrivals {
+    /// The status of this triple's entry when it has no arrivals: `no_path` (a proof) when the
+    /// search was complete, `not_converged` when it stopped at a limit.
+    pub fn status_without_arrivals(&self) -> Status {
+        if self.complete {
+            Status::NoPath
+        } else {
+            Status::NotConverged
+        }
+    }
+
+    /// The reason of that entry: [`Reason::NoStationaryPath`] or [`Reason::SearchLimit`].
+    pub fn reason_without_arrivals(&self) -> Reason {
+        if self.complete {
+            Reason::NoStationaryPath
+        } else {
+            Reason::SearchLimit
+        }
+    }
 }
 
 /// Every stationary path of every ray of a scene: one [`TripleArrivals`] per (source,

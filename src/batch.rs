@@ -74,6 +74,86 @@ pub struct Batch {
     spatial: Option<Box<Arrays>>,
 }
 
+/// One ray of a [`Batch`], as [`Batch::rays`] walks them.
+#[derive(Clone, Copy, Debug)]
+pub struct BatchRay<'a> {
+    /// Its index in ray order.
+    pub index: usize,
+    /// Source index.
+    pub source: usize,
+    /// Receiver index.
+    pub receiver: usize,
+    /// Path index.
+    pub path: usize,
+    /// Its record.
+    pub record: &'a RayRecord,
+    /// Source, interaction points and receiver (see [`Batch::points`]).
+    pub points: &'a [Point],
+    legs: &'a [u32],
+}
+
+impl BatchRay<'_> {
+    /// Leg media (indices into [`crate::Scene::media`]), when known (see [`Batch::media`]).
+    pub fn media(&self) -> Option<impl Iterator<Item = usize> + '_> {
+        (self.legs.first() != Some(&NO_MEDIUM)).then(|| self.legs.iter().map(|&m| m as usize))
+    }
+}
+
+/// The walk of [`Batch::rays`].
+#[derive(Clone, Debug)]
+pub struct BatchRays<'a> {
+    batch: &'a Batch,
+    next: usize,
+    end: usize,
+    source: usize,
+    receiver: usize,
+    path: usize,
+    /// Where the current (source, receiver) block starts in the points and media arrays.
+    points_base: usize,
+    media_base: usize,
+}
+
+impl<'a> Iterator for BatchRays<'a> {
+    type Item = BatchRay<'a>;
+
+    fn next(&mut self) -> Option<BatchRay<'a>> {
+        if self.next >= self.end {
+            return None;
+        }
+        let b = self.batch;
+        let (p, po, mo) = (self.path, &b.point_offsets, &b.media_offsets);
+        let ray = BatchRay {
+            index: self.next,
+            source: self.source,
+            receiver: self.receiver,
+            path: p,
+            record: &b.records[self.next],
+            points: &b.points[self.points_base + po[p]..self.points_base + po[p + 1]],
+            legs: &b.media[self.media_base + mo[p]..self.media_base + mo[p + 1]],
+        };
+        self.next += 1;
+        self.path += 1;
+        if self.path == b.paths {
+            self.path = 0;
+            self.points_base += po[b.paths];
+            self.media_base += mo[b.paths];
+            self.receiver += 1;
+            if self.receiver == b.receivers {
+                self.receiver = 0;
+                self.source += 1;
+            }
+        }
+        Some(ray)
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        let left = self.end - self.next;
+        (left, Some(left))
+    }
+}
+
+impl ExactSizeIterator for BatchRays<'_> {}
+
 /// A batch's three arrays: records, points, leg media.
 type Arrays = (Vec<RayRecord>, Vec<Point>, Vec<u32>);
 
@@ -118,6 +198,28 @@ impl Batch {
         let base = b * self.media_offsets[self.paths];
         let legs = &self.media[base + self.media_offsets[p]..base + self.media_offsets[p + 1]];
         (legs.first() != Some(&NO_MEDIUM)).then(|| legs.iter().map(|&m| m as usize))
+    }
+    /// Rays `range` of the batch in ray order, each with its indices, record, points and leg
+    /// media: a walk that steps from one ray to the next without the divisions that
+    /// [`triple`](Self::triple), [`points`](Self::points) and [`media`](Self::media) take per
+    /// call (for converting a whole batch, in parallel over ranges).
+    ///
+    /// # Panics
+    /// If `range` reaches beyond the batch.
+    pub fn rays(&self, range: std::ops::Range<usize>) -> BatchRays<'_> {
+        assert!(range.end <= self.len(), "rays beyond the batch");
+        let paths = self.paths.max(1);
+        let block = range.start / paths;
+        BatchRays {
+            batch: self,
+            next: range.start,
+            end: range.end,
+            source: block / self.receivers.max(1),
+            receiver: block % self.receivers.max(1),
+            path: range.start % paths,
+            points_base: block * self.point_offsets.last().copied().unwrap_or(0),
+            media_base: block * self.media_offsets.last().copied().unwrap_or(0),
+        }
     }
     /// Total solver iterations over all rays.
     pub fn total_iterations(&self) -> u64 {

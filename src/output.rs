@@ -982,11 +982,7 @@ pub fn write_rays_and_arrivals<W: Write>(
                         source: t.source,
                         receiver: t.receiver,
                         path: t.path,
-                        status: if t.complete {
-                            Status::NoPath
-                        } else {
-                            Status::NotConverged
-                        },
+                        status: t.status_without_arrivals(),
                         time: None,
                         points: &[],
                         iterations: 0,
@@ -996,11 +992,7 @@ pub fn write_rays_and_arrivals<W: Write>(
                             .get(t.path)
                             .and_then(|p| p.media.as_ref())
                             .map(|m| m.iter().copied()),
-                        reason: Some(if t.complete {
-                            Reason::NoStationaryPath
-                        } else {
-                            Reason::SearchLimit
-                        }),
+                        reason: Some(t.reason_without_arrivals()),
                         every: Some(EveryFields {
                             arrival: 0,
                             kink: None,

@@ -427,3 +427,34 @@ fn batches_keep_the_rays_where_warm_starts_fail() {
         );
     }
 }
+
+/// `Batch::rays` walks the rays with the indices, records, points and media that the
+/// per-ray accessors give, from any start, over scenes of several sources, receivers and
+/// paths of different lengths.
+#[test]
+fn the_walk_over_a_batch_gives_each_rays_parts() {
+    for name in ["room2d", "layers10", "seed500"] {
+        let scene = bench(name);
+        let batch = Tracer::new(&scene)
+            .unwrap()
+            .trace_batch(&BatchOptions::default());
+        let n = batch.len();
+        for start in [0, 1, n / 3, n - 1, n] {
+            let mut count = 0;
+            for ray in batch.rays(start..n) {
+                let i = ray.index;
+                assert_eq!(i, start + count);
+                assert_eq!((ray.source, ray.receiver, ray.path), batch.triple(i));
+                assert_eq!(ray.record, batch.record(i));
+                // The same slice of the batch (its points are NaN for a ray without a time).
+                assert!(std::ptr::eq(ray.points, batch.points(i)), "{name} ray {i}");
+                assert_eq!(
+                    ray.media().map(|m| m.collect::<Vec<_>>()),
+                    batch.media(i).map(|m| m.collect::<Vec<_>>())
+                );
+                count += 1;
+            }
+            assert_eq!(count, n - start, "{name} from {start}");
+        }
+    }
+}

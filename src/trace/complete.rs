@@ -175,6 +175,24 @@ impl fmt::Display for StationaryError {
 
 impl std::error::Error for StationaryError {}
 
+/// The error as a scene error, naming the key: `paths[i].steps` for a path beyond the
+/// search's step limit (the command-line tool's message), `paths` otherwise.
+impl From<StationaryError> for crate::scene::SceneError {
+    fn from(e: StationaryError) -> Self {
+        match e {
+            StationaryError::TooManySteps { path, steps } => crate::scene::SceneError::new(
+                format!("paths[{path}].steps"),
+                format!(
+                    "{steps} steps; \"stationary\": \"all\" searches paths of at most \
+                     {MAX_STATIONARY_STEPS} steps (each assignment of segments is tried with \
+                     every choice of held vertices, 2^steps of them)"
+                ),
+            ),
+            other => crate::scene::SceneError::new("paths", other.to_string()),
+        }
+    }
+}
+
 /// Tuples (and assignments solved) a search of one sequence visits at most when asked for
 /// every stationary path, before it gives up and says it is not complete.
 pub(crate) const MAX_TUPLES: usize = 1 << 26;

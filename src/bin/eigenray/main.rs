@@ -15,8 +15,8 @@ use std::time::Instant;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use eigenray::{
-    Batch, BatchOptions, RaySet, Scene, SceneError, SearchArrival, StationaryError, StationaryMode,
-    StationaryRays, Status, Tracer,
+    Batch, BatchOptions, RaySet, Scene, SceneError, SearchArrival, StationaryMode, StationaryRays,
+    Status, Tracer,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -385,15 +385,7 @@ fn trace_stationary(tracer: &Tracer) -> Result<StationaryRays, Failure> {
     };
     let rays = tracer
         .trace_stationary_with_progress(&progress)
-        .map_err(|e| match e {
-            StationaryError::TooManySteps { path, steps } => Failure::Input(format!(
-                "paths[{path}].steps: {steps} steps; \"stationary\": \"all\" searches paths \
-                 of at most {} steps (each assignment of segments is tried with every choice \
-                 of held vertices, 2^steps of them)",
-                eigenray::limits::MAX_STATIONARY_STEPS
-            )),
-            other => Failure::Input(format!("paths: {other}")),
-        })?;
+        .map_err(|e| Failure::scene(e.into()))?;
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }

@@ -1,0 +1,1416 @@
+//! Python bindings of eigenray (the `eigenray._eigenray` extension module).
+//!
+//! Everything here converts: Python values to the library's types (with the library's own
+//! validation and error messages) and the library's results to numpy arrays. The Python
+//! package (`python/eigenray/`) re-exports these classes and adds the plotting helper.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use eigenray::{
+    Arrival, Batch, BatchOptions, Gradient, Kink, Point, RayRecord, Scene, SceneError,
+    SearchArrival, StationaryRays, Status, Tracer, Workspace, npy::STATUS_CODES,
+    scene_parts::StepKind,
+};
+use numpy::ndarray::{Array2, Array3};
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray2,
+    PyUntypedArrayMethods,
+};
+use pyo3::exceptions::{PyIOError, PyIndexError, PyKeyError, PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList, PyString};
+
+pyo3::create_exception!(
+    _eigenray,
+    EigenrayError,
+    PyValueError,
+    "An invalid scene or argument: `key` names where the problem is, `message` what it is."
+);
+
+/// The status names in the order of their codes (the `.npy` output's codes).
+fn status_names() -> Vec<&'static str> {
+    STATUS_CODES.iter().map(|s| s.as_str()).collect()
+}
+
+fn status_code(status: Status) -> u8 {
+    STATUS_CODES
+        .iter()
+        .position(|&s| s == status)
+        .expect("every status has a code") as u8
+}
+
+/// The Python exception of a scene error: `EigenrayError(str)` with `key` and `message`.
+fn scene_error(py: Python<'_>, e: &SceneError) -> PyErr {
+    let err = EigenrayError::new_err(e.to_string());
+    let value = err.value(py);
+    // Setting attributes on a fresh exception instance cannot fail.
+    let _ = value.setattr("key", e.key.as_str());
+    let _ = value.setattr("message", e.message.as_str());
+    err
+}
+
+/// An error at `key` from an argument of a call (not from the scene).
+fn argument_error(py: Python<'_>, key: &str, message: impl Into<String>) -> PyErr {
+    scene_error(py, &SceneError::new(key, message))
+}
+
+/// A point from any Python sequence of two numbers (tuple, list, numpy array).
+fn point_arg(py: Python<'_>, key: &str, value: &Bound<'_, PyAny>) -> PyResult<Point> {
+    let xy: [f64; 2] = value
+        .extract()
+        .map_err(|_| argument_error(py, key, "needs a point: a sequence of two numbers"))?;
+    Ok(Point::new(xy[0], xy[1]))
+}
+
+/// Points from an array-like of shape `(n, 2)`.
+fn points_arg(py: Python<'_>, key: &str, value: &Bound<'_, PyAny>) -> PyResult<Vec<Point>> {
+    let numpy = py.import("numpy")?;
+    let array = numpy
+        .call_method1("asarray", (value, "float64"))
+        .map_err(|_| argument_error(py, key, "needs an array of numbers of shape (n, 2)"))?;
+    let array: PyReadonlyArray2<'_, f64> = array
+        .extract()
+        .map_err(|_| argument_error(py, key, "needs an array of shape (n, 2)"))?;
+    let view = array.as_array();
+    if view.ncols() != 2 {
+        return Err(argument_error(
+            py,
+            key,
+            format!("needs an array of shape (n, 2), not {:?}", view.shape()),
+        ));
+    }
+    Ok(view
+        .rows()
+        .into_iter()
+        .map(|r| Point::new(r[0], r[1]))
+        .collect())
+}
+
+/// A scene: media, interfaces, sources, receivers and paths, validated.
+///
+/// Build one with `Scene(source)` from a JSON string, a `dict` of the same shape, or a path to
+/// a scene file (`str` ending in `.json` or `os.PathLike`); or with `Scene.from_json`,
+/// `Scene.from_dict`, `Scene.from_file`. An invalid scene raises `EigenrayError` naming the
+/// key, with the same message as the command-line tool.
+#[pyclass(module = "eigenray", name = "Scene", frozen)]
+struct PyScene {
+    /// Shared with the tracers made from it (a tracer's updates copy it first).
+    scene: Arc<Scene>,
+}
+
+impl PyScene {
+    fn parse(py: Python<'_>, text: &str) -> PyResult<PyScene> {
+        let scene = py.detach(|| Scene::from_json(text));
+        scene
+            .map(|scene| PyScene {
+                scene: Arc::new(scene),
+            })
+            .map_err(|e| scene_error(py, &e))
+    }
+}
+
+#[pymethods]
+impl PyScene {
+    #[new]
+    fn new(py: Python<'_>, source: &Bound<'_, PyAny>) -> PyResult<PyScene> {
+        if source.is_instance_of::<PyDict>() {
+            return PyScene::from_dict(py, source);
+        }
+        if let Ok(text) = source.cast::<PyString>() {
+            let text = text.to_str()?;
+            if text.trim_start().starts_with('{') {
+                return PyScene::parse(py, text);
+            }
+            return PyScene::from_file(py, source);
+        }
+        if source.hasattr("__fspath__")? {
+            return PyScene::from_file(py, source);
+        }
+        Err(argument_error(
+            py,
+            "scene",
+            "needs a JSON string, a dict or a path to a scene file",
+        ))
+    }
+
+    /// A scene from its JSON text.
+    #[staticmethod]
+    fn from_json(py: Python<'_>, text: &str) -> PyResult<PyScene> {
+        PyScene::parse(py, text)
+    }
+
+    /// A scene from a `dict` (or any value `json.dumps` accepts) of the JSON's shape.
+    #[staticmethod]
+    fn from_dict(py: Python<'_>, scene: &Bound<'_, PyAny>) -> PyResult<PyScene> {
+        let json = py.import("json")?;
+        let kwargs = PyDict::new(py);
+        kwargs.set_item("allow_nan", false)?;
+        let text = json
+            .call_method("dumps", (scene,), Some(&kwargs))
+            .map_err(|e| argument_error(py, "scene", format!("is not JSON: {e}")))?;
+        PyScene::parse(py, text.extract::<&str>()?)
+    }
+
+    /// A scene from a file.
+    #[staticmethod]
+    fn from_file(py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<PyScene> {
+        let os = py.import("os")?;
+        let path: String = os.call_method1("fspath", (path,))?.extract()?;
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| PyIOError::new_err(format!("{path}: {e}")))?;
+        PyScene::parse(py, &text)
+    }
+
+    /// Medium names, in the scene's order (the indices of `Rays.media`).
+    #[getter]
+    fn media_names(&self) -> Vec<String> {
+        self.scene.media().iter().map(|m| m.name.clone()).collect()
+    }
+
+    /// Slowness of each medium (1 / speed, or the refractive index), in the scene's order.
+    #[getter]
+    fn slowness<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let w: Vec<f64> = self.scene.media().iter().map(|m| m.slowness).collect();
+        w.into_pyarray(py)
+    }
+
+    /// Interface names, in the scene's order.
+    #[getter]
+    fn interface_names(&self) -> Vec<String> {
+        self.scene
+            .interfaces()
+            .iter()
+            .map(|i| i.name.clone())
+            .collect()
+    }
+
+    /// Each interface's vertices as an array of shape `(n, 2)`, by name (a closed
+    /// interface's first vertex is not repeated at its end).
+    #[getter]
+    fn interfaces<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let out = PyDict::new(py);
+        for i in self.scene.interfaces() {
+            out.set_item(&i.name, points_array(py, i.polyline.vertices()))?;
+        }
+        Ok(out)
+    }
+
+    /// Whether each interface is closed, by name.
+    #[getter]
+    fn closed<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let out = PyDict::new(py);
+        for i in self.scene.interfaces() {
+            out.set_item(&i.name, i.polyline.is_closed())?;
+        }
+        Ok(out)
+    }
+
+    /// Path names (`None` for an unnamed path), in the scene's order.
+    #[getter]
+    fn path_names(&self) -> Vec<Option<String>> {
+        self.scene.paths().iter().map(|p| p.name.clone()).collect()
+    }
+
+    /// Sources, shape `(n, 2)`.
+    #[getter]
+    fn sources<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        points_array(py, self.scene.sources())
+    }
+
+    /// Receivers, shape `(n, 2)`.
+    #[getter]
+    fn receivers<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        points_array(py, self.scene.receivers())
+    }
+
+    /// Rays of the scene: sources × receivers × paths.
+    #[getter]
+    fn num_rays(&self) -> usize {
+        self.scene.num_rays()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Scene({} media, {} interfaces, {} sources, {} receivers, {} paths)",
+            self.scene.media().len(),
+            self.scene.interfaces().len(),
+            self.scene.sources().len(),
+            self.scene.receivers().len(),
+            self.scene.paths().len()
+        )
+    }
+}
+
+fn points_array<'py>(py: Python<'py>, points: &[Point]) -> Bound<'py, PyArray2<f64>> {
+    let flat: Vec<f64> = points.iter().flat_map(|p| [p.x, p.y]).collect();
+    Array2::from_shape_vec((points.len(), 2), flat)
+        .expect("two coordinates a point")
+        .into_pyarray(py)
+}
+
+/// Traces the rays of a scene. `Tracer(scene)` prepares it once (region lookup, segment
+/// hierarchies); every call after that reuses it.
+#[pyclass(module = "eigenray", name = "Tracer")]
+struct PyTracer {
+    tracer: Tracer,
+    /// The last batch's arrays, reused by the next `trace`.
+    batch: Batch,
+    workspace: Workspace,
+    arrivals: Vec<Arrival>,
+    /// The last `gradient`'s derivatives (reused).
+    gradient: Gradient,
+}
+
+/// One ray: its status, time, points and leg media.
+#[pyclass(module = "eigenray", name = "Ray", frozen, get_all)]
+struct PyRay {
+    /// `converged`, `vertex`, `no_path`, `obstructed` or `not_converged`.
+    status: String,
+    /// Travel time; NaN when the status has none.
+    time: f64,
+    /// Source, interaction points and receiver, shape `(k + 2, 2)`; empty without a time.
+    points: Py<PyArray2<f64>>,
+    /// Leg media's names, when known.
+    media: Vec<String>,
+    /// Solver iterations.
+    iterations: usize,
+    /// Final relative residual (NaN where the solver did not run).
+    residual: f64,
+    /// Why it is not `converged` (`None` when it is).
+    reason: Option<String>,
+    /// Among the stationary paths of its triple, its place by time (0: the first); `None`
+    /// for a ray of `Tracer.solve`.
+    arrival: Option<usize>,
+    /// On a `vertex` path of `stationary_paths`: `"minimum"` or `"maximum"`.
+    kink: Option<String>,
+}
+
+#[pymethods]
+impl PyRay {
+    fn __repr__(&self) -> String {
+        format!(
+            "Ray(status={:?}, time={}, iterations={})",
+            self.status, self.time, self.iterations
+        )
+    }
+}
+
+fn medium_names(scene: &Scene, media: impl Iterator<Item = usize>) -> Vec<String> {
+    media.map(|m| scene.media()[m].name.clone()).collect()
+}
+
+fn kink_name(kink: Option<Kink>) -> Option<String> {
+    kink.map(|k| k.as_str().to_string())
+}
+
+impl PyRay {
+    fn from_record(
+        py: Python<'_>,
+        scene: &Scene,
+        record: &RayRecord,
+        points: &[Point],
+        media: &[usize],
+    ) -> PyRay {
+        PyRay {
+            status: record.status.as_str().to_string(),
+            time: record.time,
+            points: points_array(py, points).unbind(),
+            media: medium_names(scene, media.iter().copied()),
+            iterations: record.iterations as usize,
+            residual: record.residual,
+            reason: record.reason.map(|r| r.describe(scene)),
+            arrival: None,
+            kink: None,
+        }
+    }
+
+    fn from_arrival(py: Python<'_>, scene: &Scene, index: usize, a: &Arrival) -> PyRay {
+        PyRay {
+            status: a.status.as_str().to_string(),
+            time: a.time,
+            points: points_array(py, &a.points).unbind(),
+            media: medium_names(scene, a.media.iter().copied()),
+            iterations: a.iterations,
+            residual: a.residual,
+            reason: a.reason.map(|r| r.describe(scene)),
+            arrival: Some(index),
+            kink: kink_name(a.kink),
+        }
+    }
+}
+
+/// The derivatives of one ray's travel time (see `Tracer.gradient`): with respect to the
+/// source and receiver positions, each medium's slowness, and every polyline vertex the path
+/// touches. A ray without a time has `time` NaN, NaN derivatives and no vertices.
+#[pyclass(module = "eigenray", name = "Gradient", frozen, get_all)]
+struct PyGradient {
+    /// The ray's status.
+    status: String,
+    /// The ray's travel time (NaN without one).
+    time: f64,
+    /// `(dT/dx, dT/dy)` of the source.
+    source: Py<PyArray1<f64>>,
+    /// `(dT/dx, dT/dy)` of the receiver.
+    receiver: Py<PyArray1<f64>>,
+    /// `dT/dw` of each medium by name (`w`: the slowness, 1/speed or the index); 0 for a
+    /// medium the ray does not pass through.
+    slowness: Py<PyDict>,
+    /// Every vertex whose movement changes the time, each once: dicts with `interface`
+    /// (name), `vertex` (index in its points) and `d` (`(dT/dx, dT/dy)`).
+    vertices: Py<PyList>,
+}
+
+#[pymethods]
+impl PyGradient {
+    fn __repr__(&self) -> String {
+        format!("Gradient(status={:?}, time={})", self.status, self.time)
+    }
+}
+
+impl PyGradient {
+    fn new(
+        py: Python<'_>,
+        scene: &Scene,
+        record: &RayRecord,
+        g: Option<&Gradient>,
+    ) -> PyResult<Self> {
+        let nan = [f64::NAN, f64::NAN];
+        let (source, receiver) = match g {
+            Some(g) => ([g.source.x, g.source.y], [g.receiver.x, g.receiver.y]),
+            None => (nan, nan),
+        };
+        let slowness = PyDict::new(py);
+        for (i, m) in scene.media().iter().enumerate() {
+            slowness.set_item(&m.name, g.map_or(f64::NAN, |g| g.slowness[i]))?;
+        }
+        let vertices = PyList::empty(py);
+        for v in g.map_or(&[][..], |g| &g.vertices) {
+            let d = PyDict::new(py);
+            d.set_item("interface", &scene.interfaces()[v.interface].name)?;
+            d.set_item("vertex", v.vertex)?;
+            d.set_item("d", PyArray1::from_slice(py, &[v.d.x, v.d.y]))?;
+            vertices.append(d)?;
+        }
+        Ok(PyGradient {
+            status: record.status.as_str().to_string(),
+            time: record.time,
+            source: PyArray1::from_slice(py, &source).unbind(),
+            receiver: PyArray1::from_slice(py, &receiver).unbind(),
+            slowness: slowness.unbind(),
+            vertices: vertices.unbind(),
+        })
+    }
+}
+
+/// Every ray of a scene as numpy arrays, in ray order (source-major, then receiver, then
+/// path). Rays without a time have `time` NaN and NaN points.
+#[pyclass(module = "eigenray", name = "Rays", frozen)]
+struct PyRays {
+    /// Source index of each ray, shape `(n,)`.
+    #[pyo3(get)]
+    source: Py<PyArray1<i64>>,
+    /// Receiver index of each ray.
+    #[pyo3(get)]
+    receiver: Py<PyArray1<i64>>,
+    /// Path index of each ray.
+    #[pyo3(get)]
+    path: Py<PyArray1<i64>>,
+    /// Status code of each ray (an index into `status_names`), `uint8`.
+    #[pyo3(get)]
+    status: Py<PyArray1<u8>>,
+    /// Travel time; NaN for a ray without one.
+    #[pyo3(get)]
+    time: Py<PyArray1<f64>>,
+    /// Source, interaction points and receiver, shape `(n, P, 2)`, NaN-padded past a path's
+    /// own points (P: the most points of any path) and NaN for a ray without a time.
+    #[pyo3(get)]
+    points: Py<PyArray3<f64>>,
+    /// Points of each ray's path (`k + 2` for `k` steps), shape `(n,)`.
+    #[pyo3(get)]
+    num_points: Py<PyArray1<i64>>,
+    /// Leg media, shape `(n, P − 1)`: indices into `media_names`, −1 where unknown or past the
+    /// path's legs.
+    #[pyo3(get)]
+    media: Py<PyArray2<i32>>,
+    /// Solver iterations.
+    #[pyo3(get)]
+    iterations: Py<PyArray1<u32>>,
+    /// Final relative residual (NaN where the solver did not run).
+    #[pyo3(get)]
+    residual: Py<PyArray1<f64>>,
+    /// Why each ray is not `converged` (`None` where it is): read through the `reason`
+    /// getter (a list), rewritten by `trace(out=...)`.
+    reasons: Mutex<Vec<Option<String>>>,
+    /// The status names, by code.
+    #[pyo3(get)]
+    status_names: Vec<&'static str>,
+    /// The scene's path names (`None` for an unnamed path), by path index.
+    #[pyo3(get)]
+    path_names: Vec<Option<String>>,
+    /// The scene's medium names, by medium index.
+    #[pyo3(get)]
+    media_names: Vec<String>,
+    /// From `trace_stationary`: each entry's place by time among its triple's stationary
+    /// paths (0 for a triple without any); `None` from `trace`.
+    #[pyo3(get)]
+    arrival: Option<Py<PyArray1<i64>>>,
+    /// From `trace_stationary`: `"minimum"`, `"maximum"` or `"mixed"` on `vertex` entries.
+    #[pyo3(get)]
+    kink: Option<Vec<Option<String>>>,
+    /// From `trace_stationary`: whether the triple's search was complete.
+    #[pyo3(get)]
+    complete: Option<Py<PyArray1<bool>>>,
+}
+
+#[pymethods]
+impl PyRays {
+    /// Why each ray is not `converged` (`None` where it is), naming interfaces.
+    #[getter]
+    fn reason(&self) -> Vec<Option<String>> {
+        self.reasons.lock().map(|r| r.clone()).unwrap_or_default()
+    }
+
+    fn __len__(&self, py: Python<'_>) -> usize {
+        self.time.bind(py).len()
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        format!("Rays({} rays)", self.time.bind(py).len())
+    }
+}
+
+/// The arrays of `Rays`, allocated for their rays and filled in place (in parallel for
+/// batches): `width` points a ray.
+struct Table {
+    width: usize,
+    source: Vec<i64>,
+    receiver: Vec<i64>,
+    path: Vec<i64>,
+    status: Vec<u8>,
+    time: Vec<f64>,
+    points: Vec<f64>,
+    num_points: Vec<i64>,
+    media: Vec<i32>,
+    iterations: Vec<u32>,
+    residual: Vec<f64>,
+    reason: Vec<Option<String>>,
+    /// The columns of every stationary path's entries, for `trace_stationary`.
+    stationary: Option<StationaryColumns>,
+}
+
+/// The columns of every stationary path's entries (see `stationary_columns`).
+struct StationaryColumns {
+    arrival: Vec<i64>,
+    kink: Vec<Option<String>>,
+    complete: Vec<bool>,
+}
+
+/// Rows of a [`Table`]: one slice per column, all of the same rows.
+struct Rows<'a> {
+    width: usize,
+    source: &'a mut [i64],
+    receiver: &'a mut [i64],
+    path: &'a mut [i64],
+    status: &'a mut [u8],
+    time: &'a mut [f64],
+    points: &'a mut [f64],
+    num_points: &'a mut [i64],
+    media: &'a mut [i32],
+    iterations: &'a mut [u32],
+    residual: &'a mut [f64],
+    reason: &'a mut [Option<String>],
+}
+
+/// Rows written by one task of a parallel fill.
+const ROWS_PER_TASK: usize = 4096;
+
+impl Table {
+    fn new(rays: usize, width: usize) -> Table {
+        Table {
+            width,
+            source: vec![0; rays],
+            receiver: vec![0; rays],
+            path: vec![0; rays],
+            status: vec![0; rays],
+            time: vec![0.0; rays],
+            points: vec![0.0; rays * width * 2],
+            num_points: vec![0; rays],
+            media: vec![0; rays * (width - 1)],
+            iterations: vec![0; rays],
+            residual: vec![0.0; rays],
+            reason: vec![None; rays],
+            stationary: None,
+        }
+    }
+
+    fn rows(&mut self) -> Rows<'_> {
+        Rows {
+            width: self.width,
+            source: &mut self.source,
+            receiver: &mut self.receiver,
+            path: &mut self.path,
+            status: &mut self.status,
+            time: &mut self.time,
+            points: &mut self.points,
+            num_points: &mut self.num_points,
+            media: &mut self.media,
+            iterations: &mut self.iterations,
+            residual: &mut self.residual,
+            reason: &mut self.reason,
+        }
+    }
+
+    fn finish(self, py: Python<'_>, scene: &Scene) -> PyRays {
+        let (n, width) = (self.time.len(), self.width);
+        let (arrival, kink, complete) = match self.stationary {
+            Some(c) => (
+                Some(c.arrival.into_pyarray(py).unbind()),
+                Some(c.kink),
+                Some(c.complete.into_pyarray(py).unbind()),
+            ),
+            None => (None, None, None),
+        };
+        PyRays {
+            source: self.source.into_pyarray(py).unbind(),
+            receiver: self.receiver.into_pyarray(py).unbind(),
+            path: self.path.into_pyarray(py).unbind(),
+            status: self.status.into_pyarray(py).unbind(),
+            time: self.time.into_pyarray(py).unbind(),
+            points: Array3::from_shape_vec((n, width, 2), self.points)
+                .expect("width points a ray")
+                .into_pyarray(py)
+                .unbind(),
+            num_points: self.num_points.into_pyarray(py).unbind(),
+            media: Array2::from_shape_vec((n, width - 1), self.media)
+                .expect("width − 1 legs a ray")
+                .into_pyarray(py)
+                .unbind(),
+            iterations: self.iterations.into_pyarray(py).unbind(),
+            residual: self.residual.into_pyarray(py).unbind(),
+            reasons: Mutex::new(self.reason),
+            status_names: status_names(),
+            path_names: scene.paths().iter().map(|p| p.name.clone()).collect(),
+            media_names: scene.media().iter().map(|m| m.name.clone()).collect(),
+            arrival,
+            kink,
+            complete,
+        }
+    }
+}
+
+/// Fills `rows` in parallel: `write(state, first, rows)` writes the rows of rays `first..`
+/// (tasks of at most `ROWS_PER_TASK` rows), each task with its own `state` from `init` (a
+/// workspace, say).
+fn fill_parallel<S>(
+    rows: Rows<'_>,
+    first: usize,
+    init: &(impl Fn() -> S + Sync),
+    write: &(impl Fn(&mut S, usize, &mut Rows<'_>) + Sync),
+) {
+    let n = rows.time.len();
+    if n <= ROWS_PER_TASK {
+        let mut rows = rows;
+        write(&mut init(), first, &mut rows);
+    } else {
+        let (a, b) = rows.split_at(n / 2);
+        rayon::join(
+            || fill_parallel(a, first, init, write),
+            || fill_parallel(b, first + n / 2, init, write),
+        );
+    }
+}
+
+impl Rows<'_> {
+    /// The rows before `k` and from `k` on.
+    fn split_at(self, k: usize) -> (Self, Self) {
+        let w = self.width;
+        let (source, source_b) = self.source.split_at_mut(k);
+        let (receiver, receiver_b) = self.receiver.split_at_mut(k);
+        let (path, path_b) = self.path.split_at_mut(k);
+        let (status, status_b) = self.status.split_at_mut(k);
+        let (time, time_b) = self.time.split_at_mut(k);
+        let (points, points_b) = self.points.split_at_mut(k * w * 2);
+        let (num_points, num_points_b) = self.num_points.split_at_mut(k);
+        let (media, media_b) = self.media.split_at_mut(k * (w - 1));
+        let (iterations, iterations_b) = self.iterations.split_at_mut(k);
+        let (residual, residual_b) = self.residual.split_at_mut(k);
+        let (reason, reason_b) = self.reason.split_at_mut(k);
+        (
+            Rows {
+                width: w,
+                source,
+                receiver,
+                path,
+                status,
+                time,
+                points,
+                num_points,
+                media,
+                iterations,
+                residual,
+                reason,
+            },
+            Rows {
+                width: w,
+                source: source_b,
+                receiver: receiver_b,
+                path: path_b,
+                status: status_b,
+                time: time_b,
+                points: points_b,
+                num_points: num_points_b,
+                media: media_b,
+                iterations: iterations_b,
+                residual: residual_b,
+                reason: reason_b,
+            },
+        )
+    }
+
+    /// Row `i`: ray `triple` with its record, points (read only when it has a time) and leg
+    /// media (`None`, or fewer than its legs, where unknown: −1).
+    #[allow(clippy::too_many_arguments, reason = "the parts of one ray")]
+    fn write(
+        &mut self,
+        i: usize,
+        scene: &Scene,
+        triple: [usize; 3],
+        record: &RayRecord,
+        points: &[Point],
+        media: Option<impl Iterator<Item = usize>>,
+    ) {
+        let [source, receiver, path] = triple;
+        let w = self.width;
+        self.source[i] = source as i64;
+        self.receiver[i] = receiver as i64;
+        self.path[i] = path as i64;
+        self.status[i] = status_code(record.status);
+        self.time[i] = record.time;
+        let own = scene.paths()[path].steps.len() + 2;
+        self.num_points[i] = own as i64;
+        let with_time = record.status.has_time() && points.len() == own;
+        let row = &mut self.points[i * w * 2..(i + 1) * w * 2];
+        row.fill(f64::NAN);
+        if with_time {
+            for (xy, p) in row.chunks_exact_mut(2).zip(points) {
+                xy[0] = p.x;
+                xy[1] = p.y;
+            }
+        }
+        let legs = &mut self.media[i * (w - 1)..(i + 1) * (w - 1)];
+        legs.fill(-1);
+        if let Some(media) = media {
+            for (leg, m) in legs.iter_mut().zip(media) {
+                *leg = i32::try_from(m).unwrap_or(-1);
+            }
+        }
+        self.iterations[i] = record.iterations;
+        self.residual[i] = record.residual;
+        self.reason[i] = record.reason.map(|r| r.describe(scene));
+    }
+}
+
+/// The entries of every stationary path, as the command-line tool writes them: one per
+/// stationary path, and one (`no_path` or `not_converged`) per triple that has none.
+fn stationary_table(scene: &Scene, rays: &StationaryRays) -> Table {
+    let n = rays.entries();
+    let mut table = Table::new(n, width(scene));
+    let mut columns = StationaryColumns {
+        arrival: Vec::with_capacity(n),
+        kink: Vec::with_capacity(n),
+        complete: Vec::with_capacity(n),
+    };
+    let mut rows = table.rows();
+    let mut row = 0;
+    for t in &rays.triples {
+        let triple = [t.source, t.receiver, t.path];
+        for (i, a) in t.arrivals.iter().enumerate() {
+            let record = RayRecord {
+                status: a.status,
+                time: a.time,
+                iterations: a.iterations.try_into().unwrap_or(u32::MAX),
+                residual: a.residual,
+                reason: a.reason,
+            };
+            let media = Some(a.media.iter().copied());
+            rows.write(row, scene, triple, &record, &a.points, media);
+            row += 1;
+            columns.arrival.push(i as i64);
+            columns.kink.push(kink_name(a.kink));
+            columns.complete.push(t.complete);
+        }
+        if t.arrivals.is_empty() {
+            let record = RayRecord {
+                status: t.status_without_arrivals(),
+                time: f64::NAN,
+                iterations: 0,
+                residual: f64::NAN,
+                reason: Some(t.reason_without_arrivals()),
+            };
+            let media = scene.paths()[t.path]
+                .media
+                .as_deref()
+                .map(|m| m.iter().copied());
+            rows.write(row, scene, triple, &record, &[], media);
+            row += 1;
+            columns.arrival.push(0);
+            columns.kink.push(None);
+            columns.complete.push(t.complete);
+        }
+    }
+    table.stationary = Some(columns);
+    table
+}
+
+/// The most points of any path of `scene` (at least 2: the source and the receiver).
+fn width(scene: &Scene) -> usize {
+    scene
+        .paths()
+        .iter()
+        .map(|p| p.steps.len() + 2)
+        .max()
+        .unwrap_or(2)
+}
+
+/// Writes every ray of `batch` into `rows`, in parallel.
+fn write_batch(scene: &Scene, batch: &Batch, rows: Rows<'_>) {
+    fill_parallel(rows, 0, &|| (), &|(), first, rows| {
+        let n = rows.time.len();
+        for (i, ray) in batch.rays(first..first + n).enumerate() {
+            let triple = [ray.source, ray.receiver, ray.path];
+            rows.write(i, scene, triple, ray.record, ray.points, ray.media());
+        }
+    });
+}
+
+/// Writes a batch into the arrays of `out` (a `Rays` of the same shape, from `trace`), in
+/// place: a layout loop's arrays are allocated once.
+fn write_batch_into(py: Python<'_>, scene: &Scene, batch: &Batch, out: &PyRays) -> PyResult<()> {
+    let (n, w) = (batch.len(), width(scene));
+    let shape_error = || {
+        argument_error(
+            py,
+            "out",
+            format!("needs the Rays of an earlier trace() of {n} rays of {w} points"),
+        )
+    };
+    if out.arrival.is_some() || out.time.bind(py).len() != n {
+        return Err(shape_error());
+    }
+    if out.points.bind(py).shape() != [n, w, 2] || out.media.bind(py).shape() != [n, w - 1] {
+        return Err(shape_error());
+    }
+    let busy = |_| argument_error(py, "out", "its arrays are in use or not writeable");
+    let contiguous = |_| argument_error(py, "out", "its arrays must stay contiguous");
+    let source = out.source.bind(py);
+    let mut source = source.try_readwrite().map_err(busy)?;
+    let receiver = out.receiver.bind(py);
+    let mut receiver = receiver.try_readwrite().map_err(busy)?;
+    let path = out.path.bind(py);
+    let mut path = path.try_readwrite().map_err(busy)?;
+    let status = out.status.bind(py);
+    let mut status = status.try_readwrite().map_err(busy)?;
+    let time = out.time.bind(py);
+    let mut time = time.try_readwrite().map_err(busy)?;
+    let points = out.points.bind(py);
+    let mut points = points.try_readwrite().map_err(busy)?;
+    let num_points = out.num_points.bind(py);
+    let mut num_points = num_points.try_readwrite().map_err(busy)?;
+    let media = out.media.bind(py);
+    let mut media = media.try_readwrite().map_err(busy)?;
+    let iterations = out.iterations.bind(py);
+    let mut iterations = iterations.try_readwrite().map_err(busy)?;
+    let residual = out.residual.bind(py);
+    let mut residual = residual.try_readwrite().map_err(busy)?;
+    let mut reasons = out
+        .reasons
+        .lock()
+        .map_err(|_| PyRuntimeError::new_err("an earlier call failed while writing these rays"))?;
+    reasons.resize(n, None);
+    let rows = Rows {
+        width: w,
+        source: source.as_slice_mut().map_err(contiguous)?,
+        receiver: receiver.as_slice_mut().map_err(contiguous)?,
+        path: path.as_slice_mut().map_err(contiguous)?,
+        status: status.as_slice_mut().map_err(contiguous)?,
+        time: time.as_slice_mut().map_err(contiguous)?,
+        points: points.as_slice_mut().map_err(contiguous)?,
+        num_points: num_points.as_slice_mut().map_err(contiguous)?,
+        media: media.as_slice_mut().map_err(contiguous)?,
+        iterations: iterations.as_slice_mut().map_err(contiguous)?,
+        residual: residual.as_slice_mut().map_err(contiguous)?,
+        reason: &mut reasons,
+    };
+    py.detach(|| write_batch(scene, batch, rows));
+    Ok(())
+}
+
+/// An index into a list of `len` named things (`what`: interface, medium) from a name (via
+/// `lookup`) or an integer.
+fn named_index(
+    py: Python<'_>,
+    what: &str,
+    value: &Bound<'_, PyAny>,
+    len: usize,
+    lookup: impl Fn(&str) -> Option<usize>,
+) -> PyResult<usize> {
+    if let Ok(name) = value.extract::<&str>() {
+        return lookup(name)
+            .ok_or_else(|| PyKeyError::new_err(format!("no {what} is named `{name}`")));
+    }
+    let index: i64 = value
+        .extract()
+        .map_err(|_| argument_error(py, what, format!("needs a {what} name or index")))?;
+    usize::try_from(index)
+        .ok()
+        .filter(|&i| i < len)
+        .ok_or_else(|| {
+            PyIndexError::new_err(format!("{what} index {index} is out of range ({len})"))
+        })
+}
+
+/// Where a long batch reports its progress.
+enum Progress<'py> {
+    /// A tqdm bar (tqdm.auto: a widget in a notebook, text in a terminal).
+    Bar(Bound<'py, PyAny>),
+    /// The caller's `progress(done, total)`.
+    Callback(Bound<'py, PyAny>),
+}
+
+impl<'py> Progress<'py> {
+    fn new(
+        py: Python<'py>,
+        arg: Option<&Bound<'py, PyAny>>,
+        total: usize,
+    ) -> PyResult<Option<Self>> {
+        let Some(arg) = arg else { return Ok(None) };
+        if arg.is_none() {
+            return Ok(None);
+        }
+        if arg.is_callable() {
+            return Ok(Some(Progress::Callback(arg.clone())));
+        }
+        if !arg.is_truthy()? {
+            return Ok(None);
+        }
+        let kwargs = PyDict::new(py);
+        kwargs.set_item("total", total)?;
+        kwargs.set_item("unit", "ray")?;
+        let bar = py
+            .import("tqdm.auto")
+            .and_then(|m| m.getattr("tqdm"))
+            .map_err(|_| {
+                PyRuntimeError::new_err("progress=True needs the tqdm package (pip install tqdm)")
+            })?
+            .call((), Some(&kwargs))?;
+        Ok(Some(Progress::Bar(bar)))
+    }
+
+    fn report(&self, done: usize, shown: usize, total: usize) -> PyResult<()> {
+        match self {
+            Progress::Bar(bar) => {
+                bar.call_method1("update", (done - shown,))?;
+            }
+            Progress::Callback(f) => {
+                f.call1((done, total))?;
+            }
+        }
+        Ok(())
+    }
+
+    fn close(&self) -> PyResult<()> {
+        if let Progress::Bar(bar) = self {
+            bar.call_method0("close")?;
+        }
+        Ok(())
+    }
+}
+
+impl PyTracer {
+    fn inner_scene(&self) -> &Scene {
+        self.tracer.scene()
+    }
+
+    fn path_index(&self, py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<usize> {
+        let scene = self.inner_scene();
+        if let Ok(name) = path.extract::<&str>() {
+            return scene
+                .paths()
+                .iter()
+                .position(|p| p.name.as_deref() == Some(name))
+                .ok_or_else(|| PyKeyError::new_err(format!("no path is named `{name}`")));
+        }
+        let index: i64 = path
+            .extract()
+            .map_err(|_| argument_error(py, "path", "needs a path index or a path name"))?;
+        usize::try_from(index)
+            .ok()
+            .filter(|&i| i < scene.paths().len())
+            .ok_or_else(|| {
+                PyIndexError::new_err(format!(
+                    "path index {index} is out of range (the scene has {} paths)",
+                    scene.paths().len()
+                ))
+            })
+    }
+
+    fn interface_index(&self, py: Python<'_>, interface: &Bound<'_, PyAny>) -> PyResult<usize> {
+        let scene = self.inner_scene();
+        named_index(
+            py,
+            "interface",
+            interface,
+            scene.interfaces().len(),
+            |name| scene.interface_index(name),
+        )
+    }
+
+    fn medium_index(&self, py: Python<'_>, medium: &Bound<'_, PyAny>) -> PyResult<usize> {
+        let scene = self.inner_scene();
+        named_index(py, "medium", medium, scene.media().len(), |name| {
+            scene.medium_index(name)
+        })
+    }
+
+    fn checked_points(
+        &self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: usize,
+    ) -> PyResult<(Point, Point)> {
+        let source = point_arg(py, "source", source)?;
+        let receiver = point_arg(py, "receiver", receiver)?;
+        self.inner_scene()
+            .check_solve(source, receiver, path)
+            .map_err(|e| scene_error(py, &e))?;
+        Ok((source, receiver))
+    }
+}
+
+#[pymethods]
+impl PyTracer {
+    #[new]
+    fn new(py: Python<'_>, scene: &Bound<'_, PyScene>) -> PyResult<PyTracer> {
+        let shared = Arc::clone(&scene.get().scene);
+        let tracer = py.detach(|| Tracer::new(shared));
+        let tracer = tracer.map_err(|e| scene_error(py, &e))?;
+        Ok(PyTracer {
+            tracer,
+            batch: Batch::default(),
+            workspace: Workspace::new(),
+            arrivals: Vec::new(),
+            gradient: Gradient::default(),
+        })
+    }
+
+    /// The tracer's scene.
+    #[getter]
+    fn scene(&self) -> PyScene {
+        PyScene {
+            scene: Arc::new(self.inner_scene().clone()),
+        }
+    }
+
+    /// Every ray of the scene, in parallel (the GIL released), as numpy arrays (`Rays`).
+    ///
+    /// `warm_start`: start each receiver from its neighbour's solution (see the library's
+    /// `BatchOptions::warm_start`). `progress`: `True` for a tqdm bar, or a callable
+    /// `progress(done, total)` called from the calling thread. `out`: the `Rays` of an
+    /// earlier `trace()` of this many rays, rewritten in place and returned (a loop then
+    /// allocates its arrays once).
+    #[pyo3(signature = (*, warm_start = true, progress = None, out = None))]
+    fn trace(
+        &mut self,
+        py: Python<'_>,
+        warm_start: bool,
+        progress: Option<&Bound<'_, PyAny>>,
+        out: Option<Bound<'_, PyRays>>,
+    ) -> PyResult<Py<PyRays>> {
+        let tracer = &self.tracer;
+        let scene = self.tracer.scene();
+        let batch = &mut self.batch;
+        let total = scene.num_rays();
+        let progress = Progress::new(py, progress, total)?;
+        let done = AtomicUsize::new(0);
+        let count = |n: usize| {
+            done.fetch_add(n, Ordering::Relaxed);
+        };
+        let opts = BatchOptions {
+            warm_start,
+            progress: progress.as_ref().map(|_| &count as &(dyn Fn(usize) + Sync)),
+            ..BatchOptions::default()
+        };
+        let solved = match &progress {
+            None => py.detach(|| tracer.try_trace_batch_into(&opts, batch)),
+            Some(progress) => {
+                let (finished, mut shown) = (AtomicUsize::new(0), 0);
+                let result = std::thread::scope(|scope| {
+                    let worker = scope.spawn(|| {
+                        let solved = tracer.try_trace_batch_into(&opts, batch);
+                        finished.store(1, Ordering::Release);
+                        solved
+                    });
+                    let mut reported = Ok(());
+                    while finished.load(Ordering::Acquire) == 0 {
+                        py.detach(|| std::thread::sleep(Duration::from_millis(50)));
+                        let now = done.load(Ordering::Relaxed);
+                        if reported.is_ok() && now > shown {
+                            reported = progress.report(now, shown, total);
+                            shown = now;
+                        }
+                    }
+                    let solved = py.detach(|| worker.join());
+                    (solved, reported)
+                });
+                let (solved, reported) = result;
+                let solved = solved.map_err(|_| PyRuntimeError::new_err("the batch panicked"))?;
+                reported?;
+                if shown < total {
+                    progress.report(total, shown, total)?;
+                }
+                progress.close()?;
+                solved
+            }
+        };
+        solved.map_err(|e| scene_error(py, &e))?;
+        let batch = &self.batch;
+        if let Some(out) = out {
+            write_batch_into(py, scene, batch, out.get())?;
+            return Ok(out.unbind());
+        }
+        let table = py.detach(|| {
+            let mut table = Table::new(batch.len(), width(scene));
+            write_batch(scene, batch, table.rows());
+            table
+        });
+        Py::new(py, table.finish(py, scene))
+    }
+
+    /// Every stationary path of every ray of the scene (not only the one the default start
+    /// reaches), in parallel with the GIL released, as `Rays` with `arrival`, `kink` and
+    /// `complete`: one entry per stationary path, ordered by time within its triple, and one
+    /// `no_path` (a proof) or `not_converged` entry per triple that has none.
+    fn trace_stationary(&self, py: Python<'_>) -> PyResult<PyRays> {
+        let tracer = &self.tracer;
+        let scene = self.inner_scene();
+        let rays = py
+            .detach(|| tracer.trace_stationary())
+            .map_err(|e| scene_error(py, &e.into()))?;
+        let table = py.detach(|| stationary_table(scene, &rays));
+        Ok(table.finish(py, scene))
+    }
+
+    /// One ray of path `path` (index or name) between any two points.
+    #[pyo3(signature = (source, receiver, path = None))]
+    fn solve(
+        &mut self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyRay> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let record = self
+            .tracer
+            .solve(source, receiver, path, &mut self.workspace);
+        let scene = self.tracer.scene();
+        let ws = &self.workspace;
+        Ok(PyRay::from_record(
+            py,
+            scene,
+            &record,
+            ws.points(),
+            ws.media(),
+        ))
+    }
+
+    /// The travel time of one ray (NaN without one): `solve` without building a `Ray`.
+    #[pyo3(signature = (source, receiver, path = None))]
+    fn time(
+        &mut self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<f64> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let record = self
+            .tracer
+            .solve(source, receiver, path, &mut self.workspace);
+        Ok(record.time)
+    }
+
+    /// Solves one ray of path `path` between any two points and returns the derivatives of
+    /// its time (`Gradient`): exact for the path as found (the envelope theorem at the solved
+    /// points), so they agree with differences of re-solved times. For a layout loop: move
+    /// things with the `set_*` calls, ask again.
+    #[pyo3(signature = (source, receiver, path = None))]
+    fn gradient(
+        &mut self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyGradient> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let record = self
+            .tracer
+            .solve(source, receiver, path, &mut self.workspace);
+        let scene = self.tracer.scene();
+        if !record.status.has_time() {
+            return PyGradient::new(py, scene, &record, None);
+        }
+        self.gradient
+            .solved_into(scene, path, &self.workspace)
+            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        PyGradient::new(py, scene, &record, Some(&self.gradient))
+    }
+
+    /// Rays of path `path` between `sources[i]` and `receivers[i]` (arrays of shape `(n, 2)`),
+    /// in parallel with the GIL released, as `Rays` (their `source` and `receiver` hold `i`).
+    #[pyo3(signature = (sources, receivers, path = None))]
+    fn solve_pairs(
+        &mut self,
+        py: Python<'_>,
+        sources: &Bound<'_, PyAny>,
+        receivers: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyRays> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let sources = points_arg(py, "sources", sources)?;
+        let receivers = points_arg(py, "receivers", receivers)?;
+        if sources.len() != receivers.len() {
+            return Err(argument_error(
+                py,
+                "receivers",
+                format!(
+                    "has {} points where sources has {}",
+                    receivers.len(),
+                    sources.len()
+                ),
+            ));
+        }
+        let scene = self.tracer.scene();
+        for (i, (&s, &r)) in sources.iter().zip(&receivers).enumerate() {
+            scene.check_solve(s, r, path).map_err(|e| {
+                let key = format!("{}s[{i}]", e.key);
+                scene_error(py, &SceneError::new(key, e.message))
+            })?;
+        }
+        let tracer = &self.tracer;
+        let table = py.detach(|| {
+            let mut table = Table::new(sources.len(), width(scene));
+            fill_parallel(table.rows(), 0, &Workspace::new, &|ws, first, rows| {
+                for row in 0..rows.time.len() {
+                    let i = first + row;
+                    let record = tracer.solve(sources[i], receivers[i], path, ws);
+                    let media = Some(ws.media().iter().copied());
+                    rows.write(row, scene, [i, i, path], &record, ws.points(), media);
+                }
+            });
+            table
+        });
+        Ok(table.finish(py, scene))
+    }
+
+    /// Every stationary path of path `path` between two points, ordered by time (a `Ray`
+    /// each, with its `arrival` index and, on `vertex` paths, its `kink`). Returns the list
+    /// and whether the search was complete (with `True`, an empty list proves there is none).
+    #[pyo3(signature = (source, receiver, path = None))]
+    fn stationary_paths(
+        &mut self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<(Vec<PyRay>, bool)> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let tracer = &self.tracer;
+        let out = &mut self.arrivals;
+        let search = py
+            .detach(|| tracer.stationary_paths(source, receiver, path, out))
+            .map_err(|e| scene_error(py, &e.into()))?;
+        let scene = self.tracer.scene();
+        let rays = self
+            .arrivals
+            .iter()
+            .enumerate()
+            .map(|(i, a)| PyRay::from_arrival(py, scene, i, a))
+            .collect();
+        Ok((rays, search.complete))
+    }
+
+    /// Moves source `index` to `point`, checked as `sources[index]` of a scene file (a
+    /// refused move leaves the tracer as it was). Cheap: nothing is rebuilt.
+    fn set_source(
+        &mut self,
+        py: Python<'_>,
+        index: usize,
+        point: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let p = point_arg(py, &format!("sources[{index}]"), point)?;
+        self.tracer
+            .set_source(index, p)
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// Moves receiver `index` to `point`, checked as `receivers[index]`. Cheap.
+    fn set_receiver(
+        &mut self,
+        py: Python<'_>,
+        index: usize,
+        point: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let p = point_arg(py, &format!("receivers[{index}]"), point)?;
+        self.tracer
+            .set_receiver(index, p)
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// Moves every receiver: `points` of shape `(n, 2)`, `n` the scene's receivers. Moves
+    /// are checked one by one; a refused one raises, and the receivers before it stay moved.
+    fn set_receivers(&mut self, py: Python<'_>, points: &Bound<'_, PyAny>) -> PyResult<()> {
+        let points = points_arg(py, "receivers", points)?;
+        let n = self.inner_scene().receivers().len();
+        if points.len() != n {
+            return Err(argument_error(
+                py,
+                "receivers",
+                format!("has {} points; the scene has {n} receivers", points.len()),
+            ));
+        }
+        for (i, p) in points.into_iter().enumerate() {
+            self.tracer
+                .set_receiver(i, p)
+                .map_err(|e| scene_error(py, &e))?;
+        }
+        Ok(())
+    }
+
+    /// Gives interface `interface` (a name or an index) new vertices, `points` of shape
+    /// `(n, 2)`, checked as `interfaces.NAME.points` of a scene file (a refused change leaves
+    /// the tracer as it was). Rebuilds what depends on the interfaces.
+    fn set_interface_points(
+        &mut self,
+        py: Python<'_>,
+        interface: &Bound<'_, PyAny>,
+        points: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let index = self.interface_index(py, interface)?;
+        let name = &self.inner_scene().interfaces()[index].name;
+        let points = points_arg(py, &format!("interfaces.{name}.points"), points)?;
+        self.tracer
+            .set_interface_points(index, &points)
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// Gives medium `medium` (a name or an index) the speed `speed`.
+    fn set_medium_speed(
+        &mut self,
+        py: Python<'_>,
+        medium: &Bound<'_, PyAny>,
+        speed: f64,
+    ) -> PyResult<()> {
+        let index = self.medium_index(py, medium)?;
+        self.tracer
+            .set_medium_speed(index, speed)
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// Gives medium `medium` (a name or an index) the refractive index `index`.
+    fn set_medium_index(
+        &mut self,
+        py: Python<'_>,
+        medium: &Bound<'_, PyAny>,
+        index: f64,
+    ) -> PyResult<()> {
+        let medium = self.medium_index(py, medium)?;
+        self.tracer
+            .set_medium_index(medium, index)
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// The scene's `search` (its `"search"` section): every arrival per (source, receiver),
+    /// ordered by time, as a list of dicts with `source`, `receiver`, `steps` (as in the
+    /// scene: `{"reflect": name}`), `media`, `status`, `time`, `points`, `iterations`,
+    /// `complete`.
+    fn search<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let tracer = &self.tracer;
+        let arrivals = py
+            .detach(|| tracer.search())
+            .map_err(|e| argument_error(py, "search", e.to_string()))?;
+        let scene = self.inner_scene();
+        let list = PyList::empty(py);
+        for a in &arrivals {
+            list.append(search_arrival(py, scene, a)?)?;
+        }
+        Ok(list)
+    }
+}
+
+fn search_arrival<'py>(
+    py: Python<'py>,
+    scene: &Scene,
+    a: &SearchArrival,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("source", a.source)?;
+    d.set_item("receiver", a.receiver)?;
+    let steps = PyList::empty(py);
+    for step in &a.steps {
+        let s = PyDict::new(py);
+        let kind = match step.kind {
+            StepKind::Reflect => "reflect",
+            StepKind::Refract => "refract",
+        };
+        s.set_item(kind, &scene.interfaces()[step.interface].name)?;
+        steps.append(s)?;
+    }
+    d.set_item("steps", steps)?;
+    let arrival = &a.arrival;
+    d.set_item("media", medium_names(scene, arrival.media.iter().copied()))?;
+    d.set_item("status", arrival.status.as_str())?;
+    d.set_item("time", arrival.time)?;
+    d.set_item("points", points_array(py, &arrival.points))?;
+    d.set_item("iterations", arrival.iterations)?;
+    d.set_item("residual", arrival.residual)?;
+    d.set_item("reason", arrival.reason.map(|r| r.describe(scene)))?;
+    d.set_item("kink", kink_name(arrival.kink))?;
+    d.set_item("complete", arrival.complete)?;
+    Ok(d)
+}
+
+/// The compiled core of the `eigenray` package.
+#[pymodule]
+fn _eigenray(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyScene>()?;
+    m.add_class::<PyTracer>()?;
+    m.add_class::<PyRay>()?;
+    m.add_class::<PyRays>()?;
+    m.add_class::<PyGradient>()?;
+    m.add("EigenrayError", m.py().get_type::<EigenrayError>())?;
+    m.add("STATUS_NAMES", status_names())?;
+    Ok(())
+}
