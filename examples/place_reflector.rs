@@ -18,6 +18,9 @@ use eigenray::argmin_bridge::{Placement, ReflectorPlacement};
 use eigenray::{Point, Scene, SceneSpec, Tracer, Workspace};
 use nalgebra::DVector;
 
+#[path = "support/svg.rs"]
+mod svg;
+
 /// Prints the objective and the placement after every iteration.
 struct PrintObjective;
 
@@ -132,27 +135,10 @@ fn picture(
 ) -> Result<String, Box<dyn std::error::Error>> {
     let (x0, x1, y0, y1) = (-1.0, 7.0, 0.0, 8.0);
     let scale = 80.0;
-    let px = |p: Point| ((p.x - x0) * scale, (y1 - p.y) * scale);
-    let mut s = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" \
-         font-family=\"sans-serif\" font-size=\"14\">\n\
-         <rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n",
-        (x1 - x0) * scale,
-        (y1 - y0) * scale
-    );
-    let line = |pts: &[Point], style: &str| {
-        let coords: Vec<String> = pts
-            .iter()
-            .map(|&p| {
-                let (x, y) = px(p);
-                format!("{x:.1},{y:.1}")
-            })
-            .collect();
-        format!(
-            "<polyline points=\"{}\" fill=\"none\" {style}/>\n",
-            coords.join(" ")
-        )
-    };
+    let canvas = svg::Canvas::new([x0, x1], [y0, y1], [scale, scale], 0.0);
+    let px = |p: Point| canvas.px(p);
+    let mut s = canvas.header();
+    let line = |pts: &[Point], style: &str| canvas.polyline(pts, style);
     s += &line(&[source, listener], "stroke=\"#999\"");
     for (p, style, label) in [
         (start, "stroke=\"#999\" stroke-dasharray=\"6 4\"", "start"),

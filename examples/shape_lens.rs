@@ -20,6 +20,9 @@ use eigenray::argmin_bridge::LensProfile;
 use eigenray::{Point, SceneSpec, Tracer, Workspace};
 use nalgebra::DVector;
 
+#[path = "support/svg.rs"]
+mod svg;
+
 /// Prints the objective after every iteration.
 struct PrintObjective;
 
@@ -147,27 +150,10 @@ fn picture(
     // The picture stretches y: the lens is thin and the distances long.
     let (x0, x1, y0, y1) = (-21.0, 22.0, -3.0, 3.0);
     let (sx, sy) = (24.0, 110.0);
-    let px = |p: Point| ((p.x - x0) * sx, (y1 - p.y) * sy);
-    let mut s = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" \
-         font-family=\"sans-serif\" font-size=\"14\">\n\
-         <rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n",
-        (x1 - x0) * sx,
-        (y1 - y0) * sy + 300.0
-    );
-    let line = |pts: &[Point], style: &str| {
-        let coords: Vec<String> = pts
-            .iter()
-            .map(|&p| {
-                let (x, y) = px(p);
-                format!("{x:.1},{y:.1}")
-            })
-            .collect();
-        format!(
-            "<polyline points=\"{}\" fill=\"none\" {style}/>\n",
-            coords.join(" ")
-        )
-    };
+    let canvas = svg::Canvas::new([x0, x1], [y0, y1], [sx, sy], 300.0);
+    let px = |p: Point| canvas.px(p);
+    let mut s = canvas.header();
+    let line = |pts: &[Point], style: &str| canvas.polyline(pts, style);
     s += &line(
         &[Point::new(0.0, -HALF_HEIGHT), Point::new(0.0, HALF_HEIGHT)],
         "stroke=\"#3a7bd5\" stroke-width=\"2\"",
@@ -211,17 +197,7 @@ fn picture(
         back.insert(0, Point::new(0.0, HALF_HEIGHT));
         back.push(Point::new(0.0, -HALF_HEIGHT));
         back.push(Point::new(0.0, HALF_HEIGHT));
-        let coords: Vec<String> = back
-            .iter()
-            .map(|&p| {
-                let (x, y) = inset(p);
-                format!("{x:.1},{y:.1}")
-            })
-            .collect();
-        s += &format!(
-            "<polyline points=\"{}\" fill=\"none\" {style}/>\n",
-            coords.join(" ")
-        );
+        s += &svg::polyline_through(back.iter().map(|&p| inset(p)), style);
     }
     for (p, label) in [(source, "source"), (focus, "focus")] {
         let (x, y) = px(p);
