@@ -68,16 +68,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     let middle = VERTICES / 2;
     let free: Vec<usize> = (0..VERTICES).filter(|&v| v != middle).collect();
-    let problem = LensProfile::new(
-        spec()?,
-        "back",
-        free.clone(),
-        0,
-        source,
-        1.0,
-        entries.clone(),
-        focus,
-    )?;
+    // The objective (built twice: the optimiser takes the first).
+    let lens = spec()?;
+    let profile = || {
+        LensProfile::new(
+            lens.clone(),
+            "back",
+            free.clone(),
+            0,
+            source,
+            1.0,
+            entries.clone(),
+            focus,
+        )
+    };
+    let problem = profile()?;
     let flat = vec![THICKNESS; free.len()];
     let before = problem.misfit(&flat)?;
     let spread = |t: &[f64]| {
@@ -107,16 +112,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .expect("a best profile")
         .as_slice()
         .to_vec();
-    let problem = LensProfile::new(
-        spec()?,
-        "back",
-        free.clone(),
-        0,
-        source,
-        1.0,
-        entries.clone(),
-        focus,
-    )?;
+    let problem = profile()?;
     let after = problem.misfit(&shaped)?;
     println!(
         "shaped after {} iterations ({:.1} ms): path times spread over {:.3e} ({})",
