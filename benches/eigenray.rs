@@ -204,8 +204,9 @@ fn versus_argmin(c: &mut Criterion) {
     }
 }
 
-/// The cost of a ray's gradient: `Tracer::solve` alone and followed by
-/// `Gradient::solved_into` (reused, allocation-free), one receiver after the other, for one
+/// The cost of a ray's gradient: `Tracer::solve` alone, followed by `Gradient::solved_into`
+/// (reused, allocation-free), and `Tracer::solve_with_gradient` (one call), one receiver after
+/// the other, for one
 /// refraction (`demo::air_water`) and eight (`demo::layer_stack(8, …)`, `demo::dipping_stack`).
 fn gradient(c: &mut Criterion) {
     let cases = [
@@ -236,6 +237,15 @@ fn gradient(c: &mut Criterion) {
                     black_box(g.solved_into(scene, 0, &ws).is_ok());
                 }
                 black_box(record)
+            })
+        });
+        group.bench_function("ray_with_gradient", |b| {
+            b.iter(|| {
+                next = (next + 1) % receivers.len();
+                let record =
+                    tracer.solve_with_gradient(source, receivers[next], 0, &mut ws, &mut g);
+                black_box(g.source);
+                black_box(record.is_ok())
             })
         });
         group.finish();

@@ -43,7 +43,7 @@ use crate::geom::{Point, Vec2};
 use crate::polyline::Polyline;
 use crate::scene::{Scene, Step};
 use crate::solver::thomas;
-use crate::trace::{Ray, Tracer, Workspace};
+use crate::trace::{Ray, RayRecord, SegmentFrame, Tracer, Workspace};
 
 /// The derivative of a travel time with respect to one polyline vertex.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -175,50 +175,94 @@ fn locate(line: &Polyline, p: Point, hint: Option<usize>) -> Option<Contact> {
 /// Where `p` lies on segment `j` of `line`, if it lies there (to round-off).
 #[inline(always)]
 fn contact_on(line: &Polyline, j: usize, p: Point) -> Option<Contact> {
-    let (a, _) = line.segment(j);
-    let len = line.segment_length(j);
-    let t = line.tangent(j);
-    let d = p - a;
-    let along = d.dot(t);
-    let round = 16.0 * f64::EPSILON * ((p.x.abs() + p.y.abs()) + (a.x.abs() + a.y.abs()));
-    let slack = 1e-9 * len + 4.0 * round;
-    if !(d.cross(t).abs() <= slack && along >= -slack && along <= len + slack) {
-        return None;
-    }
-    let b = if j + 1 == line.vertices().len() {
+    let (start, _) = line.segment(j);
+    let frame = SegmentFrame {
+        start,
+        tangent: line.tangent(j),
+        length: line.segment_length(j),
+    };
+    let end_vertex = if j + 1 == line.vertices().len() {
         0
     } else {
         j + 1
     };
-    // On a vertex: within round-off of it (where the solver holds a point, it is exact).
-    let snap = 1e-12 * len + round;
-    let (at_vertex, lambda) = if along <= snap {
-        (Some(j), 0.0)
-    } else if len - along <= snap {
-        (Some(b), 1.0)
-    } else {
-        (None, along / len)
-    };
-    Some(Contact {
-        seg: j,
-        lambda,
-        a: j,
-        b,
-        at_vertex,
-    })
+    let at = SegmentPoint::of(&frame, p);
+    at.on_segment().then(|| at.contact(j, end_vertex))
+}
+
+/// A point measured against a segment: its distance along the segment from the start, across
+/// it, and the round-off of both.
+struct SegmentPoint {
+    along: f64,
+    across: f64,
+    length: f64,
+    round: f64,
+}
+
+impl SegmentPoint {
+    #[inline(always)]
+    fn of(frame: &SegmentFrame, p: Point) -> SegmentPoint {
+        let (a, t) = (frame.start, frame.tangent);
+        let d = p - a;
+        SegmentPoint {
+            along: d.dot(t),
+            across: d.cross(t),
+            length: frame.length,
+            round: 16.0 * f64::EPSILON * ((p.x.abs() + p.y.abs()) + (a.x.abs() + a.y.abs())),
+        }
+    }
+
+    /// Whether the point is on the segment, to round-off.
+    #[inline(always)]
+    fn on_segment(&self) -> bool {
+        let slack = 1e-9 * self.length + 4.0 * self.round;
+        self.across.abs() <= slack && self.along >= -slack && self.along <= self.length + slack
+    }
+
+    /// The contact of a point on segment `seg`, which ends at vertex `end_vertex`.
+    #[inline(always)]
+    fn contact(&self, seg: usize, end_vertex: usize) -> Contact {
+        let (along, len) = (self.along, self.length);
+        // On a vertex: within round-off of it (where the solver holds a point, it is exact).
+        let snap = 1e-12 * len + self.round;
+        let (at_vertex, lambda) = if along <= snap {
+            (Some(seg), 0.0)
+        } else if len - along <= snap {
+            (Some(end_vertex), 1.0)
+        } else {
+            (None, along / len)
+        };
+        Contact {
+            seg,
+            lambda,
+            a: seg,
+            b: end_vertex,
+            at_vertex,
+        }
+    }
 }
 
 /// The unit direction and length of the leg from `p` to `q` (a zero direction for a leg of
 /// zero length).
-#[inline]
+#[inline(always)]
 fn leg(p: Point, q: Point) -> (Vec2, f64) {
     let d = q - p;
     let l2 = d.x * d.x + d.y * d.y;
-    let l = if (f64::MIN_POSITIVE..1e300).contains(&l2) {
-        l2.sqrt()
+    // The common leg in line, without a select: a squared length that neither underflows nor
+    // overflows.
+    if (f64::MIN_POSITIVE..1e300).contains(&l2) {
+        let l = l2.sqrt();
+        (d * (1.0 / l), l)
     } else {
-        d.length()
-    };
+        leg_unusual(d)
+    }
+}
+
+/// [`leg`] of a leg of zero, tiny or huge length (out of line: the common ray never comes here).
+#[cold]
+#[inline(never)]
+fn leg_unusual(d: Vec2) -> (Vec2, f64) {
+    let l = d.length();
     (
         if l > 0.0 {
             d * (1.0 / l)
@@ -322,6 +366,15 @@ fn gradient_parts(
     }
     let receiver = u_prev * w_prev;
     Ok(EndGradients { source, receiver })
+}
+
+/// The slownesses of the two legs' media `media`.
+#[inline(always)]
+fn leg_slownesses(scene: &Scene, [m0, m1]: [usize; 2]) -> Result<[f64; 2], DerivativeError> {
+    match (scene.media().get(m0), scene.media().get(m1)) {
+        (Some(a), Some(b)) => Ok([a.slowness, b.slowness]),
+        _ => Err(DerivativeError::Media),
+    }
 }
 
 /// Sorts `v` by interface and vertex and adds up the entries of one vertex into one; returns
@@ -478,26 +531,63 @@ impl Gradient {
         &mut self,
         scene: &Scene,
         step: &Step,
-        [p0, p1, p2]: [Point; 3],
-        [m0, m1]: [usize; 2],
+        points: [Point; 3],
+        media: [usize; 2],
         hint: Option<usize>,
     ) -> Result<(), DerivativeError> {
-        let all = scene.media();
-        let (Some(medium0), Some(medium1)) = (all.get(m0), all.get(m1)) else {
-            return Err(DerivativeError::Media);
-        };
+        let w = leg_slownesses(scene, media)?;
         let line = &scene.interfaces()[step.interface].polyline;
-        let c = locate(line, p1, hint).ok_or(DerivativeError::OffInterface { step: 0 })?;
+        let c = locate(line, points[1], hint).ok_or(DerivativeError::OffInterface { step: 0 })?;
+        self.fill_one_at(step.interface, c, points, media, w);
+        Ok(())
+    }
+
+    /// [`fill_one`](Self::fill_one) for a ray of the flat kernel's plan, whose interaction
+    /// point the solve put on `segment`, the interface's one segment (nothing to locate), and
+    /// whose slowness entries are already sized.
+    #[inline(always)]
+    fn fill_flat(
+        &mut self,
+        scene: &Scene,
+        interface: usize,
+        segment: &SegmentFrame,
+        points: [Point; 3],
+        media: [usize; 2],
+    ) -> Result<(), DerivativeError> {
+        let w = leg_slownesses(scene, media)?;
+        let at = SegmentPoint::of(segment, points[1]);
+        debug_assert!(at.on_segment());
+        self.fill_one_at(interface, at.contact(0, 1), points, media, w);
+        Ok(())
+    }
+
+    /// The gradient of a ray of one interaction at `c` on interface `interface`, through
+    /// `points` with leg media `media` of slownesses `w` (valid indices; the slowness entries
+    /// already sized).
+    #[inline(always)]
+    fn fill_one_at(
+        &mut self,
+        interface: usize,
+        c: Contact,
+        [p0, p1, p2]: [Point; 3],
+        [m0, m1]: [usize; 2],
+        [w0, w1]: [f64; 2],
+    ) {
         let ((u0, l0), (u1, l1)) = (leg(p0, p1), leg(p1, p2));
-        let (w0, w1) = (medium0.slowness, medium1.slowness);
-        let slowness = &mut self.slowness[..all.len()];
-        slowness.fill(0.0);
-        slowness[m0] += l0;
-        slowness[m1] += l1;
+        let slowness = &mut self.slowness[..];
+        if let [a, b] = slowness
+            && m0 != m1
+        {
+            // Two media, both crossed: every entry written, none to clear first.
+            (*a, *b) = if m0 == 0 { (l0, l1) } else { (l1, l0) };
+        } else {
+            slowness.fill(0.0);
+            slowness[m0] += l0;
+            slowness[m1] += l1;
+        }
         self.source = u0 * -w0;
         self.receiver = u1 * w1;
         let g = u0 * w0 - u1 * w1;
-        let interface = step.interface;
         let share = |vertex, d| VertexGradient {
             interface,
             vertex,
@@ -520,7 +610,16 @@ impl Gradient {
                 }
             }
         }
-        Ok(())
+    }
+
+    /// The value of a ray without a time: NaN for the source, the receiver and every medium,
+    /// no vertices.
+    fn set_none(&mut self, media: usize) {
+        let nan = Vec2::new(f64::NAN, f64::NAN);
+        (self.source, self.receiver) = (nan, nan);
+        self.slowness.clear();
+        self.slowness.resize(media, f64::NAN);
+        self.vertices.clear();
     }
 
     /// `(dT/dx, dT/dy)` of vertex `vertex` of interface `interface` (zero when the path does
@@ -909,6 +1008,48 @@ impl Tracer {
     /// See [`DerivativeError`].
     pub fn gradient(&self, path: usize, ws: &Workspace) -> Result<Gradient, DerivativeError> {
         Gradient::of_solved(self.scene(), path, ws)
+    }
+
+    /// Solves path `path` between two points as [`solve`](Self::solve) does, and puts the
+    /// ray's [`Gradient`] in `gradient`, reusing its memory: the call of a layout loop. A ray
+    /// without a time leaves NaN in `gradient`'s source, receiver and slownesses, and no
+    /// vertices. The gradient is [`Gradient::of_solved`]'s, bit for bit; a refraction at an
+    /// interface of one segment (the flat kernel's plan) skips finding its point on the
+    /// interface, which the solve already knows.
+    ///
+    /// # Errors
+    /// See [`DerivativeError`] (none for the rays of the solve, whose points lie on their
+    /// interfaces).
+    ///
+    /// # Panics
+    /// As [`solve`](Self::solve).
+    pub fn solve_with_gradient(
+        &self,
+        source: Point,
+        receiver: Point,
+        path: usize,
+        ws: &mut Workspace,
+        gradient: &mut Gradient,
+    ) -> Result<RayRecord, DerivativeError> {
+        let record = self.solve(source, receiver, path, ws);
+        let scene = self.scene();
+        let media = scene.media().len();
+        if !record.status.has_time() {
+            gradient.set_none(media);
+            return Ok(record);
+        }
+        if let Some(segment) = self.flat_segment(path)
+            && let (&[p0, p1, p2], &[m0, m1]) = (ws.points(), ws.media())
+        {
+            if gradient.slowness.len() != media {
+                gradient.slowness.resize(media, 0.0);
+            }
+            let interface = scene.paths()[path].steps[0].interface;
+            gradient.fill_flat(scene, interface, &segment, [p0, p1, p2], [m0, m1])?;
+        } else {
+            gradient.solved_into(scene, path, ws)?;
+        }
+        Ok(record)
     }
 
     /// The [`PointSensitivities`] of the ray of path `path` last solved in `ws`.

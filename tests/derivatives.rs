@@ -553,6 +553,45 @@ fn batch_gradients_are_the_rays_gradients() {
     assert!(timed > 20);
 }
 
+/// `Tracer::solve_with_gradient` gives `Tracer::solve` and then `Gradient::of_solved`, bit for
+/// bit: on the flat kernel's plan (which skips locating its point) with rays the kernel hands
+/// over (grazing ones, near the interface's ends), rays without a time, and the random scenes.
+#[test]
+fn one_call_gives_the_solve_and_its_gradient() {
+    let mut rng = Rng(7);
+    let mut docs = random_docs();
+    docs.push(serde_json::to_value(eigenray::demo::air_water(4, 1)).unwrap());
+    let (mut compared, mut none) = (0, 0);
+    for doc in &docs {
+        let scene = Scene::from_json(&doc.to_string()).unwrap();
+        let tracer = Tracer::new(&scene).unwrap();
+        let (mut one, mut two) = (Workspace::new(), Workspace::new());
+        let mut g = Gradient::default();
+        for _ in 0..300 {
+            let point = |rng: &mut Rng| Point::new(rng.uniform(-3.0, 4.0), rng.uniform(-3.0, 3.0));
+            let (s, r) = (point(&mut rng), point(&mut rng));
+            for path in 0..scene.paths().len() {
+                let record = tracer
+                    .solve_with_gradient(s, r, path, &mut one, &mut g)
+                    .unwrap();
+                let want = tracer.solve(s, r, path, &mut two);
+                assert_eq!(format!("{record:?}"), format!("{want:?}"));
+                assert_eq!(one.points(), two.points());
+                if want.status.has_time() {
+                    assert_eq!(g, Gradient::of_solved(&scene, path, &two).unwrap());
+                    compared += 1;
+                } else {
+                    assert!(g.source.x.is_nan() && g.receiver.y.is_nan());
+                    assert!(g.slowness.iter().all(|w| w.is_nan()) && g.vertices.is_empty());
+                    none += 1;
+                }
+            }
+        }
+    }
+    println!("{compared} gradients compared, {none} rays without a time");
+    assert!(compared > 2000 && none > 1000, "{compared} {none}");
+}
+
 /// Once warm, the per-ray calls allocate nothing.
 #[test]
 fn warm_calls_allocate_nothing() {

@@ -1170,15 +1170,17 @@ impl PyTracer {
         let (source, receiver) = self.checked_points(py, source, receiver, path)?;
         let record = self
             .tracer
-            .solve(source, receiver, path, &mut self.workspace);
-        let scene = self.tracer.scene();
-        if !record.status.has_time() {
-            return PyGradient::new(py, scene, &record, None);
-        }
-        self.gradient
-            .solved_into(scene, path, &self.workspace)
+            .solve_with_gradient(
+                source,
+                receiver,
+                path,
+                &mut self.workspace,
+                &mut self.gradient,
+            )
             .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-        PyGradient::new(py, scene, &record, Some(&self.gradient))
+        let scene = self.tracer.scene();
+        let gradient = record.status.has_time().then_some(&self.gradient);
+        PyGradient::new(py, scene, &record, gradient)
     }
 
     /// Rays of path `path` between `sources[i]` and `receivers[i]` (arrays of shape `(n, 2)`),

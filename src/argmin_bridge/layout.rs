@@ -103,7 +103,9 @@ impl<'a> SourceLocation<'a> {
         let mut predicted = Vec::with_capacity(self.observed.len());
         for (i, o) in self.observed.iter().enumerate() {
             scene.check_solve(source, o.receiver, o.path)?;
-            let ray = self.tracer.solve(source, o.receiver, o.path, ws);
+            let ray = self
+                .tracer
+                .solve_with_gradient(source, o.receiver, o.path, ws, gradient)?;
             if !ray.status.has_time() {
                 return Err(Error::msg(format!(
                     "observation {i}: no ray of path {} from the trial source ({}, {}) to \
@@ -111,7 +113,6 @@ impl<'a> SourceLocation<'a> {
                     o.path, source.x, source.y, o.receiver.x, o.receiver.y, ray.status
                 )));
             }
-            gradient.solved_into(scene, o.path, ws)?;
             let miss = ray.time - o.time;
             cost += 0.5 * miss * miss;
             grad += gradient.source * miss;

@@ -54,6 +54,14 @@ pub(crate) struct FlatRefraction {
     steps: usize,
 }
 
+/// A segment's start, unit tangent and length.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SegmentFrame {
+    pub start: Point,
+    pub tangent: Vec2,
+    pub length: f64,
+}
+
 /// A converged [`FlatRefraction::solve`].
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct FlatSolution {
@@ -248,6 +256,18 @@ impl FlatRefraction {
     #[inline(always)]
     pub(crate) fn point(&self, s: f64) -> Point {
         self.origin + self.t * s
+    }
+
+    /// The interface's one segment as the kernel holds it: the start, unit tangent and length
+    /// of [`Polyline::segment`], [`Polyline::tangent`] and [`Polyline::segment_length`], bit
+    /// for bit.
+    #[inline(always)]
+    pub(crate) fn frame(&self) -> SegmentFrame {
+        SegmentFrame {
+            start: self.origin,
+            tangent: self.t,
+            length: self.len,
+        }
     }
 
     /// The interface's normal ([`Polyline::normal`]).

@@ -32,6 +32,7 @@ mod update;
 
 pub(crate) use classify::{Classifier, Sequence};
 pub use complete::{Arrival, Kink, Stationary, StationaryError};
+pub(crate) use flat::SegmentFrame;
 pub(crate) use mirrors::{MirrorArrival, MirrorScratch, MirrorWalls};
 pub(crate) use one_step::{OneStepStart, flat_status};
 pub use plan::Kernels;
@@ -513,6 +514,16 @@ impl Tracer {
     /// The classifier.
     pub(crate) fn classifier(&self) -> &Classifier {
         &self.classifier
+    }
+
+    /// The one segment of the interface of path `path` when the flat kernel's plan solves
+    /// its rays (a refraction at an open interface of one segment, the media given).
+    #[inline(always)]
+    pub(crate) fn flat_segment(&self, path: usize) -> Option<SegmentFrame> {
+        match self.plans.get(path) {
+            Some(PathPlan::FlatRefraction(_, flat)) => Some(flat.frame()),
+            _ => None,
+        }
     }
 
     /// Solves one ray from `start` as its path's plan says: the one dispatch of every ray.
