@@ -171,15 +171,19 @@ fn npy_header(n: usize, shape: NpyShape, layout: Layout) -> Vec<u8> {
         descr.push_str(", ('arrival', '<u4'), ('kink', '|u1'), ('complete', '|u1')");
     }
     if let Some(media) = shape.gradient_media {
-        let slots = 2 * shape.k;
-        descr.push_str(&format!(
-            ", ('gradient_source', '<f8', (2,)), ('gradient_receiver', '<f8', (2,)), \
-             ('gradient_slowness', '<f8', ({media},)), \
-             ('gradient_vertex_interface', '<u4', ({slots},)), \
-             ('gradient_vertex', '<u4', ({slots},)), ('gradient_vertices', '<f8', ({slots}, 2))"
-        ));
+        descr.push_str(&gradient_npy_descr(media, 2 * shape.k));
     }
     npy_header_of(n, &descr)
+}
+
+/// The `.npy` fields of a gradient of `media` media and `slots` vertices (after others).
+fn gradient_npy_descr(media: usize, slots: usize) -> String {
+    format!(
+        ", ('gradient_source', '<f8', (2,)), ('gradient_receiver', '<f8', (2,)), \
+         ('gradient_slowness', '<f8', ({media},)), \
+         ('gradient_vertex_interface', '<u4', ({slots},)), \
+         ('gradient_vertex', '<u4', ({slots},)), ('gradient_vertices', '<f8', ({slots}, 2))"
+    )
 }
 
 /// A count as a `.npy` `<u4` (saturating).
@@ -667,6 +671,17 @@ points,path_name,media,reason,arrival,kink,complete\n";
 const CSV_GRADIENT_COLUMNS: &[u8] =
     b",gradient_source,gradient_receiver,gradient_slowness,gradient_vertices\n";
 
+/// Writes the CSV header line `header`, with the gradient columns when `derivatives`.
+fn csv_header<W: Write>(out: &mut W, header: &[u8], derivatives: bool) -> io::Result<()> {
+    match header.strip_suffix(b"\n") {
+        Some(columns) if derivatives => {
+            out.write_all(columns)?;
+            out.write_all(CSV_GRADIENT_COLUMNS)
+        }
+        _ => out.write_all(header),
+    }
+}
+
 /// Rays formatted at a time (in [`PIECE`]s, in parallel) before they are written out in order.
 const WINDOW: usize = 1 << 14;
 /// Rays per parallel piece of a window.
@@ -709,12 +724,7 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
                 Layout::Rays => CSV_HEADER,
                 Layout::Stationary => CSV_HEADER_STATIONARY,
             };
-            if derivatives {
-                out.write_all(&header[..header.len() - 1])?;
-                out.write_all(CSV_GRADIENT_COLUMNS)?;
-            } else {
-                out.write_all(header)?;
-            }
+            csv_header(&mut out, header, derivatives)?;
         }
         Format::Jsonl => {}
     }
@@ -1012,9 +1022,10 @@ fn arrival_steps(scene: &Scene, arrivals: &[SearchArrival]) -> usize {
     most.max(scene.search().map_or(0, |s| s.max_steps))
 }
 
-/// The `.npy` header of `n` arrival records of at most `k` steps.
-fn arrivals_npy_header(n: usize, k: usize) -> Vec<u8> {
-    let descr = format!(
+/// The `.npy` header of `n` arrival records of at most `k` steps, with the gradient fields of
+/// `media` media when the scene asks for derivatives.
+fn arrivals_npy_header(n: usize, k: usize, gradient_media: Option<usize>) -> Vec<u8> {
+    let mut descr = format!(
         "('source', '<u4'), ('receiver', '<u4'), ('steps', '<u4'), ('step_kind', '|u1', ({k},)), \
          ('step_interface', '<u4', ({k},)), ('status', '|u1'), ('kink', '|u1'), \
          ('complete', '|u1'), ('iterations', '<u4'), ('time', '<f8'), ('residual', '<f8'), \
@@ -1022,6 +1033,9 @@ fn arrivals_npy_header(n: usize, k: usize) -> Vec<u8> {
         k + 2,
         k + 1
     );
+    if let Some(media) = gradient_media {
+        descr.push_str(&gradient_npy_descr(media, 2 * k));
+    }
     npy_header_of(n, &descr)
 }
 
@@ -1067,11 +1081,8 @@ fn arrival_json(buf: &mut Vec<u8>, scene: &Scene, names: &Names, s: &SearchArriv
     float(buf, a.time);
     buf.extend_from_slice(b",\"points\":");
     points_json(buf, &a.points);
-    if scene.solver().derivatives {
-        let g = Gradient::of_points(scene, &s.steps, &a.points, &a.media);
-        if let Ok(g) = g {
-            gradient_json(buf, names, &g);
-        }
+    if let Some(g) = arrival_gradient(scene, s) {
+        gradient_json(buf, names, &g);
     }
     buf.extend_from_slice(b",\"iterations\":");
     int(buf, a.iterations);
@@ -1088,6 +1099,15 @@ fn arrival_json(buf: &mut Vec<u8>, scene: &Scene, names: &Names, s: &SearchArriv
     } else {
         b",\"complete\":false}"
     });
+}
+
+/// The gradient of an arrival's time when the scene asks for derivatives.
+fn arrival_gradient(scene: &Scene, s: &SearchArrival) -> Option<Gradient> {
+    let a = &s.arrival;
+    let derivatives = scene.solver().derivatives;
+    derivatives
+        .then(|| Gradient::of_points(scene, &s.steps, &a.points, &a.media).ok())
+        .flatten()
 }
 
 /// One search arrival as a CSV line.
@@ -1137,11 +1157,15 @@ fn arrival_csv(buf: &mut Vec<u8>, scene: &Scene, names: &Names, s: &SearchArriva
     }
     buf.push(b',');
     buf.extend_from_slice(if a.complete { b"true" } else { b"false" });
+    if scene.solver().derivatives {
+        gradient_csv(buf, arrival_gradient(scene, s).as_ref());
+    }
     buf.push(b'\n');
 }
 
-/// One search arrival as a `.npy` record of at most `k` steps.
-fn arrival_npy(buf: &mut Vec<u8>, k: usize, s: &SearchArrival) {
+/// One search arrival as a `.npy` record of at most `k` steps (of `scene`, for the gradient
+/// fields when it asks for derivatives).
+fn arrival_npy(buf: &mut Vec<u8>, scene: &Scene, k: usize, s: &SearchArrival) {
     let a = &s.arrival;
     u32_le(buf, s.source);
     u32_le(buf, s.receiver);
@@ -1165,6 +1189,10 @@ fn arrival_npy(buf: &mut Vec<u8>, k: usize, s: &SearchArrival) {
     buf.extend_from_slice(&a.time.to_le_bytes());
     buf.extend_from_slice(&a.residual.to_le_bytes());
     points_media_npy(buf, &a.points, k + 2, Some(a.media.iter().copied()), k + 1);
+    if scene.solver().derivatives {
+        let g = arrival_gradient(scene, s);
+        gradient_npy(buf, scene.media().len(), 2 * k, g.as_ref());
+    }
 }
 
 /// Bytes gathered before they are handed to the writer.
@@ -1194,7 +1222,7 @@ fn arrival_lines<W: Write>(
                 buf.push(b'\n');
             }
             Format::Csv => arrival_csv(&mut buf, scene, names, a),
-            Format::Npy => arrival_npy(&mut buf, k, a),
+            Format::Npy => arrival_npy(&mut buf, scene, k, a),
         }
         if buf.len() >= CHUNK {
             out.write_all(&buf)?;
@@ -1214,7 +1242,8 @@ const ARRIVALS_CSV_HEADER: &[u8] =
 /// (the step sequence in the scene's notation), the leg `media`, `status` (`converged`,
 /// `vertex` or `obstructed`), `kink` (on `vertex` arrivals), `time`, `points` (source,
 /// interaction points, receiver), `iterations`, `residual` (when finite), a `reason` when it
-/// is not converged, and `complete` (whether the search of its sequence was complete).
+/// is not converged, and `complete` (whether the search of its sequence was complete). With
+/// `"derivatives": true` each also carries its gradient, as the rays do in each format.
 ///
 /// - [`Format::Json`]: `{"arrivals": [{"source": 0, "receiver": 0, "steps": [{"reflect":
 ///   "w0"}], "media": ["air", "air"], "status": "converged", "time": …, "points": […], …}]}`.
@@ -1244,10 +1273,11 @@ pub fn write_arrivals<W: Write>(
     match format {
         Format::Json => out.write_all(b"{\"arrivals\":[")?,
         Format::Jsonl => {}
-        Format::Csv => out.write_all(ARRIVALS_CSV_HEADER)?,
+        Format::Csv => csv_header(&mut out, ARRIVALS_CSV_HEADER, scene.solver().derivatives)?,
         Format::Npy => out.write_all(&arrivals_npy_header(
             arrivals.len(),
             arrival_steps(scene, arrivals),
+            scene.solver().derivatives.then_some(scene.media().len()),
         ))?,
     }
     arrival_lines(scene, &names, arrivals, format, &mut out)?;

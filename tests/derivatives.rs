@@ -687,6 +687,97 @@ fn outputs_carry_the_gradient() {
     assert_eq!(doc["rays"][0]["gradient"], *g);
 }
 
+/// The arrivals of a search carry the same gradient in JSON, JSON Lines, CSV and `.npy`, and
+/// it is the gradient of the arrival's points (`Gradient::of_points`).
+#[test]
+fn search_arrivals_carry_the_gradient_in_every_format() {
+    use eigenray::{Format, write_arrivals};
+    let path = format!(
+        "{}/fixtures/pyroomacoustics/hexagon.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let mut doc: Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    doc["search"] = json!({ "max_steps": 2, "refract": false });
+    doc["solver"] = json!({ "derivatives": true });
+    let scene = Scene::from_json(&doc.to_string()).unwrap();
+    let arrivals = Tracer::new(&scene).unwrap().search().unwrap();
+    assert!(arrivals.len() > 20, "{}", arrivals.len());
+    let write = |format| {
+        let mut out = Vec::new();
+        write_arrivals(&scene, &arrivals, format, &mut out).unwrap();
+        out
+    };
+    let json_doc: Value = serde_json::from_slice(&write(Format::Json)).unwrap();
+    let listed = json_doc["arrivals"].as_array().unwrap();
+    let lines = String::from_utf8(write(Format::Jsonl)).unwrap();
+    let csv = String::from_utf8(write(Format::Csv)).unwrap();
+    let mut rows = csv.lines();
+    assert!(rows.next().unwrap().ends_with(
+        ",complete,gradient_source,gradient_receiver,gradient_slowness,gradient_vertices"
+    ));
+    let npy = write(Format::Npy);
+    let len = u16::from_le_bytes([npy[8], npy[9]]) as usize;
+    let header = String::from_utf8_lossy(&npy[10..10 + len]).to_string();
+    let (k, media) = (2, scene.media().len());
+    assert!(
+        header.contains(&format!(
+            "('gradient_slowness', '<f8', ({media},)), ('gradient_vertex_interface', '<u4', (4,))"
+        )),
+        "{header}"
+    );
+    // The record: the arrival's own fields, then 2 + 2 + M floats, 2 × 2K indices, 2K pairs.
+    let own = 12 + k + 4 * k + 3 + 4 + 16 + 16 * (k + 2) + 4 * (k + 1);
+    let size = own + 8 * (4 + media) + 8 * 2 * k + 16 * 2 * k;
+    let data = &npy[10 + len..];
+    assert_eq!(data.len(), arrivals.len() * size);
+    let f = |r: &[u8], at: usize| f64::from_le_bytes(r[at..at + 8].try_into().unwrap());
+    let u = |r: &[u8], at: usize| u32::from_le_bytes(r[at..at + 4].try_into().unwrap());
+    for (i, ((a, entry), line)) in arrivals.iter().zip(listed).zip(lines.lines()).enumerate() {
+        let want =
+            Gradient::of_points(&scene, &a.steps, &a.arrival.points, &a.arrival.media).unwrap();
+        let g = &entry["gradient"];
+        assert_eq!(g["source"], json!([want.source.x, want.source.y]));
+        assert_eq!(g["receiver"], json!([want.receiver.x, want.receiver.y]));
+        let marked: Value = serde_json::from_str(line).unwrap();
+        assert_eq!(marked["gradient"], *g);
+        // CSV: the last four columns.
+        let row: Vec<&str> = rows.next().unwrap().rsplitn(5, ',').collect();
+        let pair =
+            |text: &str| -> Vec<f64> { text.split(' ').map(|x| x.parse().unwrap()).collect() };
+        assert_eq!(pair(row[3]), [want.source.x, want.source.y]);
+        assert_eq!(pair(row[2]), [want.receiver.x, want.receiver.y]);
+        let slowness: Vec<f64> = row[1].split(';').map(|x| x.parse().unwrap()).collect();
+        assert_eq!(slowness, want.slowness);
+        let listed_vertices = row[0].split(';').filter(|v| !v.is_empty()).count();
+        assert_eq!(listed_vertices, want.vertices.len());
+        // `.npy`.
+        let r = &data[i * size..(i + 1) * size];
+        assert_eq!([f(r, own), f(r, own + 8)], [want.source.x, want.source.y]);
+        assert_eq!(f(r, own + 16 + 8), want.receiver.y);
+        for (m, w) in want.slowness.iter().enumerate() {
+            assert_eq!(f(r, own + 32 + 8 * m), *w);
+        }
+        let at = own + 8 * (4 + media);
+        for slot in 0..2 * k {
+            let (interface, vertex) = (u(r, at + 4 * slot), u(r, at + 8 * k + 4 * slot));
+            let d = (
+                f(r, at + 16 * k + 16 * slot),
+                f(r, at + 16 * k + 16 * slot + 8),
+            );
+            match want.vertices.get(slot) {
+                Some(v) => {
+                    assert_eq!(
+                        (interface as usize, vertex as usize),
+                        (v.interface, v.vertex)
+                    );
+                    assert_eq!(d, (v.d.x, v.d.y));
+                }
+                None => assert!(interface == u32::MAX && vertex == u32::MAX && d.0.is_nan()),
+            }
+        }
+    }
+}
+
 /// A forward-mode dual number `re + eps ε`, `ε² = 0`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct Dual {
