@@ -10,6 +10,24 @@ use crate::derivatives::Gradient;
 use crate::geom::{Point, Vec2};
 use crate::trace::{Tracer, Workspace};
 
+/// What a layout objective changes and solves with between evaluations: its own tracer (the
+/// scene updated in place), a workspace and a gradient.
+struct LayoutScratch {
+    tracer: Tracer,
+    ws: Workspace,
+    gradient: Gradient,
+}
+
+impl LayoutScratch {
+    fn new(tracer: Tracer) -> LayoutScratch {
+        LayoutScratch {
+            tracer,
+            ws: Workspace::new(),
+            gradient: Gradient::default(),
+        }
+    }
+}
+
 /// One observed arrival: the time at which path `path` from the unknown source reached
 /// `receiver`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -191,12 +209,14 @@ pub struct PlacementMisfit {
 /// `θ`, with `Δ` the reflection's time minus the direct ray's, `c` the speed of the direct
 /// ray's medium and `L` the reflector's length (so that every term is dimensionless and a unit
 /// step moves the reflector by about its length), the second term (`μ` small) choosing, among
-/// the placements that give the delay, the one nearest to the start. The time's derivative with respect to the reflector's two vertices ([`Gradient`])
-/// gives the gradient by the chain rule. Each evaluation builds the scene with the reflector
-/// placed and solves the two rays. As an argmin problem its parameter is `[x, y, θ]`.
+/// the placements that give the delay, the one nearest to the start. The time's derivative
+/// with respect to the reflector's two vertices ([`Gradient`]) gives the gradient by the chain
+/// rule. Each evaluation moves the reflector in the problem's own tracer
+/// ([`Tracer::set_interface_points`]: the scene is not rebuilt) and solves the two rays. As an
+/// argmin problem its parameter is `[x, y, θ]`.
 pub struct ReflectorPlacement {
-    spec: crate::scene::SceneSpec,
-    reflector: String,
+    scratch: RefCell<LayoutScratch>,
+    reflector: usize,
     length: f64,
     reflection: usize,
     direct: usize,
@@ -216,8 +236,8 @@ impl ReflectorPlacement {
     ///
     /// # Errors
     /// A `reflector` that the scene does not have, path indices out of range, the direct path
-    /// with steps, or a length, delay or weight that is not a finite number (the length
-    /// positive, the weight not negative).
+    /// with steps, a length, delay or weight that is not a finite number (the length positive,
+    /// the weight not negative), or a scene that is not valid with the reflector at `start`.
     #[expect(
         clippy::too_many_arguments,
         reason = "the parts of the problem, each named in the documentation"
@@ -262,9 +282,19 @@ impl ReflectorPlacement {
                 "length (> 0), delay and weight (≥ 0) must be finite numbers",
             ));
         }
+        let mut spec = spec;
+        let [a, b] = start.endpoints(length);
+        if let Some(i) = spec.interfaces.get_mut(reflector) {
+            i.points = vec![[a.x, a.y], [b.x, b.y]];
+            i.closed = false;
+        }
+        let scene = crate::scene::Scene::from_spec(&spec)?;
+        let index = scene.interface_index(reflector).ok_or_else(|| {
+            SceneError::new(format!("interfaces.{reflector}"), "not in the scene")
+        })?;
         Ok(ReflectorPlacement {
-            spec,
-            reflector: reflector.to_string(),
+            scratch: RefCell::new(LayoutScratch::new(Tracer::new(scene)?)),
+            reflector: index,
             length,
             reflection,
             direct,
@@ -281,13 +311,9 @@ impl ReflectorPlacement {
     /// # Errors
     /// A placement that makes the scene invalid (the reflector crossing another interface).
     pub fn scene(&self, p: Placement) -> Result<crate::scene::Scene, crate::scene::SceneError> {
-        let mut spec = self.spec.clone();
-        let [a, b] = p.endpoints(self.length);
-        if let Some(i) = spec.interfaces.get_mut(&self.reflector) {
-            i.points = vec![[a.x, a.y], [b.x, b.y]];
-            i.closed = false;
-        }
-        crate::scene::Scene::from_spec(&spec)
+        let mut scene = self.scratch.borrow().tracer.scene().clone();
+        scene.set_interface_points(self.reflector, &p.endpoints(self.length))?;
+        Ok(scene)
     }
 
     /// The misfit of placement `p`.
@@ -295,30 +321,30 @@ impl ReflectorPlacement {
     /// # Errors
     /// An invalid scene, or a ray without a time (the reflection point off the reflector).
     pub fn misfit(&self, p: Placement) -> Result<PlacementMisfit, Error> {
-        let scene = self.scene(p)?;
-        let tracer = Tracer::new(&scene)?;
-        let mut ws = Workspace::new();
-        let direct = tracer.solve(self.source, self.listener, self.direct, &mut ws);
+        let mut scratch = self.scratch.borrow_mut();
+        let LayoutScratch {
+            tracer,
+            ws,
+            gradient: g,
+        } = &mut *scratch;
+        tracer.set_interface_points(self.reflector, &p.endpoints(self.length))?;
+        let direct = tracer.solve(self.source, self.listener, self.direct, ws);
         if !direct.status.has_time() {
             return Err(Error::msg("the direct ray has no time"));
         }
         let speed = ws
             .media()
             .first()
-            .map_or(1.0, |&m| 1.0 / scene.media()[m].slowness);
-        let reflected = tracer.solve(self.source, self.listener, self.reflection, &mut ws);
+            .map_or(1.0, |&m| 1.0 / tracer.scene().media()[m].slowness);
+        let reflected =
+            tracer.solve_with_gradient(self.source, self.listener, self.reflection, ws, g)?;
         if !reflected.status.has_time() {
             return Err(Error::msg(format!(
                 "no reflection off the placed reflector ({}) at centre ({}, {}), angle {}",
                 reflected.status, p.center.x, p.center.y, p.angle
             )));
         }
-        let g = Gradient::of_solved(&scene, self.reflection, &ws)?;
-        let iface = scene
-            .interfaces()
-            .iter()
-            .position(|i| i.name == self.reflector)
-            .ok_or_else(|| Error::msg("the reflector is not in the scene"))?;
+        let iface = self.reflector;
         let (da, db) = (g.vertex(iface, 0), g.vertex(iface, 1));
         let delay = reflected.time - direct.time;
         let l = self.length;
@@ -393,10 +419,11 @@ impl ArgminGradient for ReflectorPlacement {
 /// coordinates of the back surface's `free` vertices (the others stay put, which fixes the
 /// lens's thickness). The derivative of each `T` with respect to the vertices ([`Gradient`])
 /// gives the gradient: `Σᵢ (τᵢ − τ̄) ∂τᵢ/∂xⱼ / n`. As an argmin problem its parameter is
-/// those `x` coordinates, in the order of `free`.
+/// those `x` coordinates, in the order of `free`. Each evaluation moves the vertices in the
+/// problem's own tracer ([`Tracer::set_interface_points`]: the scene is not rebuilt).
 pub struct LensProfile {
-    spec: crate::scene::SceneSpec,
-    surface: String,
+    scratch: RefCell<LayoutScratch>,
+    surface: usize,
     free: Vec<usize>,
     path: usize,
     source: Point,
@@ -424,7 +451,8 @@ impl LensProfile {
     ///
     /// # Errors
     /// A `surface` the scene does not have, a free vertex it does not have, a path out of
-    /// range, fewer than two entries, or a slowness that is not a positive number.
+    /// range, fewer than two entries, a slowness that is not a positive number, or a scene
+    /// that is not valid.
     #[expect(
         clippy::too_many_arguments,
         reason = "the parts of the problem, each named in the documentation"
@@ -461,9 +489,13 @@ impl LensProfile {
                 "needs two entry points or more and a positive slowness before the lens",
             ));
         }
+        let scene = crate::scene::Scene::from_spec(&spec)?;
+        let index = scene
+            .interface_index(surface)
+            .ok_or_else(|| SceneError::new(format!("interfaces.{surface}"), "not in the scene"))?;
         Ok(LensProfile {
-            spec,
-            surface: surface.to_string(),
+            scratch: RefCell::new(LayoutScratch::new(Tracer::new(scene)?)),
+            surface: index,
             free,
             path,
             source,
@@ -473,11 +505,8 @@ impl LensProfile {
         })
     }
 
-    /// The scene with the free vertices at `x`.
-    ///
-    /// # Errors
-    /// `x` of the wrong length, or a profile that makes the scene invalid.
-    pub fn scene(&self, x: &[f64]) -> Result<crate::scene::Scene, crate::scene::SceneError> {
+    /// The surface's vertices with the free ones at `x`, from `tracer`'s scene.
+    fn profile(&self, tracer: &Tracer, x: &[f64]) -> Result<Vec<Point>, crate::scene::SceneError> {
         use crate::scene::SceneError;
         if x.len() != self.free.len() {
             return Err(SceneError::new(
@@ -485,13 +514,24 @@ impl LensProfile {
                 format!("{} free vertices, {} coordinates", self.free.len(), x.len()),
             ));
         }
-        let mut spec = self.spec.clone();
-        if let Some(line) = spec.interfaces.get_mut(&self.surface) {
-            for (&v, &xv) in self.free.iter().zip(x) {
-                line.points[v][0] = xv;
-            }
+        let line = &tracer.scene().interfaces()[self.surface].polyline;
+        let mut points = line.vertices().to_vec();
+        for (&v, &xv) in self.free.iter().zip(x) {
+            points[v].x = xv;
         }
-        crate::scene::Scene::from_spec(&spec)
+        Ok(points)
+    }
+
+    /// The scene with the free vertices at `x`.
+    ///
+    /// # Errors
+    /// `x` of the wrong length, or a profile that makes the scene invalid.
+    pub fn scene(&self, x: &[f64]) -> Result<crate::scene::Scene, crate::scene::SceneError> {
+        let scratch = self.scratch.borrow();
+        let points = self.profile(&scratch.tracer, x)?;
+        let mut scene = scratch.tracer.scene().clone();
+        scene.set_interface_points(self.surface, &points)?;
+        Ok(scene)
     }
 
     /// The misfit of the profile with the free vertices at `x`.
@@ -499,30 +539,28 @@ impl LensProfile {
     /// # Errors
     /// An invalid profile, or a path without a time.
     pub fn misfit(&self, x: &[f64]) -> Result<ProfileMisfit, Error> {
-        let scene = self.scene(x)?;
-        let tracer = Tracer::new(&scene)?;
-        let iface = scene
-            .interfaces()
-            .iter()
-            .position(|i| i.name == self.surface)
-            .ok_or_else(|| Error::msg("the surface is not in the scene"))?;
-        let mut ws = Workspace::new();
-        let mut g = Gradient::default();
+        let mut scratch = self.scratch.borrow_mut();
+        let points = self.profile(&scratch.tracer, x)?;
+        let LayoutScratch {
+            tracer,
+            ws,
+            gradient: g,
+        } = &mut *scratch;
+        tracer.set_interface_points(self.surface, &points)?;
         let n = self.entries.len();
         let mut times = Vec::with_capacity(n);
         let mut partials = vec![0.0; n * self.free.len()];
         for (i, &p) in self.entries.iter().enumerate() {
-            let ray = tracer.solve(p, self.focus, self.path, &mut ws);
+            let ray = tracer.solve_with_gradient(p, self.focus, self.path, ws, g)?;
             if !ray.status.has_time() {
                 return Err(Error::msg(format!(
                     "no ray from the entry point ({}, {}) to the focus ({})",
                     p.x, p.y, ray.status
                 )));
             }
-            g.solved_into(&scene, self.path, &ws)?;
             times.push(self.slowness_before * (p - self.source).length() + ray.time);
             for (j, &v) in self.free.iter().enumerate() {
-                partials[i * self.free.len() + j] = g.vertex(iface, v).x;
+                partials[i * self.free.len() + j] = g.vertex(self.surface, v).x;
             }
         }
         let mean = times.iter().sum::<f64>() / n as f64;
