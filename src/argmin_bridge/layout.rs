@@ -212,8 +212,8 @@ pub struct PlacementMisfit {
 /// the placements that give the delay, the one nearest to the start. The time's derivative
 /// with respect to the reflector's two vertices ([`Gradient`]) gives the gradient by the chain
 /// rule. Each evaluation moves the reflector in the problem's own tracer
-/// ([`Tracer::set_interface_points`], not a scene built again from its spec) and solves the two rays. As an
-/// argmin problem its parameter is `[x, y, θ]`.
+/// ([`Tracer::set_interface_points`], not a scene built again from its spec) and solves the
+/// two rays. As an argmin problem its parameter is `[x, y, θ]`.
 pub struct ReflectorPlacement {
     scratch: RefCell<LayoutScratch>,
     reflector: usize,
@@ -420,7 +420,8 @@ impl ArgminGradient for ReflectorPlacement {
 /// lens's thickness). The derivative of each `T` with respect to the vertices ([`Gradient`])
 /// gives the gradient: `Σᵢ (τᵢ − τ̄) ∂τᵢ/∂xⱼ / n`. As an argmin problem its parameter is
 /// those `x` coordinates, in the order of `free`. Each evaluation moves the vertices in the
-/// problem's own tracer ([`Tracer::set_interface_points`], not a scene built again from its spec).
+/// problem's own tracer ([`Tracer::set_interface_points`], not a scene built again from its
+/// spec).
 pub struct LensProfile {
     scratch: RefCell<LayoutScratch>,
     surface: usize,
