@@ -13,10 +13,20 @@ piecewise-linear interfaces between media of different speeds.
 2.601764
 """
 
-from ._eigenray import STATUS_NAMES, EigenrayError, Gradient, Ray, Rays, Scene, Tracer
+from ._eigenray import (
+    STATUS_NAMES,
+    EigenrayError,
+    Gradient,
+    PointSensitivities,
+    Ray,
+    Rays,
+    Scene,
+    Tracer,
+)
 
 __all__ = [
-    "STATUS_NAMES", "EigenrayError", "Gradient", "Ray", "Rays", "Scene", "Tracer", "plot"
+    "STATUS_NAMES", "EigenrayError", "Gradient", "PointSensitivities", "Ray", "Rays", "Scene",
+    "Tracer", "plot",
 ]
 
 

@@ -68,6 +68,14 @@ class Gradient:
     slowness: dict[str, float]
     vertices: list[dict[str, Any]]
 
+class PointSensitivities:
+    """How one ray's points move: `d[i]` is d(points)/d(parameters[i]), shape (points, 2)."""
+
+    status: str
+    time: float
+    parameters: list[tuple[Any, ...]]
+    d: npt.NDArray[np.float64]
+
 class Rays:
     """Rays as numpy arrays, in ray order (source-major, then receiver, then path)."""
 
@@ -122,6 +130,9 @@ class Tracer:
     def gradient(
         self, source: PointLike, receiver: PointLike, path: Union[int, str, None] = None
     ) -> Gradient: ...
+    def point_sensitivities(
+        self, source: PointLike, receiver: PointLike, path: Union[int, str, None] = None
+    ) -> PointSensitivities: ...
     def search(self) -> list[dict[str, Any]]: ...
     def set_source(self, index: int, point: PointLike) -> None: ...
     def set_receiver(self, index: int, point: PointLike) -> None: ...

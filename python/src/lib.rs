@@ -9,9 +9,9 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use eigenray::{
-    Arrival, Batch, BatchOptions, Gradient, Kink, Point, RayRecord, Scene, SceneError,
-    SearchArrival, StationaryRays, Status, Tracer, Workspace, npy::STATUS_CODES,
-    scene_parts::StepKind,
+    Arrival, Axis, Batch, BatchOptions, Gradient, Kink, Parameter, Point, PointSensitivities,
+    RayRecord, Scene, SceneError, SearchArrival, StationaryRays, Status, Tracer, Workspace,
+    npy::STATUS_CODES, scene_parts::StepKind,
 };
 use numpy::ndarray::{Array2, Array3};
 use numpy::{
@@ -400,6 +400,86 @@ impl PyGradient {
             receiver: PyArray1::from_slice(py, &receiver).unbind(),
             slowness: slowness.unbind(),
             vertices: vertices.unbind(),
+        })
+    }
+}
+
+/// How one ray's points move with everything its time depends on (see
+/// `Tracer.point_sensitivities`): row `i` of `d` is `d(points)/d(parameters[i])`, one `(dx, dy)`
+/// per point (source, interaction points, receiver). A ray without a time has `time` NaN, no
+/// parameters and `d` of shape `(0, 0, 2)`.
+#[pyclass(module = "eigenray", name = "PointSensitivities", frozen, get_all)]
+struct PyPointSensitivities {
+    /// The ray's status.
+    status: String,
+    /// The ray's travel time (NaN without one).
+    time: f64,
+    /// The parameters, in the order of `d`'s rows: `("source", "x")`, `("receiver", "y")`,
+    /// `("slowness", medium name)` or `("vertex", interface name, vertex index, "x")`.
+    parameters: Py<PyList>,
+    /// `d(points)/dθ`: shape `(parameters, points, 2)`.
+    d: Py<PyArray3<f64>>,
+}
+
+#[pymethods]
+impl PyPointSensitivities {
+    fn __repr__(&self) -> String {
+        format!(
+            "PointSensitivities(status={:?}, time={})",
+            self.status, self.time
+        )
+    }
+}
+
+impl PyPointSensitivities {
+    fn new(
+        py: Python<'_>,
+        scene: &Scene,
+        record: &RayRecord,
+        sens: Option<&PointSensitivities>,
+    ) -> PyResult<Self> {
+        let axis = |a: Axis| match a {
+            Axis::X => "x",
+            Axis::Y => "y",
+        };
+        let parameters = PyList::empty(py);
+        let (rows, points) = sens.map_or((0, 0), |s| (s.parameters().len(), s.points()));
+        let mut d = Array3::<f64>::zeros((rows, points, 2));
+        if let Some(s) = sens {
+            for (row, parameter) in s.parameters().iter().enumerate() {
+                let entry = match *parameter {
+                    Parameter::Source(a) => ("source", axis(a)).into_pyobject(py)?.into_any(),
+                    Parameter::Receiver(a) => {
+                        ("receiver", axis(a)).into_pyobject(py)?.into_any()
+                    }
+                    Parameter::Slowness { medium } => ("slowness", &scene.media()[medium].name)
+                        .into_pyobject(py)?
+                        .into_any(),
+                    Parameter::Vertex {
+                        interface,
+                        vertex,
+                        axis: a,
+                    } => (
+                        "vertex",
+                        &scene.interfaces()[interface].name,
+                        vertex,
+                        axis(a),
+                    )
+                        .into_pyobject(py)?
+                        .into_any(),
+                };
+                parameters.append(entry)?;
+                for (i, v) in s.row(row).iter().enumerate() {
+                    d[[row, i, 0]] = v.x;
+                    d[[row, i, 1]] = v.y;
+                }
+            }
+        }
+        Ok(PyPointSensitivities {
+            status: record.status.as_str().to_string(),
+            time: record.time,
+            parameters: parameters.unbind(),
+            d: d.into_pyarray(py).unbind(),
         })
     }
 }
@@ -1183,6 +1263,36 @@ impl PyTracer {
         PyGradient::new(py, scene, &record, gradient)
     }
 
+    /// Solves one ray of path `path` between any two points and returns how its points move
+    /// with every parameter its time depends on (`PointSensitivities`): by the implicit
+    /// function theorem, one tridiagonal solve with the converged Hessian per parameter; for
+    /// users who need where a ray lands (on a detector, on a wall) rather than when. Raises
+    /// `RuntimeError` at a caustic, where the points do not move smoothly.
+    #[pyo3(signature = (source, receiver, path = None))]
+    fn point_sensitivities(
+        &mut self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyPointSensitivities> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let record = self
+            .tracer
+            .solve(source, receiver, path, &mut self.workspace);
+        let scene = self.tracer.scene();
+        if !record.status.has_time() {
+            return PyPointSensitivities::new(py, scene, &record, None);
+        }
+        let sens = PointSensitivities::of_solved(scene, path, &self.workspace)
+            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        PyPointSensitivities::new(py, scene, &record, Some(&sens))
+    }
+
     /// Rays of path `path` between `sources[i]` and `receivers[i]` (arrays of shape `(n, 2)`),
     /// in parallel with the GIL released, as `Rays` (their `source` and `receiver` hold `i`).
     #[pyo3(signature = (sources, receivers, path = None))]
@@ -1412,6 +1522,7 @@ fn _eigenray(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyRay>()?;
     m.add_class::<PyRays>()?;
     m.add_class::<PyGradient>()?;
+    m.add_class::<PyPointSensitivities>()?;
     m.add("EigenrayError", m.py().get_type::<EigenrayError>())?;
     m.add("STATUS_NAMES", status_names())?;
     Ok(())

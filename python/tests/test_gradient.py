@@ -117,3 +117,54 @@ def test_the_cli_gradient_is_the_packages(cli, tmp_path):
     assert [(v["interface"], v["vertex"], v["d"].tolist()) for v in g.vertices] == [
         (v["interface"], v["vertex"], v["d"]) for v in expected["vertices"]
     ]
+
+
+def test_point_sensitivities_match_differences_of_re_solved_points():
+    scene = eigenray.Scene(BENT)
+    tracer = eigenray.Tracer(scene)
+    s, r = BENT["sources"][0], BENT["receivers"][0]
+    sens = tracer.point_sensitivities(s, r, "echo")
+    assert sens.status == "converged"
+    assert sens.time == tracer.solve(s, r, "echo").time
+    rows = {p: i for i, p in enumerate(sens.parameters)}
+    assert sens.d.shape == (len(sens.parameters), 5, 2)
+
+    def points_with(h, parameter):
+        moved = eigenray.Tracer(scene)
+        source, receiver = list(s), list(r)
+        kind = parameter[0]
+        axis = "xy".index(parameter[-1]) if kind != "slowness" else None
+        if kind == "source":
+            source[axis] += h
+        elif kind == "receiver":
+            receiver[axis] += h
+        elif kind == "slowness":
+            speed = BENT["media"][parameter[1]]["speed"]
+            moved.set_medium_index(parameter[1], 1 / speed + h)
+        else:
+            points = copy.deepcopy(BENT["interfaces"][parameter[1]]["points"])
+            points[parameter[2]][axis] += h
+            moved.set_interface_points(parameter[1], points)
+        return moved.solve(source, receiver, "echo").points
+
+    checked = 0
+    for parameter, row in rows.items():
+        h = 1e-6
+        expected = (points_with(h, parameter) - points_with(-h, parameter)) / (2 * h)
+        assert np.allclose(sens.d[row], expected, rtol=0, atol=1e-7), parameter
+        checked += 1
+    # Both ends and both coordinates, both media, and the vertices of both interfaces' segments.
+    assert ("source", "x") in rows and ("receiver", "y") in rows
+    assert ("slowness", "glass") in rows
+    assert any(p[0] == "vertex" and p[1] == "back" for p in rows)
+    assert checked >= 10
+    # The source's own row moves the source and nothing else at the ends.
+    assert sens.d[rows[("source", "x")]][0].tolist() == [1.0, 0.0]
+    assert sens.d[rows[("source", "x")]][-1].tolist() == [0.0, 0.0]
+
+
+def test_a_ray_without_a_time_has_no_sensitivities():
+    tracer = eigenray.Tracer(eigenray.Scene(SEED))
+    sens = tracer.point_sensitivities((0, 1), (5, -1))
+    assert sens.status == "no_path" and np.isnan(sens.time)
+    assert sens.parameters == [] and sens.d.shape == (0, 0, 2)
