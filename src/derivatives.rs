@@ -471,8 +471,23 @@ impl Gradient {
         media: &[usize],
     ) -> Result<Gradient, DerivativeError> {
         let mut g = Gradient::default();
-        g.fill(scene, steps, points, media.iter().copied(), None)?;
+        g.points_into(scene, steps, points, media)?;
         Ok(g)
+    }
+
+    /// [`of_points`](Self::of_points) into this gradient, reusing its memory: allocates
+    /// nothing once it has held a gradient of as many media and vertices.
+    ///
+    /// # Errors
+    /// As [`of_points`](Self::of_points).
+    pub fn points_into(
+        &mut self,
+        scene: &Scene,
+        steps: &[Step],
+        points: &[Point],
+        media: &[usize],
+    ) -> Result<(), DerivativeError> {
+        self.fill(scene, steps, points, media.iter().copied(), None)
     }
 
     /// [`of_points`](Self::of_points) into this gradient, reusing its memory; `segments`, when

@@ -538,6 +538,7 @@ fn batch_gradients_are_the_rays_gradients() {
     let batch = tracer.trace_batch(&BatchOptions::default());
     let mut gradients = BatchGradients::default();
     gradients.compute(&scene, &batch, &|ray| ray % 3 != 1);
+    let mut reused = Gradient::default();
     let mut timed = 0;
     for ray in 0..batch.len() {
         let has = batch.record(ray).status.has_time() && ray % 3 != 1;
@@ -549,6 +550,14 @@ fn batch_gradients_are_the_rays_gradients() {
         timed += 1;
         let one = Gradient::of_ray(&scene, &batch.ray(ray)).unwrap();
         assert_eq!(gradients.gradient(ray).unwrap(), one);
+        // Into a reused gradient, from the points and media alone.
+        let (_, _, path) = batch.triple(ray);
+        let steps = &scene.paths()[path].steps;
+        let media: Vec<usize> = batch.media(ray).unwrap().collect();
+        reused
+            .points_into(&scene, steps, batch.points(ray), &media)
+            .unwrap();
+        assert_eq!(reused, one);
     }
     assert!(timed > 20);
 }

@@ -449,9 +449,7 @@ impl PyPointSensitivities {
             for (row, parameter) in s.parameters().iter().enumerate() {
                 let entry = match *parameter {
                     Parameter::Source(a) => ("source", axis(a)).into_pyobject(py)?.into_any(),
-                    Parameter::Receiver(a) => {
-                        ("receiver", axis(a)).into_pyobject(py)?.into_any()
-                    }
+                    Parameter::Receiver(a) => ("receiver", axis(a)).into_pyobject(py)?.into_any(),
                     Parameter::Slowness { medium } => ("slowness", &scene.media()[medium].name)
                         .into_pyobject(py)?
                         .into_any(),
