@@ -17,6 +17,7 @@ from ._eigenray import (
     STATUS_NAMES,
     EigenrayError,
     Gradient,
+    Gradients,
     PointSensitivities,
     Ray,
     Rays,
@@ -25,8 +26,8 @@ from ._eigenray import (
 )
 
 __all__ = [
-    "STATUS_NAMES", "EigenrayError", "Gradient", "PointSensitivities", "Ray", "Rays", "Scene",
-    "Tracer", "plot",
+    "STATUS_NAMES", "EigenrayError", "Gradient", "Gradients", "PointSensitivities", "Ray", "Rays",
+    "Scene", "Tracer", "plot",
 ]
 
 

@@ -76,6 +76,19 @@ class PointSensitivities:
     parameters: list[tuple[Any, ...]]
     d: npt.NDArray[np.float64]
 
+class Gradients:
+    """Derivatives of many rays' times, one row per ray (NaN and -1 without a time)."""
+
+    source: npt.NDArray[np.float64]
+    receiver: npt.NDArray[np.float64]
+    slowness: npt.NDArray[np.float64]
+    vertex_interface: npt.NDArray[np.int32]
+    vertex: npt.NDArray[np.int32]
+    vertex_d: npt.NDArray[np.float64]
+    media_names: list[str]
+    interface_names: list[str]
+    def __len__(self) -> int: ...
+
 class Rays:
     """Rays as numpy arrays, in ray order (source-major, then receiver, then path)."""
 
@@ -130,6 +143,7 @@ class Tracer:
     def gradient(
         self, source: PointLike, receiver: PointLike, path: Union[int, str, None] = None
     ) -> Gradient: ...
+    def gradients(self, rays: Rays) -> Gradients: ...
     def point_sensitivities(
         self, source: PointLike, receiver: PointLike, path: Union[int, str, None] = None
     ) -> PointSensitivities: ...

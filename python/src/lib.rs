@@ -482,6 +482,59 @@ impl PyPointSensitivities {
     }
 }
 
+/// The derivatives of many rays' times as numpy arrays (see `Tracer.gradients`), row `i`
+/// those of ray `i` of the `Rays` they were computed from: NaN (and −1 for the vertex indices)
+/// for a ray without a time. `K` below is the most steps of a path of the scene.
+#[pyclass(module = "eigenray", name = "Gradients", frozen, get_all)]
+struct PyGradients {
+    /// `(dT/dx, dT/dy)` of the source, shape `(n, 2)`.
+    source: Py<PyArray2<f64>>,
+    /// `(dT/dx, dT/dy)` of the receiver, shape `(n, 2)`.
+    receiver: Py<PyArray2<f64>>,
+    /// `dT/dw` of each medium (in the order of `media_names`), shape `(n, M)`.
+    slowness: Py<PyArray2<f64>>,
+    /// The interface (index into `interface_names`) of each vertex whose movement changes the
+    /// time, shape `(n, 2K)`, −1 past the ray's own vertices.
+    vertex_interface: Py<PyArray2<i32>>,
+    /// Its index in the interface's points, shape `(n, 2K)`, −1 past the ray's own.
+    vertex: Py<PyArray2<i32>>,
+    /// `(dT/dx, dT/dy)` of that vertex, shape `(n, 2K, 2)`, NaN past the ray's own.
+    vertex_d: Py<PyArray3<f64>>,
+    /// The scene's medium names.
+    media_names: Vec<String>,
+    /// The scene's interface names.
+    interface_names: Vec<String>,
+}
+
+#[pymethods]
+impl PyGradients {
+    fn __len__(&self, py: Python<'_>) -> usize {
+        self.source.bind(py).shape()[0]
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        format!("Gradients({} rays)", self.source.bind(py).shape()[0])
+    }
+}
+
+/// `v`, rows of `width` entries, cut into `pieces` pieces of `rows` rows (the last shorter),
+/// for a parallel loop: empty pieces when `width` is 0, so that they still pair up with the
+/// pieces of the other arrays.
+fn row_pieces<T: Send>(
+    v: &mut [T],
+    width: usize,
+    rows: usize,
+    pieces: usize,
+) -> rayon::vec::IntoIter<&mut [T]> {
+    use rayon::prelude::*;
+    let cut: Vec<&mut [T]> = if width == 0 {
+        (0..pieces).map(|_| &mut [][..]).collect()
+    } else {
+        v.chunks_mut(width * rows).collect()
+    };
+    cut.into_par_iter()
+}
+
 /// Every ray of a scene as numpy arrays, in ray order (source-major, then receiver, then
 /// path). Rays without a time have `time` NaN and NaN points.
 #[pyclass(module = "eigenray", name = "Rays", frozen)]
@@ -1291,6 +1344,156 @@ impl PyTracer {
         PyPointSensitivities::new(py, scene, &record, Some(&sens))
     }
 
+    /// The derivatives of the times of `rays` (from `trace`, `trace_stationary` or
+    /// `solve_pairs` of this tracer), as `Gradients`: one row per ray, computed from each ray's
+    /// points and leg media in parallel with the GIL released, the same numbers as
+    /// `gradient` and the command-line tool's `"derivatives": true`.
+    fn gradients(&self, py: Python<'_>, rays: &Bound<'_, PyRays>) -> PyResult<PyGradients> {
+        let scene = self.tracer.scene();
+        let rays = rays.get();
+        let media_names: Vec<String> = scene.media().iter().map(|m| m.name.clone()).collect();
+        let path_names: Vec<Option<String>> =
+            scene.paths().iter().map(|p| p.name.clone()).collect();
+        if rays.media_names != media_names || rays.path_names != path_names {
+            return Err(argument_error(
+                py,
+                "rays",
+                "are not rays of this tracer's scene (other media or paths)",
+            ));
+        }
+        let (path, status) = (
+            rays.path.bind(py).readonly(),
+            rays.status.bind(py).readonly(),
+        );
+        let points = rays.points.bind(py).readonly();
+        let num_points = rays.num_points.bind(py).readonly();
+        let media = rays.media.bind(py).readonly();
+        let (path, status, points, num_points, media) = (
+            path.as_array(),
+            status.as_array(),
+            points.as_array(),
+            num_points.as_array(),
+            media.as_array(),
+        );
+        let n = path.len();
+        let width = points.shape()[1];
+        let shapes_agree = [
+            status.len(),
+            points.shape()[0],
+            num_points.len(),
+            media.shape()[0],
+        ]
+        .iter()
+        .all(|&m| m == n)
+            && media.shape()[1] + 1 == width;
+        if !shapes_agree {
+            return Err(argument_error(py, "rays", "arrays of different lengths"));
+        }
+        let m = scene.media().len();
+        let k = scene
+            .paths()
+            .iter()
+            .map(|p| p.steps.len())
+            .max()
+            .unwrap_or(0);
+        let slots = 2 * k;
+        let mut source = vec![f64::NAN; 2 * n];
+        let mut receiver = vec![f64::NAN; 2 * n];
+        let mut slowness = vec![f64::NAN; m * n];
+        let mut vertex_interface = vec![-1i32; slots * n];
+        let mut vertex = vec![-1i32; slots * n];
+        let mut vertex_d = vec![f64::NAN; 2 * slots * n];
+        py.detach(|| {
+            use rayon::prelude::*;
+            const PIECE: usize = 1024;
+            let gradient_of = |g: &mut Gradient, scratch: &mut (Vec<Point>, Vec<usize>), i| {
+                let code = usize::from(status[i]);
+                let timed = STATUS_CODES.get(code).is_some_and(|s| s.has_time());
+                let spec = usize::try_from(path[i])
+                    .ok()
+                    .and_then(|p| scene.paths().get(p));
+                let (Some(spec), true) = (spec, timed) else {
+                    return false;
+                };
+                let count = spec.steps.len() + 2;
+                if usize::try_from(num_points[i]) != Ok(count) || count > width {
+                    return false;
+                }
+                let (ray_points, ray_media) = scratch;
+                ray_points.clear();
+                ray_points
+                    .extend((0..count).map(|j| Point::new(points[[i, j, 0]], points[[i, j, 1]])));
+                ray_media.clear();
+                for j in 0..count - 1 {
+                    match usize::try_from(media[[i, j]]) {
+                        Ok(medium) => ray_media.push(medium),
+                        Err(_) => return false,
+                    }
+                }
+                g.points_into(scene, &spec.steps, ray_points, ray_media)
+                    .is_ok()
+            };
+            let pieces = n.div_ceil(PIECE);
+            source
+                .par_chunks_mut(2 * PIECE)
+                .zip(receiver.par_chunks_mut(2 * PIECE))
+                .zip(row_pieces(&mut slowness, m, PIECE, pieces))
+                .zip(row_pieces(&mut vertex_interface, slots, PIECE, pieces))
+                .zip(row_pieces(&mut vertex, slots, PIECE, pieces))
+                .zip(row_pieces(&mut vertex_d, 2 * slots, PIECE, pieces))
+                .enumerate()
+                .for_each(|(piece, (((((src, rec), slow), ifaces), verts), ds))| {
+                    let mut g = Gradient::default();
+                    let mut scratch = (Vec::new(), Vec::new());
+                    for row in 0..src.len() / 2 {
+                        let i = piece * PIECE + row;
+                        if !gradient_of(&mut g, &mut scratch, i) {
+                            continue;
+                        }
+                        src[2 * row..2 * row + 2].copy_from_slice(&[g.source.x, g.source.y]);
+                        rec[2 * row..2 * row + 2].copy_from_slice(&[g.receiver.x, g.receiver.y]);
+                        slow[m * row..m * (row + 1)].copy_from_slice(&g.slowness);
+                        for (slot, v) in g.vertices.iter().take(slots).enumerate() {
+                            let at = slots * row + slot;
+                            ifaces[at] = i32::try_from(v.interface).unwrap_or(-1);
+                            verts[at] = i32::try_from(v.vertex).unwrap_or(-1);
+                            ds[2 * at..2 * at + 2].copy_from_slice(&[v.d.x, v.d.y]);
+                        }
+                    }
+                });
+        });
+        let array2 = |v: Vec<f64>, w: usize| Array2::from_shape_vec((n, w), v);
+        let shape_error = |e: numpy::ndarray::ShapeError| PyRuntimeError::new_err(e.to_string());
+        Ok(PyGradients {
+            source: array2(source, 2)
+                .map_err(shape_error)?
+                .into_pyarray(py)
+                .unbind(),
+            receiver: array2(receiver, 2)
+                .map_err(shape_error)?
+                .into_pyarray(py)
+                .unbind(),
+            slowness: array2(slowness, m)
+                .map_err(shape_error)?
+                .into_pyarray(py)
+                .unbind(),
+            vertex_interface: Array2::from_shape_vec((n, slots), vertex_interface)
+                .map_err(shape_error)?
+                .into_pyarray(py)
+                .unbind(),
+            vertex: Array2::from_shape_vec((n, slots), vertex)
+                .map_err(shape_error)?
+                .into_pyarray(py)
+                .unbind(),
+            vertex_d: Array3::from_shape_vec((n, slots, 2), vertex_d)
+                .map_err(shape_error)?
+                .into_pyarray(py)
+                .unbind(),
+            media_names,
+            interface_names: scene.interfaces().iter().map(|i| i.name.clone()).collect(),
+        })
+    }
+
     /// Rays of path `path` between `sources[i]` and `receivers[i]` (arrays of shape `(n, 2)`),
     /// in parallel with the GIL released, as `Rays` (their `source` and `receiver` hold `i`).
     #[pyo3(signature = (sources, receivers, path = None))]
@@ -1521,6 +1724,7 @@ fn _eigenray(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyRays>()?;
     m.add_class::<PyGradient>()?;
     m.add_class::<PyPointSensitivities>()?;
+    m.add_class::<PyGradients>()?;
     m.add("EigenrayError", m.py().get_type::<EigenrayError>())?;
     m.add("STATUS_NAMES", status_names())?;
     Ok(())

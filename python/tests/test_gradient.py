@@ -168,3 +168,50 @@ def test_a_ray_without_a_time_has_no_sensitivities():
     sens = tracer.point_sensitivities((0, 1), (5, -1))
     assert sens.status == "no_path" and np.isnan(sens.time)
     assert sens.parameters == [] and sens.d.shape == (0, 0, 2)
+
+
+def test_gradients_of_a_batch_are_the_rays_gradients(cli, tmp_path):
+    spec = copy.deepcopy(BENT)
+    spec["receivers"] = [[x, 1.3] for x in np.linspace(-2.5, 2.5, 9)] + [[40.0, 1.0]]
+    spec["paths"].append({"name": "skim", "steps": [{"reflect": "front"}],
+                          "media": ["air", "air"]})
+    scene = eigenray.Scene(spec)
+    tracer = eigenray.Tracer(scene)
+    # Each ray from the documented start, as `gradient` solves it.
+    rays = tracer.trace(warm_start=False)
+    grads = tracer.gradients(rays)
+    assert len(grads) == len(rays) == 20
+    assert grads.vertex_d.shape == (20, 6, 2) and grads.slowness.shape == (20, 2)
+    timed = 0
+    for i in range(len(rays)):
+        source = spec["sources"][rays.source[i]]
+        receiver = spec["receivers"][rays.receiver[i]]
+        one = tracer.gradient(source, receiver, int(rays.path[i]))
+        if np.isnan(rays.time[i]):
+            assert np.isnan(grads.source[i]).all() and (grads.vertex[i] == -1).all()
+            continue
+        timed += 1
+        assert grads.source[i].tolist() == one.source.tolist()
+        assert grads.receiver[i].tolist() == one.receiver.tolist()
+        assert dict(zip(grads.media_names, grads.slowness[i].tolist())) == dict(one.slowness)
+        listed = [(grads.interface_names[grads.vertex_interface[i, j]], int(grads.vertex[i, j]),
+                   grads.vertex_d[i, j].tolist())
+                  for j in range(grads.vertex.shape[1]) if grads.vertex[i, j] >= 0]
+        assert listed == [(v["interface"], v["vertex"], v["d"].tolist()) for v in one.vertices]
+    assert 10 <= timed < 20
+    # The command-line tool's "gradient" of the same scene (its rays warm-started, as
+    # `trace()`'s), bit for bit.
+    grads = tracer.gradients(tracer.trace())
+    path = tmp_path / "bent.json"
+    path.write_text(json.dumps({**spec, "solver": {"derivatives": True}}))
+    out = subprocess.run([cli, "solve", str(path)], capture_output=True, text=True, check=True)
+    for i, ray in enumerate(json.loads(out.stdout)["rays"]):
+        if "gradient" in ray:
+            assert grads.source[i].tolist() == ray["gradient"]["source"]
+            assert grads.slowness[i].tolist() == [ray["gradient"]["slowness"][m]
+                                                  for m in grads.media_names]
+    # Rays of another scene are refused, naming the argument.
+    other = eigenray.Tracer(eigenray.Scene(SEED)).trace()
+    with pytest.raises(eigenray.EigenrayError) as e:
+        tracer.gradients(other)
+    assert e.value.key == "rays"
