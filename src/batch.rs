@@ -1,5 +1,6 @@
 //! Batches: every ray of a scene in parallel, in ray order, in flat storage, with warm starts.
 
+use rayon::iter::plumbing::{Consumer, Producer, ProducerCallback, UnindexedConsumer, bridge};
 use rayon::prelude::*;
 
 use crate::geom::{Point, Vec2};
@@ -154,8 +155,335 @@ impl<'a> Iterator for BatchRays<'a> {
 
 impl ExactSizeIterator for BatchRays<'_> {}
 
+/// Where a batch writes its rays as it solves them ([`Tracer::trace_batch_to`]): a
+/// destination for every ray of a scene in ray order, in blocks (a block is one (source,
+/// receiver) pair: the rays of all its paths, in path order).
+///
+/// The batch cuts its sink into parts of whole blocks ([`split_at`](Self::split_at)), one
+/// per work unit, and the worker that solves a unit writes each of its rays into the unit's
+/// part right after solving it, while the ray is in cache: a front end's own arrays (numpy's,
+/// a GPU staging buffer) are filled in the batch's parallel pass, without a [`Batch`] in
+/// between and a second pass to copy it. [`Batch`] itself is filled through one.
+///
+/// Every ray is written exactly once, with [`write`](Self::write) or
+/// [`write_one`](Self::write_one); which rays go through which is not part of the contract.
+///
+/// ```
+/// use eigenray::{BatchOptions, BatchScratch, BatchSink, Point, RayRecord, RaySlot, Scene, Tracer};
+///
+/// /// Times only, into a slice of one time per ray (one path here).
+/// struct Times<'a>(&'a mut [f64]);
+///
+/// impl BatchSink for Times<'_> {
+///     fn blocks(&self) -> usize {
+///         self.0.len()
+///     }
+///     fn split_at(self, blocks: usize) -> (Self, Self) {
+///         let (a, b) = self.0.split_at_mut(blocks);
+///         (Times(a), Times(b))
+///     }
+///     fn write(&mut self, at: RaySlot, record: &RayRecord, _: &[Point], _: &[usize]) {
+///         self.0[at.block] = record.time;
+///     }
+/// }
+///
+/// let scene = Scene::from_spec(&eigenray::demo::air_water(1000, 7)).unwrap();
+/// let tracer = Tracer::new(&scene).unwrap();
+/// let mut times = vec![0.0; 1000];
+/// let mut scratch = BatchScratch::default();
+/// tracer
+///     .trace_batch_to(&BatchOptions::default(), Times(&mut times), &mut scratch)
+///     .unwrap();
+/// let batch = tracer.trace_batch(&BatchOptions::default());
+/// assert!((0..1000).all(|i| times[i].to_bits() == batch.record(i).time.to_bits()));
+/// ```
+pub trait BatchSink: Send + Sized {
+    /// Its number of blocks.
+    fn blocks(&self) -> usize;
+
+    /// Its first `blocks` blocks, and the rest.
+    fn split_at(self, blocks: usize) -> (Self, Self);
+
+    /// Writes the ray at `at`: its record, its points (source, interaction points, receiver:
+    /// meaningful only when [`Status::has_time`], and then as many as its path has) and its
+    /// leg media (indices into [`crate::Scene::media`]: one per leg when known, else fewer,
+    /// usually none).
+    fn write(&mut self, at: RaySlot, record: &RayRecord, points: &[Point], media: &[usize]);
+
+    /// [`write`](Self::write) for a ray of one interaction whose three points and two leg
+    /// media are known (the batch's fastest rays): an implementation may copy them without
+    /// loops. By default, `write`.
+    #[inline(always)]
+    fn write_one(
+        &mut self,
+        at: RaySlot,
+        record: &RayRecord,
+        points: &[Point; 3],
+        media: [usize; 2],
+    ) {
+        self.write(at, record, points, &media);
+    }
+}
+
+/// Where a [`BatchSink`] writes a ray: the ray's block within the part of the sink it is
+/// given (counted from the part's first block), and the ray's indices. Its index in ray order
+/// is `(source × receivers + receiver) × paths + path`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RaySlot {
+    /// The block within the part.
+    pub block: usize,
+    /// Source index.
+    pub source: usize,
+    /// Receiver index.
+    pub receiver: usize,
+    /// Path index (the ray's place within its block).
+    pub path: usize,
+}
+
+/// Memory that [`Tracer::trace_batch_to`] keeps from one call to the next: the rays in
+/// solving order when the receivers are solved in a spatial order (see
+/// [`BatchOptions::warm_start`]), before they go to the sink in ray order. Receivers already
+/// in a coherent order (a grid, a survey line) are solved straight into the sink and leave it
+/// empty.
+#[derive(Clone, Debug, Default)]
+pub struct BatchScratch {
+    arrays: Arrays,
+}
+
+impl BatchScratch {
+    /// Bytes held.
+    pub fn memory_bytes(&self) -> usize {
+        let (r, p, m) = &self.arrays;
+        arrays_bytes((r, p, m))
+    }
+}
+
 /// A batch's three arrays: records, points, leg media.
 type Arrays = (Vec<RayRecord>, Vec<Point>, Vec<u32>);
+
+/// Bytes held by a batch's three arrays.
+fn arrays_bytes((r, p, m): (&Vec<RayRecord>, &Vec<Point>, &Vec<u32>)) -> usize {
+    r.capacity() * std::mem::size_of::<RayRecord>()
+        + p.capacity() * std::mem::size_of::<Point>()
+        + m.capacity() * std::mem::size_of::<u32>()
+}
+
+/// Where each path's rays sit in a batch's blocks.
+#[derive(Clone, Copy)]
+struct Layout<'a> {
+    /// Paths per block.
+    np: usize,
+    /// Points and leg media per block.
+    pts_block: usize,
+    media_block: usize,
+    /// Offset of each path's points and leg media within a block, and the block size (last
+    /// entry).
+    po: &'a [usize],
+    mo: &'a [usize],
+}
+
+/// Each path's offsets of points, leg media and parameters within a block, and the block
+/// sizes (last entries).
+fn offsets(scene: &crate::scene::Scene) -> [Vec<usize>; 3] {
+    let mut point_offsets = vec![0];
+    let mut media_offsets = vec![0];
+    let mut param_offsets = vec![0];
+    for p in scene.paths() {
+        let k = p.steps.len();
+        point_offsets.push(point_offsets.last().unwrap() + k + 2);
+        media_offsets.push(media_offsets.last().unwrap() + k + 1);
+        param_offsets.push(param_offsets.last().unwrap() + k);
+    }
+    [point_offsets, media_offsets, param_offsets]
+}
+
+/// The [`BatchSink`] of a batch's own arrays (records, points, leg media, in block order).
+struct Out<'a> {
+    rec: &'a mut [RayRecord],
+    pts: &'a mut [Point],
+    med: &'a mut [u32],
+    layout: Layout<'a>,
+}
+
+impl BatchSink for Out<'_> {
+    fn blocks(&self) -> usize {
+        self.rec.len() / self.layout.np
+    }
+
+    fn split_at(self, blocks: usize) -> (Self, Self) {
+        let l = self.layout;
+        let (rec, rec_b) = self.rec.split_at_mut(blocks * l.np);
+        let (pts, pts_b) = self.pts.split_at_mut(blocks * l.pts_block);
+        let (med, med_b) = self.med.split_at_mut(blocks * l.media_block);
+        (
+            Out {
+                rec,
+                pts,
+                med,
+                layout: l,
+            },
+            Out {
+                rec: rec_b,
+                pts: pts_b,
+                med: med_b,
+                layout: l,
+            },
+        )
+    }
+
+    #[inline(always)]
+    fn write(&mut self, at: RaySlot, s: &RayRecord, points: &[Point], media: &[usize]) {
+        self.write_at(at.block, at.path, s, points, media);
+    }
+
+    #[inline(always)]
+    fn write_one(&mut self, at: RaySlot, s: &RayRecord, points: &[Point; 3], media: [usize; 2]) {
+        let (b, p, l) = (at.block, at.path, self.layout);
+        self.rec[b * l.np + p] = *s;
+        let base = b * l.pts_block + l.po[p];
+        let nan = Point::new(f64::NAN, f64::NAN);
+        let points = if s.status.has_time() {
+            *points
+        } else {
+            [nan; 3]
+        };
+        self.pts[base..base + 3].copy_from_slice(&points);
+        let base = b * l.media_block + l.mo[p];
+        self.med[base..base + 2].copy_from_slice(&[media[0] as u32, media[1] as u32]);
+    }
+}
+
+impl Out<'_> {
+    /// Writes ray `p` of block `b` (a call of its own: the general paths' rays).
+    #[inline]
+    fn write_at(&mut self, b: usize, p: usize, s: &RayRecord, points: &[Point], media: &[usize]) {
+        // (The layout's fields read where needed: a copy of it loads them all first.)
+        self.rec[b * self.layout.np + p] = *s;
+        let (base, po) = (b * self.layout.pts_block, self.layout.po);
+        let ray_points = &mut self.pts[base + po[p]..base + po[p + 1]];
+        if s.status.has_time() {
+            ray_points.copy_from_slice(points);
+        } else {
+            ray_points.fill(Point::new(f64::NAN, f64::NAN));
+        }
+        let (base, mo) = (b * self.layout.media_block, self.layout.mo);
+        let ray_media = &mut self.med[base + mo[p]..base + mo[p + 1]];
+        if media.len() == ray_media.len() {
+            for (dst, &m) in ray_media.iter_mut().zip(media) {
+                *dst = m as u32;
+            }
+        } else {
+            ray_media.fill(NO_MEDIUM);
+        }
+    }
+}
+
+/// A sink cut into parts of `unit` blocks (the last may be shorter), as a rayon indexed
+/// parallel iterator: the `par_chunks_mut` of a sink.
+struct Parts<S> {
+    sink: S,
+    unit: usize,
+}
+
+impl<S: BatchSink> Parts<S> {
+    fn new(sink: S, unit: usize) -> Self {
+        Parts {
+            sink,
+            unit: unit.max(1),
+        }
+    }
+}
+
+impl<S: BatchSink> ParallelIterator for Parts<S> {
+    type Item = S;
+
+    fn drive_unindexed<C: UnindexedConsumer<S>>(self, consumer: C) -> C::Result {
+        bridge(self, consumer)
+    }
+
+    fn opt_len(&self) -> Option<usize> {
+        Some(IndexedParallelIterator::len(self))
+    }
+}
+
+impl<S: BatchSink> IndexedParallelIterator for Parts<S> {
+    fn len(&self) -> usize {
+        self.sink.blocks().div_ceil(self.unit)
+    }
+
+    fn drive<C: Consumer<S>>(self, consumer: C) -> C::Result {
+        bridge(self, consumer)
+    }
+
+    fn with_producer<CB: ProducerCallback<S>>(self, callback: CB) -> CB::Output {
+        callback.callback(self)
+    }
+}
+
+impl<S: BatchSink> Producer for Parts<S> {
+    type Item = S;
+    type IntoIter = PartsIter<S>;
+
+    fn into_iter(self) -> PartsIter<S> {
+        let parts = IndexedParallelIterator::len(&self);
+        PartsIter {
+            parts,
+            sink: (parts > 0).then_some(self.sink),
+            unit: self.unit,
+        }
+    }
+
+    fn split_at(self, index: usize) -> (Self, Self) {
+        let at = (index * self.unit).min(self.sink.blocks());
+        let (a, b) = self.sink.split_at(at);
+        (Parts::new(a, self.unit), Parts::new(b, self.unit))
+    }
+}
+
+/// The parts of [`Parts`], one after the other.
+struct PartsIter<S> {
+    sink: Option<S>,
+    unit: usize,
+    /// Parts left.
+    parts: usize,
+}
+
+impl<S: BatchSink> Iterator for PartsIter<S> {
+    type Item = S;
+
+    // Out of line: the split of each unit's part stays out of the solve loop that the
+    // workers' job inlines (about one instruction a ray fewer in a batch of one refraction).
+    #[inline(never)]
+    fn next(&mut self) -> Option<S> {
+        let sink = self.sink.take()?;
+        self.parts -= 1;
+        if self.parts == 0 {
+            return Some(sink);
+        }
+        let (part, rest) = sink.split_at(self.unit);
+        self.sink = Some(rest);
+        Some(part)
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        (self.parts, Some(self.parts))
+    }
+}
+
+impl<S: BatchSink> DoubleEndedIterator for PartsIter<S> {
+    fn next_back(&mut self) -> Option<S> {
+        let sink = self.sink.take()?;
+        self.parts -= 1;
+        if self.parts == 0 {
+            return Some(sink);
+        }
+        let (rest, part) = sink.split_at(self.parts * self.unit);
+        self.sink = Some(rest);
+        Some(part)
+    }
+}
+
+impl<S: BatchSink> ExactSizeIterator for PartsIter<S> {}
 
 /// Marks a leg medium that was not determined.
 const NO_MEDIUM: u32 = u32::MAX;
@@ -253,16 +581,11 @@ impl Batch {
     }
     /// Bytes held by the batch's arrays.
     pub fn memory_bytes(&self) -> usize {
-        let bytes = |r: &Vec<RayRecord>, p: &Vec<Point>, m: &Vec<u32>| {
-            r.capacity() * std::mem::size_of::<RayRecord>()
-                + p.capacity() * std::mem::size_of::<Point>()
-                + m.capacity() * std::mem::size_of::<u32>()
-        };
-        bytes(&self.records, &self.points, &self.media)
+        arrays_bytes((&self.records, &self.points, &self.media))
             + self
                 .spatial
                 .as_deref()
-                .map_or(0, |(r, p, m)| bytes(r, p, m))
+                .map_or(0, |(r, p, m)| arrays_bytes((r, p, m)))
     }
 }
 
@@ -432,48 +755,52 @@ impl Tracer {
         opts: &BatchOptions,
         batch: &mut Batch,
     ) -> Result<(), SceneError> {
-        let scene = self.scene();
-        let size = scene.batch_size();
-        // Results in solving order as well when the receivers are put in a spatial order.
-        let spatial = opts.warm_start
-            && !scene.sources().is_empty()
-            && !coherent(scene.receivers(), scene.sources()[0]);
-        let needs =
-            |records: &mut Vec<RayRecord>, points: &mut Vec<Point>, media: &mut Vec<u32>| {
-                let grow = |have: usize, want: usize| want.saturating_sub(have);
-                records
-                    .try_reserve_exact(grow(records.len(), size.rays))
-                    .and_then(|()| points.try_reserve_exact(grow(points.len(), size.points)))
-                    .and_then(|()| media.try_reserve_exact(grow(media.len(), size.legs)))
-            };
-        let mut reserved = needs(&mut batch.records, &mut batch.points, &mut batch.media);
+        let spatial = self.solves_spatially(opts);
+        let mut reserved = reserve(
+            (&mut batch.records, &mut batch.points, &mut batch.media),
+            self.scene(),
+        );
         if spatial && reserved.is_ok() {
-            let arrays = batch.spatial.get_or_insert_with(Box::default);
-            let (r, p, m) = &mut **arrays;
-            reserved = needs(r, p, m);
+            let (r, p, m) = &mut **batch.spatial.get_or_insert_with(Box::default);
+            reserved = reserve((r, p, m), self.scene());
         }
         if reserved.is_err() {
-            let bytes = size
-                .bytes(
-                    std::mem::size_of::<RayRecord>(),
-                    std::mem::size_of::<Point>(),
-                    std::mem::size_of::<u32>(),
-                )
-                .and_then(|b| b.checked_mul(1 + usize::from(spatial)))
-                .map_or("more than the address space holds".to_string(), |b| {
-                    format!("{b} bytes")
-                });
-            return Err(SceneError::new(
-                "paths",
-                format!(
-                    "a batch of {} rays needs {bytes} for its records, points and leg media, \
-                     which cannot be allocated",
-                    size.rays
-                ),
-            ));
+            return Err(self.too_large(1 + usize::from(spatial)));
         }
         self.trace_batch_into(opts, batch);
         Ok(())
+    }
+
+    /// Whether a batch with `opts` may solve the receivers in a spatial order (and so needs
+    /// a second copy of its arrays).
+    fn solves_spatially(&self, opts: &BatchOptions) -> bool {
+        let scene = self.scene();
+        opts.warm_start
+            && !scene.sources().is_empty()
+            && !coherent(scene.receivers(), scene.sources()[0])
+    }
+
+    /// The error of a batch whose `copies` copies of its arrays cannot be allocated.
+    fn too_large(&self, copies: usize) -> SceneError {
+        let size = self.scene().batch_size();
+        let bytes = size
+            .bytes(
+                std::mem::size_of::<RayRecord>(),
+                std::mem::size_of::<Point>(),
+                std::mem::size_of::<u32>(),
+            )
+            .and_then(|b| b.checked_mul(copies))
+            .map_or("more than the address space holds".to_string(), |b| {
+                format!("{b} bytes")
+            });
+        SceneError::new(
+            "paths",
+            format!(
+                "a batch of {} rays needs {bytes} for its records, points and leg media, \
+                 which cannot be allocated",
+                size.rays
+            ),
+        )
     }
 
     /// Solves every ray of the scene in parallel (rayon, one workspace per work unit), with
@@ -505,23 +832,10 @@ impl Tracer {
     /// ```
     pub fn trace_batch_into(&self, opts: &BatchOptions, batch: &mut Batch) {
         let scene = self.scene();
-        let (ns, nr, np) = (
-            scene.sources().len(),
-            scene.receivers().len(),
-            scene.paths().len(),
-        );
-        let mut point_offsets = vec![0];
-        let mut media_offsets = vec![0];
-        let mut param_offsets = vec![0];
-        for p in scene.paths() {
-            let k = p.steps.len();
-            point_offsets.push(point_offsets.last().unwrap() + k + 2);
-            media_offsets.push(media_offsets.last().unwrap() + k + 1);
-            param_offsets.push(param_offsets.last().unwrap() + k);
-        }
-        let (pts_block, media_block, params_block) =
-            (point_offsets[np], media_offsets[np], param_offsets[np]);
-        let blocks = ns * nr;
+        let (nr, np) = (scene.receivers().len(), scene.paths().len());
+        let [point_offsets, media_offsets, param_offsets] = offsets(scene);
+        let (pts_block, media_block) = (point_offsets[np], media_offsets[np]);
+        let blocks = scene.sources().len() * nr;
         batch.receivers = nr;
         batch.paths = np;
         batch.point_offsets = point_offsets;
@@ -532,18 +846,11 @@ impl Tracer {
             batch.media.clear();
             return;
         }
-        // Receivers already in a coherent order (a grid, a survey line) keep it: sorting and
-        // putting the rays back would cost more than the warm starts save.
-        let order = if opts.warm_start && !coherent(scene.receivers(), scene.sources()[0]) {
-            spatial_order(scene.receivers())
-        } else {
-            (0..nr).collect()
-        };
+        let order = self.solve_order(opts);
         let identity = order.iter().enumerate().all(|(i, &r)| i == r);
-        let chunk = opts.chunk.max(1);
 
-        // Solve in (source, spatial position) block order; each unit is `chunk` blocks. Every
-        // element is written by the solve: the arrays need only the right lengths.
+        // Solve in (source, spatial position) block order. Every element is written by the
+        // solve: the arrays need only the right lengths.
         let mut spatial = if identity {
             None
         } else {
@@ -553,49 +860,19 @@ impl Tracer {
             Some((r, p, m)) => (r, p, m),
             None => (&mut batch.records, &mut batch.points, &mut batch.media),
         };
-        sized(records, blocks * np, RayRecord::default());
-        sized(points, blocks * pts_block, Point::new(f64::NAN, f64::NAN));
-        sized(media, blocks * media_block, NO_MEDIUM);
-        let (po, mo) = (&batch.point_offsets, &batch.media_offsets);
-        records
-            .par_chunks_mut(chunk * np)
-            .zip(points.par_chunks_mut(chunk * pts_block))
-            .zip(media.par_chunks_mut(chunk * media_block))
-            .enumerate()
-            .for_each_init(
-                || (Workspace::new(), Warm::new(params_block, np)),
-                |(ws, warm), (unit, ((rec, pts), med))| {
-                    let n = rec.len() / np;
-                    let mut unit = Unit {
-                        first: unit * chunk,
-                        n,
-                        nr,
-                        order: &order,
-                        warm_start: opts.warm_start,
-                        rec,
-                        pts,
-                        med,
-                        np,
-                        pts_block,
-                        media_block,
-                        po,
-                        mo,
-                    };
-                    // Path by path: each path's rays form one chain of warm starts.
-                    for p in 0..np {
-                        let params = param_offsets[p]..param_offsets[p + 1];
-                        match self.plan_of(p) {
-                            PathPlan::OneStep(one) | PathPlan::FlatRefraction(one, _) => {
-                                self.one_step_chain(one, p, params.start, &mut unit, ws, warm)
-                            }
-                            _ => self.path_chain(p, params, &mut unit, ws, warm),
-                        }
-                    }
-                    if let Some(progress) = opts.progress {
-                        progress(n * np);
-                    }
-                },
-            );
+        let layout = Layout {
+            np,
+            pts_block,
+            media_block,
+            po: &batch.point_offsets,
+            mo: &batch.media_offsets,
+        };
+        self.solve_units(
+            opts,
+            &order,
+            &param_offsets,
+            sized_out(records, points, media, blocks, layout),
+        );
 
         let Some(spatial) = spatial else {
             return;
@@ -609,42 +886,223 @@ impl Tracer {
             Point::new(f64::NAN, f64::NAN),
         );
         sized(&mut batch.media, blocks * media_block, NO_MEDIUM);
-        let src_block = |block: usize, inverse: &[usize]| (block / nr) * nr + inverse[block % nr];
-        let mut inverse = vec![0; nr];
-        for (pos, &r) in order.iter().enumerate() {
-            inverse[r] = pos;
-        }
+        let from = solved_block(&order, nr);
         batch
             .records
             .par_chunks_mut(np)
             .enumerate()
             .for_each(|(block, out)| {
-                let from = src_block(block, &inverse) * np;
-                out.copy_from_slice(&records[from..from + np]);
+                let at = from(block) * np;
+                out.copy_from_slice(&records[at..at + np]);
             });
         batch
             .points
             .par_chunks_mut(pts_block)
             .enumerate()
             .for_each(|(block, out)| {
-                let from = src_block(block, &inverse) * pts_block;
-                out.copy_from_slice(&points[from..from + pts_block]);
+                let at = from(block) * pts_block;
+                out.copy_from_slice(&points[at..at + pts_block]);
             });
         batch
             .media
             .par_chunks_mut(media_block)
             .enumerate()
             .for_each(|(block, out)| {
-                let from = src_block(block, &inverse) * media_block;
-                out.copy_from_slice(&media[from..from + media_block]);
+                let at = from(block) * media_block;
+                out.copy_from_slice(&media[at..at + media_block]);
             });
         batch.spatial = Some(spatial);
     }
+
+    /// [`trace_batch_into`](Self::trace_batch_into) into a [`BatchSink`] of every ray of the
+    /// scene: each ray is written into `sink` by the worker that solves it, right after
+    /// solving it, with the same results as [`trace_batch`](Self::trace_batch) (bit for bit).
+    /// A front end fills its own arrays this way in the batch's parallel pass, without a
+    /// [`Batch`] to copy from. Receivers solved in a spatial order (see
+    /// [`BatchOptions::warm_start`]) are solved into `scratch` first and then written into
+    /// the sink in parallel; keep one `scratch` for a loop of batches. A scene without rays
+    /// (no paths, sources or receivers) writes nothing.
+    ///
+    /// # Errors
+    /// As [`try_trace_batch`](Self::try_trace_batch), when `scratch` cannot be allocated;
+    /// nothing has been written to the sink then.
+    ///
+    /// # Panics
+    /// If the sink does not have one block per (source, receiver) pair (and the scene has
+    /// rays).
+    pub fn trace_batch_to<S: BatchSink>(
+        &self,
+        opts: &BatchOptions,
+        sink: S,
+        scratch: &mut BatchScratch,
+    ) -> Result<(), SceneError> {
+        let scene = self.scene();
+        let (nr, np) = (scene.receivers().len(), scene.paths().len());
+        let blocks = scene.sources().len() * nr;
+        if blocks == 0 || np == 0 {
+            return Ok(());
+        }
+        assert_eq!(
+            sink.blocks(),
+            blocks,
+            "a batch's sink holds one block per (source, receiver) pair"
+        );
+        let [point_offsets, media_offsets, param_offsets] = offsets(scene);
+        let order = self.solve_order(opts);
+        if order.iter().enumerate().all(|(i, &r)| i == r) {
+            self.solve_units(opts, &order, &param_offsets, sink);
+            return Ok(());
+        }
+        let (records, points, media) = &mut scratch.arrays;
+        if reserve((records, points, media), scene).is_err() {
+            return Err(self.too_large(1));
+        }
+        let layout = Layout {
+            np,
+            pts_block: point_offsets[np],
+            media_block: media_offsets[np],
+            po: &point_offsets,
+            mo: &media_offsets,
+        };
+        let out = sized_out(records, points, media, blocks, layout);
+        self.solve_units(opts, &order, &param_offsets, out);
+        // Back from spatial order to ray order, the sink's parts in parallel.
+        let (records, points, media) = &scratch.arrays;
+        let from = solved_block(&order, nr);
+        let chunk = opts.chunk.max(1);
+        Parts::new(sink, chunk)
+            .enumerate()
+            .for_each_init(Vec::new, |legs, (unit, mut part)| {
+                for b in 0..part.blocks() {
+                    let block = unit * chunk + b;
+                    let (source, receiver) = (block / nr, block % nr);
+                    let solved = from(block);
+                    for p in 0..np {
+                        let at = solved * layout.pts_block;
+                        let ray_points = &points[at + layout.po[p]..at + layout.po[p + 1]];
+                        let at = solved * layout.media_block;
+                        let stored = &media[at + layout.mo[p]..at + layout.mo[p + 1]];
+                        legs.clear();
+                        if stored.first() != Some(&NO_MEDIUM) {
+                            legs.extend(stored.iter().map(|&m| m as usize));
+                        }
+                        let slot = RaySlot {
+                            block: b,
+                            source,
+                            receiver,
+                            path: p,
+                        };
+                        part.write(slot, &records[solved * np + p], ray_points, legs);
+                    }
+                }
+            });
+        Ok(())
+    }
+
+    /// The order in which a batch solves the receivers of each source: a Morton order when
+    /// warm starts are on and the receivers' own order is not coherent, else their own
+    /// (sorting and putting the rays back would cost more than the warm starts save).
+    fn solve_order(&self, opts: &BatchOptions) -> Vec<usize> {
+        let scene = self.scene();
+        if self.solves_spatially(opts) {
+            spatial_order(scene.receivers())
+        } else {
+            (0..scene.receivers().len()).collect()
+        }
+    }
+
+    /// Solves every ray into `sink` in (source, `order`) block order, in parallel: one work
+    /// unit per `opts.chunk` blocks (one part of the sink), one workspace and warm-start state
+    /// per rayon job.
+    fn solve_units<S: BatchSink>(
+        &self,
+        opts: &BatchOptions,
+        order: &[usize],
+        param_offsets: &[usize],
+        sink: S,
+    ) {
+        let scene = self.scene();
+        let (nr, np) = (scene.receivers().len(), scene.paths().len());
+        let chunk = opts.chunk.max(1);
+        Parts::new(sink, chunk).enumerate().for_each_init(
+            || (Workspace::new(), Warm::new(param_offsets[np], np)),
+            |(ws, warm), (unit, out)| {
+                let n = out.blocks();
+                let mut unit = Unit {
+                    first: unit * chunk,
+                    n,
+                    nr,
+                    order,
+                    warm_start: opts.warm_start,
+                    out,
+                };
+                // Path by path: each path's rays form one chain of warm starts.
+                for p in 0..np {
+                    let params = param_offsets[p]..param_offsets[p + 1];
+                    match self.plan_of(p) {
+                        PathPlan::OneStep(one) | PathPlan::FlatRefraction(one, _) => {
+                            self.one_step_chain(one, p, params.start, &mut unit, ws, warm)
+                        }
+                        _ => self.path_chain(p, params, &mut unit, ws, warm),
+                    }
+                }
+                if let Some(progress) = opts.progress {
+                    progress(n * np);
+                }
+            },
+        );
+    }
+}
+
+/// Reserves room in a batch's arrays for every ray of `scene`.
+fn reserve(
+    (records, points, media): (&mut Vec<RayRecord>, &mut Vec<Point>, &mut Vec<u32>),
+    scene: &crate::scene::Scene,
+) -> Result<(), std::collections::TryReserveError> {
+    let size = scene.batch_size();
+    let grow = |have: usize, want: usize| want.saturating_sub(have);
+    records
+        .try_reserve_exact(grow(records.len(), size.rays))
+        .and_then(|()| points.try_reserve_exact(grow(points.len(), size.points)))
+        .and_then(|()| media.try_reserve_exact(grow(media.len(), size.legs)))
+}
+
+/// The [`Out`] sink of `blocks` blocks over the arrays, sized for them.
+fn sized_out<'a>(
+    records: &'a mut Vec<RayRecord>,
+    points: &'a mut Vec<Point>,
+    media: &'a mut Vec<u32>,
+    blocks: usize,
+    layout: Layout<'a>,
+) -> Out<'a> {
+    sized(records, blocks * layout.np, RayRecord::default());
+    sized(
+        points,
+        blocks * layout.pts_block,
+        Point::new(f64::NAN, f64::NAN),
+    );
+    sized(media, blocks * layout.media_block, NO_MEDIUM);
+    Out {
+        rec: records,
+        pts: points,
+        med: media,
+        layout,
+    }
+}
+
+/// Where the block of ray order `block` was solved, with the receivers of each source solved
+/// in `order` (the inverse permutation, per source).
+fn solved_block(order: &[usize], nr: usize) -> impl Fn(usize) -> usize + Sync {
+    let mut inverse = vec![0; nr];
+    for (pos, &r) in order.iter().enumerate() {
+        inverse[r] = pos;
+    }
+    move |block| (block / nr) * nr + inverse[block % nr]
 }
 
 /// One work unit of a batch: blocks `first..first + n` in solve order (a block is one
-/// (source, receiver) pair, all paths) and their output.
-struct Unit<'a> {
+/// (source, receiver) pair, all paths) and the part of the sink they go to.
+struct Unit<'a, S> {
     first: usize,
     n: usize,
     /// Receivers per source.
@@ -652,18 +1110,10 @@ struct Unit<'a> {
     /// Solve order of the receivers.
     order: &'a [usize],
     warm_start: bool,
-    rec: &'a mut [RayRecord],
-    pts: &'a mut [Point],
-    med: &'a mut [u32],
-    /// Paths, points and leg media per block, and each path's offsets in a block.
-    np: usize,
-    pts_block: usize,
-    media_block: usize,
-    po: &'a [usize],
-    mo: &'a [usize],
+    out: S,
 }
 
-impl Unit<'_> {
+impl<S: BatchSink> Unit<'_, S> {
     /// Source and receiver of block `b` of the unit.
     #[inline]
     fn ends(&self, b: usize) -> (usize, usize) {
@@ -675,52 +1125,6 @@ impl Unit<'_> {
     #[inline]
     fn new_source(&self, b: usize) -> bool {
         (self.first + b) % self.nr == 0
-    }
-
-    /// Writes ray `s` of path `p` of block `b` with its points and leg media.
-    #[inline]
-    fn write(&mut self, b: usize, p: usize, s: &RayRecord, points: &[Point], media: &[usize]) {
-        self.rec[b * self.np + p] = *s;
-        let at = b * self.pts_block;
-        let ray_points = &mut self.pts[at + self.po[p]..at + self.po[p + 1]];
-        if s.status.has_time() {
-            ray_points.copy_from_slice(points);
-        } else {
-            ray_points.fill(Point::new(f64::NAN, f64::NAN));
-        }
-        let at = b * self.media_block;
-        let ray_media = &mut self.med[at + self.mo[p]..at + self.mo[p + 1]];
-        if media.len() == ray_media.len() {
-            for (dst, &m) in ray_media.iter_mut().zip(media) {
-                *dst = m as u32;
-            }
-        } else {
-            ray_media.fill(NO_MEDIUM);
-        }
-    }
-
-    /// [`write`](Self::write) for a ray of one interaction with its leg media given: its
-    /// three points and two media, copied without a loop.
-    #[inline(always)]
-    fn write_one(
-        &mut self,
-        b: usize,
-        p: usize,
-        s: &RayRecord,
-        points: &[Point; 3],
-        media: [usize; 2],
-    ) {
-        self.rec[b * self.np + p] = *s;
-        let at = b * self.pts_block + self.po[p];
-        let nan = Point::new(f64::NAN, f64::NAN);
-        let points = if s.status.has_time() {
-            *points
-        } else {
-            [nan; 3]
-        };
-        self.pts[at..at + 3].copy_from_slice(&points);
-        let at = b * self.media_block + self.mo[p];
-        self.med[at..at + 2].copy_from_slice(&[media[0] as u32, media[1] as u32]);
     }
 }
 
@@ -763,10 +1167,28 @@ struct Link {
     warm: bool,
 }
 
+impl Link {
+    /// Where path `p` of this block, block `b` of its unit, goes in the unit's part.
+    #[inline]
+    fn slot(&self, b: usize, p: usize) -> RaySlot {
+        RaySlot {
+            block: b,
+            source: self.source,
+            receiver: self.receiver,
+            path: p,
+        }
+    }
+}
+
 impl Chain {
     /// Block `b` of `unit` in the chain.
     #[inline]
-    fn link(&mut self, scene: &crate::scene::Scene, unit: &Unit, b: usize) -> Link {
+    fn link<S: BatchSink>(
+        &mut self,
+        scene: &crate::scene::Scene,
+        unit: &Unit<S>,
+        b: usize,
+    ) -> Link {
         let (source, receiver) = unit.ends(b);
         if b > 0 && unit.new_source(b) {
             self.have = false;
@@ -788,11 +1210,11 @@ impl Chain {
 impl Tracer {
     /// Path `p` of every block of `unit`, one block after the other, each starting from the
     /// last one's solution when that receiver is near.
-    fn path_chain(
+    fn path_chain<S: BatchSink>(
         &self,
         p: usize,
         params: std::ops::Range<usize>,
-        unit: &mut Unit,
+        unit: &mut Unit<S>,
         ws: &mut Workspace,
         warm: &mut Warm,
     ) {
@@ -806,7 +1228,7 @@ impl Tracer {
             let guess =
                 (link.warm && warm_start).then(|| warm.predict(p, params.clone(), link.moved));
             let s = self.solve_ray(link.source, link.receiver, p, guess, ws);
-            unit.write(b, p, &s, ws.points(), ws.media());
+            unit.out.write(link.slot(b, p), &s, ws.points(), ws.media());
             chain.have = s.status == Status::Converged;
             if chain.have && warm_start {
                 warm.store(p, params.clone(), ws);
@@ -845,12 +1267,12 @@ impl Tracer {
     /// any status but `converged` after a warm start, no time) is solved one by one from the
     /// same start. A refraction at a one-segment interface goes through the flat kernel instead,
     /// never warm-started, as one by one.
-    fn one_step_chain(
+    fn one_step_chain<S: BatchSink>(
         &self,
         one: &OneStepPath,
         p: usize,
         at: usize,
-        unit: &mut Unit,
+        unit: &mut Unit<S>,
         ws: &mut Workspace,
         warm: &mut Warm,
     ) {
@@ -894,7 +1316,8 @@ impl Tracer {
             // path, the complete search answers.
             match fast.filter(|(record, _, _)| record.status.has_time()) {
                 Some((record, points, newton)) => {
-                    unit.write_one(b, p, &record, &points, one.media);
+                    let slot = link.slot(b, p);
+                    unit.out.write_one(slot, &record, &points, one.media);
                     chain.have = record.status == Status::Converged;
                     if let Some((it, j)) = newton.filter(|_| chain.have && warm_start) {
                         let t = path.line.tangent(j);
@@ -907,7 +1330,8 @@ impl Tracer {
                     let guess = guess.map(|g| [g]);
                     let guess = guess.as_ref().map(|g| &g[..]);
                     let s = self.solve_ray(link.source, link.receiver, p, guess, ws);
-                    unit.write(b, p, &s, ws.points(), ws.media());
+                    let slot = link.slot(b, p);
+                    unit.out.write(slot, &s, ws.points(), ws.media());
                     chain.have = s.status == Status::Converged;
                     if chain.have && warm_start {
                         warm.store(p, at..at + 1, ws);

@@ -75,7 +75,7 @@ pub mod argmin_bridge;
 
 // The vocabulary: scenes, the tracer and its options, ray results, batches, outputs.
 pub use arrivals::{MAX_SEARCH_WORK, SearchArrival, SearchError, StationaryRays, TripleArrivals};
-pub use batch::{Batch, BatchOptions, BatchRay, BatchRays};
+pub use batch::{Batch, BatchOptions, BatchRay, BatchRays, BatchScratch, BatchSink, RaySlot};
 pub use derivatives::{
     Axis, BatchGradients, DerivativeError, Gradient, Parameter, PointSensitivities, VertexGradient,
 };

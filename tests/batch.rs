@@ -458,3 +458,148 @@ fn the_walk_over_a_batch_gives_each_rays_parts() {
         }
     }
 }
+
+/// Each ray as a [`eigenray::BatchSink`] receives it: indices, record, points (with a time)
+/// and leg media.
+type Written = (
+    [usize; 3],
+    eigenray::RayRecord,
+    Vec<eigenray::Point>,
+    Vec<usize>,
+);
+
+/// A sink that keeps what it is given, one slot per ray (counting the writes of each).
+struct Keep<'a> {
+    paths: usize,
+    rays: &'a mut [(usize, Option<Written>)],
+}
+
+impl eigenray::BatchSink for Keep<'_> {
+    fn blocks(&self) -> usize {
+        self.rays.len() / self.paths
+    }
+
+    fn split_at(self, blocks: usize) -> (Self, Self) {
+        let (a, b) = self.rays.split_at_mut(blocks * self.paths);
+        let paths = self.paths;
+        (Keep { paths, rays: a }, Keep { paths, rays: b })
+    }
+
+    fn write(
+        &mut self,
+        at: eigenray::RaySlot,
+        record: &eigenray::RayRecord,
+        points: &[eigenray::Point],
+        media: &[usize],
+    ) {
+        let slot = &mut self.rays[at.block * self.paths + at.path];
+        let points = if record.status.has_time() {
+            points.to_vec()
+        } else {
+            Vec::new()
+        };
+        slot.0 += 1;
+        slot.1 = Some((
+            [at.source, at.receiver, at.path],
+            *record,
+            points,
+            media.to_vec(),
+        ));
+    }
+}
+
+/// A batch into a sink gives the sink every ray of `Tracer::trace_batch`, bit for bit, once
+/// each, in ray order: receivers in their own order (solved straight into the sink) and
+/// shuffled (solved in a spatial order, then written in ray order), one-interaction and
+/// general paths, several sources and paths, rays without a time, work units that do not
+/// divide the receivers, warm starts on and off, one scratch for all.
+#[test]
+fn a_sink_gets_the_rays_of_the_batch_bit_for_bit() {
+    let mut beyond = demo::air_water(300, 4);
+    beyond
+        .receivers
+        .extend([[3.0, -1.0], [4.0, -0.5], [5.0, -0.3]]);
+    let scenes = [
+        scene(&demo::air_water(1000, 2)),
+        scene(&shuffled(demo::air_water(1000, 2), 3)),
+        scene(&shuffled(demo::sea_floor(500, 400), 5)),
+        scene(&demo::layer_stack(8, 900)),
+        scene(&shuffled(demo::dipping_stack(4, 700), 9)),
+        scene(&beyond),
+        bench("room2d"),
+    ];
+    let mut scratch = eigenray::BatchScratch::default();
+    for (k, sc) in scenes.iter().enumerate() {
+        let tracer = Tracer::new(sc).expect("tracer");
+        for (warm_start, chunk) in [(true, 256), (true, 37), (false, 256)] {
+            let opts = BatchOptions {
+                warm_start,
+                chunk,
+                ..BatchOptions::default()
+            };
+            let batch = tracer.trace_batch(&opts);
+            let mut rays = vec![(0, None); sc.num_rays()];
+            let sink = Keep {
+                paths: sc.paths().len(),
+                rays: &mut rays,
+            };
+            tracer
+                .trace_batch_to(&opts, sink, &mut scratch)
+                .expect("room");
+            for (i, (writes, got)) in rays.into_iter().enumerate() {
+                let at = format!("scene {k}, warm {warm_start}, chunk {chunk}, ray {i}");
+                assert_eq!(writes, 1, "{at}");
+                let (triple, record, points, media) = got.expect("written");
+                let (s, r, p) = batch.triple(i);
+                assert_eq!(triple, [s, r, p], "{at}");
+                let want = batch.record(i);
+                // Debug strings: NaN times and residuals compare equal there.
+                assert_eq!(format!("{record:?}"), format!("{want:?}"), "{at}");
+                assert_eq!(record.time.to_bits(), want.time.to_bits(), "{at}");
+                assert_eq!(record.residual.to_bits(), want.residual.to_bits(), "{at}");
+                if record.status.has_time() {
+                    assert_eq!(
+                        format!("{points:?}"),
+                        format!("{:?}", batch.points(i)),
+                        "{at}"
+                    );
+                }
+                let legs = sc.paths()[p].steps.len() + 1;
+                let media = (media.len() == legs).then_some(media);
+                assert_eq!(media, batch.media(i).map(|m| m.collect()), "{at}");
+            }
+        }
+    }
+    assert!(
+        scratch.memory_bytes() > 0,
+        "no scene was solved in a spatial order"
+    );
+}
+
+/// A scene without rays writes nothing into its sink; a sink of the wrong size is refused.
+#[test]
+fn a_sink_holds_every_ray_of_the_scene() {
+    let mut spec = demo::air_water(10, 1);
+    spec.paths.clear();
+    let sc = scene(&spec);
+    let tracer = Tracer::new(&sc).expect("tracer");
+    let mut scratch = eigenray::BatchScratch::default();
+    let sink = Keep {
+        paths: 1,
+        rays: &mut [],
+    };
+    tracer
+        .trace_batch_to(&BatchOptions::default(), sink, &mut scratch)
+        .expect("nothing to solve");
+    let sc = scene(&demo::air_water(10, 1));
+    let tracer = Tracer::new(&sc).expect("tracer");
+    let mut rays = vec![(0, None); 9];
+    let wrong = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let sink = Keep {
+            paths: 1,
+            rays: &mut rays,
+        };
+        tracer.trace_batch_to(&BatchOptions::default(), sink, &mut scratch)
+    }));
+    assert!(wrong.is_err(), "a sink of 9 rays for a scene of 10");
+}

@@ -116,9 +116,19 @@ pub enum Reason {
 impl Reason {
     /// The reason in words, naming interfaces by their names in `scene`.
     pub fn describe(&self, scene: &Scene) -> String {
+        self.describe_with(|i| scene.interfaces().get(i).map(|i| i.name.as_str()))
+    }
+
+    /// [`describe`](Self::describe) with the interfaces' names from `interface_name` (by
+    /// index; `None` names it by its index): for a front end that keeps a batch's reasons
+    /// and words them later, with the names alone.
+    pub fn describe_with<'a>(
+        &self,
+        interface_name: impl FnOnce(usize) -> Option<&'a str>,
+    ) -> String {
         match *self {
-            Reason::Crosses { leg, interface } => match scene.interfaces().get(interface) {
-                Some(i) => format!("leg {leg} crosses interface `{}`", i.name),
+            Reason::Crosses { leg, interface } => match interface_name(interface) {
+                Some(name) => format!("leg {leg} crosses interface `{name}`"),
                 None => self.to_string(),
             },
             _ => self.to_string(),
