@@ -4,23 +4,24 @@
 //! validation and error messages) and the library's results to numpy arrays. The Python
 //! package (`python/eigenray/`) re-exports these classes and adds the plotting helper.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
 use eigenray::{
-    Arrival, Axis, Batch, BatchOptions, Gradient, Kink, Parameter, Point, PointSensitivities,
-    RayRecord, Scene, SceneError, SearchArrival, StationaryRays, Status, Tracer, Workspace,
-    npy::STATUS_CODES, scene_parts::StepKind,
+    Arrival, Axis, BatchOptions, BatchScratch, BatchSink, Gradient, Kink, Parameter, Point,
+    PointSensitivities, RayRecord, RaySlot, Reason, Scene, SceneError, SearchArrival,
+    StationaryRays, Status, Tracer, Workspace, npy::STATUS_CODES, scene_parts::StepKind,
 };
 use numpy::ndarray::{Array2, Array3};
 use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray2,
-    PyUntypedArrayMethods,
+    IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray2, PyReadwriteArray1,
+    PyReadwriteArray2, PyReadwriteArray3, PyUntypedArrayMethods,
 };
 use pyo3::exceptions::{PyIOError, PyIndexError, PyKeyError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
+use rayon::iter::ParallelExtend;
 
 pyo3::create_exception!(
     _eigenray,
@@ -255,8 +256,9 @@ fn points_array<'py>(py: Python<'py>, points: &[Point]) -> Bound<'py, PyArray2<f
 #[pyclass(module = "eigenray", name = "Tracer")]
 struct PyTracer {
     tracer: Tracer,
-    /// The last batch's arrays, reused by the next `trace`.
-    batch: Batch,
+    /// What the next `trace` reuses (the rays in solving order, for receivers solved in a
+    /// spatial order).
+    scratch: BatchScratch,
     workspace: Workspace,
     arrivals: Vec<Arrival>,
     /// The last `gradient`'s derivatives (reused).
@@ -573,7 +575,7 @@ struct PyRays {
     residual: Py<PyArray1<f64>>,
     /// Why each ray is not `converged` (`None` where it is): read through the `reason`
     /// getter (a list), rewritten by `trace(out=...)`.
-    reasons: Mutex<Vec<Option<String>>>,
+    reasons: Mutex<Reasons>,
     /// The status names, by code.
     #[pyo3(get)]
     status_names: Vec<&'static str>,
@@ -599,8 +601,10 @@ struct PyRays {
 impl PyRays {
     /// Why each ray is not `converged` (`None` where it is), naming interfaces.
     #[getter]
-    fn reason(&self) -> Vec<Option<String>> {
-        self.reasons.lock().map(|r| r.clone()).unwrap_or_default()
+    fn reason(&self, py: Python<'_>) -> Vec<Option<String>> {
+        // The GIL released while waiting: a `trace(out=...)` of these rays in another thread
+        // holds the lock through its batch, and takes the GIL to report progress.
+        py.detach(|| self.reasons.lock().map(|r| r.words()).unwrap_or_default())
     }
 
     fn __len__(&self, py: Python<'_>) -> usize {
@@ -610,6 +614,41 @@ impl PyRays {
     fn __repr__(&self, py: Python<'_>) -> String {
         format!("Rays({} rays)", self.time.bind(py).len())
     }
+}
+
+/// Why each ray of a `Rays` is not `converged`, as the library's reasons (written by the
+/// batch's workers without a string each), worded when read with the interfaces' names.
+struct Reasons {
+    /// One per ray.
+    codes: Vec<Option<Reason>>,
+    /// Whether an entry is not `None` (most rays have no reason, and rows write `None` only
+    /// over an earlier result that has some).
+    any: bool,
+    /// The scene's interface names, by index.
+    interfaces: Vec<String>,
+}
+
+impl Reasons {
+    fn words(&self) -> Vec<Option<String>> {
+        let name = |i: usize| self.interfaces.get(i).map(String::as_str);
+        self.codes
+            .iter()
+            .map(|r| r.map(|r| r.describe_with(name)))
+            .collect()
+    }
+}
+
+/// `n` reasons, all `None`, written by the rayon pool (the first touch of fresh memory is
+/// then not a serial step before a parallel batch).
+fn none_of(n: usize) -> Vec<Option<Reason>> {
+    let mut codes = Vec::new();
+    codes.par_extend(rayon::iter::repeat_n(None, n));
+    codes
+}
+
+/// The names of the interfaces of `scene`, by index.
+fn interface_names(scene: &Scene) -> Vec<String> {
+    scene.interfaces().iter().map(|i| i.name.clone()).collect()
 }
 
 /// The arrays of `Rays`, allocated for their rays and filled in place (in parallel for
@@ -626,7 +665,9 @@ struct Table {
     media: Vec<i32>,
     iterations: Vec<u32>,
     residual: Vec<f64>,
-    reason: Vec<Option<String>>,
+    reason: Vec<Option<Reason>>,
+    /// Whether a row has a reason.
+    any_reason: AtomicBool,
     /// The columns of every stationary path's entries, for `trace_stationary`.
     stationary: Option<StationaryColumns>,
 }
@@ -651,7 +692,10 @@ struct Rows<'a> {
     media: &'a mut [i32],
     iterations: &'a mut [u32],
     residual: &'a mut [f64],
-    reason: &'a mut [Option<String>],
+    /// Written only where a ray has a reason: every entry is `None` before.
+    reason: &'a mut [Option<Reason>],
+    /// Set when a reason is written.
+    any_reason: &'a AtomicBool,
 }
 
 /// Rows written by one task of a parallel fill.
@@ -671,7 +715,8 @@ impl Table {
             media: vec![0; rays * (width - 1)],
             iterations: vec![0; rays],
             residual: vec![0.0; rays],
-            reason: vec![None; rays],
+            reason: none_of(rays),
+            any_reason: AtomicBool::new(false),
             stationary: None,
         }
     }
@@ -690,6 +735,7 @@ impl Table {
             iterations: &mut self.iterations,
             residual: &mut self.residual,
             reason: &mut self.reason,
+            any_reason: &self.any_reason,
         }
     }
 
@@ -720,7 +766,11 @@ impl Table {
                 .unbind(),
             iterations: self.iterations.into_pyarray(py).unbind(),
             residual: self.residual.into_pyarray(py).unbind(),
-            reasons: Mutex::new(self.reason),
+            reasons: Mutex::new(Reasons {
+                codes: self.reason,
+                any: self.any_reason.into_inner(),
+                interfaces: interface_names(scene),
+            }),
             status_names: status_names(),
             path_names: scene.paths().iter().map(|p| p.name.clone()).collect(),
             media_names: scene.media().iter().map(|m| m.name.clone()).collect(),
@@ -768,6 +818,7 @@ impl Rows<'_> {
         let (iterations, iterations_b) = self.iterations.split_at_mut(k);
         let (residual, residual_b) = self.residual.split_at_mut(k);
         let (reason, reason_b) = self.reason.split_at_mut(k);
+        let any_reason = self.any_reason;
         (
             Rows {
                 width: w,
@@ -782,6 +833,7 @@ impl Rows<'_> {
                 iterations,
                 residual,
                 reason,
+                any_reason,
             },
             Rows {
                 width: w,
@@ -796,6 +848,7 @@ impl Rows<'_> {
                 iterations: iterations_b,
                 residual: residual_b,
                 reason: reason_b,
+                any_reason,
             },
         )
     }
@@ -803,6 +856,7 @@ impl Rows<'_> {
     /// Row `i`: ray `triple` with its record, points (read only when it has a time) and leg
     /// media (`None`, or fewer than its legs, where unknown: −1).
     #[allow(clippy::too_many_arguments, reason = "the parts of one ray")]
+    #[inline]
     fn write(
         &mut self,
         i: usize,
@@ -812,35 +866,88 @@ impl Rows<'_> {
         points: &[Point],
         media: Option<impl Iterator<Item = usize>>,
     ) {
-        let [source, receiver, path] = triple;
+        let own = scene.paths()[triple[2]].steps.len() + 2;
+        self.write_scalars(i, triple, record, own);
         let w = self.width;
+        let row = &mut self.points[i * w * 2..(i + 1) * w * 2];
+        let mut written = 0;
+        if record.status.has_time() && points.len() == own {
+            for (xy, p) in row.chunks_exact_mut(2).zip(points) {
+                xy.copy_from_slice(&[p.x, p.y]);
+            }
+            written = 2 * own;
+        }
+        if written < row.len() {
+            row[written..].fill(f64::NAN);
+        }
+        let legs = &mut self.media[i * (w - 1)..(i + 1) * (w - 1)];
+        let mut written = 0;
+        if let Some(media) = media {
+            for (leg, m) in legs.iter_mut().zip(media) {
+                *leg = leg_code(m);
+                written += 1;
+            }
+        }
+        if written < legs.len() {
+            legs[written..].fill(-1);
+        }
+    }
+
+    /// [`write`](Self::write) for a ray of one interaction (three points) whose two leg media
+    /// are known: without loops.
+    #[inline(always)]
+    fn write_one(
+        &mut self,
+        i: usize,
+        triple: [usize; 3],
+        record: &RayRecord,
+        points: &[Point; 3],
+        media: [usize; 2],
+    ) {
+        self.write_scalars(i, triple, record, 3);
+        let w = self.width;
+        let (row, rest) = self.points[i * w * 2..(i + 1) * w * 2].split_at_mut(6);
+        if record.status.has_time() {
+            let [a, b, c] = points;
+            row.copy_from_slice(&[a.x, a.y, b.x, b.y, c.x, c.y]);
+        } else {
+            row.fill(f64::NAN);
+        }
+        let (legs, rest_legs) = self.media[i * (w - 1)..(i + 1) * (w - 1)].split_at_mut(2);
+        legs.copy_from_slice(&[leg_code(media[0]), leg_code(media[1])]);
+        // (Only when other paths have more points: a `fill` of nothing still calls memset.)
+        if w > 3 {
+            rest.fill(f64::NAN);
+            rest_legs.fill(-1);
+        }
+    }
+
+    /// The one-number columns of row `i`, for a ray of `own` points.
+    #[inline(always)]
+    fn write_scalars(&mut self, i: usize, triple: [usize; 3], record: &RayRecord, own: usize) {
+        let [source, receiver, path] = triple;
         self.source[i] = source as i64;
         self.receiver[i] = receiver as i64;
         self.path[i] = path as i64;
         self.status[i] = status_code(record.status);
         self.time[i] = record.time;
-        let own = scene.paths()[path].steps.len() + 2;
         self.num_points[i] = own as i64;
-        let with_time = record.status.has_time() && points.len() == own;
-        let row = &mut self.points[i * w * 2..(i + 1) * w * 2];
-        row.fill(f64::NAN);
-        if with_time {
-            for (xy, p) in row.chunks_exact_mut(2).zip(points) {
-                xy[0] = p.x;
-                xy[1] = p.y;
-            }
-        }
-        let legs = &mut self.media[i * (w - 1)..(i + 1) * (w - 1)];
-        legs.fill(-1);
-        if let Some(media) = media {
-            for (leg, m) in legs.iter_mut().zip(media) {
-                *leg = i32::try_from(m).unwrap_or(-1);
-            }
-        }
         self.iterations[i] = record.iterations;
         self.residual[i] = record.residual;
-        self.reason[i] = record.reason.map(|r| r.describe(scene));
+        if let Some(reason) = record.reason {
+            self.reason[i] = Some(reason);
+            // (Read first: the flag's cache line stays shared between the workers.)
+            if !self.any_reason.load(Ordering::Relaxed) {
+                self.any_reason.store(true, Ordering::Relaxed);
+            }
+        }
     }
+}
+
+/// The `media` entry of a leg in medium `m`.
+#[inline]
+fn leg_code(m: usize) -> i32 {
+    i32::try_from(m).unwrap_or(-1)
 }
 
 /// The entries of every stationary path, as the command-line tool writes them: one per
@@ -905,77 +1012,181 @@ fn width(scene: &Scene) -> usize {
         .unwrap_or(2)
 }
 
-/// Writes every ray of `batch` into `rows`, in parallel.
-fn write_batch(scene: &Scene, batch: &Batch, rows: Rows<'_>) {
-    fill_parallel(rows, 0, &|| (), &|(), first, rows| {
-        let n = rows.time.len();
-        for (i, ray) in batch.rays(first..first + n).enumerate() {
-            let triple = [ray.source, ray.receiver, ray.path];
-            rows.write(i, scene, triple, ray.record, ray.points, ray.media());
-        }
-    });
+/// The rows of `Rays` as a batch's sink: the worker that solves a ray writes its row right
+/// after solving it (the library's `Tracer::trace_batch_to`), so that numpy's arrays are
+/// filled in the batch's own parallel pass.
+struct RowSink<'a> {
+    scene: &'a Scene,
+    /// Paths (rays per block).
+    paths: usize,
+    rows: Rows<'a>,
 }
 
-/// Writes a batch into the arrays of `out` (a `Rays` of the same shape, from `trace`), in
-/// place: a layout loop's arrays are allocated once.
-fn write_batch_into(py: Python<'_>, scene: &Scene, batch: &Batch, out: &PyRays) -> PyResult<()> {
-    let (n, w) = (batch.len(), width(scene));
-    let shape_error = || {
-        argument_error(
-            py,
-            "out",
-            format!("needs the Rays of an earlier trace() of {n} rays of {w} points"),
+impl<'a> RowSink<'a> {
+    fn new(scene: &'a Scene, rows: Rows<'a>) -> Self {
+        RowSink {
+            scene,
+            paths: scene.paths().len(),
+            rows,
+        }
+    }
+}
+
+impl BatchSink for RowSink<'_> {
+    fn blocks(&self) -> usize {
+        self.rows.time.len().checked_div(self.paths).unwrap_or(0)
+    }
+
+    fn split_at(self, blocks: usize) -> (Self, Self) {
+        let (a, b) = self.rows.split_at(blocks * self.paths);
+        let (scene, paths) = (self.scene, self.paths);
+        (
+            RowSink {
+                scene,
+                paths,
+                rows: a,
+            },
+            RowSink {
+                scene,
+                paths,
+                rows: b,
+            },
         )
-    };
-    if out.arrival.is_some() || out.time.bind(py).len() != n {
-        return Err(shape_error());
     }
-    if out.points.bind(py).shape() != [n, w, 2] || out.media.bind(py).shape() != [n, w - 1] {
-        return Err(shape_error());
+
+    #[inline]
+    fn write(&mut self, at: RaySlot, record: &RayRecord, points: &[Point], media: &[usize]) {
+        let legs = self.scene.paths()[at.path].steps.len() + 1;
+        // Leg media are known when there is one per leg (as a `Batch` keeps them).
+        let media = (media.len() == legs).then(|| media.iter().copied());
+        let row = at.block * self.paths + at.path;
+        let triple = [at.source, at.receiver, at.path];
+        self.rows
+            .write(row, self.scene, triple, record, points, media);
     }
-    let busy = |_| argument_error(py, "out", "its arrays are in use or not writeable");
-    let contiguous = |_| argument_error(py, "out", "its arrays must stay contiguous");
-    let source = out.source.bind(py);
-    let mut source = source.try_readwrite().map_err(busy)?;
-    let receiver = out.receiver.bind(py);
-    let mut receiver = receiver.try_readwrite().map_err(busy)?;
-    let path = out.path.bind(py);
-    let mut path = path.try_readwrite().map_err(busy)?;
-    let status = out.status.bind(py);
-    let mut status = status.try_readwrite().map_err(busy)?;
-    let time = out.time.bind(py);
-    let mut time = time.try_readwrite().map_err(busy)?;
-    let points = out.points.bind(py);
-    let mut points = points.try_readwrite().map_err(busy)?;
-    let num_points = out.num_points.bind(py);
-    let mut num_points = num_points.try_readwrite().map_err(busy)?;
-    let media = out.media.bind(py);
-    let mut media = media.try_readwrite().map_err(busy)?;
-    let iterations = out.iterations.bind(py);
-    let mut iterations = iterations.try_readwrite().map_err(busy)?;
-    let residual = out.residual.bind(py);
-    let mut residual = residual.try_readwrite().map_err(busy)?;
-    let mut reasons = out
-        .reasons
-        .lock()
-        .map_err(|_| PyRuntimeError::new_err("an earlier call failed while writing these rays"))?;
-    reasons.resize(n, None);
-    let rows = Rows {
-        width: w,
-        source: source.as_slice_mut().map_err(contiguous)?,
-        receiver: receiver.as_slice_mut().map_err(contiguous)?,
-        path: path.as_slice_mut().map_err(contiguous)?,
-        status: status.as_slice_mut().map_err(contiguous)?,
-        time: time.as_slice_mut().map_err(contiguous)?,
-        points: points.as_slice_mut().map_err(contiguous)?,
-        num_points: num_points.as_slice_mut().map_err(contiguous)?,
-        media: media.as_slice_mut().map_err(contiguous)?,
-        iterations: iterations.as_slice_mut().map_err(contiguous)?,
-        residual: residual.as_slice_mut().map_err(contiguous)?,
-        reason: &mut reasons,
-    };
-    py.detach(|| write_batch(scene, batch, rows));
-    Ok(())
+
+    #[inline(always)]
+    fn write_one(
+        &mut self,
+        at: RaySlot,
+        record: &RayRecord,
+        points: &[Point; 3],
+        media: [usize; 2],
+    ) {
+        let row = at.block * self.paths + at.path;
+        let triple = [at.source, at.receiver, at.path];
+        self.rows.write_one(row, triple, record, points, media);
+    }
+}
+
+/// The arrays of an earlier `Rays` from `trace`, borrowed for writing in place.
+struct OutArrays<'py, 'a> {
+    width: usize,
+    source: PyReadwriteArray1<'py, i64>,
+    receiver: PyReadwriteArray1<'py, i64>,
+    path: PyReadwriteArray1<'py, i64>,
+    status: PyReadwriteArray1<'py, u8>,
+    time: PyReadwriteArray1<'py, f64>,
+    points: PyReadwriteArray3<'py, f64>,
+    num_points: PyReadwriteArray1<'py, i64>,
+    media: PyReadwriteArray2<'py, i32>,
+    iterations: PyReadwriteArray1<'py, u32>,
+    residual: PyReadwriteArray1<'py, f64>,
+    reasons: MutexGuard<'a, Reasons>,
+    /// Set when the batch writes a reason.
+    any_reason: AtomicBool,
+    /// The reasons of the earlier result while the batch writes new ones (all `None` first),
+    /// put back if it does not finish.
+    earlier: Option<Vec<Option<Reason>>>,
+}
+
+impl<'py, 'a> OutArrays<'py, 'a> {
+    /// The arrays of `out`, which must hold the rays of `scene` (those of an earlier `trace`
+    /// of the same scene).
+    fn borrow(py: Python<'py>, out: &'a PyRays, scene: &Scene) -> PyResult<Self> {
+        let (n, width) = (scene.num_rays(), self::width(scene));
+        let shape_error = || {
+            argument_error(
+                py,
+                "out",
+                format!("needs the Rays of an earlier trace() of {n} rays of {width} points"),
+            )
+        };
+        if out.arrival.is_some() || out.time.bind(py).len() != n {
+            return Err(shape_error());
+        }
+        if out.points.bind(py).shape() != [n, width, 2]
+            || out.media.bind(py).shape() != [n, width - 1]
+        {
+            return Err(shape_error());
+        }
+        let busy = |_| argument_error(py, "out", "its arrays are in use or not writeable");
+        let reasons = || {
+            out.reasons.lock().map_err(|_| {
+                PyRuntimeError::new_err("an earlier call failed while writing these rays")
+            })
+        };
+        Ok(OutArrays {
+            width,
+            source: out.source.bind(py).try_readwrite().map_err(busy)?,
+            receiver: out.receiver.bind(py).try_readwrite().map_err(busy)?,
+            path: out.path.bind(py).try_readwrite().map_err(busy)?,
+            status: out.status.bind(py).try_readwrite().map_err(busy)?,
+            time: out.time.bind(py).try_readwrite().map_err(busy)?,
+            points: out.points.bind(py).try_readwrite().map_err(busy)?,
+            num_points: out.num_points.bind(py).try_readwrite().map_err(busy)?,
+            media: out.media.bind(py).try_readwrite().map_err(busy)?,
+            iterations: out.iterations.bind(py).try_readwrite().map_err(busy)?,
+            residual: out.residual.bind(py).try_readwrite().map_err(busy)?,
+            reasons: reasons()?,
+            any_reason: AtomicBool::new(false),
+            earlier: None,
+        })
+    }
+
+    /// Their rows.
+    fn rows(&mut self, py: Python<'_>) -> PyResult<Rows<'_>> {
+        let contiguous = |_| argument_error(py, "out", "its arrays must stay contiguous");
+        let reasons = &mut *self.reasons;
+        if reasons.any && self.earlier.is_none() {
+            let n = reasons.codes.len();
+            self.earlier = Some(std::mem::replace(
+                &mut reasons.codes,
+                py.detach(|| none_of(n)),
+            ));
+        }
+        Ok(Rows {
+            width: self.width,
+            source: self.source.as_slice_mut().map_err(contiguous)?,
+            receiver: self.receiver.as_slice_mut().map_err(contiguous)?,
+            path: self.path.as_slice_mut().map_err(contiguous)?,
+            status: self.status.as_slice_mut().map_err(contiguous)?,
+            time: self.time.as_slice_mut().map_err(contiguous)?,
+            points: self.points.as_slice_mut().map_err(contiguous)?,
+            num_points: self.num_points.as_slice_mut().map_err(contiguous)?,
+            media: self.media.as_slice_mut().map_err(contiguous)?,
+            iterations: self.iterations.as_slice_mut().map_err(contiguous)?,
+            residual: self.residual.as_slice_mut().map_err(contiguous)?,
+            reason: &mut reasons.codes,
+            any_reason: &self.any_reason,
+        })
+    }
+
+    /// After the batch has written every row: the reasons' flag and names.
+    fn finish(mut self, scene: &Scene) {
+        self.earlier = None;
+        self.reasons.any = self.any_reason.load(Ordering::Relaxed);
+        self.reasons.interfaces = interface_names(scene);
+    }
+}
+
+impl Drop for OutArrays<'_, '_> {
+    /// A batch that did not finish leaves the earlier result's reasons.
+    fn drop(&mut self) {
+        if let Some(earlier) = self.earlier.take() {
+            self.reasons.codes = earlier;
+        }
+    }
 }
 
 /// An index into a list of `len` named things (`what`: interface, medium) from a name (via
@@ -1059,6 +1270,65 @@ impl<'py> Progress<'py> {
     }
 }
 
+/// Runs the batch of every ray of `tracer` into `sink` (the GIL released), reporting to
+/// `progress` from the calling thread while it runs. `Err` when the batch did not run
+/// (nothing is written); else the error of a progress report, if one failed (the rows are
+/// written all the same).
+fn trace_into(
+    py: Python<'_>,
+    tracer: &Tracer,
+    scratch: &mut BatchScratch,
+    warm_start: bool,
+    progress: Option<Progress<'_>>,
+    sink: RowSink<'_>,
+) -> PyResult<PyResult<()>> {
+    let total = tracer.scene().num_rays();
+    let done = AtomicUsize::new(0);
+    let count = |n: usize| {
+        done.fetch_add(n, Ordering::Relaxed);
+    };
+    let opts = BatchOptions {
+        warm_start,
+        progress: progress.as_ref().map(|_| &count as &(dyn Fn(usize) + Sync)),
+        ..BatchOptions::default()
+    };
+    let (solved, reported) = match &progress {
+        None => (
+            py.detach(|| tracer.trace_batch_to(&opts, sink, scratch)),
+            Ok(()),
+        ),
+        Some(progress) => {
+            let (finished, mut shown) = (AtomicUsize::new(0), 0);
+            let result = std::thread::scope(|scope| {
+                let worker = scope.spawn(|| {
+                    let solved = tracer.trace_batch_to(&opts, sink, scratch);
+                    finished.store(1, Ordering::Release);
+                    solved
+                });
+                let mut reported = Ok(());
+                while finished.load(Ordering::Acquire) == 0 {
+                    py.detach(|| std::thread::sleep(Duration::from_millis(50)));
+                    let now = done.load(Ordering::Relaxed);
+                    if reported.is_ok() && now > shown {
+                        reported = progress.report(now, shown, total);
+                        shown = now;
+                    }
+                }
+                let solved = py.detach(|| worker.join());
+                (solved, reported)
+            });
+            let (solved, mut reported) = result;
+            let solved = solved.map_err(|_| PyRuntimeError::new_err("the batch panicked"))?;
+            if reported.is_ok() && solved.is_ok() && shown < total {
+                reported = progress.report(total, shown, total);
+            }
+            (solved, reported.and(progress.close()))
+        }
+    };
+    solved.map_err(|e| scene_error(py, &e))?;
+    Ok(reported)
+}
+
 impl PyTracer {
     fn inner_scene(&self) -> &Scene {
         self.tracer.scene()
@@ -1130,7 +1400,7 @@ impl PyTracer {
         let tracer = tracer.map_err(|e| scene_error(py, &e))?;
         Ok(PyTracer {
             tracer,
-            batch: Batch::default(),
+            scratch: BatchScratch::default(),
             workspace: Workspace::new(),
             arrivals: Vec::new(),
             gradient: Gradient::default(),
@@ -1160,64 +1430,30 @@ impl PyTracer {
         progress: Option<&Bound<'_, PyAny>>,
         out: Option<Bound<'_, PyRays>>,
     ) -> PyResult<Py<PyRays>> {
-        let tracer = &self.tracer;
-        let scene = self.tracer.scene();
-        let batch = &mut self.batch;
-        let total = scene.num_rays();
-        let progress = Progress::new(py, progress, total)?;
-        let done = AtomicUsize::new(0);
-        let count = |n: usize| {
-            done.fetch_add(n, Ordering::Relaxed);
-        };
-        let opts = BatchOptions {
-            warm_start,
-            progress: progress.as_ref().map(|_| &count as &(dyn Fn(usize) + Sync)),
-            ..BatchOptions::default()
-        };
-        let solved = match &progress {
-            None => py.detach(|| tracer.try_trace_batch_into(&opts, batch)),
-            Some(progress) => {
-                let (finished, mut shown) = (AtomicUsize::new(0), 0);
-                let result = std::thread::scope(|scope| {
-                    let worker = scope.spawn(|| {
-                        let solved = tracer.try_trace_batch_into(&opts, batch);
-                        finished.store(1, Ordering::Release);
-                        solved
-                    });
-                    let mut reported = Ok(());
-                    while finished.load(Ordering::Acquire) == 0 {
-                        py.detach(|| std::thread::sleep(Duration::from_millis(50)));
-                        let now = done.load(Ordering::Relaxed);
-                        if reported.is_ok() && now > shown {
-                            reported = progress.report(now, shown, total);
-                            shown = now;
-                        }
-                    }
-                    let solved = py.detach(|| worker.join());
-                    (solved, reported)
-                });
-                let (solved, reported) = result;
-                let solved = solved.map_err(|_| PyRuntimeError::new_err("the batch panicked"))?;
+        let PyTracer {
+            tracer, scratch, ..
+        } = self;
+        let scene = tracer.scene();
+        let (n, w) = (scene.num_rays(), width(scene));
+        // Each worker writes its rays into the arrays right after solving them.
+        match out {
+            Some(out) => {
+                let mut arrays = OutArrays::borrow(py, out.get(), scene)?;
+                let sink = RowSink::new(scene, arrays.rows(py)?);
+                let progress = Progress::new(py, progress, n)?;
+                let reported = trace_into(py, tracer, scratch, warm_start, progress, sink)?;
+                arrays.finish(scene);
                 reported?;
-                if shown < total {
-                    progress.report(total, shown, total)?;
-                }
-                progress.close()?;
-                solved
+                Ok(out.unbind())
             }
-        };
-        solved.map_err(|e| scene_error(py, &e))?;
-        let batch = &self.batch;
-        if let Some(out) = out {
-            write_batch_into(py, scene, batch, out.get())?;
-            return Ok(out.unbind());
+            None => {
+                let mut table = py.detach(|| Table::new(n, w));
+                let sink = RowSink::new(scene, table.rows());
+                let progress = Progress::new(py, progress, n)?;
+                trace_into(py, tracer, scratch, warm_start, progress, sink)??;
+                Py::new(py, table.finish(py, scene))
+            }
         }
-        let table = py.detach(|| {
-            let mut table = Table::new(batch.len(), width(scene));
-            write_batch(scene, batch, table.rows());
-            table
-        });
-        Py::new(py, table.finish(py, scene))
     }
 
     /// Every stationary path of every ray of the scene (not only the one the default start

@@ -233,6 +233,19 @@ def test_trace_into_an_earlier_result_rewrites_it_in_place():
     assert first.reason == fresh.reason
 
 
+def test_trace_into_an_earlier_result_rewrites_its_reasons():
+    # Rays with a reason, then the same arrays for rays without one, then with one again.
+    tracer = eigenray.Tracer(eigenray.Scene(VALLEY))
+    rays = tracer.trace()
+    assert rays.reason[0] is None and rays.reason[1] is not None
+    tracer.set_receiver(1, [1.0, 2.0])
+    tracer.trace(out=rays)
+    assert rays.reason == [None, None] == tracer.trace().reason
+    tracer.set_receiver(1, [20.0, 2.0])
+    tracer.trace(out=rays)
+    assert rays.reason == tracer.trace().reason and rays.reason[1] is not None
+
+
 def test_trace_into_rays_of_another_shape_is_refused():
     small = eigenray.Tracer(eigenray.Scene(AIR_WATER)).trace()
     valley = eigenray.Tracer(eigenray.Scene(VALLEY))
