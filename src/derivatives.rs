@@ -436,10 +436,7 @@ impl Gradient {
         let points = ws.points();
         let steps = path_steps(scene, path)?;
         if let ([step], &[p0, p1, p2], &[m0, m1]) = (steps, points, ws.media()) {
-            let media_count = scene.media().len();
-            if self.slowness.len() != media_count {
-                self.slowness.resize(media_count, 0.0);
-            }
+            self.size_slowness(scene);
             let hint = ws.newton.seg.first().copied();
             return self.fill_one(scene, step, [p0, p1, p2], [m0, m1], hint);
         }
@@ -500,10 +497,7 @@ impl Gradient {
         mut media: impl Iterator<Item = usize>,
         segments: Option<&[usize]>,
     ) -> Result<(), DerivativeError> {
-        let media_count = scene.media().len();
-        if self.slowness.len() != media_count {
-            self.slowness.resize(media_count, 0.0);
-        }
+        self.size_slowness(scene);
         // One interaction (the common ray): written out, without the general bookkeeping.
         if let ([step], &[p0, p1, p2]) = (steps, points) {
             let media = match [media.next(), media.next(), media.next()] {
@@ -537,6 +531,15 @@ impl Gradient {
                 self.vertices.clear();
                 Err(e)
             }
+        }
+    }
+
+    /// One slowness entry per medium of `scene` (what the `fill_*` calls below expect).
+    #[inline(always)]
+    fn size_slowness(&mut self, scene: &Scene) {
+        let media = scene.media().len();
+        if self.slowness.len() != media {
+            self.slowness.resize(media, 0.0);
         }
     }
 
@@ -1056,9 +1059,7 @@ impl Tracer {
         if let Some(segment) = self.flat_segment(path)
             && let (&[p0, p1, p2], &[m0, m1]) = (ws.points(), ws.media())
         {
-            if gradient.slowness.len() != media {
-                gradient.slowness.resize(media, 0.0);
-            }
+            gradient.size_slowness(scene);
             let interface = scene.paths()[path].steps[0].interface;
             gradient.fill_flat(scene, interface, &segment, [p0, p1, p2], [m0, m1])?;
         } else {
