@@ -9,35 +9,20 @@
 //!
 //! `cargo run --release --features argmin --example locate_source [OUT.svg]`
 
-use argmin::core::observers::{Observe, ObserverMode};
-use argmin::core::{Error, Executor, KV, State};
+use argmin::core::observers::ObserverMode;
+use argmin::core::{Executor, State};
 use argmin::solver::linesearch::MoreThuenteLineSearch;
 use argmin::solver::quasinewton::LBFGS;
 use eigenray::argmin_bridge::{ObservedArrival, SourceLocation};
 use eigenray::{Point, Scene, Tracer, Workspace};
 use nalgebra::DVector;
 
+#[path = "support/objective.rs"]
+mod objective;
 #[path = "support/svg.rs"]
 mod svg;
 
-/// Prints the objective after every iteration.
-struct PrintObjective;
-
-impl<I: State<Param = DVector<f64>, Float = f64>> Observe<I> for PrintObjective {
-    fn observe_iter(&mut self, state: &I, _kv: &KV) -> Result<(), Error> {
-        let p = state
-            .get_param()
-            .map_or(vec![f64::NAN; 2], |p| p.as_slice().to_vec());
-        println!(
-            "{:>4}  {:>12.5e}  ({:.6}, {:.6})",
-            state.get_iter(),
-            state.get_cost(),
-            p[0],
-            p[1]
-        );
-        Ok(())
-    }
-}
+use objective::PrintObjective;
 
 const SCENE: &str = r#"{
     "media": { "air": { "speed": 343.0 }, "water": { "speed": 1480.0 } },
@@ -87,7 +72,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             s.param(DVector::from_vec(vec![guess.x, guess.y]))
                 .max_iters(100)
         })
-        .add_observer(PrintObjective, ObserverMode::Always)
+        .add_observer(
+            PrintObjective(|p| format!("({:.6}, {:.6})", p[0], p[1])),
+            ObserverMode::Always,
+        )
         .ctrlc(false)
         .run()?;
     let elapsed = started.elapsed();

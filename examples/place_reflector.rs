@@ -10,36 +10,20 @@
 //!
 //! `cargo run --release --features argmin --example place_reflector [OUT.svg]`
 
-use argmin::core::observers::{Observe, ObserverMode};
-use argmin::core::{Error, Executor, KV, State};
+use argmin::core::observers::ObserverMode;
+use argmin::core::{Executor, State};
 use argmin::solver::linesearch::MoreThuenteLineSearch;
 use argmin::solver::quasinewton::LBFGS;
 use eigenray::argmin_bridge::{Placement, ReflectorPlacement};
 use eigenray::{Point, Scene, SceneSpec, Tracer, Workspace};
 use nalgebra::DVector;
 
+#[path = "support/objective.rs"]
+mod objective;
 #[path = "support/svg.rs"]
 mod svg;
 
-/// Prints the objective and the placement after every iteration.
-struct PrintObjective;
-
-impl<I: State<Param = DVector<f64>, Float = f64>> Observe<I> for PrintObjective {
-    fn observe_iter(&mut self, state: &I, _kv: &KV) -> Result<(), Error> {
-        let p = state
-            .get_param()
-            .map_or(vec![f64::NAN; 3], |p| p.as_slice().to_vec());
-        println!(
-            "{:>4}  {:>12.5e}  ({:.5}, {:.5})  {:>8.4}°",
-            state.get_iter(),
-            state.get_cost(),
-            p[0],
-            p[1],
-            p[2].to_degrees()
-        );
-        Ok(())
-    }
-}
+use objective::PrintObjective;
 
 const SCENE: &str = r#"{
     "media": { "air": { "speed": 343.0 } },
@@ -91,7 +75,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let init = DVector::from_vec(vec![start.center.x, start.center.y, start.angle]);
     let result = Executor::new(problem, solver)
         .configure(|s| s.param(init).max_iters(100))
-        .add_observer(PrintObjective, ObserverMode::Always)
+        .add_observer(
+            PrintObjective(|p| format!("({:.5}, {:.5})  {:>8.4}°", p[0], p[1], p[2].to_degrees())),
+            ObserverMode::Always,
+        )
         .ctrlc(false)
         .run()?;
     let elapsed = started.elapsed();

@@ -12,26 +12,20 @@
 //!
 //! `cargo run --release --features argmin --example shape_lens [OUT.svg]`
 
-use argmin::core::observers::{Observe, ObserverMode};
-use argmin::core::{Error, Executor, KV, State};
+use argmin::core::observers::ObserverMode;
+use argmin::core::{Executor, State};
 use argmin::solver::linesearch::MoreThuenteLineSearch;
 use argmin::solver::quasinewton::LBFGS;
 use eigenray::argmin_bridge::LensProfile;
 use eigenray::{Point, SceneSpec, Tracer, Workspace};
 use nalgebra::DVector;
 
+#[path = "support/objective.rs"]
+mod objective;
 #[path = "support/svg.rs"]
 mod svg;
 
-/// Prints the objective after every iteration.
-struct PrintObjective;
-
-impl<I: State<Param = DVector<f64>, Float = f64>> Observe<I> for PrintObjective {
-    fn observe_iter(&mut self, state: &I, _kv: &KV) -> Result<(), Error> {
-        println!("{:>4}  {:>12.5e}", state.get_iter(), state.get_cost());
-        Ok(())
-    }
-}
+use objective::PrintObjective;
 
 /// Vertices of the back surface, from the top down.
 const VERTICES: usize = 11;
@@ -102,7 +96,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let started = std::time::Instant::now();
     let result = Executor::new(problem, solver)
         .configure(|s| s.param(DVector::from_vec(flat.clone())).max_iters(200))
-        .add_observer(PrintObjective, ObserverMode::Always)
+        .add_observer(PrintObjective(|_| String::new()), ObserverMode::Always)
         .ctrlc(false)
         .run()?;
     let elapsed = started.elapsed();
