@@ -9,7 +9,7 @@ use std::fs::File;
 use std::io::BufWriter;
 use std::path::PathBuf;
 
-use eigenray::{BatchOptions, Format, Scene, Tracer, write_batch, write_names};
+use eigenray::{BatchOptions, Format, Scene, Tracer, npy::write_names, write};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dir = std::env::args_os()
@@ -24,7 +24,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let rays = dir.join("rays.npy");
     let names = dir.join("rays.names.json");
-    write_batch(
+    write(
         &scene,
         &batch,
         Format::Npy,

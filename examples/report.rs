@@ -32,7 +32,8 @@ mod report {
 
     use eigenray::argmin_bridge::{solve_bfgs, solve_gauss_newton, solve_lbfgs};
     use eigenray::{
-        InitialGuess, PathProblem, Point, RayRecord, Scene, SolverOptions, Tracer, Workspace, demo,
+        InitialGuess, Point, RayRecord, Scene, SolverOptions, Tracer, Workspace, demo,
+        path_problem::PathProblem,
     };
 
     use super::plot::{Marker, Plot, Scale, Series};

@@ -12,9 +12,7 @@ use std::fmt::Write as _;
 use std::io::{self, BufWriter};
 use std::time::Instant;
 
-use eigenray::{
-    BatchOptions, Format, Scene, SceneSpec, Status, Tracer, Workspace, demo, write_batch,
-};
+use eigenray::{BatchOptions, Format, Scene, SceneSpec, Status, Tracer, Workspace, demo, write};
 use plot::{Plot, Scale, Series};
 use timing::{cpu_model, fmt_seconds, load_average, median, process_cpu_seconds, time_per_call};
 
@@ -613,12 +611,12 @@ fn batch_section() -> io::Result<String> {
         (Format::Npy, "NumPy `.npy`", "npy"),
     ] {
         let sink = three_runs(|| {
-            write_batch(&scene, &batch, format, io::sink()).expect("write to sink");
+            write(&scene, &batch, format, io::sink()).expect("write to sink");
         });
         let path = std::env::temp_dir().join(format!("eigenray-scaling.{ext}"));
         let file = three_runs(|| {
             let f = std::fs::File::create(&path).expect("create file");
-            write_batch(&scene, &batch, format, BufWriter::new(f)).expect("write file");
+            write(&scene, &batch, format, BufWriter::new(f)).expect("write file");
         });
         let bytes = std::fs::metadata(&path)?.len();
         std::fs::remove_file(&path)?;

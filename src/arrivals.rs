@@ -52,7 +52,7 @@ impl TripleArrivals {
 }
 
 /// Every stationary path of every ray of a scene: one [`TripleArrivals`] per (source,
-/// receiver, path) triple, in ray order ([`ray_index`](crate::ray_index)), as
+/// receiver, path) triple, in ray order ([`Scene::ray_index`]), as
 /// [`Tracer::trace_stationary`] finds them.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct StationaryRays {
@@ -177,7 +177,7 @@ impl Tracer {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Scene, Status, ray_index};
+    use crate::{Scene, Status};
 
     #[test]
     fn triples_come_in_ray_order_and_match_one_by_one_searches() {
@@ -198,7 +198,7 @@ mod tests {
         assert_eq!(rays.triples.len(), 12);
         let mut one = Vec::new();
         for (i, t) in rays.triples.iter().enumerate() {
-            assert_eq!(ray_index(t.source, t.receiver, t.path, 3, 2), i);
+            assert_eq!(scene.ray_index(t.source, t.receiver, t.path), i);
             let search = tracer
                 .stationary_paths(
                     scene.sources()[t.source],

@@ -27,12 +27,12 @@
 //! 4. **Change and trace again**: [`Tracer::set_receiver`], [`Tracer::set_source`],
 //!    [`Tracer::set_interface_points`], [`Tracer::set_medium_speed`] edit the tracer's scene,
 //!    validated as the document is, and prepare again only what depends on the change.
-//! 5. **Write**: [`write_rays`], [`write_batch`] and their siblings write JSON, JSON Lines,
-//!    CSV or `.npy` ([`Format`]).
+//! 5. **Write**: [`write`] writes rays, batches, every stationary path and search arrivals
+//!    as JSON, JSON Lines, CSV or `.npy` ([`Format`]).
 //! 6. **Derivatives**: [`Tracer::gradient`] gives the derivatives of a solved ray's time with
 //!    respect to its source, receiver, each medium's slowness and the vertices it touches
-//!    ([`Gradient`]); [`PointSensitivities`] how its points move; [`BatchGradients`] both for
-//!    a whole batch.
+//!    ([`Gradient`]); [`PointSensitivities`] how its points move;
+//!    [`BatchGradients`](gradients::BatchGradients) both for a whole batch.
 //!
 //! ```
 //! use eigenray::{InterfaceSpec, MediumSpec, PathSpec, Point, Scene, Status, StepSpec, Tracer};
@@ -73,35 +73,81 @@ mod trace;
 #[cfg(feature = "argmin")]
 pub mod argmin_bridge;
 
-// The vocabulary: scenes, the tracer and its options, ray results, batches, outputs.
-pub use arrivals::{MAX_SEARCH_WORK, SearchArrival, SearchError, StationaryRays, TripleArrivals};
-pub use batch::{Batch, BatchOptions, BatchRay, BatchRays, BatchScratch, BatchSink, RaySlot};
-pub use derivatives::{
-    Axis, BatchGradients, DerivativeError, Gradient, Parameter, PointSensitivities, VertexGradient,
-};
+// The vocabulary: what a user of the README names. Everything else that is public lives in a
+// module named for its concept, below. `tests/architecture.rs` keeps this list at 30 or fewer.
+pub use arrivals::{SearchArrival, StationaryRays};
+pub use batch::{Batch, BatchOptions};
+pub use derivatives::{Gradient, PointSensitivities};
 pub use geom::{Point, Vec2};
-pub use output::{
-    Format, RaySet, write_arrivals, write_batch, write_names, write_rays, write_rays_and_arrivals,
-    write_rays_json, write_stationary,
-};
-pub use problem::{PathProblem, Tridiagonal};
+pub use output::{Document, Format, RaySet, write};
 pub use scene::{
-    InterfaceSpec, MediumSpec, PathSpec, Scene, SceneBuilder, SceneError, SceneSpec, SearchOptions,
-    SearchSpec, SolverOptions, SolverSpec, StationaryMode, StepSpec, escape_text,
+    InterfaceSpec, MediumSpec, PathSpec, Scene, SceneBuilder, SceneError, SceneSpec, SolverOptions,
+    StepSpec,
 };
-pub use trace::{
-    Arrival, InitialGuess, Kernels, Kink, Ray, RayRecord, Reason, Stationary, StationaryError,
-    Status, Tracer, Workspace, ray_index,
-};
+pub use trace::{Arrival, InitialGuess, Ray, RayRecord, Reason, Status, Tracer, Workspace};
+
+/// The scene document's parts as plain data ([`SceneSpec`] and the specs of its keys), for
+/// scenes written in code or read with serde.
+pub mod spec {
+    pub use crate::scene::{
+        InterfaceSpec, MediumSpec, PathSpec, SceneSpec, SearchSpec, SolverSpec, StationaryMode,
+        StepSpec,
+    };
+}
 
 /// The parts of a validated [`Scene`], as its accessors give them: media, interfaces, paths
-/// and their steps, segments, and the sizes of a batch.
+/// and their steps, segments, the search's options, and the sizes of a batch.
 pub mod scene_parts {
-    pub use crate::scene::{BatchSize, Interface, Medium, Path, SegmentRef, Step, StepKind};
+    pub use crate::scene::{
+        BatchSize, Interface, Medium, Path, SearchOptions, SegmentRef, Step, StepKind,
+    };
+}
+
+/// What a [`Tracer`] can be told besides its scene: the solver's options, the start of each
+/// ray, and which kernels it may use (for comparing the kernels with the general solve).
+pub mod options {
+    pub use crate::scene::SolverOptions;
+    pub use crate::trace::{InitialGuess, Kernels};
+}
+
+/// Writing a batch into arrays of your own ([`Tracer::trace_batch_to`]): the sink each worker
+/// writes a ray into right after solving it, where a ray goes, and the scratch a sink reuses.
+pub mod sink {
+    pub use crate::batch::{BatchRay, BatchRays, BatchScratch, BatchSink, RaySlot};
+}
+
+/// Every stationary path of a sequence ([`Tracer::stationary_paths`]) and of every ray of a
+/// scene ([`Tracer::trace_stationary`]): the arrivals, their kinks, what each search did.
+pub mod stationary {
+    pub use crate::arrivals::{StationaryRays, TripleArrivals};
+    pub use crate::trace::{Arrival, Kink, Stationary, StationaryError};
+}
+
+/// The automatic search over step sequences ([`Tracer::search`]).
+pub mod search {
+    pub use crate::arrivals::{SearchArrival, SearchError};
+    pub use crate::scene::SearchOptions;
+}
+
+/// Derivatives of a ray's time ([`Gradient`]) and of its points ([`PointSensitivities`]), per
+/// ray and for a whole batch ([`BatchGradients`](gradients::BatchGradients)).
+pub mod gradients {
+    pub use crate::derivatives::{
+        Axis, BatchGradients, DerivativeError, Gradient, Parameter, PointSensitivities,
+        VertexGradient,
+    };
+}
+
+/// The path problem of one ray on its own: travel time, residual and tridiagonal Hessian at
+/// any parameters ([`PathProblem`](path_problem::PathProblem)), for cross-checks with other
+/// solvers.
+pub mod path_problem {
+    pub use crate::problem::{PathProblem, Tridiagonal};
 }
 
 /// The limits a scene is validated against, and the solver's defaults.
 pub mod limits {
+    pub use crate::arrivals::MAX_SEARCH_WORK;
     pub use crate::scene::{
         DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, MAX_COORDINATE, MAX_ITERATIONS_LIMIT,
         MAX_SPEED_RATIO, MAX_STATIONARY_STEPS, MIN_COORDINATE, REGION_RANGE_BITS,
@@ -121,10 +167,13 @@ pub mod lookup {
     pub use crate::regions::{LocateHint, Regions, Sides};
 }
 
-/// The fixed codes of the `.npy` format: the status and kink codes, the index marking a leg
-/// medium that was not found, and the padding of an arrival's steps.
+/// The `.npy` format's fixed codes (the status and kink codes, the index marking a leg medium
+/// that was not found, the padding of an arrival's steps) and the name tables that give its
+/// indices their names ([`write_names`](npy::write_names), the `--names` sidecar).
 pub mod npy {
-    pub use crate::output::{KINK_CODES, NO_INTERFACE, NO_MEDIUM, NO_STEP_KIND, STATUS_CODES};
+    pub use crate::output::{
+        KINK_CODES, NO_INTERFACE, NO_MEDIUM, NO_STEP_KIND, STATUS_CODES, write_names,
+    };
 }
 
 /// The README's examples, compiled and run as doctests.

@@ -6,7 +6,7 @@
 //! [`StationaryRays`] of `"stationary": "all"`, and formatted in parallel (rayon) a window of
 //! rays at a time, so that writing a large batch costs less than solving it. A search's
 //! [`SearchArrival`]s follow the rays in JSON and JSON Lines, or go to a file of their own
-//! ([`write_arrivals`]).
+//! (a [`Document`] of arrivals alone); [`write`] writes them all.
 
 use std::io::{self, Write};
 
@@ -23,14 +23,14 @@ use crate::trace::{Kink, Ray, Reason, Status};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Format {
     /// One JSON document, `{"rays": [...]}`: one object per ray, in ray order (see
-    /// [`write_rays_json`] for its fields). With `"stationary": "all"` ([`write_stationary`])
+    /// [`write`] for its fields). With `"stationary": "all"` ([`StationaryRays`])
     /// one object per stationary path, each with three more fields: `arrival` (0, 1, … within
     /// its triple, by time), `kink` (`"minimum"`, `"maximum"` or `"mixed"`, on `vertex`
     /// entries) and `complete` (whether its triple's search was complete); a triple without a
     /// stationary path is one entry, `no_path` (or `not_converged` when its search was not
     /// complete), `arrival` 0. A scene's search arrivals follow as a second key,
-    /// `{"rays": [...], "arrivals": [...]}` ([`write_rays_and_arrivals`]; the fields are
-    /// listed at [`write_arrivals`]).
+    /// `{"rays": [...], "arrivals": [...]}` ([`Document::with_arrivals`]; the fields are
+    /// listed at [`write`]).
     #[default]
     Json,
     /// One ray object per line (the same objects as in `Json`), then one line per search
@@ -45,7 +45,7 @@ pub enum Format {
     /// converged). A field holding `,`, `"` or a line break is quoted as RFC 4180 says. With
     /// `"stationary": "all"` three columns follow: `arrival`, `kink` (empty but on `vertex`
     /// entries) and `complete` (`true` or `false`). Search arrivals are a table of their own,
-    /// written to a second file by [`write_arrivals`].
+    /// written to a second file by [`write`].
     Csv,
     /// NumPy's `.npy` file (format version 1.0): one record per ray, in ray order, of a packed
     /// little-endian structured array that `numpy.load` reads as it is:
@@ -60,7 +60,7 @@ pub enum Format {
     /// records: the compact format for large batches. With `"stationary": "all"` three fields
     /// follow: `arrival` (`<u4`), `kink` (`u1`: 0 none, 1 `minimum`, 2 `maximum`, 3 `mixed`,
     /// the places in [`KINK_CODES`]) and `complete` (`u1`: 0 or 1). Search arrivals are records
-    /// of their own, written to a second file by [`write_arrivals`].
+    /// of their own, written to a second file by [`write`].
     Npy,
 }
 
@@ -85,11 +85,11 @@ pub const KINK_CODES: [Option<Kink>; 4] = [
     Some(Kink::Mixed),
 ];
 
-/// The [`write_arrivals`] `.npy` `step_kind` codes: 0 reflect, 1 refract; this one pads the
+/// The arrivals' `.npy` `step_kind` codes: 0 reflect, 1 refract; this one pads the
 /// steps beyond an arrival's own.
 pub const NO_STEP_KIND: u8 = u8::MAX;
 
-/// The [`write_arrivals`] `.npy` `step_interface` entry that pads the steps beyond an
+/// The arrivals' `.npy` `step_interface` entry that pads the steps beyond an
 /// arrival's own.
 pub const NO_INTERFACE: u32 = u32::MAX;
 
@@ -692,7 +692,7 @@ fn one_table(format: Format) -> io::Error {
     io::Error::new(
         io::ErrorKind::InvalidInput,
         format!(
-            "{} holds one table: write the search arrivals to a second file (write_arrivals)",
+            "{} holds one table: write the search arrivals to a second file, as a document of their own",
             if format == Format::Csv { "CSV" } else { ".npy" }
         ),
     )
@@ -804,46 +804,116 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
     out.flush()
 }
 
-/// Writes the `{"rays": [...]}` document of `eigenray solve` for `rays` (compact, one line).
-///
-/// Each ray has `source`, `receiver` and `path` (indices), `path_name` (when the path has a
-/// name), `status`, `time` and `points` (when it has a time), `iterations`, `residual` (when
-/// finite), the leg `media` names (when known) and a `reason` when it is not converged.
-///
-/// # Errors
-/// Any error of the writer.
-pub fn write_rays_json<W: Write>(scene: &Scene, rays: &[Ray], out: W) -> io::Result<()> {
-    write_rays(scene, rays, Format::Json, out)
+/// What one document of `eigenray solve` holds: rays in one of their forms, a search's
+/// arrivals, or both (see [`write`]). Every form the library gives converts into it.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Document<'a> {
+    /// The rays: `{"rays": [...]}` (an empty list when `None` and arrivals are given beside
+    /// nothing else: then the document is the arrivals' table alone).
+    pub rays: Option<RaySet<'a>>,
+    /// A search's arrivals ([`Tracer::search`](crate::Tracer::search)).
+    pub arrivals: Option<&'a [SearchArrival]>,
 }
 
-/// Writes `rays` in `format`.
-///
-/// # Errors
-/// Any error of the writer.
-pub fn write_rays<W: Write>(scene: &Scene, rays: &[Ray], format: Format, out: W) -> io::Result<()> {
-    write_rays_and_arrivals(scene, RaySet::Rays(rays), None, format, out)
+impl<'a> Document<'a> {
+    /// `self` with a search's arrivals after the rays.
+    pub fn with_arrivals(self, arrivals: &'a [SearchArrival]) -> Document<'a> {
+        Document {
+            arrivals: Some(arrivals),
+            ..self
+        }
+    }
 }
 
-/// Writes every ray of a batch in `format`, in ray order.
-///
-/// # Errors
-/// Any error of the writer.
-pub fn write_batch<W: Write>(
-    scene: &Scene,
-    batch: &Batch,
-    format: Format,
-    out: W,
-) -> io::Result<()> {
-    write_rays_and_arrivals(scene, RaySet::Batch(batch), None, format, out)
+impl<'a> From<RaySet<'a>> for Document<'a> {
+    fn from(rays: RaySet<'a>) -> Self {
+        Document {
+            rays: Some(rays),
+            arrivals: None,
+        }
+    }
 }
 
-/// Writes every stationary path of every ray (`"stationary": "all"`) in `format`: one entry
-/// per stationary path, in ray order and within a triple by time, with the fields of a ray
-/// plus `arrival`, `kink` and `complete` (see [`Format`]); one `no_path` entry (or
-/// `not_converged`, when the triple's search was not complete) for a triple without any.
+impl<'a> From<&'a [Ray]> for Document<'a> {
+    fn from(rays: &'a [Ray]) -> Self {
+        RaySet::Rays(rays).into()
+    }
+}
+
+impl<'a> From<&'a Vec<Ray>> for Document<'a> {
+    fn from(rays: &'a Vec<Ray>) -> Self {
+        RaySet::Rays(rays).into()
+    }
+}
+
+impl<'a> From<&'a Batch> for Document<'a> {
+    fn from(batch: &'a Batch) -> Self {
+        RaySet::Batch(batch).into()
+    }
+}
+
+impl<'a> From<&'a StationaryRays> for Document<'a> {
+    fn from(rays: &'a StationaryRays) -> Self {
+        RaySet::Stationary(rays).into()
+    }
+}
+
+impl<'a> From<&'a [SearchArrival]> for Document<'a> {
+    fn from(arrivals: &'a [SearchArrival]) -> Self {
+        Document {
+            rays: None,
+            arrivals: Some(arrivals),
+        }
+    }
+}
+
+impl<'a> From<&'a Vec<SearchArrival>> for Document<'a> {
+    fn from(arrivals: &'a Vec<SearchArrival>) -> Self {
+        arrivals.as_slice().into()
+    }
+}
+
+/// Writes one document of `eigenray solve` in `format`: rays ([`Ray`]s, a [`Batch`] or every
+/// stationary path, [`StationaryRays`]), a search's arrivals ([`SearchArrival`]s), or rays
+/// followed by arrivals ([`Document::with_arrivals`]). [`Format`] lists each format's fields.
+///
+/// - Rays: one entry per ray in ray order, `{"rays": [...]}` in JSON (compact, one line).
+///   Each ray has `source`, `receiver` and `path` (indices), `path_name` (when the path has a
+///   name), `status`, `time` and `points` (when it has a time), `iterations`, `residual`
+///   (when finite), the leg `media` names (when known) and a `reason` when it is not
+///   converged. Every stationary path (`"stationary": "all"`) is one entry per stationary
+///   path, in ray order and within a triple by time, with the fields of a ray plus `arrival`,
+///   `kink` and `complete`; a triple without any is one `no_path` entry (or `not_converged`,
+///   when the triple's search was not complete).
+/// - Arrivals alone: the table described at [`Format`]'s arrival fields (below).
+/// - Rays and arrivals: in JSON the document `{"rays": [...], "arrivals": [...]}`, in JSON
+///   Lines one line per arrival after the rays' lines, marked `"kind": "arrival"`.
+///
+/// Each arrival has `source` and `receiver` (indices), `steps` (the step sequence in the
+/// scene's notation), the leg `media`, `status` (`converged`, `vertex` or `obstructed`),
+/// `kink` (on `vertex` arrivals), `time`, `points` (source, interaction points, receiver),
+/// `iterations`, `residual` (when finite), a `reason` when it is not converged, and `complete`
+/// (whether the search of its sequence was complete). With `"derivatives": true` each also
+/// carries its gradient, as the rays do in each format.
+///
+/// - [`Format::Json`]: `{"arrivals": [{"source": 0, "receiver": 0, "steps": [{"reflect":
+///   "w0"}], "media": ["air", "air"], "status": "converged", "time": …, "points": […], …}]}`.
+/// - [`Format::Jsonl`]: one arrival object per line, `"kind": "arrival"` first.
+/// - [`Format::Csv`]: the header
+///   `source,receiver,steps,media,status,kink,time,points,iterations,residual,reason,complete`,
+///   then one line per arrival; `steps` as `reflect:w0;refract:surface` (empty for the direct
+///   ray), `media` and `points` as in the rays' CSV.
+/// - [`Format::Npy`]: one record per arrival: `source`, `receiver`, `steps` (the number of
+///   steps) (`<u4`), `step_kind` (`u1`, shape `(K,)`: 0 reflect, 1 refract,
+///   [`NO_STEP_KIND`] beyond the arrival's steps), `step_interface` (`<u4`, shape `(K,)`:
+///   indices into [`Scene::interfaces`], [`NO_INTERFACE`] beyond), `status`, `kink` (the
+///   codes of [`Format::Npy`]), `complete` (`u1`), `iterations` (`<u4`), `time`, `residual`
+///   (`<f8`), `points` (`<f8`, shape `(K + 2, 2)`, padded with NaN) and `media` (`<u4`, shape
+///   `(K + 1,)`, padded with [`NO_MEDIUM`]), with `K` the search's `max_steps` (or the most
+///   steps of an arrival, when more).
 ///
 /// ```
-/// use eigenray::{Format, Scene, Tracer, write_stationary};
+/// use eigenray::{Format, Scene, Tracer, write};
 /// let scene = Scene::from_json(r#"{
 ///     "media": { "air": { "speed": 1.0 } },
 ///     "interfaces": { "valley": { "points": [[-3, 0], [0, -2], [3, 0]] } },
@@ -853,7 +923,7 @@ pub fn write_batch<W: Write>(
 /// }"#).unwrap();
 /// let rays = Tracer::new(&scene).unwrap().trace_stationary().unwrap();
 /// let mut out = Vec::new();
-/// write_stationary(&scene, &rays, Format::Jsonl, &mut out).unwrap();
+/// write(&scene, &rays, Format::Jsonl, &mut out).unwrap();
 /// let lines: Vec<serde_json::Value> = out
 ///     .split(|&b| b == b'\n')
 ///     .filter(|l| !l.is_empty())
@@ -867,14 +937,28 @@ pub fn write_batch<W: Write>(
 /// ```
 ///
 /// # Errors
-/// Any error of the writer.
-pub fn write_stationary<W: Write>(
+/// Any error of the writer; rays and arrivals together in [`Format::Csv`] or [`Format::Npy`],
+/// which hold one table each ([`io::ErrorKind::InvalidInput`], before anything is written:
+/// write the arrivals to a second file, as a document of their own).
+pub fn write<'a, W: Write>(
     scene: &Scene,
-    rays: &StationaryRays,
+    document: impl Into<Document<'a>>,
     format: Format,
     out: W,
 ) -> io::Result<()> {
-    write_rays_and_arrivals(scene, RaySet::Stationary(rays), None, format, out)
+    match document.into() {
+        Document {
+            rays: None,
+            arrivals: Some(arrivals),
+        } => write_arrivals(scene, arrivals, format, out),
+        Document { rays, arrivals } => write_rays_and_arrivals(
+            scene,
+            rays.unwrap_or(RaySet::Rays(&[])),
+            arrivals,
+            format,
+            out,
+        ),
+    }
 }
 
 /// The rays of an `eigenray solve` document, in any of the forms the library gives them.
@@ -889,17 +973,8 @@ pub enum RaySet<'a> {
     Stationary(&'a StationaryRays),
 }
 
-/// Writes `rays` in `format` and, when `arrivals` is given (a scene with a `search` section),
-/// the search's arrivals after them: in JSON the document `{"rays": [...], "arrivals": [...]}`,
-/// in JSON Lines one line per arrival after the rays' lines, marked `"kind": "arrival"` (the
-/// arrival fields are listed at [`write_arrivals`]). Without `arrivals` this is
-/// [`write_rays`], [`write_batch`] or [`write_stationary`].
-///
-/// # Errors
-/// Any error of the writer; arrivals asked for in [`Format::Csv`] or [`Format::Npy`], which
-/// hold one table each ([`io::ErrorKind::InvalidInput`], before anything is written: write
-/// them to a second file with [`write_arrivals`]).
-pub fn write_rays_and_arrivals<W: Write>(
+/// [`write`]: `rays`, then `arrivals` when given.
+fn write_rays_and_arrivals<W: Write>(
     scene: &Scene,
     rays: RaySet<'_>,
     arrivals: Option<&[SearchArrival]>,
@@ -1232,38 +1307,12 @@ fn arrival_lines<W: Write>(
     out.write_all(&buf)
 }
 
-/// The header line of [`write_arrivals`]'s CSV.
+/// The header line of the arrivals' CSV.
 const ARRIVALS_CSV_HEADER: &[u8] =
     b"source,receiver,steps,media,status,kink,time,points,iterations,residual,reason,complete\n";
 
-/// Writes the arrivals of a scene's automatic search on their own, in `format` (the second
-/// file of `eigenray solve --arrivals`; JSON and JSON Lines can also hold them beside the rays:
-/// [`write_rays_and_arrivals`]). Each arrival has `source` and `receiver` (indices), `steps`
-/// (the step sequence in the scene's notation), the leg `media`, `status` (`converged`,
-/// `vertex` or `obstructed`), `kink` (on `vertex` arrivals), `time`, `points` (source,
-/// interaction points, receiver), `iterations`, `residual` (when finite), a `reason` when it
-/// is not converged, and `complete` (whether the search of its sequence was complete). With
-/// `"derivatives": true` each also carries its gradient, as the rays do in each format.
-///
-/// - [`Format::Json`]: `{"arrivals": [{"source": 0, "receiver": 0, "steps": [{"reflect":
-///   "w0"}], "media": ["air", "air"], "status": "converged", "time": …, "points": […], …}]}`.
-/// - [`Format::Jsonl`]: one arrival object per line, `"kind": "arrival"` first.
-/// - [`Format::Csv`]: the header
-///   `source,receiver,steps,media,status,kink,time,points,iterations,residual,reason,complete`,
-///   then one line per arrival; `steps` as `reflect:w0;refract:surface` (empty for the direct
-///   ray), `media` and `points` as in the rays' CSV.
-/// - [`Format::Npy`]: one record per arrival: `source`, `receiver`, `steps` (the number of
-///   steps) (`<u4`), `step_kind` (`u1`, shape `(K,)`: 0 reflect, 1 refract,
-///   [`NO_STEP_KIND`] beyond the arrival's steps), `step_interface` (`<u4`, shape `(K,)`:
-///   indices into [`Scene::interfaces`], [`NO_INTERFACE`] beyond), `status`, `kink` (the
-///   codes of [`Format::Npy`]), `complete` (`u1`), `iterations` (`<u4`), `time`, `residual`
-///   (`<f8`), `points` (`<f8`, shape `(K + 2, 2)`, padded with NaN) and `media` (`<u4`, shape
-///   `(K + 1,)`, padded with [`NO_MEDIUM`]), with `K` the search's `max_steps` (or the most
-///   steps of an arrival, when more).
-///
-/// # Errors
-/// Any error of the writer.
-pub fn write_arrivals<W: Write>(
+/// [`write`]: a search's arrivals on their own.
+fn write_arrivals<W: Write>(
     scene: &Scene,
     arrivals: &[SearchArrival],
     format: Format,
@@ -1360,7 +1409,7 @@ mod tests {
             .trace_batch(&BatchOptions::default());
         let write = |format| {
             let mut out = Vec::new();
-            write_batch(&scene, &batch, format, &mut out).unwrap();
+            write(&scene, &batch, format, &mut out).unwrap();
             String::from_utf8(out).unwrap()
         };
         let json = write(Format::Json);
@@ -1386,7 +1435,7 @@ mod tests {
         assert_eq!(write(Format::Csv).lines().count(), n + 1);
         // The owned rays give the same document.
         let mut owned = Vec::new();
-        write_rays_json(&scene, &batch.to_rays(), &mut owned).unwrap();
+        super::write(&scene, &batch.to_rays(), Format::Json, &mut owned).unwrap();
         assert_eq!(String::from_utf8(owned).unwrap(), json);
     }
 
@@ -1400,7 +1449,7 @@ mod tests {
             .unwrap()
             .trace_batch(&BatchOptions::default());
         let mut out = Vec::new();
-        write_batch(&scene, &batch, Format::Npy, &mut out).unwrap();
+        write(&scene, &batch, Format::Npy, &mut out).unwrap();
         assert_eq!(&out[..8], b"\x93NUMPY\x01\x00");
         let len = u16::from_le_bytes([out[8], out[9]]) as usize;
         assert_eq!((10 + len) % 64, 0);

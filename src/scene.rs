@@ -42,6 +42,14 @@ impl SceneError {
             message: message.into(),
         }
     }
+
+    /// `text` with every character that must not reach a terminal or a log as it is (control
+    /// characters, line separators, bidirectional overrides, non-characters) as `\u{hex}`:
+    /// what this error's `Display` does to the names it quotes. For messages of your own that
+    /// quote user input.
+    pub fn escape_text(text: &str) -> String {
+        escape_text(text)
+    }
 }
 
 impl fmt::Display for SceneError {
@@ -72,7 +80,7 @@ fn needs_escape(c: char) -> bool {
 /// `text` with every character that must not reach a terminal or a log as it is (control
 /// characters, line separators, bidirectional overrides, non-characters) as `\u{hex}`: what
 /// [`SceneError`]'s `Display` does to the names it quotes.
-pub fn escape_text(text: &str) -> String {
+fn escape_text(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
     for c in text.chars() {
         if needs_escape(c) {
@@ -820,6 +828,12 @@ impl Scene {
     /// Paths.
     pub fn paths(&self) -> &[Path] {
         &self.paths
+    }
+    /// The number of the ray of (`source`, `receiver`, `path`) in `eigenray solve`'s ray order:
+    /// source-major, then receiver, then path.
+    #[inline]
+    pub fn ray_index(&self, source: usize, receiver: usize, path: usize) -> usize {
+        (source * self.receivers.len() + receiver) * self.paths.len() + path
     }
     /// Solver settings.
     pub fn solver(&self) -> SolverOptions {

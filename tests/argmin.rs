@@ -6,7 +6,9 @@ use argmin::core::{CostFunction, Gradient, Hessian, Jacobian, Operator};
 use eigenray::argmin_bridge::{
     ArgminOutcome, ArgminPath, solve_bfgs, solve_gauss_newton, solve_lbfgs, solve_newton,
 };
-use eigenray::{PathProblem, Point, Ray, Scene, SolverOptions, Status, Tracer, Workspace};
+use eigenray::{
+    Point, Ray, Scene, SolverOptions, Status, Tracer, Workspace, path_problem::PathProblem,
+};
 use nalgebra::DVector;
 
 /// Relative residual tolerance given to every argmin solver (eigenray's default).

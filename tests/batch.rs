@@ -3,13 +3,17 @@
 
 use eigenray::{BatchOptions, Scene, Status, Tracer, Workspace, demo};
 
+#[path = "support/rng.rs"]
+mod rng;
+use rng::SplitMix64;
+
 fn scene(spec: &eigenray::SceneSpec) -> Scene {
     Scene::from_spec(spec).expect("valid scene")
 }
 
 /// `spec` with its receivers in a random order (a Fisher-Yates shuffle seeded by `seed`).
 fn shuffled(mut spec: eigenray::SceneSpec, seed: u64) -> eigenray::SceneSpec {
-    let mut rng = demo::SplitMix64(seed);
+    let mut rng = SplitMix64(seed);
     for i in (1..spec.receivers.len()).rev() {
         let j = (rng.next_u64() % (i as u64 + 1)) as usize;
         spec.receivers.swap(i, j);
@@ -459,7 +463,7 @@ fn the_walk_over_a_batch_gives_each_rays_parts() {
     }
 }
 
-/// Each ray as a [`eigenray::BatchSink`] receives it: indices, record, points (with a time)
+/// Each ray as a [`eigenray::sink::BatchSink`] receives it: indices, record, points (with a time)
 /// and leg media.
 type Written = (
     [usize; 3],
@@ -474,7 +478,7 @@ struct Keep<'a> {
     rays: &'a mut [(usize, Option<Written>)],
 }
 
-impl eigenray::BatchSink for Keep<'_> {
+impl eigenray::sink::BatchSink for Keep<'_> {
     fn blocks(&self) -> usize {
         self.rays.len() / self.paths
     }
@@ -487,7 +491,7 @@ impl eigenray::BatchSink for Keep<'_> {
 
     fn write(
         &mut self,
-        at: eigenray::RaySlot,
+        at: eigenray::sink::RaySlot,
         record: &eigenray::RayRecord,
         points: &[eigenray::Point],
         media: &[usize],
@@ -528,7 +532,7 @@ fn a_sink_gets_the_rays_of_the_batch_bit_for_bit() {
         scene(&beyond),
         bench("room2d"),
     ];
-    let mut scratch = eigenray::BatchScratch::default();
+    let mut scratch = eigenray::sink::BatchScratch::default();
     for (k, sc) in scenes.iter().enumerate() {
         let tracer = Tracer::new(sc).expect("tracer");
         for (warm_start, chunk) in [(true, 256), (true, 37), (false, 256)] {
@@ -583,7 +587,7 @@ fn a_sink_holds_every_ray_of_the_scene() {
     spec.paths.clear();
     let sc = scene(&spec);
     let tracer = Tracer::new(&sc).expect("tracer");
-    let mut scratch = eigenray::BatchScratch::default();
+    let mut scratch = eigenray::sink::BatchScratch::default();
     let sink = Keep {
         paths: 1,
         rays: &mut [],

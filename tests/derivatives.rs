@@ -7,8 +7,8 @@
 //! errors it saw (`--nocapture`).
 
 use eigenray::{
-    Axis, BatchGradients, BatchOptions, Gradient, Parameter, Point, PointSensitivities, Scene,
-    Status, Tracer, Vec2, Workspace,
+    BatchOptions, Gradient, Point, PointSensitivities, Scene, Status, Tracer, Vec2, Workspace,
+    gradients::{Axis, BatchGradients, Parameter},
 };
 use serde_json::{Value, json};
 
@@ -496,11 +496,11 @@ fn bad_inputs_are_errors() {
     assert_eq!(rec.status, Status::NoPath);
     assert_eq!(
         tracer.gradient(0, &ws).unwrap_err(),
-        eigenray::DerivativeError::NoTime
+        eigenray::gradients::DerivativeError::NoTime
     );
     assert!(matches!(
         tracer.gradient(3, &ws).unwrap_err(),
-        eigenray::DerivativeError::UnknownPath { path: 3 }
+        eigenray::gradients::DerivativeError::UnknownPath { path: 3 }
     ));
     let off = [
         Point::new(0.0, 1.0),
@@ -510,7 +510,7 @@ fn bad_inputs_are_errors() {
     let steps = &scene.paths()[0].steps;
     assert_eq!(
         Gradient::of_points(&scene, steps, &off, &[0, 0]).unwrap_err(),
-        eigenray::DerivativeError::OffInterface { step: 0 }
+        eigenray::gradients::DerivativeError::OffInterface { step: 0 }
     );
     let on = [
         Point::new(0.0, 1.0),
@@ -519,11 +519,11 @@ fn bad_inputs_are_errors() {
     ];
     assert_eq!(
         Gradient::of_points(&scene, steps, &on, &[0]).unwrap_err(),
-        eigenray::DerivativeError::Media
+        eigenray::gradients::DerivativeError::Media
     );
     assert_eq!(
         Gradient::of_points(&scene, steps, &on[..2], &[0, 0]).unwrap_err(),
-        eigenray::DerivativeError::PointCount {
+        eigenray::gradients::DerivativeError::PointCount {
             points: 2,
             expected: 3
         }
@@ -632,7 +632,7 @@ fn warm_calls_allocate_nothing() {
 /// (one ray per triple and every stationary path), JSON Lines, CSV and `.npy`.
 #[test]
 fn outputs_carry_the_gradient() {
-    use eigenray::{Format, RaySet, write_rays_and_arrivals};
+    use eigenray::{Format, write};
     let text = r#"{
         "media": { "air": { "index": 1.0 }, "water": { "index": 1.333 } },
         "interfaces": { "surface": { "points": [[-1, 0], [2, 0]] } },
@@ -645,7 +645,7 @@ fn outputs_carry_the_gradient() {
     let batch = tracer.trace_batch(&BatchOptions::default());
     let write = |format| {
         let mut out = Vec::new();
-        write_rays_and_arrivals(&scene, RaySet::Batch(&batch), None, format, &mut out).unwrap();
+        write(&scene, &batch, format, &mut out).unwrap();
         out
     };
     let doc: Value = serde_json::from_slice(&write(eigenray::Format::Json)).unwrap();
@@ -691,7 +691,7 @@ fn outputs_carry_the_gradient() {
     .unwrap();
     let rays = Tracer::new(&all).unwrap().trace_stationary().unwrap();
     let mut out = Vec::new();
-    eigenray::write_stationary(&all, &rays, Format::Json, &mut out).unwrap();
+    eigenray::write(&all, &rays, Format::Json, &mut out).unwrap();
     let doc: Value = serde_json::from_slice(&out).unwrap();
     assert_eq!(doc["rays"][0]["gradient"], *g);
 }
@@ -700,7 +700,7 @@ fn outputs_carry_the_gradient() {
 /// it is the gradient of the arrival's points (`Gradient::of_points`).
 #[test]
 fn search_arrivals_carry_the_gradient_in_every_format() {
-    use eigenray::{Format, write_arrivals};
+    use eigenray::{Format, write};
     let path = format!(
         "{}/fixtures/pyroomacoustics/hexagon.json",
         env!("CARGO_MANIFEST_DIR")
@@ -713,7 +713,7 @@ fn search_arrivals_carry_the_gradient_in_every_format() {
     assert!(arrivals.len() > 20, "{}", arrivals.len());
     let write = |format| {
         let mut out = Vec::new();
-        write_arrivals(&scene, &arrivals, format, &mut out).unwrap();
+        write(&scene, &arrivals, format, &mut out).unwrap();
         out
     };
     let json_doc: Value = serde_json::from_slice(&write(Format::Json)).unwrap();

@@ -4,7 +4,8 @@
 //! kernel ([`Kernels::All`]) gives the same statuses and times within 1e-12.
 
 use eigenray::{
-    BatchOptions, InitialGuess, Kernels, Ray, Reason, Scene, Status, Tracer, Workspace, demo,
+    BatchOptions, InitialGuess, Ray, Reason, Scene, Status, Tracer, Workspace, demo,
+    options::Kernels,
 };
 use serde_json::json;
 

@@ -3,9 +3,8 @@
 
 use eigenray::scene_parts::{Step, StepKind};
 use eigenray::{
-    Arrival, BatchOptions, Format, Kink, Point, RaySet, Reason, Scene, SearchArrival, Status,
-    Tracer, write_arrivals, write_batch, write_names, write_rays, write_rays_and_arrivals,
-    write_stationary,
+    Arrival, BatchOptions, Format, Point, Reason, Scene, SearchArrival, Status, Tracer,
+    npy::write_names, stationary::Kink, write,
 };
 use serde_json::Value;
 
@@ -37,9 +36,9 @@ fn written(scene: &Scene, format: Format) -> Vec<u8> {
     let tracer = Tracer::new(scene).expect("tracer");
     let batch = tracer.trace_batch(&BatchOptions::default());
     let mut out = Vec::new();
-    write_batch(scene, &batch, format, &mut out).expect("write");
+    write(scene, &batch, format, &mut out).expect("write");
     let mut owned = Vec::new();
-    write_rays(scene, &tracer.trace_all(), format, &mut owned).expect("write");
+    write(scene, &tracer.trace_all(), format, &mut owned).expect("write");
     assert_eq!(owned, out, "{format:?}: owned rays and batch differ");
     out
 }
@@ -432,7 +431,7 @@ fn stationary_written(format: Format) -> (Scene, eigenray::StationaryRays, Vec<u
         .trace_stationary()
         .expect("at most 12 steps");
     let mut out = Vec::new();
-    write_stationary(&scene, &rays, format, &mut out).expect("write");
+    write(&scene, &rays, format, &mut out).expect("write");
     (scene, rays, out)
 }
 
@@ -530,7 +529,7 @@ fn an_incomplete_triple_says_so_on_every_entry_and_is_never_no_path() {
     st.triples[1].complete = false;
     assert!(st.triples[1].arrivals.is_empty());
     let mut out = Vec::new();
-    write_stationary(&scene, &st, Format::Json, &mut out).unwrap();
+    write(&scene, &st, Format::Json, &mut out).unwrap();
     let doc: Value = serde_json::from_slice(&out).unwrap();
     let rays = doc["rays"].as_array().unwrap();
     assert_eq!(rays[0]["complete"], false);
@@ -738,10 +737,9 @@ fn search_arrivals_follow_the_rays_in_json_and_json_lines() {
     let want = hand_built_json();
     // JSON: a second top-level key.
     let mut out = Vec::new();
-    write_rays_and_arrivals(
+    write(
         &scene,
-        RaySet::Stationary(&st),
-        Some(&arrivals),
+        eigenray::Document::from(&st).with_arrivals(&arrivals),
         Format::Json,
         &mut out,
     )
@@ -753,23 +751,15 @@ fn search_arrivals_follow_the_rays_in_json_and_json_lines() {
     assert_eq!(keys, ["arrivals", "rays"]);
     // Without arrivals the document is the rays' alone, byte for byte.
     let mut alone = Vec::new();
-    write_stationary(&scene, &st, Format::Json, &mut alone).unwrap();
+    write(&scene, &st, Format::Json, &mut alone).unwrap();
     let mut none = Vec::new();
-    write_rays_and_arrivals(
-        &scene,
-        RaySet::Stationary(&st),
-        None,
-        Format::Json,
-        &mut none,
-    )
-    .unwrap();
+    write(&scene, &st, Format::Json, &mut none).unwrap();
     assert_eq!(none, alone);
     // An empty search is an empty list, not a missing key.
     let mut empty = Vec::new();
-    write_rays_and_arrivals(
+    write(
         &scene,
-        RaySet::Stationary(&st),
-        Some(&[]),
+        eigenray::Document::from(&st).with_arrivals(&[]),
         Format::Json,
         &mut empty,
     )
@@ -779,10 +769,9 @@ fn search_arrivals_follow_the_rays_in_json_and_json_lines() {
 
     // JSON Lines: the rays' lines, then one marked line per arrival.
     let mut out = Vec::new();
-    write_rays_and_arrivals(
+    write(
         &scene,
-        RaySet::Stationary(&st),
-        Some(&arrivals),
+        eigenray::Document::from(&st).with_arrivals(&arrivals),
         Format::Jsonl,
         &mut out,
     )
@@ -805,13 +794,13 @@ fn search_arrivals_follow_the_rays_in_json_and_json_lines() {
     assert_eq!(marked.len(), 3);
     // On their own: `{"arrivals": [...]}` and the marked lines.
     let mut own = Vec::new();
-    write_arrivals(&scene, &arrivals, Format::Json, &mut own).unwrap();
+    write(&scene, &arrivals, Format::Json, &mut own).unwrap();
     assert_eq!(
         serde_json::from_slice::<Value>(&own).unwrap(),
         serde_json::json!({ "arrivals": want })
     );
     let mut own = Vec::new();
-    write_arrivals(&scene, &arrivals, Format::Jsonl, &mut own).unwrap();
+    write(&scene, &arrivals, Format::Jsonl, &mut own).unwrap();
     assert_eq!(String::from_utf8(own).unwrap().lines().count(), 3);
 }
 
@@ -821,10 +810,9 @@ fn csv_and_npy_refuse_arrivals_beside_the_rays_and_write_them_on_their_own() {
     let arrivals = hand_built_arrivals(&scene);
     for format in [Format::Csv, Format::Npy] {
         let mut out = Vec::new();
-        let err = write_rays_and_arrivals(
+        let err = write(
             &scene,
-            RaySet::Stationary(&st),
-            Some(&arrivals),
+            eigenray::Document::from(&st).with_arrivals(&arrivals),
             format,
             &mut out,
         )
@@ -836,7 +824,7 @@ fn csv_and_npy_refuse_arrivals_beside_the_rays_and_write_them_on_their_own() {
 
     // CSV: a table of its own.
     let mut out = Vec::new();
-    write_arrivals(&scene, &arrivals, Format::Csv, &mut out).unwrap();
+    write(&scene, &arrivals, Format::Csv, &mut out).unwrap();
     let text = String::from_utf8(out).unwrap();
     let lines: Vec<Vec<String>> = text.lines().map(csv_fields).collect();
     assert_eq!(
@@ -871,7 +859,7 @@ fn csv_and_npy_refuse_arrivals_beside_the_rays_and_write_them_on_their_own() {
 
     // `.npy`: records of their own, sized by the most steps (2 here: no `search` section).
     let mut out = Vec::new();
-    write_arrivals(&scene, &arrivals, Format::Npy, &mut out).unwrap();
+    write(&scene, &arrivals, Format::Npy, &mut out).unwrap();
     let (header, data) = npy_parts(&out);
     assert!(
         header.contains(

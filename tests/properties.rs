@@ -22,8 +22,8 @@ use eigenray::geometry::orient;
 use eigenray::limits::DEFAULT_MAX_ITERATIONS;
 use eigenray::scene_parts::StepKind;
 use eigenray::{
-    InterfaceSpec, MediumSpec, PathSpec, Point, Ray, Scene, SceneSpec, SolverSpec, Status,
-    StepSpec, Tracer, Workspace,
+    InterfaceSpec, MediumSpec, PathSpec, Point, Ray, Scene, SceneSpec, Status, StepSpec, Tracer,
+    Workspace, spec::SolverSpec,
 };
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};

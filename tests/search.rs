@@ -1,7 +1,7 @@
 //! Automatic sequences (`search`): the image-source tree of rooms against the complete search
 //! of every sequence, one by one; the refusal of searches too large to run.
 
-use eigenray::{Scene, SearchError, Status, Tracer};
+use eigenray::{Scene, Status, Tracer, search::SearchError};
 
 fn fixture(name: &str) -> serde_json::Value {
     let path = format!(

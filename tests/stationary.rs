@@ -4,9 +4,13 @@
 //! the contract's rules, and deduplicated. Then the named cases.
 
 use eigenray::{
-    Arrival, Kink, Point, Reason, Scene, StationaryError, Status, Tracer, Workspace,
-    demo::SplitMix64,
+    Arrival, Point, Reason, Scene, Status, Tracer, Workspace,
+    stationary::{Kink, StationaryError},
 };
+
+#[path = "support/rng.rs"]
+mod rng;
+use rng::SplitMix64;
 
 type P = [f64; 2];
 

@@ -3,9 +3,11 @@
 //! tracer's rays are those of a tracer built afresh from the edited scene document, bit for
 //! bit, and a refused update gives the document's own error and changes nothing.
 
-use eigenray::{
-    BatchOptions, MediumSpec, Point, Scene, SceneError, SceneSpec, Tracer, demo::SplitMix64,
-};
+use eigenray::{BatchOptions, MediumSpec, Point, Scene, SceneError, SceneSpec, Tracer};
+
+#[path = "support/rng.rs"]
+mod rng;
+use rng::SplitMix64;
 
 /// Every result of a tracer in one string: `Debug` prints each `f64` so that it reads back to
 /// the same bits, so equal strings are equal rays.

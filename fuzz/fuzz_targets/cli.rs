@@ -3,7 +3,7 @@
 //! output writer.
 #![no_main]
 
-use eigenray::{BatchOptions, Format, Point, RayRecord, Scene, SolverOptions, Tracer, write_batch};
+use eigenray::{BatchOptions, Format, Point, RayRecord, Scene, SolverOptions, Tracer, write};
 use libfuzzer_sys::fuzz_target;
 
 /// Largest batch traced (beyond it only the arithmetic runs).
@@ -53,7 +53,7 @@ fuzz_target!(|data: &[u8]| {
         assert_eq!(batch.len(), size.rays);
         for format in [Format::Json, Format::Jsonl, Format::Csv, Format::Npy] {
             let mut out = Vec::new();
-            write_batch(&scene, &batch, format, &mut out).expect("writing to a Vec");
+            write(&scene, &batch, format, &mut out).expect("writing to a Vec");
             match format {
                 Format::Json => {
                     let doc: serde_json::Value =

@@ -1,7 +1,7 @@
 //! What both fuzz targets check on a valid scene: tracing and writing it neither panics nor
 //! produces non-finite times or points, and the output is valid JSON.
 
-use eigenray::{Scene, SolverOptions, Tracer, write_rays_json};
+use eigenray::{Scene, SolverOptions, Tracer, write};
 
 #[path = "../../tests/support/interface.rs"]
 mod interface;
@@ -60,7 +60,7 @@ pub fn trace_and_check(mut scene: Scene) {
         }
     }
     let mut out = Vec::new();
-    write_rays_json(&scene, &rays, &mut out).expect("writing to a Vec");
+    write(&scene, &rays, eigenray::Format::Json, &mut out).expect("writing to a Vec");
     let doc: serde_json::Value = serde_json::from_slice(&out).expect("the output is valid JSON");
     assert_eq!(
         doc["rays"].as_array().map(Vec::len),

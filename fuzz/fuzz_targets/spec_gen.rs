@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 
 use arbitrary::Arbitrary;
-use eigenray::{InterfaceSpec, MediumSpec, PathSpec, SceneSpec, SolverSpec, StepSpec};
+use eigenray::{InterfaceSpec, MediumSpec, PathSpec, SceneSpec, StepSpec, spec::SolverSpec};
 
 /// One coordinate: on a coarse grid (many exact coincidences), a fine grid, or any f64.
 #[derive(Arbitrary, Debug, Clone, Copy)]

@@ -9,9 +9,13 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
 use eigenray::{
-    Arrival, Axis, BatchOptions, BatchScratch, BatchSink, Gradient, Kink, Parameter, Point,
-    PointSensitivities, RayRecord, RaySlot, Reason, Scene, SceneError, SearchArrival,
-    StationaryRays, Status, Tracer, Workspace, npy::STATUS_CODES, scene_parts::StepKind,
+    Arrival, BatchOptions, Gradient, Point, PointSensitivities, RayRecord, Reason, Scene,
+    SceneError, SearchArrival, StationaryRays, Status, Tracer, Workspace,
+    gradients::{Axis, Parameter},
+    npy::STATUS_CODES,
+    scene_parts::StepKind,
+    sink::{BatchScratch, BatchSink, RaySlot},
+    stationary::Kink,
 };
 use numpy::ndarray::{Array2, Array3};
 use numpy::{

@@ -702,7 +702,7 @@ mod tests {
         let general = Tracer::new(scene)
             .unwrap()
             .with_initial_guess(crate::InitialGuess::Paraxial)
-            .with_kernels(crate::Kernels::GeneralOnly);
+            .with_kernels(crate::trace::Kernels::GeneralOnly);
         let keep = |status: Status| {
             status == Status::Converged || (obstructed && status == Status::Obstructed)
         };

@@ -97,18 +97,6 @@ pub enum InitialGuess {
     Paraxial,
 }
 
-/// The ray numbering of `eigenray solve`: source-major, then receiver, then path.
-#[inline]
-pub fn ray_index(
-    source: usize,
-    receiver: usize,
-    path: usize,
-    receivers: usize,
-    paths: usize,
-) -> usize {
-    (source * receivers + receiver) * paths + path
-}
-
 /// Reusable scratch space for solving rays: once it has grown to the longest path, solving
 /// allocates nothing. Use one per thread.
 #[derive(Clone, Debug, Default)]
@@ -369,7 +357,7 @@ impl Tracer {
         }
     }
 
-    /// Solves every ray of the scene, in parallel, in ray order ([`ray_index`]).
+    /// Solves every ray of the scene, in parallel, in ray order ([`Scene::ray_index`]).
     pub fn trace_all(&self) -> Vec<Ray> {
         let (r, p) = (self.scene.receivers().len(), self.scene.paths().len());
         (0..self.scene.num_rays())

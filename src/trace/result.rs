@@ -337,7 +337,7 @@ impl Ray {
     /// ```
     pub fn describe(&self, scene: &Scene) -> String {
         use fmt::Write as _;
-        let esc = crate::scene::escape_text;
+        let esc = crate::scene::SceneError::escape_text;
         let mut out = format!("source {}, receiver {}, ", self.source, self.receiver);
         let path = scene.paths().get(self.path);
         match path.and_then(|p| p.name.as_deref()) {

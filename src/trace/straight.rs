@@ -541,7 +541,7 @@ mod tests {
             let general = Tracer::new(&scene)
                 .unwrap()
                 .with_initial_guess(crate::InitialGuess::Paraxial)
-                .with_kernels(crate::Kernels::GeneralOnly);
+                .with_kernels(crate::trace::Kernels::GeneralOnly);
             let mut ws = Workspace::new();
             let (np, nr) = (scene.paths().len(), scene.receivers().len());
             let (mut decided, mut started, mut behind) = (0, 0, 0);

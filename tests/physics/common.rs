@@ -1,8 +1,11 @@
 //! Shared helpers: plain-`f64` geometry, a seeded generator, scene building, reference solvers.
 
-use eigenray::demo::SplitMix64;
 use eigenray::{Point, Ray, Scene, Tracer};
 use serde_json::Value;
+
+#[path = "../support/rng.rs"]
+mod rng;
+use rng::SplitMix64;
 
 #[path = "../support/reference.rs"]
 mod reference;

@@ -1,6 +1,6 @@
 //! Leg media from region lookup: layers cut by open polylines in a domain box, and a lens.
 
-use eigenray::{Ray, Reason, Status, ray_index};
+use eigenray::{Ray, Reason, Status};
 use serde_json::json;
 
 use crate::common::*;
@@ -81,8 +81,7 @@ fn check_ray(
 fn media_from_regions() {
     let sc = layered_scene();
     let rays = trace_all(&sc);
-    let (nr, np) = (sc.receivers().len(), sc.paths().len());
-    let ray = |s: usize, r: usize, p: usize| &rays[ray_index(s, r, p, nr, np)];
+    let ray = |s: usize, r: usize, p: usize| &rays[sc.ray_index(s, r, p)];
     let m = |name: &str| sc.medium_index(name).unwrap();
     let (upper, middle, lower, glass) = (m("upper"), m("middle"), m("lower"), m("glass"));
     let (w_up, w_mid) = (1.0, 1.0 / 0.6);

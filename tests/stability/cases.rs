@@ -17,9 +17,12 @@
 
 use std::time::{Duration, Instant};
 
-use eigenray::demo::SplitMix64;
-use eigenray::{PathProblem, Ray, Reason, Scene, Status, Tracer, Workspace, write_rays_json};
+use eigenray::{Ray, Reason, Scene, Status, Tracer, Workspace, path_problem::PathProblem, write};
 use serde_json::{Map, Value, json};
+
+#[path = "../support/rng.rs"]
+mod rng;
+use rng::SplitMix64;
 
 #[path = "../support/reference.rs"]
 mod reference;
@@ -336,7 +339,13 @@ pub fn run(case: &Case) -> Outcome {
     }
     // … and its JSON.
     let mut buf = Vec::new();
-    write_rays_json(&sc, std::slice::from_ref(&ray), &mut buf).expect("write to a Vec");
+    write(
+        &sc,
+        std::slice::from_ref(&ray),
+        eigenray::Format::Json,
+        &mut buf,
+    )
+    .expect("write to a Vec");
     match serde_json::from_slice::<Value>(&buf) {
         Ok(doc) => {
             let mut bad = Vec::new();

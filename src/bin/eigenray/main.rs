@@ -15,8 +15,8 @@ use std::time::Instant;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use eigenray::{
-    Batch, BatchOptions, RaySet, Scene, SceneError, SearchArrival, StationaryMode, StationaryRays,
-    Status, Tracer,
+    Batch, BatchOptions, RaySet, Scene, SceneError, SearchArrival, StationaryRays, Status, Tracer,
+    spec::StationaryMode,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -172,7 +172,7 @@ impl Failure {
         if let Some(m) = message {
             // One line, whatever the message holds, with control characters escaped (names and
             // paths come from the user); a failing stderr has nowhere to report to.
-            let line = eigenray::escape_text(&m);
+            let line = SceneError::escape_text(&m);
             let _ = writeln!(io::stderr().lock(), "error: {line}");
         }
         ExitCode::from(code)
@@ -212,7 +212,8 @@ fn check_batch_memory(scene: &Scene, warm_start: bool) -> Result<(), Failure> {
     let size = scene.batch_size();
     let all = scene.solver().stationary == StationaryMode::All;
     let per_ray = if all {
-        std::mem::size_of::<eigenray::TripleArrivals>() + std::mem::size_of::<eigenray::Arrival>()
+        std::mem::size_of::<eigenray::stationary::TripleArrivals>()
+            + std::mem::size_of::<eigenray::Arrival>()
     } else {
         std::mem::size_of::<eigenray::RayRecord>()
     };
@@ -340,7 +341,7 @@ fn write_outputs(
     }
     if let Some(path) = &args.names {
         let mut names = Vec::new();
-        eigenray::write_names(scene, &mut names).map_err(|e| write_failure(path, &e))?;
+        eigenray::npy::write_names(scene, &mut names).map_err(|e| write_failure(path, &e))?;
         fs::write(path, names).map_err(|e| write_failure(path, &e))?;
     }
     if let Some(path) = &args.svg {
@@ -361,15 +362,23 @@ fn write_outputs(
     let inline = match (arrivals, &args.arrivals) {
         (Some(arrivals), Some(path)) => {
             let mut file = Vec::new();
-            eigenray::write_arrivals(scene, arrivals, format, &mut file)
+            eigenray::write(scene, arrivals, format, &mut file)
                 .map_err(|e| write_failure(path, &e))?;
             fs::write(path, file).map_err(|e| write_failure(path, &e))?;
             None
         }
         (arrivals, _) => arrivals,
     };
-    eigenray::write_rays_and_arrivals(scene, solved.rays(), inline, format, io::stdout().lock())
-        .map_err(Failure::stdout)
+    eigenray::write(
+        scene,
+        eigenray::Document {
+            rays: Some(solved.rays()),
+            arrivals: inline,
+        },
+        format,
+        io::stdout().lock(),
+    )
+    .map_err(Failure::stdout)
 }
 
 /// Every stationary path of every ray (`"stationary": "all"`), with a progress bar on standard
