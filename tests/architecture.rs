@@ -43,17 +43,48 @@ fn module_of(src: &Path, path: &Path) -> Option<String> {
     Some(first.trim_end_matches(".rs").to_string())
 }
 
-/// Every `crate::NAME` that `text` mentions.
+/// Every top-level module that `text` names after `crate::`: `crate::NAME` and each name of a
+/// group, `crate::{NAME::…, NAME}`.
 fn uses(text: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    for (i, _) in text.match_indices("crate::") {
-        let name: String = text[i + 7..]
+    let ident = |s: &str| -> String {
+        s.trim_start()
             .chars()
             .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
-            .collect();
-        out.push(name);
+            .collect()
+    };
+    let mut out = Vec::new();
+    for (i, _) in text.match_indices("crate::") {
+        let rest = &text[i + 7..];
+        let Some(group) = rest.strip_prefix('{') else {
+            out.push(ident(rest));
+            continue;
+        };
+        // The names of the group at its own depth: after its `{` and after each `,` there.
+        let mut depth = 0;
+        let mut start = 0;
+        for (j, c) in group.char_indices() {
+            match c {
+                '{' => depth += 1,
+                '}' if depth == 0 => {
+                    out.push(ident(&group[start..j]));
+                    break;
+                }
+                '}' => depth -= 1,
+                ',' if depth == 0 => {
+                    out.push(ident(&group[start..j]));
+                    start = j + 1;
+                }
+                _ => {}
+            }
+        }
     }
     out
+}
+
+#[test]
+fn grouped_imports_count_as_uses() {
+    let text = "use crate::{geom::Point, scene::{Scene, Step}, trace};\nuse crate::bvh::Bvh;";
+    assert_eq!(uses(text), ["geom", "scene", "trace", "bvh"]);
 }
 
 fn files(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
@@ -127,4 +158,146 @@ fn kernels_do_not_reach_up_to_the_tracer() {
             "src/trace/{name} uses the Tracer: kernels take a Context"
         );
     }
+}
+
+/// The names the crate root exports: each name of its `pub use` lines (grouped or not) and
+/// each public item it defines itself (its public modules are not names of the vocabulary).
+fn root_names(lib: &str) -> Vec<String> {
+    let text: String = lib
+        .lines()
+        .map(|l| l.split("//").next().unwrap_or(""))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let mut names = Vec::new();
+    let mut depth = 0usize;
+    let mut i = 0;
+    while i < text.len() {
+        let rest = &text[i..];
+        if depth == 0 && rest.starts_with("pub use ") {
+            let end = rest.find(';').expect("a `pub use` ends with `;`");
+            let body = &rest[8..end];
+            let list = match (body.find('{'), body.rfind('}')) {
+                (Some(a), Some(b)) => &body[a + 1..b],
+                _ => body.rsplit("::").next().unwrap_or(body),
+            };
+            names.extend(
+                list.split(',')
+                    .map(|n| n.split("::").last().unwrap_or("").trim().to_string())
+                    .filter(|n| !n.is_empty() && n != "self"),
+            );
+            i += end + 1;
+            continue;
+        }
+        if depth == 0 {
+            for kind in ["fn", "struct", "enum", "const", "static", "type", "trait"] {
+                if let Some(after) = rest.strip_prefix("pub ").and_then(|r| r.strip_prefix(kind))
+                    && after.starts_with(' ')
+                {
+                    let name = after
+                        .trim_start()
+                        .chars()
+                        .take_while(|c| c.is_alphanumeric() || *c == '_')
+                        .collect();
+                    names.push(name);
+                }
+            }
+        }
+        match rest.as_bytes()[0] {
+            b'{' => depth += 1,
+            b'}' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+        i += rest.chars().next().map_or(1, char::len_utf8);
+    }
+    names
+}
+
+/// The most names the crate root may export: what the README's user names.
+const MAX_ROOT_NAMES: usize = 30;
+
+#[test]
+fn the_crate_root_holds_at_most_thirty_names() {
+    let lib =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lib.rs")).unwrap();
+    let names = root_names(&lib);
+    assert!(names.contains(&"Tracer".to_string()) && names.contains(&"write".to_string()));
+    assert!(
+        names.len() <= MAX_ROOT_NAMES,
+        "the crate root exports {} names (at most {MAX_ROOT_NAMES}): {names:?}",
+        names.len()
+    );
+    // The counter itself: grouped and single `pub use` lines, and items defined at the root.
+    let sample = "pub use a::{B, C};\npub use d::E;\npub fn f() {}\npub mod m { pub use x::Y; }";
+    assert_eq!(root_names(sample), ["B", "C", "E", "f"]);
+}
+
+/// The longest a function in `src/` may be, from its `fn` line to its closing brace.
+const MAX_FUNCTION_LINES: usize = 150;
+
+/// Each function of `text` longer than [`MAX_FUNCTION_LINES`], as `name (lines)`: a line
+/// that declares a `fn` with a body, up to the first later line that closes it at the same
+/// indentation.
+fn long_functions(text: &str) -> Vec<String> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut long = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        let trimmed = line.trim_start();
+        let Some(at) = trimmed.find("fn ") else {
+            continue;
+        };
+        let head = &trimmed[..at];
+        let is_item = head
+            .split_whitespace()
+            .all(|w| w.starts_with("pub") || ["const", "unsafe", "async", "extern"].contains(&w));
+        if !is_item || trimmed.starts_with("//") {
+            continue;
+        }
+        let indent = line.len() - trimmed.len();
+        let close = lines[i..]
+            .iter()
+            .position(|l| l.trim_end().ends_with(['{', ';']))
+            .map(|j| i + j);
+        let Some(open) = close.filter(|&j| lines[j].trim_end().ends_with('{')) else {
+            continue;
+        };
+        let end = lines[open + 1..].iter().position(|l| {
+            let t = l.trim_start();
+            l.len() - t.len() == indent && t.starts_with('}')
+        });
+        if let Some(end) = end {
+            let n = open + 1 + end - i + 1;
+            if n > MAX_FUNCTION_LINES {
+                let name: String = trimmed[at + 3..]
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect();
+                long.push(format!("{name} ({n} lines)"));
+            }
+        }
+    }
+    long
+}
+
+#[test]
+fn no_function_in_src_is_over_150_lines() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut all = Vec::new();
+    files(&src, &mut all);
+    let mut long = Vec::new();
+    for path in &all {
+        for f in long_functions(&code(path)) {
+            long.push(format!("{}: {f}", path.display()));
+        }
+    }
+    assert!(
+        long.is_empty(),
+        "functions over {MAX_FUNCTION_LINES} lines: {long:#?}"
+    );
+    // The scan itself finds a long function and passes a short one.
+    let body = "    x += 1;\n".repeat(MAX_FUNCTION_LINES);
+    let text = format!("pub(crate) fn long(x: &mut u32) {{\n{body}}}\nfn short() {{}}\n");
+    assert_eq!(
+        long_functions(&text),
+        [format!("long ({} lines)", MAX_FUNCTION_LINES + 2)]
+    );
 }
