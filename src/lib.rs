@@ -56,7 +56,6 @@
 //!
 //! The modules and how they depend on each other: `ARCHITECTURE.md`.
 
-mod arrivals;
 mod batch;
 mod bvh;
 pub mod demo;
@@ -67,7 +66,9 @@ mod polyline;
 mod problem;
 mod regions;
 mod scene;
+pub mod search;
 mod solver;
+pub mod stationary;
 mod trace;
 
 #[cfg(feature = "argmin")]
@@ -75,7 +76,6 @@ pub mod argmin_bridge;
 
 // The vocabulary: what a user of the README names. Everything else that is public lives in a
 // module named for its concept, below. `tests/architecture.rs` keeps this list at 30 or fewer.
-pub use arrivals::{SearchArrival, StationaryRays};
 pub use batch::{Batch, BatchOptions};
 pub use derivatives::{Gradient, PointSensitivities};
 pub use geom::{Point, Vec2};
@@ -84,6 +84,8 @@ pub use scene::{
     InterfaceSpec, MediumSpec, PathSpec, Scene, SceneBuilder, SceneError, SceneSpec, SolverOptions,
     StepSpec,
 };
+pub use search::SearchArrival;
+pub use stationary::StationaryRays;
 pub use trace::{Arrival, InitialGuess, Ray, RayRecord, Reason, Status, Tracer, Workspace};
 
 /// The scene document's parts as plain data ([`SceneSpec`] and the specs of its keys), for
@@ -116,19 +118,6 @@ pub mod sink {
     pub use crate::batch::{BatchRay, BatchRays, BatchScratch, BatchSink, RaySlot};
 }
 
-/// Every stationary path of a sequence ([`Tracer::stationary_paths`]) and of every ray of a
-/// scene ([`Tracer::trace_stationary`]): the arrivals, their kinks, what each search did.
-pub mod stationary {
-    pub use crate::arrivals::{StationaryRays, TripleArrivals};
-    pub use crate::trace::{Arrival, Kink, Stationary, StationaryError};
-}
-
-/// The automatic search over step sequences ([`Tracer::search`]).
-pub mod search {
-    pub use crate::arrivals::{SearchArrival, SearchError};
-    pub use crate::scene::SearchOptions;
-}
-
 /// Derivatives of a ray's time ([`Gradient`]) and of its points ([`PointSensitivities`]), per
 /// ray and for a whole batch ([`BatchGradients`](gradients::BatchGradients)).
 pub mod gradients {
@@ -147,11 +136,11 @@ pub mod path_problem {
 
 /// The limits a scene is validated against, and the solver's defaults.
 pub mod limits {
-    pub use crate::arrivals::MAX_SEARCH_WORK;
     pub use crate::scene::{
         DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, MAX_COORDINATE, MAX_ITERATIONS_LIMIT,
         MAX_SPEED_RATIO, MAX_STATIONARY_STEPS, MIN_COORDINATE, REGION_RANGE_BITS,
     };
+    pub use crate::search::MAX_SEARCH_WORK;
 }
 
 /// The geometry beneath a scene: polylines and their queries, boxes, and the robust

@@ -12,11 +12,12 @@ use std::io::{self, Write};
 
 use rayon::prelude::*;
 
-use crate::arrivals::{SearchArrival, StationaryRays};
 use crate::batch::Batch;
 use crate::derivatives::Gradient;
 use crate::geom::Point;
 use crate::scene::{Scene, StepKind};
+use crate::search::SearchArrival;
+use crate::stationary::StationaryRays;
 use crate::trace::{Kink, Ray, Reason, Status};
 
 /// Output formats of `eigenray solve`.

@@ -1,0 +1,227 @@
+//! Every stationary path of a sequence ([`Tracer::stationary_paths`]) and of every ray of a
+//! scene (`"solver": {"stationary": "all"}`, [`Tracer::trace_stationary`]): solved in
+//! parallel into one list of arrivals per (source, receiver, path) triple, in ray order.
+
+use rayon::prelude::*;
+
+use crate::scene::MAX_STATIONARY_STEPS;
+use crate::trace::Tracer;
+pub use crate::trace::{Arrival, Kink, Stationary, StationaryError};
+use crate::trace::{Reason, Status};
+
+/// Every stationary path of one (source, receiver, path) triple.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TripleArrivals {
+    /// Source index.
+    pub source: usize,
+    /// Receiver index.
+    pub receiver: usize,
+    /// Path index.
+    pub path: usize,
+    /// Its stationary paths (`converged`, `vertex`, `obstructed`), each once, ordered by time.
+    pub arrivals: Vec<Arrival>,
+    /// Whether the search was complete (see [`Stationary::complete`]):
+    /// with `true` the list holds every stationary path of the triple, and an empty list is a
+    /// proof that it has none; with `false` it may be short.
+    pub complete: bool,
+}
+
+impl TripleArrivals {
+    /// The status of this triple's entry when it has no arrivals: `no_path` (a proof) when the
+    /// search was complete, `not_converged` when it stopped at a limit.
+    pub fn status_without_arrivals(&self) -> Status {
+        if self.complete {
+            Status::NoPath
+        } else {
+            Status::NotConverged
+        }
+    }
+
+    /// The reason of that entry: [`Reason::NoStationaryPath`] or [`Reason::SearchLimit`].
+    pub fn reason_without_arrivals(&self) -> Reason {
+        if self.complete {
+            Reason::NoStationaryPath
+        } else {
+            Reason::SearchLimit
+        }
+    }
+}
+
+/// Every stationary path of every ray of a scene: one [`TripleArrivals`] per (source,
+/// receiver, path) triple, in ray order ([`Scene::ray_index`]), as
+/// [`Tracer::trace_stationary`] finds them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StationaryRays {
+    /// One entry per triple, in ray order.
+    pub triples: Vec<TripleArrivals>,
+}
+
+impl StationaryRays {
+    /// Stationary paths found, over all triples.
+    pub fn arrivals(&self) -> usize {
+        self.triples.iter().map(|t| t.arrivals.len()).sum()
+    }
+
+    /// Entries of the written output: one per stationary path, and one (`no_path`, or
+    /// `not_converged` when its search was not complete) per triple that has none.
+    pub fn entries(&self) -> usize {
+        self.triples.iter().map(|t| t.arrivals.len().max(1)).sum()
+    }
+
+    /// Whether every triple's search was complete.
+    pub fn complete(&self) -> bool {
+        self.triples.iter().all(|t| t.complete)
+    }
+}
+
+impl Tracer {
+    /// Every stationary path of every (source, receiver, path) triple of the scene, as
+    /// [`Tracer::stationary_paths`] finds them for one triple, solved in parallel (rayon), in
+    /// ray order. This is what a scene with `"solver": {"stationary": "all"}` asks for.
+    ///
+    /// ```
+    /// use eigenray::{Kink, Scene, Status, Tracer};
+    /// // A mirror bent into a valley: a specular point on each slope, and the bottom, where
+    /// // the time has a maximum-type kink.
+    /// let scene = Scene::from_json(r#"{
+    ///     "media": { "air": { "speed": 1.0 } },
+    ///     "interfaces": { "valley": { "points": [[-3, 0], [0, -2], [3, 0]] } },
+    ///     "sources": [[-0.5, 2]], "receivers": [[0.5, 2], [20, 2]],
+    ///     "paths": [{ "steps": [{ "reflect": "valley" }], "media": ["air", "air"] }],
+    ///     "solver": { "stationary": "all" }
+    /// }"#).unwrap();
+    /// let rays = Tracer::new(&scene).unwrap().trace_stationary().unwrap();
+    /// assert_eq!(rays.triples.len(), 2);
+    /// let valley = &rays.triples[0];
+    /// assert!(valley.complete);
+    /// let statuses: Vec<Status> = valley.arrivals.iter().map(|a| a.status).collect();
+    /// assert_eq!(statuses, [Status::Converged, Status::Converged, Status::Vertex]);
+    /// assert_eq!(valley.arrivals[2].kink, Some(Kink::Maximum));
+    /// // The far receiver sees no reflection off the valley at all: a proof.
+    /// assert!(rays.triples[1].arrivals.is_empty() && rays.triples[1].complete);
+    /// assert_eq!((rays.arrivals(), rays.entries()), (3, 4));
+    /// ```
+    ///
+    /// # Errors
+    /// [`StationaryError::TooManySteps`] for the first path of more than
+    /// [`MAX_STATIONARY_STEPS`](crate::limits::MAX_STATIONARY_STEPS) steps, before any search
+    /// runs.
+    pub fn trace_stationary(&self) -> Result<StationaryRays, StationaryError> {
+        self.trace_stationary_with_progress(&|_| {})
+    }
+
+    /// [`Tracer::trace_stationary`], calling `progress` from the worker threads with the number
+    /// of triples each finished piece of work searched.
+    ///
+    /// # Errors
+    /// As [`Tracer::trace_stationary`].
+    pub fn trace_stationary_with_progress(
+        &self,
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<StationaryRays, StationaryError> {
+        let scene = self.scene();
+        for (path, p) in scene.paths().iter().enumerate() {
+            if p.steps.len() > MAX_STATIONARY_STEPS {
+                return Err(StationaryError::TooManySteps {
+                    path,
+                    steps: p.steps.len(),
+                });
+            }
+        }
+        let (receivers, paths) = (scene.receivers().len(), scene.paths().len());
+        let triples = (0..scene.num_rays())
+            .into_par_iter()
+            .map(|ray| {
+                let path = ray % paths;
+                let receiver = (ray / paths) % receivers;
+                let source = ray / paths / receivers;
+                let mut arrivals = Vec::new();
+                let search = self.stationary_paths(
+                    scene.sources()[source],
+                    scene.receivers()[receiver],
+                    path,
+                    &mut arrivals,
+                )?;
+                progress(1);
+                Ok(TripleArrivals {
+                    source,
+                    receiver,
+                    path,
+                    arrivals,
+                    complete: search.complete,
+                })
+            })
+            .collect::<Result<Vec<_>, StationaryError>>()?;
+        Ok(StationaryRays { triples })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Scene, Status};
+
+    #[test]
+    fn triples_come_in_ray_order_and_match_one_by_one_searches() {
+        let scene = Scene::from_json(
+            r#"{
+            "media": { "air": { "speed": 1.0 } },
+            "interfaces": { "valley": { "points": [[-3, 0], [0, -2], [3, 0]] } },
+            "sources": [[-0.5, 2], [0, 3]], "receivers": [[0.5, 2], [1, 1], [20, 2]],
+            "paths": [
+                { "steps": [{ "reflect": "valley" }], "media": ["air", "air"] },
+                { "steps": [], "media": ["air"] }
+            ]
+        }"#,
+        )
+        .unwrap();
+        let tracer = Tracer::new(&scene).unwrap();
+        let rays = tracer.trace_stationary().unwrap();
+        assert_eq!(rays.triples.len(), 12);
+        let mut one = Vec::new();
+        for (i, t) in rays.triples.iter().enumerate() {
+            assert_eq!(scene.ray_index(t.source, t.receiver, t.path), i);
+            let search = tracer
+                .stationary_paths(
+                    scene.sources()[t.source],
+                    scene.receivers()[t.receiver],
+                    t.path,
+                    &mut one,
+                )
+                .unwrap();
+            assert_eq!(t.arrivals, one, "triple {i}");
+            assert_eq!(t.complete, search.complete);
+            assert!(t.arrivals.windows(2).all(|w| w[0].time <= w[1].time));
+        }
+        // The direct ray is one arrival everywhere; the valley gives three to its own receiver.
+        assert_eq!(rays.triples[1].arrivals.len(), 1);
+        assert_eq!(rays.triples[1].arrivals[0].status, Status::Converged);
+        assert_eq!(rays.triples[0].arrivals.len(), 3);
+        assert!(rays.triples[4].arrivals.is_empty());
+        assert_eq!(rays.entries(), rays.arrivals() + 2);
+        assert!(rays.complete());
+    }
+
+    #[test]
+    fn a_path_beyond_the_step_limit_is_refused_before_any_search() {
+        let steps = vec![r#"{ "reflect": "floor" }"#; MAX_STATIONARY_STEPS + 1].join(",");
+        let media = vec![r#""air""#; MAX_STATIONARY_STEPS + 2].join(",");
+        let scene = Scene::from_json(&format!(
+            r#"{{
+            "media": {{ "air": {{ "speed": 1.0 }} }},
+            "interfaces": {{ "floor": {{ "points": [[-3, 0], [3, 0]] }} }},
+            "sources": [[0, 1]], "receivers": [[1, 1]],
+            "paths": [{{ "steps": [], "media": ["air"] }}, {{ "steps": [{steps}], "media": [{media}] }}]
+        }}"#
+        ))
+        .unwrap();
+        let err = Tracer::new(&scene).unwrap().trace_stationary().unwrap_err();
+        assert_eq!(
+            err,
+            StationaryError::TooManySteps {
+                path: 1,
+                steps: MAX_STATIONARY_STEPS + 1
+            }
+        );
+    }
+}
