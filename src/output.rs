@@ -43,7 +43,11 @@ pub enum Format {
     /// with the points as `x y;x y;…` and the leg media as names joined by `;`. Empty fields
     /// where the ray has no such value (`time` and `points` without a time, `residual` when
     /// not finite, `path_name` for an unnamed path, `media` when unknown, `reason` when
-    /// converged). A field holding `,`, `"` or a line break is quoted as RFC 4180 says. With
+    /// converged). A field holding `,`, `"` or a line break is quoted as RFC 4180 says; a text
+    /// field that starts with `=`, `+`, `-`, `@`, a tab or a carriage return is quoted with a
+    /// `'` before it (`"'=name"`), so that a spreadsheet does not run it as a formula (OWASP's
+    /// advice on CSV injection); in the list columns (`media`, an arrival's `steps`) a name's
+    /// own `;` is written `\;` and its backslash `\\`. With
     /// `"stationary": "all"` three columns follow: `arrival`, `kink` (empty but on `vertex`
     /// entries) and `complete` (`true` or `false`). Search arrivals are a table of their own,
     /// written to a second file by [`write`].
@@ -336,14 +340,36 @@ fn json_string(s: &str) -> Vec<u8> {
     serde_json::to_vec(s).unwrap_or_else(|_| b"\"?\"".to_vec())
 }
 
-/// Appends `field` to a CSV line, quoted (RFC 4180) when it holds `,`, `"` or a line break.
+/// The characters that make a spreadsheet read a cell as a formula when the cell starts with
+/// one (OWASP's list for CSV injection).
+const FORMULA_STARTS: [char; 6] = ['=', '+', '-', '@', '\t', '\r'];
+
+/// Appends the text cell `field` to a CSV line: quoted (RFC 4180) when it holds `,`, `"` or a
+/// line break, and, when it starts with a character a spreadsheet takes for a formula
+/// ([`FORMULA_STARTS`]), quoted with a `'` before it, as OWASP advises (the cell then reads
+/// as text: `'=name`).
 fn csv_field(buf: &mut Vec<u8>, field: &str) {
-    if field.contains([',', '"', '\n', '\r']) {
+    let formula = field.starts_with(FORMULA_STARTS);
+    if formula || field.contains([',', '"', '\n', '\r']) {
         buf.push(b'"');
+        if formula {
+            buf.push(b'\'');
+        }
         buf.extend_from_slice(field.replace('"', "\"\"").as_bytes());
         buf.push(b'"');
     } else {
         buf.extend_from_slice(field.as_bytes());
+    }
+}
+
+/// A name as an item of a CSV list column (items joined by `;`): a backslash in the name
+/// written as two, and its `;` as `\;`, so that splitting at the other `;` gives the names
+/// back.
+fn csv_list_item(name: &str) -> std::borrow::Cow<'_, str> {
+    if name.contains([';', '\\']) {
+        name.replace('\\', "\\\\").replace(';', "\\;").into()
+    } else {
+        name.into()
     }
 }
 
@@ -367,7 +393,11 @@ impl Names {
         let media_csv = scene
             .media()
             .iter()
-            .map(|m| (!m.name.contains([',', '"', '\n', '\r'])).then(|| m.name.as_bytes().to_vec()))
+            .map(|m| {
+                let plain = !m.name.contains([',', '"', '\n', '\r', ';', '\\'])
+                    && !m.name.starts_with(FORMULA_STARTS);
+                plain.then(|| m.name.as_bytes().to_vec())
+            })
             .collect();
         let interfaces = scene
             .interfaces()
@@ -579,7 +609,8 @@ fn points_csv(buf: &mut Vec<u8>, points: &[Point]) {
     }
 }
 
-/// The leg media's names joined by `;` (quoted whole when a name needs it).
+/// The leg media's names joined by `;` (each name's own `;` and `\\` escaped; the cell quoted
+/// whole when it needs it).
 fn media_csv(buf: &mut Vec<u8>, scene: &Scene, names: &Names, media: impl Iterator<Item = usize>) {
     match &names.media_csv {
         // No name needs quoting: the names as they are, joined by `;`.
@@ -597,7 +628,9 @@ fn media_csv(buf: &mut Vec<u8>, scene: &Scene, names: &Names, media: impl Iterat
                 if i > 0 {
                     joined.push(';');
                 }
-                joined.push_str(scene.media().get(m).map_or("?", |m| m.name.as_str()));
+                joined.push_str(&csv_list_item(
+                    scene.media().get(m).map_or("?", |m| m.name.as_str()),
+                ));
             }
             csv_field(buf, &joined);
         }
@@ -1205,7 +1238,7 @@ fn arrival_csv(buf: &mut Vec<u8>, scene: &Scene, names: &Names, s: &SearchArriva
                 .interfaces()
                 .get(step.interface)
                 .map_or("?", |i| i.name.as_str());
-            format!("{kind}:{name}")
+            format!("{kind}:{}", csv_list_item(name))
         })
         .collect();
     csv_field(buf, &steps.join(";"));

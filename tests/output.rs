@@ -902,3 +902,59 @@ fn csv_and_npy_refuse_arrivals_beside_the_rays_and_write_them_on_their_own() {
     );
     assert_eq!(u32_at(recs[2], 117), 0);
 }
+
+/// The items of a CSV list cell: split at every `;` that is not escaped, each `\;` and `\\`
+/// turned back into `;` and `\` (the reader the format documents, written here apart from
+/// the writer).
+fn csv_list(cell: &str) -> Vec<String> {
+    let mut items = vec![String::new()];
+    let mut chars = cell.chars();
+    while let Some(c) = chars.next() {
+        match c {
+            '\\' => items.last_mut().unwrap().extend(chars.next()),
+            ';' => items.push(String::new()),
+            c => items.last_mut().unwrap().push(c),
+        }
+    }
+    items
+}
+
+/// Names that a spreadsheet would run as formulas are written as text (`'` in front, quoted),
+/// and names holding `;` or `\` survive the list columns: the rays' and the arrivals' CSV give
+/// every name back.
+#[test]
+fn csv_names_are_safe_to_open_and_split() {
+    let evil = "=HYPERLINK(\"http://x\";\"y\")";
+    let semi = r"wa;ter\deep";
+    let doc = serde_json::json!({
+        "media": { evil: { "speed": 1.0 }, semi: { "speed": 0.75, "at": [0.5, -0.5] } },
+        "background": evil,
+        "domain": [[-2, -3], [5, 3]],
+        "interfaces": { "@surface": { "points": [[-2, 0], [5, 0]] } },
+        "sources": [[0, 1]], "receivers": [[1, -1]],
+        "paths": [{ "name": "+bounce", "steps": [{ "refract": "@surface" }] }],
+        "search": { "max_steps": 1 }
+    });
+    let scene = Scene::from_json(&doc.to_string()).unwrap();
+    let tracer = Tracer::new(&scene).unwrap();
+    let mut rays = Vec::new();
+    write(&scene, &tracer.trace_all(), Format::Csv, &mut rays).unwrap();
+    let text = String::from_utf8(rays).unwrap();
+    let row = csv_fields(text.lines().nth(1).unwrap());
+    // path_name and media: text cells that start with a formula character get a `'`.
+    assert_eq!(row[8], "'+bounce");
+    let media = row[9].strip_prefix('\'').expect("a formula-safe cell");
+    assert_eq!(csv_list(media), [evil, semi]);
+    for line in text.lines() {
+        for cell in csv_fields(line) {
+            assert!(!cell.starts_with(['=', '+', '@']), "{cell}");
+        }
+    }
+    let arrivals = tracer.search().unwrap();
+    let mut out = Vec::new();
+    write(&scene, &arrivals, Format::Csv, &mut out).unwrap();
+    let text = String::from_utf8(out).unwrap();
+    let row = csv_fields(text.lines().nth(1).unwrap());
+    assert_eq!(csv_list(&row[2]), ["refract:@surface"]);
+    assert_eq!(csv_list(row[3].strip_prefix('\'').unwrap()), [evil, semi]);
+}

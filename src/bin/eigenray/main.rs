@@ -336,7 +336,8 @@ fn write_outputs(
             "npy"
         };
         return Err(Failure::Input(format!(
-            "--format {name}: the scene's `search` arrivals are a table of their own; give              --arrivals FILE to write them"
+            "--format {name}: the scene's `search` arrivals are a table of their own; give \
+             --arrivals FILE to write them"
         )));
     }
     if let Some(path) = &args.names {
