@@ -716,10 +716,51 @@ fn csv_header<W: Write>(out: &mut W, header: &[u8], derivatives: bool) -> io::Re
     }
 }
 
-/// Rays formatted at a time (in [`PIECE`]s, in parallel) before they are written out in order.
+/// Rays formatted at a time (in [`PIECE`]s, in parallel) before they are written out in order,
+/// at most: fewer where long names make each ray's text long ([`Window::of`]).
 const WINDOW: usize = 1 << 14;
-/// Rays per parallel piece of a window.
+/// Rays per parallel piece of a window, at most.
 const PIECE: usize = 1 << 10;
+/// The most bytes of text one window may hold, by the estimate of [`Window::of`]: two windows
+/// are in memory at a time (one written while the next is formatted).
+const WINDOW_BYTES: usize = 32 << 20;
+
+/// How many rays the writer formats at a time: a window, in parallel pieces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Window {
+    /// Rays per window.
+    rays: usize,
+    /// Rays per parallel piece.
+    piece: usize,
+}
+
+impl Window {
+    /// The window for `scene`'s rays: [`WINDOW`] rays, or as many as fit in [`WINDOW_BYTES`]
+    /// by a bound on one ray's text. A name can take six bytes a character in JSON (`\u00xx`),
+    /// and a ray names its path, each leg's medium and, in a reason, an interface.
+    fn of(scene: &Scene, derivatives: bool) -> Window {
+        let longest = |names: &mut dyn Iterator<Item = usize>| names.max().unwrap_or(0);
+        let medium = longest(&mut scene.media().iter().map(|m| m.name.len()));
+        let path = longest(
+            &mut scene
+                .paths()
+                .iter()
+                .filter_map(|p| p.name.as_ref().map(String::len)),
+        );
+        let interface = longest(&mut scene.interfaces().iter().map(|i| i.name.len()));
+        let steps = longest(&mut scene.paths().iter().map(|p| p.steps.len()));
+        let (points, legs) = (steps + 2, steps + 1);
+        let mut bytes = 512 + 64 * points + legs * (6 * medium + 8) + 6 * (path + interface);
+        if derivatives {
+            bytes += 32 * scene.media().len() + 96 * 2 * steps;
+        }
+        let rays = (WINDOW_BYTES / bytes).clamp(1, WINDOW);
+        Window {
+            rays,
+            piece: (rays / 16).clamp(1, PIECE),
+        }
+    }
+}
 
 /// The error of a request for arrivals beside the rays in a format that holds one table.
 fn one_table(format: Format) -> io::Error {
@@ -750,6 +791,7 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
     let names = Names::new(scene);
     let shape = NpyShape::of(scene);
     let derivatives = scene.solver().derivatives;
+    let window = Window::of(scene, derivatives);
     match format {
         Format::Npy => out.write_all(&npy_header(n, shape, layout))?,
         Format::Json => out.write_all(b"{\"rays\":[")?,
@@ -796,17 +838,17 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
     };
     // Formats window `w` into `pieces` (one buffer per piece, in order).
     let format_window = |pieces: &mut Vec<Vec<u8>>, w: usize| {
-        let (start, end) = (w * WINDOW, n.min((w + 1) * WINDOW));
-        let count = (end - start).div_ceil(PIECE);
+        let (start, end) = (w * window.rays, n.min((w + 1) * window.rays));
+        let count = (end - start).div_ceil(window.piece);
         pieces.resize_with(count, Vec::new);
         pieces.par_iter_mut().enumerate().for_each(|(j, buf)| {
-            let lo = start + j * PIECE;
-            format_piece(buf, lo..end.min(lo + PIECE));
+            let lo = start + j * window.piece;
+            format_piece(buf, lo..end.min(lo + window.piece));
         });
     };
     // Double-buffered: this thread writes one window while the pool formats the next.
     let (mut ready, mut next) = (Vec::new(), Vec::new());
-    let windows = n.div_ceil(WINDOW);
+    let windows = n.div_ceil(window.rays);
     if windows > 0 {
         format_window(&mut ready, 0);
     }
@@ -1471,6 +1513,44 @@ mod tests {
         let mut owned = Vec::new();
         super::write(&scene, &batch.to_rays(), Format::Json, &mut owned).unwrap();
         assert_eq!(String::from_utf8(owned).unwrap(), json);
+    }
+
+    /// Ordinary scenes keep the full window; long names shrink it so that a window's text
+    /// stays within its budget, whatever the names (each ray's real line measured here).
+    #[test]
+    fn the_window_fits_its_budget_of_bytes() {
+        let ordinary = Scene::from_spec(&demo::air_water(10, 3)).unwrap();
+        let full = Window {
+            rays: WINDOW,
+            piece: PIECE,
+        };
+        assert_eq!(Window::of(&ordinary, false), full);
+        assert_eq!(Window::of(&ordinary, true), full);
+        for len in [1 << 10, 32 << 10, 1 << 20] {
+            let name = "\u{1}".repeat(len);
+            let doc = serde_json::json!({
+                "media": { &name: { "speed": 1.0 } },
+                "interfaces": { &name: { "points": [[-1, 0], [1, 0]] } },
+                "sources": [[0, 1]], "receivers": [[0.5, 1], [5, 1]],
+                "paths": [{ "name": &name, "steps": [{ "reflect": &name }], "media": [&name, &name] }]
+            });
+            let scene = Scene::from_json(&doc.to_string()).unwrap();
+            let window = Window::of(&scene, false);
+            assert!(window.rays < WINDOW && window.piece >= 1);
+            let rays = Tracer::new(&scene).unwrap().trace_all();
+            // One line per ray in JSON Lines and CSV (the JSON document holds the same
+            // objects as JSON Lines).
+            for format in [Format::Jsonl, Format::Csv] {
+                let mut out = Vec::new();
+                super::write(&scene, &rays, format, &mut out).unwrap();
+                let per_ray = out.split(|&b| b == b'\n').map(<[u8]>::len).max().unwrap();
+                assert!(
+                    per_ray * window.rays <= WINDOW_BYTES,
+                    "{len}: {per_ray} bytes a ray, {} rays a window",
+                    window.rays
+                );
+            }
+        }
     }
 
     #[test]

@@ -3,7 +3,10 @@
 //!
 //! Command-line cases run the binary with a memory limit (`ulimit -v`) and a time limit, and
 //! check the exit status, the first line of standard error and that nothing reached standard
-//! output. Library cases call the API directly.
+//! output. Library cases call the API directly. `round2.rs` holds the second round of
+//! cases: work that must stay bounded, memory, and answers that must not be wrong.
+
+mod round2;
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -90,10 +93,21 @@ impl Run {
     }
 }
 
-/// Runs `eigenray ARGS` through `sh` (`shell` is put before the command: redirections), with
+/// Runs `eigenray ARGS` through `sh` (`redirect` is put after the command: redirections), with
 /// at most 4 GB of address space and `limit` of time; kills it beyond that.
 fn run_bounded(args: &str, redirect: &str, stdin: Option<&[u8]>, limit: Duration) -> Run {
-    let script = format!("ulimit -v 4000000; exec {BIN} {args} {redirect}");
+    run_capped(4_000_000, args, redirect, stdin, limit)
+}
+
+/// [`run_bounded`] with at most `kilobytes` of address space.
+fn run_capped(
+    kilobytes: u64,
+    args: &str,
+    redirect: &str,
+    stdin: Option<&[u8]>,
+    limit: Duration,
+) -> Run {
+    let script = format!("ulimit -v {kilobytes}; exec {BIN} {args} {redirect}");
     let mut child = Command::new("sh")
         .arg("-c")
         .arg(script)
