@@ -38,3 +38,31 @@ fn long_names_on_many_rays_are_written_within_a_memory_cap() {
     let bytes = std::fs::metadata(out.path()).unwrap().len();
     assert!(bytes > 16_384 * 3 * (32 << 10), "{bytes} bytes");
 }
+
+/// `"stationary": "all"` over 10⁷ triples (1,000 sources × 1,000 receivers × 10 paths) under
+/// a 1.5 GB address-space cap: refused before the run, naming `solver.stationary` and what
+/// it needs, instead of aborting once the arrivals fill the memory. The check counts the
+/// cap, not only the machine's free memory.
+#[test]
+fn every_stationary_path_of_too_many_rays_is_refused_up_front() {
+    let points: Vec<[f64; 2]> = (0..1000).map(|i| [i as f64 * 1e-3, 1.0]).collect();
+    let paths: Vec<_> = (0..10)
+        .map(|_| json!({ "steps": [{ "reflect": "mirror" }], "media": ["air", "air"] }))
+        .collect();
+    let scene = json!({
+        "media": { "air": { "speed": 1.0 } },
+        "interfaces": { "mirror": { "points": [[-100.0, 0.0], [100.0, 0.0]] } },
+        "sources": points, "receivers": points, "paths": paths,
+        "solver": { "stationary": "all" }
+    });
+    let file = TempFile::with(scene.to_string());
+    let run = run_capped(
+        1_500_000,
+        &format!("solve {}", file.path()),
+        "",
+        None,
+        Duration::from_secs(60),
+    );
+    run.assert_refused("solver.stationary");
+    assert!(run.stderr.contains("GB"), "{}", run.stderr);
+}

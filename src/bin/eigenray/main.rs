@@ -211,17 +211,26 @@ fn main() -> ExitCode {
 fn check_batch_memory(scene: &Scene, warm_start: bool) -> Result<(), Failure> {
     let size = scene.batch_size();
     let all = scene.solver().stationary == StationaryMode::All;
-    let per_ray = if all {
-        std::mem::size_of::<eigenray::stationary::TripleArrivals>()
-            + std::mem::size_of::<eigenray::Arrival>()
+    // With every stationary path, each triple holds at least one entry: the triple, one
+    // arrival and the heap blocks of its four vectors (points; parameters and segments, one
+    // each a point at most; media, one a leg).
+    const HEAP_BLOCK: usize = 32;
+    let point = std::mem::size_of::<eigenray::Point>();
+    let (per_ray, per_point, per_leg) = if all {
+        (
+            std::mem::size_of::<eigenray::stationary::TripleArrivals>()
+                + std::mem::size_of::<eigenray::Arrival>()
+                + 4 * HEAP_BLOCK,
+            point + 2 * std::mem::size_of::<usize>(),
+            std::mem::size_of::<usize>(),
+        )
     } else {
-        std::mem::size_of::<eigenray::RayRecord>()
+        (std::mem::size_of::<eigenray::RayRecord>(), point, 4)
     };
-    let per_point = std::mem::size_of::<eigenray::Point>();
     // Solving in a spatial order keeps a second copy of the arrays.
     let copies = if warm_start && !all { 2 } else { 1 };
     let need = size
-        .bytes(per_ray, per_point, 4)
+        .bytes(per_ray, per_point, per_leg)
         .and_then(|b| b.checked_mul(copies));
     let have = available_memory();
     let too_much = match (need, have) {
@@ -253,18 +262,38 @@ fn check_batch_memory(scene: &Scene, warm_start: bool) -> Result<(), Failure> {
             gb(h as f64)
         )
     });
+    let what = if all {
+        "solver.stationary: every stationary path of each ray needs at least"
+    } else {
+        "paths: the batch needs about"
+    };
     Err(Failure::Input(format!(
-        "paths: the batch needs about {need_text} ({why}){have_text}: split the receivers \
-         or the paths over several runs"
+        "{what} {need_text} ({why}){have_text}: split the receivers or the paths over several \
+         runs"
     )))
 }
 
-/// Memory available to a new allocation (Linux's `MemAvailable`), if known.
+/// Memory available to a new allocation, if known: Linux's `MemAvailable`, or less where the
+/// process's address space is limited (`ulimit -v`): the limit less what the process already
+/// maps.
 fn available_memory() -> Option<u64> {
+    let field = |text: &str, key: &str| -> Option<u64> {
+        let line = text.lines().find(|l| l.starts_with(key))?;
+        line[key.len()..].split_whitespace().next()?.parse().ok()
+    };
     let info = fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    kb.checked_mul(1024)
+    let free = field(&info, "MemAvailable:")?.checked_mul(1024)?;
+    let limit = fs::read_to_string("/proc/self/limits")
+        .ok()
+        .and_then(|l| field(&l, "Max address space"));
+    let mapped = fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| field(&s, "VmSize:"))
+        .map_or(0, |kb| kb.saturating_mul(1024));
+    Some(match limit {
+        Some(limit) => free.min(limit.saturating_sub(mapped)),
+        None => free,
+    })
 }
 
 /// What `eigenray solve` found: one ray per triple, or every stationary path of each.
