@@ -608,15 +608,18 @@ fn leg_length(d: Vec2) -> f64 {
     }
 }
 
-/// [`ProblemRef::coord`] of a ray from `source` to `receiver`.
-#[inline]
+/// The largest coordinate (in absolute value) of the ends of a ray from `source` to
+/// `receiver`: the scale of their round-off ([`ProblemRef::coord`]).
+///
+/// By compare and select ([`max_num`]): one instruction per maximum where `f64::max`, which
+/// ignores NaN, takes several (the one-interaction kernels compute this for every ray). The
+/// two agree on every input without NaN, and the ends of a solved ray are finite (the tracer
+/// checks them); with a NaN end the path's length is NaN, and so is the threshold built from
+/// both ([`vanish_threshold`]), and the flat kernel's test of sides fails, either way.
+#[inline(always)]
 pub(crate) fn coord(source: Point, receiver: Point) -> f64 {
-    source
-        .x
-        .abs()
-        .max(source.y.abs())
-        .max(receiver.x.abs())
-        .max(receiver.y.abs())
+    let m = max_num(source.x.abs(), source.y.abs());
+    max_num(max_num(m, receiver.x.abs()), receiver.y.abs())
 }
 
 /// `x.is_finite()` as one compare of `|x|` (the standard bit test takes five instructions, and
