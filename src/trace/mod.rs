@@ -6,8 +6,9 @@
 //! `flat`, `stack`) or the general solve ([`Tracer::solve_general`]): the start (`start`,
 //! `straight`), the Newton solve (`crate::solver`), the media lookup and the classification
 //! (`classify`). Every kernel ends in the same classifier. A batch's chain of rays of one path
-//! goes through `Tracer::solve_chain` (`chain`), which reads the plan once per chain and
-//! solves one-interaction paths in registers, every other ray through `solve_planned`.
+//! goes through `Tracer::solve_chain` (`chain`), which reads the plan once per chain: the
+//! rays of a one-interaction path in registers, without the workspace, and every other ray
+//! (and a one-interaction ray outside the common case) through `solve_planned`.
 
 use std::sync::Arc;
 
