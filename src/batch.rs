@@ -3,16 +3,9 @@
 use rayon::iter::plumbing::{Consumer, Producer, ProducerCallback, UnindexedConsumer, bridge};
 use rayon::prelude::*;
 
-use crate::geom::{Point, Vec2};
-use crate::problem::{Frame, coord};
+use crate::geom::Point;
 use crate::scene::SceneError;
-use crate::solver::{
-    OneStepNewton, Outcome, ReceiverSensitivity, one_step_sensitivity, receiver_sensitivity,
-};
-use crate::trace::{
-    OneStepPath, PathPlan, Ray, RayRecord, Start, Status, Tracer, Workspace, flat_status,
-    given_param,
-};
+use crate::trace::{ChainLink, ChainRays, Ray, RayRecord, Status, Tracer, WarmStarts, Workspace};
 
 /// How to run a batch.
 #[derive(Clone, Copy)]
@@ -603,75 +596,6 @@ fn morton(x: u32, y: u32) -> u64 {
     spread(x) | (spread(y) << 1)
 }
 
-/// The warm-start state of one worker: per path, the last converged solution and how it moves
-/// with the receiver ([`receiver_sensitivity`]), to predict the next receiver's solution.
-struct Warm {
-    /// Parameters of the last converged solution, per path (at the paths' parameter offsets).
-    params: Vec<f64>,
-    /// Their sensitivity `z` to the last residual.
-    z: Vec<f64>,
-    /// Per path: `∂rₖ₋₁/∂R`, or `None` (no prediction, the parameters as they are).
-    g: Vec<Option<Vec2>>,
-    /// The predicted start.
-    guess: Vec<f64>,
-    /// Scratch for the sensitivity solve.
-    unit: Vec<f64>,
-    cp: Vec<f64>,
-}
-
-impl Warm {
-    fn new(params: usize, paths: usize) -> Warm {
-        Warm {
-            params: vec![0.0; params],
-            z: vec![0.0; params],
-            g: vec![None; paths],
-            guess: vec![0.0; params],
-            unit: vec![0.0; params],
-            cp: vec![0.0; params],
-        }
-    }
-
-    /// Keeps the converged solution of path `p` in `ws` and its sensitivity.
-    fn store(&mut self, p: usize, range: std::ops::Range<usize>, ws: &Workspace) {
-        let k = range.len();
-        self.params[range.clone()].copy_from_slice(ws.parameters());
-        self.g[p] = receiver_sensitivity(
-            &ws.newton,
-            &ws.ray.slowness,
-            &mut self.z[range],
-            &mut self.unit[..k],
-            &mut self.cp[..k],
-        );
-    }
-
-    /// [`store`](Self::store) for a one-interaction path whose solution `s` was solved without
-    /// a workspace, with its sensitivity (`one_step_sensitivity`).
-    fn store_one(&mut self, p: usize, at: usize, s: f64, sensitivity: Option<ReceiverSensitivity>) {
-        self.params[at] = s;
-        (self.z[at], self.g[p]) = match sensitivity {
-            Some(sens) => (sens.z, Some(sens.g)),
-            None => (0.0, None),
-        };
-    }
-
-    /// The predicted start of path `p` for a receiver `moved` from the last one: the last
-    /// solution moved by `−z (g · moved)` (a first-order continuation step).
-    fn predict(&mut self, p: usize, range: std::ops::Range<usize>, moved: Vec2) -> &[f64] {
-        let guess = &mut self.guess[range.clone()];
-        let (params, z) = (&self.params[range.clone()], &self.z[range]);
-        match self.g[p] {
-            Some(g) => {
-                let shift = g.dot(moved);
-                for ((out, &s), &zi) in guess.iter_mut().zip(params).zip(z) {
-                    *out = s - zi * shift;
-                }
-            }
-            None => guess.copy_from_slice(params),
-        }
-        guess
-    }
-}
-
 /// Gives `v` length `n`. Elements it already has keep their values (the caller overwrites
 /// them all); new ones are `value`, written by the rayon pool (the first touch of a batch's
 /// hundreds of megabytes is then not a serial step before the parallel solve).
@@ -1025,7 +949,7 @@ impl Tracer {
         let (nr, np) = (scene.receivers().len(), scene.paths().len());
         let chunk = opts.chunk.max(1);
         Parts::new(sink, chunk).enumerate().for_each_init(
-            || (Workspace::new(), Warm::new(param_offsets[np], np)),
+            || (Workspace::new(), WarmStarts::new(param_offsets[np], np)),
             |(ws, warm), (unit, out)| {
                 let n = out.blocks();
                 let mut unit = Unit {
@@ -1039,12 +963,14 @@ impl Tracer {
                 // Path by path: each path's rays form one chain of warm starts.
                 for p in 0..np {
                     let params = param_offsets[p]..param_offsets[p + 1];
-                    match self.plan_of(p) {
-                        PathPlan::OneStep(one) | PathPlan::FlatRefraction(one, _) => {
-                            self.one_step_chain(one, p, params.start, &mut unit, ws, warm)
-                        }
-                        _ => self.path_chain(p, params, &mut unit, ws, warm),
-                    }
+                    let mut rays = UnitChain {
+                        scene,
+                        unit: &mut unit,
+                        path: p,
+                        have: false,
+                        last: Point::default(),
+                    };
+                    self.solve_chain(p, params, &mut rays, warm, ws);
                 }
                 if let Some(progress) = opts.progress {
                     progress(n * np);
@@ -1128,67 +1054,50 @@ impl<S: BatchSink> Unit<'_, S> {
     }
 }
 
-/// What [`Tracer::one_step_chain`] needs of its path, looked up once.
-#[derive(Clone, Copy)]
-struct OneStepChain<'a> {
-    one: &'a OneStepPath,
-    p: usize,
-    kind: crate::scene::StepKind,
-    line: &'a crate::polyline::Polyline,
-}
-
-/// A ray of [`Tracer::one_step_chain`] solved without the workspace: its record, points,
-/// final iterate and segment.
-struct OneStepRay {
-    record: RayRecord,
-    points: [Point; 3],
-    newton: OneStepNewton,
-    seg: usize,
-}
-
-/// One path's chain of warm starts through the blocks of a unit: whether its last ray
-/// converged, and the last receiver.
-#[derive(Default)]
-struct Chain {
+/// One path's rays through the blocks of a unit, as the tracer solves them ([`ChainRays`]):
+/// the chain of warm starts (whether its last ray converged, the last receiver) and where
+/// each ray goes in the unit's part of the sink.
+struct UnitChain<'u, 'a, S> {
+    scene: &'u crate::scene::Scene,
+    unit: &'u mut Unit<'a, S>,
+    /// The path.
+    path: usize,
+    /// Whether the last ray converged.
     have: bool,
+    /// The last receiver.
     last: Point,
 }
 
-/// A block's place in a [`Chain`].
-struct Link {
-    source: usize,
-    receiver: usize,
-    /// The receiver's position and its move from the last one.
-    here: Point,
-    moved: Vec2,
-    /// Whether the ray starts from the last solution: warm starts on, the last ray converged,
-    /// the same source, and the last receiver near (closer than a quarter of this receiver's
-    /// distance to the source).
-    warm: bool,
-}
-
-impl Link {
-    /// Where path `p` of this block, block `b` of its unit, goes in the unit's part.
-    #[inline]
-    fn slot(&self, b: usize, p: usize) -> RaySlot {
+impl<S: BatchSink> UnitChain<'_, '_, S> {
+    /// Where block `b`'s ray at `link` goes in the unit's part.
+    #[inline(always)]
+    fn slot(&self, b: usize, link: &ChainLink) -> RaySlot {
         RaySlot {
             block: b,
-            source: self.source,
-            receiver: self.receiver,
-            path: p,
+            source: link.source,
+            receiver: link.receiver,
+            path: self.path,
         }
     }
 }
 
-impl Chain {
-    /// Block `b` of `unit` in the chain.
-    #[inline]
-    fn link<S: BatchSink>(
-        &mut self,
-        scene: &crate::scene::Scene,
-        unit: &Unit<S>,
-        b: usize,
-    ) -> Link {
+impl<S: BatchSink> ChainRays for UnitChain<'_, '_, S> {
+    #[inline(always)]
+    fn warm_starts(&self) -> bool {
+        self.unit.warm_start
+    }
+
+    #[inline(always)]
+    fn rays(&self) -> usize {
+        self.unit.n
+    }
+
+    /// Block `b` of the unit: it starts from the last solution when warm starts are on, the
+    /// last ray converged, the source is the same, and the last receiver is near (closer than
+    /// a quarter of this receiver's distance to the source).
+    #[inline(always)]
+    fn link(&mut self, b: usize) -> ChainLink {
+        let (scene, unit) = (self.scene, &*self.unit);
         let (source, receiver) = unit.ends(b);
         if b > 0 && unit.new_source(b) {
             self.have = false;
@@ -1197,7 +1106,7 @@ impl Chain {
         let near = b > 0 && near(here, self.last, scene.sources()[source]);
         let moved = here - self.last;
         self.last = here;
-        Link {
+        ChainLink {
             source,
             receiver,
             here,
@@ -1205,195 +1114,33 @@ impl Chain {
             warm: unit.warm_start && self.have && near,
         }
     }
-}
 
-impl Tracer {
-    /// Path `p` of every block of `unit`, one block after the other, each starting from the
-    /// last one's solution when that receiver is near.
-    fn path_chain<S: BatchSink>(
-        &self,
-        p: usize,
-        params: std::ops::Range<usize>,
-        unit: &mut Unit<S>,
-        ws: &mut Workspace,
-        warm: &mut Warm,
-    ) {
-        let mut chain = Chain::default();
-        // Through parallel flat layers the default start is already the solution: a warm
-        // start would leave a Newton step or two.
-        let skip = self.plan_of(p).skips_warm_start(self.initial_guess());
-        let warm_start = unit.warm_start && !skip;
-        for b in 0..unit.n {
-            let link = chain.link(self.scene(), unit, b);
-            let guess =
-                (link.warm && warm_start).then(|| warm.predict(p, params.clone(), link.moved));
-            let s = self.solve_ray(link.source, link.receiver, p, guess, ws);
-            unit.out.write(link.slot(b, p), &s, ws.points(), ws.media());
-            chain.have = s.status == Status::Converged;
-            if chain.have && warm_start {
-                warm.store(p, params.clone(), ws);
-            }
-        }
-    }
-
-    /// One ray from `guess` if given, else from the default start; a warm-started ray that
-    /// does not converge is solved again from the default start.
-    fn solve_ray(
-        &self,
-        source: usize,
-        receiver: usize,
-        p: usize,
-        guess: Option<&[f64]>,
-        ws: &mut Workspace,
-    ) -> RayRecord {
-        let start = guess.map_or(Start::Default, Start::Trial);
-        let s = self.solve_indexed_start(source, receiver, p, start, ws);
-        if guess.is_none() || s.status == Status::Converged {
-            return s;
-        }
-        // The neighbour's path may lead elsewhere (off an end, onto a vertex): the
-        // documented start decides.
-        let cold = self.solve_indexed_start(source, receiver, p, Start::Default, ws);
-        RayRecord {
-            iterations: s.iterations + cold.iterations,
-            ..cold
-        }
-    }
-
-    /// [`path_chain`](Self::path_chain) for a one-interaction path (its parameter at `at` in
-    /// `warm`), without the workspace: each ray's start, Newton steps ([`OneStepNewton`], the
-    /// steps of one-by-one solving) and classification in registers. A ray that leaves this
-    /// common case (no crossing or specular point to start from, a step leaving its segment,
-    /// any status but `converged` after a warm start, no time) is solved one by one from the
-    /// same start. A refraction at a one-segment interface goes through the flat kernel instead,
-    /// never warm-started, as one by one.
-    fn one_step_chain<S: BatchSink>(
-        &self,
-        one: &OneStepPath,
-        p: usize,
-        at: usize,
-        unit: &mut Unit<S>,
-        ws: &mut Workspace,
-        warm: &mut Warm,
-    ) {
-        let scene = self.scene();
-        let step = &scene.paths()[p].steps[0];
-        let path = OneStepChain {
-            one,
-            p,
-            kind: step.kind,
-            line: &scene.interfaces()[step.interface].polyline,
-        };
-        let mut chain = Chain::default();
-        // The last ray's segment: the first one tried for the next start.
-        let mut seg = 0;
-        // Off a flat mirror the default start is already the solution; at a flat interface
-        // the kernel's steps from its own start cost less than a warm start saves.
-        let flat = match self.plan_of(p) {
-            PathPlan::FlatRefraction(_, flat) => Some(flat),
-            _ => None,
-        };
-        let skip = self.plan_of(p).skips_warm_start(self.initial_guess());
-        let warm_start = unit.warm_start && !skip;
-        let cx = self.context();
-        for b in 0..unit.n {
-            let link = chain.link(scene, unit, b);
-            let guess =
-                (link.warm && warm_start).then(|| warm.predict(p, at..at + 1, link.moved)[0]);
-            let source = scene.sources()[link.source];
-            let fast = match flat {
-                // (Never warm-started.)
-                Some(flat) => flat.solve(source, link.here).map(|sol| {
-                    let points = [source, flat.point(sol.s), link.here];
-                    let record = flat_status(&cx, flat, p, &points, sol);
-                    (record, points, None)
-                }),
-                None => self
-                    .one_step_fast(&path, source, link.here, guess, seg)
-                    .map(|ray| (ray.record, ray.points, Some((ray.newton, ray.seg)))),
-            };
-            // A ray without a time goes one by one: where the start led to no stationary
-            // path, the complete search answers.
-            match fast.filter(|(record, _, _)| record.status.has_time()) {
-                Some((record, points, newton)) => {
-                    let slot = link.slot(b, p);
-                    unit.out.write_one(slot, &record, &points, one.media);
-                    chain.have = record.status == Status::Converged;
-                    if let Some((it, j)) = newton.filter(|_| chain.have && warm_start) {
-                        let t = path.line.tangent(j);
-                        let sens = one_step_sensitivity(&it.e, t, one.slowness[1]);
-                        warm.store_one(p, at, it.s, sens);
-                        seg = j;
-                    }
-                }
-                None => {
-                    let guess = guess.map(|g| [g]);
-                    let guess = guess.as_ref().map(|g| &g[..]);
-                    let s = self.solve_ray(link.source, link.receiver, p, guess, ws);
-                    let slot = link.slot(b, p);
-                    unit.out.write(slot, &s, ws.points(), ws.media());
-                    chain.have = s.status == Status::Converged;
-                    if chain.have && warm_start {
-                        warm.store(p, at..at + 1, ws);
-                        seg = ws.newton.seg[0];
-                    }
-                }
-            }
-        }
-    }
-
-    /// One ray of [`one_step_chain`](Self::one_step_chain) from `guess` (else the crossing
-    /// start), `hint` a segment to try first; `None` when the ray must be solved one by one.
     #[inline(always)]
-    fn one_step_fast(
-        &self,
-        path: &OneStepChain,
-        source: Point,
-        receiver: Point,
-        guess: Option<f64>,
-        hint: usize,
-    ) -> Option<OneStepRay> {
-        let OneStepChain { one, p, kind, line } = *path;
-        let at = match guess {
-            Some(wanted) => given_param(line, wanted, hint),
-            None => match one.crossing_start(kind, line, source, receiver) {
-                crate::trace::OneStepStart::At(at) => at,
-                _ => return None,
-            },
-        };
-        let (s, j) = (at.s, at.seg);
-        let (to_receiver, coord) = (receiver - source, coord(source, receiver));
-        let f = &Frame::new(line, j, source);
-        let mut it = OneStepNewton::start(s, f, one.slowness, to_receiver, coord);
-        if it.run(f, one.slowness, to_receiver, coord, self.newton_options())
-            != Some(Outcome::Converged)
-        {
-            return None;
-        }
-        let e = &it.e;
-        let points = [source, line.point_on(j, it.s), receiver];
-        let rel = [Vec2::default(), e.p, to_receiver];
-        let sol = it.solution(Outcome::Converged);
-        let sides = std::iter::once((kind, line.normal(j)));
-        let record = self.classifier().free_points(
-            self.scene(),
-            p,
-            sides,
-            &rel,
-            &e.len,
-            &points,
-            &[j],
-            &sol,
-        );
-        if record.status != Status::Converged && guess.is_some() {
-            return None;
-        }
-        Some(OneStepRay {
-            record,
-            points,
-            newton: it,
-            seg: j,
-        })
+    fn write(
+        &mut self,
+        b: usize,
+        link: &ChainLink,
+        record: &RayRecord,
+        points: &[Point],
+        media: &[usize],
+    ) {
+        let slot = self.slot(b, link);
+        self.unit.out.write(slot, record, points, media);
+        self.have = record.status == Status::Converged;
+    }
+
+    #[inline(always)]
+    fn write_one(
+        &mut self,
+        b: usize,
+        link: &ChainLink,
+        record: &RayRecord,
+        points: &[Point; 3],
+        media: [usize; 2],
+    ) {
+        let slot = self.slot(b, link);
+        self.unit.out.write_one(slot, record, points, media);
+        self.have = record.status == Status::Converged;
     }
 }
 

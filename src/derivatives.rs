@@ -886,7 +886,7 @@ impl PointSensitivities {
         let coord = points
             .iter()
             .fold(0.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
-        let vanish = 1e-12 * total + 8.0 * f64::EPSILON * coord;
+        let vanish = crate::problem::vanish_threshold(total, coord);
         // Points.
         sc.contacts.clear();
         for (i, step) in steps.iter().enumerate() {

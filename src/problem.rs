@@ -248,7 +248,7 @@ impl<'a> ProblemRef<'a> {
             total += len[j];
             shortest = min_num(shortest, len[j]);
         }
-        let vanish = 1e-12 * total + 8.0 * f64::EPSILON * self.coord();
+        let vanish = vanish_threshold(total, self.coord());
         if !plain || shortest <= vanish {
             // Points next to a vanished leg count differently in the merit.
             self.evaluate_framed(s, frames, e, curvature);
@@ -324,7 +324,7 @@ impl<'a> ProblemRef<'a> {
         let (u0x, u0y, u1x, u1y) = (d0x * i0, d0y * i0, d1x * i1, d1y * i1);
         let time = 0.0 + w[0] * l0 + w[1] * l1;
         let total = 0.0 + l0 + l1;
-        let vanish = 1e-12 * total + 8.0 * f64::EPSILON * coord;
+        let vanish = vanish_threshold(total, coord);
         let t = f.t;
         let (vx, vy) = (u0x * w[0] - u1x * w[1], u0y * w[0] - u1y * w[1]);
         let r = vx * t.x + vy * t.y;
@@ -395,7 +395,7 @@ impl<'a> ProblemRef<'a> {
             total += l;
         }
         e.time = time;
-        let vanish = 1e-12 * total + 8.0 * f64::EPSILON * self.coord();
+        let vanish = vanish_threshold(total, self.coord());
         let r = &mut e.r[..k];
         let (mut phi, mut rmax, mut held, mut vanished) = (0.0, 0.0f64, 0, 0);
         for i in 0..k {
@@ -580,6 +580,21 @@ pub(crate) fn leg_vanished(len: &[f64], i: usize, vanish: f64) -> bool {
     len[i] <= vanish || len[i + 1] <= vanish
 }
 
+/// Length below which a leg counts as vanished ([`Eval::vanish`]), for a path of length
+/// `total` between ends whose largest coordinate is `coord` ([`coord`]): `1e-12` of the
+/// path's length plus 8 ulps of the largest coordinate (about whichever is larger). Next to
+/// a leg that short the residual is undefined (the leg's direction is round-off) and the
+/// point counts as sitting on the kink where the leg vanishes. `8ε·coord` is the round-off of
+/// a leg between points of coordinates that large (each carries a few ulps of error), and
+/// `1e-12` of the path is the solver's default relative tolerance: a shorter leg is below
+/// what the solve resolves. The evaluations (and through them the solver and the
+/// classifier), the image-source search and the derivatives all decide with this threshold,
+/// so that they agree on which legs vanished.
+#[inline(always)]
+pub(crate) fn vanish_threshold(total: f64, coord: f64) -> f64 {
+    1e-12 * total + 8.0 * f64::EPSILON * coord
+}
+
 /// `|d|`: a plain square root where the squares neither overflow nor lose precision to
 /// underflow, `hypot` otherwise.
 #[inline]
@@ -593,15 +608,18 @@ fn leg_length(d: Vec2) -> f64 {
     }
 }
 
-/// [`ProblemRef::coord`] of a ray from `source` to `receiver`.
-#[inline]
+/// The largest coordinate (in absolute value) of the ends of a ray from `source` to
+/// `receiver`: the scale of their round-off ([`ProblemRef::coord`]).
+///
+/// By compare and select ([`max_num`]): one instruction per maximum where `f64::max`, which
+/// ignores NaN, takes several (the one-interaction kernels compute this for every ray). The
+/// two agree on every input without NaN, and the ends of a solved ray are finite (the tracer
+/// checks them); with a NaN end the path's length is NaN, and so is the threshold built from
+/// both ([`vanish_threshold`]), and the flat kernel's test of sides fails, either way.
+#[inline(always)]
 pub(crate) fn coord(source: Point, receiver: Point) -> f64 {
-    source
-        .x
-        .abs()
-        .max(source.y.abs())
-        .max(receiver.x.abs())
-        .max(receiver.y.abs())
+    let m = max_num(source.x.abs(), source.y.abs());
+    max_num(max_num(m, receiver.x.abs()), receiver.y.abs())
 }
 
 /// `x.is_finite()` as one compare of `|x|` (the standard bit test takes five instructions, and
@@ -763,5 +781,38 @@ impl<'a> PathProblem<'a> {
     pub fn points(&self, s: &[f64]) -> Vec<Point> {
         let e = self.eval(s, false);
         e.rel.iter().map(|v| self.source + *v).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`coord`] by compare and select is `f64::max` of the four magnitudes, bit for bit, on
+    /// every input without NaN: signed zeros, subnormals, infinities, each coordinate the
+    /// largest in turn.
+    #[test]
+    fn coord_is_the_largest_magnitude() {
+        let values = [
+            0.0,
+            -0.0,
+            5e-324,
+            -1.5,
+            2.0,
+            1e300,
+            f64::MAX,
+            -f64::INFINITY,
+        ];
+        for a in values {
+            for b in values {
+                for c in values {
+                    for d in values {
+                        let expected = a.abs().max(b.abs()).max(c.abs()).max(d.abs());
+                        let got = coord(Point::new(a, b), Point::new(c, d));
+                        assert_eq!(got.to_bits(), expected.to_bits(), "{a} {b} {c} {d}");
+                    }
+                }
+            }
+        }
     }
 }

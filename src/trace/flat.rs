@@ -35,7 +35,7 @@
 
 use crate::geom::{Point, Vec2};
 use crate::polyline::Polyline;
-use crate::problem::{finite, max_num, min_num};
+use crate::problem::{coord, finite, max_num, min_num};
 use crate::scene::SolverOptions;
 
 /// A refraction at an open interface of one segment, with its two slownesses.
@@ -275,16 +275,6 @@ impl FlatRefraction {
     pub(crate) fn normal(&self) -> Vec2 {
         self.t.perp()
     }
-}
-
-/// The largest coordinate of the ray's ends (the scale of their round-off):
-/// `problem::coord` with compare-and-select instead of the NaN-ignoring `f64::max`. They
-/// differ only where a coordinate is NaN, and such a ray fails the kernel's test of sides
-/// either way.
-#[inline(always)]
-fn coord(source: Point, receiver: Point) -> f64 {
-    let m = max_num(source.x.abs(), source.y.abs());
-    max_num(max_num(m, receiver.x.abs()), receiver.y.abs())
 }
 
 /// How far, relative to the ray's extent, the source and the receiver must lie from the

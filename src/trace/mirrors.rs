@@ -401,7 +401,7 @@ impl Validation<'_> {
         let total: f64 = lens.iter().sum();
         // A leg between two reflections that vanished (the classifier's threshold).
         let coord = crate::problem::coord(source, receiver);
-        let vanish = 1e-12 * total + 8.0 * f64::EPSILON * coord;
+        let vanish = crate::problem::vanish_threshold(total, coord);
         if lens[1..k.max(1)].iter().any(|&l| l <= vanish) {
             return None;
         }

@@ -5,7 +5,10 @@
 //! [`PathPlan`] (built once in [`Tracer::new`]): a kernel for a common case (`one_step`,
 //! `flat`, `stack`) or the general solve ([`Tracer::solve_general`]): the start (`start`,
 //! `straight`), the Newton solve (`crate::solver`), the media lookup and the classification
-//! (`classify`). Every kernel ends in the same classifier.
+//! (`classify`). Every kernel ends in the same classifier. A batch's chain of rays of one path
+//! goes through `Tracer::solve_chain` (`chain`), which reads the plan once per chain: the
+//! rays of a one-interaction path in registers, without the workspace, and every other ray
+//! (and a one-interaction ray outside the common case) through `solve_planned`.
 
 use std::sync::Arc;
 
@@ -17,6 +20,7 @@ use crate::regions::Regions;
 use crate::scene::{MAX_COORDINATE, Scene, SceneError};
 use crate::solver::{NewtonOptions, NewtonWorkspace, solve};
 
+mod chain;
 mod classify;
 mod complete;
 mod flat;
@@ -30,22 +34,24 @@ mod stationary;
 mod straight;
 mod update;
 
+pub(crate) use chain::{ChainLink, ChainRays, WarmStarts};
 pub(crate) use classify::{Classifier, Sequence};
 pub use complete::{Arrival, Kink, Stationary, StationaryError};
 pub(crate) use flat::SegmentFrame;
 pub(crate) use mirrors::{MirrorArrival, MirrorScratch, MirrorWalls};
-pub(crate) use one_step::{OneStepStart, flat_status};
 pub use plan::Kernels;
-pub(crate) use plan::{OneStepPath, PathPlan};
 pub use result::{Ray, RayRecord, Reason, Status};
-pub(crate) use start::given_param;
+
+use one_step::{OneStepStart, flat_status};
+use plan::{OneStepPath, PathPlan};
+use start::given_param;
 
 use start::{StartScratch, given_start, initial_guess, refraction_guess};
 use straight::StraightStart;
 
 /// Where a solve starts.
 #[derive(Clone, Copy, Debug)]
-pub(crate) enum Start<'a> {
+enum Start<'a> {
     /// The documented initial guess.
     Default,
     /// These parameters (a caller's start).
@@ -443,7 +449,7 @@ impl Tracer {
     /// Ray (`source`, `receiver`, `path`) of the scene from `start` (the batches' entry: the
     /// points of a ray without a time stay in `ws`, unread).
     #[inline(always)]
-    pub(crate) fn solve_indexed_start(
+    fn solve_indexed_start(
         &self,
         source: usize,
         receiver: usize,
@@ -485,22 +491,22 @@ impl Tracer {
 
     /// The plan of path `path`.
     #[inline(always)]
-    pub(crate) fn plan_of(&self, path: usize) -> &PathPlan {
+    fn plan_of(&self, path: usize) -> &PathPlan {
         &self.plans[path]
     }
 
     /// The start's refinement.
-    pub(crate) fn initial_guess(&self) -> InitialGuess {
+    fn initial_guess(&self) -> InitialGuess {
         self.guess
     }
 
     /// The solver's options.
-    pub(crate) fn newton_options(&self) -> NewtonOptions {
+    fn newton_options(&self) -> NewtonOptions {
         self.newton
     }
 
     /// The classifier.
-    pub(crate) fn classifier(&self) -> &Classifier {
+    fn classifier(&self) -> &Classifier {
         &self.classifier
     }
 

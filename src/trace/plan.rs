@@ -1,7 +1,7 @@
 //! The per-path plan: which kernel solves a path's rays, decided once in `Tracer::new`.
 //!
 //! Every ray goes through [`PathPlan`]: [`Tracer::solve`](super::Tracer::solve) and the
-//! batches dispatch on it and on nothing else. A kernel is a shortcut for a common case
+//! batches' chains (`trace::chain`) dispatch on it and on nothing else. A kernel is a shortcut for a common case
 //! that ends in the same classifier (`classify`) as the general solve, and hands every ray
 //! outside its case to the general code from the same start.
 
