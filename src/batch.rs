@@ -4,7 +4,7 @@ use rayon::iter::plumbing::{Consumer, Producer, ProducerCallback, UnindexedConsu
 use rayon::prelude::*;
 
 use crate::geom::Point;
-use crate::scene::SceneError;
+use crate::scene::{RayTriple, SceneError};
 use crate::trace::{ChainLink, ChainRays, Ray, RayRecord, Status, Tracer, WarmStarts, Workspace};
 
 /// How to run a batch.
@@ -498,11 +498,9 @@ impl Batch {
     pub fn records(&self) -> &[RayRecord] {
         &self.records
     }
-    /// `(source, receiver, path)` of ray `ray`.
-    pub fn triple(&self, ray: usize) -> (usize, usize, usize) {
-        let p = ray % self.paths;
-        let r = (ray / self.paths) % self.receivers;
-        (ray / (self.paths * self.receivers), r, p)
+    /// The (source, receiver, path) of ray `ray`.
+    pub fn triple(&self, ray: usize) -> RayTriple {
+        RayTriple::of(ray, self.receivers, self.paths)
     }
     fn block(&self, ray: usize) -> (usize, usize) {
         (ray / self.paths, ray % self.paths)
@@ -549,7 +547,11 @@ impl Batch {
     /// Ray `ray` as an owned [`Ray`].
     pub fn ray(&self, ray: usize) -> Ray {
         let rec = self.records[ray];
-        let (source, receiver, path) = self.triple(ray);
+        let RayTriple {
+            source,
+            receiver,
+            path,
+        } = self.triple(ray);
         let has = rec.status.has_time();
         Ray {
             source,

@@ -1218,7 +1218,7 @@ impl BatchGradients {
                     if !(batch.record(ray).status.has_time() && wanted(ray)) {
                         continue;
                     }
-                    let (_, _, path) = batch.triple(ray);
+                    let path = batch.triple(ray).path;
                     let steps = &scene.paths()[path].steps;
                     let Some(ray_media) = batch.media(ray) else {
                         continue;

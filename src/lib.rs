@@ -101,7 +101,7 @@ pub mod spec {
 /// and their steps, segments, the search's options, and the sizes of a batch.
 pub mod scene_parts {
     pub use crate::scene::{
-        BatchSize, Interface, Medium, Path, SearchOptions, SegmentRef, Step, StepKind,
+        BatchSize, Interface, Medium, Path, RayTriple, SearchOptions, SegmentRef, Step, StepKind,
     };
 }
 

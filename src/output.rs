@@ -15,7 +15,7 @@ use rayon::prelude::*;
 use crate::batch::Batch;
 use crate::derivatives::Gradient;
 use crate::geom::Point;
-use crate::scene::{Scene, StepKind};
+use crate::scene::{RayTriple, Scene, StepKind};
 use crate::search::SearchArrival;
 use crate::stationary::StationaryRays;
 use crate::trace::{Kink, Ray, Reason, Status};
@@ -1091,7 +1091,11 @@ fn write_rays_and_arrivals<W: Write>(
             out,
             |i| {
                 let r = batch.record(i);
-                let (source, receiver, path) = batch.triple(i);
+                let RayTriple {
+                    source,
+                    receiver,
+                    path,
+                } = batch.triple(i);
                 let has = r.status.has_time();
                 View {
                     source,
@@ -1493,7 +1497,11 @@ mod tests {
         let rays = doc["rays"].as_array().unwrap();
         assert_eq!(rays.len(), n);
         for (i, ray) in rays.iter().enumerate() {
-            let (s, r, p) = batch.triple(i);
+            let RayTriple {
+                source: s,
+                receiver: r,
+                path: p,
+            } = batch.triple(i);
             assert_eq!(ray["source"], s);
             assert_eq!(ray["receiver"], r);
             assert_eq!(ray["path"], p);
@@ -1585,7 +1593,11 @@ mod tests {
         let mut codes = std::collections::BTreeSet::new();
         for (i, r) in data.chunks(size).enumerate() {
             let rec = batch.record(i);
-            let (s, rc, pa) = batch.triple(i);
+            let RayTriple {
+                source: s,
+                receiver: rc,
+                path: pa,
+            } = batch.triple(i);
             assert_eq!(
                 [u32_at(r, 0), u32_at(r, 4), u32_at(r, 8)],
                 [s, rc, pa].map(|v| v as u32)

@@ -465,6 +465,30 @@ impl BatchSize {
     }
 }
 
+/// One ray's (source, receiver, path) indices.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct RayTriple {
+    /// Source index.
+    pub source: usize,
+    /// Receiver index.
+    pub receiver: usize,
+    /// Path index.
+    pub path: usize,
+}
+
+impl RayTriple {
+    /// The triple of ray `ray` among `receivers` receivers and `paths` paths a source, in ray
+    /// order (source-major, then receiver, then path).
+    #[inline]
+    pub fn of(ray: usize, receivers: usize, paths: usize) -> RayTriple {
+        RayTriple {
+            source: ray / (paths * receivers),
+            receiver: (ray / paths) % receivers,
+            path: ray % paths,
+        }
+    }
+}
+
 /// Largest coordinate magnitude accepted: beyond it distances and times could overflow.
 pub const MAX_COORDINATE: f64 = 1e100;
 /// Smallest magnitude of a nonzero coordinate accepted: below it products of coordinate
@@ -834,6 +858,12 @@ impl Scene {
     #[inline]
     pub fn ray_index(&self, source: usize, receiver: usize, path: usize) -> usize {
         (source * self.receivers.len() + receiver) * self.paths.len() + path
+    }
+    /// The (source, receiver, path) triple of ray `ray` in `eigenray solve`'s ray order: the
+    /// inverse of [`Scene::ray_index`].
+    #[inline]
+    pub fn ray_triple(&self, ray: usize) -> RayTriple {
+        RayTriple::of(ray, self.receivers.len(), self.paths.len())
     }
     /// Solver settings.
     pub fn solver(&self) -> SolverOptions {

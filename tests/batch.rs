@@ -1,6 +1,7 @@
 //! Batches: the same rays as one-by-one solving, in ray order, and warm starts that save
 //! iterations.
 
+use eigenray::scene_parts::RayTriple;
 use eigenray::{BatchOptions, Scene, Status, Tracer, Workspace, demo};
 
 #[path = "support/rng.rs"]
@@ -57,7 +58,11 @@ fn compare_in_units(scene: &Scene, warm_start: bool, chunk: usize) -> (u64, u64)
     let mut ws = Workspace::new();
     let (mut single_iterations, mut batch_iterations) = (0, 0);
     for i in 0..scene.num_rays() {
-        let (s, r, p) = batch.triple(i);
+        let RayTriple {
+            source: s,
+            receiver: r,
+            path: p,
+        } = batch.triple(i);
         let one = tracer.trace(s, r, p, &mut ws);
         let got = batch.ray(i);
         assert_eq!((got.source, got.receiver, got.path), (s, r, p));
@@ -230,7 +235,11 @@ fn warm_starts_keep_the_rays_and_save_iterations() {
     let batch = tracer.trace_batch(&BatchOptions::default());
     let mut ws = Workspace::new();
     for i in 0..sc.num_rays() {
-        let (s, r, p) = batch.triple(i);
+        let RayTriple {
+            source: s,
+            receiver: r,
+            path: p,
+        } = batch.triple(i);
         let one = tracer.trace(s, r, p, &mut ws);
         assert_eq!(bits(batch.ray(i)), bits(one), "flat surface, ray {i}");
     }
@@ -448,7 +457,11 @@ fn the_walk_over_a_batch_gives_each_rays_parts() {
             for ray in batch.rays(start..n) {
                 let i = ray.index;
                 assert_eq!(i, start + count);
-                assert_eq!((ray.source, ray.receiver, ray.path), batch.triple(i));
+                let t = batch.triple(i);
+                assert_eq!(
+                    (ray.source, ray.receiver, ray.path),
+                    (t.source, t.receiver, t.path)
+                );
                 assert_eq!(ray.record, batch.record(i));
                 // The same slice of the batch (its points are NaN for a ray without a time).
                 assert!(std::ptr::eq(ray.points, batch.points(i)), "{name} ray {i}");
@@ -554,7 +567,11 @@ fn a_sink_gets_the_rays_of_the_batch_bit_for_bit() {
                 let at = format!("scene {k}, warm {warm_start}, chunk {chunk}, ray {i}");
                 assert_eq!(writes, 1, "{at}");
                 let (triple, record, points, media) = got.expect("written");
-                let (s, r, p) = batch.triple(i);
+                let RayTriple {
+                    source: s,
+                    receiver: r,
+                    path: p,
+                } = batch.triple(i);
                 assert_eq!(triple, [s, r, p], "{at}");
                 let want = batch.record(i);
                 // Debug strings: NaN times and residuals compare equal there.

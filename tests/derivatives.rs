@@ -551,7 +551,7 @@ fn batch_gradients_are_the_rays_gradients() {
         let one = Gradient::of_ray(&scene, &batch.ray(ray)).unwrap();
         assert_eq!(gradients.gradient(ray).unwrap(), one);
         // Into a reused gradient, from the points and media alone.
-        let (_, _, path) = batch.triple(ray);
+        let path = batch.triple(ray).path;
         let steps = &scene.paths()[path].steps;
         let media: Vec<usize> = batch.media(ray).unwrap().collect();
         reused
