@@ -21,6 +21,7 @@ struct Chord {
     reversed: bool,
 }
 
+/// The [`Chord`] of a leg from a point of `a` to a point of `b`.
 fn chord(a: &Place, b: &Place) -> Option<Chord> {
     if a.interface != b.interface || a.interface == usize::MAX {
         return None;
@@ -56,8 +57,11 @@ fn arc_dot_range(e0: Vec2, e1: Vec2, t: Vec2) -> [f64; 2] {
 /// What bounds the directions of one leg.
 #[derive(Clone, Copy, Debug)]
 enum LegBound {
+    /// Between boxes apart: the directions of the differences of their points.
     Box(Legs),
+    /// Between touching places on one interface: an arc of directions.
     Arc(Chord),
+    /// Any direction.
     Unknown,
 }
 
@@ -86,12 +90,15 @@ impl LegBound {
 /// `None` when the boxes touch (a leg between them may vanish: no bound).
 #[derive(Clone, Copy, Debug)]
 struct Legs {
+    /// The box of the differences.
     d: Aabb,
+    /// The round-off of a direction's components.
     pad: f64,
     /// The directions of the box's corners.
     corners: [Vec2; 4],
 }
 
+/// The [`Legs`] from a point of `from` to a point of `to`.
 fn legs(from: Aabb, to: Aabb) -> Option<Legs> {
     let d = Aabb {
         min: Point::new(to.min.x - from.max.x, to.min.y - from.max.y),
@@ -204,4 +211,381 @@ pub(super) fn pruned(places: &[Place], source: Point, receiver: Point, w: &[f64]
         before = after;
     }
     false
+}
+
+#[cfg(test)]
+mod tests {
+    use std::f64::consts::TAU;
+
+    use proptest::prelude::*;
+    use proptest::test_runner::{Config, RngSeed};
+
+    use super::*;
+    use crate::demo::SplitMix64;
+    use crate::polyline::Polyline;
+    use crate::trace::complete::hierarchy::Hierarchy;
+
+    /// A fixed budget: a few thousand cases, well under a second in the test-opt profile.
+    fn config(cases: u32, seed: u64) -> Config {
+        Config {
+            cases,
+            rng_seed: RngSeed::Fixed(seed),
+            failure_persistence: None,
+            ..Config::default()
+        }
+    }
+
+    /// The unit vector at angle `a`.
+    fn unit(a: f64) -> Vec2 {
+        Vec2::new(a.cos(), a.sin())
+    }
+
+    /// The point at fractions `(fx, fy)` of box `b`.
+    fn in_box(b: Aabb, fx: f64, fy: f64) -> Point {
+        Point::new(
+            b.min.x + fx * (b.max.x - b.min.x),
+            b.min.y + fy * (b.max.y - b.min.y),
+        )
+    }
+
+    /// A box from its centre and half-sizes.
+    fn boxed(c: (f64, f64), h: (f64, f64)) -> Aabb {
+        Aabb::from_points(
+            Point::new(c.0 - h.0, c.1 - h.1),
+            Point::new(c.0 + h.0, c.1 + h.1),
+        )
+    }
+
+    /// Whether `x` lies in `range`.
+    fn within(x: f64, range: [f64; 2]) -> bool {
+        range[0] <= x && x <= range[1]
+    }
+
+    /// A fraction, the ends of the range drawn more often (a box's corners and edges).
+    fn fraction() -> impl Strategy<Value = f64> {
+        prop_oneof![Just(0.0), Just(1.0), 0.0..=1.0]
+    }
+
+    /// The place of a free point on a segment through `x` along the unit tangent at angle
+    /// `alpha`, reaching `back` behind `x` and `ahead` beyond it (as a leaf's assignment
+    /// bounds it: spread 0).
+    fn segment_place(x: Point, alpha: f64, back: f64, ahead: f64) -> Place {
+        let t = unit(alpha);
+        let bbox = Aabb::from_points(x - t * back, x + t * ahead);
+        Place {
+            tangent: t,
+            spread: 0.0,
+            ..Place::new(bbox, [alpha, alpha], 0, 1)
+        }
+    }
+
+    /// The place of a hierarchy node around `x`: the box grown by `grow` on each side and the
+    /// cone widened by `widen` on each side of `alpha`.
+    fn node_place(x: Point, alpha: f64, grow: [f64; 4], widen: [f64; 2]) -> Place {
+        let bbox = Aabb::from_points(
+            Point::new(x.x - grow[0], x.y - grow[1]),
+            Point::new(x.x + grow[2], x.y + grow[3]),
+        );
+        Place::new(bbox, [alpha - widen[0], alpha + widen[1]], 0, 1)
+    }
+
+    /// The outgoing direction at a point on a line of unit tangent `t`, for the incoming
+    /// direction `u` (crossing from the normal's side to the other, `u · n < 0`), slowness
+    /// `w0` before and `w1` after: Snell's law (`w0 sin θ0 = w1 sin θ1`) for a refraction, the
+    /// mirror image for a reflection. `None` beyond the critical angle.
+    fn outgoing(u: Vec2, t: Vec2, w0: f64, w1: f64, reflect: bool) -> Option<Vec2> {
+        let n = t.perp();
+        let (along, across) = (u.dot(t), u.dot(n));
+        if reflect {
+            return Some(t * along - n * across);
+        }
+        let sine = w0 * along / w1;
+        (sine.abs() < 1.0).then(|| t * sine + n * (across.signum() * (1.0 - sine * sine).sqrt()))
+    }
+
+    /// The box of differences of [(−2, −1), (−1, 1)] seen from the origin holds the
+    /// direction (−1, 0): with t = (1, 0) the lower bound reaches −1, below every corner's.
+    #[test]
+    fn a_box_astride_minus_t_reaches_minus_one() {
+        let from = Aabb::from_points(Point::new(0.0, 0.0), Point::new(0.0, 0.0));
+        let to = Aabb::from_points(Point::new(-2.0, -1.0), Point::new(-1.0, 1.0));
+        let l = legs(from, to).expect("the boxes are apart");
+        let [lo, hi] = dot_range(l, Vec2::new(1.0, 0.0));
+        assert!(lo <= -1.0, "lower bound {lo}");
+        // The upper bound: the corners (−1, ±1), at 135° and 225°.
+        assert!((hi + 0.5f64.sqrt()).abs() < 1e-9, "upper bound {hi}");
+        // And seen along t = (−1, 0): the upper bound reaches 1.
+        let [_, hi] = dot_range(l, Vec2::new(-1.0, 0.0));
+        assert!(hi >= 1.0, "upper bound {hi}");
+    }
+
+    /// Touching boxes give no box of directions; boxes apart do.
+    #[test]
+    fn touching_boxes_give_no_bound() {
+        let a = Aabb::from_points(Point::new(0.0, 0.0), Point::new(1.0, 1.0));
+        let b = Aabb::from_points(Point::new(1.0, 0.5), Point::new(2.0, 2.0));
+        assert!(legs(a, b).is_none());
+        assert!(legs(a, a).is_none());
+        let c = Aabb::from_points(Point::new(1.5, 0.5), Point::new(2.0, 2.0));
+        assert!(legs(a, c).is_some());
+    }
+
+    /// A reflection in the line y = 0 at the origin (source (−1, 1), receiver (1, 1)) is
+    /// not pruned where its segment holds the origin, and pruned where the segment lies at
+    /// x ∈ [5, 6], where every leg's residual has one sign.
+    #[test]
+    fn a_mirror_is_pruned_only_away_from_its_reflection() {
+        let (s, r) = (Point::new(-1.0, 1.0), Point::new(1.0, 1.0));
+        let w = [1.0, 1.0];
+        let here = segment_place(Point::new(0.0, 0.0), 0.0, 1.0, 2.0);
+        assert!(!pruned(&[here], s, r, &w));
+        let there = segment_place(Point::new(5.0, 0.0), 0.0, 0.0, 1.0);
+        assert!(pruned(&[there], s, r, &w));
+        // A node holding both: not pruned.
+        let node = node_place(Point::new(0.0, 0.0), 0.0, [1.0, 0.0, 6.0, 0.0], [0.1, 0.1]);
+        assert!(!pruned(&[node], s, r, &w));
+    }
+
+    /// A corner reflector: the walls x = 0 and y = 0 as one polyline (0, 2), (0, 0), (2, 0);
+    /// the path (1, 2) → (0, 1) → (1, 0) → (2, 1) reflects off both. The two points' boxes
+    /// touch at the corner, so the leg between them is bounded by its chord.
+    #[test]
+    fn a_corner_reflection_is_not_pruned() {
+        let (s, r) = (Point::new(1.0, 2.0), Point::new(2.0, 1.0));
+        let half = std::f64::consts::FRAC_PI_2;
+        let mut a = segment_place(Point::new(0.0, 1.0), -half, 1.0, 1.0);
+        let mut b = segment_place(Point::new(1.0, 0.0), 0.0, 1.0, 1.0);
+        (a.first, a.end, b.first, b.end) = (0, 1, 1, 2);
+        (a.interface, b.interface) = (0, 0);
+        assert!(legs(a.bbox, b.bbox).is_none(), "the boxes touch");
+        assert!(chord(&a, &b).is_some());
+        assert!(!pruned(&[a, b], s, r, &[1.0, 1.0, 1.0]));
+        // With the receiver moved behind the first wall, every leg to it from the second
+        // wall runs back along that wall, while the leg arriving there runs forward along
+        // it: no point of the second wall is stationary, pruned.
+        assert!(pruned(&[a, b], s, Point::new(-1.0, 1.0), &[1.0, 1.0, 1.0]));
+    }
+
+    /// Random polylines: for two nodes of its hierarchy whose places touch, every direction
+    /// from a point of the first to a point of the second lies in the chord's arc (the
+    /// opposite one where the second point comes first), and its `u · t` in the chord's
+    /// ranges.
+    #[test]
+    fn a_chord_holds_every_leg_along_the_polyline() {
+        let mut rng = SplitMix64(0xc0ed);
+        let mut checked = 0;
+        for m in 2..=24 {
+            for closed in [false, true] {
+                if closed && m < 3 {
+                    continue;
+                }
+                let line = random_polyline(&mut rng, m, closed);
+                let h = Hierarchy::new(&line);
+                for na in &h.nodes {
+                    for nb in &h.nodes {
+                        let (mut a, mut b) = (na.place, nb.place);
+                        (a.interface, b.interface) = (3, 3);
+                        let Some(c) = chord(&a, &b) else { continue };
+                        for _ in 0..8 {
+                            let ja = a.first + (rng.next_u64() as usize) % (a.end - a.first);
+                            let jb = b.first + (rng.next_u64() as usize) % (b.end - b.first);
+                            let (fa, fb) = (rng.next_f64(), rng.next_f64());
+                            let x =
+                                line.point_on(ja, line.start(ja) + fa * line.segment_length(ja));
+                            let y =
+                                line.point_on(jb, line.start(jb) + fb * line.segment_length(jb));
+                            let d = y - x;
+                            if d.length() < 1e-9 {
+                                continue;
+                            }
+                            let u = d * (1.0 / d.length());
+                            let later = jb > ja || (ja == jb && fb > fa);
+                            assert!(c.both || later != c.reversed, "{ja} → {jb}: {c:?}");
+                            let along = if later { u } else { -u };
+                            let [e0, e1] = c.ends;
+                            let inside = e0.cross(along) >= -1e-12 && along.cross(e1) >= -1e-12;
+                            assert!(inside, "{ja} → {jb}: {along:?} outside {c:?}");
+                            let t = unit(TAU * rng.next_f64());
+                            let (r0, r1) = LegBound::Arc(c).dot_ranges(t);
+                            let dot = u.dot(t);
+                            let range = match (c.both, later) {
+                                (true, false) => r1.expect("both arcs"),
+                                _ => r0,
+                            };
+                            assert!(within(dot, range), "{dot} outside {range:?}");
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked > 1000, "{checked} legs checked");
+    }
+
+    /// A random polyline of `m` segments: a walk of random lengths and turns up to ±2.5 rad.
+    fn random_polyline(rng: &mut SplitMix64, m: usize, closed: bool) -> Polyline {
+        loop {
+            let vertices = if closed { m } else { m + 1 };
+            let mut heading = TAU * rng.next_f64();
+            let mut p = Point::new(0.0, 0.0);
+            let mut points = vec![p];
+            for _ in 1..vertices {
+                heading += 2.5 * (2.0 * rng.next_f64() - 1.0);
+                p = p + unit(heading) * (0.1 + rng.next_f64());
+                points.push(p);
+            }
+            if let Ok(line) = Polyline::new(points, closed) {
+                return line;
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(config(4000, 0xb0_0de5))]
+
+        /// `dot_range` never excludes a direction: for boxes apart, every unit direction
+        /// from a point of one to a point of the other has its `u · t` inside the range.
+        #[test]
+        fn dot_range_holds_every_direction(
+            c0 in (-4.0..4.0f64, -4.0..4.0f64), h0 in (0.0..2.0f64, 0.0..2.0f64),
+            c1 in (-4.0..4.0f64, -4.0..4.0f64), h1 in (0.0..2.0f64, 0.0..2.0f64),
+            angle in 0.0..TAU,
+            samples in proptest::collection::vec(
+                (fraction(), fraction(), fraction(), fraction()),
+                12,
+            ),
+        ) {
+            let (from, to) = (boxed(c0, h0), boxed(c1, h1));
+            let Some(l) = legs(from, to) else { return Ok(()) };
+            // Along a random tangent, the axes, away from the corners and from the middle
+            // of the differences (whose direction then gives u · t = −1).
+            let mut tangents = vec![unit(angle), Vec2::new(1.0, 0.0), Vec2::new(0.0, -1.0)];
+            tangents.extend(l.corners.iter().map(|&c| -c));
+            let middle = to.center() - from.center();
+            tangents.push(middle * (-1.0 / middle.length()));
+            for t in tangents {
+                let range = dot_range(l, t);
+                for &(a, b, c, d) in samples.iter().chain([&(0.5, 0.5, 0.5, 0.5)]) {
+                    let v = in_box(to, c, d) - in_box(from, a, b);
+                    let u = v * (1.0 / v.length());
+                    prop_assert!(within(u.dot(t), range), "{} outside {:?}", u.dot(t), range);
+                }
+            }
+        }
+
+        /// `arc_dot_range` holds every unit vector of its arc.
+        #[test]
+        fn arc_dot_range_holds_every_direction(
+            start in 0.0..TAU, width in 0.0..3.1f64, angle in 0.0..TAU,
+            at in proptest::collection::vec(fraction(), 12),
+        ) {
+            let (e0, e1) = (unit(start), unit(start + width));
+            for t in [unit(angle), -e0, e1, unit(start + 0.5 * width + std::f64::consts::PI)] {
+                let range = arc_dot_range(e0, e1, t);
+                for &f in &at {
+                    let u = unit(start + f * width);
+                    prop_assert!(within(u.dot(t), range), "{} outside {:?}", u.dot(t), range);
+                }
+            }
+        }
+
+        /// A chord's ranges: the forward arc's where the legs run forward, the opposite
+        /// arc's where they run back, both where either may.
+        #[test]
+        fn chord_ranges_hold_their_arcs(
+            start in 0.0..TAU, width in 0.0..3.1f64, angle in 0.0..TAU, f in fraction(),
+            both in any::<bool>(), reversed in any::<bool>(),
+        ) {
+            let c = Chord { ends: [unit(start), unit(start + width)], both, reversed };
+            let (r0, r1) = LegBound::Arc(c).dot_ranges(unit(angle));
+            let u = unit(start + f * width);
+            let t = unit(angle);
+            match (both, reversed) {
+                (true, _) => {
+                    prop_assert!(within(u.dot(t), r0));
+                    prop_assert!(within(-u.dot(t), r1.expect("both arcs")));
+                }
+                (false, false) => prop_assert!(within(u.dot(t), r0)),
+                (false, true) => prop_assert!(within(-u.dot(t), r0)),
+            }
+        }
+
+        /// A stationary path through one point is never pruned: a reflection, or a
+        /// refraction by Snell's law, inside the box of its segment or of a node around it.
+        #[test]
+        fn a_stationary_point_is_never_pruned(
+            x in (-3.0..3.0f64, -3.0..3.0f64), alpha in -4.0..4.0f64, incidence in -1.5..1.5f64,
+            lengths in (0.05..5.0f64, 0.05..5.0f64), w in (0.3..3.0f64, 0.3..3.0f64),
+            reflect in any::<bool>(), reach in (0.0..3.0f64, 0.0..3.0f64),
+            grow in proptest::array::uniform4(0.0..2.0f64),
+            widen in proptest::array::uniform2(0.0..1.5f64),
+        ) {
+            let x = Point::new(x.0, x.1);
+            let t = unit(alpha);
+            let n = t.perp();
+            let w1 = if reflect { w.0 } else { w.1 };
+            let u0 = t * incidence.sin() - n * incidence.cos();
+            let Some(u1) = outgoing(u0, t, w.0, w1, reflect) else { return Ok(()) };
+            let (s, r) = (x - u0 * lengths.0, x + u1 * lengths.1);
+            // The residual vanishes (the construction is right).
+            prop_assert!(((u0 * w.0 - u1 * w1).dot(t)).abs() < 1e-12);
+            let seg = segment_place(x, alpha, reach.0, reach.1);
+            prop_assert!(!pruned(&[seg], s, r, &[w.0, w1]));
+            let node = node_place(x, alpha, grow, widen);
+            prop_assert!(!pruned(&[node], s, r, &[w.0, w1]));
+        }
+
+        /// The same for a path through two points on different interfaces, each a reflection
+        /// or a refraction.
+        #[test]
+        fn a_stationary_path_of_two_points_is_never_pruned(
+            x in (-3.0..3.0f64, -3.0..3.0f64), alpha in (-4.0..4.0f64, -4.0..4.0f64),
+            incidence in -1.5..1.5f64, lengths in proptest::array::uniform3(0.05..5.0f64),
+            w in proptest::array::uniform3(0.3..3.0f64), reflect in (any::<bool>(), any::<bool>()),
+            grow in proptest::array::uniform4(0.0..1.0f64),
+            widen in proptest::array::uniform2(0.0..1.0f64),
+        ) {
+            let x0 = Point::new(x.0, x.1);
+            let (t0, t1) = (unit(alpha.0), unit(alpha.1));
+            let w1 = if reflect.0 { w[0] } else { w[1] };
+            let u0 = t0 * incidence.sin() - t0.perp() * incidence.cos();
+            let Some(u1) = outgoing(u0, t0, w[0], w1, reflect.0) else { return Ok(()) };
+            let x1 = x0 + u1 * lengths[1];
+            // The second line crosses the leg (its normal faces the leg's start).
+            let t1 = if u1.dot(t1.perp()) < 0.0 { t1 } else { -t1 };
+            prop_assume!(u1.dot(t1.perp()).abs() > 1e-3);
+            let w2 = if reflect.1 { w1 } else { w[2] };
+            let Some(u2) = outgoing(u1, t1, w1, w2, reflect.1) else { return Ok(()) };
+            let (s, r) = (x0 - u0 * lengths[0], x1 + u2 * lengths[2]);
+            let a1 = t1.y.atan2(t1.x);
+            let segs = [segment_place(x0, alpha.0, 0.5, 0.5), segment_place(x1, a1, 0.5, 0.5)];
+            prop_assert!(!pruned(&segs, s, r, &[w[0], w1, w2]));
+            let nodes = [node_place(x0, alpha.0, grow, widen), node_place(x1, a1, grow, widen)];
+            prop_assert!(!pruned(&nodes, s, r, &[w[0], w1, w2]));
+        }
+
+        /// A corner reflector of any opening: two walls of one polyline meeting at the
+        /// origin, a path reflecting off both; the places touch at the corner (a chord bounds
+        /// the leg between them), and the path is not pruned.
+        #[test]
+        fn a_reflection_off_two_touching_walls_is_never_pruned(
+            f in (0.0..TAU, 0.3..2.8f64), at in (0.05..2.0f64, 0.05..2.0f64),
+            lengths in (0.05..5.0f64, 0.05..5.0f64), reach in (0.0..1.0f64, 0.0..1.0f64),
+        ) {
+            // The polyline runs in along −f1 to the corner, out along f2.
+            let (f1, f2) = (unit(f.0), unit(f.0 + f.1));
+            let (xa, xb) = (Point::new(0.0, 0.0) + f1 * at.0, Point::new(0.0, 0.0) + f2 * at.1);
+            let d = (xb - xa) * (1.0 / (xb - xa).length());
+            let (ta, tb) = (-f1, f2);
+            let mirror = |v: Vec2, t: Vec2| t * (2.0 * v.dot(t)) - v;
+            let (u0, u2) = (mirror(d, ta), mirror(d, tb));
+            let (s, r) = (xa - u0 * lengths.0, xb + u2 * lengths.1);
+            let (aa, ab) = (ta.y.atan2(ta.x), tb.y.atan2(tb.x));
+            let ab = aa + (ab - aa + std::f64::consts::PI).rem_euclid(TAU) - std::f64::consts::PI;
+            let mut a = segment_place(xa, aa, reach.0, at.0);
+            let mut b = segment_place(xb, ab, at.1, reach.1);
+            (a.first, a.end, b.first, b.end, a.interface, b.interface) = (0, 1, 1, 2, 0, 0);
+            prop_assert!(!pruned(&[a, b], s, r, &[1.0, 1.0, 1.0]));
+        }
+    }
 }

@@ -252,3 +252,153 @@ impl Search<'_> {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::demo::SplitMix64;
+    use crate::geom::{Point, Vec2};
+    use crate::problem::Pin;
+    use crate::trace::complete::Search;
+    use crate::trace::complete::fixture::{Fixture, points_json};
+
+    /// Two reflections off the polyline through `v`, from `s` to `r`.
+    fn twice(v: &[Point], s: Point, r: Point) -> Fixture {
+        Fixture::new(&format!(
+            r#"{{
+                "media": {{ "air": {{ "speed": 1.0 }} }},
+                "interfaces": {{ "v": {{ "points": {} }} }},
+                "sources": {}, "receivers": {},
+                "paths": [{{ "steps": [{{ "reflect": "v" }}, {{ "reflect": "v" }}],
+                             "media": ["air", "air", "air"] }}]
+            }}"#,
+            points_json(v),
+            points_json(&[s]),
+            points_json(&[r])
+        ))
+    }
+
+    /// Puts the two points on segments `segs` at fractions `f` of them, free, and evaluates.
+    fn place(search: &mut Search<'_>, segs: [usize; 2], f: [f64; 2]) {
+        let nw = &mut search.sc.nw;
+        for i in 0..2 {
+            let line = search.g.line(i);
+            let (a, b) = (line.start(segs[i]), line.start(segs[i] + 1));
+            (nw.seg[i], nw.pin[i], nw.s[i]) = (segs[i], Pin::Free, a + f[i] * (b - a));
+        }
+        search
+            .g
+            .evaluate(&nw.s, &nw.seg, &nw.pin, &mut nw.eval, true, false);
+    }
+
+    /// On random polylines, `crossing` gives the parameters where the lines of two segments
+    /// cross when that is inside both (Cramer's rule on the segments' ends, independently),
+    /// and none otherwise; `pin` holds both points there.
+    #[test]
+    fn the_crossing_is_where_the_lines_meet() {
+        let mut rng = SplitMix64(0xc405);
+        let (mut inside, mut outside) = (0, 0);
+        for _ in 0..40 {
+            let mut r = |lo: f64, hi: f64| lo + (hi - lo) * rng.next_f64();
+            let v: Vec<Point> = (0..6)
+                .map(|i| Point::new(i as f64 + r(0.0, 0.8), r(-2.0, 2.0)))
+                .collect();
+            let f = [r(0.0, 1.0), r(0.0, 1.0)];
+            let fixture = twice(&v, Point::new(0.0, 5.0), Point::new(6.0, 5.0));
+            for ja in 0..5 {
+                for jb in 0..5 {
+                    let (pa, qa, pb, qb) = (v[ja], v[ja + 1], v[jb], v[jb + 1]);
+                    let (da, db) = (qa - pa, qb - pb);
+                    let det = da.cross(db);
+                    // pa + α da = pb + β db.
+                    let (alpha, beta) = ((pb - pa).cross(db) / det, (pb - pa).cross(da) / det);
+                    let near = |x: f64| x.abs().min((x - 1.0).abs()) < 1e-6;
+                    let adjacent = ja + 1 == jb || jb + 1 == ja;
+                    if ja == jb || (!adjacent && (near(alpha) || near(beta))) {
+                        continue;
+                    }
+                    // (On a polyline that does not cross itself: adjacent segments only.)
+                    let meets = (-1e-12..=1.0 + 1e-12).contains(&alpha)
+                        && (-1e-12..=1.0 + 1e-12).contains(&beta);
+                    assert_eq!(meets, adjacent);
+                    fixture.search(0, |search| {
+                        place(search, [ja, jb], f);
+                        let got = search.crossing(1);
+                        assert_eq!(got.is_some(), meets, "{ja}, {jb}: {alpha}, {beta}");
+                        let Some([sa, sb]) = got else { return };
+                        let x = pa + da * alpha;
+                        let line = search.g.line(0);
+                        let scale = 1e-9 * (1.0 + x.x.abs() + x.y.abs());
+                        assert!((line.point_on(ja, sa) - x).length() <= scale);
+                        assert!((line.point_on(jb, sb) - x).length() <= scale);
+                        // Pinned: both points held there.
+                        assert!(matches!(search.pin(0, 1), super::Kinked::Restarted));
+                        let nw = &search.sc.nw;
+                        assert_eq!(
+                            (nw.s[0], nw.s[1], nw.pin[0], nw.pin[1]),
+                            (sa, sb, Pin::Vertex, Pin::Vertex)
+                        );
+                        assert_eq!((search.pinned, search.pinned_points()), (0b10, 0b11));
+                    });
+                    if meets {
+                        inside += 1;
+                    } else {
+                        outside += 1;
+                    }
+                }
+            }
+        }
+        assert!(inside > 100 && outside > 100, "{inside} {outside}");
+    }
+
+    /// Two interfaces in a T: `b` ends on `a` (the line y = 0, exactly); the lines of the
+    /// two segments cross there, inside `a` and at `b`'s end.
+    #[test]
+    fn the_crossing_of_a_t_junction() {
+        let mut rng = SplitMix64(0x7);
+        for _ in 0..50 {
+            let mut r = |lo: f64, hi: f64| lo + (hi - lo) * rng.next_f64();
+            let (c, angle, len) = (r(-1.5, 1.5), r(0.2, 2.9), r(0.5, 2.0));
+            let x = Point::new(c, 0.0);
+            let top = x + Vec2::new(angle.cos(), angle.sin()) * len;
+            let fixture = Fixture::new(&format!(
+                r#"{{
+                    "media": {{ "air": {{ "speed": 1.0 }} }},
+                    "interfaces": {{ "a": {{ "points": [[-2, 0], [2, 0]] }},
+                                     "b": {{ "points": {} }} }},
+                    "sources": [[-1, 3]], "receivers": [[1, 3]],
+                    "paths": [{{ "steps": [{{ "reflect": "a" }}, {{ "reflect": "b" }}],
+                                 "media": ["air", "air", "air"] }}]
+                }}"#,
+                points_json(&[top, x])
+            ));
+            let f = [r(0.0, 1.0), r(0.0, 1.0)];
+            fixture.search(0, |search| {
+                place(search, [0, 0], f);
+                let [sa, sb] = search.crossing(1).expect("the lines cross at the junction");
+                assert!((sa - (c + 2.0)).abs() <= 1e-12 && (sb - len).abs() <= 1e-12 * len);
+            });
+        }
+    }
+
+    /// Parallel segments have no crossing; a point already held by a vertex cannot be pinned
+    /// (no stationary path, by the rule).
+    #[test]
+    fn parallel_or_held_points_do_not_pin() {
+        let v = [
+            Point::new(0.0, 0.0),
+            Point::new(1.0, 0.0),
+            Point::new(1.0, 1.0),
+            Point::new(2.0, 1.0),
+        ];
+        let fixture = twice(&v, Point::new(0.0, 3.0), Point::new(2.0, 3.0));
+        fixture.search(0, |search| {
+            place(search, [0, 2], [0.5, 0.5]);
+            assert_eq!(search.crossing(1), None);
+            place(search, [0, 1], [0.5, 0.5]);
+            assert_eq!(search.crossing(1), Some([1.0, 1.0]));
+            let degenerate = |k| matches!(k, super::Kinked::Settled(super::Settled::Degenerate));
+            assert!(degenerate(search.pin(0b01, 1)));
+            assert_eq!(search.pinned, 0);
+        });
+    }
+}

@@ -155,3 +155,153 @@ impl Search<'_> {
         out.push(a);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::demo::SplitMix64;
+    use crate::geom::{Point, Vec2};
+    use crate::trace::Status;
+    use crate::trace::complete::branch::tests::mirror;
+    use crate::trace::complete::fixture::{Fixture, points_json};
+    use crate::trace::complete::{Arrival, Kink};
+
+    /// The unit vector at angle `a`.
+    fn unit(a: f64) -> Vec2 {
+        Vec2::new(a.cos(), a.sin())
+    }
+
+    /// Snell's law at a line of unit tangent `t` for the incoming unit direction `u`, from
+    /// slowness `w0` into `w1`: `None` beyond the critical angle.
+    fn snell(u: Vec2, t: Vec2, w0: f64, w1: f64) -> Option<Vec2> {
+        let n = t.perp();
+        let sine = w0 * u.dot(t) / w1;
+        let across = u.dot(n).signum() * (1.0 - sine * sine).sqrt();
+        (sine.abs() < 1.0).then(|| t * sine + n * across)
+    }
+
+    /// Whether segments `a` and `b` share a point.
+    fn meet(a: [Point; 2], b: [Point; 2]) -> bool {
+        let side = |o: [Point; 2], x: Point| (o[1] - o[0]).cross(x - o[0]);
+        side(a, b[0]) * side(a, b[1]) <= 0.0 && side(b, a[0]) * side(b, a[1]) <= 0.0
+    }
+
+    /// The arrivals of the assignment `segs` of path 0 with the points in `held` on vertices.
+    fn leaf(fixture: &Fixture, segs: &[usize], held: usize) -> Vec<Arrival> {
+        let (out, _) = fixture.search(0, |search| {
+            let mut out = Vec::new();
+            search.solve_leaf_choice(segs, held, &mut out);
+            out
+        });
+        out
+    }
+
+    /// Two refractions, built forwards by Snell's law from random lines, slownesses and
+    /// angles: the assignment of the two segments holds exactly that path, at its points
+    /// and time; the segment moved along its line away from the point, nothing.
+    #[test]
+    fn two_refractions_are_where_snell_puts_them() {
+        let mut rng = SplitMix64(0x5e11);
+        let mut r = |lo: f64, hi: f64| lo + (hi - lo) * rng.next_f64();
+        let mut solved = 0;
+        for _ in 0..60 {
+            let speed = [r(0.4, 2.5), r(0.4, 2.5), r(0.4, 2.5)];
+            let w = speed.map(|v| 1.0 / v);
+            let x1 = Point::new(r(-2.0, 2.0), r(-2.0, 2.0));
+            let t1 = unit(r(-3.0, 3.0));
+            let u0 = t1 * r(-0.9, 0.9) - t1.perp() * 1.0;
+            let u0 = u0 * (1.0 / u0.length());
+            let Some(u1) = snell(u0, t1, w[0], w[1]) else {
+                continue;
+            };
+            let len = [r(0.3, 4.0), r(0.3, 4.0), r(0.3, 4.0)];
+            let x2 = x1 + u1 * len[1];
+            let t2 = unit(r(-3.0, 3.0));
+            let t2 = if u1.dot(t2.perp()) < 0.0 { t2 } else { -t2 };
+            if u1.dot(t2.perp()).abs() < 0.2 {
+                continue;
+            }
+            let Some(u2) = snell(u1, t2, w[1], w[2]) else {
+                continue;
+            };
+            let (s, rcv) = (x1 - u0 * len[0], x2 + u2 * len[2]);
+            let ends = |x: Point, t: Vec2, back: f64, ahead: f64| [x - t * back, x + t * ahead];
+            let scene = |a: [Point; 2], b: [Point; 2]| {
+                Fixture::new(&format!(
+                    r#"{{
+                        "media": {{ "m0": {{ "speed": {:?} }}, "m1": {{ "speed": {:?} }},
+                                    "m2": {{ "speed": {:?} }} }},
+                        "interfaces": {{ "a": {{ "points": {} }}, "b": {{ "points": {} }} }},
+                        "sources": {}, "receivers": {},
+                        "paths": [{{ "steps": [{{ "refract": "a" }}, {{ "refract": "b" }}],
+                                     "media": ["m0", "m1", "m2"] }}]
+                    }}"#,
+                    speed[0],
+                    speed[1],
+                    speed[2],
+                    points_json(&a),
+                    points_json(&b),
+                    points_json(&[s]),
+                    points_json(&[rcv])
+                ))
+            };
+            let (ra, rb) = ([r(0.1, 1.0), r(0.1, 1.0)], [r(0.1, 1.0), r(0.1, 1.0)]);
+            let b = ends(x2, t2, rb[0], rb[1]);
+            let moved = ends(x1 + t1 * (ra[1] + 0.05), t1, 0.0, 1.0);
+            if meet(ends(x1, t1, ra[0], ra[1]), b) || meet(moved, b) {
+                continue; // Interfaces may not cross.
+            }
+            let out = leaf(&scene(ends(x1, t1, ra[0], ra[1]), b), &[0, 0], 0);
+            assert_eq!(out.len(), 1, "{out:?}");
+            let a = &out[0];
+            assert!(matches!(a.status, Status::Converged | Status::Obstructed));
+            for (p, q) in a.points.iter().zip([s, x1, x2, rcv]) {
+                assert!((*p - q).length() <= 1e-9, "{p:?} ≠ {q:?}");
+            }
+            let time: f64 = (0..3).map(|i| w[i] * len[i]).sum();
+            assert!((a.time - time).abs() <= 1e-12 * time, "{} ≠ {time}", a.time);
+            assert_eq!((a.segments.as_slice(), a.kink), ([0, 0].as_slice(), None));
+            // Segment `a` moved along its line past the point: no path on it.
+            assert!(leaf(&scene(moved, b), &[0, 0], 0).is_empty());
+            solved += 1;
+        }
+        assert!(solved > 30, "{solved} cases");
+    }
+
+    /// A valley seen from above holds, at its bottom, a path whose time falls off the vertex
+    /// both ways (a maximum-type kink); a ridge, at its top, one whose time rises both ways.
+    /// The kink and the time checked against the straight legs and finite differences.
+    #[test]
+    fn a_held_vertex_has_the_kink_of_its_time() {
+        let (s, r) = (Point::new(-0.5, 3.0), Point::new(0.5, 3.0));
+        let time = |x: Point| (x - s).length() + (r - x).length();
+        for (tip, kink) in [(-2.0, Kink::Maximum), (2.0, Kink::Minimum)] {
+            let v = [
+                Point::new(-3.0, 0.0),
+                Point::new(0.0, tip),
+                Point::new(3.0, 0.0),
+            ];
+            // Finite differences off the vertex, along each segment.
+            let at = time(v[1]);
+            let off = |to: Point| time(v[1] + (to - v[1]) * 1e-7) - at;
+            let rises = (off(v[0]) > 0.0, off(v[2]) > 0.0);
+            assert_eq!(
+                rises,
+                if kink == Kink::Minimum {
+                    (true, true)
+                } else {
+                    (false, false)
+                }
+            );
+            let fixture = mirror(&v, s, r);
+            let out = leaf(&fixture, &[1], 1);
+            assert_eq!(out.len(), 1);
+            let a = &out[0];
+            assert_eq!((a.status, a.kink), (Status::Vertex, Some(kink)));
+            assert_eq!(a.points, [s, v[1], r]);
+            assert!((a.time - at).abs() <= 1e-14 * at);
+            // The same vertex from the segment before it is not held: its first vertex is
+            // the polyline's open end.
+            assert!(leaf(&fixture, &[0], 1).is_empty());
+        }
+    }
+}

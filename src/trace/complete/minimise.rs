@@ -277,3 +277,124 @@ impl Search<'_> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::demo::SplitMix64;
+    use crate::geom::{Point, Vec2};
+    use crate::polyline::Polyline;
+    use crate::problem::Pin;
+    use crate::trace::complete::fixture::{Fixture, points_json};
+
+    /// The minimum of the convex `f` over `[lo, hi]` (ternary search) and where it is.
+    fn ternary(lo: f64, hi: f64, f: impl Fn(f64) -> f64) -> (f64, f64) {
+        let (mut a, mut b) = (lo, hi);
+        for _ in 0..90 {
+            let (m1, m2) = (a + (b - a) / 3.0, b - (b - a) / 3.0);
+            if f(m1) <= f(m2) {
+                b = m2;
+            } else {
+                a = m1;
+            }
+        }
+        let x = 0.5 * (a + b);
+        (f(x), x)
+    }
+
+    /// Where the brute force puts the minimum of a convex time over the two segments.
+    #[derive(Debug, PartialEq)]
+    enum Minimum {
+        /// Both points strictly inside their segments, apart.
+        Inside,
+        /// A point at an end of its segment, or the two on one spot: no stationary path.
+        Edge,
+        /// Too near the border between the two to tell.
+        Unclear,
+    }
+
+    /// Two reflections off a random V (two segments meeting at a corner), each assignment
+    /// of the two points to its segments: the solve ends at the minimum of the time over
+    /// the segments that a brute force (nested ternary searches on the convex time) finds
+    /// and says `Yes` where that minimum lies inside both segments (apart); it says `Outside`
+    /// or `Degenerate` where the minimum lies at an end or on a collapse.
+    #[test]
+    fn the_solve_finds_the_brute_force_minimum() {
+        let mut rng = SplitMix64(0x3a1c);
+        let mut seen = [0usize; 3];
+        for case in 0..80 {
+            let mut r = |lo: f64, hi: f64| lo + (hi - lo) * rng.next_f64();
+            let (a, open) = (r(0.0, 6.3), r(0.3, 2.8));
+            let corner = Point::new(r(-1.0, 1.0), r(-1.0, 1.0));
+            let arm = |angle: f64, len: f64| corner + Vec2::new(angle.cos(), angle.sin()) * len;
+            let v = [arm(a, r(1.0, 3.0)), corner, arm(a + open, r(1.0, 3.0))];
+            let (s, rcv) = (
+                Point::new(r(-3.0, 3.0), r(-3.0, 3.0)),
+                Point::new(r(-3.0, 3.0), r(-3.0, 3.0)),
+            );
+            let fixture = Fixture::new(&format!(
+                r#"{{
+                    "media": {{ "air": {{ "speed": 1.0 }} }},
+                    "interfaces": {{ "v": {{ "points": {} }} }},
+                    "sources": {}, "receivers": {},
+                    "paths": [{{ "steps": [{{ "reflect": "v" }}, {{ "reflect": "v" }}],
+                                 "media": ["air", "air", "air"] }}]
+                }}"#,
+                points_json(&v),
+                points_json(&[s]),
+                points_json(&[rcv])
+            ));
+            let line: &Polyline = &fixture.scene.interfaces()[0].polyline;
+            for segs in [[0, 0], [0, 1], [1, 0], [1, 1]] {
+                let ext = segs.map(|j| [line.start(j), line.start(j + 1)]);
+                let at = |i: usize, x: f64| line.point_on(segs[i], x);
+                let time = |a: f64, b: f64| {
+                    let (pa, pb) = (at(0, a), at(1, b));
+                    (pa - s).length() + (pb - pa).length() + (rcv - pb).length()
+                };
+                let (best, sa) = ternary(ext[0][0], ext[0][1], |a| {
+                    ternary(ext[1][0], ext[1][1], |b| time(a, b)).0
+                });
+                let sb = ternary(ext[1][0], ext[1][1], |b| time(sa, b)).1;
+                let margin =
+                    |i: usize, x: f64| (x - ext[i][0]).min(ext[i][1] - x) / (ext[i][1] - ext[i][0]);
+                let gap = (at(1, sb) - at(0, sa)).length();
+                let inner = margin(0, sa).min(margin(1, sb));
+                // (A solve that stalls next to a leg shorter than `COLLAPSE` of the path
+                // takes it to vanish: a rule, so a short leg is not clearly inside.)
+                let expected = if inner > 1e-4 && gap > 1e-2 {
+                    Minimum::Inside
+                } else if inner.min(gap) < 1e-7 {
+                    Minimum::Edge
+                } else {
+                    Minimum::Unclear
+                };
+                let ((settled, solved), _) = fixture.search(0, |search| {
+                    let nw = &mut search.sc.nw;
+                    for (i, &j) in segs.iter().enumerate() {
+                        nw.seg[i] = j;
+                        nw.pin[i] = Pin::Free;
+                        nw.s[i] = ext[i][0] + (i + 1) as f64 / 3.0 * (ext[i][1] - ext[i][0]);
+                    }
+                    let (settled, _) = search.minimise(0);
+                    (settled, search.sc.nw.eval.time)
+                });
+                let what = format!("case {case} {segs:?}: {expected:?}, {solved} vs {best}");
+                match settled {
+                    Settled::Yes => {
+                        assert_ne!(expected, Minimum::Edge, "{what}");
+                        assert!((solved - best).abs() <= 1e-9 * best, "{what}");
+                        seen[0] += 1;
+                    }
+                    Settled::Outside | Settled::Degenerate => {
+                        assert_ne!(expected, Minimum::Inside, "{what}");
+                        seen[1 + matches!(settled, Settled::Degenerate) as usize] += 1;
+                    }
+                    Settled::No => panic!("not settled: {what}"),
+                }
+            }
+        }
+        // Each ending is reached.
+        assert!(seen.iter().all(|&n| n >= 5), "{seen:?}");
+    }
+}

@@ -45,6 +45,8 @@
 mod bounds;
 mod branch;
 mod collapse;
+#[cfg(test)]
+mod fixture;
 mod hierarchy;
 mod leaf;
 mod listing;
@@ -173,4 +175,59 @@ fn searching(input: SequenceSearch<'_>, f: impl FnOnce(&mut Search<'_>)) -> Stat
     sc.slowness = slowness;
     scratch::give_back(sc);
     done
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::trace::Status;
+    use crate::trace::complete::branch::tests::mirror;
+
+    /// The valley of `Tracer::stationary_paths`'s example: `search_sequence` appends the
+    /// three paths (two reflections and the bottom vertex) and adds what it did to the
+    /// stats it is given; a second search appends the same again; a limit of one tuple
+    /// makes the search incomplete.
+    #[test]
+    fn search_sequence_appends_and_adds_up() {
+        let v = [
+            Point::new(-3.0, 0.0),
+            Point::new(0.0, -2.0),
+            Point::new(3.0, 0.0),
+        ];
+        let fixture = mirror(&v, Point::new(-0.5, 2.0), Point::new(0.5, 2.0));
+        let mut out = Vec::new();
+        let start = Stationary {
+            complete: true,
+            tuples: 5,
+            solves: 7,
+        };
+        let mut stats = start;
+        fixture.with_input(0, MAX_TUPLES, |input| {
+            search_sequence(input, &mut out, &mut stats);
+        });
+        let once = stats;
+        assert!(once.complete && once.tuples > 5 && once.solves > 7);
+        let mut statuses: Vec<Status> = out.iter().map(|a| a.status).collect();
+        statuses.sort_by_key(|s| s.as_str());
+        assert_eq!(
+            statuses,
+            [Status::Converged, Status::Converged, Status::Vertex]
+        );
+        // The image method's time of the two reflections: from (−0.5, 2) to the image of
+        // (0.5, 2) in either slope.
+        for a in out.iter().filter(|a| a.status == Status::Converged) {
+            assert!((a.time - 45f64.sqrt()).abs() <= 1e-12, "{}", a.time);
+        }
+        fixture.with_input(0, MAX_TUPLES, |input| {
+            search_sequence(input, &mut out, &mut stats);
+        });
+        assert_eq!(out.len(), 6);
+        assert_eq!(out[..3], out[3..]);
+        assert_eq!(stats.tuples - once.tuples, once.tuples - start.tuples);
+        assert_eq!(stats.solves - once.solves, once.solves - start.solves);
+        fixture.with_input(0, 1, |input| {
+            search_sequence(input, &mut out, &mut stats);
+        });
+        assert!(!stats.complete);
+    }
 }

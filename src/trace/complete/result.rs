@@ -144,3 +144,44 @@ impl From<StationaryError> for crate::scene::SceneError {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The kinks' names, and the errors' messages and keys as the scene and the command
+    /// line give them.
+    #[test]
+    fn names_and_messages() {
+        let names = [Kink::Minimum, Kink::Maximum, Kink::Mixed].map(Kink::as_str);
+        assert_eq!(names, ["minimum", "maximum", "mixed"]);
+        let none = StationaryError::NoSuchPath { path: 4 };
+        assert_eq!(none.to_string(), "there is no path 4");
+        let e = crate::scene::SceneError::from(none);
+        assert_eq!(
+            (e.key.as_str(), e.message.as_str()),
+            ("paths", "there is no path 4")
+        );
+        let long = StationaryError::TooManySteps { path: 2, steps: 99 };
+        assert!(long.to_string().starts_with("path 2 has 99 steps"));
+        assert!(
+            long.to_string()
+                .ends_with(&MAX_STATIONARY_STEPS.to_string())
+        );
+        let e = crate::scene::SceneError::from(long);
+        assert_eq!(e.key, "paths[2].steps");
+        assert!(e.message.starts_with("99 steps;"));
+    }
+
+    /// An empty arrival has nothing in it yet and no time.
+    #[test]
+    fn an_empty_arrival_is_empty() {
+        let a = Arrival::empty();
+        assert!(a.points.is_empty() && a.parameters.is_empty() && a.segments.is_empty());
+        assert!(a.media.is_empty() && a.time.is_nan() && a.residual.is_nan());
+        assert_eq!(
+            (a.status, a.kink, a.reason, a.complete),
+            (Status::NoPath, None, None, true)
+        );
+    }
+}

@@ -11,19 +11,33 @@ use super::result::Arrival;
 /// scratch, the tuples' stack.
 #[derive(Default)]
 pub(super) struct Scratch {
+    /// The solve's state: parameters, segments, held points and the evaluation.
     pub(super) nw: NewtonWorkspace,
+    /// The evaluation at a trial step.
     pub(super) trial: Eval,
+    /// The parameters of a trial step.
     pub(super) s_try: Vec<f64>,
+    /// The Newton step.
     pub(super) delta: Vec<f64>,
+    /// The Hessian's diagonal, as the step solves it.
     pub(super) diag: Vec<f64>,
+    /// The Hessian's off-diagonal, as the step solves it.
     pub(super) off: Vec<f64>,
+    /// The step's right-hand side.
     pub(super) rhs: Vec<f64>,
+    /// The tridiagonal solve's scratch.
     pub(super) cp: Vec<f64>,
+    /// The places of the tuple or assignment being bounded.
     pub(super) places: Vec<Place>,
+    /// The points of a classified path.
     pub(super) points: Vec<Point>,
+    /// The legs' slownesses.
     pub(super) slowness: Vec<f64>,
+    /// The tuples still to visit, `k` node indices each.
     pub(super) stack: Vec<u32>,
+    /// The tuple being visited.
     pub(super) tuple: Vec<u32>,
+    /// The segments of a leaf's assignment.
     pub(super) segs: Vec<usize>,
     /// Arrivals no longer listed, whose vectors the next ones reuse.
     pub(super) spare: Vec<Arrival>,
@@ -72,4 +86,34 @@ pub(super) fn with_scratch<R>(f: impl FnOnce(&mut Scratch) -> R) -> R {
     let r = f(&mut sc);
     give_back(sc);
     r
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The scratch is sized for `k` points, and the thread gets the same one back: a search
+    /// after the first allocates nothing.
+    #[test]
+    fn the_thread_keeps_its_scratch() {
+        let first = with_scratch(|sc| {
+            sc.resize(5);
+            assert!(sc.nw.fits(5));
+            for v in [&sc.s_try, &sc.delta, &sc.diag, &sc.off, &sc.rhs, &sc.cp] {
+                assert_eq!(v.len(), 5);
+            }
+            assert_eq!((sc.tuple.len(), sc.segs.len()), (5, 5));
+            sc.spare.push(Arrival::empty());
+            std::ptr::from_ref(sc) as usize
+        });
+        let sc = take_scratch();
+        assert_eq!(std::ptr::from_ref(&*sc) as usize, first);
+        assert_eq!(sc.spare.len(), 1);
+        give_back(sc);
+        let again = with_scratch(|sc| {
+            sc.spare.clear();
+            std::ptr::from_ref(sc) as usize
+        });
+        assert_eq!(again, first);
+    }
 }

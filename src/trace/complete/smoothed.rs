@@ -131,3 +131,94 @@ impl Search<'_> {
         false
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::demo::SplitMix64;
+    use crate::geom::{Point, Vec2};
+    use crate::problem::Pin;
+    use crate::trace::complete::Search;
+    use crate::trace::complete::fixture::{Fixture, points_json};
+
+    /// The smoothed time at the present points, from the points themselves.
+    fn smoothed_time(search: &Search<'_>, eps: f64) -> f64 {
+        let g = &search.g;
+        let nw = &search.sc.nw;
+        let mut points = vec![g.source];
+        points.extend((0..g.k()).map(|i| g.line(i).point_on(nw.seg[i], nw.s[i])));
+        points.push(g.receiver);
+        (0..points.len() - 1)
+            .map(|l| {
+                let d = points[l + 1] - points[l];
+                let e = if l >= 1 && l < g.k() { eps } else { 0.0 };
+                g.slowness[l] * (d.dot(d) + e * e).sqrt()
+            })
+            .sum()
+    }
+
+    /// Three reflections off random polylines (three points, two legs between them): the
+    /// smoothed legs are the legs, those between interactions with `ε` added in quadrature;
+    /// a smoothed Newton step lowers the smoothed time (computed from the points), or leaves
+    /// the points where they are.
+    #[test]
+    fn smoothed_steps_lower_the_smoothed_time() {
+        let mut rng = SplitMix64(0x5300);
+        let (mut moved, mut stayed) = (0, 0);
+        for _ in 0..30 {
+            let mut r = |lo: f64, hi: f64| lo + (hi - lo) * rng.next_f64();
+            let v: Vec<Point> = (0..5)
+                .map(|i| Point::new(i as f64 + r(0.0, 0.9), r(-1.0, 1.0)))
+                .collect();
+            let fixture = Fixture::new(&format!(
+                r#"{{
+                    "media": {{ "air": {{ "speed": 1.0 }}, "slow": {{ "speed": 0.5 }} }},
+                    "interfaces": {{ "v": {{ "points": {} }} }},
+                    "sources": {}, "receivers": {},
+                    "paths": [{{ "steps": [{{ "reflect": "v" }}, {{ "reflect": "v" }},
+                                           {{ "reflect": "v" }}],
+                                 "media": ["air", "slow", "slow", "air"] }}]
+                }}"#,
+                points_json(&v),
+                points_json(&[Point::new(r(0.0, 5.0), 3.0)]),
+                points_json(&[Point::new(r(0.0, 5.0), 3.0)])
+            ));
+            let segs = [0, 1, 2].map(|_| (r(0.0, 3.99)) as usize);
+            let f = [r(0.0, 1.0), r(0.0, 1.0), r(0.0, 1.0)];
+            let eps = [0.0, 1e-3, 0.1][(r(0.0, 2.99)) as usize];
+            fixture.search(0, |search| {
+                let nw = &mut search.sc.nw;
+                for i in 0..3 {
+                    let line = search.g.line(i);
+                    let (a, b) = (line.start(segs[i]), line.start(segs[i] + 1));
+                    (nw.seg[i], nw.pin[i], nw.s[i]) = (segs[i], Pin::Free, a + f[i] * (b - a));
+                }
+                let legs = search.smoothed_legs(eps);
+                let mut prev = search.g.source;
+                for (l, len) in legs.iter().enumerate().take(4) {
+                    let p = if l < 3 {
+                        search.smoothed_point(l)
+                    } else {
+                        search.g.receiver
+                    };
+                    let d: Vec2 = p - prev;
+                    let e = if l == 1 || l == 2 { eps } else { 0.0 };
+                    assert!((len - (d.dot(d) + e * e).sqrt()).abs() <= 1e-15 * (1.0 + len));
+                    prev = p;
+                }
+                let eps = eps.max(1e-3);
+                for _ in 0..50 {
+                    let (before, s) = (smoothed_time(search, eps), search.sc.nw.s.clone());
+                    if search.smoothed_step(0, eps) {
+                        assert!(smoothed_time(search, eps) < before);
+                        moved += 1;
+                    } else {
+                        assert_eq!(search.sc.nw.s, s);
+                        stayed += 1;
+                        break;
+                    }
+                }
+            });
+        }
+        assert!(moved > 30 && stayed > 5, "{moved} {stayed}");
+    }
+}
