@@ -473,6 +473,35 @@ mod tests {
             }
         }
 
+        /// `dot_range` is tight: each of its ends is reached by a direction of the box (its
+        /// boundary sampled densely), so the bound prunes what it can. Along the axes too,
+        /// where `ray_meets` takes a zero component.
+        #[test]
+        fn dot_range_is_tight(
+            c0 in (-4.0..4.0f64, -4.0..4.0f64), h0 in (0.0..2.0f64, 0.0..2.0f64),
+            c1 in (-4.0..4.0f64, -4.0..4.0f64), h1 in (0.0..2.0f64, 0.0..2.0f64),
+            angle in 0.0..TAU, axis in 0..4usize,
+        ) {
+            let (from, to) = (boxed(c0, h0), boxed(c1, h1));
+            let Some(l) = legs(from, to) else { return Ok(()) };
+            let axes = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)];
+            for t in [unit(angle), Vec2::new(axes[axis].0, axes[axis].1)] {
+                let [lo, hi] = dot_range(l, t);
+                let (mut least, mut most) = (f64::INFINITY, f64::NEG_INFINITY);
+                for i in 0..=400 {
+                    let f = i as f64 / 400.0;
+                    for (a, b) in [(f, 0.0), (f, 1.0), (0.0, f), (1.0, f)] {
+                        let v = in_box(l.d, a, b) - Point::new(0.0, 0.0);
+                        let dot = v.dot(t) / v.length();
+                        (least, most) = (least.min(dot), most.max(dot));
+                    }
+                }
+                // The boundary's directions hold every direction of the box.
+                let tight = hi <= most + 1e-3 && lo >= least - 1e-3;
+                prop_assert!(tight, "{lo}, {hi} vs {least}, {most}");
+            }
+        }
+
         /// `arc_dot_range` holds every unit vector of its arc.
         #[test]
         fn arc_dot_range_holds_every_direction(
