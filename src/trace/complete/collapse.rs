@@ -15,11 +15,11 @@ const MAX_RESTARTS: usize = 6;
 /// differentiable: no stationary path, the classifier's `coincident`). Where `T` is smooth
 /// the damped Newton steps on a convex `T` converge quadratically and do not stall; they
 /// stall only next to such a kink, which they approach slowly.
-const COLLAPSE: f64 = 1e-3;
+pub(super) const COLLAPSE: f64 = 1e-3;
 
 /// Sine of the angle between a leg and its interaction's segment below which a stalled solve
 /// is taken to run along the segment's line.
-const ALONG: f64 = 1e-7;
+pub(super) const ALONG: f64 = 1e-7;
 
 /// What a collapse or a stall of an assignment's solve leads to.
 pub(super) enum Kinked {

@@ -36,11 +36,13 @@
 //! the others settle, and the subgradient decides whether the collapse is the minimum (no
 //! path) or the points restart apart; where three points share one spot, the minimum of `T`
 //! with its kinks smoothed away decides. A solve that stalls next to a collapse that cannot be
-//! tested (points held on vertices, parallel lines; within [`COLLAPSE`](collapse::COLLAPSE)
-//! of the path's length), or with a leg whose sine with its segment's line is below
-//! [`ALONG`](collapse::ALONG), is taken to approach a minimum that holds no stationary path:
-//! a rule with these thresholds, not a proof. Any other solve that does not settle marks the
-//! search incomplete.
+//! tested (points held on vertices, parallel lines; within [`COLLAPSE`] of the path's length),
+//! or with a leg whose sine with its segment's line is below [`ALONG`], is taken to approach a
+//! minimum that holds no stationary path: a rule with these thresholds, not a proof. Any other
+//! solve that does not settle marks the search incomplete.
+//!
+//! [`COLLAPSE`]: collapse::COLLAPSE
+//! [`ALONG`]: collapse::ALONG
 
 mod bounds;
 mod branch;

@@ -42,7 +42,7 @@ pub struct Arrival {
     pub parameters: Vec<f64>,
     /// The segment of each interaction (a held point: the segment its vertex starts).
     pub segments: Vec<usize>,
-    /// Leg media, as indices into [`Scene::media`].
+    /// Leg media, as indices into [`Scene::media`](crate::Scene::media).
     pub media: Vec<usize>,
     /// Newton steps of its assignment's solve.
     pub iterations: usize,
