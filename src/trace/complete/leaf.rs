@@ -1,0 +1,307 @@
+//! The exact solve of one assignment of segments (with its held vertices), and its arrival.
+
+use crate::geom::Aabb;
+use crate::problem::Pin;
+use crate::solver::{Outcome, Solution};
+
+use super::Search;
+use super::minimise::Settled;
+use super::place::Place;
+use super::result::{Arrival, Kink};
+use crate::trace::Status;
+
+impl Search<'_> {
+    /// The assignment of segments `segs` with the points in the bit set `held` on the first
+    /// vertices of their segments: its bound, then its solve and classification.
+    pub(super) fn solve_leaf_choice(
+        &mut self,
+        segs: &[usize],
+        held: usize,
+        out: &mut Vec<Arrival>,
+    ) {
+        let k = segs.len();
+        let is_held = |i: usize| held >> i & 1 == 1;
+        self.sc.places.clear();
+        for (i, &j) in segs.iter().enumerate() {
+            let h = self.hierarchies[i];
+            let line = self.g.line(i);
+            if is_held(i) {
+                if h.before(j).is_none() {
+                    // The start of an open polyline: an end, not a vertex.
+                    return;
+                }
+                let v = line.vertices()[j];
+                let cone = h.vertex_cone(j);
+                let place = Place::new(Aabb::from_points(v, v), cone, j, j + 1);
+                self.sc.places.push(place);
+            } else {
+                let (p, q) = line.segment(j);
+                let t = h.theta[j];
+                self.sc.places.push(Place {
+                    tangent: line.tangent(j),
+                    spread: 0.0,
+                    ..Place::new(Aabb::from_points(p, q), [t, t], j, j + 1)
+                });
+            }
+            self.sc.places[i].interface = self.g.steps[i].interface;
+        }
+        if self.pruned() {
+            return;
+        }
+        self.stats.solves += 1;
+        if self.stats.solves > self.max_tuples {
+            self.stats.complete = false;
+            return;
+        }
+        let nw = &mut self.sc.nw;
+        for (i, &j) in segs.iter().enumerate() {
+            let line = self.g.line(i);
+            nw.seg[i] = j;
+            if is_held(i) {
+                nw.pin[i] = Pin::Vertex;
+                nw.s[i] = line.start(j);
+            } else {
+                nw.pin[i] = Pin::Free;
+                // Consecutive points on one segment start apart.
+                let f = (i + 1) as f64 / (k + 1) as f64;
+                nw.s[i] = line.start(j) + f * (line.start(j + 1) - line.start(j));
+            }
+        }
+        let (settled, iterations) = self.minimise(held);
+        match settled {
+            Settled::Yes => {}
+            Settled::Degenerate | Settled::Outside => return,
+            Settled::No => {
+                self.stats.complete = false;
+                return;
+            }
+        }
+        let nw = &self.sc.nw;
+        let e = &nw.eval;
+        // Free points strictly inside their segments.
+        for (i, &j) in segs.iter().enumerate() {
+            let line = self.g.line(i);
+            let inside = nw.s[i] > line.start(j) && nw.s[i] < line.start(j + 1);
+            if !is_held(i) && !inside {
+                return;
+            }
+        }
+        // Held points: the one-sided derivatives bracket zero.
+        let w = self.g.slowness;
+        let mut kink = None;
+        for (i, &j) in segs.iter().enumerate() {
+            if !is_held(i) {
+                continue;
+            }
+            let line = self.g.line(i);
+            let before = if j > 0 {
+                j - 1
+            } else {
+                line.num_segments() - 1
+            };
+            let v = e.u[i] * w[i] - e.u[i + 1] * w[i + 1];
+            let (r_before, r_after) = (v.dot(line.tangent(before)), v.dot(line.tangent(j)));
+            let this = if r_before < 0.0 && r_after > 0.0 {
+                Kink::Minimum
+            } else if r_before > 0.0 && r_after < 0.0 {
+                Kink::Maximum
+            } else {
+                return;
+            };
+            kink = Some(match kink {
+                None => this,
+                Some(k) if k == this => this,
+                Some(_) => Kink::Mixed,
+            });
+        }
+        let sol = Solution {
+            outcome: if held == 0 {
+                Outcome::Converged
+            } else {
+                Outcome::Vertex
+            },
+            time: e.time,
+            iterations,
+            residual: e.rmax,
+        };
+        let record = self.classifier.classify(
+            self.g.scene,
+            self.sequence,
+            self.g.source,
+            self.g.receiver,
+            &sol,
+            nw,
+            &mut self.sc.points,
+        );
+        if !record.status.has_time() {
+            return;
+        }
+        let mut a = self.sc.spare.pop().unwrap_or_else(Arrival::empty);
+        a.status = record.status;
+        a.time = record.time;
+        a.points.clear();
+        a.points.extend_from_slice(&self.sc.points);
+        a.parameters.clear();
+        a.parameters.extend_from_slice(&nw.s[..k]);
+        a.segments.clear();
+        a.segments.extend_from_slice(segs);
+        a.media.clear();
+        a.media.extend_from_slice(self.media);
+        a.iterations = iterations;
+        a.reason = record.reason;
+        a.kink = (record.status == Status::Vertex).then_some(kink).flatten();
+        a.residual = record.residual;
+        a.complete = true;
+        out.push(a);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::demo::SplitMix64;
+    use crate::geom::{Point, Vec2};
+    use crate::trace::Status;
+    use crate::trace::complete::branch::tests::mirror;
+    use crate::trace::complete::fixture::{Fixture, points_json};
+    use crate::trace::complete::{Arrival, Kink};
+
+    /// The unit vector at angle `a`.
+    fn unit(a: f64) -> Vec2 {
+        Vec2::new(a.cos(), a.sin())
+    }
+
+    /// Snell's law at a line of unit tangent `t` for the incoming unit direction `u`, from
+    /// slowness `w0` into `w1`: `None` beyond the critical angle.
+    fn snell(u: Vec2, t: Vec2, w0: f64, w1: f64) -> Option<Vec2> {
+        let n = t.perp();
+        let sine = w0 * u.dot(t) / w1;
+        let across = u.dot(n).signum() * (1.0 - sine * sine).sqrt();
+        (sine.abs() < 1.0).then(|| t * sine + n * across)
+    }
+
+    /// Whether segments `a` and `b` share a point.
+    fn meet(a: [Point; 2], b: [Point; 2]) -> bool {
+        let side = |o: [Point; 2], x: Point| (o[1] - o[0]).cross(x - o[0]);
+        side(a, b[0]) * side(a, b[1]) <= 0.0 && side(b, a[0]) * side(b, a[1]) <= 0.0
+    }
+
+    /// The arrivals of the assignment `segs` of path 0 with the points in `held` on vertices.
+    fn leaf(fixture: &Fixture, segs: &[usize], held: usize) -> Vec<Arrival> {
+        let (out, _) = fixture.search(0, |search| {
+            let mut out = Vec::new();
+            search.solve_leaf_choice(segs, held, &mut out);
+            out
+        });
+        out
+    }
+
+    /// Two refractions, built forwards by Snell's law from random lines, slownesses and
+    /// angles: the assignment of the two segments holds exactly that path, at its points
+    /// and time; the segment moved along its line away from the point, nothing.
+    #[test]
+    fn two_refractions_are_where_snell_puts_them() {
+        let mut rng = SplitMix64(0x5e11);
+        let mut r = |lo: f64, hi: f64| lo + (hi - lo) * rng.next_f64();
+        let mut solved = 0;
+        for _ in 0..60 {
+            let speed = [r(0.4, 2.5), r(0.4, 2.5), r(0.4, 2.5)];
+            let w = speed.map(|v| 1.0 / v);
+            let x1 = Point::new(r(-2.0, 2.0), r(-2.0, 2.0));
+            let t1 = unit(r(-3.0, 3.0));
+            let u0 = t1 * r(-0.9, 0.9) - t1.perp() * 1.0;
+            let u0 = u0 * (1.0 / u0.length());
+            let Some(u1) = snell(u0, t1, w[0], w[1]) else {
+                continue;
+            };
+            let len = [r(0.3, 4.0), r(0.3, 4.0), r(0.3, 4.0)];
+            let x2 = x1 + u1 * len[1];
+            let t2 = unit(r(-3.0, 3.0));
+            let t2 = if u1.dot(t2.perp()) < 0.0 { t2 } else { -t2 };
+            if u1.dot(t2.perp()).abs() < 0.2 {
+                continue;
+            }
+            let Some(u2) = snell(u1, t2, w[1], w[2]) else {
+                continue;
+            };
+            let (s, rcv) = (x1 - u0 * len[0], x2 + u2 * len[2]);
+            let ends = |x: Point, t: Vec2, back: f64, ahead: f64| [x - t * back, x + t * ahead];
+            let scene = |a: [Point; 2], b: [Point; 2]| {
+                Fixture::new(&format!(
+                    r#"{{
+                        "media": {{ "m0": {{ "speed": {:?} }}, "m1": {{ "speed": {:?} }},
+                                    "m2": {{ "speed": {:?} }} }},
+                        "interfaces": {{ "a": {{ "points": {} }}, "b": {{ "points": {} }} }},
+                        "sources": {}, "receivers": {},
+                        "paths": [{{ "steps": [{{ "refract": "a" }}, {{ "refract": "b" }}],
+                                     "media": ["m0", "m1", "m2"] }}]
+                    }}"#,
+                    speed[0],
+                    speed[1],
+                    speed[2],
+                    points_json(&a),
+                    points_json(&b),
+                    points_json(&[s]),
+                    points_json(&[rcv])
+                ))
+            };
+            let (ra, rb) = ([r(0.1, 1.0), r(0.1, 1.0)], [r(0.1, 1.0), r(0.1, 1.0)]);
+            let b = ends(x2, t2, rb[0], rb[1]);
+            let moved = ends(x1 + t1 * (ra[1] + 0.05), t1, 0.0, 1.0);
+            if meet(ends(x1, t1, ra[0], ra[1]), b) || meet(moved, b) {
+                continue; // Interfaces may not cross.
+            }
+            let out = leaf(&scene(ends(x1, t1, ra[0], ra[1]), b), &[0, 0], 0);
+            assert_eq!(out.len(), 1, "{out:?}");
+            let a = &out[0];
+            assert!(matches!(a.status, Status::Converged | Status::Obstructed));
+            for (p, q) in a.points.iter().zip([s, x1, x2, rcv]) {
+                assert!((*p - q).length() <= 1e-9, "{p:?} ≠ {q:?}");
+            }
+            let time: f64 = (0..3).map(|i| w[i] * len[i]).sum();
+            assert!((a.time - time).abs() <= 1e-12 * time, "{} ≠ {time}", a.time);
+            assert_eq!((a.segments.as_slice(), a.kink), ([0, 0].as_slice(), None));
+            // Segment `a` moved along its line past the point: no path on it.
+            assert!(leaf(&scene(moved, b), &[0, 0], 0).is_empty());
+            solved += 1;
+        }
+        assert!(solved > 30, "{solved} cases");
+    }
+
+    /// A valley seen from above holds, at its bottom, a path whose time falls off the vertex
+    /// both ways (a maximum-type kink); a ridge, at its top, one whose time rises both ways.
+    /// The kink and the time checked against the straight legs and finite differences.
+    #[test]
+    fn a_held_vertex_has_the_kink_of_its_time() {
+        let (s, r) = (Point::new(-0.5, 3.0), Point::new(0.5, 3.0));
+        let time = |x: Point| (x - s).length() + (r - x).length();
+        for (tip, kink) in [(-2.0, Kink::Maximum), (2.0, Kink::Minimum)] {
+            let v = [
+                Point::new(-3.0, 0.0),
+                Point::new(0.0, tip),
+                Point::new(3.0, 0.0),
+            ];
+            // Finite differences off the vertex, along each segment.
+            let at = time(v[1]);
+            let off = |to: Point| time(v[1] + (to - v[1]) * 1e-7) - at;
+            let rises = (off(v[0]) > 0.0, off(v[2]) > 0.0);
+            assert_eq!(
+                rises,
+                if kink == Kink::Minimum {
+                    (true, true)
+                } else {
+                    (false, false)
+                }
+            );
+            let fixture = mirror(&v, s, r);
+            let out = leaf(&fixture, &[1], 1);
+            assert_eq!(out.len(), 1);
+            let a = &out[0];
+            assert_eq!((a.status, a.kink), (Status::Vertex, Some(kink)));
+            assert_eq!(a.points, [s, v[1], r]);
+            assert!((a.time - at).abs() <= 1e-14 * at);
+            // The same vertex from the segment before it is not held: its first vertex is
+            // the polyline's open end.
+            assert!(leaf(&fixture, &[0], 1).is_empty());
+        }
+    }
+}
