@@ -836,6 +836,9 @@ impl PointSensitivities {
         self.row(row)[point]
     }
 
+    /// The sensitivities of the path through `points` by `steps` with leg media `media`
+    /// (`segments`: each step's segment, a hint): the parameters, the legs, the tridiagonal
+    /// system of the points' fractions along their segments, and one solve per parameter.
     fn fill(
         &mut self,
         scene: &Scene,
@@ -849,169 +852,237 @@ impl PointSensitivities {
             .fill(scene, steps, points, media.iter().copied(), segments)?;
         let k = steps.len();
         let n = k + 2;
-        // Parameters.
-        self.parameters.clear();
-        self.parameters.extend([
-            Parameter::Source(Axis::X),
-            Parameter::Source(Axis::Y),
-            Parameter::Receiver(Axis::X),
-            Parameter::Receiver(Axis::Y),
-        ]);
-        self.parameters
-            .extend((0..scene.media().len()).map(|medium| Parameter::Slowness { medium }));
-        for v in &sc.gradient.vertices {
-            for axis in [Axis::X, Axis::Y] {
-                self.parameters.push(Parameter::Vertex {
-                    interface: v.interface,
-                    vertex: v.vertex,
-                    axis,
-                });
-            }
-        }
+        fill_parameters(&mut self.parameters, scene, &sc.gradient.vertices);
         self.points = n;
-        // Legs.
-        sc.u.clear();
-        sc.len.clear();
-        sc.w.clear();
-        sc.medium.clear();
+        let vanish = sc.legs(scene, points, media, k);
+        sc.locate_contacts(scene, steps, points, segments)?;
+        sc.reset_system(k, n);
+        sc.couplings(scene, steps, vanish);
+        // One solve per parameter.
+        self.d.clear();
+        self.d.resize(self.parameters.len() * n, Vec2::default());
+        for (row, &param) in self.parameters.iter().enumerate() {
+            sc.solve_row(param, steps, &mut self.d[row * n..(row + 1) * n])?;
+        }
+        Ok(())
+    }
+}
+
+/// Sets `parameters` to those a ray depends on, in the order of the rows: the source's and
+/// the receiver's coordinates, every medium's slowness, and both coordinates of each of the
+/// `vertices` the ray's gradient holds.
+#[inline]
+fn fill_parameters(parameters: &mut Vec<Parameter>, scene: &Scene, vertices: &[VertexGradient]) {
+    parameters.clear();
+    parameters.extend([
+        Parameter::Source(Axis::X),
+        Parameter::Source(Axis::Y),
+        Parameter::Receiver(Axis::X),
+        Parameter::Receiver(Axis::Y),
+    ]);
+    parameters.extend((0..scene.media().len()).map(|medium| Parameter::Slowness { medium }));
+    for v in vertices {
+        for axis in [Axis::X, Axis::Y] {
+            parameters.push(Parameter::Vertex {
+                interface: v.interface,
+                vertex: v.vertex,
+                axis,
+            });
+        }
+    }
+}
+
+impl Scratch {
+    /// Sets the legs of the path through `points` (`k` steps) with leg media `media`: each
+    /// one's unit direction, length, slowness and medium. Returns the length below which a leg
+    /// has vanished (relative to the path's length, and to round-off of its coordinates).
+    #[inline]
+    fn legs(&mut self, scene: &Scene, points: &[Point], media: &[usize], k: usize) -> f64 {
+        self.u.clear();
+        self.len.clear();
+        self.w.clear();
+        self.medium.clear();
         let mut total = 0.0;
         for j in 0..=k {
             let (u, l) = leg(points[j], points[j + 1]);
-            sc.u.push(u);
-            sc.len.push(l);
-            sc.w.push(scene.media()[media[j]].slowness);
-            sc.medium.push(media[j]);
+            self.u.push(u);
+            self.len.push(l);
+            self.w.push(scene.media()[media[j]].slowness);
+            self.medium.push(media[j]);
             total += l;
         }
         let coord = points
             .iter()
             .fold(0.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
-        let vanish = crate::problem::vanish_threshold(total, coord);
-        // Points.
-        sc.contacts.clear();
+        crate::problem::vanish_threshold(total, coord)
+    }
+
+    /// Finds each step's point on its interface (`segments`: each step's segment, a hint).
+    ///
+    /// # Errors
+    /// [`DerivativeError::OffInterface`] for the first point off its interface.
+    #[inline]
+    fn locate_contacts(
+        &mut self,
+        scene: &Scene,
+        steps: &[Step],
+        points: &[Point],
+        segments: Option<&[usize]>,
+    ) -> Result<(), DerivativeError> {
+        self.contacts.clear();
         for (i, step) in steps.iter().enumerate() {
             let line = &scene.interfaces()[step.interface].polyline;
             let c = locate(line, points[i + 1], segments.map(|h| h[i]))
                 .ok_or(DerivativeError::OffInterface { step: i })?;
-            sc.contacts.push(c);
+            self.contacts.push(c);
         }
-        for v in [&mut sc.tan, &mut sc.c_prev, &mut sc.c_self, &mut sc.c_next] {
+        Ok(())
+    }
+
+    /// Sizes the system of `k` interaction points (of `n` points in all) and zeroes it.
+    #[inline]
+    fn reset_system(&mut self, k: usize, n: usize) {
+        for v in [
+            &mut self.tan,
+            &mut self.c_prev,
+            &mut self.c_self,
+            &mut self.c_next,
+        ] {
             v.clear();
             v.resize(k, Vec2::default());
         }
         for v in [
-            &mut sc.turn,
-            &mut sc.diag,
-            &mut sc.rhs,
-            &mut sc.x,
-            &mut sc.cp,
+            &mut self.turn,
+            &mut self.diag,
+            &mut self.rhs,
+            &mut self.x,
+            &mut self.cp,
         ] {
             v.clear();
             v.resize(k, 0.0);
         }
-        sc.off.clear();
-        sc.off.resize(k.saturating_sub(1), 0.0);
-        sc.held.clear();
-        sc.held.resize(k, false);
-        sc.moved.clear();
-        sc.moved.resize(n, Vec2::default());
+        self.off.clear();
+        self.off.resize(k.saturating_sub(1), 0.0);
+        self.held.clear();
+        self.held.resize(k, false);
+        self.moved.clear();
+        self.moved.resize(n, Vec2::default());
+    }
+
+    /// The system's coefficients at each interaction point: whether it is held (on a vertex,
+    /// or beside a leg shorter than `vanish`), its tangent, its residual's couplings to the
+    /// previous, own and next point, its turn term, and the tridiagonal matrix.
+    #[inline]
+    fn couplings(&mut self, scene: &Scene, steps: &[Step], vanish: f64) {
         let project = |u: Vec2, v: Vec2| v - u * u.dot(v);
         for (i, step) in steps.iter().enumerate() {
             let line = &scene.interfaces()[step.interface].polyline;
-            let c = sc.contacts[i];
+            let c = self.contacts[i];
             let t = line.tangent(c.seg);
-            sc.tan[i] = t;
-            let (ua, ub) = (sc.u[i], sc.u[i + 1]);
-            let (la, lb) = (sc.len[i], sc.len[i + 1]);
-            sc.held[i] = c.at_vertex.is_some() || la <= vanish || lb <= vanish;
-            if sc.held[i] {
-                sc.diag[i] = 1.0;
+            self.tan[i] = t;
+            let (ua, ub) = (self.u[i], self.u[i + 1]);
+            let (la, lb) = (self.len[i], self.len[i + 1]);
+            self.held[i] = c.at_vertex.is_some() || la <= vanish || lb <= vanish;
+            if self.held[i] {
+                self.diag[i] = 1.0;
                 continue;
             }
-            let (wa, wb) = (sc.w[i], sc.w[i + 1]);
+            let (wa, wb) = (self.w[i], self.w[i + 1]);
             let pa = project(ua, t) * (wa / la);
             let pb = project(ub, t) * (wb / lb);
-            sc.c_prev[i] = -pa;
-            sc.c_self[i] = pa + pb;
-            sc.c_next[i] = -pb;
-            sc.diag[i] = t.dot(pa + pb);
+            self.c_prev[i] = -pa;
+            self.c_self[i] = pa + pb;
+            self.c_next[i] = -pb;
+            self.diag[i] = t.dot(pa + pb);
             let g = ua * wa - ub * wb;
-            sc.turn[i] = g.dot(t.perp()) / line.segment_length(c.seg);
+            self.turn[i] = g.dot(t.perp()) / line.segment_length(c.seg);
         }
-        for i in 0..k.saturating_sub(1) {
-            if !sc.held[i] && !sc.held[i + 1] {
-                sc.off[i] = sc.tan[i + 1].dot(sc.c_next[i]);
+        for i in 0..steps.len().saturating_sub(1) {
+            if !self.held[i] && !self.held[i + 1] {
+                self.off[i] = self.tan[i + 1].dot(self.c_next[i]);
             }
         }
-        // One solve per parameter.
-        self.d.clear();
-        self.d.resize(self.parameters.len() * n, Vec2::default());
-        for (row, &param) in self.parameters.iter().enumerate() {
-            let moved = &mut sc.moved;
-            moved.fill(Vec2::default());
-            let (mut dw_medium, mut vertex) = (None, None);
-            match param {
-                Parameter::Source(axis) => moved[0] = axis.unit(),
-                Parameter::Receiver(axis) => moved[n - 1] = axis.unit(),
-                Parameter::Slowness { medium } => dw_medium = Some(medium),
-                Parameter::Vertex {
-                    interface,
-                    vertex: v,
-                    axis,
-                } => {
-                    vertex = Some((interface, v, axis.unit()));
-                    for (i, step) in steps.iter().enumerate() {
-                        if step.interface != interface {
-                            continue;
-                        }
-                        let c = sc.contacts[i];
-                        moved[i + 1] = match c.at_vertex {
-                            Some(at) if at == v => axis.unit(),
-                            Some(_) => Vec2::default(),
-                            None if c.a == v => axis.unit() * (1.0 - c.lambda),
-                            None if c.b == v => axis.unit() * c.lambda,
-                            None => Vec2::default(),
-                        };
+    }
+
+    /// Solves for the row of `param`: how it moves the ray's points (`out`, one per point),
+    /// at fixed fractions along their segments and then along the tangents by the system's
+    /// solution.
+    ///
+    /// # Errors
+    /// [`DerivativeError::Singular`] when the system has no solution (a caustic).
+    #[inline]
+    fn solve_row(
+        &mut self,
+        param: Parameter,
+        steps: &[Step],
+        out: &mut [Vec2],
+    ) -> Result<(), DerivativeError> {
+        let sc = self;
+        let k = steps.len();
+        let n = k + 2;
+        let moved = &mut sc.moved;
+        moved.fill(Vec2::default());
+        let (mut dw_medium, mut vertex) = (None, None);
+        match param {
+            Parameter::Source(axis) => moved[0] = axis.unit(),
+            Parameter::Receiver(axis) => moved[n - 1] = axis.unit(),
+            Parameter::Slowness { medium } => dw_medium = Some(medium),
+            Parameter::Vertex {
+                interface,
+                vertex: v,
+                axis,
+            } => {
+                vertex = Some((interface, v, axis.unit()));
+                for (i, step) in steps.iter().enumerate() {
+                    if step.interface != interface {
+                        continue;
                     }
-                }
-            }
-            let dw = |j: usize| -> f64 {
-                if dw_medium == Some(sc.medium[j]) {
-                    1.0
-                } else {
-                    0.0
-                }
-            };
-            for i in 0..k {
-                if sc.held[i] {
-                    sc.rhs[i] = 0.0;
-                    continue;
-                }
-                let t = sc.tan[i];
-                let mut b = sc.c_prev[i].dot(moved[i])
-                    + sc.c_self[i].dot(moved[i + 1])
-                    + sc.c_next[i].dot(moved[i + 2])
-                    + dw(i) * t.dot(sc.u[i])
-                    - dw(i + 1) * t.dot(sc.u[i + 1]);
-                if let Some((interface, v, e)) = vertex
-                    && steps[i].interface == interface
-                {
                     let c = sc.contacts[i];
-                    let turn_by = if c.b == v { e } else { Vec2::default() }
-                        - if c.a == v { e } else { Vec2::default() };
-                    b += sc.turn[i] * t.perp().dot(turn_by);
+                    moved[i + 1] = match c.at_vertex {
+                        Some(at) if at == v => axis.unit(),
+                        Some(_) => Vec2::default(),
+                        None if c.a == v => axis.unit() * (1.0 - c.lambda),
+                        None if c.b == v => axis.unit() * c.lambda,
+                        None => Vec2::default(),
+                    };
                 }
-                sc.rhs[i] = b;
             }
-            if !thomas(&sc.diag, &sc.off, &sc.rhs, &mut sc.x, &mut sc.cp) {
-                return Err(DerivativeError::Singular);
+        }
+        let dw = |j: usize| -> f64 {
+            if dw_medium == Some(sc.medium[j]) {
+                1.0
+            } else {
+                0.0
             }
-            let out = &mut self.d[row * n..(row + 1) * n];
-            out.copy_from_slice(moved);
-            for i in 0..k {
-                if !sc.held[i] {
-                    out[i + 1] += sc.tan[i] * -sc.x[i];
-                }
+        };
+        for i in 0..k {
+            if sc.held[i] {
+                sc.rhs[i] = 0.0;
+                continue;
+            }
+            let t = sc.tan[i];
+            let mut b = sc.c_prev[i].dot(moved[i])
+                + sc.c_self[i].dot(moved[i + 1])
+                + sc.c_next[i].dot(moved[i + 2])
+                + dw(i) * t.dot(sc.u[i])
+                - dw(i + 1) * t.dot(sc.u[i + 1]);
+            if let Some((interface, v, e)) = vertex
+                && steps[i].interface == interface
+            {
+                let c = sc.contacts[i];
+                let turn_by = if c.b == v { e } else { Vec2::default() }
+                    - if c.a == v { e } else { Vec2::default() };
+                b += sc.turn[i] * t.perp().dot(turn_by);
+            }
+            sc.rhs[i] = b;
+        }
+        if !thomas(&sc.diag, &sc.off, &sc.rhs, &mut sc.x, &mut sc.cp) {
+            return Err(DerivativeError::Singular);
+        }
+        out.copy_from_slice(moved);
+        for i in 0..k {
+            if !sc.held[i] {
+                out[i + 1] += sc.tan[i] * -sc.x[i];
             }
         }
         Ok(())

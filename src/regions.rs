@@ -13,7 +13,7 @@ use spade::{
 };
 
 use crate::geom::{Aabb, Point, orient, vertex_side};
-use crate::scene::{Scene, SceneError};
+use crate::scene::{Interface, Scene, SceneError};
 
 type Cdt = ConstrainedDelaunayTriangulation<Point2<f64>, (), (), (), QuietHint>;
 type EdgeRef<'a> = DirectedEdgeHandle<'a, Point2<f64>, (), CdtEdge<()>, ()>;
@@ -243,211 +243,47 @@ impl Regions {
         Ok(())
     }
 
+    /// The regions of `scene` without their media: the triangulation of its interfaces (and
+    /// domain box), its faces flood-filled into regions, and every segment's pieces with the
+    /// regions on their sides.
     fn build_inner(scene: &Scene) -> Result<Regions, SceneError> {
         let interfaces = scene.interfaces();
-
-        // Every interface vertex, flattened, with per-interface offsets.
-        let mut verts = Vec::new();
-        let mut vert_offset = Vec::with_capacity(interfaces.len() + 1);
-        let mut seg_offset = Vec::with_capacity(interfaces.len() + 1);
-        let mut nseg = 0;
-        for iface in interfaces {
-            vert_offset.push(verts.len());
-            seg_offset.push(nseg);
-            verts.extend_from_slice(iface.polyline.vertices());
-            nseg += iface.polyline.num_segments();
-        }
-        vert_offset.push(verts.len());
-        seg_offset.push(nseg);
-
-        // An exact power-of-two scale brings every coordinate into the range spade accepts.
-        let geometry = Aabb::around(&verts);
-        let extent = match scene.domain() {
-            Some(d) => geometry.union(d),
-            None => geometry,
-        };
-        let scale = Scale::for_box(extent);
-
-        // Box corners, counter-clockwise from the lower left: the domain's, or a margin box around
-        // the interfaces (in spade's coordinates) that keeps every interface off the convex hull.
-        let domain = scene.domain().map(|d| scale.aabb(d));
-        let corners = match domain {
-            Some(d) => d,
-            None => {
-                let b = if geometry.min.x <= geometry.max.x {
-                    scale.aabb(geometry)
-                } else {
-                    Aabb::from_points(Point::new(-1.0, -1.0), Point::new(1.0, 1.0))
-                };
-                let margin = 0.1 * b.diagonal() + 1.0;
-                Aabb {
-                    min: Point::new(b.min.x - margin, b.min.y - margin),
-                    max: Point::new(b.max.x + margin, b.max.y + margin),
-                }
-            }
-        };
-        let corner_points = [
-            Point::new(corners.min.x, corners.min.y),
-            Point::new(corners.max.x, corners.min.y),
-            Point::new(corners.max.x, corners.max.y),
-            Point::new(corners.min.x, corners.max.y),
-        ];
-
-        // Deduplicate (interfaces share vertices): `vid` maps every interface vertex, then the 4
-        // corners, to its index in `unique`.
-        let mut scaled: Vec<Point2<f64>> = verts.iter().map(|&p| scale.to_spade(p)).collect();
-        scaled.extend(corner_points.iter().map(|p| Point2::new(p.x, p.y)));
-        if scaled.len() >= NONE as usize {
-            return Err(SceneError::new("interfaces", "too many interface vertices"));
-        }
-        let mut order: Vec<u32> = (0..scaled.len() as u32).collect();
-        order.sort_unstable_by(|&a, &b| {
-            let (p, q) = (scaled[a as usize], scaled[b as usize]);
-            p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y))
-        });
-        let mut vid = vec![0u32; scaled.len()];
-        let mut unique: Vec<Point2<f64>> = Vec::with_capacity(scaled.len());
-        // Original coordinates of each unique vertex (corners: spade's coordinates, unscaled).
-        let mut original: Vec<Point> = Vec::with_capacity(scaled.len());
-        for &k in &order {
-            let p = scaled[k as usize];
-            if unique.last() != Some(&p) {
-                unique.push(p);
-                original.push(
-                    verts
-                        .get(k as usize)
-                        .copied()
-                        .unwrap_or_else(|| scale.to_scene(p)),
-                );
-            }
-            vid[k as usize] = (unique.len() - 1) as u32;
-        }
-        drop(order);
-
-        // Insert the corners first (so that the triangulation is never degenerate), then the
-        // rest in a biased randomised insertion order. Spade's bulk loading and insertion in
-        // polyline order both take quadratic time on long polylines.
-        let mut cdt = Cdt::new();
-        let mut handle = vec![NONE; unique.len()];
-        let corner_ids: Vec<u32> = (0..4).map(|c| vid[verts.len() + c]).collect();
-        let insertion = corner_ids.iter().copied().chain(
-            brio_order(&unique)
-                .into_iter()
-                .filter(|u| !corner_ids.contains(u)),
-        );
-        for u in insertion {
-            let h = cdt.insert(unique[u as usize]).map_err(|e| {
-                SceneError::new(
-                    "interfaces",
-                    format!("cannot triangulate the interfaces: {e:?}"),
-                )
-            })?;
-            handle[u as usize] = h.index() as u32;
-        }
-        let num_input_vertices = cdt.num_vertices();
-        if num_input_vertices != unique.len() || handle.contains(&NONE) {
-            return Err(SceneError::new(
-                "interfaces",
-                "the triangulation merged distinct vertices (internal error)",
-            ));
-        }
-        // Original coordinates by vertex handle.
-        let mut original_by_handle = vec![Point::default(); num_input_vertices];
-        for (u, &h) in handle.iter().enumerate() {
-            original_by_handle[h as usize] = original[u];
-        }
-        drop(original);
+        let flat = FlatInterfaces::of(interfaces);
+        let bounds = TriangulationBox::of(scene, &flat.verts);
+        let scale = bounds.scale;
+        let UniqueVertices {
+            vid,
+            unique,
+            original,
+        } = UniqueVertices::of(&flat.verts, &bounds.corner_points, scale)?;
+        let Triangulated {
+            mut cdt,
+            handle,
+            original_by_handle,
+        } = Triangulated::of(&unique, original, &vid[flat.verts.len()..])?;
+        drop(unique);
+        let num_input_vertices = original_by_handle.len();
         let vertex = |k: usize| FixedVertexHandle::from_index(handle[vid[k] as usize] as usize);
-        let corner = |c: usize| vertex(verts.len() + c);
+        let corner = |c: usize| vertex(flat.verts.len() + c);
 
         // The domain's edges first, so that each interface segment's insertion below returns its
         // complete chain of edges (split where it crosses the domain's edge).
-        if domain.is_some() {
+        if bounds.domain.is_some() {
             for c in 0..4 {
                 cdt.add_constraint_and_split(corner(c), corner((c + 1) % 4), |p| p);
             }
         }
+        let through = vertices_through_segments(scene, &flat, &handle, &original_by_handle);
+        let chains =
+            SegmentChains::constrain(&mut cdt, interfaces, &flat, &through, &handle, vertex);
+        drop(through);
 
-        // Vertices lying exactly on a segment strictly between its ends (a fault ending on a
-        // layer, a domain corner on an interface): that segment's constraint goes in pieces
-        // through them, in order along it. (Spade's constraint splitting can fail on a
-        // constraint through such a vertex that also crosses others.) The scale is a power of
-        // two, so exactness in scene coordinates is exactness in spade's.
-        let mut through: Vec<Vec<(f64, u32)>> = vec![Vec::new(); nseg];
-        for (u, &h) in handle.iter().enumerate() {
-            let p = original_by_handle[h as usize];
-            scene.segments_through(p, |s| {
-                let (a, b) = interfaces[s.interface as usize]
-                    .polyline
-                    .segment(s.segment as usize);
-                let along = (p - a).dot(b - a);
-                through[seg_offset[s.interface as usize] + s.segment as usize]
-                    .push((along, u as u32));
-            });
-        }
-        for t in &mut through {
-            t.sort_by(|x, y| x.0.total_cmp(&y.0));
-        }
-
-        // Interface segments: the chain of triangulation vertices along each.
-        let mut chain: Vec<u32> = Vec::with_capacity(nseg + verts.len());
-        let mut chain_offset: Vec<usize> = Vec::with_capacity(nseg + 1);
-        for (i, iface) in interfaces.iter().enumerate() {
-            let n = iface.polyline.vertices().len();
-            for j in 0..iface.polyline.num_segments() {
-                chain_offset.push(chain.len());
-                let (u, w) = (
-                    vertex(vert_offset[i] + j),
-                    vertex(vert_offset[i] + (j + 1) % n),
-                );
-                let stops = &through[seg_offset[i] + j];
-                let mut edges = Vec::new();
-                let mut from = u;
-                for to in stops
-                    .iter()
-                    .map(|&(_, v)| FixedVertexHandle::from_index(handle[v as usize] as usize))
-                    .chain([w])
-                {
-                    if to != from {
-                        edges.extend(cdt.add_constraint_and_split(from, to, |p| p));
-                        from = to;
-                    }
-                }
-                chain.push(u.index() as u32);
-                if u == w {
-                    continue;
-                }
-                let mut at = u;
-                let mut connected = true;
-                for e in &edges {
-                    let e = cdt.directed_edge(*e);
-                    connected &= e.from().fix() == at;
-                    at = e.to().fix();
-                }
-                if connected && at == w {
-                    chain.extend(
-                        edges
-                            .iter()
-                            .map(|e| cdt.directed_edge(*e).to().fix().index() as u32),
-                    );
-                } else {
-                    chain.push(w.index() as u32);
-                }
-            }
-        }
-        chain_offset.push(chain.len());
-
-        let face_region = flood_regions(&cdt, domain, num_input_vertices);
+        let face_region = flood_regions(&cdt, bounds.domain, num_input_vertices);
         let num_regions = face_region
             .iter()
             .filter(|&&r| r != NONE)
             .max()
             .map_or(1, |&r| r as usize + 1);
-
-        // Pieces of every segment with the regions on their two sides; consecutive pieces with
-        // the same regions merge.
-        let mut pieces = Vec::with_capacity(nseg);
-        let mut piece_offset = Vec::with_capacity(nseg + 1);
         let position = |v: u32| -> Point {
             let v = v as usize;
             if v < num_input_vertices {
@@ -456,43 +292,7 @@ impl Regions {
                 scale.to_scene(cdt.vertex(FixedVertexHandle::from_index(v)).position())
             }
         };
-        for (i, iface) in interfaces.iter().enumerate() {
-            let line = &iface.polyline;
-            for j in 0..line.num_segments() {
-                let g = seg_offset[i] + j;
-                let first = pieces.len();
-                piece_offset.push(first);
-                let links = &chain[chain_offset[g]..chain_offset[g + 1]];
-                let (a, _) = line.segment(j);
-                let (s0, s1) = (line.start(j), line.start(j + 1));
-                let tangent = line.tangent(j);
-                for pair in links.windows(2) {
-                    let (x, y) = (pair[0], pair[1]);
-                    let (left, right) = piece_regions(&cdt, &face_region, x, y);
-                    let start = if pieces.len() == first {
-                        s0
-                    } else {
-                        let prev: &Piece = &pieces[pieces.len() - 1];
-                        // `max` then `min`, not `clamp`: no panic whatever round-off does.
-                        (s0 + (position(x) - a).dot(tangent))
-                            .max(prev.start)
-                            .min(s1)
-                    };
-                    match pieces.last() {
-                        Some(p) if pieces.len() > first && p.left == left && p.right == right => {}
-                        _ => pieces.push(Piece { start, left, right }),
-                    }
-                }
-                if pieces.len() == first {
-                    pieces.push(Piece {
-                        start: s0,
-                        left: NONE,
-                        right: NONE,
-                    });
-                }
-            }
-        }
-        piece_offset.push(pieces.len());
+        let pieces = SegmentPieces::of(&cdt, interfaces, &flat, &chains, &face_region, position);
 
         let grid = HintGrid::build(&cdt);
         Ok(Regions {
@@ -501,11 +301,11 @@ impl Regions {
             face_region,
             region_medium: vec![None; num_regions],
             grid,
-            verts,
-            vert_offset,
-            seg_offset,
-            piece_offset,
-            pieces,
+            verts: flat.verts,
+            vert_offset: flat.vert_offset,
+            seg_offset: flat.seg_offset,
+            piece_offset: pieces.offset,
+            pieces: pieces.pieces,
         })
     }
 
@@ -736,6 +536,393 @@ impl Regions {
 
     fn medium_of_region(&self, region: u32) -> Option<usize> {
         self.region_medium(region as usize)
+    }
+}
+
+/// Every interface vertex, all interfaces one after the other, with each interface's offsets.
+struct FlatInterfaces {
+    /// The vertices.
+    verts: Vec<Point>,
+    /// Index in `verts` of each interface's first vertex (one more entry at the end).
+    vert_offset: Vec<usize>,
+    /// Scene-wide index of each interface's first segment (one more entry at the end).
+    seg_offset: Vec<usize>,
+    /// Segments in all.
+    nseg: usize,
+}
+
+impl FlatInterfaces {
+    /// The vertices of `interfaces`, flattened, with per-interface offsets.
+    fn of(interfaces: &[Interface]) -> FlatInterfaces {
+        let mut verts = Vec::new();
+        let mut vert_offset = Vec::with_capacity(interfaces.len() + 1);
+        let mut seg_offset = Vec::with_capacity(interfaces.len() + 1);
+        let mut nseg = 0;
+        for iface in interfaces {
+            vert_offset.push(verts.len());
+            seg_offset.push(nseg);
+            verts.extend_from_slice(iface.polyline.vertices());
+            nseg += iface.polyline.num_segments();
+        }
+        vert_offset.push(verts.len());
+        seg_offset.push(nseg);
+        FlatInterfaces {
+            verts,
+            vert_offset,
+            seg_offset,
+            nseg,
+        }
+    }
+}
+
+/// The box the triangulation spans, in spade's coordinates, and the scale to them.
+struct TriangulationBox {
+    /// The exact power-of-two scale between the scene's coordinates and spade's.
+    scale: Scale,
+    /// The domain box (spade's coordinates), if the scene has one.
+    domain: Option<Aabb>,
+    /// The box's corners, counter-clockwise from the lower left: the domain's, or a margin box
+    /// around the interfaces.
+    corner_points: [Point; 4],
+}
+
+impl TriangulationBox {
+    /// The box of `scene`, whose interface vertices are `verts`.
+    fn of(scene: &Scene, verts: &[Point]) -> TriangulationBox {
+        // An exact power-of-two scale brings every coordinate into the range spade accepts.
+        let geometry = Aabb::around(verts);
+        let extent = match scene.domain() {
+            Some(d) => geometry.union(d),
+            None => geometry,
+        };
+        let scale = Scale::for_box(extent);
+
+        // Box corners, counter-clockwise from the lower left: the domain's, or a margin box around
+        // the interfaces (in spade's coordinates) that keeps every interface off the convex hull.
+        let domain = scene.domain().map(|d| scale.aabb(d));
+        let corners = match domain {
+            Some(d) => d,
+            None => {
+                let b = if geometry.min.x <= geometry.max.x {
+                    scale.aabb(geometry)
+                } else {
+                    Aabb::from_points(Point::new(-1.0, -1.0), Point::new(1.0, 1.0))
+                };
+                let margin = 0.1 * b.diagonal() + 1.0;
+                Aabb {
+                    min: Point::new(b.min.x - margin, b.min.y - margin),
+                    max: Point::new(b.max.x + margin, b.max.y + margin),
+                }
+            }
+        };
+        let corner_points = [
+            Point::new(corners.min.x, corners.min.y),
+            Point::new(corners.max.x, corners.min.y),
+            Point::new(corners.max.x, corners.max.y),
+            Point::new(corners.min.x, corners.max.y),
+        ];
+        TriangulationBox {
+            scale,
+            domain,
+            corner_points,
+        }
+    }
+}
+
+/// The triangulation's input vertices without duplicates (interfaces share vertices).
+struct UniqueVertices {
+    /// The index in `unique` of every interface vertex, then of the 4 corners.
+    vid: Vec<u32>,
+    /// The distinct vertices in spade's coordinates, sorted by x then y.
+    unique: Vec<Point2<f64>>,
+    /// Original coordinates of each unique vertex (corners: spade's coordinates, unscaled).
+    original: Vec<Point>,
+}
+
+impl UniqueVertices {
+    /// Deduplicates the interface vertices `verts` and the box's `corner_points` (in spade's
+    /// coordinates) after scaling the former by `scale`.
+    ///
+    /// # Errors
+    /// `interfaces` when there are too many vertices to number in `u32`.
+    fn of(
+        verts: &[Point],
+        corner_points: &[Point; 4],
+        scale: Scale,
+    ) -> Result<UniqueVertices, SceneError> {
+        let mut scaled: Vec<Point2<f64>> = verts.iter().map(|&p| scale.to_spade(p)).collect();
+        scaled.extend(corner_points.iter().map(|p| Point2::new(p.x, p.y)));
+        if scaled.len() >= NONE as usize {
+            return Err(SceneError::new("interfaces", "too many interface vertices"));
+        }
+        let mut order: Vec<u32> = (0..scaled.len() as u32).collect();
+        order.sort_unstable_by(|&a, &b| {
+            let (p, q) = (scaled[a as usize], scaled[b as usize]);
+            p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y))
+        });
+        let mut vid = vec![0u32; scaled.len()];
+        let mut unique: Vec<Point2<f64>> = Vec::with_capacity(scaled.len());
+        let mut original: Vec<Point> = Vec::with_capacity(scaled.len());
+        for &k in &order {
+            let p = scaled[k as usize];
+            if unique.last() != Some(&p) {
+                unique.push(p);
+                original.push(
+                    verts
+                        .get(k as usize)
+                        .copied()
+                        .unwrap_or_else(|| scale.to_scene(p)),
+                );
+            }
+            vid[k as usize] = (unique.len() - 1) as u32;
+        }
+        Ok(UniqueVertices {
+            vid,
+            unique,
+            original,
+        })
+    }
+}
+
+/// The triangulation of the unique vertices, before any constraint.
+struct Triangulated {
+    /// The triangulation.
+    cdt: Cdt,
+    /// The vertex handle (index) of each unique vertex.
+    handle: Vec<u32>,
+    /// Original coordinates by vertex handle.
+    original_by_handle: Vec<Point>,
+}
+
+impl Triangulated {
+    /// Triangulates `unique` (with their `original` coordinates): the corners (`corner_ids`,
+    /// indices into `unique`) first, so that the triangulation is never degenerate, then the
+    /// rest in a biased randomised insertion order. Spade's bulk loading and insertion in
+    /// polyline order both take quadratic time on long polylines.
+    ///
+    /// # Errors
+    /// `interfaces` when spade refuses a vertex or merges two distinct ones.
+    fn of(
+        unique: &[Point2<f64>],
+        original: Vec<Point>,
+        corner_ids: &[u32],
+    ) -> Result<Triangulated, SceneError> {
+        let mut cdt = Cdt::new();
+        let mut handle = vec![NONE; unique.len()];
+        let insertion = corner_ids.iter().copied().chain(
+            brio_order(unique)
+                .into_iter()
+                .filter(|u| !corner_ids.contains(u)),
+        );
+        for u in insertion {
+            let h = cdt.insert(unique[u as usize]).map_err(|e| {
+                SceneError::new(
+                    "interfaces",
+                    format!("cannot triangulate the interfaces: {e:?}"),
+                )
+            })?;
+            handle[u as usize] = h.index() as u32;
+        }
+        let num_input_vertices = cdt.num_vertices();
+        if num_input_vertices != unique.len() || handle.contains(&NONE) {
+            return Err(SceneError::new(
+                "interfaces",
+                "the triangulation merged distinct vertices (internal error)",
+            ));
+        }
+        let mut original_by_handle = vec![Point::default(); num_input_vertices];
+        for (u, &h) in handle.iter().enumerate() {
+            original_by_handle[h as usize] = original[u];
+        }
+        Ok(Triangulated {
+            cdt,
+            handle,
+            original_by_handle,
+        })
+    }
+}
+
+/// The vertices lying exactly on each scene-wide segment strictly between its ends (a fault
+/// ending on a layer, a domain corner on an interface), in order along it, each with its
+/// position along the segment (unnormalised) and its index among the unique vertices: that
+/// segment's constraint goes in pieces through them. (Spade's constraint splitting can fail on
+/// a constraint through such a vertex that also crosses others.) The scale is a power of two,
+/// so exactness in scene coordinates is exactness in spade's.
+fn vertices_through_segments(
+    scene: &Scene,
+    flat: &FlatInterfaces,
+    handle: &[u32],
+    original_by_handle: &[Point],
+) -> Vec<Vec<(f64, u32)>> {
+    let interfaces = scene.interfaces();
+    let mut through: Vec<Vec<(f64, u32)>> = vec![Vec::new(); flat.nseg];
+    for (u, &h) in handle.iter().enumerate() {
+        let p = original_by_handle[h as usize];
+        scene.segments_through(p, |s| {
+            let (a, b) = interfaces[s.interface as usize]
+                .polyline
+                .segment(s.segment as usize);
+            let along = (p - a).dot(b - a);
+            through[flat.seg_offset[s.interface as usize] + s.segment as usize]
+                .push((along, u as u32));
+        });
+    }
+    for t in &mut through {
+        t.sort_by(|x, y| x.0.total_cmp(&y.0));
+    }
+    through
+}
+
+/// The chain of triangulation vertices along every interface segment, once each is a
+/// constraint.
+struct SegmentChains {
+    /// The vertex handles (indices), every segment's chain one after the other.
+    chain: Vec<u32>,
+    /// Index in `chain` of each scene-wide segment's first vertex (one more entry at the end).
+    offset: Vec<usize>,
+}
+
+impl SegmentChains {
+    /// Adds every segment of `interfaces` to `cdt` as a constraint (in pieces through the
+    /// vertices `through` it; `handle` numbers the unique vertices, `vertex` gives the handle
+    /// of interface vertex `k` of `flat`), and collects the chain of vertices along each: the
+    /// edges that its insertion returns when they connect its ends, else its two ends.
+    fn constrain(
+        cdt: &mut Cdt,
+        interfaces: &[Interface],
+        flat: &FlatInterfaces,
+        through: &[Vec<(f64, u32)>],
+        handle: &[u32],
+        vertex: impl Fn(usize) -> FixedVertexHandle,
+    ) -> SegmentChains {
+        let mut chain: Vec<u32> = Vec::with_capacity(flat.nseg + flat.verts.len());
+        let mut chain_offset: Vec<usize> = Vec::with_capacity(flat.nseg + 1);
+        for (i, iface) in interfaces.iter().enumerate() {
+            let n = iface.polyline.vertices().len();
+            for j in 0..iface.polyline.num_segments() {
+                chain_offset.push(chain.len());
+                let (u, w) = (
+                    vertex(flat.vert_offset[i] + j),
+                    vertex(flat.vert_offset[i] + (j + 1) % n),
+                );
+                let stops = &through[flat.seg_offset[i] + j];
+                let mut edges = Vec::new();
+                let mut from = u;
+                for to in stops
+                    .iter()
+                    .map(|&(_, v)| FixedVertexHandle::from_index(handle[v as usize] as usize))
+                    .chain([w])
+                {
+                    if to != from {
+                        edges.extend(cdt.add_constraint_and_split(from, to, |p| p));
+                        from = to;
+                    }
+                }
+                chain.push(u.index() as u32);
+                if u == w {
+                    continue;
+                }
+                Self::push_links(cdt, &mut chain, &edges, u, w);
+            }
+        }
+        chain_offset.push(chain.len());
+        SegmentChains {
+            chain,
+            offset: chain_offset,
+        }
+    }
+
+    /// Appends to `chain` the vertices after `u` along the segment `u → w`: the ends of its
+    /// constraint `edges` when they connect `u` to `w`, else `w` alone.
+    fn push_links(
+        cdt: &Cdt,
+        chain: &mut Vec<u32>,
+        edges: &[FixedDirectedEdgeHandle],
+        u: FixedVertexHandle,
+        w: FixedVertexHandle,
+    ) {
+        let mut at = u;
+        let mut connected = true;
+        for e in edges {
+            let e = cdt.directed_edge(*e);
+            connected &= e.from().fix() == at;
+            at = e.to().fix();
+        }
+        if connected && at == w {
+            chain.extend(
+                edges
+                    .iter()
+                    .map(|e| cdt.directed_edge(*e).to().fix().index() as u32),
+            );
+        } else {
+            chain.push(w.index() as u32);
+        }
+    }
+}
+
+/// The pieces of every interface segment with the regions on their two sides.
+struct SegmentPieces {
+    /// The pieces, every segment's one after the other.
+    pieces: Vec<Piece>,
+    /// Index in `pieces` of each scene-wide segment's first piece (one more entry at the end).
+    offset: Vec<usize>,
+}
+
+impl SegmentPieces {
+    /// The pieces of every segment of `interfaces` along its `chains` in `cdt`, with the
+    /// regions (`face_region`) on their two sides; consecutive pieces with the same regions
+    /// merge. `position` gives a triangulation vertex's scene coordinates.
+    fn of(
+        cdt: &Cdt,
+        interfaces: &[Interface],
+        flat: &FlatInterfaces,
+        chains: &SegmentChains,
+        face_region: &[u32],
+        position: impl Fn(u32) -> Point,
+    ) -> SegmentPieces {
+        let mut pieces = Vec::with_capacity(flat.nseg);
+        let mut piece_offset = Vec::with_capacity(flat.nseg + 1);
+        for (i, iface) in interfaces.iter().enumerate() {
+            let line = &iface.polyline;
+            for j in 0..line.num_segments() {
+                let g = flat.seg_offset[i] + j;
+                let first = pieces.len();
+                piece_offset.push(first);
+                let links = &chains.chain[chains.offset[g]..chains.offset[g + 1]];
+                let (a, _) = line.segment(j);
+                let (s0, s1) = (line.start(j), line.start(j + 1));
+                let tangent = line.tangent(j);
+                for pair in links.windows(2) {
+                    let (x, y) = (pair[0], pair[1]);
+                    let (left, right) = piece_regions(cdt, face_region, x, y);
+                    let start = if pieces.len() == first {
+                        s0
+                    } else {
+                        let prev: &Piece = &pieces[pieces.len() - 1];
+                        // `max` then `min`, not `clamp`: no panic whatever round-off does.
+                        (s0 + (position(x) - a).dot(tangent))
+                            .max(prev.start)
+                            .min(s1)
+                    };
+                    match pieces.last() {
+                        Some(p) if pieces.len() > first && p.left == left && p.right == right => {}
+                        _ => pieces.push(Piece { start, left, right }),
+                    }
+                }
+                if pieces.len() == first {
+                    pieces.push(Piece {
+                        start: s0,
+                        left: NONE,
+                        right: NONE,
+                    });
+                }
+            }
+        }
+        piece_offset.push(pieces.len());
+        SegmentPieces {
+            pieces,
+            offset: piece_offset,
+        }
     }
 }
 

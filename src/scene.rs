@@ -589,6 +589,235 @@ fn search_options(
     })
 }
 
+/// The media of a scene document, in name order: each with its slowness (from its `speed` or
+/// its `index`) and its `at` point.
+///
+/// # Errors
+/// `media` when there is none; `media.NAME` (or its `speed`, `index`, `at`) when a medium has
+/// neither or both of `speed` and `index`, a slowness that is not finite and positive, or an
+/// `at` point that is not finite.
+fn media_of(spec: &SceneSpec) -> Result<Vec<Medium>, SceneError> {
+    if spec.media.is_empty() {
+        return Err(SceneError::new("media", "needs at least one medium"));
+    }
+    let mut media = Vec::with_capacity(spec.media.len());
+    for (name, m) in &spec.media {
+        let key = format!("media.{name}");
+        let slowness = match (m.speed, m.index) {
+            (Some(v), None) => 1.0 / positive(format!("{key}.speed"), v)?,
+            (None, Some(n)) => positive(format!("{key}.index"), n)?,
+            (Some(_), Some(_)) => {
+                return Err(SceneError::new(
+                    key,
+                    "give exactly one of `speed` or `index`, not both",
+                ));
+            }
+            (None, None) => return Err(SceneError::new(key, "needs `speed` or `index`")),
+        };
+        if !(slowness.is_finite() && slowness > 0.0) {
+            return Err(SceneError::new(
+                key,
+                "slowness (1 / speed) is not a finite positive number",
+            ));
+        }
+        let at = match m.at {
+            Some(p) => Some(point(&format!("{key}.at"), p)?),
+            None => None,
+        };
+        media.push(Medium {
+            name: name.clone(),
+            slowness,
+            at,
+        });
+    }
+    Ok(media)
+}
+
+/// The index of medium `name` among `media` (in name order: found by binary search, so that
+/// validation stays O(n log n)).
+///
+/// # Errors
+/// `key` when no medium has that name.
+fn medium_index(media: &[Medium], key: &str, name: &str) -> Result<usize, SceneError> {
+    by_name(media, |m| &m.name, name)
+        .ok_or_else(|| SceneError::new(key, format!("unknown medium `{name}`")))
+}
+
+/// The domain box of `[[xmin, ymin], [xmax, ymax]]`, if given.
+///
+/// # Errors
+/// `domain` when a corner is not finite or the box is empty.
+fn domain_of(domain: Option<[[f64; 2]; 2]>) -> Result<Option<Aabb>, SceneError> {
+    match domain {
+        Some([lo, hi]) => {
+            let (lo, hi) = (point("domain", lo)?, point("domain", hi)?);
+            if !(lo.x < hi.x && lo.y < hi.y) {
+                return Err(SceneError::new(
+                    "domain",
+                    "needs [[xmin, ymin], [xmax, ymax]] with xmin < xmax and ymin < ymax",
+                ));
+            }
+            Ok(Some(Aabb { min: lo, max: hi }))
+        }
+        None => Ok(None),
+    }
+}
+
+/// Refuses medium `m`'s `at` point (if it has one) on an interface, outside the `domain` or on
+/// its edge.
+///
+/// # Errors
+/// `media.NAME.at`.
+fn at_point_in_place(
+    m: &Medium,
+    interfaces: &[Interface],
+    segments: &[SegmentRef],
+    segment_bvh: &Bvh,
+    domain: Option<Aabb>,
+) -> Result<(), SceneError> {
+    let Some(at) = m.at else {
+        return Ok(());
+    };
+    let key = format!("media.{}.at", m.name);
+    at_off_interfaces(m, interfaces, segments, segment_bvh)?;
+    if let Some(d) = domain {
+        if !d.contains(at) {
+            return Err(SceneError::new(
+                key,
+                "lies outside the domain; it must be strictly inside a region of the domain \
+                 (outside the domain is the background's)",
+            ));
+        }
+        if at.x == d.min.x || at.x == d.max.x || at.y == d.min.y || at.y == d.max.y {
+            return Err(SceneError::new(
+                key,
+                "lies on the edge of the domain; it must be strictly inside a region",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The points of the list under `key` (`sources`, `receivers`).
+///
+/// # Errors
+/// `KEY[k]` for the first point that is not finite.
+fn points_of(key: &str, list: &[[f64; 2]]) -> Result<Vec<Point>, SceneError> {
+    list.iter()
+        .enumerate()
+        .map(|(k, p)| point(&format!("{key}[{k}]"), *p))
+        .collect()
+}
+
+/// The paths of a scene document, their steps and media by index into `interfaces` and
+/// `media`.
+///
+/// # Errors
+/// `paths[k].name` when two paths share a name; the errors of [`path_of`].
+fn paths_of(
+    specs: &[PathSpec],
+    interfaces: &[Interface],
+    media: &[Medium],
+) -> Result<Vec<Path>, SceneError> {
+    let mut paths = Vec::with_capacity(specs.len());
+    let mut path_names: HashMap<&str, usize> = HashMap::new();
+    for (k, p) in specs.iter().enumerate() {
+        if let Some(name) = &p.name {
+            if let Some(first) = path_names.insert(name, k) {
+                return Err(SceneError::new(
+                    format!("paths[{k}].name"),
+                    format!("`{name}` is also the name of paths[{first}] (names must differ)"),
+                ));
+            }
+        }
+        paths.push(path_of(k, p, interfaces, media)?);
+    }
+    Ok(paths)
+}
+
+/// Path `k` of a scene document: its steps and its leg media by index.
+///
+/// # Errors
+/// `paths[k].steps[j].reflect` (or `refract`) for an unknown interface; `paths[k].media` when
+/// it does not hold one medium per leg; `paths[k].media[j]` for an unknown medium.
+fn path_of(
+    k: usize,
+    p: &PathSpec,
+    interfaces: &[Interface],
+    media: &[Medium],
+) -> Result<Path, SceneError> {
+    let key = format!("paths[{k}]");
+    let mut steps = Vec::with_capacity(p.steps.len());
+    for (j, s) in p.steps.iter().enumerate() {
+        let (kind, name, which) = match s {
+            StepSpec::Reflect(n) => (StepKind::Reflect, n, "reflect"),
+            StepSpec::Refract(n) => (StepKind::Refract, n, "refract"),
+        };
+        let interface = by_name(interfaces, |i| &i.name, name).ok_or_else(|| {
+            SceneError::new(
+                format!("{key}.steps[{j}].{which}"),
+                format!("unknown interface `{name}`"),
+            )
+        })?;
+        steps.push(Step { kind, interface });
+    }
+    let media = match &p.media {
+        Some(names) => {
+            if names.len() != steps.len() + 1 {
+                return Err(SceneError::new(
+                    format!("{key}.media"),
+                    format!(
+                        "needs one medium per leg: {} (steps + 1), got {}",
+                        steps.len() + 1,
+                        names.len()
+                    ),
+                ));
+            }
+            let mut idx = Vec::with_capacity(names.len());
+            for (j, n) in names.iter().enumerate() {
+                idx.push(medium_index(media, &format!("{key}.media[{j}]"), n)?);
+            }
+            Some(idx)
+        }
+        None => None,
+    };
+    Ok(Path {
+        name: p.name.clone(),
+        steps,
+        media,
+    })
+}
+
+/// The solver options of a scene document: the defaults, with what its `solver` section sets.
+///
+/// # Errors
+/// `solver.max_iterations` when it is 0; the errors of [`SolverOptions::validate`].
+fn solver_of(spec: Option<&SolverSpec>) -> Result<SolverOptions, SceneError> {
+    let mut solver = SolverOptions::default();
+    if let Some(s) = spec {
+        if let Some(t) = s.tolerance {
+            solver.tolerance = t;
+        }
+        if let Some(m) = s.max_iterations {
+            solver.max_iterations = usize::try_from(m).unwrap_or(usize::MAX);
+            if m == 0 {
+                return Err(SceneError::new(
+                    "solver.max_iterations",
+                    format!("must be between 1 and {MAX_ITERATIONS_LIMIT}"),
+                ));
+            }
+        }
+        if let Some(m) = s.stationary {
+            solver.stationary = m;
+        }
+        if let Some(d) = s.derivatives {
+            solver.derivatives = d;
+        }
+        solver.validate()?;
+    }
+    Ok(solver)
+}
+
 impl Scene {
     /// Parses and validates a scene document.
     ///
@@ -604,63 +833,12 @@ impl Scene {
     /// # Errors
     /// The first problem found, with the key that holds it.
     pub fn from_spec(spec: &SceneSpec) -> Result<Scene, SceneError> {
-        if spec.media.is_empty() {
-            return Err(SceneError::new("media", "needs at least one medium"));
-        }
-        let mut media = Vec::with_capacity(spec.media.len());
-        for (name, m) in &spec.media {
-            let key = format!("media.{name}");
-            let slowness = match (m.speed, m.index) {
-                (Some(v), None) => 1.0 / positive(format!("{key}.speed"), v)?,
-                (None, Some(n)) => positive(format!("{key}.index"), n)?,
-                (Some(_), Some(_)) => {
-                    return Err(SceneError::new(
-                        key,
-                        "give exactly one of `speed` or `index`, not both",
-                    ));
-                }
-                (None, None) => return Err(SceneError::new(key, "needs `speed` or `index`")),
-            };
-            if !(slowness.is_finite() && slowness > 0.0) {
-                return Err(SceneError::new(
-                    key,
-                    "slowness (1 / speed) is not a finite positive number",
-                ));
-            }
-            let at = match m.at {
-                Some(p) => Some(point(&format!("{key}.at"), p)?),
-                None => None,
-            };
-            media.push(Medium {
-                name: name.clone(),
-                slowness,
-                at,
-            });
-        }
-        // Media and interfaces come in name order (the document's maps are sorted): names
-        // are found by binary search, so that validation stays O(n log n).
-        let medium_index = |key: &str, name: &str| -> Result<usize, SceneError> {
-            by_name(&media, |m| &m.name, name)
-                .ok_or_else(|| SceneError::new(key, format!("unknown medium `{name}`")))
-        };
+        let media = media_of(spec)?;
         let background = match &spec.background {
-            Some(name) => Some(medium_index("background", name)?),
+            Some(name) => Some(medium_index(&media, "background", name)?),
             None => None,
         };
-        let domain = match spec.domain {
-            Some([lo, hi]) => {
-                let (lo, hi) = (point("domain", lo)?, point("domain", hi)?);
-                if !(lo.x < hi.x && lo.y < hi.y) {
-                    return Err(SceneError::new(
-                        "domain",
-                        "needs [[xmin, ymin], [xmax, ymax]] with xmin < xmax and ymin < ymax",
-                    ));
-                }
-                Some(Aabb { min: lo, max: hi })
-            }
-            None => None,
-        };
-
+        let domain = domain_of(spec.domain)?;
         let mut interfaces = Vec::with_capacity(spec.interfaces.len());
         for (name, i) in &spec.interfaces {
             interfaces.push(Interface {
@@ -670,37 +848,11 @@ impl Scene {
         }
         let (segments, segment_bvh) = index_segments(&interfaces);
         crossings::check(&interfaces, &segments)?;
-
         for m in &media {
-            if let Some(at) = m.at {
-                let key = format!("media.{}.at", m.name);
-                at_off_interfaces(m, &interfaces, &segments, &segment_bvh)?;
-                if let Some(d) = domain {
-                    if !d.contains(at) {
-                        return Err(SceneError::new(
-                            key,
-                            "lies outside the domain; it must be strictly inside a region of \
-                             the domain (outside the domain is the background's)",
-                        ));
-                    }
-                    if at.x == d.min.x || at.x == d.max.x || at.y == d.min.y || at.y == d.max.y {
-                        return Err(SceneError::new(
-                            key,
-                            "lies on the edge of the domain; it must be strictly inside a region",
-                        ));
-                    }
-                }
-            }
+            at_point_in_place(m, &interfaces, &segments, &segment_bvh, domain)?;
         }
-
-        let points = |key: &str, list: &[[f64; 2]]| -> Result<Vec<Point>, SceneError> {
-            list.iter()
-                .enumerate()
-                .map(|(k, p)| point(&format!("{key}[{k}]"), *p))
-                .collect()
-        };
-        let sources = points("sources", &spec.sources)?;
-        let receivers = points("receivers", &spec.receivers)?;
+        let sources = points_of("sources", &spec.sources)?;
+        let receivers = points_of("receivers", &spec.receivers)?;
 
         let needs_regions = spec.paths.iter().any(|p| p.media.is_none()) || spec.search.is_some();
         if needs_regions {
@@ -708,82 +860,8 @@ impl Scene {
                 source_in_a_region(&interfaces, &segments, &segment_bvh, domain, k, p)?;
             }
         }
-
-        let mut paths = Vec::with_capacity(spec.paths.len());
-        let mut path_names: HashMap<&str, usize> = HashMap::new();
-        for (k, p) in spec.paths.iter().enumerate() {
-            let key = format!("paths[{k}]");
-            if let Some(name) = &p.name {
-                if let Some(first) = path_names.insert(name, k) {
-                    return Err(SceneError::new(
-                        format!("{key}.name"),
-                        format!("`{name}` is also the name of paths[{first}] (names must differ)"),
-                    ));
-                }
-            }
-            let mut steps = Vec::with_capacity(p.steps.len());
-            for (j, s) in p.steps.iter().enumerate() {
-                let (kind, name, which) = match s {
-                    StepSpec::Reflect(n) => (StepKind::Reflect, n, "reflect"),
-                    StepSpec::Refract(n) => (StepKind::Refract, n, "refract"),
-                };
-                let interface = by_name(&interfaces, |i| &i.name, name).ok_or_else(|| {
-                    SceneError::new(
-                        format!("{key}.steps[{j}].{which}"),
-                        format!("unknown interface `{name}`"),
-                    )
-                })?;
-                steps.push(Step { kind, interface });
-            }
-            let media = match &p.media {
-                Some(names) => {
-                    if names.len() != steps.len() + 1 {
-                        return Err(SceneError::new(
-                            format!("{key}.media"),
-                            format!(
-                                "needs one medium per leg: {} (steps + 1), got {}",
-                                steps.len() + 1,
-                                names.len()
-                            ),
-                        ));
-                    }
-                    let mut idx = Vec::with_capacity(names.len());
-                    for (j, n) in names.iter().enumerate() {
-                        idx.push(medium_index(&format!("{key}.media[{j}]"), n)?);
-                    }
-                    Some(idx)
-                }
-                None => None,
-            };
-            paths.push(Path {
-                name: p.name.clone(),
-                steps,
-                media,
-            });
-        }
-
-        let mut solver = SolverOptions::default();
-        if let Some(s) = &spec.solver {
-            if let Some(t) = s.tolerance {
-                solver.tolerance = t;
-            }
-            if let Some(m) = s.max_iterations {
-                solver.max_iterations = usize::try_from(m).unwrap_or(usize::MAX);
-                if m == 0 {
-                    return Err(SceneError::new(
-                        "solver.max_iterations",
-                        format!("must be between 1 and {MAX_ITERATIONS_LIMIT}"),
-                    ));
-                }
-            }
-            if let Some(m) = s.stationary {
-                solver.stationary = m;
-            }
-            if let Some(d) = s.derivatives {
-                solver.derivatives = d;
-            }
-            solver.validate()?;
-        }
+        let paths = paths_of(&spec.paths, &interfaces, &media)?;
+        let solver = solver_of(spec.solver.as_ref())?;
         let search = match &spec.search {
             Some(s) => Some(search_options(s, &interfaces)?),
             None => None,

@@ -266,43 +266,9 @@ fn ray_parameter(
     tangent: impl Fn(usize) -> Vec2,
     layers: &mut Vec<Layer>,
 ) -> Option<RayParameter> {
-    let k = t.len();
-    let m = tangent(0);
-    if (1..k).any(|i| tangent(i).dot(m).abs() < 1.0 - PARALLEL) {
-        return None;
-    }
-    // Across (`z`) and along (`x`) the first interface.
-    let (z, x) = (d.cross(m).abs(), d.dot(m).abs());
-    let x = x / z;
-    if !(x > 0.0 && x.is_finite()) {
-        return None;
-    }
-    // Per layer: thickness Δtⱼ (in units of Z) and speed vⱼ = 1/wⱼ; the sums Σ Δtⱼ vⱼⁿ for
-    // n = 3, 5, 7 (of the series below); the smallest slowness `limit` (a layer's critical
-    // angle) and how thick the layers of that slowness are together (`critical`).
-    let (mut limit, mut critical, mut prev) = (f64::INFINITY, 0.0, 0.0);
-    let mut series = [0.0; 3];
-    layers.clear();
-    for (j, &wj) in w[..=k].iter().enumerate() {
-        let hi = if j < k { t[j] } else { 1.0 };
-        let (dt, v) = (hi - prev, 1.0 / wj);
-        layers.push(Layer {
-            dt,
-            v,
-            ..Layer::default()
-        });
-        let (a, v2) = (dt * v, v * v);
-        series[0] += a * v2;
-        series[1] += a * v2 * v2;
-        series[2] += a * v2 * v2 * v2;
-        prev = hi;
-        // (Slownesses are positive and finite.)
-        if wj < limit {
-            (limit, critical) = (wj, dt);
-        } else if wj == limit {
-            critical += dt;
-        }
-    }
+    let x = parallel_offset(t.len(), d, tangent)?;
+    let sums = LayerSums::fill(t, w, layers);
+    let limit = sums.limit;
     // The paraxial p (tan θ ≈ sin θ): f(p) ≥ 0 there, as tan θ ≥ sin θ. Below the smallest
     // slowness f is defined; just below it, it must be positive.
     let cap = limit * (1.0 - 1e-9);
@@ -313,43 +279,11 @@ fn ray_parameter(
     // nearer the root and still above it (the other layers add to f). From the paraxial p
     // alone the iterates would first back away from the pole (f is steep there, like
     // 1/√(p_max − p)) by a factor of about 3 a step: 15 or more steps.
-    let tan = x / critical;
+    let tan = x / sums.critical;
     let alone = limit * (tan / (1.0 + tan * tan).sqrt());
-    // f(p) = Σ Δtⱼ sⱼ / cⱼ − x with sⱼ = p / wⱼ, cⱼ = √(1 − sⱼ²); f' = Σ Δtⱼ vⱼ / cⱼ³ and
-    // f'' = Σ 3 Δtⱼ vⱼ² sⱼ / cⱼ⁵. Each evaluation leaves the offsets Δtⱼ tan θⱼ = Δtⱼ sⱼ / cⱼ
-    // and their derivatives in the layers, for the caller: every return with a p follows an
-    // evaluation at that p, or a last step whose own error is below round-off, with the
-    // offsets moved along their Taylor series.
-    let mut f = |p: f64| {
-        let (mut f, mut df, mut d2f) = (-x, 0.0, 0.0);
-        for l in layers.iter_mut() {
-            let sin = p * l.v;
-            let r = 1.0 / (1.0 - sin * sin).sqrt();
-            let a = l.dt * r;
-            l.offset = a * sin;
-            l.slope = a * l.v * r * r;
-            l.bend = 3.0 * l.slope * l.v * sin * r * r;
-            f += l.offset;
-            df += l.slope;
-            d2f += l.bend;
-        }
-        (f, df, d2f)
-    };
     // (`alone` may exceed `cap`: the root can lie nearer the pole than that.)
     let mut p = small_angle.min(alone);
-    // tan θ = sin θ (1 + sin²θ / 2 + 3 sin⁴θ / 8 + 5 sin⁶θ / 16 + …), all terms positive: the
-    // first four make a polynomial P(p) ≤ f(p) + x, convex and increasing, whose root is
-    // therefore above f's; Newton's iterates on it from its linear part's root (the
-    // paraxial p) stay above its root. Three of them, without a square root or a division by
-    // layer, save evaluations of f.
-    let [b3, b5, b7] = series;
-    let mut q = small_angle;
-    for _ in 0..3 {
-        let q2 = q * q;
-        let g = q * (sum + q2 * (0.5 * b3 + q2 * (0.375 * b5 + q2 * 0.3125 * b7))) - x;
-        let dg = sum + q2 * (1.5 * b3 + q2 * (1.875 * b5 + q2 * 2.1875 * b7));
-        q -= g / dg;
-    }
+    let q = series_root(sums.series, sum, x, small_angle);
     // (A NaN `q`, from overflowing powers of a huge speed, is not taken.)
     let series_bound = q < p;
     if series_bound {
@@ -358,34 +292,177 @@ fn ray_parameter(
     if p >= limit {
         p = cap;
     }
-    let (mut fp, mut dfp, mut d2fp) = f(p);
-    if series_bound && fp < 0.0 && fp >= -64.0 * f64::EPSILON * x {
+    let mut at = evaluate(layers, x, p);
+    if series_bound && at.f < 0.0 && at.f >= -64.0 * f64::EPSILON * x {
         // Where the series' neglected terms are below round-off, its root is f's to within
         // round-off, on either side.
         return Some(RayParameter { p, x });
     }
-    if (fp.is_nan() || fp < 0.0) && p < paraxial {
+    if (at.f.is_nan() || at.f < 0.0) && p < paraxial {
         // Round-off put `alone` (or the series' root) below the root.
         p = paraxial;
-        (fp, dfp, d2fp) = f(p);
+        at = evaluate(layers, x, p);
     }
-    let sound = |fp: f64, dfp: f64, d2fp: f64| dfp > 0.0 && crate::problem::finite(fp + dfp + d2fp);
-    if !(fp >= 0.0 && sound(fp, dfp, d2fp)) {
+    if !(at.f >= 0.0 && at.sound()) {
         return None;
     }
-    // Halley's steps from above the root of this convex increasing function (Newton's, where
-    // the curvature would more than double the step): the error after a step of `h` is about
-    // `(ρ²/4 + (h vₘₐₓ)²/2) |h|` with `ρ = h f''/f'` (the f‴ term bounded through the
-    // largest speed, `1/limit`). Where a thousand times that is below round-off, the step is
-    // the last: the offsets follow it to second order (their error of order h³, below
-    // round-off too), without another evaluation.
+    halley(layers, x, limit, p, at)
+}
+
+/// The offset `x = X / Z` of [`ray_parameter`]'s equation for `d = R − S`: along (`X`) over
+/// across (`Z`) the first of `k` interfaces, `tangent(i)` the tangent of interface `i` at its
+/// crossing. `None` when the interfaces are not parallel or `x` is not finite and positive
+/// (the straight line is the ray).
+#[inline]
+fn parallel_offset(k: usize, d: Vec2, tangent: impl Fn(usize) -> Vec2) -> Option<f64> {
+    let m = tangent(0);
+    if (1..k).any(|i| tangent(i).dot(m).abs() < 1.0 - PARALLEL) {
+        return None;
+    }
+    // Across (`z`) and along (`x`) the first interface.
+    let (z, x) = (d.cross(m).abs(), d.dot(m).abs());
+    let x = x / z;
+    if !(x > 0.0 && x.is_finite()) {
+        return None;
+    }
+    Some(x)
+}
+
+/// What [`ray_parameter`] needs of its layers besides each one's thickness and speed.
+struct LayerSums {
+    /// The sums `Σ Δtⱼ vⱼⁿ` for `n` = 3, 5, 7 (of the series of [`series_root`]).
+    series: [f64; 3],
+    /// The smallest slowness (a layer's critical angle).
+    limit: f64,
+    /// How thick the layers of that slowness are together.
+    critical: f64,
+}
+
+impl LayerSums {
+    /// Sets `layers` to the thickness `Δtⱼ` (in units of `Z`) and speed `vⱼ = 1/wⱼ` of each
+    /// layer between the crossing fractions `t`, with slownesses `w`, and sums them up.
+    #[inline]
+    fn fill(t: &[f64], w: &[f64], layers: &mut Vec<Layer>) -> LayerSums {
+        let k = t.len();
+        let (mut limit, mut critical, mut prev) = (f64::INFINITY, 0.0, 0.0);
+        let mut series = [0.0; 3];
+        layers.clear();
+        for (j, &wj) in w[..=k].iter().enumerate() {
+            let hi = if j < k { t[j] } else { 1.0 };
+            let (dt, v) = (hi - prev, 1.0 / wj);
+            layers.push(Layer {
+                dt,
+                v,
+                ..Layer::default()
+            });
+            let (a, v2) = (dt * v, v * v);
+            series[0] += a * v2;
+            series[1] += a * v2 * v2;
+            series[2] += a * v2 * v2 * v2;
+            prev = hi;
+            // (Slownesses are positive and finite.)
+            if wj < limit {
+                (limit, critical) = (wj, dt);
+            } else if wj == limit {
+                critical += dt;
+            }
+        }
+        LayerSums {
+            series,
+            limit,
+            critical,
+        }
+    }
+}
+
+/// An upper bound of the root of [`ray_parameter`]'s equation from the series of its layers
+/// (`series`, see [`LayerSums`]), the paraxial denominator `sum` and the offset `x`, starting
+/// at the paraxial `small_angle`.
+///
+/// tan θ = sin θ (1 + sin²θ / 2 + 3 sin⁴θ / 8 + 5 sin⁶θ / 16 + …), all terms positive: the
+/// first four make a polynomial P(p) ≤ f(p) + x, convex and increasing, whose root is
+/// therefore above f's; Newton's iterates on it from its linear part's root (the paraxial p)
+/// stay above its root. Three of them, without a square root or a division by layer, save
+/// evaluations of f.
+#[inline]
+fn series_root(series: [f64; 3], sum: f64, x: f64, small_angle: f64) -> f64 {
+    let [b3, b5, b7] = series;
+    let mut q = small_angle;
+    for _ in 0..3 {
+        let q2 = q * q;
+        let g = q * (sum + q2 * (0.5 * b3 + q2 * (0.375 * b5 + q2 * 0.3125 * b7))) - x;
+        let dg = sum + q2 * (1.5 * b3 + q2 * (1.875 * b5 + q2 * 2.1875 * b7));
+        q -= g / dg;
+    }
+    q
+}
+
+/// [`ray_parameter`]'s function at one `p` and its first two derivatives.
+#[derive(Clone, Copy)]
+struct Evaluation {
+    /// `f(p)`.
+    f: f64,
+    /// `f'(p)`.
+    df: f64,
+    /// `f''(p)`.
+    d2f: f64,
+}
+
+impl Evaluation {
+    /// Whether the evaluation can be stepped from: `f'` positive and everything finite.
+    #[inline]
+    fn sound(self) -> bool {
+        self.df > 0.0 && crate::problem::finite(self.f + self.df + self.d2f)
+    }
+}
+
+/// Evaluates `f(p) = Σ Δtⱼ sⱼ / cⱼ − x` with `sⱼ = p / wⱼ`, `cⱼ = √(1 − sⱼ²)`; `f' = Σ Δtⱼ vⱼ /
+/// cⱼ³` and `f'' = Σ 3 Δtⱼ vⱼ² sⱼ / cⱼ⁵`. Each evaluation leaves the offsets `Δtⱼ tan θⱼ = Δtⱼ
+/// sⱼ / cⱼ` and their derivatives in the layers, for the caller: every return of
+/// [`ray_parameter`] with a p follows an evaluation at that p, or a last step whose own error
+/// is below round-off, with the offsets moved along their Taylor series.
+#[inline]
+fn evaluate(layers: &mut [Layer], x: f64, p: f64) -> Evaluation {
+    let (mut f, mut df, mut d2f) = (-x, 0.0, 0.0);
+    for l in layers.iter_mut() {
+        let sin = p * l.v;
+        let r = 1.0 / (1.0 - sin * sin).sqrt();
+        let a = l.dt * r;
+        l.offset = a * sin;
+        l.slope = a * l.v * r * r;
+        l.bend = 3.0 * l.slope * l.v * sin * r * r;
+        f += l.offset;
+        df += l.slope;
+        d2f += l.bend;
+    }
+    Evaluation { f, df, d2f }
+}
+
+/// Halley's steps on [`ray_parameter`]'s equation (offset `x`, smallest slowness `limit`)
+/// from `p`, above the root, where it evaluates to `at`; the root, or `None` where an
+/// evaluation is not sound.
+///
+/// From above the root of this convex increasing function (Newton's steps, where the
+/// curvature would more than double the step): the error after a step of `h` is about
+/// `(ρ²/4 + (h vₘₐₓ)²/2) |h|` with `ρ = h f''/f'` (the f‴ term bounded through the largest
+/// speed, `1/limit`). Where a thousand times that is below round-off, the step is the last:
+/// the offsets follow it to second order (their error of order h³, below round-off too),
+/// without another evaluation.
+#[inline(always)]
+fn halley(
+    layers: &mut [Layer],
+    x: f64,
+    limit: f64,
+    mut p: f64,
+    mut at: Evaluation,
+) -> Option<RayParameter> {
     let vmax = 1.0 / limit;
     for _ in 0..60 {
-        if fp.abs() <= 4.0 * f64::EPSILON * x {
+        if at.f.abs() <= 4.0 * f64::EPSILON * x {
             break;
         }
-        let newton = fp / dfp;
-        let rho = newton * d2fp / dfp;
+        let newton = at.f / at.df;
+        let rho = newton * at.d2f / at.df;
         let h = if rho.abs() < 1.0 {
             newton / (1.0 - 0.5 * rho)
         } else {
@@ -404,8 +481,8 @@ fn ray_parameter(
             return Some(RayParameter { p: next, x });
         }
         p = next;
-        (fp, dfp, d2fp) = f(p);
-        if !sound(fp, dfp, d2fp) {
+        at = evaluate(layers, x, p);
+        if !at.sound() {
             return None;
         }
     }
