@@ -1249,7 +1249,7 @@ fn arrival_json(buf: &mut Vec<u8>, scene: &Scene, names: &Names, s: &SearchArriv
         buf.extend_from_slice(b",\"reason\":");
         buf.extend_from_slice(&json_string(&reason.describe(scene)));
     }
-    buf.extend_from_slice(if a.complete {
+    buf.extend_from_slice(if s.complete {
         b",\"complete\":true}"
     } else {
         b",\"complete\":false}"
@@ -1311,7 +1311,7 @@ fn arrival_csv(buf: &mut Vec<u8>, scene: &Scene, names: &Names, s: &SearchArriva
         csv_field(buf, &reason.describe(scene));
     }
     buf.push(b',');
-    buf.extend_from_slice(if a.complete { b"true" } else { b"false" });
+    buf.extend_from_slice(if s.complete { b"true" } else { b"false" });
     if scene.solver().derivatives {
         gradient_csv(buf, arrival_gradient(scene, s).as_ref());
     }
@@ -1339,7 +1339,7 @@ fn arrival_npy(buf: &mut Vec<u8>, scene: &Scene, k: usize, s: &SearchArrival) {
     }
     buf.push(status_code(a.status));
     buf.push(kink_code(a.kink));
-    buf.push(u8::from(a.complete));
+    buf.push(u8::from(s.complete));
     u32_le(buf, a.iterations);
     buf.extend_from_slice(&a.time.to_le_bytes());
     buf.extend_from_slice(&a.residual.to_le_bytes());

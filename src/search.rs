@@ -24,6 +24,9 @@ pub struct SearchArrival {
     pub steps: Vec<Step>,
     /// The stationary path, with its status, time, points and leg media.
     pub arrival: Arrival,
+    /// Whether the search that found it was complete: `false` where it stopped at a limit
+    /// (its list may then be short).
+    pub complete: bool,
 }
 
 /// Tuples (and assignments solved) of the search of one sequence between one pair, beyond
@@ -219,7 +222,8 @@ impl Tracer {
                 let mut visit = |steps: &[Step]| {
                     let sequence = Sequence { steps, path: None };
                     let limit = SEARCH_TUPLES;
-                    self.stationary_of(sequence, None, s, medium, r, limit, &mut arrivals);
+                    let outcome =
+                        self.stationary_of(sequence, None, s, medium, r, limit, &mut arrivals);
                     for a in arrivals.drain(..) {
                         if Self::listed(a.status, options) {
                             found.push(SearchArrival {
@@ -227,6 +231,7 @@ impl Tracer {
                                 receiver,
                                 steps: steps.to_vec(),
                                 arrival: a,
+                                complete: outcome.complete,
                             });
                         }
                     }
@@ -309,7 +314,7 @@ fn mirror_arrival(
             kink: None,
             // The image method's points: no solve, no residual.
             residual: f64::NAN,
-            complete: true,
         },
+        complete: true,
     }
 }

@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use crate::scene::MAX_STATIONARY_STEPS;
 use crate::trace::Tracer;
-pub use crate::trace::{Arrival, Kink, Stationary, StationaryError};
+pub use crate::trace::{Arrival, Kink, SearchOutcome, StationaryError};
 use crate::trace::{Reason, Status};
 
 /// Every stationary path of one (source, receiver, path) triple.
@@ -20,7 +20,7 @@ pub struct TripleArrivals {
     pub path: usize,
     /// Its stationary paths (`converged`, `vertex`, `obstructed`), each once, ordered by time.
     pub arrivals: Vec<Arrival>,
-    /// Whether the search was complete (see [`Stationary::complete`]):
+    /// Whether the search was complete (see [`SearchOutcome::complete`]):
     /// with `true` the list holds every stationary path of the triple, and an empty list is a
     /// proof that it has none; with `false` it may be short.
     pub complete: bool,

@@ -632,7 +632,7 @@ fn hand_built_arrivals(scene: &Scene) -> Vec<SearchArrival> {
     let valley = scene.interface_index("valley").expect("valley");
     let roof = scene.interface_index("roof").expect("roof");
     let air = scene.medium_index("air").expect("air");
-    let arrival = |status, time, points: Vec<Point>, kink, reason, complete| Arrival {
+    let arrival = |status, time, points: Vec<Point>, kink, reason| Arrival {
         status,
         time,
         parameters: vec![0.0; points.len() - 2],
@@ -643,7 +643,6 @@ fn hand_built_arrivals(scene: &Scene) -> Vec<SearchArrival> {
         reason,
         kink,
         residual: 1e-16,
-        complete,
     };
     vec![
         SearchArrival {
@@ -656,8 +655,8 @@ fn hand_built_arrivals(scene: &Scene) -> Vec<SearchArrival> {
                 vec![Point::new(-0.5, 2.0), Point::new(0.5, 2.0)],
                 None,
                 None,
-                true,
             ),
+            complete: true,
         },
         SearchArrival {
             source: 0,
@@ -676,8 +675,8 @@ fn hand_built_arrivals(scene: &Scene) -> Vec<SearchArrival> {
                 ],
                 Some(Kink::Maximum),
                 Some(Reason::AtVertex { step: 0 }),
-                true,
             ),
+            complete: true,
         },
         SearchArrival {
             source: 0,
@@ -706,8 +705,8 @@ fn hand_built_arrivals(scene: &Scene) -> Vec<SearchArrival> {
                     leg: 1,
                     interface: valley,
                 }),
-                false,
             ),
+            complete: false,
         },
     ]
 }

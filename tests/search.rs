@@ -36,7 +36,7 @@ fn rooms_image_tree_matches_the_sequence_search() {
             );
             let (t, u) = (x.arrival.time, y.arrival.time);
             assert!((t - u).abs() <= 1e-12 * t, "{name}: {t} vs {u}");
-            assert!(y.arrival.complete);
+            assert!(y.complete);
         }
         assert!(a.iter().all(|x| x.arrival.status == Status::Converged));
         // Ordered by source, receiver, time.

@@ -36,7 +36,7 @@ mod update;
 
 pub(crate) use chain::{ChainLink, ChainRays, WarmStarts};
 pub(crate) use classify::{Classifier, Sequence};
-pub use complete::{Arrival, Kink, Stationary, StationaryError};
+pub use complete::{Arrival, Kink, SearchOutcome, StationaryError};
 pub(crate) use flat::SegmentFrame;
 pub(crate) use mirrors::{MirrorArrival, MirrorScratch, MirrorWalls};
 pub use plan::Kernels;

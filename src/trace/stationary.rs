@@ -15,7 +15,7 @@ use crate::scene::{MAX_STATIONARY_STEPS, StepKind};
 
 use super::classify::Sequence;
 use super::complete::{self, Arrival, Hierarchy, SequenceSearch};
-use super::{RayRecord, Reason, Stationary, StationaryError, Status, Tracer, Workspace};
+use super::{RayRecord, Reason, SearchOutcome, StationaryError, Status, Tracer, Workspace};
 
 /// Tuples (and assignments solved) of the default mode's search of one ray, beyond which it
 /// answers `not_converged` (`Reason::SearchLimit`): the search of a ray stays within about a
@@ -31,7 +31,7 @@ thread_local! {
 impl Tracer {
     /// Every stationary path of path `path` from `source` to `receiver` into `out` (emptied
     /// first): `converged`, `vertex` (with its [`Kink`](crate::Kink)) and `obstructed` ones, each once,
-    /// ordered by time. A search that is [`complete`](Stationary::complete) lists them all (an
+    /// ordered by time. A search that is [`complete`](SearchOutcome::complete) lists them all (an
     /// empty `out` then says that the sequence has no stationary path).
     ///
     /// On one assignment of segments the time is convex in the parameters; the search runs
@@ -80,7 +80,7 @@ impl Tracer {
         receiver: Point,
         path: usize,
         out: &mut Vec<Arrival>,
-    ) -> Result<Stationary, StationaryError> {
+    ) -> Result<SearchOutcome, StationaryError> {
         out.clear();
         let spec = self
             .scene
@@ -129,9 +129,9 @@ impl Tracer {
         receiver: Point,
         max_tuples: usize,
         out: &mut Vec<Arrival>,
-    ) -> Stationary {
+    ) -> SearchOutcome {
         complete::recycle(out);
-        let mut stats = Stationary {
+        let mut stats = SearchOutcome {
             complete: true,
             tuples: 0,
             solves: 0,
@@ -174,7 +174,7 @@ impl Tracer {
             // No medium at the source: no path.
             (None, _, _) => {}
         }
-        complete::finish(out, stats.complete);
+        complete::finish(out);
         stats
     }
 
@@ -185,7 +185,7 @@ impl Tracer {
         base: SequenceSearch<'_>,
         legs: &mut Legs,
         out: &mut Vec<Arrival>,
-        stats: &mut Stationary,
+        stats: &mut SearchOutcome,
     ) {
         let i = legs.len - 1;
         let Some(step) = base.sequence.steps.get(i) else {

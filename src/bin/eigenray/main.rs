@@ -732,8 +732,8 @@ mod tests {
                 reason: None,
                 kink: None,
                 residual: 0.0,
-                complete: true,
             },
+            complete: true,
         }
     }
 

@@ -499,8 +499,8 @@ mod tests {
                 reason: None,
                 kink: None,
                 residual: 0.0,
-                complete: true,
             },
+            complete: true,
         }
     }
 

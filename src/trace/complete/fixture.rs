@@ -6,7 +6,7 @@ use crate::scene::Scene;
 use crate::trace::Classifier;
 use crate::trace::classify::Sequence;
 
-use super::{Hierarchy, MAX_TUPLES, Search, SequenceSearch, Stationary, searching};
+use super::{Hierarchy, MAX_TUPLES, Search, SearchOutcome, SequenceSearch, searching};
 
 /// A scene with what a search of its paths borrows.
 pub(super) struct Fixture {
@@ -69,7 +69,7 @@ impl Fixture {
         &self,
         path: usize,
         f: impl FnOnce(&mut Search<'_>) -> R,
-    ) -> (R, Stationary) {
+    ) -> (R, SearchOutcome) {
         self.with_input(path, MAX_TUPLES, |input| {
             let mut result = None;
             let stats = searching(input, |search| result = Some(f(search)));

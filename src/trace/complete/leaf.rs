@@ -151,7 +151,6 @@ impl Search<'_> {
         a.reason = record.reason;
         a.kink = (record.status == Status::Vertex).then_some(kink).flatten();
         a.residual = record.residual;
-        a.complete = true;
         out.push(a);
     }
 }

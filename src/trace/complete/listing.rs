@@ -24,8 +24,8 @@ pub(crate) fn retain(out: &mut Vec<Arrival>, mut keep: impl FnMut(&Arrival) -> b
 }
 
 /// Orders the arrivals by time, drops repeats of one path (a vertex path kept over an
-/// interior path on the same points), and marks whether the search was complete.
-pub(crate) fn finish(out: &mut Vec<Arrival>, complete: bool) {
+/// interior path on the same points).
+pub(crate) fn finish(out: &mut Vec<Arrival>) {
     let order =
         |a: &Arrival, b: &Arrival| a.time.total_cmp(&b.time).then(a.segments.cmp(&b.segments));
     out.sort_unstable_by(order);
@@ -59,9 +59,6 @@ pub(crate) fn finish(out: &mut Vec<Arrival>, complete: bool) {
     }
     with_scratch(|sc| sc.spare.extend(out.drain(w..)));
     out.sort_unstable_by(order);
-    for a in out.iter_mut() {
-        a.complete = complete;
-    }
 }
 
 #[cfg(test)]
@@ -99,7 +96,7 @@ mod tests {
             arrival(Status::Converged, 2.0, &v, &[2]),
             arrival(Status::Converged, 1.5, &c.map(near), &[0]),
         ];
-        finish(&mut out, false);
+        finish(&mut out);
         let got: Vec<(Status, f64)> = out.iter().map(|a| (a.status, a.time)).collect();
         assert_eq!(
             got,
@@ -109,7 +106,6 @@ mod tests {
                 (Status::Obstructed, 5.0)
             ]
         );
-        assert!(out.iter().all(|a| !a.complete));
         assert_eq!(out[1].segments, [2]);
         // The three repeats' vectors wait for the next search.
         assert_eq!(take_scratch().spare.len(), 3);
@@ -141,7 +137,7 @@ mod tests {
                     reference.push((a.time, x));
                 }
             }
-            finish(&mut out, true);
+            finish(&mut out);
             let times: Vec<f64> = out.iter().map(|a| a.time).collect();
             let expected: Vec<f64> = reference.iter().map(|r| r.0).collect();
             assert_eq!(times, expected);

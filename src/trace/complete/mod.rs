@@ -60,7 +60,7 @@ mod smoothed;
 
 pub(crate) use hierarchy::Hierarchy;
 pub(crate) use listing::{finish, recycle, retain};
-pub use result::{Arrival, Kink, Stationary, StationaryError};
+pub use result::{Arrival, Kink, SearchOutcome, StationaryError};
 
 use crate::geom::Point;
 use crate::problem::ProblemRef;
@@ -116,7 +116,7 @@ struct Search<'a> {
     /// This thread's scratch, held for the search.
     sc: Box<Scratch>,
     /// What the search did so far.
-    stats: Stationary,
+    stats: SearchOutcome,
     /// The legs (bits) whose two points [`minimise`](Search::minimise) holds together at a
     /// collapse while the others settle.
     pinned: usize,
@@ -130,7 +130,7 @@ struct Search<'a> {
 pub(crate) fn search_sequence(
     input: SequenceSearch<'_>,
     out: &mut Vec<Arrival>,
-    stats: &mut Stationary,
+    stats: &mut SearchOutcome,
 ) {
     let done = searching(input, |search| search.run(out));
     stats.complete &= done.complete;
@@ -140,7 +140,7 @@ pub(crate) fn search_sequence(
 
 /// Runs `f` on the search of `input` (with this thread's scratch, given back at the end);
 /// returns what the search did.
-fn searching(input: SequenceSearch<'_>, f: impl FnOnce(&mut Search<'_>)) -> Stationary {
+fn searching(input: SequenceSearch<'_>, f: impl FnOnce(&mut Search<'_>)) -> SearchOutcome {
     let k = input.sequence.steps.len();
     debug_assert!(k <= MAX_STATIONARY_STEPS && input.media.len() == k + 1);
     let mut sc = scratch::take_scratch();
@@ -163,7 +163,7 @@ fn searching(input: SequenceSearch<'_>, f: impl FnOnce(&mut Search<'_>)) -> Stat
         hierarchies: input.hierarchies,
         tolerance: input.tolerance,
         sc,
-        stats: Stationary {
+        stats: SearchOutcome {
             complete: true,
             tuples: 0,
             solves: 0,
@@ -198,7 +198,7 @@ mod tests {
         ];
         let fixture = mirror(&v, Point::new(-0.5, 2.0), Point::new(0.5, 2.0));
         let mut out = Vec::new();
-        let start = Stationary {
+        let start = SearchOutcome {
             complete: true,
             tuples: 5,
             solves: 7,

@@ -52,8 +52,6 @@ pub struct Arrival {
     pub kink: Option<Kink>,
     /// Final relative residual of the free points.
     pub residual: f64,
-    /// Whether the search of its triple was complete (see [`Stationary::complete`]).
-    pub complete: bool,
 }
 
 impl Arrival {
@@ -70,14 +68,16 @@ impl Arrival {
             reason: None,
             kink: None,
             residual: f64::NAN,
-            complete: true,
         }
     }
 }
 
-/// What a search of one triple did.
+/// What the search for every stationary path of one sequence between one source and one
+/// receiver did: whether it is complete (the one place a search says so; the lists it fills
+/// carry it on: [`TripleArrivals::complete`](crate::stationary::TripleArrivals::complete),
+/// [`SearchArrival::complete`](crate::search::SearchArrival::complete)), and its work.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Stationary {
+pub struct SearchOutcome {
     /// Whether every stationary path of the triple is listed: `false` when the search reached
     /// its limit of tuples, or an assignment's solve did not settle (the list may then be
     /// short). With `true`, an empty list says that the sequence has no stationary path: the
@@ -179,9 +179,6 @@ mod tests {
         let a = Arrival::empty();
         assert!(a.points.is_empty() && a.parameters.is_empty() && a.segments.is_empty());
         assert!(a.media.is_empty() && a.time.is_nan() && a.residual.is_nan());
-        assert_eq!(
-            (a.status, a.kink, a.reason, a.complete),
-            (Status::NoPath, None, None, true)
-        );
+        assert_eq!((a.status, a.kink, a.reason), (Status::NoPath, None, None));
     }
 }
