@@ -175,7 +175,7 @@ fn locate(line: &Polyline, p: Point, hint: Option<usize>) -> Option<Contact> {
 /// Where `p` lies on segment `j` of `line`, if it lies there (to round-off).
 #[inline(always)]
 fn contact_on(line: &Polyline, j: usize, p: Point) -> Option<Contact> {
-    let (start, _) = line.segment(j);
+    let start = line.segment(j).start;
     let frame = SegmentFrame {
         start,
         tangent: line.tangent(j),

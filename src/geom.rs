@@ -156,6 +156,15 @@ impl From<Point> for [f64; 2] {
     }
 }
 
+/// A straight segment from `start` to `end`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Segment {
+    /// Where it starts.
+    pub start: Point,
+    /// Where it ends.
+    pub end: Point,
+}
+
 /// An axis-aligned box `[min, max]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {

@@ -146,7 +146,7 @@ pub mod limits {
 /// The geometry beneath a scene: polylines and their queries, boxes, and the robust
 /// orientation and segment-contact tests the validation uses.
 pub mod geometry {
-    pub use crate::geom::{Aabb, SegmentContact, orient, segment_contact};
+    pub use crate::geom::{Aabb, Segment, SegmentContact, orient, segment_contact};
     pub use crate::polyline::{Nearest, Polyline, PolylineError};
 }
 

@@ -1,7 +1,7 @@
 //! Open and closed polylines parametrised by arclength.
 
 use crate::bvh::Bvh;
-use crate::geom::{Aabb, Point, Vec2, orient};
+use crate::geom::{Aabb, Point, Segment, Vec2, orient};
 
 /// Turning angles above this (radians) are corners, not a digitised smooth curve: they add
 /// nothing to the curvature estimate that guides the solver across vertices.
@@ -330,11 +330,14 @@ impl Polyline {
     pub fn segment_length(&self, j: usize) -> f64 {
         self.cum[j + 1] - self.cum[j]
     }
-    /// End points of segment `j`.
+    /// Segment `j`, from its vertex `j` to the next.
     #[inline]
-    pub fn segment(&self, j: usize) -> (Point, Point) {
+    pub fn segment(&self, j: usize) -> Segment {
         let e = &self.ends[j..j + 2];
-        (e[0], e[1])
+        Segment {
+            start: e[0],
+            end: e[1],
+        }
     }
     /// Unit tangent of segment `j` (the direction of increasing arclength).
     #[inline]
@@ -410,7 +413,7 @@ impl Polyline {
     /// so that `s` at a vertex gives that vertex exactly.
     #[inline]
     pub fn point_on(&self, j: usize, s: f64) -> Point {
-        let (a, b) = self.segment(j);
+        let Segment { start: a, end: b } = self.segment(j);
         point_between(a, b, self.dirs[j], self.cum[j], self.cum[j + 1], s)
     }
 
@@ -418,7 +421,7 @@ impl Polyline {
     /// relative precision for paths far from the coordinate origin.
     #[inline]
     pub fn offset_on(&self, j: usize, s: f64, origin: Point) -> Vec2 {
-        let (a, b) = self.segment(j);
+        let Segment { start: a, end: b } = self.segment(j);
         let from_start = s - self.cum[j];
         let from_end = self.cum[j + 1] - s;
         if from_start <= from_end {
@@ -483,7 +486,7 @@ impl Polyline {
         const SHORT: usize = 8;
         if self.num_segments() <= SHORT {
             for j in 0..self.num_segments() {
-                let (p, q) = self.segment(j);
+                let Segment { start: p, end: q } = self.segment(j);
                 if let Some((t, u)) = segment_intersection(a, b, p, q) {
                     f(self.cum[j] + u * self.segment_length(j), t, j);
                 }
@@ -492,7 +495,7 @@ impl Polyline {
         }
         self.bvh.any_near_segment(a, b, |j| {
             let j = j as usize;
-            let (p, q) = self.segment(j);
+            let Segment { start: p, end: q } = self.segment(j);
             if let Some((t, u)) = segment_intersection(a, b, p, q) {
                 f(self.cum[j] + u * self.segment_length(j), t, j);
             }
@@ -502,7 +505,7 @@ impl Polyline {
 
     /// Orthogonal projection of `p` on segment `j`, clamped: `(parameter, point)`.
     fn project(&self, j: usize, p: Point) -> (f64, Point) {
-        let (a, _) = self.segment(j);
+        let a = self.segment(j).start;
         let len = self.segment_length(j);
         let t = (p - a).dot(self.dirs[j]).clamp(0.0, len);
         let s = self.cum[j] + t;
@@ -559,7 +562,13 @@ mod tests {
         // The closing segment runs from the last vertex back to the first, which the vertex
         // list does not repeat.
         assert_eq!(sq.vertices().len(), 4);
-        assert_eq!(sq.segment(3), (sq.vertices()[3], sq.vertices()[0]));
+        assert_eq!(
+            sq.segment(3),
+            Segment {
+                start: sq.vertices()[3],
+                end: sq.vertices()[0]
+            }
+        );
     }
 
     #[test]

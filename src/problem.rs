@@ -17,7 +17,7 @@
 //! of a digitised smooth curve, where the true `T` (of the smooth curve) may have maxima and
 //! saddles that the segment-wise Hessian cannot see.
 
-use crate::geom::{Point, Vec2};
+use crate::geom::{Point, Segment, Vec2};
 use crate::polyline::Polyline;
 use crate::scene::{Scene, Step};
 
@@ -524,7 +524,7 @@ impl Frame {
     /// The frame of segment `j` of `line`, relative to `origin`.
     #[inline]
     pub fn new(line: &Polyline, j: usize, origin: Point) -> Frame {
-        let (a, b) = line.segment(j);
+        let Segment { start: a, end: b } = line.segment(j);
         Frame {
             a: a - origin,
             b: b - origin,

@@ -12,7 +12,7 @@ use spade::{
     MIN_ALLOWED_VALUE, Point2, PositionInTriangulation, Triangulation,
 };
 
-use crate::geom::{Aabb, Point, orient, vertex_side};
+use crate::geom::{Aabb, Point, Segment, orient, vertex_side};
 use crate::scene::{Interface, Scene, SceneError};
 
 type Cdt = ConstrainedDelaunayTriangulation<Point2<f64>, (), (), (), QuietHint>;
@@ -759,7 +759,7 @@ fn vertices_through_segments(
     for (u, &h) in handle.iter().enumerate() {
         let p = original_by_handle[h as usize];
         scene.segments_through(p, |s| {
-            let (a, b) = interfaces[s.interface as usize]
+            let Segment { start: a, end: b } = interfaces[s.interface as usize]
                 .polyline
                 .segment(s.segment as usize);
             let along = (p - a).dot(b - a);
@@ -889,7 +889,7 @@ impl SegmentPieces {
                 let first = pieces.len();
                 piece_offset.push(first);
                 let links = &chains.chain[chains.offset[g]..chains.offset[g + 1]];
-                let (a, _) = line.segment(j);
+                let a = line.segment(j).start;
                 let (s0, s1) = (line.start(j), line.start(j + 1));
                 let tangent = line.tangent(j);
                 for pair in links.windows(2) {
@@ -1446,7 +1446,7 @@ mod tests {
         assert_eq!(r.num_regions(), 22);
         let line = &scene.interfaces()[0].polyline;
         for j in 0..line.num_segments() {
-            let (a, _) = line.segment(j);
+            let a = line.segment(j).start;
             let s_in = if a.y > 10.0 {
                 line.start(j + 1) - 0.01
             } else {

@@ -6,7 +6,7 @@ use std::fmt;
 use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::bvh::Bvh;
-use crate::geom::{Aabb, Point, SegmentContact, orient, segment_contact};
+use crate::geom::{Aabb, Point, Segment, SegmentContact, orient, segment_contact};
 use crate::polyline::{Polyline, PolylineError};
 
 mod builder;
@@ -428,7 +428,7 @@ pub struct Scene {
     search: Option<SearchOptions>,
     segments: Vec<SegmentRef>,
     /// End points of `segments`, in the same order.
-    segment_ends: Vec<(Point, Point)>,
+    segment_ends: Vec<Segment>,
     segment_bvh: Bvh,
     batch_size: BatchSize,
 }
@@ -1032,13 +1032,15 @@ impl Scene {
     /// pair counted from both sides, a segment with itself once); stops counting beyond it.
     pub(crate) fn box_overlaps_exceed(&self, budget: usize) -> bool {
         let mut count = 0usize;
-        self.segment_ends.iter().any(|&(a, b)| {
-            self.segment_bvh
-                .any_overlapping(Aabb::from_points(a, b), |_| {
-                    count += 1;
-                    count > budget
-                })
-        })
+        self.segment_ends
+            .iter()
+            .any(|&Segment { start: a, end: b }| {
+                self.segment_bvh
+                    .any_overlapping(Aabb::from_points(a, b), |_| {
+                        count += 1;
+                        count > budget
+                    })
+            })
     }
 
     /// Every interface segment, scene-wide.
@@ -1099,7 +1101,7 @@ impl Scene {
                 continue;
             }
             let sbox = *sbox.get_or_insert_with(|| middle_box(a, b, margin));
-            let (p, q) = self.segment_ends[i as usize];
+            let Segment { start: p, end: q } = self.segment_ends[i as usize];
             // Scene vertices are finite.
             if Aabb::from_finite(p, q).overlaps(sbox) && self.crosses(i, a, b, margin) {
                 return Some(r);
@@ -1111,7 +1113,7 @@ impl Scene {
     /// Whether scene segment `i` meets `a–b` at a fraction `t ∈ (margin, 1 − margin)` of it.
     #[inline]
     fn crosses(&self, i: u32, a: Point, b: Point, margin: f64) -> bool {
-        let (p, q) = self.segment_ends[i as usize];
+        let Segment { start: p, end: q } = self.segment_ends[i as usize];
         matches!(
             crate::polyline::segment_intersection(a, b, p, q),
             Some((t, _)) if t > margin && t < 1.0 - margin
@@ -1135,7 +1137,7 @@ impl Scene {
 
     /// End points of a scene segment.
     #[inline]
-    pub fn segment_points(&self, s: SegmentRef) -> (Point, Point) {
+    pub fn segment_points(&self, s: SegmentRef) -> Segment {
         self.interfaces[s.interface as usize]
             .polyline
             .segment(s.segment as usize)
@@ -1355,7 +1357,7 @@ fn index_segments(interfaces: &[Interface]) -> (Vec<SegmentRef>, Bvh) {
                 interface: i as u32,
                 segment: j as u32,
             });
-            let (a, b) = iface.polyline.segment(j);
+            let Segment { start: a, end: b } = iface.polyline.segment(j);
             boxes.push(Aabb::from_points(a, b));
         }
     }
@@ -1386,7 +1388,7 @@ fn interface_polyline(
 }
 
 /// End points of `segments`, in the same order.
-fn segment_ends(interfaces: &[Interface], segments: &[SegmentRef]) -> Vec<(Point, Point)> {
+fn segment_ends(interfaces: &[Interface], segments: &[SegmentRef]) -> Vec<Segment> {
     segments
         .iter()
         .map(|r| {
@@ -1456,7 +1458,7 @@ fn segments_on(
 ) {
     bvh.any_overlapping(Aabb::from_points(p, p), |i| {
         let s = segments[i as usize];
-        let (a, b) = interfaces[s.interface as usize]
+        let Segment { start: a, end: b } = interfaces[s.interface as usize]
             .polyline
             .segment(s.segment as usize);
         orient(a, b, p) == 0.0 && Aabb::from_points(a, b).contains(p) && visit(s, a, b)
@@ -1476,9 +1478,9 @@ fn contact_problem(
 ) -> Option<SceneError> {
     let (s, o) = (segments[i.min(j) as usize], segments[i.max(j) as usize]);
     let line = &interfaces[s.interface as usize].polyline;
-    let (a0, a1) = line.segment(s.segment as usize);
+    let Segment { start: a0, end: a1 } = line.segment(s.segment as usize);
     let oline = &interfaces[o.interface as usize].polyline;
-    let (b0, b1) = oline.segment(o.segment as usize);
+    let Segment { start: b0, end: b1 } = oline.segment(o.segment as usize);
     let contact = segment_contact(a0, a1, b0, b1);
     let same = o.interface == s.interface;
     let nseg = line.num_segments() as u32;

@@ -893,7 +893,7 @@ fn place_of(line: &eigenray::geometry::Polyline, p: Point) -> Place {
     let v = line.vertices();
     let mut best = (f64::INFINITY, Place::Held { vertex: 0 });
     for j in 0..line.num_segments() {
-        let (a, b) = line.segment(j);
+        let eigenray::geometry::Segment { start: a, end: b } = line.segment(j);
         let e = b - a;
         let t = ((p - a).dot(e) / e.dot(e)).clamp(0.0, 1.0);
         let q = a + e * t;

@@ -18,7 +18,7 @@
 //! different search. Plausible paths are named `q0`, `q1`, … in a failing scene, random ones
 //! `p0`, `p1`, …
 
-use eigenray::geometry::orient;
+use eigenray::geometry::{Segment, orient};
 use eigenray::limits::DEFAULT_MAX_ITERATIONS;
 use eigenray::scene_parts::StepKind;
 use eigenray::{
@@ -487,7 +487,7 @@ fn side_of(line: &eigenray::geometry::Polyline, p: Point, margin: f64) -> Option
     let v = line.vertices();
     let n = line.num_segments();
     let near = (0..n).any(|j| {
-        let (a, b) = line.segment(j);
+        let Segment { start: a, end: b } = line.segment(j);
         segment_distance(p, a, b) <= margin
     });
     if near {
@@ -496,7 +496,7 @@ fn side_of(line: &eigenray::geometry::Polyline, p: Point, margin: f64) -> Option
     if line.is_closed() {
         let mut inside = false;
         for j in 0..n {
-            let (a, b) = line.segment(j);
+            let Segment { start: a, end: b } = line.segment(j);
             if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
                 inside = !inside;
             }
@@ -621,7 +621,7 @@ fn check_ray(scene: &Scene, tracer: &Tracer, ray: &Ray) -> Result<(), String> {
         // The segment the point lies on (near a vertex, either neighbour may be it).
         let dists: Vec<f64> = (0..line.num_segments())
             .map(|j| {
-                let (a, b) = line.segment(j);
+                let Segment { start: a, end: b } = line.segment(j);
                 segment_distance(p, a, b)
             })
             .collect();
@@ -631,7 +631,7 @@ fn check_ray(scene: &Scene, tracer: &Tracer, ray: &Ray) -> Result<(), String> {
             .filter(|&j| dists[j] <= best + 1e-12 * size)
             .any(|j| {
                 let t = line.tangent(j);
-                let (a, b) = line.segment(j);
+                let Segment { start: a, end: b } = line.segment(j);
                 let u0 = unit(prev, p);
                 let u1 = unit(p, next);
                 let lhs = w[i] * (u0.0 * t.x + u0.1 * t.y);

@@ -1951,7 +1951,7 @@ fn search_arrival<'py>(
     d.set_item("residual", arrival.residual)?;
     d.set_item("reason", arrival.reason.map(|r| r.describe(scene)))?;
     d.set_item("kink", kink_name(arrival.kink))?;
-    d.set_item("complete", arrival.complete)?;
+    d.set_item("complete", a.complete)?;
     Ok(d)
 }
 

@@ -14,7 +14,7 @@ use std::cmp::Ordering;
 use std::collections::BTreeSet;
 
 use super::{Interface, SceneError, SegmentRef, contact_problem};
-use crate::geom::{Point, orient};
+use crate::geom::{Point, Segment, orient};
 
 /// A segment in the sweep's order (`a` before `b` lexicographically), or a probe: a point
 /// that sorts just below (`probe < 0`) or just above (`probe > 0`) the segments through it.
@@ -86,7 +86,7 @@ pub(super) fn check(interfaces: &[Interface], refs: &[SegmentRef]) -> Result<(),
         .iter()
         .enumerate()
         .map(|(id, r)| {
-            let (p, q) = interfaces[r.interface as usize]
+            let Segment { start: p, end: q } = interfaces[r.interface as usize]
                 .polyline
                 .segment(r.segment as usize);
             let (a, b) = if lex(p, q) == Ordering::Greater {

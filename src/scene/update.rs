@@ -15,7 +15,7 @@ pub(crate) struct InterfaceUndo {
     interface: usize,
     polyline: Polyline,
     segments: Vec<SegmentRef>,
-    segment_ends: Vec<(Point, Point)>,
+    segment_ends: Vec<crate::geom::Segment>,
     segment_bvh: Bvh,
 }
 

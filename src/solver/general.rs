@@ -8,7 +8,7 @@
 //! points that meet a vertex or an end point of the ray are put there instead.
 
 use super::{IterationState, NewtonOptions, NewtonWorkspace, Outcome, Solution, thomas};
-use crate::geom::{Point, Vec2};
+use crate::geom::{Point, Segment, Vec2};
 use crate::problem::{Eval, Pin, ProblemRef, leg_vanished};
 
 /// The general iteration from `ws` as the fast path left it (`fast`). Leaves the final state in
@@ -775,7 +775,7 @@ fn kink_residuals(g: &ProblemRef, e: &Eval, i: usize, back: Vec2) -> (f64, f64) 
 fn end_point_between(g: &ProblemRef, ws: &NewtonWorkspace, i: usize, j: usize) -> Option<f64> {
     let k = g.k();
     let line = g.line(i);
-    let (a, b) = line.segment(j);
+    let Segment { start: a, end: b } = line.segment(j);
     let tiny = ws.eval.vanish;
     let on_segment = |p: crate::geom::Point| -> Option<f64> {
         let t = line.tangent(j);

@@ -10,7 +10,7 @@
 //! interactions fall on one spot or a side is wrong; `obstructed` when only the crossing test
 //! fails.
 
-use crate::geom::{Aabb, Point, Vec2, vertex_side};
+use crate::geom::{Aabb, Point, Segment, Vec2, vertex_side};
 use crate::problem::Pin;
 use crate::regions::Regions;
 use crate::scene::{Scene, SegmentRef, Step, StepKind};
@@ -454,7 +454,7 @@ fn leg_candidates(
                 .into_iter()
                 .filter(|&i| {
                     let r = scene.segments()[i as usize];
-                    let (p, q) = scene.segment_points(r);
+                    let Segment { start: p, end: q } = scene.segment_points(r);
                     !own.contains(&Some(r.interface as usize)) && meets_convex(p, q, &hull, pad)
                 })
                 .collect();

@@ -95,7 +95,7 @@ impl FlatRefraction {
         if line.is_closed() || line.num_segments() != 1 {
             return None;
         }
-        let (origin, _) = line.segment(0);
+        let origin = line.segment(0).start;
         let len = line.length();
         let kernel =
             len > 0.0 && len.is_finite() && SLOWNESS.contains(&w[0]) && SLOWNESS.contains(&w[1]);
@@ -352,7 +352,7 @@ mod tests {
         for i in 0..20_000 {
             let (line, w, s, r) = random_ray(&mut rng);
             let flat = FlatRefraction::of(&line, w, opts).unwrap();
-            let (o, t, len) = (line.segment(0).0, line.tangent(0), line.length());
+            let (o, t, len) = (line.segment(0).start, line.tangent(0), line.length());
             let root = bisection(o, t, len, w, s, r);
             let clear = root.is_some_and(|x| x > 1e-3 * len && x < len * 0.999);
             inside += usize::from(clear);
@@ -439,7 +439,7 @@ mod tests {
                         continue;
                     };
                     solved += 1;
-                    let (o, t) = (line.segment(0).0, line.tangent(0));
+                    let (o, t) = (line.segment(0).start, line.tangent(0));
                     assert!(sol.s > 0.0 && sol.s < 0.1 * scale, "{scale:e} {w:?}");
                     assert!(sol.time.is_finite() && sol.time > 0.0, "{scale:e} {w:?}");
                     let rel = residual(o, t, w, s, r, sol.s).abs() / (w[0] + w[1]);
@@ -459,7 +459,7 @@ mod tests {
         let m = scene.paths()[0].media.as_deref().unwrap();
         let w = [scene.media()[m[0]].slowness, scene.media()[m[1]].slowness];
         let flat = FlatRefraction::of(line, w, scene.solver()).unwrap();
-        let (o, t) = (line.segment(0).0, line.tangent(0));
+        let (o, t) = (line.segment(0).start, line.tangent(0));
         let source = scene.sources()[0];
         let mut more = 0;
         for &r in scene.receivers() {

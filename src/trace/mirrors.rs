@@ -21,7 +21,7 @@
 //! validation alone decides. Where the side of a wall's line an image lies on is within that
 //! margin, the child's beam is the whole plane (no pruning below it).
 
-use crate::geom::{Point, Vec2};
+use crate::geom::{Point, Segment, Vec2};
 use crate::scene::{Scene, SegmentRef, StepKind};
 
 use super::classify::{END_MARGIN, leg_sides, sides_suit};
@@ -208,7 +208,7 @@ impl MirrorWalls {
             .map(|&interface| {
                 let line = &scene.interfaces()[interface].polyline;
                 debug_assert!(line.num_segments() == 1 && !line.is_closed());
-                let (p, q) = line.segment(0);
+                let Segment { start: p, end: q } = line.segment(0);
                 Wall {
                     interface,
                     own: SegmentRef {
@@ -782,7 +782,8 @@ mod tests {
                 b.reason
             );
             if let Some((l, interface)) = leg(a.reason) {
-                let (p, q) = scene.interfaces()[interface].polyline.segment(0);
+                let Segment { start: p, end: q } =
+                    scene.interfaces()[interface].polyline.segment(0);
                 let t = crate::polyline::segment_intersection(a.points[l], a.points[l + 1], p, q);
                 assert!(
                     t.is_some_and(|(t, _)| t > END_MARGIN && t < 1.0 - END_MARGIN),

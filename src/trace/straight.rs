@@ -22,7 +22,7 @@
 
 use super::Workspace;
 use super::start::{PARALLEL, Placed, StepLines};
-use crate::geom::{Point, Vec2};
+use crate::geom::{Point, Segment, Vec2};
 use crate::polyline::{Polyline, point_between, segment_intersection};
 use crate::problem::Frame;
 use crate::problem::Pin;
@@ -41,7 +41,7 @@ pub(super) struct StraightSegment {
 
 impl StraightSegment {
     fn of(line: &Polyline) -> StraightSegment {
-        let (p, q) = line.segment(0);
+        let Segment { start: p, end: q } = line.segment(0);
         // (An open polyline of one segment has no curvature estimate: `StraightSegment::frame`.)
         debug_assert_eq!(line.curvature(0), 0.0);
         StraightSegment {

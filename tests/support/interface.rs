@@ -3,7 +3,7 @@
 //! fuzz targets through `#[path]`).
 
 use eigenray::Point;
-use eigenray::geometry::Polyline;
+use eigenray::geometry::{Polyline, Segment};
 
 /// Distance from `p` to segment `a–b` (computed on coordinates scaled to the segment, so that
 /// tiny and huge scenes neither underflow nor overflow).
@@ -19,7 +19,7 @@ pub fn segment_distance(p: Point, a: Point, b: Point) -> f64 {
 pub fn distance_to_polyline(line: &Polyline, p: Point) -> f64 {
     (0..line.num_segments())
         .map(|j| {
-            let (a, b) = line.segment(j);
+            let Segment { start: a, end: b } = line.segment(j);
             segment_distance(p, a, b)
         })
         .fold(f64::INFINITY, f64::min)

@@ -1,7 +1,7 @@
 //! The segment hierarchy of one polyline: nodes of consecutive segments, each with its box and
 //! tangent cone.
 
-use crate::geom::{Aabb, Vec2};
+use crate::geom::{Aabb, Segment, Vec2};
 use crate::polyline::Polyline;
 
 use super::place::Place;
@@ -74,7 +74,7 @@ impl Hierarchy {
     /// Adds the node of segments `a..b` and its descendants; returns its index.
     fn build(&mut self, line: &Polyline, a: usize, b: usize) -> u32 {
         let at = self.nodes.len();
-        let (p, q) = line.segment(a);
+        let Segment { start: p, end: q } = line.segment(a);
         let (bbox, cone) = (Aabb::from_points(p, q), self.vertex_cone(a));
         self.nodes.push(Node {
             first: a as u32,
@@ -159,7 +159,7 @@ mod tests {
         // The box: exactly that of the range's vertices.
         let ends: Vec<Point> = (a..b)
             .flat_map(|j| {
-                let (p, q) = line.segment(j);
+                let Segment { start: p, end: q } = line.segment(j);
                 [p, q]
             })
             .collect();

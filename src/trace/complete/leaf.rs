@@ -1,6 +1,6 @@
 //! The exact solve of one assignment of segments (with its held vertices), and its arrival.
 
-use crate::geom::Aabb;
+use crate::geom::{Aabb, Segment};
 use crate::problem::Pin;
 use crate::solver::{Outcome, Solution};
 
@@ -35,7 +35,7 @@ impl Search<'_> {
                 let place = Place::new(Aabb::from_points(v, v), cone, j, j + 1);
                 self.sc.places.push(place);
             } else {
-                let (p, q) = line.segment(j);
+                let Segment { start: p, end: q } = line.segment(j);
                 let t = h.theta[j];
                 self.sc.places.push(Place {
                     tangent: line.tangent(j),
