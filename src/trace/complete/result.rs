@@ -74,8 +74,8 @@ impl Arrival {
 
 /// What the search for every stationary path of one sequence between one source and one
 /// receiver did: whether it is complete (the one place a search says so; the lists it fills
-/// carry it on: [`TripleArrivals::complete`](crate::stationary::TripleArrivals::complete),
-/// [`SearchArrival::complete`](crate::search::SearchArrival::complete)), and its work.
+/// carry it on: `TripleArrivals::complete` per triple, `SearchArrival::complete` per search
+/// arrival), and its work.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SearchOutcome {
     /// Whether every stationary path of the triple is listed: `false` when the search reached
