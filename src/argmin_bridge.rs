@@ -65,7 +65,8 @@ use crate::problem::PathProblem;
 /// use argmin::core::{CostFunction, Executor, Gradient, State};
 /// use argmin::solver::gaussnewton::GaussNewton;
 /// use eigenray::argmin_bridge::ArgminPath;
-/// use eigenray::{PathProblem, Scene};
+/// use eigenray::path_problem::PathProblem;
+/// use eigenray::Scene;
 /// use nalgebra::DVector;
 ///
 /// let scene = Scene::from_json(r#"{

@@ -162,7 +162,8 @@ impl ExactSizeIterator for BatchRays<'_> {}
 /// [`write_one`](Self::write_one); which rays go through which is not part of the contract.
 ///
 /// ```
-/// use eigenray::{BatchOptions, BatchScratch, BatchSink, Point, RayRecord, RaySlot, Scene, Tracer};
+/// use eigenray::sink::{BatchScratch, BatchSink, RaySlot};
+/// use eigenray::{BatchOptions, Point, RayRecord, Scene, Tracer};
 ///
 /// /// Times only, into a slice of one time per ray (one path here).
 /// struct Times<'a>(&'a mut [f64]);

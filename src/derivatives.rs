@@ -706,7 +706,8 @@ pub enum Parameter {
 /// those of [`Workspace::points`] (source, interactions, receiver).
 ///
 /// ```
-/// use eigenray::{Axis, Parameter, PointSensitivities, Scene, Tracer, Workspace};
+/// use eigenray::gradients::{Axis, Parameter};
+/// use eigenray::{PointSensitivities, Scene, Tracer, Workspace};
 /// let scene = Scene::from_json(r#"{
 ///     "media": { "air": { "speed": 1.0 } },
 ///     "interfaces": { "mirror": { "points": [[-5, 0], [5, 0]] } },
@@ -1158,7 +1159,8 @@ impl Tracer {
 /// A ray without a time, or not asked for, has NaN gradients and no vertices.
 ///
 /// ```
-/// use eigenray::{BatchGradients, BatchOptions, Scene, Tracer};
+/// use eigenray::gradients::BatchGradients;
+/// use eigenray::{BatchOptions, Scene, Tracer};
 /// let scene = Scene::from_spec(&eigenray::demo::air_water(100, 7)).unwrap();
 /// let tracer = Tracer::new(&scene).unwrap();
 /// let batch = tracer.trace_batch(&BatchOptions::default());

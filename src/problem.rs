@@ -652,7 +652,8 @@ fn inv(l: f64) -> f64 {
 /// other solvers (the argmin bridge).
 ///
 /// ```
-/// use eigenray::{PathProblem, Scene};
+/// use eigenray::path_problem::PathProblem;
+/// use eigenray::Scene;
 /// let scene = Scene::from_json(r#"{
 ///     "media": { "a": { "speed": 1.0 }, "b": { "speed": 0.5 } },
 ///     "interfaces": { "flat": { "points": [[-10, 0], [10, 0]] } },

@@ -80,7 +80,8 @@ impl Tracer {
     /// ray order. This is what a scene with `"solver": {"stationary": "all"}` asks for.
     ///
     /// ```
-    /// use eigenray::{Kink, Scene, Status, Tracer};
+    /// use eigenray::stationary::Kink;
+    /// use eigenray::{Scene, Status, Tracer};
     /// // A mirror bent into a valley: a specular point on each slope, and the bottom, where
     /// // the time has a maximum-type kink.
     /// let scene = Scene::from_json(r#"{

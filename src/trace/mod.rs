@@ -310,7 +310,8 @@ impl Tracer {
     /// example, to compare a kernel's rays with it.
     ///
     /// ```
-    /// use eigenray::{Kernels, Scene, Tracer};
+    /// use eigenray::options::Kernels;
+    /// use eigenray::{Scene, Tracer};
     /// let scene = Scene::from_spec(&eigenray::demo::layer_stack(8, 20)).unwrap();
     /// let fast = Tracer::new(&scene).unwrap().trace_all();
     /// let general = Tracer::new(&scene).unwrap().with_kernels(Kernels::GeneralOnly).trace_all();

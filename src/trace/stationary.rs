@@ -45,7 +45,8 @@ impl Tracer {
     /// (measured on a digitised sea floor: 24 tuples per ray at M = 1e3, 40 at 1e5).
     ///
     /// ```
-    /// use eigenray::{Kink, Point, Scene, Status, Tracer};
+    /// use eigenray::stationary::Kink;
+    /// use eigenray::{Point, Scene, Status, Tracer};
     /// // A mirror bent into a valley, seen from above: a specular point on each slope, and
     /// // the bottom, where the time has a maximum-type kink.
     /// let scene = Scene::from_json(r#"{
