@@ -164,10 +164,32 @@ impl Regions {
             ""
         };
         if self.region_medium.iter().all(Option::is_none) {
-            return Err(SceneError::new(
-                "background",
-                "no medium fills any region: name a `background`, or give media `at` points",
-            ));
+            // Blame what asked for region lookup: a path without `media`, else the search.
+            let lookup = scene.paths().iter().position(|p| p.media.is_none());
+            let regions = "name a `background` medium, or give a medium an `at` point inside \
+                           its region";
+            let (key, message) = match lookup {
+                Some(k) => (
+                    format!("paths[{k}].media"),
+                    format!(
+                        "missing: path {k} takes its leg media from the regions (it has no \
+                         `media`), but no medium fills any region: give the path `media` (one \
+                         medium name per leg), or {regions}"
+                    ),
+                ),
+                None if scene.search().is_some() => (
+                    "search".to_string(),
+                    format!(
+                        "the search takes its leg media from the regions, but no medium fills \
+                         any region: {regions}"
+                    ),
+                ),
+                None => (
+                    "background".to_string(),
+                    format!("no medium fills any region: {regions}"),
+                ),
+            };
+            return Err(SceneError::new(key, message));
         }
         if let Some(b) = scene.background() {
             if !self.region_medium.contains(&Some(b)) {

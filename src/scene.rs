@@ -11,6 +11,7 @@ use crate::polyline::{Polyline, PolylineError};
 
 mod builder;
 mod crossings;
+mod names;
 mod update;
 
 pub use builder::SceneBuilder;
@@ -224,12 +225,41 @@ pub struct PathSpec {
 
 /// One interaction: `{"reflect": NAME}` or `{"refract": NAME}`.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
+#[serde(rename_all = "lowercase", try_from = "StepDocument")]
 pub enum StepSpec {
     /// Reflection off the named interface.
     Reflect(String),
     /// Refraction through the named interface.
     Refract(String),
+}
+
+/// A step as the document writes it, before the check that it names exactly one kind: the
+/// form serde reads, so that a step with both keys or neither gets a message of its own.
+#[derive(Deserialize)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a step, {\"reflect\": NAME} or {\"refract\": NAME}"
+)]
+struct StepDocument {
+    reflect: Option<String>,
+    refract: Option<String>,
+}
+
+impl TryFrom<StepDocument> for StepSpec {
+    type Error = String;
+
+    fn try_from(step: StepDocument) -> Result<StepSpec, String> {
+        match (step.reflect, step.refract) {
+            (Some(name), None) => Ok(StepSpec::Reflect(name)),
+            (None, Some(name)) => Ok(StepSpec::Refract(name)),
+            (Some(_), Some(_)) => Err("a step is one interaction: give `reflect` or `refract` \
+                 (`{\"reflect\": NAME}`), not both; write two steps for two interactions"
+                .into()),
+            (None, None) => {
+                Err("a step needs `reflect` or `refract` (`{\"reflect\": NAME}`)".into())
+            }
+        }
+    }
 }
 
 /// Solver settings.
@@ -305,6 +335,9 @@ pub struct Medium {
     pub name: String,
     /// Slowness: time per unit length (1 / speed, or the refractive index).
     pub slowness: f64,
+    /// Whether it was given as a refractive index (optics), not a speed. A scene's media are
+    /// all of one kind.
+    pub index: bool,
     /// A point inside its region, if given.
     pub at: Option<Point>,
 }
@@ -561,8 +594,10 @@ fn search_options(
             let mut idx: Vec<usize> = Vec::with_capacity(names.len());
             for (j, name) in names.iter().enumerate() {
                 let key = format!("search.interfaces[{j}]");
-                let i = by_name(interfaces, |i| &i.name, name)
-                    .ok_or_else(|| SceneError::new(&key, format!("unknown interface `{name}`")))?;
+                let i = by_name(interfaces, |i| &i.name, name).ok_or_else(|| {
+                    let known = interfaces.iter().map(|i| i.name.as_str());
+                    SceneError::new(&key, names::unknown("interface", name, known))
+                })?;
                 if idx.contains(&i) {
                     return Err(SceneError::new(key, format!("`{name}` is listed twice")));
                 }
@@ -627,10 +662,39 @@ fn media_of(spec: &SceneSpec) -> Result<Vec<Medium>, SceneError> {
         media.push(Medium {
             name: name.clone(),
             slowness,
+            index: m.index.is_some(),
             at,
         });
     }
+    one_kind_of_medium(&media)?;
     Ok(media)
+}
+
+/// Refuses a scene that mixes `speed` media with `index` media: a speed gives time in length
+/// over the scene's speed unit, an index time in length over the speed of light (c = 1), so a
+/// path through both has no time in any one unit.
+///
+/// # Errors
+/// `media.NAME` for the first medium (in name order) of the other kind than the first.
+fn one_kind_of_medium(media: &[Medium]) -> Result<(), SceneError> {
+    let Some(first) = media.first() else {
+        return Ok(());
+    };
+    let word = |index: bool| if index { "an `index`" } else { "a `speed`" };
+    let (first, kind) = (&first.name, first.index);
+    match media.iter().find(|m| m.index != kind) {
+        Some(Medium { name, .. }) => Err(SceneError::new(
+            format!("media.{name}"),
+            format!(
+                "has {} while `{first}` has {}: a scene's media are all `speed` media (times \
+                 in length / speed) or all `index` media (optics: time = index × length), not \
+                 both; give every medium the same kind",
+                word(!kind),
+                word(kind)
+            ),
+        )),
+        None => Ok(()),
+    }
 }
 
 /// The index of medium `name` among `media` (in name order: found by binary search, so that
@@ -639,8 +703,10 @@ fn media_of(spec: &SceneSpec) -> Result<Vec<Medium>, SceneError> {
 /// # Errors
 /// `key` when no medium has that name.
 fn medium_index(media: &[Medium], key: &str, name: &str) -> Result<usize, SceneError> {
-    by_name(media, |m| &m.name, name)
-        .ok_or_else(|| SceneError::new(key, format!("unknown medium `{name}`")))
+    by_name(media, |m| &m.name, name).ok_or_else(|| {
+        let known = media.iter().map(|m| m.name.as_str());
+        SceneError::new(key, names::unknown("medium", name, known))
+    })
 }
 
 /// The domain box of `[[xmin, ymin], [xmax, ymax]]`, if given.
@@ -756,7 +822,11 @@ fn path_of(
         let interface = by_name(interfaces, |i| &i.name, name).ok_or_else(|| {
             SceneError::new(
                 format!("{key}.steps[{j}].{which}"),
-                format!("unknown interface `{name}`"),
+                names::unknown(
+                    "interface",
+                    name,
+                    interfaces.iter().map(|i| i.name.as_str()),
+                ),
             )
         })?;
         steps.push(Step { kind, interface });

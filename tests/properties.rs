@@ -353,7 +353,9 @@ fn build(raw: &RawScene) -> SceneSpec {
 
     let mut claimed = vec![false; region_at.len()];
     let medium_names: Vec<String> = (0..raw.media.len()).map(|k| format!("m{k}")).collect();
-    for (k, &(log_speed, as_index, region)) in raw.media.iter().enumerate() {
+    // One kind of medium a scene (the first one's): a scene that mixes them is refused.
+    let as_index = raw.media.first().is_some_and(|m| m.1);
+    for (k, &(log_speed, _, region)) in raw.media.iter().enumerate() {
         let v = 10f64.powf(log_speed);
         let at = region.map(|r| r % region_at.len()).and_then(|r| {
             (!claimed[r]).then(|| {

@@ -267,7 +267,7 @@ mod tests {
     #[test]
     fn the_builder_reads_like_the_json() {
         let json = r#"{
-            "media": { "air": { "speed": 343.0, "at": [3, 2] }, "wood": { "index": 2.0 } },
+            "media": { "air": { "speed": 343.0, "at": [3, 2] }, "wood": { "speed": 3900.0 } },
             "background": "wood",
             "domain": [[-1, -1], [7, 5]],
             "interfaces": {
@@ -283,7 +283,7 @@ mod tests {
         }"#;
         let built = Scene::builder()
             .medium("air", MediumSpec::speed(343.0).at([3.0, 2.0]))
-            .medium("wood", MediumSpec::index(2.0))
+            .medium("wood", MediumSpec::speed(3900.0))
             .background("wood")
             .domain([-1.0, -1.0], [7.0, 5.0])
             .interface(

@@ -4,8 +4,8 @@
 
 use super::{
     Bvh, Interface, Point, Polyline, Scene, SceneError, SegmentRef, at_off_interfaces,
-    check_region_range, crossings, index_segments, interface_polyline, point, positive,
-    scene_points, segment_ends, source_in_a_region,
+    check_region_range, crossings, index_segments, interface_polyline, one_kind_of_medium, point,
+    positive, scene_points, segment_ends, source_in_a_region,
 };
 
 /// What an interface edit replaced: enough to put it back (a tracer's own checks may refuse
@@ -231,7 +231,14 @@ impl Scene {
                 "slowness (1 / speed) is not a finite positive number",
             ));
         }
-        m.slowness = slowness;
+        // The document's check of kinds, on the media as they would be.
+        let (was, index) = (m.index, what == "index");
+        m.index = index;
+        if let Err(e) = one_kind_of_medium(&self.media) {
+            self.media[medium].index = was;
+            return Err(e);
+        }
+        self.media[medium].slowness = slowness;
         Ok(())
     }
 

@@ -817,7 +817,7 @@ fn no_background_and_no_at_is_refused() {
         "interfaces": {"wall": {"points": [[0, 0], [1, 0]]}},
         "sources": [[0, 1]], "receivers": [[1, 1]], "paths": [{"steps": [{"reflect": "wall"}]}]});
     let run = solve_file(&v.to_string());
-    run.assert_refused("background: no medium fills any region");
+    run.assert_refused("paths[0].media: missing: path 0 takes its leg media from the regions");
 }
 
 #[test]
