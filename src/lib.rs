@@ -74,10 +74,13 @@ mod trace;
 pub mod argmin_bridge;
 
 // The vocabulary: scenes, the tracer and its options, ray results, batches, outputs.
-pub use arrivals::{MAX_SEARCH_WORK, SearchArrival, SearchError, StationaryRays, TripleArrivals};
+pub use arrivals::{
+    MAX_SEARCH_WORK, SearchArrival, SearchError, StationaryEntry, StationaryRays, TripleArrivals,
+};
 pub use batch::{Batch, BatchOptions, BatchRay, BatchRays, BatchScratch, BatchSink, RaySlot};
 pub use derivatives::{
-    Axis, BatchGradients, DerivativeError, Gradient, Parameter, PointSensitivities, VertexGradient,
+    Axis, BatchGradients, DerivativeError, Gradient, GradientArraysMut, GradientRows, Parameter,
+    PointSensitivities, VertexGradient,
 };
 pub use geom::{Point, Vec2};
 pub use output::{
