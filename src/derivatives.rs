@@ -1218,12 +1218,23 @@ impl BatchGradients {
                 },
             )
             .collect();
-        let inputs = BatchInputs {
-            scene,
-            batch,
-            wanted,
-        };
-        gradients_in_pieces(scene, &inputs, pieces);
+        gradients_in_pieces(pieces, |rays, piece| {
+            let first = rays.start;
+            for ray in rays {
+                let row = ray - first;
+                if !(batch.record(ray).status.has_time() && wanted(ray)) {
+                    piece.store_none(row);
+                    continue;
+                }
+                let (_, _, path) = batch.triple(ray);
+                let steps = &scene.paths()[path].steps;
+                let Some(media) = batch.media(ray) else {
+                    piece.store_none(row);
+                    continue;
+                };
+                store_gradient(scene, piece, row, steps, batch.points(ray), media);
+            }
+        });
     }
 }
 
@@ -1331,8 +1342,54 @@ impl GradientRows<'_> {
                 },
             )
             .collect();
-        let inputs = RowInputs { scene, rows: self };
-        gradients_in_pieces(scene, &inputs, pieces);
+        gradients_in_pieces(pieces, |rays, piece| {
+            let first = rays.start;
+            let mut points = Vec::new();
+            for ray in rays {
+                match self.ray(scene, ray, &mut points) {
+                    Some(path) => {
+                        let (steps, media) = (path.steps, path.media);
+                        store_gradient(scene, piece, ray - first, steps, path.points, media);
+                    }
+                    None => piece.store_none(ray - first),
+                }
+            }
+        });
+    }
+
+    /// Ray `ray`, when it has a time and its points and leg media fit its path (`points` holds
+    /// its points).
+    fn ray<'s>(
+        &'s self,
+        scene: &'s Scene,
+        ray: usize,
+        points: &'s mut Vec<Point>,
+    ) -> Option<RayPath<'s, impl Iterator<Item = usize> + 's>> {
+        let timed = STATUS_CODES
+            .get(usize::from(self.statuses[ray]))
+            .is_some_and(|s| s.has_time());
+        let path = usize::try_from(self.paths[ray]).ok();
+        let steps = &path
+            .and_then(|p| scene.paths().get(p))
+            .filter(|_| timed)?
+            .steps;
+        let count = steps.len() + 2;
+        if usize::try_from(self.num_points[ray]) != Ok(count) || count > self.width {
+            return None;
+        }
+        let xy = &self.points[2 * ray * self.width..][..2 * count];
+        points.clear();
+        points.extend(xy.chunks_exact(2).map(|p| Point::new(p[0], p[1])));
+        let legs = &self.media[ray * (self.width - 1)..][..count - 1];
+        // An unknown medium (negative) is out of range: no gradient.
+        let media = legs
+            .iter()
+            .map(|&m| usize::try_from(m).unwrap_or(usize::MAX));
+        Some(RayPath {
+            steps,
+            points,
+            media,
+        })
     }
 }
 
@@ -1360,17 +1417,6 @@ struct RayPath<'s, M> {
     media: M,
 }
 
-/// The rays of a computation of many gradients, one by one.
-trait GradientInputs: Sync {
-    /// Ray `ray`, or `None` when it gets no gradient (no time, or not asked for); `points` a
-    /// buffer for points that are not already [`Point`]s.
-    fn ray<'s>(
-        &'s self,
-        ray: usize,
-        points: &'s mut Vec<Point>,
-    ) -> Option<RayPath<'s, impl Iterator<Item = usize> + 's>>;
-}
-
 /// One piece of the arrays of many gradients, written row by row.
 trait GradientPiece: Send {
     /// Rows of the piece.
@@ -1392,75 +1438,46 @@ struct RowRoom<'r> {
     vertices: &'r mut [VertexGradient],
 }
 
-/// The gradients of the rays of `inputs` into `pieces`, in parallel: piece `p` holds rays
-/// `p × GRADIENT_PIECE` on. The core of [`BatchGradients::compute`] and
-/// [`GradientRows::gradients_into`].
+/// Fills `pieces` in parallel, `fill(rays, piece)` the rows of rays `rays` (piece `p` holds
+/// rays `p × GRADIENT_PIECE` on): the core of [`BatchGradients::compute`] and
+/// [`GradientRows::gradients_into`], with [`store_gradient`] for each ray.
 fn gradients_in_pieces<P: GradientPiece>(
-    scene: &Scene,
-    inputs: &impl GradientInputs,
     pieces: Vec<P>,
+    fill: impl Fn(std::ops::Range<usize>, &mut P) + Sync,
 ) {
     pieces
         .into_par_iter()
         .enumerate()
         .for_each(|(p, mut piece)| {
-            let mut points = Vec::new();
-            for row in 0..piece.rows() {
-                let Some(ray) = inputs.ray(p * GRADIENT_PIECE + row, &mut points) else {
-                    piece.store_none(row);
-                    continue;
-                };
-                let room = piece.row(row);
-                let vertices = &mut room.vertices[..2 * ray.steps.len()];
-                let mut used = 0;
-                let parts = gradient_parts(
-                    scene,
-                    ray.steps,
-                    ray.points,
-                    ray.media,
-                    None,
-                    room.slowness,
-                    |v| {
-                        vertices[used] = v;
-                        used += 1;
-                    },
-                );
-                match parts {
-                    Ok(ends) => {
-                        let count = merge(&mut vertices[..used]);
-                        piece.store(row, ends, count);
-                    }
-                    Err(_) => piece.store_none(row),
-                }
-            }
+            let first = p * GRADIENT_PIECE;
+            fill(first..first + piece.rows(), &mut piece);
         });
 }
 
-/// The rays of a [`Batch`] that have a time and are wanted.
-struct BatchInputs<'a> {
-    /// The batch's scene.
-    scene: &'a Scene,
-    /// The rays.
-    batch: &'a Batch,
-    /// Whether a ray's gradient is asked for.
-    wanted: &'a (dyn Fn(usize) -> bool + Sync),
-}
-
-impl GradientInputs for BatchInputs<'_> {
-    fn ray<'s>(
-        &'s self,
-        ray: usize,
-        _: &'s mut Vec<Point>,
-    ) -> Option<RayPath<'s, impl Iterator<Item = usize> + 's>> {
-        if !(self.batch.record(ray).status.has_time() && (self.wanted)(ray)) {
-            return None;
+/// Row `row` of `piece`: the gradient of the ray through `points` by `steps` with leg media
+/// `media`, or none when they do not make one.
+#[inline(always)]
+fn store_gradient<P: GradientPiece>(
+    scene: &Scene,
+    piece: &mut P,
+    row: usize,
+    steps: &[Step],
+    points: &[Point],
+    media: impl Iterator<Item = usize>,
+) {
+    let room = piece.row(row);
+    let vertices = &mut room.vertices[..2 * steps.len()];
+    let mut used = 0;
+    let parts = gradient_parts(scene, steps, points, media, None, room.slowness, |v| {
+        vertices[used] = v;
+        used += 1;
+    });
+    match parts {
+        Ok(ends) => {
+            let count = merge(&mut vertices[..used]);
+            piece.store(row, ends, count);
         }
-        let (_, _, path) = self.batch.triple(ray);
-        Some(RayPath {
-            steps: &self.scene.paths()[path].steps,
-            points: self.batch.points(ray),
-            media: self.batch.media(ray)?,
-        })
+        Err(_) => piece.store_none(row),
     }
 }
 
@@ -1504,50 +1521,6 @@ impl GradientPiece for BatchPiece<'_> {
     fn store_none(&mut self, row: usize) {
         // Everything else holds its value without a gradient already.
         self.slowness[row * self.media..(row + 1) * self.media].fill(f64::NAN);
-    }
-}
-
-/// The rays of [`GradientRows`] that have a time and whose points and leg media fit their
-/// path.
-struct RowInputs<'a> {
-    /// The rays' scene.
-    scene: &'a Scene,
-    /// The rays.
-    rows: &'a GradientRows<'a>,
-}
-
-impl GradientInputs for RowInputs<'_> {
-    fn ray<'s>(
-        &'s self,
-        ray: usize,
-        points: &'s mut Vec<Point>,
-    ) -> Option<RayPath<'s, impl Iterator<Item = usize> + 's>> {
-        let rows = self.rows;
-        let timed = STATUS_CODES
-            .get(usize::from(rows.statuses[ray]))
-            .is_some_and(|s| s.has_time());
-        let path = usize::try_from(rows.paths[ray]).ok();
-        let steps = &path
-            .and_then(|p| self.scene.paths().get(p))
-            .filter(|_| timed)?
-            .steps;
-        let count = steps.len() + 2;
-        if usize::try_from(rows.num_points[ray]) != Ok(count) || count > rows.width {
-            return None;
-        }
-        let xy = &rows.points[2 * ray * rows.width..][..2 * count];
-        points.clear();
-        points.extend(xy.chunks_exact(2).map(|p| Point::new(p[0], p[1])));
-        let legs = &rows.media[ray * (rows.width - 1)..][..count - 1];
-        // An unknown medium (negative) is out of range: no gradient.
-        let media = legs
-            .iter()
-            .map(|&m| usize::try_from(m).unwrap_or(usize::MAX));
-        Some(RayPath {
-            steps,
-            points,
-            media,
-        })
     }
 }
 
