@@ -958,7 +958,8 @@ pub fn write_rays_and_arrivals<W: Write>(
             },
         ),
         RaySet::Stationary(rays) => {
-            let entries: Vec<_> = rays.entries_in_order(scene).collect();
+            let mut entries = Vec::with_capacity(rays.entries());
+            entries.extend(rays.entries_in_order(scene));
             write_all(
                 scene,
                 entries.len(),
