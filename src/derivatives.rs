@@ -40,6 +40,7 @@ use rayon::prelude::*;
 
 use crate::batch::Batch;
 use crate::geom::{Point, Vec2};
+use crate::output::STATUS_CODES;
 use crate::polyline::Polyline;
 use crate::scene::{Scene, Step};
 use crate::solver::thomas;
@@ -1181,7 +1182,7 @@ pub struct BatchGradients {
     counts: Vec<u32>,
 }
 
-/// Rays per parallel piece of [`BatchGradients::compute`].
+/// Rays per parallel piece of [`BatchGradients::compute`] and [`GradientRows::gradients_into`].
 const GRADIENT_PIECE: usize = 1024;
 
 impl BatchGradients {
@@ -1258,12 +1259,7 @@ impl BatchGradients {
     ) {
         let n = batch.len();
         let media = scene.media().len();
-        let slots = 2 * scene
-            .paths()
-            .iter()
-            .map(|p| p.steps.len())
-            .max()
-            .unwrap_or(0);
+        let slots = GradientArraysMut::slots(scene);
         self.media = media;
         self.slots = slots;
         let nan = Vec2::new(f64::NAN, f64::NAN);
@@ -1277,49 +1273,590 @@ impl BatchGradients {
         self.vertices.resize(n * slots, VertexGradient::default());
         self.counts.clear();
         self.counts.resize(n, u32::MAX);
-        let piece = GRADIENT_PIECE;
-        self.source
-            .par_chunks_mut(piece)
-            .zip(self.receiver.par_chunks_mut(piece))
-            .zip(self.slowness.par_chunks_mut(piece * media.max(1)))
-            .zip(self.vertices.par_chunks_mut(piece * slots.max(1)))
-            .zip(self.counts.par_chunks_mut(piece))
-            .enumerate()
-            .for_each(|(p, ((((src, rec), slow), verts), counts))| {
-                for (j, count) in counts.iter_mut().enumerate() {
-                    let ray = p * piece + j;
-                    if !(batch.record(ray).status.has_time() && wanted(ray)) {
-                        continue;
-                    }
-                    let path = batch.triple(ray).path;
-                    let steps = &scene.paths()[path].steps;
-                    let Some(ray_media) = batch.media(ray) else {
-                        continue;
-                    };
-                    let slow = &mut slow[j * media..(j + 1) * media];
-                    let verts = &mut verts[j * slots..j * slots + 2 * steps.len()];
-                    let mut used = 0;
-                    let parts = gradient_parts(
-                        scene,
-                        steps,
-                        batch.points(ray),
-                        ray_media,
-                        None,
-                        slow,
-                        |v| {
-                            verts[used] = v;
-                            used += 1;
-                        },
-                    );
-                    match parts {
-                        Ok(ends) => {
-                            src[j] = ends.source;
-                            rec[j] = ends.receiver;
-                            *count = merge(&mut verts[..used]) as u32;
-                        }
-                        Err(_) => slow.fill(f64::NAN),
-                    }
+        let count = n.div_ceil(GRADIENT_PIECE);
+        let pieces = row_pieces(&mut self.source, 1, count)
+            .zip(row_pieces(&mut self.receiver, 1, count))
+            .zip(row_pieces(&mut self.slowness, media, count))
+            .zip(row_pieces(&mut self.vertices, slots, count))
+            .zip(row_pieces(&mut self.counts, 1, count))
+            .map(
+                |((((source, receiver), slowness), vertices), counts)| BatchPiece {
+                    media,
+                    slots,
+                    source,
+                    receiver,
+                    slowness,
+                    vertices,
+                    counts,
+                },
+            )
+            .collect();
+        gradients_in_pieces(pieces, |rays, piece| {
+            let first = rays.start;
+            for ray in rays {
+                let row = ray - first;
+                if !(batch.record(ray).status.has_time() && wanted(ray)) {
+                    piece.store_none(row);
+                    continue;
                 }
-            });
+                let path = batch.triple(ray).path;
+                let steps = &scene.paths()[path].steps;
+                let Some(media) = batch.media(ray) else {
+                    piece.store_none(row);
+                    continue;
+                };
+                store_gradient(scene, piece, row, steps, batch.points(ray), media);
+            }
+        });
+    }
+}
+
+/// Rays given as flat rows (the arrays of the Python package's `Rays`), whose gradients
+/// [`gradients_into`](Self::gradients_into) computes: `n` rays, row `i` of every array ray
+/// `i`'s.
+#[derive(Clone, Copy, Debug)]
+pub struct GradientRows<'a> {
+    /// Path index of each ray (`n` entries).
+    pub paths: &'a [i64],
+    /// Status code of each ray: its place in [`STATUS_CODES`](crate::npy::STATUS_CODES) (`n`
+    /// entries).
+    pub statuses: &'a [u8],
+    /// Points a row holds (`width − 1` legs).
+    pub width: usize,
+    /// Source, interaction points and receiver of each ray, `(x, y)` each, `width` points a
+    /// row (`n × width × 2` entries), the ray's own first.
+    pub points: &'a [f64],
+    /// How many of a row's points are the ray's own (`n` entries).
+    pub num_points: &'a [i64],
+    /// Leg media, `width − 1` a row (indices into [`Scene::media`]; negative where unknown).
+    pub media: &'a [i32],
+}
+
+/// Where [`GradientRows::gradients_into`] writes: flat arrays of `n` rows, every entry
+/// written. `slots` below is [`GradientArraysMut::slots`] of the scene.
+#[derive(Debug)]
+pub struct GradientArraysMut<'a> {
+    /// `(dT/dx, dT/dy)` of each ray's source (`n × 2` entries).
+    pub source: &'a mut [f64],
+    /// `(dT/dx, dT/dy)` of each ray's receiver (`n × 2` entries).
+    pub receiver: &'a mut [f64],
+    /// `dT/dw` of each medium, in the order of [`Scene::media`] (`n × media` entries).
+    pub slowness: &'a mut [f64],
+    /// The interface of each vertex gradient, the ray's own first (ordered by interface and
+    /// vertex, each vertex once), −1 past them (`n × slots` entries).
+    pub vertex_interface: &'a mut [i32],
+    /// The vertex's index in its interface's points, −1 past the ray's own (`n × slots`).
+    pub vertex: &'a mut [i32],
+    /// `(dT/dx, dT/dy)` of that vertex, NaN past the ray's own (`n × slots × 2` entries).
+    pub vertex_d: &'a mut [f64],
+}
+
+impl GradientArraysMut<'_> {
+    /// Vertex gradients a row has room for, for rays of `scene`: twice the most steps of a
+    /// path (a point between two vertices moves both).
+    pub fn slots(scene: &Scene) -> usize {
+        2 * scene
+            .paths()
+            .iter()
+            .map(|p| p.steps.len())
+            .max()
+            .unwrap_or(0)
+    }
+}
+
+impl GradientRows<'_> {
+    /// Computes the gradient of every ray into `out`, in parallel (rayon), the same numbers
+    /// as [`Gradient::points_into`] and [`BatchGradients::compute`]. A ray gets NaN gradients
+    /// and no vertices (−1) when its status has no time, its path index is not one of
+    /// `scene`'s, its point count is not its path's (or more than `width`), or a leg medium is
+    /// unknown.
+    ///
+    /// # Panics
+    /// When the arrays' lengths do not agree with `paths`' (see the fields' documentation).
+    pub fn gradients_into(&self, scene: &Scene, out: GradientArraysMut<'_>) {
+        let n = self.paths.len();
+        let (media, slots) = (scene.media().len(), GradientArraysMut::slots(scene));
+        assert!(
+            self.statuses.len() == n
+                && self.num_points.len() == n
+                && self.points.len() == n * self.width * 2
+                && self.media.len() == n * self.width.saturating_sub(1),
+            "gradient rows of different lengths"
+        );
+        assert!(
+            out.source.len() == 2 * n
+                && out.receiver.len() == 2 * n
+                && out.slowness.len() == n * media
+                && out.vertex_interface.len() == n * slots
+                && out.vertex.len() == n * slots
+                && out.vertex_d.len() == 2 * n * slots,
+            "gradient arrays of other lengths than the rows"
+        );
+        let count = n.div_ceil(GRADIENT_PIECE);
+        let pieces = row_pieces(out.source, 2, count)
+            .zip(row_pieces(out.receiver, 2, count))
+            .zip(row_pieces(out.slowness, media, count))
+            .zip(row_pieces(out.vertex_interface, slots, count))
+            .zip(row_pieces(out.vertex, slots, count))
+            .zip(row_pieces(out.vertex_d, 2 * slots, count))
+            .map(
+                |(((((source, receiver), slowness), vertex_interface), vertex), vertex_d)| {
+                    RowsPiece {
+                        media,
+                        slots,
+                        source,
+                        receiver,
+                        slowness,
+                        vertex_interface,
+                        vertex,
+                        vertex_d,
+                        room: vec![VertexGradient::default(); slots],
+                    }
+                },
+            )
+            .collect();
+        gradients_in_pieces(pieces, |rays, piece| {
+            let first = rays.start;
+            let mut points = Vec::new();
+            for ray in rays {
+                match self.ray(scene, ray, &mut points) {
+                    Some(path) => {
+                        let (steps, media) = (path.steps, path.media);
+                        store_gradient(scene, piece, ray - first, steps, path.points, media);
+                    }
+                    None => piece.store_none(ray - first),
+                }
+            }
+        });
+    }
+
+    /// Ray `ray`, when it has a time and its points and leg media fit its path (`points` holds
+    /// its points).
+    fn ray<'s>(
+        &'s self,
+        scene: &'s Scene,
+        ray: usize,
+        points: &'s mut Vec<Point>,
+    ) -> Option<RayPath<'s, impl Iterator<Item = usize> + 's>> {
+        let timed = STATUS_CODES
+            .get(usize::from(self.statuses[ray]))
+            .is_some_and(|s| s.has_time());
+        let path = usize::try_from(self.paths[ray]).ok();
+        let steps = &path
+            .and_then(|p| scene.paths().get(p))
+            .filter(|_| timed)?
+            .steps;
+        let count = steps.len() + 2;
+        if usize::try_from(self.num_points[ray]) != Ok(count) || count > self.width {
+            return None;
+        }
+        let xy = &self.points[2 * ray * self.width..][..2 * count];
+        points.clear();
+        points.extend(xy.chunks_exact(2).map(|p| Point::new(p[0], p[1])));
+        let legs = &self.media[ray * (self.width - 1)..][..count - 1];
+        // An unknown medium (negative) is out of range: no gradient.
+        let media = legs
+            .iter()
+            .map(|&m| usize::try_from(m).unwrap_or(usize::MAX));
+        Some(RayPath {
+            steps,
+            points,
+            media,
+        })
+    }
+}
+
+/// `v`, rows of `width` entries, cut into `pieces` pieces of [`GRADIENT_PIECE`] rows (the
+/// last shorter; all empty when `width` is 0, so that they still pair up with the pieces of
+/// other arrays).
+fn row_pieces<T>(v: &mut [T], width: usize, pieces: usize) -> impl Iterator<Item = &mut [T]> {
+    let len = GRADIENT_PIECE * width;
+    let mut rest = v;
+    (0..pieces).map(move |_| {
+        let all = std::mem::take(&mut rest);
+        let (piece, after) = all.split_at_mut(len.min(all.len()));
+        rest = after;
+        piece
+    })
+}
+
+/// One ray as a gradient reads it: its path's steps, its points and its leg media.
+struct RayPath<'s, M> {
+    /// The steps of its path.
+    steps: &'s [Step],
+    /// Source, interaction points and receiver.
+    points: &'s [Point],
+    /// Leg media.
+    media: M,
+}
+
+/// One piece of the arrays of many gradients, written row by row.
+trait GradientPiece: Send {
+    /// Rows of the piece.
+    fn rows(&self) -> usize;
+    /// Row `row`'s slowness entries and room for its vertex shares.
+    fn row(&mut self, row: usize) -> RowRoom<'_>;
+    /// Row `row` has a gradient: `ends`, its slowness entries, and `count` vertex gradients at
+    /// the front of its room.
+    fn store(&mut self, row: usize, ends: EndGradients, count: usize);
+    /// Row `row` has no gradient (its slowness entries may hold a partial one).
+    fn store_none(&mut self, row: usize);
+}
+
+/// A row's slowness entries and room for its vertex shares (at least `2 × steps`).
+struct RowRoom<'r> {
+    /// One per medium.
+    slowness: &'r mut [f64],
+    /// The row's vertex shares, merged in place.
+    vertices: &'r mut [VertexGradient],
+}
+
+/// Fills `pieces` in parallel, `fill(rays, piece)` the rows of rays `rays` (piece `p` holds
+/// rays `p × GRADIENT_PIECE` on): the core of [`BatchGradients::compute`] and
+/// [`GradientRows::gradients_into`], with [`store_gradient`] for each ray.
+fn gradients_in_pieces<P: GradientPiece>(
+    pieces: Vec<P>,
+    fill: impl Fn(std::ops::Range<usize>, &mut P) + Sync,
+) {
+    pieces
+        .into_par_iter()
+        .enumerate()
+        .for_each(|(p, mut piece)| {
+            let first = p * GRADIENT_PIECE;
+            fill(first..first + piece.rows(), &mut piece);
+        });
+}
+
+/// Row `row` of `piece`: the gradient of the ray through `points` by `steps` with leg media
+/// `media`, or none when they do not make one.
+#[inline(always)]
+fn store_gradient<P: GradientPiece>(
+    scene: &Scene,
+    piece: &mut P,
+    row: usize,
+    steps: &[Step],
+    points: &[Point],
+    media: impl Iterator<Item = usize>,
+) {
+    let room = piece.row(row);
+    let vertices = &mut room.vertices[..2 * steps.len()];
+    let mut used = 0;
+    let parts = gradient_parts(scene, steps, points, media, None, room.slowness, |v| {
+        vertices[used] = v;
+        used += 1;
+    });
+    match parts {
+        Ok(ends) => {
+            let count = merge(&mut vertices[..used]);
+            piece.store(row, ends, count);
+        }
+        Err(_) => piece.store_none(row),
+    }
+}
+
+/// The pieces of a [`BatchGradients`]' arrays.
+struct BatchPiece<'a> {
+    /// Slowness entries a row.
+    media: usize,
+    /// Vertex slots a row.
+    slots: usize,
+    /// The sources' gradients.
+    source: &'a mut [Vec2],
+    /// The receivers' gradients.
+    receiver: &'a mut [Vec2],
+    /// `media` a row.
+    slowness: &'a mut [f64],
+    /// `slots` a row.
+    vertices: &'a mut [VertexGradient],
+    /// Each row's vertex gradients (`u32::MAX` without a gradient: set before).
+    counts: &'a mut [u32],
+}
+
+impl GradientPiece for BatchPiece<'_> {
+    fn rows(&self) -> usize {
+        self.counts.len()
+    }
+
+    fn row(&mut self, row: usize) -> RowRoom<'_> {
+        let (media, slots) = (self.media, self.slots);
+        RowRoom {
+            slowness: &mut self.slowness[row * media..(row + 1) * media],
+            vertices: &mut self.vertices[row * slots..(row + 1) * slots],
+        }
+    }
+
+    fn store(&mut self, row: usize, ends: EndGradients, count: usize) {
+        self.source[row] = ends.source;
+        self.receiver[row] = ends.receiver;
+        self.counts[row] = count as u32;
+    }
+
+    fn store_none(&mut self, row: usize) {
+        // Everything else holds its value without a gradient already.
+        self.slowness[row * self.media..(row + 1) * self.media].fill(f64::NAN);
+    }
+}
+
+/// The pieces of the arrays of [`GradientArraysMut`].
+struct RowsPiece<'a> {
+    /// Slowness entries a row.
+    media: usize,
+    /// Vertex slots a row.
+    slots: usize,
+    /// `2` a row.
+    source: &'a mut [f64],
+    /// `2` a row.
+    receiver: &'a mut [f64],
+    /// `media` a row.
+    slowness: &'a mut [f64],
+    /// `slots` a row.
+    vertex_interface: &'a mut [i32],
+    /// `slots` a row.
+    vertex: &'a mut [i32],
+    /// `2 × slots` a row.
+    vertex_d: &'a mut [f64],
+    /// Room for one row's vertex shares (`slots`).
+    room: Vec<VertexGradient>,
+}
+
+impl GradientPiece for RowsPiece<'_> {
+    fn rows(&self) -> usize {
+        self.source.len() / 2
+    }
+
+    fn row(&mut self, row: usize) -> RowRoom<'_> {
+        let media = self.media;
+        RowRoom {
+            slowness: &mut self.slowness[row * media..(row + 1) * media],
+            vertices: &mut self.room,
+        }
+    }
+
+    fn store(&mut self, row: usize, ends: EndGradients, count: usize) {
+        let (s, r) = (ends.source, ends.receiver);
+        self.source[2 * row..2 * row + 2].copy_from_slice(&[s.x, s.y]);
+        self.receiver[2 * row..2 * row + 2].copy_from_slice(&[r.x, r.y]);
+        let slots = self.slots;
+        let interfaces = &mut self.vertex_interface[row * slots..(row + 1) * slots];
+        let vertices = &mut self.vertex[row * slots..(row + 1) * slots];
+        let ds = &mut self.vertex_d[2 * row * slots..2 * (row + 1) * slots];
+        for (slot, v) in self.room[..count].iter().enumerate() {
+            interfaces[slot] = i32::try_from(v.interface).unwrap_or(-1);
+            vertices[slot] = i32::try_from(v.vertex).unwrap_or(-1);
+            ds[2 * slot..2 * slot + 2].copy_from_slice(&[v.d.x, v.d.y]);
+        }
+        interfaces[count..].fill(-1);
+        vertices[count..].fill(-1);
+        ds[2 * count..].fill(f64::NAN);
+    }
+
+    fn store_none(&mut self, row: usize) {
+        let (media, slots) = (self.media, self.slots);
+        self.source[2 * row..2 * row + 2].fill(f64::NAN);
+        self.receiver[2 * row..2 * row + 2].fill(f64::NAN);
+        self.slowness[row * media..(row + 1) * media].fill(f64::NAN);
+        self.vertex_interface[row * slots..(row + 1) * slots].fill(-1);
+        self.vertex[row * slots..(row + 1) * slots].fill(-1);
+        self.vertex_d[2 * row * slots..2 * (row + 1) * slots].fill(f64::NAN);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{BatchOptions, demo};
+
+    /// A batch's rays as flat rows (as the Python package's `Rays` holds them).
+    struct FlatRays {
+        paths: Vec<i64>,
+        statuses: Vec<u8>,
+        width: usize,
+        points: Vec<f64>,
+        num_points: Vec<i64>,
+        media: Vec<i32>,
+    }
+
+    impl FlatRays {
+        fn of(scene: &Scene, batch: &Batch) -> FlatRays {
+            let width = 2 + scene.paths().iter().map(|p| p.steps.len()).max().unwrap();
+            let mut rays = FlatRays {
+                paths: Vec::new(),
+                statuses: Vec::new(),
+                width,
+                points: Vec::new(),
+                num_points: Vec::new(),
+                media: Vec::new(),
+            };
+            for ray in 0..batch.len() {
+                let path = batch.triple(ray).path;
+                let status = batch.record(ray).status;
+                rays.paths.push(path as i64);
+                rays.statuses
+                    .push(STATUS_CODES.iter().position(|&s| s == status).unwrap() as u8);
+                let points = batch.points(ray);
+                rays.num_points.push(points.len() as i64);
+                let xy = points.iter().flat_map(|p| [p.x, p.y]);
+                rays.points.extend(xy.chain([f64::NAN; 64]).take(2 * width));
+                let legs = batch.media(ray).into_iter().flatten().map(|m| m as i32);
+                rays.media.extend(legs.chain([-1; 32]).take(width - 1));
+            }
+            rays
+        }
+
+        fn rows(&self) -> GradientRows<'_> {
+            GradientRows {
+                paths: &self.paths,
+                statuses: &self.statuses,
+                width: self.width,
+                points: &self.points,
+                num_points: &self.num_points,
+                media: &self.media,
+            }
+        }
+    }
+
+    /// The arrays of [`GradientArraysMut`], filled with a value no gradient has (so that an
+    /// entry left unwritten shows).
+    struct Arrays {
+        source: Vec<f64>,
+        receiver: Vec<f64>,
+        slowness: Vec<f64>,
+        vertex_interface: Vec<i32>,
+        vertex: Vec<i32>,
+        vertex_d: Vec<f64>,
+    }
+
+    impl Arrays {
+        fn of(scene: &Scene, rows: &GradientRows<'_>) -> Arrays {
+            let n = rows.paths.len();
+            let slots = GradientArraysMut::slots(scene);
+            let mut a = Arrays {
+                source: vec![7.5; 2 * n],
+                receiver: vec![7.5; 2 * n],
+                slowness: vec![7.5; n * scene.media().len()],
+                vertex_interface: vec![99; n * slots],
+                vertex: vec![99; n * slots],
+                vertex_d: vec![7.5; 2 * n * slots],
+            };
+            rows.gradients_into(
+                scene,
+                GradientArraysMut {
+                    source: &mut a.source,
+                    receiver: &mut a.receiver,
+                    slowness: &mut a.slowness,
+                    vertex_interface: &mut a.vertex_interface,
+                    vertex: &mut a.vertex,
+                    vertex_d: &mut a.vertex_d,
+                },
+            );
+            a
+        }
+    }
+
+    fn bits(v: &[f64]) -> Vec<u64> {
+        v.iter().map(|x| x.to_bits()).collect()
+    }
+
+    /// Row `ray` of `a` holds `g`'s gradient of that ray bit for bit, or NaN and −1 without one.
+    fn assert_row_is(a: &Arrays, g: &BatchGradients, ray: usize) {
+        let (m, slots) = (g.media(), g.slots());
+        let (s, r) = (g.source(ray), g.receiver(ray));
+        assert_eq!(
+            bits(&a.source[2 * ray..2 * ray + 2]),
+            bits(&[s.x, s.y]),
+            "{ray}"
+        );
+        assert_eq!(bits(&a.receiver[2 * ray..2 * ray + 2]), bits(&[r.x, r.y]));
+        assert_eq!(
+            bits(&a.slowness[m * ray..m * (ray + 1)]),
+            bits(g.slowness(ray))
+        );
+        let own = g.vertices(ray);
+        for slot in 0..slots {
+            let at = slots * ray + slot;
+            let d = &a.vertex_d[2 * at..2 * at + 2];
+            match own.get(slot) {
+                Some(v) => {
+                    assert_eq!(a.vertex_interface[at], v.interface as i32);
+                    assert_eq!(a.vertex[at], v.vertex as i32);
+                    assert_eq!(bits(d), bits(&[v.d.x, v.d.y]));
+                }
+                None => {
+                    assert_eq!((a.vertex_interface[at], a.vertex[at]), (-1, -1));
+                    assert!(d.iter().all(|x| x.is_nan()));
+                }
+            }
+        }
+    }
+
+    /// Scenes of one refraction (more rays than a parallel piece), flat and dipping layers,
+    /// the fixtures' cases (vertex paths, two bounces, rays without a time) and a direct path
+    /// alone (no vertex slots).
+    fn scenes() -> Vec<Scene> {
+        let mut scenes = vec![
+            Scene::from_spec(&demo::air_water(2500, 3)).unwrap(),
+            Scene::from_spec(&demo::layer_stack(4, 50)).unwrap(),
+            Scene::from_spec(&demo::dipping_stack(3, 40)).unwrap(),
+            Scene::from_json(
+                r#"{ "media": { "air": { "speed": 2.0 } },
+                "interfaces": { "floor": { "points": [[-3, 0], [3, 0]] } },
+                "sources": [[0, 1]], "receivers": [[1, 1], [2, 3]],
+                "paths": [{ "steps": [], "media": ["air"] }] }"#,
+            )
+            .unwrap(),
+        ];
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/cases");
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            let name = path.to_string_lossy().into_owned();
+            if name.ends_with(".json") && !name.ends_with(".expected.json") {
+                scenes.push(Scene::from_json(&std::fs::read_to_string(&path).unwrap()).unwrap());
+            }
+        }
+        scenes
+    }
+
+    #[test]
+    fn gradients_of_rows_are_the_batch_gradients_bit_for_bit() {
+        let (mut rays, mut with_gradient) = (0, 0);
+        let mut gradients = BatchGradients::default();
+        for scene in scenes() {
+            let batch = Tracer::new(&scene)
+                .unwrap()
+                .trace_batch(&BatchOptions::default());
+            gradients.compute(&scene, &batch, &|_| true);
+            let flat = FlatRays::of(&scene, &batch);
+            let arrays = Arrays::of(&scene, &flat.rows());
+            for ray in 0..batch.len() {
+                assert_row_is(&arrays, &gradients, ray);
+                rays += 1;
+                with_gradient += usize::from(gradients.has(ray));
+            }
+        }
+        assert!(
+            rays > 2600 && with_gradient > 2550,
+            "{rays} rays, {with_gradient}"
+        );
+    }
+
+    #[test]
+    fn rows_that_do_not_fit_their_path_have_no_gradient() {
+        let scene = Scene::from_spec(&demo::layer_stack(3, 6)).unwrap();
+        let batch = Tracer::new(&scene)
+            .unwrap()
+            .trace_batch(&BatchOptions::default());
+        let mut flat = FlatRays::of(&scene, &batch);
+        let legs = flat.width - 1;
+        flat.media[legs + 1] = -1; // ray 1: a leg medium unknown
+        flat.num_points[2] -= 1; // ray 2: a point short
+        flat.paths[3] = 7; // ray 3: no such path
+        flat.statuses[4] = 2; // ray 4: `no_path`
+        let arrays = Arrays::of(&scene, &flat.rows());
+        let mut gradients = BatchGradients::default();
+        gradients.compute(&scene, &batch, &|ray| !(1..5).contains(&ray));
+        assert!(gradients.has(0) && gradients.has(5) && !gradients.has(1));
+        for ray in 0..batch.len() {
+            assert_row_is(&arrays, &gradients, ray);
+        }
     }
 }

@@ -1113,59 +1113,36 @@ fn write_rays_and_arrivals<W: Write>(
             },
         ),
         RaySet::Stationary(rays) => {
-            // Where each triple's entries start.
-            let mut starts = Vec::with_capacity(rays.triples.len());
-            let mut n = 0;
-            for t in &rays.triples {
-                starts.push(n);
-                n += t.arrivals.len().max(1);
-            }
-            write_all(scene, n, Layout::Stationary, arrivals, format, out, |i| {
-                let k = starts.partition_point(|&s| s <= i) - 1;
-                let t = &rays.triples[k];
-                let arrival = i - starts[k];
-                match t.arrivals.get(arrival) {
-                    Some(a) => View {
-                        source: t.source,
-                        receiver: t.receiver,
-                        path: t.path,
-                        status: a.status,
-                        time: Some(a.time),
-                        points: &a.points,
-                        iterations: a.iterations,
-                        residual: a.residual,
-                        media: Some(a.media.iter().copied()),
-                        reason: a.reason,
+            let mut entries = Vec::with_capacity(rays.entries());
+            entries.extend(rays.entries_in_order(scene));
+            write_all(
+                scene,
+                entries.len(),
+                Layout::Stationary,
+                arrivals,
+                format,
+                out,
+                |i| {
+                    let e = &entries[i];
+                    View {
+                        source: e.source,
+                        receiver: e.receiver,
+                        path: e.path,
+                        status: e.record.status,
+                        time: e.record.status.has_time().then_some(e.record.time),
+                        points: e.points,
+                        iterations: e.record.iterations as usize,
+                        residual: e.record.residual,
+                        media: e.media.map(|m| m.iter().copied()),
+                        reason: e.record.reason,
                         every: Some(EveryFields {
-                            arrival,
-                            kink: a.kink,
-                            complete: t.complete,
+                            arrival: e.arrival,
+                            kink: e.kink,
+                            complete: e.complete,
                         }),
-                    },
-                    // No stationary path: a proof when the search was complete.
-                    None => View {
-                        source: t.source,
-                        receiver: t.receiver,
-                        path: t.path,
-                        status: t.status_without_arrivals(),
-                        time: None,
-                        points: &[],
-                        iterations: 0,
-                        residual: f64::NAN,
-                        media: scene
-                            .paths()
-                            .get(t.path)
-                            .and_then(|p| p.media.as_ref())
-                            .map(|m| m.iter().copied()),
-                        reason: Some(t.reason_without_arrivals()),
-                        every: Some(EveryFields {
-                            arrival: 0,
-                            kink: None,
-                            complete: t.complete,
-                        }),
-                    },
-                }
-            })
+                    }
+                },
+            )
         }
     }
 }

@@ -4,10 +4,10 @@
 
 use rayon::prelude::*;
 
-use crate::scene::MAX_STATIONARY_STEPS;
-use crate::trace::Tracer;
+use crate::geom::Point;
+use crate::scene::{MAX_STATIONARY_STEPS, Scene};
 pub use crate::trace::{Arrival, Kink, SearchOutcome, StationaryError};
-use crate::trace::{Reason, Status};
+use crate::trace::{RayRecord, Reason, Status, Tracer};
 
 /// Every stationary path of one (source, receiver, path) triple.
 #[derive(Clone, Debug, PartialEq)]
@@ -71,6 +71,95 @@ impl StationaryRays {
     /// Whether every triple's search was complete.
     pub fn complete(&self) -> bool {
         self.triples.iter().all(|t| t.complete)
+    }
+
+    /// The entries of the written output ([`entries`](Self::entries) of them), in its order:
+    /// by triple in ray order, each stationary path of a triple by time, and one entry
+    /// (`no_path`, or `not_converged` when its search was not complete) for a triple that has
+    /// none, with the leg media of its path in `scene` when the scene gives them.
+    pub fn entries_in_order<'a>(
+        &'a self,
+        scene: &'a Scene,
+    ) -> impl Iterator<Item = StationaryEntry<'a>> + 'a {
+        self.triples.iter().flat_map(move |t| {
+            let found = (t.arrivals.iter().enumerate()).map(move |(i, a)| t.entry(i, a));
+            let none = t
+                .arrivals
+                .is_empty()
+                .then(|| t.entry_without_arrivals(scene));
+            found.chain(none)
+        })
+    }
+}
+
+/// One entry of the output of every stationary path ([`StationaryRays::entries_in_order`]): a
+/// stationary path of a triple, or the entry of a triple that has none.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StationaryEntry<'a> {
+    /// Source index.
+    pub source: usize,
+    /// Receiver index.
+    pub receiver: usize,
+    /// Path index.
+    pub path: usize,
+    /// Its place by time among its triple's stationary paths (0 for a triple without any).
+    pub arrival: usize,
+    /// Status, time (NaN without one), iterations, residual and reason.
+    pub record: RayRecord,
+    /// Source, interaction points and receiver (empty for a triple without stationary paths).
+    pub points: &'a [Point],
+    /// Leg media (indices into [`Scene::media`]), when known.
+    pub media: Option<&'a [usize]>,
+    /// On a `vertex` path: the kind of kink.
+    pub kink: Option<Kink>,
+    /// Whether its triple's search was complete.
+    pub complete: bool,
+}
+
+impl TripleArrivals {
+    /// The entry of stationary path `arrival`, `a`.
+    fn entry<'a>(&self, arrival: usize, a: &'a Arrival) -> StationaryEntry<'a> {
+        StationaryEntry {
+            source: self.source,
+            receiver: self.receiver,
+            path: self.path,
+            arrival,
+            record: RayRecord {
+                status: a.status,
+                time: a.time,
+                iterations: a.iterations.try_into().unwrap_or(u32::MAX),
+                residual: a.residual,
+                reason: a.reason,
+            },
+            points: &a.points,
+            media: Some(&a.media),
+            kink: a.kink,
+            complete: self.complete,
+        }
+    }
+
+    /// The entry of this triple when it has no stationary path.
+    fn entry_without_arrivals<'a>(&self, scene: &'a Scene) -> StationaryEntry<'a> {
+        StationaryEntry {
+            source: self.source,
+            receiver: self.receiver,
+            path: self.path,
+            arrival: 0,
+            record: RayRecord {
+                status: self.status_without_arrivals(),
+                time: f64::NAN,
+                iterations: 0,
+                residual: f64::NAN,
+                reason: Some(self.reason_without_arrivals()),
+            },
+            points: &[],
+            media: scene
+                .paths()
+                .get(self.path)
+                .and_then(|p| p.media.as_deref()),
+            kink: None,
+            complete: self.complete,
+        }
     }
 }
 
@@ -201,6 +290,69 @@ mod tests {
         assert!(rays.triples[4].arrivals.is_empty());
         assert_eq!(rays.entries(), rays.arrivals() + 2);
         assert!(rays.complete());
+    }
+
+    /// The entries are the rows `write` writes, in its order: every stationary path
+    /// of a triple by time, and one `no_path` row for a triple without any (the valley seen
+    /// from the far receiver).
+    #[test]
+    fn entries_in_order_are_the_written_rows() {
+        let scene = Scene::from_json(
+            r#"{
+            "media": { "air": { "speed": 1.0 } },
+            "interfaces": { "valley": { "points": [[-3, 0], [0, -2], [3, 0]] } },
+            "sources": [[-0.5, 2], [0, 3]], "receivers": [[0.5, 2], [20, 2], [1, 1]],
+            "paths": [
+                { "steps": [{ "reflect": "valley" }], "media": ["air", "air"] },
+                { "name": "direct", "steps": [], "media": ["air"] }
+            ]
+        }"#,
+        )
+        .unwrap();
+        let rays = Tracer::new(&scene).unwrap().trace_stationary().unwrap();
+        let mut out = Vec::new();
+        crate::write(&scene, &rays, crate::Format::Jsonl, &mut out).unwrap();
+        let lines: Vec<serde_json::Value> = (out.split(|&b| b == b'\n'))
+            .filter(|l| !l.is_empty())
+            .map(|l| serde_json::from_slice(l).unwrap())
+            .collect();
+        let entries: Vec<StationaryEntry<'_>> = rays.entries_in_order(&scene).collect();
+        assert_eq!(entries.len(), lines.len());
+        assert_eq!(entries.len(), rays.entries());
+        for (e, line) in entries.iter().zip(&lines) {
+            let fields = [e.source, e.receiver, e.path, e.arrival];
+            let written = ["source", "receiver", "path", "arrival"].map(|k| line[k].as_u64());
+            assert_eq!(written, fields.map(|f| Some(f as u64)), "{line}");
+            assert_eq!(line["status"], e.record.status.as_str());
+            assert_eq!(line["complete"], e.complete);
+            assert_eq!(line["kink"].as_str(), e.kink.map(|k| k.as_str()));
+            let points = line["points"].as_array().map_or(0, |p| p.len());
+            assert_eq!(points, e.points.len());
+        }
+        // Triple by triple in ray order; within one, by time; one `no_path` row for none.
+        let mut expected = Vec::new();
+        for t in &rays.triples {
+            for i in 0..t.arrivals.len().max(1) {
+                expected.push((t.source, t.receiver, t.path, i));
+            }
+        }
+        let got: Vec<_> = (entries.iter())
+            .map(|e| (e.source, e.receiver, e.path, e.arrival))
+            .collect();
+        assert_eq!(got, expected);
+        let none: Vec<_> = entries.iter().filter(|e| e.points.is_empty()).collect();
+        assert!(!none.is_empty());
+        for e in none {
+            assert_eq!(e.record.status, Status::NoPath);
+            assert!(e.record.time.is_nan() && e.complete && e.arrival == 0);
+            let legs = scene.paths()[e.path].steps.len() + 1;
+            assert_eq!(e.media, Some(&[0, 0][..legs]));
+        }
+        let times: Vec<f64> = entries.iter().map(|e| e.record.time).collect();
+        assert!(entries.windows(2).zip(times.windows(2)).all(|(e, t)| {
+            (e[0].source, e[0].receiver, e[0].path) != (e[1].source, e[1].receiver, e[1].path)
+                || t[0] <= t[1]
+        }));
     }
 
     #[test]

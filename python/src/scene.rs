@@ -1,0 +1,169 @@
+//! `Scene`: a validated scene, read from JSON, a `dict` or a file, and its parts as Python
+//! values.
+
+use std::sync::Arc;
+
+use eigenray::Scene;
+use numpy::{IntoPyArray, PyArray1, PyArray2};
+use pyo3::exceptions::PyIOError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyString};
+
+use crate::convert::points_array;
+use crate::error::{argument_error, scene_error};
+
+/// A scene: media, interfaces, sources, receivers and paths, validated.
+///
+/// Build one with `Scene(source)` from a JSON string, a `dict` of the same shape, or a path to
+/// a scene file (`str` ending in `.json` or `os.PathLike`); or with `Scene.from_json`,
+/// `Scene.from_dict`, `Scene.from_file`. An invalid scene raises `EigenrayError` naming the
+/// key, with the same message as the command-line tool.
+#[pyclass(module = "eigenray", name = "Scene", frozen)]
+pub(crate) struct PyScene {
+    /// Shared with the tracers made from it (a tracer's updates copy it first).
+    pub(crate) scene: Arc<Scene>,
+}
+
+impl PyScene {
+    /// A scene from its JSON text, parsed with the GIL released.
+    fn parse(py: Python<'_>, text: &str) -> PyResult<PyScene> {
+        let scene = py.detach(|| Scene::from_json(text));
+        scene
+            .map(|scene| PyScene {
+                scene: Arc::new(scene),
+            })
+            .map_err(|e| scene_error(py, &e))
+    }
+}
+
+#[pymethods]
+impl PyScene {
+    #[new]
+    fn new(py: Python<'_>, source: &Bound<'_, PyAny>) -> PyResult<PyScene> {
+        if source.is_instance_of::<PyDict>() {
+            return PyScene::from_dict(py, source);
+        }
+        if let Ok(text) = source.cast::<PyString>() {
+            let text = text.to_str()?;
+            if text.trim_start().starts_with('{') {
+                return PyScene::parse(py, text);
+            }
+            return PyScene::from_file(py, source);
+        }
+        if source.hasattr("__fspath__")? {
+            return PyScene::from_file(py, source);
+        }
+        Err(argument_error(
+            py,
+            "scene",
+            "needs a JSON string, a dict or a path to a scene file",
+        ))
+    }
+
+    /// A scene from its JSON text.
+    #[staticmethod]
+    fn from_json(py: Python<'_>, text: &str) -> PyResult<PyScene> {
+        PyScene::parse(py, text)
+    }
+
+    /// A scene from a `dict` (or any value `json.dumps` accepts) of the JSON's shape.
+    #[staticmethod]
+    fn from_dict(py: Python<'_>, scene: &Bound<'_, PyAny>) -> PyResult<PyScene> {
+        let json = py.import("json")?;
+        let kwargs = PyDict::new(py);
+        kwargs.set_item("allow_nan", false)?;
+        let text = json
+            .call_method("dumps", (scene,), Some(&kwargs))
+            .map_err(|e| argument_error(py, "scene", format!("is not JSON: {e}")))?;
+        PyScene::parse(py, text.extract::<&str>()?)
+    }
+
+    /// A scene from a file.
+    #[staticmethod]
+    fn from_file(py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<PyScene> {
+        let os = py.import("os")?;
+        let path: String = os.call_method1("fspath", (path,))?.extract()?;
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| PyIOError::new_err(format!("{path}: {e}")))?;
+        PyScene::parse(py, &text)
+    }
+
+    /// Medium names, in the scene's order (the indices of `Rays.media`).
+    #[getter]
+    fn media_names(&self) -> Vec<String> {
+        self.scene.media().iter().map(|m| m.name.clone()).collect()
+    }
+
+    /// Slowness of each medium (1 / speed, or the refractive index), in the scene's order.
+    #[getter]
+    fn slowness<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let w: Vec<f64> = self.scene.media().iter().map(|m| m.slowness).collect();
+        w.into_pyarray(py)
+    }
+
+    /// Interface names, in the scene's order.
+    #[getter]
+    fn interface_names(&self) -> Vec<String> {
+        self.scene
+            .interfaces()
+            .iter()
+            .map(|i| i.name.clone())
+            .collect()
+    }
+
+    /// Each interface's vertices as an array of shape `(n, 2)`, by name (a closed
+    /// interface's first vertex is not repeated at its end).
+    #[getter]
+    fn interfaces<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let out = PyDict::new(py);
+        for i in self.scene.interfaces() {
+            out.set_item(&i.name, points_array(py, i.polyline.vertices()))?;
+        }
+        Ok(out)
+    }
+
+    /// Whether each interface is closed, by name.
+    #[getter]
+    fn closed<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let out = PyDict::new(py);
+        for i in self.scene.interfaces() {
+            out.set_item(&i.name, i.polyline.is_closed())?;
+        }
+        Ok(out)
+    }
+
+    /// Path names (`None` for an unnamed path), in the scene's order.
+    #[getter]
+    fn path_names(&self) -> Vec<Option<String>> {
+        self.scene.paths().iter().map(|p| p.name.clone()).collect()
+    }
+
+    /// Sources, shape `(n, 2)`.
+    #[getter]
+    fn sources<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        points_array(py, self.scene.sources())
+    }
+
+    /// Receivers, shape `(n, 2)`.
+    #[getter]
+    fn receivers<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        points_array(py, self.scene.receivers())
+    }
+
+    /// Rays of the scene: sources × receivers × paths.
+    #[getter]
+    fn num_rays(&self) -> usize {
+        self.scene.num_rays()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Scene({} media, {} interfaces, {} sources, {} receivers, {} paths)",
+            self.scene.media().len(),
+            self.scene.interfaces().len(),
+            self.scene.sources().len(),
+            self.scene.receivers().len(),
+            self.scene.paths().len()
+        )
+    }
+}

@@ -1,0 +1,108 @@
+//! `Tracer.trace`: the batch of every ray, written into numpy's arrays by its own workers,
+//! with progress reported from the calling thread.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Duration;
+
+use eigenray::{BatchOptions, Tracer, sink::BatchScratch};
+use pyo3::exceptions::PyRuntimeError;
+use pyo3::prelude::*;
+
+use crate::error::scene_error;
+use crate::out_arrays::OutArrays;
+use crate::progress::Progress;
+use crate::rays::PyRays;
+use crate::sink::RowSink;
+use crate::table::{Table, width};
+
+/// Every ray of `tracer` as `Rays` (see `Tracer.trace`): into the arrays of `out` (the `Rays`
+/// of an earlier `trace` of as many rays) when given, else into new ones.
+pub(crate) fn trace_rays(
+    py: Python<'_>,
+    tracer: &Tracer,
+    scratch: &mut BatchScratch,
+    warm_start: bool,
+    progress: Option<&Bound<'_, PyAny>>,
+    out: Option<Bound<'_, PyRays>>,
+) -> PyResult<Py<PyRays>> {
+    let scene = tracer.scene();
+    let (n, w) = (scene.num_rays(), width(scene));
+    // Each worker writes its rays into the arrays right after solving them.
+    match out {
+        Some(out) => {
+            let mut arrays = OutArrays::borrow(py, out.get(), scene)?;
+            let sink = RowSink::new(scene, arrays.rows(py)?);
+            let progress = Progress::new(py, progress, n)?;
+            let reported = trace_into(py, tracer, scratch, warm_start, progress, sink)?;
+            arrays.finish(scene);
+            reported?;
+            Ok(out.unbind())
+        }
+        None => {
+            let mut table = py.detach(|| Table::new(n, w));
+            let sink = RowSink::new(scene, table.rows());
+            let progress = Progress::new(py, progress, n)?;
+            trace_into(py, tracer, scratch, warm_start, progress, sink)??;
+            Py::new(py, table.finish(py, scene))
+        }
+    }
+}
+
+/// Runs the batch of every ray of `tracer` into `sink` (the GIL released), reporting to
+/// `progress` from the calling thread while it runs. `Err` when the batch did not run
+/// (nothing is written); else the error of a progress report, if one failed (the rows are
+/// written all the same).
+fn trace_into(
+    py: Python<'_>,
+    tracer: &Tracer,
+    scratch: &mut BatchScratch,
+    warm_start: bool,
+    progress: Option<Progress<'_>>,
+    sink: RowSink<'_>,
+) -> PyResult<PyResult<()>> {
+    let total = tracer.scene().num_rays();
+    let done = AtomicUsize::new(0);
+    let count = |n: usize| {
+        done.fetch_add(n, Ordering::Relaxed);
+    };
+    let opts = BatchOptions {
+        warm_start,
+        progress: progress.as_ref().map(|_| &count as &(dyn Fn(usize) + Sync)),
+        ..BatchOptions::default()
+    };
+    let (solved, reported) = match &progress {
+        None => (
+            py.detach(|| tracer.trace_batch_to(&opts, sink, scratch)),
+            Ok(()),
+        ),
+        Some(progress) => {
+            let (finished, mut shown) = (AtomicUsize::new(0), 0);
+            let result = std::thread::scope(|scope| {
+                let worker = scope.spawn(|| {
+                    let solved = tracer.trace_batch_to(&opts, sink, scratch);
+                    finished.store(1, Ordering::Release);
+                    solved
+                });
+                let mut reported = Ok(());
+                while finished.load(Ordering::Acquire) == 0 {
+                    py.detach(|| std::thread::sleep(Duration::from_millis(50)));
+                    let now = done.load(Ordering::Relaxed);
+                    if reported.is_ok() && now > shown {
+                        reported = progress.report(now, shown, total);
+                        shown = now;
+                    }
+                }
+                let solved = py.detach(|| worker.join());
+                (solved, reported)
+            });
+            let (solved, mut reported) = result;
+            let solved = solved.map_err(|_| PyRuntimeError::new_err("the batch panicked"))?;
+            if reported.is_ok() && solved.is_ok() && shown < total {
+                reported = progress.report(total, shown, total);
+            }
+            (solved, reported.and(progress.close()))
+        }
+    };
+    solved.map_err(|e| scene_error(py, &e))?;
+    Ok(reported)
+}

@@ -1,0 +1,454 @@
+//! `Tracer`: a prepared scene and everything asked of it, each call converting its arguments,
+//! calling the library and converting the result (the work is in the other modules).
+
+use std::sync::Arc;
+
+use eigenray::{
+    Arrival, Gradient, Point, PointSensitivities, Scene, SceneError, Tracer, Workspace,
+    sink::BatchScratch,
+};
+use pyo3::exceptions::{PyIndexError, PyKeyError, PyRuntimeError};
+use pyo3::prelude::*;
+use pyo3::types::PyList;
+
+use crate::convert::{named_index, point_arg, points_arg};
+use crate::error::{argument_error, scene_error};
+use crate::gradient::PyGradient;
+use crate::gradients::PyGradients;
+use crate::ray::PyRay;
+use crate::rays::PyRays;
+use crate::scene::PyScene;
+use crate::search::search_list;
+use crate::sensitivities::PyPointSensitivities;
+use crate::table::{pairs_table, stationary_table};
+use crate::trace::trace_rays;
+
+/// Traces the rays of a scene. `Tracer(scene)` prepares it once (region lookup, segment
+/// hierarchies); every call after that reuses it.
+#[pyclass(module = "eigenray", name = "Tracer")]
+pub(crate) struct PyTracer {
+    /// The library's tracer, which owns its scene.
+    tracer: Tracer,
+    /// What the next `trace` reuses (the rays in solving order, for receivers solved in a
+    /// spatial order).
+    scratch: BatchScratch,
+    /// What the one-ray calls reuse.
+    workspace: Workspace,
+    /// The last `stationary_paths`' arrivals (reused).
+    arrivals: Vec<Arrival>,
+    /// The last `gradient`'s derivatives (reused).
+    gradient: Gradient,
+}
+
+impl PyTracer {
+    /// The tracer's scene.
+    fn inner_scene(&self) -> &Scene {
+        self.tracer.scene()
+    }
+
+    /// The index of a path given by name or index.
+    fn path_index(&self, py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<usize> {
+        let scene = self.inner_scene();
+        if let Ok(name) = path.extract::<&str>() {
+            return scene
+                .paths()
+                .iter()
+                .position(|p| p.name.as_deref() == Some(name))
+                .ok_or_else(|| PyKeyError::new_err(format!("no path is named `{name}`")));
+        }
+        let index: i64 = path
+            .extract()
+            .map_err(|_| argument_error(py, "path", "needs a path index or a path name"))?;
+        usize::try_from(index)
+            .ok()
+            .filter(|&i| i < scene.paths().len())
+            .ok_or_else(|| {
+                PyIndexError::new_err(format!(
+                    "path index {index} is out of range (the scene has {} paths)",
+                    scene.paths().len()
+                ))
+            })
+    }
+
+    /// The index of an interface given by name or index.
+    fn interface_index(&self, py: Python<'_>, interface: &Bound<'_, PyAny>) -> PyResult<usize> {
+        let scene = self.inner_scene();
+        named_index(
+            py,
+            "interface",
+            interface,
+            scene.interfaces().len(),
+            |name| scene.interface_index(name),
+        )
+    }
+
+    /// The index of a medium given by name or index.
+    fn medium_index(&self, py: Python<'_>, medium: &Bound<'_, PyAny>) -> PyResult<usize> {
+        let scene = self.inner_scene();
+        named_index(py, "medium", medium, scene.media().len(), |name| {
+            scene.medium_index(name)
+        })
+    }
+
+    /// A source and a receiver from Python points, checked for a ray of path `path`.
+    fn checked_points(
+        &self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: usize,
+    ) -> PyResult<(Point, Point)> {
+        let source = point_arg(py, "source", source)?;
+        let receiver = point_arg(py, "receiver", receiver)?;
+        self.inner_scene()
+            .check_solve(source, receiver, path)
+            .map_err(|e| scene_error(py, &e))?;
+        Ok((source, receiver))
+    }
+}
+
+#[pymethods]
+impl PyTracer {
+    #[new]
+    fn new(py: Python<'_>, scene: &Bound<'_, PyScene>) -> PyResult<PyTracer> {
+        let shared = Arc::clone(&scene.get().scene);
+        let tracer = py.detach(|| Tracer::new(shared));
+        let tracer = tracer.map_err(|e| scene_error(py, &e))?;
+        Ok(PyTracer {
+            tracer,
+            scratch: BatchScratch::default(),
+            workspace: Workspace::new(),
+            arrivals: Vec::new(),
+            gradient: Gradient::default(),
+        })
+    }
+
+    /// The tracer's scene.
+    #[getter]
+    fn scene(&self) -> PyScene {
+        PyScene {
+            scene: Arc::new(self.inner_scene().clone()),
+        }
+    }
+
+    /// Every ray of the scene, in parallel (the GIL released), as numpy arrays (`Rays`).
+    ///
+    /// `warm_start`: start each receiver from its neighbour's solution (see the library's
+    /// `BatchOptions::warm_start`). `progress`: `True` for a tqdm bar, or a callable
+    /// `progress(done, total)` called from the calling thread. `out`: the `Rays` of an
+    /// earlier `trace()` of this many rays, rewritten in place and returned (a loop then
+    /// allocates its arrays once).
+    #[pyo3(signature = (*, warm_start = true, progress = None, out = None))]
+    fn trace(
+        &mut self,
+        py: Python<'_>,
+        warm_start: bool,
+        progress: Option<&Bound<'_, PyAny>>,
+        out: Option<Bound<'_, PyRays>>,
+    ) -> PyResult<Py<PyRays>> {
+        let PyTracer {
+            tracer, scratch, ..
+        } = self;
+        trace_rays(py, tracer, scratch, warm_start, progress, out)
+    }
+
+    /// Every stationary path of every ray of the scene (not only the one the default start
+    /// reaches), in parallel with the GIL released, as `Rays` with `arrival`, `kink` and
+    /// `complete`: one entry per stationary path, ordered by time within its triple, and one
+    /// `no_path` (a proof) or `not_converged` entry per triple that has none.
+    fn trace_stationary(&self, py: Python<'_>) -> PyResult<PyRays> {
+        let tracer = &self.tracer;
+        let scene = self.inner_scene();
+        let rays = py
+            .detach(|| tracer.trace_stationary())
+            .map_err(|e| scene_error(py, &e.into()))?;
+        let table = py.detach(|| stationary_table(scene, &rays));
+        Ok(table.finish(py, scene))
+    }
+
+    /// One ray of path `path` (index or name) between any two points.
+    #[pyo3(signature = (source, receiver, path = None))]
+    fn solve(
+        &mut self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyRay> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let record = self
+            .tracer
+            .solve(source, receiver, path, &mut self.workspace);
+        let scene = self.tracer.scene();
+        let ws = &self.workspace;
+        Ok(PyRay::from_record(
+            py,
+            scene,
+            &record,
+            ws.points(),
+            ws.media(),
+        ))
+    }
+
+    /// The travel time of one ray (NaN without one): `solve` without building a `Ray`.
+    #[pyo3(signature = (source, receiver, path = None))]
+    fn time(
+        &mut self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<f64> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let record = self
+            .tracer
+            .solve(source, receiver, path, &mut self.workspace);
+        Ok(record.time)
+    }
+
+    /// Solves one ray of path `path` between any two points and returns the derivatives of
+    /// its time (`Gradient`): exact for the path as found (the envelope theorem at the solved
+    /// points), so they agree with differences of re-solved times. For a layout loop: move
+    /// things with the `set_*` calls, ask again.
+    #[pyo3(signature = (source, receiver, path = None))]
+    fn gradient(
+        &mut self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyGradient> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let record = self
+            .tracer
+            .solve_with_gradient(
+                source,
+                receiver,
+                path,
+                &mut self.workspace,
+                &mut self.gradient,
+            )
+            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        let scene = self.tracer.scene();
+        let gradient = record.status.has_time().then_some(&self.gradient);
+        PyGradient::new(py, scene, &record, gradient)
+    }
+
+    /// Solves one ray of path `path` between any two points and returns how its points move
+    /// with every parameter its time depends on (`PointSensitivities`): by the implicit
+    /// function theorem, one tridiagonal solve with the converged Hessian per parameter; for
+    /// users who need where a ray lands (on a detector, on a wall) rather than when. Raises
+    /// `RuntimeError` at a caustic, where the points do not move smoothly.
+    #[pyo3(signature = (source, receiver, path = None))]
+    fn point_sensitivities(
+        &mut self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyPointSensitivities> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let record = self
+            .tracer
+            .solve(source, receiver, path, &mut self.workspace);
+        let scene = self.tracer.scene();
+        if !record.status.has_time() {
+            return PyPointSensitivities::new(py, scene, &record, None);
+        }
+        let sens = PointSensitivities::of_solved(scene, path, &self.workspace)
+            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        PyPointSensitivities::new(py, scene, &record, Some(&sens))
+    }
+
+    /// The derivatives of the times of `rays` (from `trace`, `trace_stationary` or
+    /// `solve_pairs` of this tracer), as `Gradients`: one row per ray, computed from each ray's
+    /// points and leg media in parallel with the GIL released, the same numbers as
+    /// `gradient` and the command-line tool's `"derivatives": true`.
+    fn gradients(&self, py: Python<'_>, rays: &Bound<'_, PyRays>) -> PyResult<PyGradients> {
+        PyGradients::of_rays(py, self.tracer.scene(), rays.get())
+    }
+
+    /// Rays of path `path` between `sources[i]` and `receivers[i]` (arrays of shape `(n, 2)`),
+    /// in parallel with the GIL released, as `Rays` (their `source` and `receiver` hold `i`).
+    #[pyo3(signature = (sources, receivers, path = None))]
+    fn solve_pairs(
+        &mut self,
+        py: Python<'_>,
+        sources: &Bound<'_, PyAny>,
+        receivers: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyRays> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let sources = points_arg(py, "sources", sources)?;
+        let receivers = points_arg(py, "receivers", receivers)?;
+        if sources.len() != receivers.len() {
+            return Err(argument_error(
+                py,
+                "receivers",
+                format!(
+                    "has {} points where sources has {}",
+                    receivers.len(),
+                    sources.len()
+                ),
+            ));
+        }
+        let scene = self.tracer.scene();
+        for (i, (&s, &r)) in sources.iter().zip(&receivers).enumerate() {
+            scene.check_solve(s, r, path).map_err(|e| {
+                let key = format!("{}s[{i}]", e.key);
+                scene_error(py, &SceneError::new(key, e.message))
+            })?;
+        }
+        let tracer = &self.tracer;
+        let table = py.detach(|| pairs_table(tracer, &sources, &receivers, path));
+        Ok(table.finish(py, scene))
+    }
+
+    /// Every stationary path of path `path` between two points, ordered by time (a `Ray`
+    /// each, with its `arrival` index and, on `vertex` paths, its `kink`). Returns the list
+    /// and whether the search was complete (with `True`, an empty list proves there is none).
+    #[pyo3(signature = (source, receiver, path = None))]
+    fn stationary_paths(
+        &mut self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<(Vec<PyRay>, bool)> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let tracer = &self.tracer;
+        let out = &mut self.arrivals;
+        let search = py
+            .detach(|| tracer.stationary_paths(source, receiver, path, out))
+            .map_err(|e| scene_error(py, &e.into()))?;
+        let scene = self.tracer.scene();
+        let rays = self
+            .arrivals
+            .iter()
+            .enumerate()
+            .map(|(i, a)| PyRay::from_arrival(py, scene, i, a))
+            .collect();
+        Ok((rays, search.complete))
+    }
+
+    /// Moves source `index` to `point`, checked as `sources[index]` of a scene file (a
+    /// refused move leaves the tracer as it was). Cheap: nothing is rebuilt.
+    fn set_source(
+        &mut self,
+        py: Python<'_>,
+        index: usize,
+        point: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let p = point_arg(py, &format!("sources[{index}]"), point)?;
+        self.tracer
+            .set_source(index, p)
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// Moves receiver `index` to `point`, checked as `receivers[index]`. Cheap.
+    fn set_receiver(
+        &mut self,
+        py: Python<'_>,
+        index: usize,
+        point: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let p = point_arg(py, &format!("receivers[{index}]"), point)?;
+        self.tracer
+            .set_receiver(index, p)
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// Moves every receiver: `points` of shape `(n, 2)`, `n` the scene's receivers. Moves
+    /// are checked one by one; a refused one raises, and the receivers before it stay moved.
+    fn set_receivers(&mut self, py: Python<'_>, points: &Bound<'_, PyAny>) -> PyResult<()> {
+        let points = points_arg(py, "receivers", points)?;
+        let n = self.inner_scene().receivers().len();
+        if points.len() != n {
+            return Err(argument_error(
+                py,
+                "receivers",
+                format!("has {} points; the scene has {n} receivers", points.len()),
+            ));
+        }
+        for (i, p) in points.into_iter().enumerate() {
+            self.tracer
+                .set_receiver(i, p)
+                .map_err(|e| scene_error(py, &e))?;
+        }
+        Ok(())
+    }
+
+    /// Gives interface `interface` (a name or an index) new vertices, `points` of shape
+    /// `(n, 2)`, checked as `interfaces.NAME.points` of a scene file (a refused change leaves
+    /// the tracer as it was). Rebuilds what depends on the interfaces.
+    fn set_interface_points(
+        &mut self,
+        py: Python<'_>,
+        interface: &Bound<'_, PyAny>,
+        points: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let index = self.interface_index(py, interface)?;
+        let name = &self.inner_scene().interfaces()[index].name;
+        let points = points_arg(py, &format!("interfaces.{name}.points"), points)?;
+        self.tracer
+            .set_interface_points(index, &points)
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// Gives medium `medium` (a name or an index) the speed `speed`.
+    fn set_medium_speed(
+        &mut self,
+        py: Python<'_>,
+        medium: &Bound<'_, PyAny>,
+        speed: f64,
+    ) -> PyResult<()> {
+        let index = self.medium_index(py, medium)?;
+        self.tracer
+            .set_medium_speed(index, speed)
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// Gives medium `medium` (a name or an index) the refractive index `index`.
+    fn set_medium_index(
+        &mut self,
+        py: Python<'_>,
+        medium: &Bound<'_, PyAny>,
+        index: f64,
+    ) -> PyResult<()> {
+        let medium = self.medium_index(py, medium)?;
+        self.tracer
+            .set_medium_index(medium, index)
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// The scene's `search` (its `"search"` section): every arrival per (source, receiver),
+    /// ordered by time, as a list of dicts with `source`, `receiver`, `steps` (as in the
+    /// scene: `{"reflect": name}`), `media`, `status`, `time`, `points`, `iterations`,
+    /// `complete`.
+    fn search<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        search_list(py, &self.tracer)
+    }
+}
