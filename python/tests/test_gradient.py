@@ -69,7 +69,7 @@ def test_central_differences_of_re_solved_times():
 
     def glass_slowness(h):
         moved = eigenray.Tracer(scene)
-        moved.set_medium_index("glass", 1 / 0.6 + h)
+        moved.set_medium_speed("glass", 1 / (1 / 0.6 + h))
         return moved.time(s, r, "echo")
 
     assert g.slowness["glass"] == pytest.approx(central(glass_slowness), abs=1e-8)
@@ -140,7 +140,7 @@ def test_point_sensitivities_match_differences_of_re_solved_points():
             receiver[axis] += h
         elif kind == "slowness":
             speed = BENT["media"][parameter[1]]["speed"]
-            moved.set_medium_index(parameter[1], 1 / speed + h)
+            moved.set_medium_speed(parameter[1], 1 / (1 / speed + h))
         else:
             points = copy.deepcopy(BENT["interfaces"][parameter[1]]["points"])
             points[parameter[2]][axis] += h
