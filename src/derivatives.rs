@@ -40,11 +40,10 @@ use rayon::prelude::*;
 
 use crate::batch::Batch;
 use crate::geom::{Point, Vec2};
-use crate::output::STATUS_CODES;
 use crate::polyline::Polyline;
 use crate::scene::{Scene, Step};
 use crate::solver::thomas;
-use crate::trace::{Ray, RayRecord, SegmentFrame, Tracer, Workspace};
+use crate::trace::{Ray, RayRecord, SegmentFrame, Status, Tracer, Workspace};
 
 /// The derivative of a travel time with respect to one polyline vertex.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -1318,9 +1317,11 @@ impl BatchGradients {
 pub struct GradientRows<'a> {
     /// Path index of each ray (`n` entries).
     pub paths: &'a [i64],
-    /// Status code of each ray: its place in [`STATUS_CODES`](crate::npy::STATUS_CODES) (`n`
-    /// entries).
+    /// Status code of each ray (`n` entries): an index into `status_of_code`.
     pub statuses: &'a [u8],
+    /// The status of each code (the `.npy` output's codes:
+    /// [`npy::STATUS_CODES`](crate::npy::STATUS_CODES)).
+    pub status_of_code: &'a [Status],
     /// Points a row holds (`width − 1` legs).
     pub width: usize,
     /// Source, interaction points and receiver of each ray, `(x, y)` each, `width` points a
@@ -1438,7 +1439,7 @@ impl GradientRows<'_> {
         ray: usize,
         points: &'s mut Vec<Point>,
     ) -> Option<RayPath<'s, impl Iterator<Item = usize> + 's>> {
-        let timed = STATUS_CODES
+        let timed = (self.status_of_code)
             .get(usize::from(self.statuses[ray]))
             .is_some_and(|s| s.has_time());
         let path = usize::try_from(self.paths[ray]).ok();
@@ -1666,6 +1667,9 @@ mod tests {
     use super::*;
     use crate::{BatchOptions, demo};
 
+    /// Status codes as the `.npy` output numbers them (the test may use any module).
+    const CODES: [Status; 5] = crate::output::STATUS_CODES;
+
     /// A batch's rays as flat rows (as the Python package's `Rays` holds them).
     struct FlatRays {
         paths: Vec<i64>,
@@ -1692,7 +1696,7 @@ mod tests {
                 let status = batch.record(ray).status;
                 rays.paths.push(path as i64);
                 rays.statuses
-                    .push(STATUS_CODES.iter().position(|&s| s == status).unwrap() as u8);
+                    .push(CODES.iter().position(|&s| s == status).unwrap() as u8);
                 let points = batch.points(ray);
                 rays.num_points.push(points.len() as i64);
                 let xy = points.iter().flat_map(|p| [p.x, p.y]);
@@ -1707,6 +1711,7 @@ mod tests {
             GradientRows {
                 paths: &self.paths,
                 statuses: &self.statuses,
+                status_of_code: &CODES,
                 width: self.width,
                 points: &self.points,
                 num_points: &self.num_points,

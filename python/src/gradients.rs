@@ -1,8 +1,8 @@
 //! `Gradients`: the derivatives of many rays' times as numpy arrays, computed by the library
 //! from the arrays of a `Rays`.
 
-use eigenray::Scene;
 use eigenray::gradients::{GradientArraysMut, GradientRows};
+use eigenray::{Scene, npy::STATUS_CODES};
 use numpy::ndarray::{Array2, Array3, ArrayBase, Data, Dimension};
 use numpy::{IntoPyArray, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::PyRuntimeError;
@@ -100,6 +100,7 @@ impl PyGradients {
         let rows = GradientRows {
             paths: flat(&path),
             statuses: flat(&status),
+            status_of_code: &STATUS_CODES,
             width,
             points: flat(&points),
             num_points: flat(&num_points),
