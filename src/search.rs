@@ -10,7 +10,9 @@ use std::fmt;
 use crate::geom::Point;
 pub use crate::scene::SearchOptions;
 use crate::scene::{MAX_STATIONARY_STEPS, Step, StepKind};
-use crate::trace::{Arrival, MirrorArrival, MirrorScratch, MirrorWalls, Sequence, Status, Tracer};
+use crate::trace::{
+    Arrival, MirrorArrival, MirrorScratch, MirrorWalls, SearchBudget, Sequence, Status, Tracer,
+};
 
 /// One arrival of a scene's automatic `search`: a stationary path of a step sequence that the
 /// search generated, between one source and one receiver.
@@ -221,7 +223,7 @@ impl Tracer {
                 let mut arrivals = Vec::new();
                 let mut visit = |steps: &[Step]| {
                     let sequence = Sequence { steps, path: None };
-                    let limit = SEARCH_TUPLES;
+                    let limit = SearchBudget::tuples(SEARCH_TUPLES);
                     let outcome =
                         self.stationary_of(sequence, None, s, medium, r, limit, &mut arrivals);
                     for a in arrivals.drain(..) {

@@ -36,6 +36,7 @@ mod update;
 
 pub(crate) use chain::{ChainLink, ChainRays, WarmStarts};
 pub(crate) use classify::{Classifier, Sequence};
+pub(crate) use complete::SearchBudget;
 pub use complete::{Arrival, Kink, SearchOutcome, StationaryError};
 pub(crate) use flat::SegmentFrame;
 pub(crate) use mirrors::{MirrorArrival, MirrorScratch, MirrorWalls};

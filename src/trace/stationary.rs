@@ -14,14 +14,22 @@ use crate::regions::Regions;
 use crate::scene::{MAX_STATIONARY_STEPS, StepKind};
 
 use super::classify::Sequence;
-use super::complete::{self, Arrival, Hierarchy, SequenceSearch};
+use super::complete::{self, Arrival, Hierarchy, SearchBudget, SequenceSearch};
 use super::{RayRecord, Reason, SearchOutcome, StationaryError, Status, Tracer, Workspace};
 
-/// Tuples (and assignments solved) of the default mode's search of one ray, beyond which it
-/// answers `not_converged` (`Reason::SearchLimit`): the search of a ray stays within about a
-/// millisecond, where a sequence over long polylines with many steps could otherwise take
-/// minutes.
-const FALLBACK_TUPLES: usize = 1 << 14;
+/// What the default mode's search of one ray may do, beyond which it answers `not_converged`
+/// (`Reason::SearchLimit`): tuples (and assignments solved), and work, so that the search of a
+/// ray stays within about 10 ms, where a sequence over long polylines with many steps could
+/// otherwise take minutes.
+const FALLBACK_BUDGET: SearchBudget = SearchBudget {
+    tuples: 1 << 14,
+    work: FALLBACK_WORK,
+};
+
+/// The work (see [`SearchBudget`]) of the default mode's search of one ray: about 10 ms of
+/// one core, whatever the sequence, where its tuples alone allowed a second for a sequence
+/// of 12 reflections between two wavy walls of 50 segments each.
+const FALLBACK_WORK: usize = 1 << 18;
 
 thread_local! {
     /// Each thread's arrivals for the default mode's fallback, reused from ray to ray.
@@ -100,7 +108,7 @@ impl Tracer {
             source,
             source_medium,
             receiver,
-            complete::MAX_TUPLES,
+            SearchBudget::tuples(complete::MAX_TUPLES),
             out,
         ))
     }
@@ -128,7 +136,7 @@ impl Tracer {
         source: Point,
         source_medium: Option<usize>,
         receiver: Point,
-        max_tuples: usize,
+        budget: SearchBudget,
         out: &mut Vec<Arrival>,
     ) -> SearchOutcome {
         complete::recycle(out);
@@ -136,6 +144,7 @@ impl Tracer {
             complete: true,
             tuples: 0,
             solves: 0,
+            work: 0,
         };
         let k = sequence.steps.len();
         let mut held: [&Hierarchy; MAX_STATIONARY_STEPS];
@@ -158,7 +167,7 @@ impl Tracer {
             media: &[],
             source,
             receiver,
-            max_tuples,
+            budget,
         };
         match (media, self.regions.as_ref(), source_medium) {
             (Some(media), _, _) => {
@@ -287,7 +296,7 @@ impl Tracer {
             source,
             if given { None } else { source_medium },
             receiver,
-            FALLBACK_TUPLES,
+            FALLBACK_BUDGET,
             &mut arrivals,
         );
         let best = arrivals

@@ -41,7 +41,8 @@ impl Search<'_> {
             tuple.copy_from_slice(&stack[at..]);
             stack.truncate(at);
             self.stats.tuples += 1;
-            if self.stats.tuples > self.max_tuples {
+            self.stats.work += k + 1;
+            if self.stats.tuples > self.budget.tuples || self.stats.work > self.budget.work {
                 self.stats.complete = false;
                 return;
             }

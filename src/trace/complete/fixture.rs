@@ -59,7 +59,7 @@ impl Fixture {
             media: media.expect("a fixture's path gives its media"),
             source: self.scene.sources()[0],
             receiver: self.scene.receivers()[0],
-            max_tuples,
+            budget: super::SearchBudget::tuples(max_tuples),
         })
     }
 

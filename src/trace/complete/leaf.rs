@@ -49,7 +49,7 @@ impl Search<'_> {
             return;
         }
         self.stats.solves += 1;
-        if self.stats.solves > self.max_tuples {
+        if self.stats.solves > self.budget.tuples || self.stats.work > self.budget.work {
             self.stats.complete = false;
             return;
         }
@@ -68,6 +68,7 @@ impl Search<'_> {
             }
         }
         let (settled, iterations) = self.minimise(held);
+        self.stats.work += (iterations + 1) * (k + 1);
         match settled {
             Settled::Yes => {}
             Settled::Degenerate | Settled::Outside => return,

@@ -74,6 +74,29 @@ use scratch::Scratch;
 /// every stationary path, before it gives up and says it is not complete.
 pub(crate) const MAX_TUPLES: usize = 1 << 26;
 
+/// How much a search of one sequence may do before it gives up and says it is not complete:
+/// tuples of hierarchy nodes visited (and assignments solved), and work, the points moved by
+/// its Newton steps (each step of an assignment of `k` points counts `k + 1`, as does each
+/// tuple), which bounds its time where a few tuples hold costly solves (long sequences over
+/// many segments, where each assignment is solved with every choice of held vertices).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct SearchBudget {
+    /// Tuples, and assignments solved.
+    pub tuples: usize,
+    /// Points moved and tuples weighed, as above.
+    pub work: usize,
+}
+
+impl SearchBudget {
+    /// A budget of `tuples` tuples and no limit on work.
+    pub(crate) fn tuples(tuples: usize) -> SearchBudget {
+        SearchBudget {
+            tuples,
+            work: usize::MAX,
+        }
+    }
+}
+
 /// What a search of one sequence with given leg media borrows.
 #[derive(Clone, Copy)]
 pub(crate) struct SequenceSearch<'a> {
@@ -93,8 +116,8 @@ pub(crate) struct SequenceSearch<'a> {
     pub source: Point,
     /// The path's last point.
     pub receiver: Point,
-    /// Tuples, and assignments solved, after which the search gives up (incomplete).
-    pub max_tuples: usize,
+    /// What the search may do before it gives up (incomplete).
+    pub budget: SearchBudget,
 }
 
 /// The search's scratch and settings for one triple.
@@ -105,8 +128,8 @@ struct Search<'a> {
     sequence: Sequence<'a>,
     /// Leg media, as indices into [`Scene::media`].
     media: &'a [usize],
-    /// See [`SequenceSearch::max_tuples`].
-    max_tuples: usize,
+    /// See [`SequenceSearch::budget`].
+    budget: SearchBudget,
     /// The classifier every candidate goes through.
     classifier: &'a Classifier,
     /// The segment hierarchy of each step's interface.
@@ -136,6 +159,7 @@ pub(crate) fn search_sequence(
     stats.complete &= done.complete;
     stats.tuples += done.tuples;
     stats.solves += done.solves;
+    stats.work += done.work;
 }
 
 /// Runs `f` on the search of `input` (with this thread's scratch, given back at the end);
@@ -158,7 +182,7 @@ fn searching(input: SequenceSearch<'_>, f: impl FnOnce(&mut Search<'_>)) -> Sear
         },
         sequence: input.sequence,
         media: input.media,
-        max_tuples: input.max_tuples,
+        budget: input.budget,
         classifier: input.classifier,
         hierarchies: input.hierarchies,
         tolerance: input.tolerance,
@@ -167,6 +191,7 @@ fn searching(input: SequenceSearch<'_>, f: impl FnOnce(&mut Search<'_>)) -> Sear
             complete: true,
             tuples: 0,
             solves: 0,
+            work: 0,
         },
         pinned: 0,
         smoothed: false,
@@ -185,6 +210,37 @@ mod tests {
     use crate::trace::Status;
     use crate::trace::complete::branch::tests::mirror;
 
+    /// A work budget stops a search that its tuples alone would let finish: the valley's
+    /// search with ample work is complete and counts its work; with less work than it needs,
+    /// it says it is not complete.
+    #[test]
+    fn a_work_budget_makes_a_search_incomplete() {
+        let v = [
+            Point::new(-3.0, 0.0),
+            Point::new(0.0, -2.0),
+            Point::new(3.0, 0.0),
+        ];
+        let fixture = mirror(&v, Point::new(-0.5, 2.0), Point::new(0.5, 2.0));
+        let run = |work: usize| {
+            let mut stats = SearchOutcome {
+                complete: true,
+                tuples: 0,
+                solves: 0,
+                work: 0,
+            };
+            let mut out = Vec::new();
+            fixture.with_input(0, MAX_TUPLES, |mut input| {
+                input.budget.work = work;
+                search_sequence(input, &mut out, &mut stats);
+            });
+            stats
+        };
+        let full = run(usize::MAX);
+        assert!(full.complete && full.work >= 2 * full.tuples);
+        let short = run(full.work / 2);
+        assert!(!short.complete && short.work <= full.work);
+    }
+
     /// The valley of `Tracer::stationary_paths`'s example: `search_sequence` appends the
     /// three paths (two reflections and the bottom vertex) and adds what it did to the
     /// stats it is given; a second search appends the same again; a limit of one tuple
@@ -202,13 +258,14 @@ mod tests {
             complete: true,
             tuples: 5,
             solves: 7,
+            work: 11,
         };
         let mut stats = start;
         fixture.with_input(0, MAX_TUPLES, |input| {
             search_sequence(input, &mut out, &mut stats);
         });
         let once = stats;
-        assert!(once.complete && once.tuples > 5 && once.solves > 7);
+        assert!(once.complete && once.tuples > 5 && once.solves > 7 && once.work > 11);
         let mut statuses: Vec<Status> = out.iter().map(|a| a.status).collect();
         statuses.sort_by_key(|s| s.as_str());
         assert_eq!(

@@ -88,6 +88,9 @@ pub struct SearchOutcome {
     pub tuples: usize,
     /// Assignments solved.
     pub solves: usize,
+    /// Work done: the points its Newton steps moved (a step of `k` points counts `k + 1`),
+    /// and `k + 1` for each tuple visited. What a search's work budget counts.
+    pub work: usize,
 }
 
 /// Why a search cannot run.
