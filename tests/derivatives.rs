@@ -65,15 +65,23 @@ fn layered(rng: &mut Rng) -> Value {
         let n = 2 + rng.below(5);
         interfaces.insert(format!("l{j}"), band(rng, -3.0 * j as f64, n, 0.6));
     }
+    // Both forms, one per scene (a scene's media are of one kind): indices, or speeds.
+    let mut as_index = None;
     for j in 0..=layers {
-        // Both forms: an index, or a speed.
-        let m = if rng.below(2) == 0 {
+        let index = *as_index.get_or_insert(rng.below(2) == 0);
+        let m = if index {
             json!({ "index": rng.uniform(1.0, 2.0) })
         } else {
             json!({ "speed": rng.uniform(0.5, 1.0) })
         };
         media.insert(format!("m{j}"), m);
-        media.insert(format!("s{j}"), json!({ "index": rng.uniform(1.5, 3.0) }));
+        let slow = rng.uniform(1.5, 3.0);
+        let s = if index {
+            json!({ "index": slow })
+        } else {
+            json!({ "speed": 1.0 / slow })
+        };
+        media.insert(format!("s{j}"), s);
     }
     let source = json!([rng.uniform(-4.0, 4.0), rng.uniform(2.0, 4.0)]);
     let below = -3.0 * (layers - 1) as f64 - rng.uniform(2.0, 4.0);
@@ -1134,7 +1142,7 @@ fn derivatives_match_dual_numbers_through_the_solve() {
 #[test]
 fn every_stationary_path_has_its_derivatives() {
     let doc = json!({
-        "media": { "air": { "speed": 1.0 }, "slow": { "index": 1.7 } },
+        "media": { "air": { "speed": 1.0 }, "slow": { "speed": 0.5 } },
         "interfaces": { "valley": { "points": [[-3.0, 0.0], [0.0, -2.0], [3.0, 0.0]] } },
         "sources": [[-0.5, 2.0]], "receivers": [[0.7, 1.8]],
         "paths": [
