@@ -1184,6 +1184,19 @@ pub struct BatchGradients {
 /// Rays per parallel piece of [`BatchGradients::compute`] and [`GradientRows::gradients_into`].
 const GRADIENT_PIECE: usize = 1024;
 
+/// The flat arrays of a [`BatchGradients`] ([`BatchGradients::arrays`]), one row per ray.
+#[derive(Clone, Copy, Debug)]
+pub struct BatchGradientArrays<'a> {
+    /// `(dT/dx, dT/dy)` of each ray's source (NaN without a gradient).
+    pub source: &'a [Vec2],
+    /// `(dT/dx, dT/dy)` of each ray's receiver.
+    pub receiver: &'a [Vec2],
+    /// `dT/dw` of each medium, [`BatchGradients::media`] per ray.
+    pub slowness: &'a [f64],
+    /// Vertex gradients, [`BatchGradients::slots`] per ray, the ray's own first.
+    pub vertices: &'a [VertexGradient],
+}
+
 impl BatchGradients {
     /// Number of rays.
     pub fn len(&self) -> usize {
@@ -1230,8 +1243,13 @@ impl BatchGradients {
     /// The flat arrays: sources' and receivers' gradients (one per ray), slowness gradients
     /// (`media` per ray, see [`media`](Self::media)), vertex gradients (`slots` per ray, see
     /// [`slots`](Self::slots); the ray's own first, [`count`](Self::count) of them).
-    pub fn arrays(&self) -> (&[Vec2], &[Vec2], &[f64], &[VertexGradient]) {
-        (&self.source, &self.receiver, &self.slowness, &self.vertices)
+    pub fn arrays(&self) -> BatchGradientArrays<'_> {
+        BatchGradientArrays {
+            source: &self.source,
+            receiver: &self.receiver,
+            slowness: &self.slowness,
+            vertices: &self.vertices,
+        }
     }
     /// Slowness gradients per ray (the scene's media).
     pub fn media(&self) -> usize {

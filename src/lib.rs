@@ -122,8 +122,8 @@ pub mod sink {
 /// ray and for a whole batch ([`BatchGradients`](gradients::BatchGradients)).
 pub mod gradients {
     pub use crate::derivatives::{
-        Axis, BatchGradients, DerivativeError, Gradient, GradientArraysMut, GradientRows,
-        Parameter, PointSensitivities, VertexGradient,
+        Axis, BatchGradientArrays, BatchGradients, DerivativeError, Gradient, GradientArraysMut,
+        GradientRows, Parameter, PointSensitivities, VertexGradient,
     };
 }
 

@@ -558,6 +558,18 @@ fn batch_gradients_are_the_rays_gradients() {
         timed += 1;
         let one = Gradient::of_ray(&scene, &batch.ray(ray)).unwrap();
         assert_eq!(gradients.gradient(ray).unwrap(), one);
+        // The flat arrays hold the same rows.
+        let arrays = gradients.arrays();
+        assert_eq!(arrays.source[ray], one.source);
+        assert_eq!(arrays.receiver[ray], one.receiver);
+        let m = gradients.media();
+        assert_eq!(
+            &arrays.slowness[ray * m..(ray + 1) * m],
+            gradients.slowness(ray)
+        );
+        let first = ray * gradients.slots();
+        let own = &arrays.vertices[first..first + one.vertices.len()];
+        assert_eq!(own, gradients.vertices(ray));
         // Into a reused gradient, from the points and media alone.
         let path = batch.triple(ray).path;
         let steps = &scene.paths()[path].steps;
