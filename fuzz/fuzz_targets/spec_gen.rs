@@ -147,7 +147,9 @@ pub fn build(input: &Input) -> SceneSpec {
         solver: (input.max_iterations.is_some() || input.tolerance.is_some()).then(|| SolverSpec {
             max_iterations: input.max_iterations.map(u64::from),
             tolerance: input.tolerance.map(|t| 10f64.powf(-f64::from(t % 20))),
+            ..SolverSpec::default()
         }),
+        search: None,
     }
 }
 

@@ -661,7 +661,7 @@ fn write_failure(path: &Path, e: &io::Error) -> Failure {
 }
 
 /// Whether a write failed because the reader closed the pipe (also when the error comes
-/// wrapped in a `serde_json` error, as `write_rays_json` returns it).
+/// wrapped in a `serde_json` error, as `eigenray::write` returns it).
 fn is_broken_pipe(e: &io::Error) -> bool {
     let inner = e
         .get_ref()
