@@ -24,7 +24,7 @@ fn diff(f: &dyn Fn(&[f64]) -> f64, s: &[f64], j: usize) -> f64 {
 fn scene_for_jacobians() -> Scene {
     scene(&json!({
         "media": {
-            "a": { "speed": 1.0 }, "b": { "speed": 0.6 }, "c": { "index": 1.45 }, "d": { "speed": 2.2 }
+            "a": { "speed": 1.0 }, "b": { "speed": 0.6 }, "c": { "speed": 0.6896551724137931 }, "d": { "speed": 2.2 }
         },
         "interfaces": {
             "flat": { "points": [[-5.0, 0.0], [5.0, 0.0]] },
