@@ -12,6 +12,7 @@ use std::io::{self, Write};
 
 use rayon::prelude::*;
 
+use crate::amplitude::{Amplitude, NoAmplitude};
 use crate::batch::Batch;
 use crate::derivatives::Gradient;
 use crate::geom::Point;
@@ -122,6 +123,8 @@ struct NpyShape {
     k: usize,
     /// With the gradient fields (`"derivatives": true`): the scene's media.
     gradient_media: Option<usize>,
+    /// With the amplitude fields (`"amplitudes"`).
+    amplitudes: bool,
 }
 
 impl NpyShape {
@@ -131,6 +134,7 @@ impl NpyShape {
         NpyShape {
             k: k.unwrap_or(0),
             gradient_media: scene.solver().derivatives.then_some(scene.media().len()),
+            amplitudes: scene.amplitudes().is_some(),
         }
     }
 
@@ -174,7 +178,123 @@ fn npy_header(n: usize, shape: NpyShape, layout: Layout) -> Vec<u8> {
     if let Some(media) = shape.gradient_media {
         descr.push_str(&gradient_npy_descr(media, 2 * shape.k));
     }
+    if shape.amplitudes {
+        descr.push_str(AMPLITUDE_NPY_DESCR);
+    }
     npy_header_of(n, &descr)
+}
+
+/// The `.npy` fields of an amplitude (after the others).
+const AMPLITUDE_NPY_DESCR: &str = ", ('amplitude', '<f8', (2,)), ('spreading', '<f8'), \
+     ('coefficient', '<f8', (2,)), ('attenuation_db', '<f8'), ('amplitude_reason', '|u1')";
+
+/// The amplitude fields of a `.npy` record: NaN where there is no value, and the reason's
+/// code ([`NoAmplitude::code`]; 0 with a value or without a time, [`AMPLITUDE_NOT_COMPUTED`] for a
+/// timed ray whose amplitude was not computed).
+fn amplitude_npy(buf: &mut Vec<u8>, timed: bool, amplitude: Option<&Amplitude>) {
+    let nan = f64::NAN;
+    let (values, code) = match amplitude {
+        Some(a) => (
+            [
+                a.value.re,
+                a.value.im,
+                a.spreading,
+                a.coefficient.re,
+                a.coefficient.im,
+                a.attenuation_db,
+            ],
+            a.reason.map_or(0, NoAmplitude::code),
+        ),
+        None => ([nan; 6], if timed { AMPLITUDE_NOT_COMPUTED } else { 0 }),
+    };
+    for v in values {
+        buf.extend_from_slice(&v.to_le_bytes());
+    }
+    buf.push(code);
+}
+
+/// The `.npy` `amplitude_reason` of a timed ray whose amplitude was not computed (rays traced
+/// without the scene's `amplitudes`).
+pub const AMPLITUDE_NOT_COMPUTED: u8 = u8::MAX;
+
+/// The reason of a timed ray without a computed amplitude, in JSON and CSV.
+const NOT_COMPUTED_TEXT: &str = "not computed (the ray was traced without amplitudes)";
+
+/// The amplitude fields of a JSON object (each after a comma): `amplitude`, `spreading`,
+/// `coefficient`, `attenuation_db` (`null` where there is no number), and `amplitude_reason`
+/// where there is no value.
+fn amplitude_json(buf: &mut Vec<u8>, amplitude: Option<&Amplitude>) {
+    let complex = |buf: &mut Vec<u8>, c: num_complex::Complex64| {
+        if !(c.re.is_finite() && c.im.is_finite()) {
+            buf.extend_from_slice(b"null");
+            return;
+        }
+        buf.push(b'[');
+        float(buf, c.re);
+        buf.push(b',');
+        float(buf, c.im);
+        buf.push(b']');
+    };
+    let a = amplitude
+        .copied()
+        .unwrap_or(Amplitude::none(NoAmplitude::UnknownMedia));
+    buf.extend_from_slice(b",\"amplitude\":");
+    complex(buf, a.value);
+    buf.extend_from_slice(b",\"spreading\":");
+    float(buf, a.spreading);
+    buf.extend_from_slice(b",\"coefficient\":");
+    complex(buf, a.coefficient);
+    buf.extend_from_slice(b",\"attenuation_db\":");
+    float(buf, a.attenuation_db);
+    if amplitude.is_none_or(|a| a.reason.is_some()) {
+        buf.extend_from_slice(b",\"amplitude_reason\":");
+        buf.extend_from_slice(&json_string(&amplitude_reason(amplitude)));
+    }
+}
+
+/// The reason a timed ray's amplitude has no value, in words.
+fn amplitude_reason(amplitude: Option<&Amplitude>) -> String {
+    match amplitude.and_then(|a| a.reason) {
+        Some(r) => r.to_string(),
+        None => NOT_COMPUTED_TEXT.to_string(),
+    }
+}
+
+/// The five amplitude columns of a CSV line (each after a comma): `amplitude` and
+/// `coefficient` as `re im`, `spreading`, `attenuation_db`, `amplitude_reason`; all empty
+/// without a time, each number empty where there is none.
+fn amplitude_csv(buf: &mut Vec<u8>, timed: bool, amplitude: Option<&Amplitude>) {
+    if !timed {
+        buf.extend_from_slice(b",,,,,");
+        return;
+    }
+    let number = |buf: &mut Vec<u8>, v: f64| {
+        if v.is_finite() {
+            float(buf, v);
+        }
+    };
+    let complex = |buf: &mut Vec<u8>, c: num_complex::Complex64| {
+        if c.re.is_finite() && c.im.is_finite() {
+            float(buf, c.re);
+            buf.push(b' ');
+            float(buf, c.im);
+        }
+    };
+    let a = amplitude
+        .copied()
+        .unwrap_or(Amplitude::none(NoAmplitude::UnknownMedia));
+    buf.push(b',');
+    complex(buf, a.value);
+    buf.push(b',');
+    number(buf, a.spreading);
+    buf.push(b',');
+    complex(buf, a.coefficient);
+    buf.push(b',');
+    number(buf, a.attenuation_db);
+    buf.push(b',');
+    if amplitude.is_none_or(|a| a.reason.is_some()) {
+        csv_field(buf, &amplitude_reason(amplitude));
+    }
 }
 
 /// The `.npy` fields of a gradient of `media` media and `slots` vertices (after others).
@@ -241,6 +361,9 @@ fn ray_npy<M: Iterator<Item = usize>>(
     }
     if let Some(media) = shape.gradient_media {
         gradient_npy(buf, media, 2 * shape.k, gradient);
+    }
+    if shape.amplitudes {
+        amplitude_npy(buf, r.time.is_some(), r.amplitude);
     }
 }
 
@@ -315,6 +438,8 @@ struct View<'a, M: Iterator<Item = usize>> {
     reason: Option<Reason>,
     /// Present exactly in [`Layout::Stationary`].
     every: Option<EveryFields>,
+    /// Its amplitude, when computed.
+    amplitude: Option<&'a Amplitude>,
 }
 
 /// The medium, path and interface names as each format writes them, made once per document.
@@ -329,6 +454,8 @@ struct Names {
     media_csv: Option<Vec<Vec<u8>>>,
     /// Escaped JSON strings of the interface names.
     interfaces: Vec<Vec<u8>>,
+    /// Whether the scene asks for amplitudes (and so the amplitude fields are written).
+    amplitudes: bool,
 }
 
 /// `s` as a JSON string.
@@ -380,6 +507,7 @@ impl Names {
             paths_csv,
             media_csv,
             interfaces,
+            amplitudes: scene.amplitudes().is_some(),
         }
     }
 }
@@ -461,6 +589,9 @@ fn ray_json<M: Iterator<Item = usize>>(
     }
     if let Some(g) = gradient {
         gradient_json(buf, names, g);
+    }
+    if names.amplitudes && r.time.is_some() {
+        amplitude_json(buf, r.amplitude);
     }
     buf.extend_from_slice(b",\"iterations\":");
     int(buf, r.iterations);
@@ -657,6 +788,9 @@ fn ray_csv<M: Iterator<Item = usize>>(
     if let Some(g) = gradient {
         gradient_csv(buf, g);
     }
+    if names.amplitudes {
+        amplitude_csv(buf, r.time.is_some(), r.amplitude);
+    }
     buf.push(b'\n');
 }
 
@@ -670,17 +804,25 @@ points,path_name,media,reason,arrival,kink,complete\n";
 
 /// The gradient columns that follow the others in [`Format::Csv`] with `"derivatives": true`.
 const CSV_GRADIENT_COLUMNS: &[u8] =
-    b",gradient_source,gradient_receiver,gradient_slowness,gradient_vertices\n";
+    b",gradient_source,gradient_receiver,gradient_slowness,gradient_vertices";
 
-/// Writes the CSV header line `header`, with the gradient columns when `derivatives`.
-fn csv_header<W: Write>(out: &mut W, header: &[u8], derivatives: bool) -> io::Result<()> {
-    match header.strip_suffix(b"\n") {
-        Some(columns) if derivatives => {
-            out.write_all(columns)?;
-            out.write_all(CSV_GRADIENT_COLUMNS)
-        }
-        _ => out.write_all(header),
+/// The amplitude columns that follow the others (and the gradient's) in [`Format::Csv`] with
+/// `"amplitudes"`.
+const CSV_AMPLITUDE_COLUMNS: &[u8] =
+    b",amplitude,spreading,coefficient,attenuation_db,amplitude_reason";
+
+/// Writes the CSV header line `header` of `scene`, with the gradient columns when it asks
+/// for derivatives and the amplitude columns when it asks for amplitudes.
+fn csv_header<W: Write>(out: &mut W, header: &[u8], scene: &Scene) -> io::Result<()> {
+    let columns = header.strip_suffix(b"\n").unwrap_or(header);
+    out.write_all(columns)?;
+    if scene.solver().derivatives {
+        out.write_all(CSV_GRADIENT_COLUMNS)?;
     }
+    if scene.amplitudes().is_some() {
+        out.write_all(CSV_AMPLITUDE_COLUMNS)?;
+    }
+    out.write_all(b"\n")
 }
 
 /// Rays formatted at a time (in [`PIECE`]s, in parallel) before they are written out in order.
@@ -725,7 +867,7 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
                 Layout::Rays => CSV_HEADER,
                 Layout::Stationary => CSV_HEADER_STATIONARY,
             };
-            csv_header(&mut out, header, derivatives)?;
+            csv_header(&mut out, header, scene)?;
         }
         Format::Jsonl => {}
     }
@@ -1004,6 +1146,7 @@ fn write_rays_and_arrivals<W: Write>(
                     media: (!r.media.is_empty()).then(|| r.media.iter().copied()),
                     reason: r.reason,
                     every: None,
+                    amplitude: r.amplitude.as_ref(),
                 }
             },
         ),
@@ -1030,6 +1173,7 @@ fn write_rays_and_arrivals<W: Write>(
                     media: batch.media(i),
                     reason: r.reason,
                     every: None,
+                    amplitude: batch.amplitude(i),
                 }
             },
         ),
@@ -1062,6 +1206,7 @@ fn write_rays_and_arrivals<W: Write>(
                             kink: a.kink,
                             complete: t.complete,
                         }),
+                        amplitude: a.amplitude.as_ref(),
                     },
                     // No stationary path: a proof when the search was complete.
                     None => View {
@@ -1084,6 +1229,7 @@ fn write_rays_and_arrivals<W: Write>(
                             kink: None,
                             complete: t.complete,
                         }),
+                        amplitude: None,
                     },
                 }
             })
@@ -1099,8 +1245,9 @@ fn arrival_steps(scene: &Scene, arrivals: &[SearchArrival]) -> usize {
 }
 
 /// The `.npy` header of `n` arrival records of at most `k` steps, with the gradient fields of
-/// `media` media when the scene asks for derivatives.
-fn arrivals_npy_header(n: usize, k: usize, gradient_media: Option<usize>) -> Vec<u8> {
+/// `shape` (its media) when the scene asks for derivatives and the amplitude fields when it
+/// asks for amplitudes.
+fn arrivals_npy_header(n: usize, k: usize, shape: NpyShape) -> Vec<u8> {
     let mut descr = format!(
         "('source', '<u4'), ('receiver', '<u4'), ('steps', '<u4'), ('step_kind', '|u1', ({k},)), \
          ('step_interface', '<u4', ({k},)), ('status', '|u1'), ('kink', '|u1'), \
@@ -1109,8 +1256,11 @@ fn arrivals_npy_header(n: usize, k: usize, gradient_media: Option<usize>) -> Vec
         k + 2,
         k + 1
     );
-    if let Some(media) = gradient_media {
+    if let Some(media) = shape.gradient_media {
         descr.push_str(&gradient_npy_descr(media, 2 * k));
+    }
+    if shape.amplitudes {
+        descr.push_str(AMPLITUDE_NPY_DESCR);
     }
     npy_header_of(n, &descr)
 }
@@ -1159,6 +1309,9 @@ fn arrival_json(buf: &mut Vec<u8>, scene: &Scene, names: &Names, s: &SearchArriv
     points_json(buf, &a.points);
     if let Some(g) = arrival_gradient(scene, s) {
         gradient_json(buf, names, &g);
+    }
+    if names.amplitudes {
+        amplitude_json(buf, a.amplitude.as_ref());
     }
     buf.extend_from_slice(b",\"iterations\":");
     int(buf, a.iterations);
@@ -1236,6 +1389,9 @@ fn arrival_csv(buf: &mut Vec<u8>, scene: &Scene, names: &Names, s: &SearchArriva
     if scene.solver().derivatives {
         gradient_csv(buf, arrival_gradient(scene, s).as_ref());
     }
+    if names.amplitudes {
+        amplitude_csv(buf, true, a.amplitude.as_ref());
+    }
     buf.push(b'\n');
 }
 
@@ -1268,6 +1424,9 @@ fn arrival_npy(buf: &mut Vec<u8>, scene: &Scene, k: usize, s: &SearchArrival) {
     if scene.solver().derivatives {
         let g = arrival_gradient(scene, s);
         gradient_npy(buf, scene.media().len(), 2 * k, g.as_ref());
+    }
+    if scene.amplitudes().is_some() {
+        amplitude_npy(buf, true, a.amplitude.as_ref());
     }
 }
 
@@ -1323,11 +1482,11 @@ fn write_arrivals<W: Write>(
     match format {
         Format::Json => out.write_all(b"{\"arrivals\":[")?,
         Format::Jsonl => {}
-        Format::Csv => csv_header(&mut out, ARRIVALS_CSV_HEADER, scene.solver().derivatives)?,
+        Format::Csv => csv_header(&mut out, ARRIVALS_CSV_HEADER, scene)?,
         Format::Npy => out.write_all(&arrivals_npy_header(
             arrivals.len(),
             arrival_steps(scene, arrivals),
-            scene.solver().derivatives.then_some(scene.media().len()),
+            NpyShape::of(scene),
         ))?,
     }
     arrival_lines(scene, &names, arrivals, format, &mut out)?;
@@ -1350,18 +1509,28 @@ fn write_arrivals<W: Write>(
 /// (`null` when it has none), `media[index]` the name of a medium index (the scene's media in
 /// the order of their names, as [`Scene::media`] lists them) and `no_medium` the index
 /// written for a leg whose medium is not known. `interfaces` lists the interface names in
-/// the order of [`Scene::interfaces`].
+/// the order of [`Scene::interfaces`]. A scene that asks for amplitudes adds
+/// `amplitude_reasons`, the names of the `amplitude_reason` codes (`null` for 0, a value or
+/// no time; see [`NoAmplitude::CODES`](crate::amplitudes::NoAmplitude::CODES)), and
+/// `amplitude_not_computed`, the code of a timed ray traced without them.
 ///
 /// # Errors
 /// Any error of the writer.
 pub fn write_names<W: Write>(scene: &Scene, mut out: W) -> io::Result<()> {
-    let doc = serde_json::json!({
+    let mut doc = serde_json::json!({
         "status": STATUS_CODES.map(Status::as_str),
         "paths": scene.paths().iter().map(|p| p.name.as_deref()).collect::<Vec<_>>(),
         "media": scene.media().iter().map(|m| m.name.as_str()).collect::<Vec<_>>(),
         "interfaces": scene.interfaces().iter().map(|i| i.name.as_str()).collect::<Vec<_>>(),
         "no_medium": NO_MEDIUM,
     });
+    if scene.amplitudes().is_some() {
+        let reasons: Vec<Option<&str>> = std::iter::once(None)
+            .chain(NoAmplitude::CODES.iter().map(|r| Some(r.name())))
+            .collect();
+        doc["amplitude_reasons"] = serde_json::json!(reasons);
+        doc["amplitude_not_computed"] = serde_json::json!(AMPLITUDE_NOT_COMPUTED);
+    }
     serde_json::to_writer_pretty(&mut out, &doc)?;
     out.write_all(b"\n")?;
     out.flush()

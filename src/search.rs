@@ -194,6 +194,11 @@ impl Tracer {
                 .then_with(|| a.steps.len().cmp(&b.steps.len()))
                 .then_with(|| key(&a.steps).cmp(key(&b.steps)))
         });
+        if scene.amplitudes().is_some() {
+            out.par_iter_mut().for_each(|s| {
+                self.arrival_amplitudes(&s.steps, std::slice::from_mut(&mut s.arrival))
+            });
+        }
         Ok(out)
     }
 
@@ -310,6 +315,7 @@ fn mirror_arrival(
             // The image method's points: no solve, no residual.
             residual: f64::NAN,
             complete: true,
+            amplitude: None,
         },
     }
 }

@@ -644,6 +644,7 @@ fn hand_built_arrivals(scene: &Scene) -> Vec<SearchArrival> {
         kink,
         residual: 1e-16,
         complete,
+        amplitude: None,
     };
     vec![
         SearchArrival {

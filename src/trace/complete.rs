@@ -44,6 +44,7 @@
 use std::f64::consts::PI;
 use std::fmt;
 
+use crate::amplitude::Amplitude;
 use crate::geom::{Aabb, Point, Vec2};
 use crate::polyline::Polyline;
 use crate::problem::{Eval, Pin, ProblemRef};
@@ -100,6 +101,8 @@ pub struct Arrival {
     pub residual: f64,
     /// Whether the search of its triple was complete (see [`Stationary::complete`]).
     pub complete: bool,
+    /// Its amplitude, when the scene asks for amplitudes (`"amplitudes"`).
+    pub amplitude: Option<Amplitude>,
 }
 
 impl Arrival {
@@ -117,6 +120,7 @@ impl Arrival {
             kink: None,
             residual: f64::NAN,
             complete: true,
+            amplitude: None,
         }
     }
 }
@@ -997,6 +1001,7 @@ impl Search<'_> {
         a.kink = (record.status == Status::Vertex).then_some(kink).flatten();
         a.residual = record.residual;
         a.complete = true;
+        a.amplitude = None;
         out.push(a);
     }
 

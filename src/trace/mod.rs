@@ -17,6 +17,7 @@ use crate::regions::Regions;
 use crate::scene::{MAX_COORDINATE, Scene, SceneError};
 use crate::solver::{NewtonOptions, NewtonWorkspace, solve};
 
+mod amplitude;
 mod classify;
 mod complete;
 mod flat;
@@ -354,6 +355,7 @@ impl Tracer {
             residual: record.residual,
             media: ws.ray.media.clone(),
             reason: record.reason,
+            amplitude: self.amplitude(path, &record, ws),
         }
     }
 

@@ -703,6 +703,7 @@ mod tests {
                 kink: None,
                 residual: 0.0,
                 complete: true,
+                amplitude: None,
             },
         }
     }

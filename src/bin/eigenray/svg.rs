@@ -1742,6 +1742,7 @@ mod tests {
                 kink: None,
                 residual: 0.0,
                 complete: true,
+                amplitude: None,
             },
         }
     }

@@ -1,0 +1,93 @@
+//! The tracer's entry to amplitudes (`crate::amplitude`): the one function that gives a
+//! solved ray or arrival its [`Amplitude`], called by one-by-one solving, batches, every
+//! stationary path and the search alike.
+
+use crate::amplitude::{Amplitude, NoAmplitude, PathGeometry, of_path};
+use crate::geom::Point;
+use crate::scene::Step;
+
+use super::{Arrival, RayRecord, Status, Tracer, Workspace};
+
+impl Tracer {
+    /// The amplitude of a ray of `steps` through `points` (source, interaction points,
+    /// receiver) with leg media `media` that ended as `status`: `None` when the scene does not
+    /// ask for amplitudes (`"amplitudes"`) or the status has no time. A `vertex` or
+    /// `obstructed` ray has an amplitude without a value, with its reason ([`NoAmplitude`]).
+    /// Allocates nothing.
+    ///
+    /// ```
+    /// use eigenray::{Scene, Tracer};
+    /// let scene = Scene::from_json(r#"{
+    ///     "media": { "air": { "speed": 343 } },
+    ///     "interfaces": { "floor": { "points": [[-10, 0], [10, 0]],
+    ///                                "reflection": { "absorption": 0.36 } } },
+    ///     "sources": [[0, 1]], "receivers": [[4, 2]],
+    ///     "paths": [{ "steps": [{ "reflect": "floor" }], "media": ["air", "air"] }],
+    ///     "amplitudes": { "source": "point" }
+    /// }"#).unwrap();
+    /// let ray = &Tracer::new(&scene).unwrap().trace_all()[0];
+    /// let a = ray.amplitude.unwrap();
+    /// // The image source at (0, −1): √(1 − α) / (4π L).
+    /// let l = (16.0f64 + 9.0).sqrt();
+    /// assert!((a.value.re - 0.8 / (4.0 * std::f64::consts::PI * l)).abs() < 1e-15);
+    /// assert_eq!(a.value.im, 0.0);
+    /// ```
+    pub fn amplitude_of(
+        &self,
+        steps: &[Step],
+        status: Status,
+        points: &[Point],
+        media: &[usize],
+    ) -> Option<Amplitude> {
+        self.amplitude_with(steps, status, points, media, None)
+    }
+
+    /// The amplitude of the ray of path `path` last solved in `ws`, which ended as `record`
+    /// (see [`amplitude_of`](Self::amplitude_of)): what [`trace`](Self::trace) puts on its
+    /// [`Ray`](super::Ray).
+    pub fn amplitude(&self, path: usize, record: &RayRecord, ws: &Workspace) -> Option<Amplitude> {
+        let steps = &self.scene.paths().get(path)?.steps;
+        let segments = ws.newton.seg.get(..steps.len());
+        self.amplitude_with(steps, record.status, ws.points(), ws.media(), segments)
+    }
+
+    /// [`amplitude_of`](Self::amplitude_of) with the segment of each interaction point when
+    /// the solve knows it (tried before a search for it).
+    #[inline]
+    pub(crate) fn amplitude_with(
+        &self,
+        steps: &[Step],
+        status: Status,
+        points: &[Point],
+        media: &[usize],
+        segments: Option<&[usize]>,
+    ) -> Option<Amplitude> {
+        let settings = self.scene.amplitudes()?;
+        Some(match status {
+            Status::Converged => {
+                let path = PathGeometry {
+                    steps,
+                    points,
+                    media,
+                    segments,
+                };
+                of_path(&self.scene, settings, self.regions.as_ref(), path)
+            }
+            Status::Vertex => Amplitude::none(NoAmplitude::Vertex),
+            Status::Obstructed => Amplitude::none(NoAmplitude::Obstructed),
+            Status::NoPath | Status::NotConverged => return None,
+        })
+    }
+
+    /// Gives each of `arrivals` (stationary paths of `steps`) its amplitude, when the scene
+    /// asks for amplitudes.
+    pub(crate) fn arrival_amplitudes(&self, steps: &[Step], arrivals: &mut [Arrival]) {
+        if self.scene.amplitudes().is_none() {
+            return;
+        }
+        for a in arrivals {
+            let segments = Some(&a.segments[..]);
+            a.amplitude = self.amplitude_with(steps, a.status, &a.points, &a.media, segments);
+        }
+    }
+}
