@@ -4,7 +4,7 @@
 
 use num_complex::Complex64;
 
-use crate::scene::{Amplitudes, Polarization, Scene, Waves};
+use crate::scene::{Amplitudes, Polarization, Waves};
 
 /// The weights of the two cosines in a coefficient `(A cos θ₁ − B cos θ₂) / (A cos θ₁ + B cos
 /// θ₂)` and the weight `N` of the transmission coefficient's numerator `2 N cos θ₁`.
@@ -19,12 +19,11 @@ pub(crate) struct Weights {
 }
 
 impl Weights {
-    /// The weights from medium `m1` (the ray's) to medium `m2` (across):
-    /// fluids `A = Z₂`, `B = Z₁`, `N = Z₂` with `Z = ρc`; optics, s: `A = n₁`, `B = n₂`,
-    /// `N = n₁`; p: `A = n₂`, `B = n₁`, `N = n₁`.
-    #[inline]
-    pub(crate) fn of(scene: &Scene, settings: &Amplitudes, m1: usize, m2: usize) -> Weights {
-        let (s1, s2) = (scene.media()[m1].slowness, scene.media()[m2].slowness);
+    /// The weights from medium `m1` (the ray's) to medium `m2` (across), of slownesses `s1`
+    /// and `s2`: fluids `A = Z₂`, `B = Z₁`, `N = Z₂` with `Z = ρc`; optics, s: `A = n₁`,
+    /// `B = n₂`, `N = n₁`; p: `A = n₂`, `B = n₁`, `N = n₁`.
+    #[inline(always)]
+    pub(crate) fn of(settings: &Amplitudes, [m1, m2]: [usize; 2], [s1, s2]: [f64; 2]) -> Weights {
         match (settings.waves, settings.polarization) {
             (Waves::Fluid, _) => {
                 let z1 = settings.density[m1] / s1;
@@ -49,7 +48,7 @@ impl Weights {
     }
 
     /// The reflection coefficient for `cos θ₁` and `cos θ₂` (real below the critical angle).
-    #[inline]
+    #[inline(always)]
     pub(crate) fn reflection(self, cos1: f64, cos2: Complex64) -> Complex64 {
         let (a, b) = (self.a * cos1, cos2 * self.b);
         if cos2.im == 0.0 {
@@ -59,7 +58,7 @@ impl Weights {
     }
 
     /// The transmission coefficient for `cos θ₁` and a real `cos θ₂` (a refracted ray).
-    #[inline]
+    #[inline(always)]
     pub(crate) fn transmission(self, cos1: f64, cos2: f64) -> f64 {
         2.0 * self.n * cos1 / (self.a * cos1 + self.b * cos2)
     }

@@ -26,7 +26,7 @@ mod ray;
 
 pub use num_complex::Complex64;
 
-pub(crate) use ray::{PathGeometry, of_path};
+pub(crate) use ray::{OnSegment, PathGeometry, of_one, of_path};
 
 /// The amplitude of one timed ray or arrival (the contract's `amplitude`, `spreading`,
 /// `coefficient` and `attenuation_db`), or why it has none.
