@@ -32,7 +32,10 @@ pub enum Format {
     /// stationary path is one entry, `no_path` (or `not_converged` when its search was not
     /// complete), `arrival` 0. A scene's search arrivals follow as a second key,
     /// `{"rays": [...], "arrivals": [...]}` ([`Document::with_arrivals`]; the fields are
-    /// listed at [`write`]).
+    /// listed at [`write`]). A scene that asks for amplitudes adds to every timed entry
+    /// (ray, stationary path or arrival) `amplitude` and `coefficient` (`[re, im]`),
+    /// `spreading` and `attenuation_db` (`null` where there is no number), and
+    /// `amplitude_reason` where `amplitude` is `null` ([`Amplitude`]).
     #[default]
     Json,
     /// One ray object per line (the same objects as in `Json`), then one line per search
@@ -47,7 +50,10 @@ pub enum Format {
     /// converged). A field holding `,`, `"` or a line break is quoted as RFC 4180 says. With
     /// `"stationary": "all"` three columns follow: `arrival`, `kink` (empty but on `vertex`
     /// entries) and `complete` (`true` or `false`). Search arrivals are a table of their own,
-    /// written to a second file by [`write`].
+    /// written to a second file by [`write`]. With `"derivatives": true` the four gradient
+    /// columns follow; with `"amplitudes"` five more: `amplitude` and `coefficient` (`re im`),
+    /// `spreading`, `attenuation_db` and `amplitude_reason` (a number empty where there is
+    /// none, all five empty without a time).
     Csv,
     /// NumPy's `.npy` file (format version 1.0): one record per ray, in ray order, of a packed
     /// little-endian structured array that `numpy.load` reads as it is:
@@ -62,7 +68,12 @@ pub enum Format {
     /// records: the compact format for large batches. With `"stationary": "all"` three fields
     /// follow: `arrival` (`<u4`), `kink` (`u1`: 0 none, 1 `minimum`, 2 `maximum`, 3 `mixed`,
     /// the places in [`KINK_CODES`]) and `complete` (`u1`: 0 or 1). Search arrivals are records
-    /// of their own, written to a second file by [`write`].
+    /// of their own, written to a second file by [`write`]. With `"amplitudes"` five more
+    /// fields follow (after the gradient's): `amplitude` and `coefficient` (`<f8`, shape
+    /// `(2,)`), `spreading` and `attenuation_db` (`<f8`, NaN where there is none) and
+    /// `amplitude_reason` (`u1`: 0 with a value or without a time, else
+    /// [`NoAmplitude::code`](crate::amplitudes::NoAmplitude::code), or
+    /// [`AMPLITUDE_NOT_COMPUTED`]).
     Npy,
 }
 
