@@ -3,9 +3,12 @@
 use rayon::iter::plumbing::{Consumer, Producer, ProducerCallback, UnindexedConsumer, bridge};
 use rayon::prelude::*;
 
+use crate::amplitude::Amplitude;
 use crate::geom::Point;
 use crate::scene::{RayTriple, SceneError};
 use crate::trace::{ChainLink, ChainRays, Ray, RayRecord, Status, Tracer, WarmStarts, Workspace};
+
+mod amplitudes;
 
 /// How to run a batch.
 #[derive(Clone, Copy)]
@@ -66,6 +69,8 @@ pub struct Batch {
     media_offsets: Vec<usize>,
     /// Results in solving order when that is not ray order (kept for reuse).
     spatial: Option<Box<Arrays>>,
+    /// Each ray's amplitude, in ray order, when the scene asks for amplitudes (else empty).
+    amplitudes: Vec<Amplitude>,
 }
 
 /// One ray of a [`Batch`], as [`Batch::rays`] walks them.
@@ -569,6 +574,7 @@ impl Batch {
             residual: rec.residual,
             media: self.media(ray).map(|m| m.collect()).unwrap_or_default(),
             reason: rec.reason,
+            amplitude: self.amplitude(ray).copied(),
         }
     }
     /// Every ray as an owned [`Ray`], in ray order.
@@ -578,6 +584,7 @@ impl Batch {
     /// Bytes held by the batch's arrays.
     pub fn memory_bytes(&self) -> usize {
         arrays_bytes((&self.records, &self.points, &self.media))
+            + self.amplitudes.capacity() * std::mem::size_of::<Amplitude>()
             + self
                 .spatial
                 .as_deref()
@@ -758,6 +765,12 @@ impl Tracer {
     /// }
     /// ```
     pub fn trace_batch_into(&self, opts: &BatchOptions, batch: &mut Batch) {
+        self.solve_batch_into(opts, batch);
+        self.batch_amplitudes(batch);
+    }
+
+    /// [`trace_batch_into`](Self::trace_batch_into)'s solve of every ray.
+    fn solve_batch_into(&self, opts: &BatchOptions, batch: &mut Batch) {
         let scene = self.scene();
         let (nr, np) = (scene.receivers().len(), scene.paths().len());
         let [point_offsets, media_offsets, param_offsets] = offsets(scene);

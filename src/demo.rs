@@ -80,6 +80,7 @@ pub fn air_water(receivers: usize, seed: u64) -> SceneSpec {
         InterfaceSpec {
             points: vec![[-1.0, 0.0], [2.0, 0.0]],
             closed: false,
+            reflection: None,
         },
     );
     spec.sources = vec![[0.0, 1.0]];
@@ -169,6 +170,7 @@ pub fn layer_stack(n_layers: usize, receivers: usize) -> SceneSpec {
             InterfaceSpec {
                 points: vec![[-half, y], [half, y]],
                 closed: false,
+                reflection: None,
             },
         );
     }
@@ -312,6 +314,7 @@ pub fn sea_floor(segments: usize, receivers: usize) -> SceneSpec {
                 .map(|x| [x, sea_floor_depth(x)])
                 .collect(),
             closed: false,
+            reflection: None,
         },
     );
     spec.sources = vec![[0.0, -0.01]];

@@ -33,6 +33,9 @@
 //!    respect to its source, receiver, each medium's slowness and the vertices it touches
 //!    ([`Gradient`]); [`PointSensitivities`] how its points move;
 //!    [`BatchGradients`](gradients::BatchGradients) both for a whole batch.
+//! 7. **Amplitudes**: a scene with `"amplitudes"` ([`SceneBuilder::amplitudes`]) gives every
+//!    timed ray and arrival its [`Amplitude`] (spreading, reflection and transmission
+//!    coefficients, attenuation); [`Tracer::amplitude_of`] computes one for any solved path.
 //!
 //! ```
 //! use eigenray::{InterfaceSpec, MediumSpec, PathSpec, Point, Scene, Status, StepSpec, Tracer};
@@ -56,6 +59,7 @@
 //!
 //! The modules and how they depend on each other: `ARCHITECTURE.md`.
 
+mod amplitude;
 mod batch;
 mod bvh;
 pub mod demo;
@@ -76,6 +80,7 @@ pub mod argmin_bridge;
 
 // The vocabulary: what a user of the README names. Everything else that is public lives in a
 // module named for its concept, below. `tests/architecture.rs` keeps this list at 30 or fewer.
+pub use amplitude::Amplitude;
 pub use batch::{Batch, BatchOptions};
 pub use derivatives::{Gradient, PointSensitivities};
 pub use geom::{Point, Vec2};
@@ -92,8 +97,8 @@ pub use trace::{Arrival, InitialGuess, Ray, RayRecord, Reason, Status, Tracer, W
 /// scenes written in code or read with serde.
 pub mod spec {
     pub use crate::scene::{
-        InterfaceSpec, MediumSpec, PathSpec, SceneSpec, SearchSpec, SolverSpec, StationaryMode,
-        StepSpec,
+        AmplitudesSpec, InterfaceSpec, MediumSpec, PathSpec, Polarization, ReflectionSpec,
+        SceneSpec, SearchSpec, SolverSpec, SourceModel, StationaryMode, StepSpec,
     };
 }
 
@@ -101,8 +106,15 @@ pub mod spec {
 /// and their steps, segments, the search's options, and the sizes of a batch.
 pub mod scene_parts {
     pub use crate::scene::{
-        BatchSize, Interface, Medium, Path, RayTriple, SearchOptions, SegmentRef, Step, StepKind,
+        Amplitudes, BatchSize, Interface, Medium, Path, RayTriple, Reflection, SearchOptions,
+        SegmentRef, Step, StepKind, Waves,
     };
+}
+
+/// Amplitudes ([`Amplitude`]): why a timed ray may have none, and the complex numbers they
+/// are written in.
+pub mod amplitudes {
+    pub use crate::amplitude::{Complex64, NoAmplitude};
 }
 
 /// What a [`Tracer`] can be told besides its scene: the solver's options, the start of each
@@ -161,7 +173,8 @@ pub mod lookup {
 /// indices their names ([`write_names`](npy::write_names), the `--names` sidecar).
 pub mod npy {
     pub use crate::output::{
-        KINK_CODES, NO_INTERFACE, NO_MEDIUM, NO_STEP_KIND, STATUS_CODES, write_names,
+        AMPLITUDE_NOT_COMPUTED, KINK_CODES, NO_INTERFACE, NO_MEDIUM, NO_STEP_KIND, STATUS_CODES,
+        write_names,
     };
 }
 

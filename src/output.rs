@@ -12,6 +12,7 @@ use std::io::{self, Write};
 
 use rayon::prelude::*;
 
+use crate::amplitude::{Amplitude, NoAmplitude};
 use crate::batch::Batch;
 use crate::derivatives::Gradient;
 use crate::geom::Point;
@@ -31,7 +32,10 @@ pub enum Format {
     /// stationary path is one entry, `no_path` (or `not_converged` when its search was not
     /// complete), `arrival` 0. A scene's search arrivals follow as a second key,
     /// `{"rays": [...], "arrivals": [...]}` ([`Document::with_arrivals`]; the fields are
-    /// listed at [`write`]).
+    /// listed at [`write`]). A scene that asks for amplitudes adds to every timed entry
+    /// (ray, stationary path or arrival) `amplitude` and `coefficient` (`[re, im]`),
+    /// `spreading` and `attenuation_db` (`null` where there is no number), and
+    /// `amplitude_reason` where `amplitude` is `null` ([`Amplitude`]).
     #[default]
     Json,
     /// One ray object per line (the same objects as in `Json`), then one line per search
@@ -50,7 +54,10 @@ pub enum Format {
     /// own `;` is written `\;` and its backslash `\\`. With
     /// `"stationary": "all"` three columns follow: `arrival`, `kink` (empty but on `vertex`
     /// entries) and `complete` (`true` or `false`). Search arrivals are a table of their own,
-    /// written to a second file by [`write`].
+    /// written to a second file by [`write`]. With `"derivatives": true` the four gradient
+    /// columns follow; with `"amplitudes"` five more: `amplitude` and `coefficient` (`re im`),
+    /// `spreading`, `attenuation_db` and `amplitude_reason` (a number empty where there is
+    /// none, all five empty without a time).
     Csv,
     /// NumPy's `.npy` file (format version 1.0): one record per ray, in ray order, of a packed
     /// little-endian structured array that `numpy.load` reads as it is:
@@ -65,7 +72,12 @@ pub enum Format {
     /// records: the compact format for large batches. With `"stationary": "all"` three fields
     /// follow: `arrival` (`<u4`), `kink` (`u1`: 0 none, 1 `minimum`, 2 `maximum`, 3 `mixed`,
     /// the places in [`KINK_CODES`]) and `complete` (`u1`: 0 or 1). Search arrivals are records
-    /// of their own, written to a second file by [`write`].
+    /// of their own, written to a second file by [`write`]. With `"amplitudes"` five more
+    /// fields follow (after the gradient's): `amplitude` and `coefficient` (`<f8`, shape
+    /// `(2,)`), `spreading` and `attenuation_db` (`<f8`, NaN where there is none) and
+    /// `amplitude_reason` (`u1`: 0 with a value or without a time, else
+    /// [`NoAmplitude::code`](crate::amplitudes::NoAmplitude::code), or
+    /// [`AMPLITUDE_NOT_COMPUTED`]).
     Npy,
 }
 
@@ -126,6 +138,8 @@ struct NpyShape {
     k: usize,
     /// With the gradient fields (`"derivatives": true`): the scene's media.
     gradient_media: Option<usize>,
+    /// With the amplitude fields (`"amplitudes"`).
+    amplitudes: bool,
 }
 
 impl NpyShape {
@@ -135,6 +149,7 @@ impl NpyShape {
         NpyShape {
             k: k.unwrap_or(0),
             gradient_media: scene.solver().derivatives.then_some(scene.media().len()),
+            amplitudes: scene.amplitudes().is_some(),
         }
     }
 
@@ -178,7 +193,123 @@ fn npy_header(n: usize, shape: NpyShape, layout: Layout) -> Vec<u8> {
     if let Some(media) = shape.gradient_media {
         descr.push_str(&gradient_npy_descr(media, 2 * shape.k));
     }
+    if shape.amplitudes {
+        descr.push_str(AMPLITUDE_NPY_DESCR);
+    }
     npy_header_of(n, &descr)
+}
+
+/// The `.npy` fields of an amplitude (after the others).
+const AMPLITUDE_NPY_DESCR: &str = ", ('amplitude', '<f8', (2,)), ('spreading', '<f8'), \
+     ('coefficient', '<f8', (2,)), ('attenuation_db', '<f8'), ('amplitude_reason', '|u1')";
+
+/// The amplitude fields of a `.npy` record: NaN where there is no value, and the reason's
+/// code ([`NoAmplitude::code`]; 0 with a value or without a time, [`AMPLITUDE_NOT_COMPUTED`] for a
+/// timed ray whose amplitude was not computed).
+fn amplitude_npy(buf: &mut Vec<u8>, timed: bool, amplitude: Option<&Amplitude>) {
+    let nan = f64::NAN;
+    let (values, code) = match amplitude {
+        Some(a) => (
+            [
+                a.value.re,
+                a.value.im,
+                a.spreading,
+                a.coefficient.re,
+                a.coefficient.im,
+                a.attenuation_db,
+            ],
+            a.reason.map_or(0, NoAmplitude::code),
+        ),
+        None => ([nan; 6], if timed { AMPLITUDE_NOT_COMPUTED } else { 0 }),
+    };
+    for v in values {
+        buf.extend_from_slice(&v.to_le_bytes());
+    }
+    buf.push(code);
+}
+
+/// The `.npy` `amplitude_reason` of a timed ray whose amplitude was not computed (rays traced
+/// without the scene's `amplitudes`).
+pub const AMPLITUDE_NOT_COMPUTED: u8 = u8::MAX;
+
+/// The reason of a timed ray without a computed amplitude, in JSON and CSV.
+const NOT_COMPUTED_TEXT: &str = "not computed (the ray was traced without amplitudes)";
+
+/// The amplitude fields of a JSON object (each after a comma): `amplitude`, `spreading`,
+/// `coefficient`, `attenuation_db` (`null` where there is no number), and `amplitude_reason`
+/// where there is no value.
+fn amplitude_json(buf: &mut Vec<u8>, amplitude: Option<&Amplitude>) {
+    let complex = |buf: &mut Vec<u8>, c: num_complex::Complex64| {
+        if !(c.re.is_finite() && c.im.is_finite()) {
+            buf.extend_from_slice(b"null");
+            return;
+        }
+        buf.push(b'[');
+        float(buf, c.re);
+        buf.push(b',');
+        float(buf, c.im);
+        buf.push(b']');
+    };
+    let a = amplitude
+        .copied()
+        .unwrap_or(Amplitude::none(NoAmplitude::UnknownMedia));
+    buf.extend_from_slice(b",\"amplitude\":");
+    complex(buf, a.value);
+    buf.extend_from_slice(b",\"spreading\":");
+    float(buf, a.spreading);
+    buf.extend_from_slice(b",\"coefficient\":");
+    complex(buf, a.coefficient);
+    buf.extend_from_slice(b",\"attenuation_db\":");
+    float(buf, a.attenuation_db);
+    if amplitude.is_none_or(|a| a.reason.is_some()) {
+        buf.extend_from_slice(b",\"amplitude_reason\":");
+        buf.extend_from_slice(&json_string(&amplitude_reason(amplitude)));
+    }
+}
+
+/// The reason a timed ray's amplitude has no value, in words.
+fn amplitude_reason(amplitude: Option<&Amplitude>) -> String {
+    match amplitude.and_then(|a| a.reason) {
+        Some(r) => r.to_string(),
+        None => NOT_COMPUTED_TEXT.to_string(),
+    }
+}
+
+/// The five amplitude columns of a CSV line (each after a comma): `amplitude` and
+/// `coefficient` as `re im`, `spreading`, `attenuation_db`, `amplitude_reason`; all empty
+/// without a time, each number empty where there is none.
+fn amplitude_csv(buf: &mut Vec<u8>, timed: bool, amplitude: Option<&Amplitude>) {
+    if !timed {
+        buf.extend_from_slice(b",,,,,");
+        return;
+    }
+    let number = |buf: &mut Vec<u8>, v: f64| {
+        if v.is_finite() {
+            float(buf, v);
+        }
+    };
+    let complex = |buf: &mut Vec<u8>, c: num_complex::Complex64| {
+        if c.re.is_finite() && c.im.is_finite() {
+            float(buf, c.re);
+            buf.push(b' ');
+            float(buf, c.im);
+        }
+    };
+    let a = amplitude
+        .copied()
+        .unwrap_or(Amplitude::none(NoAmplitude::UnknownMedia));
+    buf.push(b',');
+    complex(buf, a.value);
+    buf.push(b',');
+    number(buf, a.spreading);
+    buf.push(b',');
+    complex(buf, a.coefficient);
+    buf.push(b',');
+    number(buf, a.attenuation_db);
+    buf.push(b',');
+    if amplitude.is_none_or(|a| a.reason.is_some()) {
+        csv_field(buf, &amplitude_reason(amplitude));
+    }
 }
 
 /// The `.npy` fields of a gradient of `media` media and `slots` vertices (after others).
@@ -245,6 +376,9 @@ fn ray_npy<M: Iterator<Item = usize>>(
     }
     if let Some(media) = shape.gradient_media {
         gradient_npy(buf, media, 2 * shape.k, gradient);
+    }
+    if shape.amplitudes {
+        amplitude_npy(buf, r.time.is_some(), r.amplitude);
     }
 }
 
@@ -319,6 +453,8 @@ struct View<'a, M: Iterator<Item = usize>> {
     reason: Option<Reason>,
     /// Present exactly in [`Layout::Stationary`].
     every: Option<EveryFields>,
+    /// Its amplitude, when computed.
+    amplitude: Option<&'a Amplitude>,
 }
 
 /// The medium, path and interface names as each format writes them, made once per document.
@@ -333,6 +469,8 @@ struct Names {
     media_csv: Option<Vec<Vec<u8>>>,
     /// Escaped JSON strings of the interface names.
     interfaces: Vec<Vec<u8>>,
+    /// Whether the scene asks for amplitudes (and so the amplitude fields are written).
+    amplitudes: bool,
 }
 
 /// `s` as a JSON string.
@@ -410,6 +548,7 @@ impl Names {
             paths_csv,
             media_csv,
             interfaces,
+            amplitudes: scene.amplitudes().is_some(),
         }
     }
 }
@@ -491,6 +630,9 @@ fn ray_json<M: Iterator<Item = usize>>(
     }
     if let Some(g) = gradient {
         gradient_json(buf, names, g);
+    }
+    if names.amplitudes && r.time.is_some() {
+        amplitude_json(buf, r.amplitude);
     }
     buf.extend_from_slice(b",\"iterations\":");
     int(buf, r.iterations);
@@ -690,6 +832,9 @@ fn ray_csv<M: Iterator<Item = usize>>(
     if let Some(g) = gradient {
         gradient_csv(buf, g);
     }
+    if names.amplitudes {
+        amplitude_csv(buf, r.time.is_some(), r.amplitude);
+    }
     buf.push(b'\n');
 }
 
@@ -703,17 +848,25 @@ points,path_name,media,reason,arrival,kink,complete\n";
 
 /// The gradient columns that follow the others in [`Format::Csv`] with `"derivatives": true`.
 const CSV_GRADIENT_COLUMNS: &[u8] =
-    b",gradient_source,gradient_receiver,gradient_slowness,gradient_vertices\n";
+    b",gradient_source,gradient_receiver,gradient_slowness,gradient_vertices";
 
-/// Writes the CSV header line `header`, with the gradient columns when `derivatives`.
-fn csv_header<W: Write>(out: &mut W, header: &[u8], derivatives: bool) -> io::Result<()> {
-    match header.strip_suffix(b"\n") {
-        Some(columns) if derivatives => {
-            out.write_all(columns)?;
-            out.write_all(CSV_GRADIENT_COLUMNS)
-        }
-        _ => out.write_all(header),
+/// The amplitude columns that follow the others (and the gradient's) in [`Format::Csv`] with
+/// `"amplitudes"`.
+const CSV_AMPLITUDE_COLUMNS: &[u8] =
+    b",amplitude,spreading,coefficient,attenuation_db,amplitude_reason";
+
+/// Writes the CSV header line `header` of `scene`, with the gradient columns when it asks
+/// for derivatives and the amplitude columns when it asks for amplitudes.
+fn csv_header<W: Write>(out: &mut W, header: &[u8], scene: &Scene) -> io::Result<()> {
+    let columns = header.strip_suffix(b"\n").unwrap_or(header);
+    out.write_all(columns)?;
+    if scene.solver().derivatives {
+        out.write_all(CSV_GRADIENT_COLUMNS)?;
     }
+    if scene.amplitudes().is_some() {
+        out.write_all(CSV_AMPLITUDE_COLUMNS)?;
+    }
+    out.write_all(b"\n")
 }
 
 /// Rays formatted at a time (in [`PIECE`]s, in parallel) before they are written out in order,
@@ -800,7 +953,7 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
                 Layout::Rays => CSV_HEADER,
                 Layout::Stationary => CSV_HEADER_STATIONARY,
             };
-            csv_header(&mut out, header, derivatives)?;
+            csv_header(&mut out, header, scene)?;
         }
         Format::Jsonl => {}
     }
@@ -1079,6 +1232,7 @@ fn write_rays_and_arrivals<W: Write>(
                     media: (!r.media.is_empty()).then(|| r.media.iter().copied()),
                     reason: r.reason,
                     every: None,
+                    amplitude: r.amplitude.as_ref(),
                 }
             },
         ),
@@ -1109,6 +1263,7 @@ fn write_rays_and_arrivals<W: Write>(
                     media: batch.media(i),
                     reason: r.reason,
                     every: None,
+                    amplitude: batch.amplitude(i),
                 }
             },
         ),
@@ -1140,6 +1295,7 @@ fn write_rays_and_arrivals<W: Write>(
                             kink: e.kink,
                             complete: e.complete,
                         }),
+                        amplitude: e.amplitude,
                     }
                 },
             )
@@ -1155,8 +1311,9 @@ fn arrival_steps(scene: &Scene, arrivals: &[SearchArrival]) -> usize {
 }
 
 /// The `.npy` header of `n` arrival records of at most `k` steps, with the gradient fields of
-/// `media` media when the scene asks for derivatives.
-fn arrivals_npy_header(n: usize, k: usize, gradient_media: Option<usize>) -> Vec<u8> {
+/// `shape` (its media) when the scene asks for derivatives and the amplitude fields when it
+/// asks for amplitudes.
+fn arrivals_npy_header(n: usize, k: usize, shape: NpyShape) -> Vec<u8> {
     let mut descr = format!(
         "('source', '<u4'), ('receiver', '<u4'), ('steps', '<u4'), ('step_kind', '|u1', ({k},)), \
          ('step_interface', '<u4', ({k},)), ('status', '|u1'), ('kink', '|u1'), \
@@ -1165,8 +1322,11 @@ fn arrivals_npy_header(n: usize, k: usize, gradient_media: Option<usize>) -> Vec
         k + 2,
         k + 1
     );
-    if let Some(media) = gradient_media {
+    if let Some(media) = shape.gradient_media {
         descr.push_str(&gradient_npy_descr(media, 2 * k));
+    }
+    if shape.amplitudes {
+        descr.push_str(AMPLITUDE_NPY_DESCR);
     }
     npy_header_of(n, &descr)
 }
@@ -1215,6 +1375,9 @@ fn arrival_json(buf: &mut Vec<u8>, scene: &Scene, names: &Names, s: &SearchArriv
     points_json(buf, &a.points);
     if let Some(g) = arrival_gradient(scene, s) {
         gradient_json(buf, names, &g);
+    }
+    if names.amplitudes {
+        amplitude_json(buf, a.amplitude.as_ref());
     }
     buf.extend_from_slice(b",\"iterations\":");
     int(buf, a.iterations);
@@ -1292,6 +1455,9 @@ fn arrival_csv(buf: &mut Vec<u8>, scene: &Scene, names: &Names, s: &SearchArriva
     if scene.solver().derivatives {
         gradient_csv(buf, arrival_gradient(scene, s).as_ref());
     }
+    if names.amplitudes {
+        amplitude_csv(buf, true, a.amplitude.as_ref());
+    }
     buf.push(b'\n');
 }
 
@@ -1324,6 +1490,9 @@ fn arrival_npy(buf: &mut Vec<u8>, scene: &Scene, k: usize, s: &SearchArrival) {
     if scene.solver().derivatives {
         let g = arrival_gradient(scene, s);
         gradient_npy(buf, scene.media().len(), 2 * k, g.as_ref());
+    }
+    if scene.amplitudes().is_some() {
+        amplitude_npy(buf, true, a.amplitude.as_ref());
     }
 }
 
@@ -1379,11 +1548,11 @@ fn write_arrivals<W: Write>(
     match format {
         Format::Json => out.write_all(b"{\"arrivals\":[")?,
         Format::Jsonl => {}
-        Format::Csv => csv_header(&mut out, ARRIVALS_CSV_HEADER, scene.solver().derivatives)?,
+        Format::Csv => csv_header(&mut out, ARRIVALS_CSV_HEADER, scene)?,
         Format::Npy => out.write_all(&arrivals_npy_header(
             arrivals.len(),
             arrival_steps(scene, arrivals),
-            scene.solver().derivatives.then_some(scene.media().len()),
+            NpyShape::of(scene),
         ))?,
     }
     arrival_lines(scene, &names, arrivals, format, &mut out)?;
@@ -1406,18 +1575,28 @@ fn write_arrivals<W: Write>(
 /// (`null` when it has none), `media[index]` the name of a medium index (the scene's media in
 /// the order of their names, as [`Scene::media`] lists them) and `no_medium` the index
 /// written for a leg whose medium is not known. `interfaces` lists the interface names in
-/// the order of [`Scene::interfaces`].
+/// the order of [`Scene::interfaces`]. A scene that asks for amplitudes adds
+/// `amplitude_reasons`, the names of the `amplitude_reason` codes (`null` for 0, a value or
+/// no time; see [`NoAmplitude::CODES`](crate::amplitudes::NoAmplitude::CODES)), and
+/// `amplitude_not_computed`, the code of a timed ray traced without them.
 ///
 /// # Errors
 /// Any error of the writer.
 pub fn write_names<W: Write>(scene: &Scene, mut out: W) -> io::Result<()> {
-    let doc = serde_json::json!({
+    let mut doc = serde_json::json!({
         "status": STATUS_CODES.map(Status::as_str),
         "paths": scene.paths().iter().map(|p| p.name.as_deref()).collect::<Vec<_>>(),
         "media": scene.media().iter().map(|m| m.name.as_str()).collect::<Vec<_>>(),
         "interfaces": scene.interfaces().iter().map(|i| i.name.as_str()).collect::<Vec<_>>(),
         "no_medium": NO_MEDIUM,
     });
+    if scene.amplitudes().is_some() {
+        let reasons: Vec<Option<&str>> = std::iter::once(None)
+            .chain(NoAmplitude::CODES.iter().map(|r| Some(r.name())))
+            .collect();
+        doc["amplitude_reasons"] = serde_json::json!(reasons);
+        doc["amplitude_not_computed"] = serde_json::json!(AMPLITUDE_NOT_COMPUTED);
+    }
     serde_json::to_writer_pretty(&mut out, &doc)?;
     out.write_all(b"\n")?;
     out.flush()

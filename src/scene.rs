@@ -9,11 +9,15 @@ use crate::bvh::Bvh;
 use crate::geom::{Aabb, Point, Segment, SegmentContact, orient, segment_contact};
 use crate::polyline::{Polyline, PolylineError};
 
+mod amplitudes;
 mod builder;
 mod crossings;
 mod names;
 mod update;
 
+pub use amplitudes::{
+    Amplitudes, AmplitudesSpec, Polarization, Reflection, ReflectionSpec, SourceModel, Waves,
+};
 pub use builder::SceneBuilder;
 
 /// Default relative tolerance on the stationarity residual.
@@ -147,6 +151,9 @@ pub struct SceneSpec {
     /// Automatic sequences: let the tracer generate the step sequences itself.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub search: Option<SearchSpec>,
+    /// Amplitudes: every timed ray also carries how much of the wave arrives along it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub amplitudes: Option<AmplitudesSpec>,
 }
 
 /// A JSON object of names: like a `BTreeMap`, but a name given twice is an error (serde's
@@ -196,6 +203,12 @@ pub struct MediumSpec {
     /// one). One point claims one region: two separate pieces of one material are two media.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub at: Option<[f64; 2]>,
+    /// Density (> 0, default 1): with the speed, the impedance ρc (amplitudes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub density: Option<f64>,
+    /// Attenuation in dB per unit length (≥ 0, default 0; amplitudes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub attenuation: Option<f64>,
 }
 
 /// An interface polyline.
@@ -207,6 +220,9 @@ pub struct InterfaceSpec {
     /// Whether the last vertex joins the first.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub closed: bool,
+    /// How it reflects (default rigid; amplitudes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reflection: Option<ReflectionSpec>,
 }
 
 /// One path: a sequence of interactions and optionally the medium of every leg.
@@ -464,6 +480,7 @@ pub struct Scene {
     segment_ends: Vec<Segment>,
     segment_bvh: Bvh,
     batch_size: BatchSize,
+    amplitudes: Option<Amplitudes>,
 }
 
 /// A copy of the scene in an `Arc`: what lets [`Tracer::new`](crate::Tracer::new) take a
@@ -936,6 +953,7 @@ impl Scene {
             Some(s) => Some(search_options(s, &interfaces)?),
             None => None,
         };
+        let amplitudes = amplitudes::validate(spec, &sources, needs_regions)?;
         let batch_size = batch_size(sources.len(), receivers.len(), &paths)?;
         if needs_regions {
             check_region_range(scene_points(
@@ -962,6 +980,7 @@ impl Scene {
             segments,
             segment_bvh,
             batch_size,
+            amplitudes,
         })
     }
 

@@ -199,6 +199,11 @@ impl Tracer {
                 .then_with(|| a.steps.len().cmp(&b.steps.len()))
                 .then_with(|| key(&a.steps).cmp(key(&b.steps)))
         });
+        if scene.amplitudes().is_some() {
+            out.par_iter_mut().for_each(|s| {
+                self.arrival_amplitudes(&s.steps, std::slice::from_mut(&mut s.arrival))
+            });
+        }
         Ok(out)
     }
 
@@ -316,6 +321,7 @@ fn mirror_arrival(
             kink: None,
             // The image method's points: no solve, no residual.
             residual: f64::NAN,
+            amplitude: None,
         },
         complete: true,
     }

@@ -4,6 +4,7 @@
 
 use rayon::prelude::*;
 
+use crate::amplitude::Amplitude;
 use crate::geom::Point;
 use crate::scene::{MAX_STATIONARY_STEPS, Scene};
 pub use crate::trace::{Arrival, Kink, SearchOutcome, StationaryError};
@@ -114,6 +115,8 @@ pub struct StationaryEntry<'a> {
     pub kink: Option<Kink>,
     /// Whether its triple's search was complete.
     pub complete: bool,
+    /// Its amplitude, when the scene asks for amplitudes (none for a triple without paths).
+    pub amplitude: Option<&'a Amplitude>,
 }
 
 impl TripleArrivals {
@@ -135,6 +138,7 @@ impl TripleArrivals {
             media: Some(&a.media),
             kink: a.kink,
             complete: self.complete,
+            amplitude: a.amplitude.as_ref(),
         }
     }
 
@@ -159,6 +163,7 @@ impl TripleArrivals {
                 .and_then(|p| p.media.as_deref()),
             kink: None,
             complete: self.complete,
+            amplitude: None,
         }
     }
 }

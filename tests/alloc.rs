@@ -134,3 +134,55 @@ fn batches_allocate_per_call_not_per_ray() {
         );
     }
 }
+
+/// Solves every ray of `scene` with one workspace (after a first sweep that grows it) and
+/// computes each ray's amplitude; counts the allocations of the amplitudes alone (the solve
+/// of a digitised reflector may allocate in its fallback search, which is not theirs).
+fn amplitude_allocations(scene: &Scene) -> u64 {
+    let tracer = Tracer::new(scene).unwrap();
+    let mut ws = Workspace::new();
+    let (mut count, mut with) = (0, 0);
+    for sweep in 0..2 {
+        for s in 0..scene.sources().len() {
+            for r in 0..scene.receivers().len() {
+                for p in 0..scene.paths().len() {
+                    let record = tracer.solve_indexed_from(s, r, p, None, &mut ws);
+                    let info = allocation_counter::measure(|| {
+                        let a = tracer.amplitude(p, &record, &ws);
+                        with += usize::from(a.is_some_and(|a| a.has_value()));
+                    });
+                    if sweep == 1 {
+                        count += info.count_total;
+                    }
+                }
+            }
+        }
+    }
+    assert!(with > 0, "the scene must have amplitudes");
+    count
+}
+
+#[test]
+fn amplitudes_allocate_nothing() {
+    let point = eigenray::spec::AmplitudesSpec::new(eigenray::spec::SourceModel::Point);
+    for mut spec in [
+        demo::air_water(200, 3),
+        demo::layer_stack(10, 50),
+        demo::sea_floor(300, 50),
+    ] {
+        spec.amplitudes = Some(point);
+        assert_eq!(amplitude_allocations(&Scene::from_spec(&spec).unwrap()), 0);
+    }
+    // Region lookup and a reflection against the medium across.
+    let scene = Scene::from_json(
+        r#"{ "media": { "air": { "speed": 1.0 }, "water": { "speed": 0.75, "at": [0.5, -0.5] } },
+             "background": "air", "domain": [[-2.0, -3.0], [5.0, 3.0]],
+             "interfaces": { "surface": { "points": [[-2.0, 0.0], [5.0, 0.0]], "reflection": "media" } },
+             "sources": [[0.0, 1.0]], "receivers": [[1.0, -1.0], [0.5, 1.5], [2.0, 0.5]],
+             "paths": [{ "steps": [] }, { "steps": [{ "refract": "surface" }] },
+                       { "steps": [{ "reflect": "surface" }] }],
+             "amplitudes": { "source": "axisymmetric" } }"#,
+    )
+    .unwrap();
+    assert_eq!(amplitude_allocations(&scene), 0);
+}

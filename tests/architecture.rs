@@ -12,6 +12,7 @@ const ORDER: &[&str] = &[
     "scene",
     "demo",
     "regions",
+    "amplitude",
     "problem",
     "solver",
     "trace",

@@ -643,6 +643,7 @@ fn hand_built_arrivals(scene: &Scene) -> Vec<SearchArrival> {
         reason,
         kink,
         residual: 1e-16,
+        amplitude: None,
     };
     vec![
         SearchArrival {

@@ -306,6 +306,7 @@ fn build(raw: &RawScene) -> SceneSpec {
             InterfaceSpec {
                 points: pts,
                 closed: false,
+                reflection: None,
             },
         );
         names.push(name);
@@ -345,6 +346,7 @@ fn build(raw: &RawScene) -> SceneSpec {
             InterfaceSpec {
                 points: pts,
                 closed: true,
+                reflection: None,
             },
         );
         names.push("poly".into());
@@ -369,6 +371,7 @@ fn build(raw: &RawScene) -> SceneSpec {
                 speed: (!as_index).then_some(v),
                 index: as_index.then_some(1.0 / v),
                 at,
+                ..MediumSpec::default()
             },
         );
     }

@@ -4,8 +4,8 @@
 use std::sync::Arc;
 
 use super::{
-    InterfaceSpec, MediumSpec, PathSpec, Scene, SceneError, SceneSpec, SearchSpec, SolverSpec,
-    StepSpec,
+    AmplitudesSpec, InterfaceSpec, MediumSpec, PathSpec, Scene, SceneError, SceneSpec, SearchSpec,
+    SolverSpec, StepSpec,
 };
 
 impl MediumSpec {
@@ -41,6 +41,7 @@ impl InterfaceSpec {
         InterfaceSpec {
             points: points.into_iter().map(Into::into).collect(),
             closed: false,
+            reflection: None,
         }
     }
 
@@ -224,6 +225,12 @@ impl SceneBuilder {
     /// `"search"`: automatic sequences.
     pub fn search(mut self, search: SearchSpec) -> SceneBuilder {
         self.spec.search = Some(search);
+        self
+    }
+
+    /// `"amplitudes"`: every timed ray also carries its amplitude.
+    pub fn amplitudes(mut self, amplitudes: AmplitudesSpec) -> SceneBuilder {
+        self.spec.amplitudes = Some(amplitudes);
         self
     }
 

@@ -55,6 +55,7 @@ impl Scene {
             return Err(out_of_range("sources", "sources", source, len));
         }
         let p = point(&format!("sources[{source}]"), [p.x, p.y])?;
+        self.source_on_axis(source, p)?;
         if self.needs_regions() {
             source_in_a_region(
                 &self.interfaces,

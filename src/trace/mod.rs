@@ -20,6 +20,7 @@ use crate::regions::Regions;
 use crate::scene::{MAX_COORDINATE, Scene, SceneError};
 use crate::solver::{NewtonOptions, NewtonWorkspace, solve};
 
+mod amplitude;
 mod chain;
 mod classify;
 mod complete;
@@ -362,6 +363,7 @@ impl Tracer {
             residual: record.residual,
             media: ws.ray.media.clone(),
             reason: record.reason,
+            amplitude: self.amplitude(path, &record, ws),
         }
     }
 

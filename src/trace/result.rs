@@ -3,6 +3,7 @@
 
 use std::fmt;
 
+use crate::amplitude::Amplitude;
 use crate::geom::Point;
 use crate::scene::Scene;
 use crate::solver::Solution;
@@ -226,6 +227,7 @@ impl PartialEq for Ray {
             && same(self.residual, o.residual)
             && self.media == o.media
             && self.reason == o.reason
+            && self.amplitude == o.amplitude
     }
 }
 
@@ -306,6 +308,8 @@ pub struct Ray {
     pub media: Vec<usize>,
     /// Why it is not `converged`, when it is not.
     pub reason: Option<Reason>,
+    /// Its amplitude, when the scene asks for amplitudes (`"amplitudes"`) and it has a time.
+    pub amplitude: Option<Amplitude>,
 }
 
 impl Ray {

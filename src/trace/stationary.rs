@@ -102,7 +102,7 @@ impl Tracer {
         }
         self.assert_solvable(source, receiver, path, "Tracer::stationary_paths");
         let source_medium = self.source_medium(spec.media.is_some(), source);
-        Ok(self.stationary_of(
+        let search = self.stationary_of(
             Sequence::of(&self.scene, path),
             spec.media.as_deref(),
             source,
@@ -110,7 +110,9 @@ impl Tracer {
             receiver,
             SearchBudget::tuples(complete::MAX_TUPLES),
             out,
-        ))
+        );
+        self.arrival_amplitudes(&spec.steps, out);
+        Ok(search)
     }
 
     /// The medium at `source` when the media are looked up (`given`: they are not).

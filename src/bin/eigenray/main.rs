@@ -732,6 +732,7 @@ mod tests {
                 reason: None,
                 kink: None,
                 residual: 0.0,
+                amplitude: None,
             },
             complete: true,
         }

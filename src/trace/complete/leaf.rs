@@ -152,6 +152,7 @@ impl Search<'_> {
         a.reason = record.reason;
         a.kink = (record.status == Status::Vertex).then_some(kink).flatten();
         a.residual = record.residual;
+        a.amplitude = None;
         out.push(a);
     }
 }

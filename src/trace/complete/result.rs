@@ -2,6 +2,7 @@
 
 use std::fmt;
 
+use crate::amplitude::Amplitude;
 use crate::geom::Point;
 use crate::scene::MAX_STATIONARY_STEPS;
 
@@ -52,6 +53,8 @@ pub struct Arrival {
     pub kink: Option<Kink>,
     /// Final relative residual of the free points.
     pub residual: f64,
+    /// Its amplitude, when the scene asks for amplitudes (`"amplitudes"`).
+    pub amplitude: Option<Amplitude>,
 }
 
 impl Arrival {
@@ -68,6 +71,7 @@ impl Arrival {
             reason: None,
             kink: None,
             residual: f64::NAN,
+            amplitude: None,
         }
     }
 }

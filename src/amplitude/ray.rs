@@ -1,0 +1,475 @@
+//! The amplitude of one ray from its points and leg media: one pass over its interactions
+//! that multiplies the coefficients, sums the attenuation and the out-of-plane width, and
+//! runs the forward sweep of the tridiagonal solve that gives the in-plane width.
+
+use std::f64::consts::PI;
+
+use num_complex::Complex64;
+
+use super::coefficients::{Weights, cos_across};
+use super::{Amplitude, NoAmplitude};
+use crate::geom::{Point, Vec2};
+use crate::polyline::Polyline;
+use crate::regions::Regions;
+use crate::scene::{Amplitudes, Reflection, Scene, SourceModel, Step, StepKind};
+
+/// A solved path as the amplitude reads it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PathGeometry<'a> {
+    /// Its steps.
+    pub steps: &'a [Step],
+    /// Source, interaction points, receiver.
+    pub points: &'a [Point],
+    /// Leg media (indices into [`Scene::media`]).
+    pub media: &'a [usize],
+    /// The segment of each interaction point, when the solve knows it (tried first).
+    pub segments: Option<&'a [usize]>,
+}
+
+/// The unit direction, length and inverse length of the leg from `p` to `q` (`None` for a
+/// leg of zero length).
+#[inline(always)]
+fn leg(p: Point, q: Point) -> Option<(Vec2, f64, f64)> {
+    let d = q - p;
+    let l2 = d.x * d.x + d.y * d.y;
+    // The common leg without `hypot`: a squared length that neither underflows nor overflows.
+    let l = if (f64::MIN_POSITIVE..1e300).contains(&l2) {
+        l2.sqrt()
+    } else {
+        leg_length_unusual(d)?
+    };
+    let inv = 1.0 / l;
+    Some((d * inv, l, inv))
+}
+
+/// The length of a leg of zero, tiny or huge length (`None` for zero), out of line.
+#[cold]
+#[inline(never)]
+fn leg_length_unusual(d: Vec2) -> Option<f64> {
+    let l = d.length();
+    (l > 0.0 && l.is_finite()).then_some(l)
+}
+
+/// The segment of `line` that interaction point `i` at `p` lies on: the only one, the solve's
+/// (in `segments`) when `p` lies on it (to round-off), else the nearest.
+#[inline(always)]
+fn segment_of(line: &Polyline, p: Point, segments: Option<&[usize]>, i: usize) -> usize {
+    let n = line.num_segments();
+    if n == 1 {
+        return 0;
+    }
+    let hint = segments.and_then(|s| s.get(i).copied());
+    if let Some(j) = hint.filter(|&j| j < n) {
+        let a = line.segment(j).start;
+        let (t, len) = (line.tangent(j), line.segment_length(j));
+        let d = p - a;
+        let round = 16.0 * f64::EPSILON * (p.x.abs() + p.y.abs() + a.x.abs() + a.y.abs());
+        let slack = 1e-9 * len + 4.0 * round;
+        let along = d.dot(t);
+        if d.cross(t).abs() <= slack && along >= -slack && along <= len + slack {
+            return j;
+        }
+    }
+    line.nearest(p).seg
+}
+
+/// What the pass over a path gathers.
+struct Walk {
+    /// The product of the coefficients.
+    coefficient: Complex64,
+    /// `Π cos θ₂ / cos θ₁` over the interactions that change the medium.
+    cos_ratio: f64,
+    /// `w₀ Σ ℓⱼ / wⱼ`: the out-of-plane width of a point source (the out-of-plane slowness
+    /// is conserved).
+    out_of_plane: f64,
+    /// `Σ αⱼ ℓⱼ` (dB).
+    attenuation_db: f64,
+    /// The in-plane width `|∂x⊥/∂φ₀|`: how far the receiver moves across the last leg per
+    /// unit turn of the take-off angle.
+    width: f64,
+    /// The first leg's direction and slowness.
+    first: Vec2,
+    w0: f64,
+    /// The first converted reflection (legs in two media), which has no coefficient.
+    converted: Option<usize>,
+}
+
+/// What the amplitude of one path reads besides the path.
+#[derive(Clone, Copy)]
+struct Context<'a> {
+    scene: &'a Scene,
+    settings: &'a Amplitudes,
+    regions: Option<&'a Regions>,
+}
+
+/// One interaction as its coefficient sees it.
+struct Interaction<'a> {
+    /// Index of the step.
+    i: usize,
+    step: &'a Step,
+    seg: usize,
+    /// Where the incoming leg starts, and the interaction point.
+    from: Point,
+    here: Point,
+    /// The incoming leg's direction and the segment's tangent.
+    u_in: Vec2,
+    t: Vec2,
+    /// `|cos θ|` of the incoming and the outgoing leg.
+    cos1: f64,
+    cos2: f64,
+    /// The media of the two legs and their slownesses.
+    m_in: usize,
+    m: usize,
+    w_in: f64,
+    w: f64,
+}
+
+/// The coefficient of one interaction; a refraction or a converted reflection multiplies
+/// `walk`'s cosine ratio (a converted reflection is noted there, with coefficient 1).
+#[inline(always)]
+fn coefficient(
+    cx: Context<'_>,
+    x: &Interaction<'_>,
+    walk: &mut Walk,
+) -> Result<Complex64, NoAmplitude> {
+    let (cos1, cos2) = (x.cos1, x.cos2);
+    if cos1 == 0.0 || cos2 == 0.0 {
+        return Err(NoAmplitude::Grazing { step: x.i });
+    }
+    Ok(match x.step.kind {
+        StepKind::Refract => {
+            walk.cos_ratio *= cos2 / cos1;
+            let weights = Weights::of(cx.settings, [x.m_in, x.m], [x.w_in, x.w]);
+            Complex64::new(weights.transmission(cos1, cos2), 0.0)
+        }
+        StepKind::Reflect if x.m_in != x.m => {
+            // A converted wave: its tube narrows as a refraction's, its coefficient is not
+            // modelled.
+            walk.cos_ratio *= cos2 / cos1;
+            walk.converted.get_or_insert(x.i);
+            Complex64::new(1.0, 0.0)
+        }
+        StepKind::Reflect => match cx.settings.reflection[x.step.interface] {
+            Reflection::Fixed(r) => Complex64::new(r, 0.0),
+            Reflection::Media => {
+                let line = &cx.scene.interfaces()[x.step.interface].polyline;
+                let across = medium_across(cx.regions, line, x.step, x.seg, x.from, x.here)
+                    .ok_or(NoAmplitude::NoMediumAcross { step: x.i })?;
+                let along = x.u_in.dot(x.t);
+                let w_across = cx.scene.media()[across].slowness;
+                let weights = Weights::of(cx.settings, [x.m_in, across], [x.w_in, w_across]);
+                weights.reflection(cos1, cos_across(x.w_in / w_across, along * along))
+            }
+        },
+    })
+}
+
+/// The amplitude of the ray through `path` (a `converged` ray: every interaction strictly
+/// inside its segment) in `scene` with the amplitude settings `settings`; `regions` for
+/// `"media"` reflections.
+pub(crate) fn of_path(
+    scene: &Scene,
+    settings: &Amplitudes,
+    regions: Option<&Regions>,
+    path: PathGeometry<'_>,
+) -> Amplitude {
+    let cx = Context {
+        scene,
+        settings,
+        regions,
+    };
+    let k = path.steps.len();
+    let walked = match (path.steps, path.points, path.media) {
+        ([step], &[p0, p1, p2], &[m0, m1]) => {
+            let line = &scene.interfaces()[step.interface].polyline;
+            let seg = segment_of(line, p1, path.segments, 0);
+            let at = OnSegment {
+                seg,
+                tangent: line.tangent(seg),
+            };
+            walk_one(cx, step, at, [p0, p1, p2], [m0, m1])
+        }
+        _ if path.points.len() != k + 2 || path.media.len() != k + 1 => {
+            Err(NoAmplitude::UnknownMedia)
+        }
+        _ => walk(cx, path),
+    };
+    match walked {
+        Ok(walk) => finish(cx, path.points, &walk),
+        Err(reason) => Amplitude::none(reason),
+    }
+}
+
+/// The segment an interaction point lies on, and its unit tangent.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct OnSegment {
+    /// The segment's index in its polyline.
+    pub seg: usize,
+    /// Its unit tangent.
+    pub tangent: Vec2,
+}
+
+/// [`of_path`] for a path of one interaction (`step`, on `at`), its points and leg media
+/// given: what a solve that knows the interaction's segment calls.
+#[inline(always)]
+pub(crate) fn of_one(
+    scene: &Scene,
+    settings: &Amplitudes,
+    regions: Option<&Regions>,
+    step: &Step,
+    at: OnSegment,
+    points: [Point; 3],
+    media: [usize; 2],
+) -> Amplitude {
+    let cx = Context {
+        scene,
+        settings,
+        regions,
+    };
+    match walk_one(cx, step, at, points, media) {
+        Ok(walk) => finish(cx, &points, &walk),
+        Err(reason) => Amplitude::none(reason),
+    }
+}
+
+/// The amplitude from what the pass over `path` gathered.
+#[inline(always)]
+fn finish(cx: Context<'_>, points: &[Point], walk: &Walk) -> Amplitude {
+    let (settings, w0) = (cx.settings, walk.w0);
+    // spreading = √(Π cos θ₂/cos θ₁ / (W Y)) / (4π), or √(… / W) / √(8π k₀) for a line, whose
+    // amplitude also takes the phase e^(iπ/4) of the 2-D Green's function's far field.
+    let width = walk.width;
+    let quarter = 0.25 / PI;
+    let (area, scale, phase) = match settings.source {
+        SourceModel::Point => (width * walk.out_of_plane, quarter, (1.0, 0.0)),
+        SourceModel::Axisymmetric => {
+            let out = match out_of_plane_axisymmetric(points, walk.first) {
+                Ok(Some(y)) => y,
+                Ok(None) => walk.out_of_plane,
+                Err(reason) => return Amplitude::none(reason),
+            };
+            (width * out, quarter, (1.0, 0.0))
+        }
+        SourceModel::Line => {
+            let k0 = 2.0 * PI * settings.frequency.unwrap_or(f64::NAN) * w0;
+            let h = std::f64::consts::FRAC_1_SQRT_2;
+            (width * k0, 1.0 / (8.0 * PI).sqrt(), (h, h))
+        }
+    };
+    let spreading = (walk.cos_ratio / area).sqrt() * scale;
+    // A degenerate tube gives 0, ∞ or NaN.
+    if !positive_finite(spreading) {
+        return Amplitude::none(NoAmplitude::Caustic);
+    }
+    if let Some(step) = walk.converted {
+        // The geometry's spreading and the attenuation, but no coefficient.
+        let nan = Complex64::new(f64::NAN, f64::NAN);
+        return Amplitude {
+            value: nan,
+            spreading,
+            coefficient: nan,
+            attenuation_db: walk.attenuation_db,
+            reason: Some(NoAmplitude::ConvertedReflection { step }),
+        };
+    }
+    let mut size = spreading;
+    if walk.attenuation_db > 0.0 {
+        size *= 10f64.powf(-walk.attenuation_db / 20.0);
+    }
+    let value = walk.coefficient * Complex64::new(phase.0 * size, phase.1 * size);
+    Amplitude {
+        value,
+        spreading,
+        coefficient: walk.coefficient,
+        attenuation_db: walk.attenuation_db,
+        reason: None,
+    }
+}
+
+/// Whether `x` is a positive finite number, in one integer comparison of its bits (the
+/// positive finite doubles are the bit patterns 1 to `0x7fef_ffff_ffff_ffff`).
+#[inline(always)]
+fn positive_finite(x: f64) -> bool {
+    x.to_bits().wrapping_sub(1) < f64::MAX.to_bits()
+}
+
+/// The out-of-plane width of an axisymmetric scene: `|x_R| / |t₀ₓ|`; `None` for a path along
+/// the axis (the point source's width is the limit there).
+#[inline(never)]
+fn out_of_plane_axisymmetric(points: &[Point], first: Vec2) -> Result<Option<f64>, NoAmplitude> {
+    if points[0].x != 0.0 {
+        return Err(NoAmplitude::SourceOffAxis);
+    }
+    let side = first.x;
+    let rest = &points[1..];
+    if side == 0.0 {
+        // Along the axis: every point on it, the tube a cone about the axis.
+        return if rest.iter().all(|p| p.x == 0.0) {
+            Ok(None)
+        } else {
+            Err(NoAmplitude::OnAxis)
+        };
+    }
+    if rest.iter().any(|p| p.x * side <= 0.0) {
+        return Err(NoAmplitude::OnAxis);
+    }
+    let range = points[points.len() - 1].x.abs();
+    Ok(Some(range / side.abs()))
+}
+
+/// The slowness of medium `m`.
+#[inline(always)]
+fn slowness(scene: &Scene, m: usize) -> Result<f64, NoAmplitude> {
+    scene
+        .media()
+        .get(m)
+        .map(|m| m.slowness)
+        .ok_or(NoAmplitude::UnknownMedia)
+}
+
+/// [`walk`] for a path of one interaction, written out: its Hessian is one number, so the
+/// in-plane width is `(w₀ c₀² ℓ₁ + w₁ c₁² ℓ₀) / (w₁ |c₀ c₁|)` (`cⱼ` the cosines of the legs
+/// with the normal).
+#[inline(always)]
+fn walk_one(
+    cx: Context<'_>,
+    step: &Step,
+    at: OnSegment,
+    points: [Point; 3],
+    [m0, m1]: [usize; 2],
+) -> Result<Walk, NoAmplitude> {
+    let (w0, w1) = (slowness(cx.scene, m0)?, slowness(cx.scene, m1)?);
+    let (u0, l0, _) = leg(points[0], points[1]).ok_or(NoAmplitude::VanishedLeg { leg: 0 })?;
+    let (u1, l1, _) = leg(points[1], points[2]).ok_or(NoAmplitude::VanishedLeg { leg: 1 })?;
+    let t = at.tangent;
+    let n = t.perp();
+    let (c0, c1) = (u0.dot(n), u1.dot(n));
+    let (cos1, cos2) = (c0.abs(), c1.abs());
+    let attenuation_db = if cx.settings.attenuates {
+        let a = &cx.settings.attenuation;
+        a[m0] * l0 + a[m1] * l1
+    } else {
+        0.0
+    };
+    let mut walk = Walk {
+        coefficient: Complex64::new(1.0, 0.0),
+        cos_ratio: 1.0,
+        out_of_plane: l0 + l1 * (w0 / w1),
+        attenuation_db,
+        width: (w0 * c0 * c0 * l1 + w1 * c1 * c1 * l0) / (w1 * cos1 * cos2),
+        first: u0,
+        w0,
+        converted: None,
+    };
+    let x = Interaction {
+        i: 0,
+        step,
+        seg: at.seg,
+        from: points[0],
+        here: points[1],
+        u_in: u0,
+        t,
+        cos1,
+        cos2,
+        m_in: m0,
+        m: m1,
+        w_in: w0,
+        w: w1,
+    };
+    walk.coefficient = coefficient(cx, &x, &mut walk)?;
+    Ok(walk)
+}
+
+/// One pass over the path's interactions: the coefficients, the lengths, and the forward
+/// sweep of the tridiagonal solve `H x = e_{k−1} β` with the Hessian `H` of the time at the
+/// solved points (Thomas' elimination, kept for the first unknown only:
+/// `x₀ = β Π_{i<k−1} (−hᵢ,ᵢ₊₁ / rᵢ) / r_{k−1}` with `rᵢ` the pivots).
+fn walk(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
+    let (points, legs) = (path.points, path.media);
+    let w0 = slowness(cx.scene, legs[0])?;
+    let (u0, l0, inv0) = leg(points[0], points[1]).ok_or(NoAmplitude::VanishedLeg { leg: 0 })?;
+    let attenuation = &cx.settings.attenuation;
+    let mut out = Walk {
+        coefficient: Complex64::new(1.0, 0.0),
+        cos_ratio: 1.0,
+        out_of_plane: l0,
+        attenuation_db: attenuation[legs[0]] * l0,
+        width: l0,
+        first: u0,
+        w0,
+        converted: None,
+    };
+    let (mut u_in, mut inv_in, mut w_in) = (u0, inv0, w0);
+    // The sweep: the last pivot, the product so far, the previous tangent; the first cosine.
+    let (mut pivot, mut product, mut prev) = (1.0, 1.0, Vec2::default());
+    let mut first_cos = 0.0;
+    for (i, step) in path.steps.iter().enumerate() {
+        let (u, l, inv) =
+            leg(points[i + 1], points[i + 2]).ok_or(NoAmplitude::VanishedLeg { leg: i + 1 })?;
+        let (m_in, m) = (legs[i], legs[i + 1]);
+        let w = slowness(cx.scene, m)?;
+        let line = &cx.scene.interfaces()[step.interface].polyline;
+        let seg = segment_of(line, points[i + 1], path.segments, i);
+        let t = line.tangent(seg);
+        let n = t.perp();
+        let (c1, c2) = (u_in.dot(n), u.dot(n));
+        // Row i of the Hessian, and the forward sweep through it.
+        let diag = w_in * c1 * c1 * inv_in + w * c2 * c2 * inv;
+        let r = if i == 0 {
+            first_cos = c1;
+            diag
+        } else {
+            let off = -t.dot(prev - u_in * u_in.dot(prev)) * (w_in * inv_in);
+            product *= -off / pivot;
+            diag - off * off / pivot
+        };
+        if !(r > 0.0 && r < f64::INFINITY) {
+            return Err(NoAmplitude::Caustic);
+        }
+        (pivot, prev) = (r, t);
+        let x = Interaction {
+            i,
+            step,
+            seg,
+            from: points[i],
+            here: points[i + 1],
+            u_in,
+            t,
+            cos1: c1.abs(),
+            cos2: c2.abs(),
+            m_in,
+            m,
+            w_in,
+            w,
+        };
+        let c = coefficient(cx, &x, &mut out)?;
+        out.coefficient *= c;
+        out.out_of_plane += l * (w0 / w);
+        out.attenuation_db += attenuation[m] * l;
+        (u_in, inv_in, w_in) = (u, inv, w);
+    }
+    if !path.steps.is_empty() {
+        // The receiver moved across the last leg by one unit: the right-hand side's one entry
+        // β = (t_{k−1} · n_k) w_k / ℓ_k, the first point's move x₀ along its tangent, and the
+        // first leg's turn (t₀ · n₀) x₀ / ℓ₀ (n the legs' normals; t · n = −(u · t⊥)).
+        let beta = prev.dot(u_in.perp()) * (w_in * inv_in);
+        let x0 = beta * product / pivot;
+        out.width = 1.0 / (first_cos * x0 * inv0).abs();
+    }
+    Ok(out)
+}
+
+/// The medium across the interface of `step` at `here` (on segment `seg`) from `from`.
+#[inline]
+fn medium_across(
+    regions: Option<&Regions>,
+    line: &Polyline,
+    step: &Step,
+    seg: usize,
+    from: Point,
+    here: Point,
+) -> Option<usize> {
+    let a = line.segment(seg).start;
+    let s = line.start(seg) + (here - a).dot(line.tangent(seg));
+    regions?.medium_across(step.interface, seg, s, from)
+}

@@ -1,0 +1,160 @@
+//! The tracer's entry to amplitudes (`crate::amplitude`): the one function that gives a
+//! solved ray or arrival its [`Amplitude`], called by one-by-one solving, batches, every
+//! stationary path and the search alike.
+
+use crate::amplitude::{Amplitude, NoAmplitude, OnSegment, PathGeometry, of_one, of_path};
+use crate::geom::Point;
+use crate::scene::Step;
+
+use super::{Arrival, PathPlan, RayRecord, Status, Tracer, Workspace};
+
+impl Tracer {
+    /// The amplitude of a ray of `steps` through `points` (source, interaction points,
+    /// receiver) with leg media `media` that ended as `status`: `None` when the scene does not
+    /// ask for amplitudes (`"amplitudes"`) or the status has no time. A `vertex` or
+    /// `obstructed` ray has an amplitude without a value, with its reason ([`NoAmplitude`]).
+    /// Allocates nothing.
+    ///
+    /// ```
+    /// use eigenray::{Scene, Tracer};
+    /// let scene = Scene::from_json(r#"{
+    ///     "media": { "air": { "speed": 343 } },
+    ///     "interfaces": { "floor": { "points": [[-10, 0], [10, 0]],
+    ///                                "reflection": { "absorption": 0.36 } } },
+    ///     "sources": [[0, 1]], "receivers": [[4, 2]],
+    ///     "paths": [{ "steps": [{ "reflect": "floor" }], "media": ["air", "air"] }],
+    ///     "amplitudes": { "source": "point" }
+    /// }"#).unwrap();
+    /// let ray = &Tracer::new(&scene).unwrap().trace_all()[0];
+    /// let a = ray.amplitude.unwrap();
+    /// // The image source at (0, −1): √(1 − α) / (4π L).
+    /// let l = (16.0f64 + 9.0).sqrt();
+    /// assert!((a.value.re - 0.8 / (4.0 * std::f64::consts::PI * l)).abs() < 1e-15);
+    /// assert_eq!(a.value.im, 0.0);
+    /// ```
+    pub fn amplitude_of(
+        &self,
+        steps: &[Step],
+        status: Status,
+        points: &[Point],
+        media: &[usize],
+    ) -> Option<Amplitude> {
+        self.amplitude_with(steps, status, points, media, None)
+    }
+
+    /// The amplitude of the ray of path `path` last solved in `ws`, which ended as `record`
+    /// (see [`amplitude_of`](Self::amplitude_of)): what [`trace`](Self::trace) puts on its
+    /// [`Ray`](super::Ray).
+    pub fn amplitude(&self, path: usize, record: &RayRecord, ws: &Workspace) -> Option<Amplitude> {
+        let steps = &self.scene.paths().get(path)?.steps;
+        let segments = ws.newton.seg.get(..steps.len());
+        self.amplitude_with(steps, record.status, ws.points(), ws.media(), segments)
+    }
+
+    /// Solves path `path` between two points as [`solve`](Self::solve) does, and puts the
+    /// ray's amplitude in `amplitude` (as [`amplitude`](Self::amplitude) gives it, bit for
+    /// bit): the call of a loop over receivers. A refraction at an interface of one segment
+    /// (the flat kernel's plan) takes the segment and the media the solve already knows.
+    ///
+    /// ```
+    /// use eigenray::{Scene, Tracer, Workspace};
+    /// let mut spec = eigenray::demo::air_water(10, 7);
+    /// spec.amplitudes = Some(eigenray::spec::AmplitudesSpec::new(
+    ///     eigenray::spec::SourceModel::Point,
+    /// ));
+    /// let scene = Scene::from_spec(&spec).unwrap();
+    /// let tracer = Tracer::new(&scene).unwrap();
+    /// let (mut ws, mut amplitude) = (Workspace::new(), None);
+    /// let (s, r) = (scene.sources()[0], scene.receivers()[3]);
+    /// let record = tracer.solve_with_amplitude(s, r, 0, &mut ws, &mut amplitude);
+    /// assert_eq!(amplitude, tracer.amplitude(0, &record, &ws));
+    /// assert!(amplitude.unwrap().value.re > 0.0);
+    /// ```
+    ///
+    /// # Panics
+    /// As [`solve`](Self::solve).
+    pub fn solve_with_amplitude(
+        &self,
+        source: Point,
+        receiver: Point,
+        path: usize,
+        ws: &mut Workspace,
+        amplitude: &mut Option<Amplitude>,
+    ) -> RayRecord {
+        let record = self.solve(source, receiver, path, ws);
+        let flat = match &self.plans[path] {
+            PathPlan::FlatRefraction(_, flat) => Some(flat.frame()),
+            _ => None,
+        };
+        *amplitude = match (self.scene.amplitudes(), flat, ws.points(), ws.media()) {
+            (Some(settings), Some(frame), &[p0, p1, p2], &[m0, m1])
+                if record.status == Status::Converged =>
+            {
+                let step = &self.scene.paths()[path].steps[0];
+                let at = OnSegment {
+                    seg: 0,
+                    tangent: frame.tangent,
+                };
+                let regions = self.regions.as_ref();
+                Some(of_one(
+                    &self.scene,
+                    settings,
+                    regions,
+                    step,
+                    at,
+                    [p0, p1, p2],
+                    [m0, m1],
+                ))
+            }
+            _ => self.amplitude(path, &record, ws),
+        };
+        record
+    }
+
+    /// [`amplitude_of`](Self::amplitude_of) with the segment of each interaction point when
+    /// the solve knows it (tried before a search for it).
+    #[inline]
+    pub(crate) fn amplitude_with(
+        &self,
+        steps: &[Step],
+        status: Status,
+        points: &[Point],
+        media: &[usize],
+        segments: Option<&[usize]>,
+    ) -> Option<Amplitude> {
+        let settings = self.scene.amplitudes()?;
+        if status != Status::Converged {
+            return Self::no_amplitude(status);
+        }
+        let path = PathGeometry {
+            steps,
+            points,
+            media,
+            segments,
+        };
+        Some(of_path(&self.scene, settings, self.regions.as_ref(), path))
+    }
+
+    /// The amplitude of a ray that is not `converged`: none without a time, no value on a
+    /// `vertex` or `obstructed` path.
+    #[cold]
+    fn no_amplitude(status: Status) -> Option<Amplitude> {
+        match status {
+            Status::Vertex => Some(Amplitude::none(NoAmplitude::Vertex)),
+            Status::Obstructed => Some(Amplitude::none(NoAmplitude::Obstructed)),
+            Status::Converged | Status::NoPath | Status::NotConverged => None,
+        }
+    }
+
+    /// Gives each of `arrivals` (stationary paths of `steps`) its amplitude, when the scene
+    /// asks for amplitudes.
+    pub(crate) fn arrival_amplitudes(&self, steps: &[Step], arrivals: &mut [Arrival]) {
+        if self.scene.amplitudes().is_none() {
+            return;
+        }
+        for a in arrivals {
+            let segments = Some(&a.segments[..]);
+            a.amplitude = self.amplitude_with(steps, a.status, &a.points, &a.media, segments);
+        }
+    }
+}
