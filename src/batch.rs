@@ -163,7 +163,7 @@ impl ExactSizeIterator for BatchRays<'_> {}
 /// a GPU staging buffer) are filled in the batch's parallel pass, without a [`Batch`] in
 /// between and a second pass to copy it. [`Batch`] itself is filled through one.
 ///
-/// Every ray is written exactly once, with [`write`](Self::write) or
+/// Every ray is written exactly once, with [`write()`](Self::write) or
 /// [`write_one`](Self::write_one); which rays go through which is not part of the contract.
 ///
 /// ```
@@ -209,7 +209,7 @@ pub trait BatchSink: Send + Sized {
     /// usually none).
     fn write(&mut self, at: RaySlot, record: &RayRecord, points: &[Point], media: &[usize]);
 
-    /// [`write`](Self::write) for a ray of one interaction whose three points and two leg
+    /// [`write()`](Self::write) for a ray of one interaction whose three points and two leg
     /// media are known (the batch's fastest rays): an implementation may copy them without
     /// loops. By default, `write`.
     #[inline(always)]

@@ -27,7 +27,7 @@
 //! 4. **Change and trace again**: [`Tracer::set_receiver`], [`Tracer::set_source`],
 //!    [`Tracer::set_interface_points`], [`Tracer::set_medium_speed`] edit the tracer's scene,
 //!    validated as the document is, and prepare again only what depends on the change.
-//! 5. **Write**: [`write`] writes rays, batches, every stationary path and search arrivals
+//! 5. **Write**: [`write()`] writes rays, batches, every stationary path and search arrivals
 //!    as JSON, JSON Lines, CSV or `.npy` ([`Format`]).
 //! 6. **Derivatives**: [`Tracer::gradient`] gives the derivatives of a solved ray's time with
 //!    respect to its source, receiver, each medium's slowness and the vertices it touches

@@ -6,7 +6,7 @@
 //! [`StationaryRays`] of `"stationary": "all"`, and formatted in parallel (rayon) a window of
 //! rays at a time, so that writing a large batch costs less than solving it. A search's
 //! [`SearchArrival`]s follow the rays in JSON and JSON Lines, or go to a file of their own
-//! (a [`Document`] of arrivals alone); [`write`] writes them all.
+//! (a [`Document`] of arrivals alone); [`write()`] writes them all.
 
 use std::io::{self, Write};
 
@@ -25,14 +25,14 @@ use crate::trace::{Kink, Ray, Reason, Status};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Format {
     /// One JSON document, `{"rays": [...]}`: one object per ray, in ray order (see
-    /// [`write`] for its fields). With `"stationary": "all"` ([`StationaryRays`])
+    /// [`write()`] for its fields). With `"stationary": "all"` ([`StationaryRays`])
     /// one object per stationary path, each with three more fields: `arrival` (0, 1, … within
     /// its triple, by time), `kink` (`"minimum"`, `"maximum"` or `"mixed"`, on `vertex`
     /// entries) and `complete` (whether its triple's search was complete); a triple without a
     /// stationary path is one entry, `no_path` (or `not_converged` when its search was not
     /// complete), `arrival` 0. A scene's search arrivals follow as a second key,
     /// `{"rays": [...], "arrivals": [...]}` ([`Document::with_arrivals`]; the fields are
-    /// listed at [`write`]). A scene that asks for amplitudes adds to every timed entry
+    /// listed at [`write()`]). A scene that asks for amplitudes adds to every timed entry
     /// (ray, stationary path or arrival) `amplitude` and `coefficient` (`[re, im]`),
     /// `spreading` and `attenuation_db` (`null` where there is no number), and
     /// `amplitude_reason` where `amplitude` is `null` ([`Amplitude`]).
@@ -54,7 +54,7 @@ pub enum Format {
     /// own `;` is written `\;` and its backslash `\\`. With
     /// `"stationary": "all"` three columns follow: `arrival`, `kink` (empty but on `vertex`
     /// entries) and `complete` (`true` or `false`). Search arrivals are a table of their own,
-    /// written to a second file by [`write`]. With `"derivatives": true` the four gradient
+    /// written to a second file by [`write()`]. With `"derivatives": true` the four gradient
     /// columns follow; with `"amplitudes"` five more: `amplitude` and `coefficient` (`re im`),
     /// `spreading`, `attenuation_db` and `amplitude_reason` (a number empty where there is
     /// none, all five empty without a time).
@@ -72,7 +72,7 @@ pub enum Format {
     /// records: the compact format for large batches. With `"stationary": "all"` three fields
     /// follow: `arrival` (`<u4`), `kink` (`u1`: 0 none, 1 `minimum`, 2 `maximum`, 3 `mixed`,
     /// the places in [`KINK_CODES`]) and `complete` (`u1`: 0 or 1). Search arrivals are records
-    /// of their own, written to a second file by [`write`]. With `"amplitudes"` five more
+    /// of their own, written to a second file by [`write()`]. With `"amplitudes"` five more
     /// fields follow (after the gradient's): `amplitude` and `coefficient` (`<f8`, shape
     /// `(2,)`), `spreading` and `attenuation_db` (`<f8`, NaN where there is none) and
     /// `amplitude_reason` (`u1`: 0 with a value or without a time, else
@@ -1034,7 +1034,7 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
 }
 
 /// What one document of `eigenray solve` holds: rays in one of their forms, a search's
-/// arrivals, or both (see [`write`]). Every form the library gives converts into it.
+/// arrivals, or both (see [`write()`]). Every form the library gives converts into it.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Document<'a> {
     /// The rays: `{"rays": [...]}` (an empty list when `None` and arrivals are given beside
@@ -1202,7 +1202,7 @@ pub enum RaySet<'a> {
     Stationary(&'a StationaryRays),
 }
 
-/// [`write`]: `rays`, then `arrivals` when given.
+/// [`write()`]: `rays`, then `arrivals` when given.
 fn write_rays_and_arrivals<W: Write>(
     scene: &Scene,
     rays: RaySet<'_>,
@@ -1537,7 +1537,7 @@ fn arrival_lines<W: Write>(
 const ARRIVALS_CSV_HEADER: &[u8] =
     b"source,receiver,steps,media,status,kink,time,points,iterations,residual,reason,complete\n";
 
-/// [`write`]: a search's arrivals on their own.
+/// [`write()`]: a search's arrivals on their own.
 fn write_arrivals<W: Write>(
     scene: &Scene,
     arrivals: &[SearchArrival],

@@ -40,7 +40,7 @@ pub(crate) struct ChainLink {
 }
 
 /// The rays of a chain as its caller holds them: [`Tracer::solve_chain`] asks for each ray in
-/// turn ([`link`](Self::link)) and hands it back solved ([`write`](Self::write) or
+/// turn ([`link`](Self::link)) and hands it back solved ([`write()`](Self::write) or
 /// [`write_one`](Self::write_one)) before it asks for the next.
 pub(crate) trait ChainRays {
     /// Whether the caller warm-starts its rays at all (else the chain keeps no solutions).
@@ -63,7 +63,7 @@ pub(crate) trait ChainRays {
         media: &[usize],
     );
 
-    /// [`write`](Self::write) for a ray of one interaction with its three points and two leg
+    /// [`write()`](Self::write) for a ray of one interaction with its three points and two leg
     /// media.
     fn write_one(
         &mut self,

@@ -38,7 +38,7 @@ thread_local! {
 
 impl Tracer {
     /// Every stationary path of path `path` from `source` to `receiver` into `out` (emptied
-    /// first): `converged`, `vertex` (with its [`Kink`](crate::Kink)) and `obstructed` ones, each once,
+    /// first): `converged`, `vertex` (with its [`Kink`](super::Kink)) and `obstructed` ones, each once,
     /// ordered by time. A search that is [`complete`](SearchOutcome::complete) lists them all (an
     /// empty `out` then says that the sequence has no stationary path).
     ///
