@@ -31,7 +31,7 @@ pub(crate) fn trace_rays(
     match out {
         Some(out) => {
             let mut arrays = OutArrays::borrow(py, out.get(), scene)?;
-            let sink = RowSink::new(scene, arrays.rows(py)?);
+            let sink = RowSink::new(tracer, arrays.rows(py)?);
             let progress = Progress::new(py, progress, n)?;
             let reported = trace_into(py, tracer, scratch, warm_start, progress, sink)?;
             arrays.finish(scene);
@@ -39,8 +39,9 @@ pub(crate) fn trace_rays(
             Ok(out.unbind())
         }
         None => {
-            let mut table = py.detach(|| Table::new(n, w));
-            let sink = RowSink::new(scene, table.rows());
+            let amplitudes = scene.amplitudes().is_some();
+            let mut table = py.detach(|| Table::new(n, w, amplitudes));
+            let sink = RowSink::new(tracer, table.rows());
             let progress = Progress::new(py, progress, n)?;
             trace_into(py, tracer, scratch, warm_start, progress, sink)??;
             Py::new(py, table.finish(py, scene))
