@@ -4,6 +4,7 @@
 //! (also when some rays find no path), 2 for an invalid scene, an unreadable input or a usage
 //! error, 1 when the output cannot be written (a closed pipe exits 1 without a message).
 
+mod response;
 mod svg;
 
 use std::fmt::Write as _;
@@ -89,6 +90,12 @@ struct SolveArgs {
     /// sample of them).
     #[arg(long, value_name = "PATH")]
     svg: Option<PathBuf>,
+    /// Write the scene's impulse responses (`"impulse_response"`) to this file: `.npy`,
+    /// float64 `[sources, receivers, samples]`; or `.wav`, 32-bit float, one channel per
+    /// (source, receiver), source-major. Every `converged` ray and arrival with an amplitude
+    /// adds its pulse.
+    #[arg(long, value_name = "PATH")]
+    ir: Option<PathBuf>,
     /// What colours the rays in the picture: `time` (travel time, with a colour bar giving the
     /// range), `path` (one colour per path, with a legend of path names) or `sequence` (one
     /// colour per step sequence, with a legend listing the sequences).
@@ -328,6 +335,10 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         ));
     }
     check_batch_memory(&scene, !args.no_warm_start)?;
+    let ir = match &args.ir {
+        Some(path) => Some(response::IrOutput::check(path, &scene)?),
+        None => None,
+    };
     let tracer = Tracer::new(&scene).map_err(Failure::scene)?;
     let solved = match scene.solver().stationary {
         StationaryMode::One => Solved::Batch(trace(&tracer, !args.no_warm_start)?),
@@ -341,7 +352,14 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         ),
         None => None,
     };
-    write_outputs(args, &scene, &solved, arrivals.as_deref())
+    write_outputs(args, &scene, &solved, arrivals.as_deref())?;
+    if let Some(ir) = ir {
+        let from_rays = eigenray::response::echoes_of_rays(solved.rays());
+        let from_arrivals =
+            eigenray::response::echoes_of_arrivals(arrivals.as_deref().unwrap_or_default());
+        ir.write(from_rays.chain(from_arrivals))?;
+    }
+    Ok(())
 }
 
 /// Writes what `solve` found: the name tables and the picture when asked for, the arrivals of
