@@ -20,7 +20,9 @@ pub use amplitudes::{
     Amplitudes, AmplitudesSpec, Polarization, Reflection, ReflectionSpec, SourceModel, Waves,
 };
 pub use builder::SceneBuilder;
-pub use impulse::{ImpulseResponseOptions, ImpulseResponseSpec};
+pub use impulse::{
+    DEFAULT_TAPS, ImpulseResponseOptions, ImpulseResponseSpec, MAX_RATE, MAX_SAMPLES, MAX_TAPS,
+};
 
 /// Default relative tolerance on the stationarity residual.
 pub const DEFAULT_TOLERANCE: f64 = 1e-12;

@@ -231,3 +231,55 @@ fn bad_response_requests_exit_2_and_write_nothing() {
     let e = Scene::from_json(&no_amplitudes).unwrap_err();
     assert_eq!(e.key, "impulse_response");
 }
+
+#[test]
+fn the_cli_draws_the_echogram_and_the_map() {
+    let dir = Dir::new("charts");
+    let scene = dir.0.join("room.json");
+    std::fs::write(&scene, rectangle(2)).unwrap();
+    let (echogram, map) = (dir.0.join("echo.svg"), dir.0.join("tl.svg"));
+    let run = Command::new(BIN)
+        .args(["solve", scene.to_str().unwrap(), "--echogram"])
+        .arg(&echogram)
+        .arg("--tl-map")
+        .arg(&map)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let echogram = std::fs::read_to_string(&echogram).unwrap();
+    // One stem per image to order 2 (1 + 4 + 8), a legend entry per order.
+    assert_eq!(
+        echogram.matches("<circle").count(),
+        rectangle_images(2).len()
+    );
+    for label in ["direct", "1 interaction", "2 interactions", "time (s)"] {
+        assert!(echogram.contains(label), "{label}");
+    }
+    let map = std::fs::read_to_string(&map).unwrap();
+    assert!(map.contains("transmission loss (dB)") && map.contains("at 500 Hz"));
+    // A receiver the scene does not have, and a map without a frequency: exit 2.
+    let run = Command::new(BIN)
+        .args([
+            "solve",
+            scene.to_str().unwrap(),
+            "--echogram",
+            "x.svg",
+            "--receiver",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("--receiver"));
+    std::fs::write(&scene, rectangle(2).replace(r#", "frequency": 500"#, "")).unwrap();
+    let run = Command::new(BIN)
+        .args(["solve", scene.to_str().unwrap(), "--tl-map", "x.svg"])
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("amplitudes.frequency"));
+}

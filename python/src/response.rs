@@ -8,10 +8,11 @@ use eigenray::response::{
 use eigenray::scene_parts::ImpulseResponseOptions;
 use eigenray::spec::ImpulseResponseSpec;
 use eigenray::{Scene, Tracer};
-use numpy::ndarray::{Array2, Array3};
+use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyArray2, PyArray3};
 use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use crate::error::{argument_error, scene_error};
 
@@ -140,4 +141,23 @@ pub(crate) fn transmission_loss_db<'py>(
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let tl = pressures(py, tracer, frequency)?.mapv(transmission_loss);
     Ok(tl.into_pyarray(py))
+}
+
+/// See `Tracer.echoes`.
+pub(crate) fn echoes<'py>(py: Python<'py>, tracer: &Tracer) -> PyResult<Bound<'py, PyDict>> {
+    let echoes = scene_echoes(py, tracer)?;
+    let d = PyDict::new(py);
+    let column = |f: fn(&Echo) -> u32| Array1::from_iter(echoes.iter().map(f)).into_pyarray(py);
+    d.set_item("source", column(|e| e.source as u32))?;
+    d.set_item("receiver", column(|e| e.receiver as u32))?;
+    d.set_item("order", column(|e| e.order as u32))?;
+    d.set_item(
+        "time",
+        Array1::from_iter(echoes.iter().map(|e| e.time)).into_pyarray(py),
+    )?;
+    d.set_item(
+        "amplitude",
+        Array1::from_iter(echoes.iter().map(|e| e.amplitude)).into_pyarray(py),
+    )?;
+    Ok(d)
 }

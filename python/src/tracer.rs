@@ -455,6 +455,14 @@ impl PyTracer {
         search_list(py, &self.tracer)
     }
 
+    /// Every arrival that reaches a receiver with an amplitude (each `converged` ray of the
+    /// scene's paths and arrival of its search), as a dict of numpy arrays: `source`,
+    /// `receiver`, `order` (interactions, uint32), `time` (float64) and `amplitude`
+    /// (complex128): what `impulse_response`, `pressure` and `eigenray.plotting.echogram` sum.
+    fn echoes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        response::echoes(py, &self.tracer)
+    }
+
     /// The impulse response of every (source, receiver), as float64 `[sources, receivers,
     /// samples]` (sample `n` at time `n / rate`): every `converged` ray and search arrival
     /// with an amplitude placed as a Hann-windowed sinc pulse of `taps` samples (default 81,

@@ -180,3 +180,28 @@ def test_missing_settings_are_named():
     with pytest.raises(eigenray.EigenrayError) as e:
         eigenray.Tracer(eigenray.Scene(scene)).pressure(100.0)
     assert e.value.key == "amplitudes"
+
+
+def test_the_echogram_and_the_map_draw_their_keys():
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    from eigenray.plotting import echogram, tl_map
+
+    corners, source, receiver, order = ROOMS["pentagon"]
+    tracer = eigenray.Tracer(eigenray.Scene(room_scene(corners, source, receiver, order)))
+    echoes = tracer.echoes()
+    assert set(echoes) == {"source", "receiver", "order", "time", "amplitude"}
+    assert echoes["amplitude"].dtype == np.complex128
+    assert len(echoes["time"]) == len(tracer.search())
+    ax = echogram(echoes)
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert legend[:2] == ["direct", "1 interaction"] and len(legend) == order + 1
+    assert ax.get_xlabel() == "time (s)"
+
+    ranges = np.linspace(10.0, 500.0, 20)
+    grid = np.array([[x, y] for y in (-10.0, -20.0, -30.0) for x in ranges])
+    scene = lloyd_scene(ranges)
+    scene["receivers"] = grid.tolist()
+    tl = eigenray.Tracer(eigenray.Scene(scene)).transmission_loss()[0]
+    ax = tl_map(grid, tl)
+    assert ax.figure.axes[1].get_ylabel() == "transmission loss (dB)"

@@ -22,6 +22,8 @@ pub struct Echo {
     pub time: f64,
     /// The complex amplitude, without the travel-time phase ([`Amplitude::value`]).
     pub amplitude: Complex64,
+    /// Interactions along the path (0: the direct path), what an echogram colours by.
+    pub order: usize,
 }
 
 impl Echo {
@@ -30,11 +32,11 @@ impl Echo {
     /// blocked, a `vertex` path has no ray-theory amplitude, and a path traced without
     /// amplitudes has none to give).
     fn of(
-        source: usize,
-        receiver: usize,
+        (source, receiver): (usize, usize),
         status: Status,
         time: f64,
         amplitude: Option<&Amplitude>,
+        points: usize,
     ) -> Option<Echo> {
         let a = amplitude.filter(|a| a.has_value())?;
         (status == Status::Converged).then_some(Echo {
@@ -42,15 +44,18 @@ impl Echo {
             receiver,
             time,
             amplitude: a.value,
+            order: points.saturating_sub(2),
         })
     }
 
     fn of_ray(r: &Ray) -> Option<Echo> {
-        Echo::of(r.source, r.receiver, r.status, r.time, r.amplitude.as_ref())
+        let pair = (r.source, r.receiver);
+        Echo::of(pair, r.status, r.time, r.amplitude.as_ref(), r.points.len())
     }
 
     fn of_arrival(source: usize, receiver: usize, a: &Arrival) -> Option<Echo> {
-        Echo::of(source, receiver, a.status, a.time, a.amplitude.as_ref())
+        let pair = (source, receiver);
+        Echo::of(pair, a.status, a.time, a.amplitude.as_ref(), a.points.len())
     }
 }
 
@@ -60,9 +65,9 @@ pub fn echoes_of_rays<'a>(rays: RaySet<'a>) -> Box<dyn Iterator<Item = Echo> + '
     match rays {
         RaySet::Rays(rays) => Box::new(rays.iter().filter_map(Echo::of_ray)),
         RaySet::Batch(b) => Box::new((0..b.len()).filter_map(move |i| {
-            let t = b.triple(i);
-            let r = b.record(i);
-            Echo::of(t.source, t.receiver, r.status, r.time, b.amplitude(i))
+            let (t, r) = (b.triple(i), b.record(i));
+            let pair = (t.source, t.receiver);
+            Echo::of(pair, r.status, r.time, b.amplitude(i), b.points(i).len())
         })),
         RaySet::Stationary(st) => Box::new(st.triples.iter().flat_map(|t| {
             (t.arrivals.iter()).filter_map(move |a| Echo::of_arrival(t.source, t.receiver, a))

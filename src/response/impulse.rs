@@ -20,7 +20,8 @@ use crate::scene::ImpulseResponseOptions;
 /// let spec = ImpulseResponseSpec::new(1000.0, 0.05); // 50 samples
 /// let options = ImpulseResponseOptions::of_spec("impulse_response", &spec).unwrap();
 /// let ir = ImpulseResponses::new(&options, 1, 2);
-/// let echo = Echo { source: 0, receiver: 1, time: 0.02, amplitude: Complex64::new(0.5, 0.0) };
+/// let a = Complex64::new(0.5, 0.0);
+/// let echo = Echo { source: 0, receiver: 1, time: 0.02, amplitude: a, order: 0 };
 /// let mut out = vec![0.0; ir.len()];
 /// ir.render_into([echo], &mut out);
 /// assert_eq!(ir.response(&out, 0, 1)[20], 0.5); // on a whole sample: that sample alone
@@ -160,18 +161,21 @@ mod tests {
                 receiver: 2,
                 time: 0.25,
                 amplitude: Complex64::new(2.0, 0.0),
+                order: 0,
             },
             Echo {
                 source: 0,
                 receiver: 0,
                 time: 0.101,
                 amplitude: Complex64::new(0.0, 1.0),
+                order: 0,
             },
             Echo {
                 source: 0,
                 receiver: 0,
                 time: 0.101,
                 amplitude: Complex64::new(0.0, -1.0),
+                order: 0,
             },
             // Not in these responses: left out.
             Echo {
@@ -179,6 +183,7 @@ mod tests {
                 receiver: 0,
                 time: 0.1,
                 amplitude: Complex64::new(1.0, 0.0),
+                order: 0,
             },
         ];
         let mut out = vec![f64::NAN; ir.len()];
@@ -203,6 +208,7 @@ mod tests {
                 receiver: 0,
                 time: 0.001 + 0.0071 * k as f64,
                 amplitude: Complex64::new(1.0 / (k + 1) as f64, 0.3 * k as f64 - 0.5),
+                order: 0,
             })
             .collect();
         let out = ir.try_render(echoes.iter().copied()).unwrap();

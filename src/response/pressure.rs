@@ -54,6 +54,7 @@ mod tests {
             receiver,
             time,
             amplitude,
+            order: 0,
         }
     }
 
@@ -107,18 +108,21 @@ mod tests {
                 receiver: 1,
                 time: 0.0,
                 amplitude: Complex64::new(1.0, 0.0),
+                order: 0,
             },
             Echo {
                 source: 2,
                 receiver: 0,
                 time: 0.0,
                 amplitude: Complex64::new(1.0, 0.0),
+                order: 0,
             },
             Echo {
                 source: 0,
                 receiver: 2,
                 time: 0.0,
                 amplitude: Complex64::new(1.0, 0.0),
+                order: 0,
             },
         ];
         pressure_into(echoes, 100.0, 2, &mut p);

@@ -96,6 +96,22 @@ struct SolveArgs {
     /// adds its pulse.
     #[arg(long, value_name = "PATH")]
     ir: Option<PathBuf>,
+    /// Draw the echogram of one source at one receiver (`--source`, `--receiver`) to this SVG
+    /// file: each arrival as a stem at its time, up to its level in dB, coloured by its
+    /// number of interactions. Needs `amplitudes`.
+    #[arg(long, value_name = "PATH")]
+    echogram: Option<PathBuf>,
+    /// Draw the transmission-loss map of one source (`--source`) over every receiver to this
+    /// SVG file, at `amplitudes.frequency`: −20 log10(|p| · 4π) dB of the coherent sum of
+    /// each receiver's arrivals, as a grid of cells where the receivers form one.
+    #[arg(long, value_name = "PATH")]
+    tl_map: Option<PathBuf>,
+    /// The source of `--echogram` and `--tl-map`.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    source: usize,
+    /// The receiver of `--echogram`.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    receiver: usize,
     /// What colours the rays in the picture: `time` (travel time, with a colour bar giving the
     /// range), `path` (one colour per path, with a legend of path names) or `sequence` (one
     /// colour per step sequence, with a legend listing the sequences).
@@ -339,6 +355,12 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         Some(path) => Some(response::IrOutput::check(path, &scene)?),
         None => None,
     };
+    let charts = response::Charts::check(
+        args.echogram.as_deref(),
+        args.tl_map.as_deref(),
+        (args.source, args.receiver),
+        &scene,
+    )?;
     let tracer = Tracer::new(&scene).map_err(Failure::scene)?;
     let solved = match scene.solver().stationary {
         StationaryMode::One => Solved::Batch(trace(&tracer, !args.no_warm_start)?),
@@ -353,11 +375,17 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         None => None,
     };
     write_outputs(args, &scene, &solved, arrivals.as_deref())?;
-    if let Some(ir) = ir {
+    if ir.is_some() || charts.is_some() {
         let from_rays = eigenray::response::echoes_of_rays(solved.rays());
         let from_arrivals =
             eigenray::response::echoes_of_arrivals(arrivals.as_deref().unwrap_or_default());
-        ir.write(from_rays.chain(from_arrivals))?;
+        let echoes: Vec<_> = from_rays.chain(from_arrivals).collect();
+        if let Some(ir) = ir {
+            ir.write(&echoes)?;
+        }
+        if let Some(charts) = charts {
+            charts.write(&scene, &echoes)?;
+        }
     }
     Ok(())
 }

@@ -3,7 +3,8 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use eigenray::response::{Echo, ImpulseResponses};
+use eigenray::amplitudes::Complex64;
+use eigenray::response::{Echo, ImpulseResponses, pressure_into, transmission_loss};
 use eigenray::{Scene, npy};
 
 use super::{Failure, available_memory, write_failure};
@@ -81,9 +82,9 @@ impl IrOutput {
     }
 
     /// Renders the responses of `echoes` and writes them to the file.
-    pub(super) fn write(&self, echoes: impl Iterator<Item = Echo>) -> Result<(), Failure> {
+    pub(super) fn write(&self, echoes: &[Echo]) -> Result<(), Failure> {
         let r = &self.responses;
-        let data = r.try_render(echoes).map_err(|_| {
+        let data = r.try_render(echoes.iter().copied()).map_err(|_| {
             Failure::Input(format!(
                 "impulse_response: {} numbers could not be allocated",
                 r.len()
@@ -141,4 +142,103 @@ fn write_wav(r: &ImpulseResponses, data: &[f64], out: &mut Vec<u8>) -> hound::Re
         }
     }
     writer.finalize()
+}
+
+/// The charts of what arrives, asked for with `--echogram` and `--tl-map`: checked before
+/// anything is solved.
+pub(super) struct Charts {
+    echogram: Option<PathBuf>,
+    tl_map: Option<(PathBuf, f64)>,
+    source: usize,
+    receiver: usize,
+}
+
+impl Charts {
+    /// The charts asked for: refused (naming the option or the scene's key) for a scene
+    /// without amplitudes, a map without `amplitudes.frequency`, or a source or receiver the
+    /// scene does not have.
+    pub(super) fn check(
+        echogram: Option<&Path>,
+        tl_map: Option<&Path>,
+        (source, receiver): (usize, usize),
+        scene: &Scene,
+    ) -> Result<Option<Charts>, Failure> {
+        let option = match (echogram, tl_map) {
+            (None, None) => return Ok(None),
+            (Some(_), _) => "--echogram",
+            (None, Some(_)) => "--tl-map",
+        };
+        let Some(amplitudes) = scene.amplitudes() else {
+            return Err(Failure::Input(format!(
+                "{option}: the scene does not ask for amplitudes (add \"amplitudes\": \
+                 {{\"source\": \"point\"}} or another source model)"
+            )));
+        };
+        if source >= scene.sources().len() {
+            return Err(Failure::Input(format!(
+                "--source: the scene has {} sources (0 to {})",
+                scene.sources().len(),
+                scene.sources().len().saturating_sub(1)
+            )));
+        }
+        if echogram.is_some() && receiver >= scene.receivers().len() {
+            return Err(Failure::Input(format!(
+                "--receiver: the scene has {} receivers (0 to {})",
+                scene.receivers().len(),
+                scene.receivers().len().saturating_sub(1)
+            )));
+        }
+        let tl_map = match tl_map {
+            Some(path) => {
+                let Some(f) = amplitudes.frequency else {
+                    return Err(Failure::Input(
+                        "--tl-map: the map is at `amplitudes.frequency`, which the scene does \
+                         not give"
+                            .into(),
+                    ));
+                };
+                Some((path.to_path_buf(), f))
+            }
+            None => None,
+        };
+        Ok(Some(Charts {
+            echogram: echogram.map(Path::to_path_buf),
+            tl_map,
+            source,
+            receiver,
+        }))
+    }
+
+    /// Draws the charts of `echoes` (every echo of the scene) and writes them.
+    pub(super) fn write(&self, scene: &Scene, echoes: &[Echo]) -> Result<(), Failure> {
+        if let Some(path) = &self.echogram {
+            let mut pair: Vec<Echo> = (echoes.iter())
+                .filter(|e| e.source == self.source && e.receiver == self.receiver)
+                .copied()
+                .collect();
+            pair.sort_by(|a, b| a.time.total_cmp(&b.time));
+            let title = format!(
+                "Echogram: source {} at receiver {}",
+                self.source, self.receiver
+            );
+            let svg = super::svg::charts::echogram_svg(&title, &pair);
+            fs::write(path, svg).map_err(|e| write_failure(path, &e))?;
+        }
+        if let Some((path, frequency)) = &self.tl_map {
+            let receivers = scene.receivers().len();
+            let mut p = vec![Complex64::new(0.0, 0.0); scene.sources().len() * receivers];
+            pressure_into(
+                echoes.iter().copied(),
+                *frequency,
+                scene.sources().len(),
+                &mut p,
+            );
+            let row = &p[self.source * receivers..(self.source + 1) * receivers];
+            let tl: Vec<f64> = row.iter().map(|&p| transmission_loss(p)).collect();
+            let title = format!("Transmission loss from source {}", self.source);
+            let svg = super::svg::charts::tl_map_svg(&title, scene.receivers(), &tl, *frequency);
+            fs::write(path, svg).map_err(|e| write_failure(path, &e))?;
+        }
+        Ok(())
+    }
 }
