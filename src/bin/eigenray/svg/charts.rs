@@ -250,7 +250,8 @@ pub fn tl_map_svg(title: &str, receivers: &[Point], tl: &[f64], frequency: f64) 
             "#c8c8c8".to_string()
         }
     };
-    let _ = writeln!(s, "<g>");
+    // Crisp edges: no seams of anti-aliasing between neighbouring cells.
+    let _ = writeln!(s, r#"<g shape-rendering="crispEdges">"#);
     for (p, &v) in receivers.iter().zip(tl) {
         let c = colour(v);
         if grid {
