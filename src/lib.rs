@@ -69,6 +69,7 @@ mod output;
 mod polyline;
 mod problem;
 mod regions;
+pub mod response;
 mod scene;
 pub mod search;
 mod solver;
@@ -97,8 +98,8 @@ pub use trace::{Arrival, InitialGuess, Ray, RayRecord, Reason, Status, Tracer, W
 /// scenes written in code or read with serde.
 pub mod spec {
     pub use crate::scene::{
-        AmplitudesSpec, InterfaceSpec, MediumSpec, PathSpec, Polarization, ReflectionSpec,
-        SceneSpec, SearchSpec, SolverSpec, SourceModel, StationaryMode, StepSpec,
+        AmplitudesSpec, ImpulseResponseSpec, InterfaceSpec, MediumSpec, PathSpec, Polarization,
+        ReflectionSpec, SceneSpec, SearchSpec, SolverSpec, SourceModel, StationaryMode, StepSpec,
     };
 }
 
@@ -106,8 +107,8 @@ pub mod spec {
 /// and their steps, segments, the search's options, and the sizes of a batch.
 pub mod scene_parts {
     pub use crate::scene::{
-        Amplitudes, BatchSize, Interface, Medium, Path, RayTriple, Reflection, SearchOptions,
-        SegmentRef, Step, StepKind, Waves,
+        Amplitudes, BatchSize, ImpulseResponseOptions, Interface, Medium, Path, RayTriple,
+        Reflection, SearchOptions, SegmentRef, Step, StepKind, Waves,
     };
 }
 
@@ -152,6 +153,7 @@ pub mod limits {
         DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, MAX_COORDINATE, MAX_ITERATIONS_LIMIT,
         MAX_SPEED_RATIO, MAX_STATIONARY_STEPS, MIN_COORDINATE, REGION_RANGE_BITS,
     };
+    pub use crate::scene::{DEFAULT_TAPS, MAX_RATE, MAX_SAMPLES, MAX_TAPS};
     pub use crate::search::MAX_SEARCH_WORK;
 }
 
@@ -174,7 +176,7 @@ pub mod lookup {
 pub mod npy {
     pub use crate::output::{
         AMPLITUDE_NOT_COMPUTED, KINK_CODES, NO_INTERFACE, NO_MEDIUM, NO_STEP_KIND, STATUS_CODES,
-        write_names,
+        write_f64_array, write_names,
     };
 }
 

@@ -165,7 +165,13 @@ impl NpyShape {
 /// The `.npy` header (magic, version 1.0, the dictionary padded to a multiple of 64 bytes) of
 /// `n` records whose fields `descr` lists.
 fn npy_header_of(n: usize, descr: &str) -> Vec<u8> {
-    let dict = format!("{{'descr': [{descr}], 'fortran_order': False, 'shape': ({n},), }}");
+    npy_header_with(&format!(
+        "{{'descr': [{descr}], 'fortran_order': False, 'shape': ({n},), }}"
+    ))
+}
+
+/// The `.npy` header of the dictionary `dict`.
+fn npy_header_with(dict: &str) -> Vec<u8> {
     let mut header = b"\x93NUMPY\x01\x00".to_vec();
     // The dictionary ends in a newline, padded with spaces so that the data starts at a
     // multiple of 64 bytes.
@@ -175,6 +181,46 @@ fn npy_header_of(n: usize, descr: &str) -> Vec<u8> {
     header.resize(10 + len - 1, b' ');
     header.push(b'\n');
     header
+}
+
+/// Writes `data` as a `.npy` array of little-endian float64 numbers of shape `shape`, in C
+/// order (the last index fastest), as `numpy.load` reads it.
+///
+/// ```
+/// let mut out = Vec::new();
+/// eigenray::npy::write_f64_array(&[2, 3], &[0.0, 1.0, 2.0, 3.0, 4.0, 5.0], &mut out).unwrap();
+/// assert_eq!(&out[..6], b"\x93NUMPY");
+/// assert_eq!(out.len() % 16, 0); // a 64-byte header (its length a multiple of 64), 48 bytes
+/// ```
+///
+/// # Errors
+/// Any error of the writer.
+///
+/// # Panics
+/// If `data` does not hold the product of `shape` numbers.
+pub fn write_f64_array<W: Write>(shape: &[usize], data: &[f64], mut out: W) -> io::Result<()> {
+    assert_eq!(
+        shape.iter().product::<usize>(),
+        data.len(),
+        "array of the wrong size for its shape"
+    );
+    let dims: String = shape.iter().map(|d| format!("{d}, ")).collect();
+    let dims = if shape.len() == 1 {
+        dims
+    } else {
+        dims.trim_end_matches(", ").to_string()
+    };
+    let dict = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({dims}), }}");
+    out.write_all(&npy_header_with(&dict))?;
+    let mut buf = Vec::with_capacity(8 * 8192);
+    for chunk in data.chunks(8192) {
+        buf.clear();
+        for v in chunk {
+            buf.extend_from_slice(&v.to_le_bytes());
+        }
+        out.write_all(&buf)?;
+    }
+    out.flush()
 }
 
 /// The `.npy` header of `n` ray records of `shape`, with the stationary-all fields when

@@ -12,6 +12,7 @@ use crate::polyline::{Polyline, PolylineError};
 mod amplitudes;
 mod builder;
 mod crossings;
+mod impulse;
 mod names;
 mod update;
 
@@ -19,6 +20,9 @@ pub use amplitudes::{
     Amplitudes, AmplitudesSpec, Polarization, Reflection, ReflectionSpec, SourceModel, Waves,
 };
 pub use builder::SceneBuilder;
+pub use impulse::{
+    DEFAULT_TAPS, ImpulseResponseOptions, ImpulseResponseSpec, MAX_RATE, MAX_SAMPLES, MAX_TAPS,
+};
 
 /// Default relative tolerance on the stationarity residual.
 pub const DEFAULT_TOLERANCE: f64 = 1e-12;
@@ -154,6 +158,9 @@ pub struct SceneSpec {
     /// Amplitudes: every timed ray also carries how much of the wave arrives along it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub amplitudes: Option<AmplitudesSpec>,
+    /// Impulse responses: one per (source, receiver), from every timed arrival's amplitude.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub impulse_response: Option<ImpulseResponseSpec>,
 }
 
 /// A JSON object of names: like a `BTreeMap`, but a name given twice is an error (serde's
@@ -481,6 +488,7 @@ pub struct Scene {
     segment_bvh: Bvh,
     batch_size: BatchSize,
     amplitudes: Option<Amplitudes>,
+    impulse_response: Option<ImpulseResponseOptions>,
 }
 
 /// A copy of the scene in an `Arc`: what lets [`Tracer::new`](crate::Tracer::new) take a
@@ -954,6 +962,7 @@ impl Scene {
             None => None,
         };
         let amplitudes = amplitudes::validate(spec, &sources, needs_regions)?;
+        let impulse_response = impulse::validate(spec)?;
         let batch_size = batch_size(sources.len(), receivers.len(), &paths)?;
         if needs_regions {
             check_region_range(scene_points(
@@ -981,7 +990,14 @@ impl Scene {
             segment_bvh,
             batch_size,
             amplitudes,
+            impulse_response,
         })
+    }
+
+    /// The impulse-response settings, when the scene asks for responses
+    /// (`"impulse_response"`).
+    pub fn impulse_response(&self) -> Option<&ImpulseResponseOptions> {
+        self.impulse_response.as_ref()
     }
 
     /// The media, in name order.

@@ -21,6 +21,7 @@ const ORDER: &[&str] = &[
     "search",
     "derivatives",
     "output",
+    "response",
     "argmin_bridge",
 ];
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["plot"]
+__all__ = ["plot", "echogram", "tl_map"]
 
 
 def _rays_polylines(rays, max_rays):
@@ -118,3 +118,77 @@ def _middle(vertices):
     i = min(int(np.searchsorted(cumulative, half, side="right")) - 1, len(steps) - 1)
     t = (half - cumulative[i]) / steps[i] if steps[i] > 0 else 0.0
     return vertices[i] + t * (vertices[i + 1] - vertices[i])
+
+
+def _order_label(order):
+    return "direct" if order == 0 else f"{order} interaction" + ("" if order == 1 else "s")
+
+
+def echogram(echoes, source=0, receiver=0, *, ax=None, range_db=60.0):
+    """Draws the echogram of one (source, receiver): each arrival as a stem at its time, up to
+    its level in dB re the free field 1 unit of length from a point source, 20·log10(|a|·4π),
+    coloured by its number of interactions, with a legend. `echoes` is `Tracer.echoes()` (a
+    dict of arrays). Stems start `range_db` below the loudest. Returns the axes."""
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(8, 4.5), layout="constrained")
+    chosen = (np.asarray(echoes["source"]) == source) & (
+        np.asarray(echoes["receiver"]) == receiver
+    )
+    time = np.asarray(echoes["time"])[chosen]
+    level = 20 * np.log10(np.abs(np.asarray(echoes["amplitude"])[chosen]) * 4 * np.pi)
+    order = np.asarray(echoes["order"])[chosen]
+    top = np.ceil(level.max() / 10) * 10 + 5 if len(level) else 0.0
+    floor = top - range_db - 5
+    cmap = plt.get_cmap("tab10" if len(set(order)) <= 10 else "tab20")
+    for k, o in enumerate(sorted(set(order.tolist()))):
+        mine = order == o
+        ax.vlines(time[mine], floor, np.maximum(level[mine], floor), color=cmap(k % cmap.N),
+                  linewidth=1.4, label=_order_label(o))
+        ax.plot(time[mine], np.maximum(level[mine], floor), "o", ms=3, color=cmap(k % cmap.N))
+    ax.set_ylim(floor, top)
+    ax.set_xlim(0, time.max() * 1.05 if len(time) else 1.0)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("level (dB re free field at 1 unit)")
+    ax.set_title(f"Echogram: source {source} at receiver {receiver}, {len(time)} arrivals",
+                 fontsize=10)
+    if len(time):
+        ax.legend(title="order", fontsize=8, loc="upper right")
+    ax.grid(alpha=0.3)
+    return ax
+
+
+def tl_map(receivers, tl, *, ax=None, range_db=60.0, title=None):
+    """Draws a transmission-loss map: `tl` (dB, one per receiver, as a row of
+    `Tracer.transmission_loss()`) at the `receivers` (an (n, 2) array), as an image when they
+    form a grid (every pair of their distinct x and y) and as dots otherwise, over `range_db`
+    from the lowest loss, loud bright, with a colour bar. Receivers nothing reaches (inf) are
+    grey. Returns the axes."""
+    import matplotlib.pyplot as plt
+
+    receivers = np.asarray(receivers, dtype=float)
+    tl = np.asarray(tl, dtype=float)
+    if ax is None:
+        _, ax = plt.subplots(figsize=(8, 4.5), layout="constrained")
+    finite = np.isfinite(tl)
+    lo = np.floor(tl[finite].min()) if finite.any() else 0.0
+    cmap = plt.get_cmap("viridis_r").with_extremes(bad="0.78")
+    xs, ys = np.unique(receivers[:, 0]), np.unique(receivers[:, 1])
+    shown = np.where(finite, tl, np.nan)
+    if len(xs) * len(ys) == len(tl) and len(tl) > 1:
+        grid = np.full((len(ys), len(xs)), np.nan)
+        grid[np.searchsorted(ys, receivers[:, 1]), np.searchsorted(xs, receivers[:, 0])] = shown
+        artist = ax.pcolormesh(xs, ys, grid, cmap=cmap, vmin=lo, vmax=lo + range_db,
+                               shading="nearest")
+    else:
+        artist = ax.scatter(receivers[:, 0], receivers[:, 1], c=shown, cmap=cmap, vmin=lo,
+                            vmax=lo + range_db, s=16, plotnonfinite=True)
+    bar = ax.figure.colorbar(artist, ax=ax)
+    bar.set_label("transmission loss (dB)")
+    bar.ax.invert_yaxis()
+    ax.set_xlabel("x (range)")
+    ax.set_ylabel("y (height)")
+    if title:
+        ax.set_title(title, fontsize=10)
+    return ax

@@ -13,6 +13,7 @@ mod out_arrays;
 mod progress;
 mod ray;
 mod rays;
+mod response;
 mod rows;
 mod scene;
 mod search;

@@ -8,6 +8,7 @@ use eigenray::{
     Arrival, Gradient, Point, PointSensitivities, Scene, SceneError, Tracer, Workspace,
     sink::BatchScratch,
 };
+use numpy::{PyArray2, PyArray3};
 use pyo3::exceptions::{PyIndexError, PyKeyError, PyRuntimeError};
 use pyo3::prelude::*;
 use pyo3::types::PyList;
@@ -18,6 +19,7 @@ use crate::gradient::PyGradient;
 use crate::gradients::PyGradients;
 use crate::ray::PyRay;
 use crate::rays::PyRays;
+use crate::response;
 use crate::scene::PyScene;
 use crate::search::search_list;
 use crate::sensitivities::PyPointSensitivities;
@@ -492,5 +494,54 @@ impl PyTracer {
     /// `attenuation_db` and `amplitude_reason` (as on a `Ray`).
     fn search<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         search_list(py, &self.tracer)
+    }
+
+    /// Every arrival that reaches a receiver with an amplitude (each `converged` ray of the
+    /// scene's paths and arrival of its search), as a dict of numpy arrays: `source`,
+    /// `receiver`, `order` (interactions, uint32), `time` (float64) and `amplitude`
+    /// (complex128): what `impulse_response`, `pressure` and `eigenray.plotting.echogram` sum.
+    fn echoes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        response::echoes(py, &self.tracer)
+    }
+
+    /// The impulse response of every (source, receiver), as float64 `[sources, receivers,
+    /// samples]` (sample `n` at time `n / rate`): every `converged` ray and search arrival
+    /// with an amplitude placed as a Hann-windowed sinc pulse of `taps` samples (default 81,
+    /// as pyroomacoustics) centred on its time, scaled by its amplitude (its imaginary part
+    /// by the pulse's Hilbert pair). `rate` and `duration` default to the scene's
+    /// `impulse_response`. Needs `amplitudes`.
+    #[pyo3(signature = (rate=None, duration=None, taps=None))]
+    fn impulse_response<'py>(
+        &self,
+        py: Python<'py>,
+        rate: Option<f64>,
+        duration: Option<f64>,
+        taps: Option<usize>,
+    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        response::impulse_response(py, &self.tracer, rate, duration, taps)
+    }
+
+    /// The coherent pressure of every (source, receiver) at `frequency` (default: the
+    /// scene's `amplitudes.frequency`), complex128 `[sources, receivers]`: the sum over
+    /// echoes of `amplitude · e^(iωT)`. Needs `amplitudes`.
+    #[pyo3(signature = (frequency=None))]
+    fn pressure<'py>(
+        &self,
+        py: Python<'py>,
+        frequency: Option<f64>,
+    ) -> PyResult<Bound<'py, PyArray2<Complex64>>> {
+        response::pressure(py, &self.tracer, frequency)
+    }
+
+    /// The transmission loss `−20 log10(|p| · 4π)` in dB of every (source, receiver) at
+    /// `frequency` (see `pressure`), float64 `[sources, receivers]`; `inf` where nothing
+    /// arrives.
+    #[pyo3(signature = (frequency=None))]
+    fn transmission_loss<'py>(
+        &self,
+        py: Python<'py>,
+        frequency: Option<f64>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        response::transmission_loss_db(py, &self.tracer, frequency)
     }
 }

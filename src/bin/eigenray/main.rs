@@ -4,6 +4,7 @@
 //! (also when some rays find no path), 2 for an invalid scene, an unreadable input or a usage
 //! error, 1 when the output cannot be written (a closed pipe exits 1 without a message).
 
+mod response;
 mod svg;
 
 use std::fmt::Write as _;
@@ -89,6 +90,28 @@ struct SolveArgs {
     /// sample of them).
     #[arg(long, value_name = "PATH")]
     svg: Option<PathBuf>,
+    /// Write the scene's impulse responses (`"impulse_response"`) to this file: `.npy`,
+    /// float64 `[sources, receivers, samples]`; or `.wav`, 32-bit float, one channel per
+    /// (source, receiver), source-major. Every `converged` ray and arrival with an amplitude
+    /// adds its pulse.
+    #[arg(long, value_name = "PATH")]
+    ir: Option<PathBuf>,
+    /// Draw the echogram of one source at one receiver (`--source`, `--receiver`) to this SVG
+    /// file: each arrival as a stem at its time, up to its level in dB, coloured by its
+    /// number of interactions. Needs `amplitudes`.
+    #[arg(long, value_name = "PATH")]
+    echogram: Option<PathBuf>,
+    /// Draw the transmission-loss map of one source (`--source`) over every receiver to this
+    /// SVG file, at `amplitudes.frequency`: −20 log10(|p| · 4π) dB of the coherent sum of
+    /// each receiver's arrivals, as a grid of cells where the receivers form one.
+    #[arg(long, value_name = "PATH")]
+    tl_map: Option<PathBuf>,
+    /// The source of `--echogram` and `--tl-map`.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    source: usize,
+    /// The receiver of `--echogram`.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    receiver: usize,
     /// What colours the rays in the picture: `time` (travel time, with a colour bar giving the
     /// range), `path` (one colour per path, with a legend of path names) or `sequence` (one
     /// colour per step sequence, with a legend listing the sequences).
@@ -328,6 +351,16 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         ));
     }
     check_batch_memory(&scene, !args.no_warm_start)?;
+    let ir = match &args.ir {
+        Some(path) => Some(response::IrOutput::check(path, &scene)?),
+        None => None,
+    };
+    let charts = response::Charts::check(
+        args.echogram.as_deref(),
+        args.tl_map.as_deref(),
+        (args.source, args.receiver),
+        &scene,
+    )?;
     let tracer = Tracer::new(&scene).map_err(Failure::scene)?;
     let solved = match scene.solver().stationary {
         StationaryMode::One => Solved::Batch(trace(&tracer, !args.no_warm_start)?),
@@ -341,7 +374,20 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         ),
         None => None,
     };
-    write_outputs(args, &scene, &solved, arrivals.as_deref())
+    write_outputs(args, &scene, &solved, arrivals.as_deref())?;
+    if ir.is_some() || charts.is_some() {
+        let from_rays = eigenray::response::echoes_of_rays(solved.rays());
+        let from_arrivals =
+            eigenray::response::echoes_of_arrivals(arrivals.as_deref().unwrap_or_default());
+        let echoes: Vec<_> = from_rays.chain(from_arrivals).collect();
+        if let Some(ir) = ir {
+            ir.write(&echoes)?;
+        }
+        if let Some(charts) = charts {
+            charts.write(&scene, &echoes)?;
+        }
+    }
+    Ok(())
 }
 
 /// Writes what `solve` found: the name tables and the picture when asked for, the arrivals of

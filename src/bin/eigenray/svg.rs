@@ -6,6 +6,7 @@
 
 mod axes;
 mod caption;
+pub mod charts;
 mod colour;
 mod entries;
 mod key;

@@ -23,7 +23,7 @@ pub(super) fn tick_label(v: f64, span: f64) -> String {
 
 /// Ticks at a round step (1, 2 or 5 × 10ⁿ) within `[lo, hi]`, about `target` of them, with
 /// labels that differ by that step; empty when the range is not finite.
-fn axis_ticks(lo: f64, hi: f64, target: f64) -> Vec<(f64, String)> {
+pub(super) fn axis_ticks(lo: f64, hi: f64, target: f64) -> Vec<(f64, String)> {
     let span = hi - lo;
     if !(span.is_finite() && span > 0.0 && lo.is_finite() && hi.is_finite()) {
         return Vec::new();

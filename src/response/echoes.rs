@@ -1,0 +1,128 @@
+//! Echoes: the timed arrivals of a solve or a search, as a response sees them.
+
+use std::fmt;
+
+use num_complex::Complex64;
+
+use crate::output::RaySet;
+use crate::scene::StationaryMode;
+use crate::search::{SearchArrival, SearchError};
+use crate::trace::{Arrival, StationaryError, Status, Tracer};
+use crate::{Amplitude, BatchOptions, Ray};
+
+/// One arrival as a response sees it: when and how strongly it reaches a receiver from a
+/// source.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Echo {
+    /// Source index.
+    pub source: usize,
+    /// Receiver index.
+    pub receiver: usize,
+    /// Travel time.
+    pub time: f64,
+    /// The complex amplitude, without the travel-time phase ([`Amplitude::value`]).
+    pub amplitude: Complex64,
+    /// Interactions along the path (0: the direct path), what an echogram colours by.
+    pub order: usize,
+}
+
+impl Echo {
+    /// The echo of a path from `source` to `receiver` with `status`, `time` and `amplitude`:
+    /// only a `converged` path with an amplitude value is one (an `obstructed` path is
+    /// blocked, a `vertex` path has no ray-theory amplitude, and a path traced without
+    /// amplitudes has none to give).
+    fn of(
+        (source, receiver): (usize, usize),
+        status: Status,
+        time: f64,
+        amplitude: Option<&Amplitude>,
+        points: usize,
+    ) -> Option<Echo> {
+        let a = amplitude.filter(|a| a.has_value())?;
+        (status == Status::Converged).then_some(Echo {
+            source,
+            receiver,
+            time,
+            amplitude: a.value,
+            order: points.saturating_sub(2),
+        })
+    }
+
+    fn of_ray(r: &Ray) -> Option<Echo> {
+        let pair = (r.source, r.receiver);
+        Echo::of(pair, r.status, r.time, r.amplitude.as_ref(), r.points.len())
+    }
+
+    fn of_arrival(source: usize, receiver: usize, a: &Arrival) -> Option<Echo> {
+        let pair = (source, receiver);
+        Echo::of(pair, a.status, a.time, a.amplitude.as_ref(), a.points.len())
+    }
+}
+
+/// The echoes of a solve's rays: each `converged` ray (or stationary path) that has an
+/// amplitude, in the order of `rays`.
+pub fn echoes_of_rays<'a>(rays: RaySet<'a>) -> Box<dyn Iterator<Item = Echo> + 'a> {
+    match rays {
+        RaySet::Rays(rays) => Box::new(rays.iter().filter_map(Echo::of_ray)),
+        RaySet::Batch(b) => Box::new((0..b.len()).filter_map(move |i| {
+            let (t, r) = (b.triple(i), b.record(i));
+            let pair = (t.source, t.receiver);
+            Echo::of(pair, r.status, r.time, b.amplitude(i), b.points(i).len())
+        })),
+        RaySet::Stationary(st) => Box::new(st.triples.iter().flat_map(|t| {
+            (t.arrivals.iter()).filter_map(move |a| Echo::of_arrival(t.source, t.receiver, a))
+        })),
+    }
+}
+
+/// The echoes of a search's arrivals: each `converged` arrival that has an amplitude.
+pub fn echoes_of_arrivals(arrivals: &[SearchArrival]) -> impl Iterator<Item = Echo> + '_ {
+    arrivals
+        .iter()
+        .filter_map(|a| Echo::of_arrival(a.source, a.receiver, &a.arrival))
+}
+
+/// Why a scene's echoes could not be found ([`echoes_of_scene`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum EchoError {
+    /// The paths' every-stationary-path search was refused.
+    Stationary(StationaryError),
+    /// The scene's `search` was refused.
+    Search(SearchError),
+}
+
+impl fmt::Display for EchoError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            EchoError::Stationary(e) => write!(f, "solver.stationary: {e}"),
+            EchoError::Search(e) => write!(f, "search: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for EchoError {}
+
+/// Every echo of `tracer`'s scene, as `eigenray solve` finds them: the rays of its `paths`
+/// (one per triple, or every stationary path with `"stationary": "all"`), then the arrivals
+/// of its `search`.
+///
+/// # Errors
+/// A refused every-stationary-path search or `search`.
+pub fn echoes_of_scene(tracer: &Tracer) -> Result<Vec<Echo>, EchoError> {
+    let scene = tracer.scene();
+    let mut echoes: Vec<Echo> = match scene.solver().stationary {
+        StationaryMode::One => {
+            let batch = tracer.trace_batch(&BatchOptions::default());
+            echoes_of_rays(RaySet::Batch(&batch)).collect()
+        }
+        StationaryMode::All => {
+            let all = tracer.trace_stationary().map_err(EchoError::Stationary)?;
+            echoes_of_rays(RaySet::Stationary(&all)).collect()
+        }
+    };
+    if scene.search().is_some() {
+        let arrivals = tracer.search().map_err(EchoError::Search)?;
+        echoes.extend(echoes_of_arrivals(&arrivals));
+    }
+    Ok(echoes)
+}

@@ -1,0 +1,18 @@
+//! What arrives at each receiver, from every timed arrival's amplitude: sampled impulse
+//! responses (`"impulse_response"`, [`ImpulseResponses`]) and the coherent pressure at one
+//! frequency with its transmission loss ([`pressure_into`], [`transmission_loss`]).
+//!
+//! A solve's rays and a search's arrivals become [`Echo`]s ([`echoes_of_rays`],
+//! [`echoes_of_arrivals`]): each `converged` path with an amplitude, from its source to its
+//! receiver at its time. Every response is a sum over echoes, so the echoes of a scene's
+//! `paths` and of its `search` can be given together.
+
+mod echoes;
+mod impulse;
+mod pressure;
+mod pulse;
+
+pub use echoes::{Echo, EchoError, echoes_of_arrivals, echoes_of_rays, echoes_of_scene};
+pub use impulse::ImpulseResponses;
+pub use pressure::{pressure_into, transmission_loss};
+pub use pulse::FractionalDelay;
