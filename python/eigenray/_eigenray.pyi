@@ -57,6 +57,12 @@ class Ray:
     reason: Optional[str]
     arrival: Optional[int]
     kink: Optional[str]
+    # With "amplitudes" (None without): NaN where there is no value (see amplitude_reason).
+    amplitude: Optional[complex]
+    spreading: Optional[float]
+    coefficient: Optional[complex]
+    attenuation_db: Optional[float]
+    amplitude_reason: Optional[str]
 
 class Gradient:
     """Derivatives of one ray's time: source, receiver, slowness per medium, touched vertices."""
@@ -109,6 +115,12 @@ class Rays:
     arrival: Optional[npt.NDArray[np.int64]]
     kink: Optional[list[Optional[str]]]
     complete: Optional[npt.NDArray[np.bool_]]
+    # With "amplitudes" (None without): NaN where there is no value (see amplitude_reason).
+    amplitude: Optional[npt.NDArray[np.complex128]]
+    spreading: Optional[npt.NDArray[np.float64]]
+    coefficient: Optional[npt.NDArray[np.complex128]]
+    attenuation_db: Optional[npt.NDArray[np.float64]]
+    amplitude_reason: Optional[list[Optional[str]]]
     def __len__(self) -> int: ...
 
 class Tracer:
@@ -131,6 +143,9 @@ class Tracer:
     def time(
         self, source: PointLike, receiver: PointLike, path: Union[int, str, None] = None
     ) -> float: ...
+    def amplitude(
+        self, source: PointLike, receiver: PointLike, path: Union[int, str, None] = None
+    ) -> complex: ...
     def solve_pairs(
         self,
         sources: npt.ArrayLike,

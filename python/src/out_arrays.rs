@@ -4,6 +4,7 @@
 use std::sync::MutexGuard;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use eigenray::amplitudes::Complex64;
 use eigenray::{Reason, Scene};
 use numpy::{
     PyArrayMethods, PyReadwriteArray1, PyReadwriteArray2, PyReadwriteArray3, PyUntypedArrayMethods,
@@ -11,6 +12,7 @@ use numpy::{
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 
+use crate::amplitude::{AmplitudeArrays, AmplitudeRows};
 use crate::convert::interface_names;
 use crate::error::argument_error;
 use crate::rays::{PyRays, Reasons, none_of};
@@ -47,6 +49,20 @@ pub(crate) struct OutArrays<'py, 'a> {
     /// The reasons of the earlier result while the batch writes new ones (all `None` first),
     /// put back if it does not finish.
     earlier: Option<Vec<Option<Reason>>>,
+    /// The amplitude arrays, when the scene asks for amplitudes.
+    amplitudes: Option<OutAmplitudes<'py>>,
+}
+
+/// The amplitude arrays of an earlier `Rays`, borrowed for writing in place.
+struct OutAmplitudes<'py> {
+    /// The complex amplitude of each ray.
+    value: PyReadwriteArray1<'py, Complex64>,
+    /// Its geometric spreading.
+    spreading: PyReadwriteArray1<'py, f64>,
+    /// The product of its coefficients.
+    coefficient: PyReadwriteArray1<'py, Complex64>,
+    /// Its attenuation, dB.
+    attenuation_db: PyReadwriteArray1<'py, f64>,
 }
 
 impl<'py, 'a> OutArrays<'py, 'a> {
@@ -64,6 +80,14 @@ impl<'py, 'a> OutArrays<'py, 'a> {
         if out.arrival.is_some() || out.time.bind(py).len() != n {
             return Err(shape_error());
         }
+        if out.amplitudes.is_some() != scene.amplitudes().is_some() {
+            let message = if scene.amplitudes().is_some() {
+                "needs the Rays of an earlier trace() with amplitudes (the scene asks for them)"
+            } else {
+                "needs the Rays of an earlier trace() without amplitudes"
+            };
+            return Err(argument_error(py, "out", message));
+        }
         if out.points.bind(py).shape() != [n, width, 2]
             || out.media.bind(py).shape() != [n, width - 1]
         {
@@ -74,6 +98,16 @@ impl<'py, 'a> OutArrays<'py, 'a> {
             out.reasons.lock().map_err(|_| {
                 PyRuntimeError::new_err("an earlier call failed while writing these rays")
             })
+        };
+        let amplitudes = match &out.amplitudes {
+            Some(a) if !same_length(py, a, n) => return Err(shape_error()),
+            Some(a) => Some(OutAmplitudes {
+                value: a.value.bind(py).try_readwrite().map_err(busy)?,
+                spreading: a.spreading.bind(py).try_readwrite().map_err(busy)?,
+                coefficient: a.coefficient.bind(py).try_readwrite().map_err(busy)?,
+                attenuation_db: a.attenuation_db.bind(py).try_readwrite().map_err(busy)?,
+            }),
+            None => None,
         };
         Ok(OutArrays {
             width,
@@ -90,6 +124,7 @@ impl<'py, 'a> OutArrays<'py, 'a> {
             reasons: reasons()?,
             any_reason: AtomicBool::new(false),
             earlier: None,
+            amplitudes,
         })
     }
 
@@ -104,6 +139,16 @@ impl<'py, 'a> OutArrays<'py, 'a> {
                 py.detach(|| none_of(n)),
             ));
         }
+        let amplitudes = match (&mut self.amplitudes, &mut reasons.amplitude) {
+            (Some(a), Some(reason)) => Some(AmplitudeRows {
+                value: a.value.as_slice_mut().map_err(contiguous)?,
+                spreading: a.spreading.as_slice_mut().map_err(contiguous)?,
+                coefficient: a.coefficient.as_slice_mut().map_err(contiguous)?,
+                attenuation_db: a.attenuation_db.as_slice_mut().map_err(contiguous)?,
+                reason,
+            }),
+            _ => None,
+        };
         Ok(Rows {
             width: self.width,
             source: self.source.as_slice_mut().map_err(contiguous)?,
@@ -118,6 +163,7 @@ impl<'py, 'a> OutArrays<'py, 'a> {
             residual: self.residual.as_slice_mut().map_err(contiguous)?,
             reason: &mut reasons.codes,
             any_reason: &self.any_reason,
+            amplitudes,
         })
     }
 
@@ -127,6 +173,14 @@ impl<'py, 'a> OutArrays<'py, 'a> {
         self.reasons.any = self.any_reason.load(Ordering::Relaxed);
         self.reasons.interfaces = interface_names(scene);
     }
+}
+
+/// Whether every amplitude array holds `n` rays.
+fn same_length(py: Python<'_>, a: &AmplitudeArrays, n: usize) -> bool {
+    a.value.bind(py).len() == n
+        && a.spreading.bind(py).len() == n
+        && a.coefficient.bind(py).len() == n
+        && a.attenuation_db.bind(py).len() == n
 }
 
 impl Drop for OutArrays<'_, '_> {

@@ -4,9 +4,12 @@
 use std::sync::Mutex;
 
 use eigenray::Reason;
+use eigenray::amplitudes::{Complex64, NoAmplitude};
 use numpy::{PyArray1, PyArray2, PyArray3, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use rayon::iter::ParallelExtend;
+
+use crate::amplitude::{AmplitudeArrays, reason_words};
 
 /// Every ray of a scene as numpy arrays, in ray order (source-major, then receiver, then
 /// path). Rays without a time have `time` NaN and NaN points.
@@ -66,6 +69,9 @@ pub(crate) struct PyRays {
     /// From `trace_stationary`: whether the triple's search was complete.
     #[pyo3(get)]
     pub(crate) complete: Option<Py<PyArray1<bool>>>,
+    /// With `"amplitudes"`: each ray's amplitude, read through the `amplitude`,
+    /// `spreading`, `coefficient` and `attenuation_db` getters (`None` without).
+    pub(crate) amplitudes: Option<AmplitudeArrays>,
 }
 
 #[pymethods]
@@ -76,6 +82,51 @@ impl PyRays {
         // The GIL released while waiting: a `trace(out=...)` of these rays in another thread
         // holds the lock through its batch, and takes the GIL to report progress.
         py.detach(|| self.reasons.lock().map(|r| r.words()).unwrap_or_default())
+    }
+
+    /// With `"amplitudes"`: the complex pressure (field) amplitude of each ray for a unit
+    /// source, without the travel-time phase (complex128); NaN where it has none (a ray
+    /// without a time, a `vertex` path: see `amplitude_reason`). `None` for a scene without
+    /// `"amplitudes"`.
+    #[getter]
+    fn amplitude(&self, py: Python<'_>) -> Option<Py<PyArray1<Complex64>>> {
+        self.amplitudes.as_ref().map(|a| a.value.clone_ref(py))
+    }
+
+    /// With `"amplitudes"`: the geometric spreading factor of each ray (float64, NaN where
+    /// the ray has none).
+    #[getter]
+    fn spreading(&self, py: Python<'_>) -> Option<Py<PyArray1<f64>>> {
+        self.amplitudes.as_ref().map(|a| a.spreading.clone_ref(py))
+    }
+
+    /// With `"amplitudes"`: the product of each ray's reflection and transmission
+    /// coefficients (complex128, NaN where the ray has none).
+    #[getter]
+    fn coefficient(&self, py: Python<'_>) -> Option<Py<PyArray1<Complex64>>> {
+        self.amplitudes
+            .as_ref()
+            .map(|a| a.coefficient.clone_ref(py))
+    }
+
+    /// With `"amplitudes"`: the attenuation of the media along each ray, dB (float64, NaN
+    /// where the ray has none).
+    #[getter]
+    fn attenuation_db(&self, py: Python<'_>) -> Option<Py<PyArray1<f64>>> {
+        self.amplitudes
+            .as_ref()
+            .map(|a| a.attenuation_db.clone_ref(py))
+    }
+
+    /// With `"amplitudes"`: why each timed ray's amplitude has no value (`None` where it has
+    /// one, and for a ray without a time), the command-line tool's `amplitude_reason`.
+    #[getter]
+    fn amplitude_reason(&self, py: Python<'_>) -> Option<Vec<Option<String>>> {
+        self.amplitudes.as_ref()?;
+        py.detach(|| {
+            let reasons = self.reasons.lock().ok()?;
+            reasons.amplitude.as_deref().map(reason_words)
+        })
     }
 
     fn __len__(&self, py: Python<'_>) -> usize {
@@ -97,6 +148,9 @@ pub(crate) struct Reasons {
     pub(crate) any: bool,
     /// The scene's interface names, by index.
     pub(crate) interfaces: Vec<String>,
+    /// With `"amplitudes"`: why each ray's amplitude has no value (one per ray; `None` where
+    /// it has one or the ray has no time).
+    pub(crate) amplitude: Option<Vec<Option<NoAmplitude>>>,
 }
 
 impl Reasons {

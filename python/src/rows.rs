@@ -3,8 +3,9 @@
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use eigenray::{Point, RayRecord, Reason, Scene};
+use eigenray::{Amplitude, Point, RayRecord, Reason, Scene};
 
+use crate::amplitude::AmplitudeRows;
 use crate::convert::status_code;
 
 /// Rows of a `Table`: one slice per column, all of the same rows.
@@ -35,6 +36,8 @@ pub(crate) struct Rows<'a> {
     pub(crate) reason: &'a mut [Option<Reason>],
     /// Set when a reason is written.
     pub(crate) any_reason: &'a AtomicBool,
+    /// The amplitude columns, when the scene asks for amplitudes.
+    pub(crate) amplitudes: Option<AmplitudeRows<'a>>,
 }
 
 /// Rows written by one task of a parallel fill.
@@ -78,6 +81,10 @@ impl Rows<'_> {
         let (residual, residual_b) = self.residual.split_at_mut(k);
         let (reason, reason_b) = self.reason.split_at_mut(k);
         let any_reason = self.any_reason;
+        let (amplitudes, amplitudes_b) = match self.amplitudes.map(|a| a.split_at(k)) {
+            Some((a, b)) => (Some(a), Some(b)),
+            None => (None, None),
+        };
         (
             Rows {
                 width: w,
@@ -93,6 +100,7 @@ impl Rows<'_> {
                 residual,
                 reason,
                 any_reason,
+                amplitudes,
             },
             Rows {
                 width: w,
@@ -108,6 +116,7 @@ impl Rows<'_> {
                 residual: residual_b,
                 reason: reason_b,
                 any_reason,
+                amplitudes: amplitudes_b,
             },
         )
     }
@@ -178,6 +187,21 @@ impl Rows<'_> {
         if w > 3 {
             rest.fill(f64::NAN);
             rest_legs.fill(-1);
+        }
+    }
+
+    /// Whether the rows have amplitude columns (the scene asks for amplitudes).
+    #[inline(always)]
+    pub(crate) fn has_amplitudes(&self) -> bool {
+        self.amplitudes.is_some()
+    }
+
+    /// The amplitude of row `i` (`None` for a ray without a time), when the rows have
+    /// amplitude columns.
+    #[inline]
+    pub(crate) fn write_amplitude(&mut self, i: usize, amplitude: Option<&Amplitude>) {
+        if let Some(columns) = &mut self.amplitudes {
+            columns.write(i, amplitude);
         }
     }
 

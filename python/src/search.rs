@@ -4,6 +4,7 @@ use eigenray::{Scene, SearchArrival, Tracer, scene_parts::StepKind};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
+use crate::amplitude::RayAmplitude;
 use crate::convert::{kink_name, medium_names, points_array};
 use crate::error::argument_error;
 
@@ -51,5 +52,6 @@ fn search_arrival<'py>(
     d.set_item("reason", arrival.reason.map(|r| r.describe(scene)))?;
     d.set_item("kink", kink_name(arrival.kink))?;
     d.set_item("complete", a.complete)?;
+    RayAmplitude::new(scene.amplitudes().is_some(), arrival.amplitude.as_ref()).set_items(&d)?;
     Ok(d)
 }

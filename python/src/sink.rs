@@ -1,8 +1,8 @@
 //! The rows of a `Rays` as a batch's sink: each worker writes a ray's row right after solving
-//! it.
+//! it, and with amplitude columns the ray's amplitude too.
 
 use eigenray::{
-    Point, RayRecord, Scene,
+    Point, RayRecord, Scene, Tracer,
     sink::{BatchSink, RaySlot},
 };
 
@@ -28,6 +28,24 @@ impl<'a> RowSink<'a> {
             paths: scene.paths().len(),
             rows,
         }
+    }
+
+    /// Whether its rows have amplitude columns.
+    pub(crate) fn has_amplitudes(&self) -> bool {
+        self.rows.has_amplitudes()
+    }
+
+    /// The row of the ray at `at`.
+    #[inline(always)]
+    fn row(&self, at: RaySlot) -> usize {
+        at.block * self.paths + at.path
+    }
+
+    /// The leg media of a ray of path `path` when known (one per leg, as a `Batch` keeps them).
+    #[inline(always)]
+    fn known<'m>(&self, path: usize, media: &'m [usize]) -> Option<&'m [usize]> {
+        let legs = self.scene.paths()[path].steps.len() + 1;
+        (media.len() == legs).then_some(media)
     }
 }
 
@@ -55,10 +73,8 @@ impl BatchSink for RowSink<'_> {
 
     #[inline]
     fn write(&mut self, at: RaySlot, record: &RayRecord, points: &[Point], media: &[usize]) {
-        let legs = self.scene.paths()[at.path].steps.len() + 1;
-        // Leg media are known when there is one per leg (as a `Batch` keeps them).
-        let media = (media.len() == legs).then(|| media.iter().copied());
-        let row = at.block * self.paths + at.path;
+        let media = self.known(at.path, media).map(|m| m.iter().copied());
+        let row = self.row(at);
         let triple = [at.source, at.receiver, at.path];
         self.rows
             .write(row, self.scene, triple, record, points, media);
@@ -72,8 +88,78 @@ impl BatchSink for RowSink<'_> {
         points: &[Point; 3],
         media: [usize; 2],
     ) {
-        let row = at.block * self.paths + at.path;
+        let row = self.row(at);
         let triple = [at.source, at.receiver, at.path];
         self.rows.write_one(row, triple, record, points, media);
+    }
+}
+
+/// [`RowSink`] for rows with amplitude columns: the worker that writes a ray's row computes its
+/// amplitude from the points and leg media it writes (`Tracer::amplitude_of`, the function a
+/// `Batch` calls after its solve: the same numbers, without a second pass). A sink of its own,
+/// so that a batch without amplitudes runs the plain sink's code, unchanged.
+pub(crate) struct AmplitudeSink<'a> {
+    /// The rays' tracer.
+    tracer: &'a Tracer,
+    /// The rows, with amplitude columns.
+    rows: RowSink<'a>,
+}
+
+impl<'a> AmplitudeSink<'a> {
+    /// The sink of `rows` (with amplitude columns), the rays of `tracer`.
+    pub(crate) fn new(tracer: &'a Tracer, rows: RowSink<'a>) -> Self {
+        AmplitudeSink { tracer, rows }
+    }
+
+    /// The amplitude of the ray of path `path` in row `row`, from its record, points and leg
+    /// media (`&[]` where unknown).
+    #[inline(always)]
+    fn amplitude(
+        &mut self,
+        row: usize,
+        path: usize,
+        record: &RayRecord,
+        points: &[Point],
+        media: &[usize],
+    ) {
+        let steps = &self.rows.scene.paths()[path].steps;
+        let a = self
+            .tracer
+            .amplitude_of(steps, record.status, points, media);
+        self.rows.rows.write_amplitude(row, a.as_ref());
+    }
+}
+
+impl BatchSink for AmplitudeSink<'_> {
+    fn blocks(&self) -> usize {
+        self.rows.blocks()
+    }
+
+    fn split_at(self, blocks: usize) -> (Self, Self) {
+        let (a, b) = self.rows.split_at(blocks);
+        let tracer = self.tracer;
+        (
+            AmplitudeSink { tracer, rows: a },
+            AmplitudeSink { tracer, rows: b },
+        )
+    }
+
+    #[inline]
+    fn write(&mut self, at: RaySlot, record: &RayRecord, points: &[Point], media: &[usize]) {
+        self.rows.write(at, record, points, media);
+        let known = self.rows.known(at.path, media).unwrap_or(&[]);
+        self.amplitude(self.rows.row(at), at.path, record, points, known);
+    }
+
+    #[inline(always)]
+    fn write_one(
+        &mut self,
+        at: RaySlot,
+        record: &RayRecord,
+        points: &[Point; 3],
+        media: [usize; 2],
+    ) {
+        self.rows.write_one(at, record, points, media);
+        self.amplitude(self.rows.row(at), at.path, record, points, &media);
     }
 }

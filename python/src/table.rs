@@ -10,6 +10,7 @@ use numpy::IntoPyArray;
 use numpy::ndarray::{Array2, Array3};
 use pyo3::prelude::*;
 
+use crate::amplitude::AmplitudeColumns;
 use crate::convert::{interface_names, kink_name, status_names};
 use crate::rays::{PyRays, Reasons, none_of};
 use crate::rows::{Rows, fill_parallel};
@@ -45,6 +46,8 @@ pub(crate) struct Table {
     any_reason: AtomicBool,
     /// The columns of every stationary path's entries, for `trace_stationary`.
     stationary: Option<StationaryColumns>,
+    /// The amplitude columns, when the scene asks for amplitudes.
+    amplitudes: Option<AmplitudeColumns>,
 }
 
 /// The columns of every stationary path's entries (see [`stationary_table`]).
@@ -58,8 +61,9 @@ struct StationaryColumns {
 }
 
 impl Table {
-    /// The arrays of `rays` rays of `width` points each.
-    pub(crate) fn new(rays: usize, width: usize) -> Table {
+    /// The arrays of `rays` rays of `width` points each, with amplitude columns when
+    /// `amplitudes` (the scene asks for amplitudes).
+    pub(crate) fn new(rays: usize, width: usize, amplitudes: bool) -> Table {
         Table {
             width,
             source: vec![0; rays],
@@ -75,6 +79,7 @@ impl Table {
             reason: none_of(rays),
             any_reason: AtomicBool::new(false),
             stationary: None,
+            amplitudes: amplitudes.then(|| AmplitudeColumns::new(rays)),
         }
     }
 
@@ -94,6 +99,7 @@ impl Table {
             residual: &mut self.residual,
             reason: &mut self.reason,
             any_reason: &self.any_reason,
+            amplitudes: self.amplitudes.as_mut().map(AmplitudeColumns::rows),
         }
     }
 
@@ -107,6 +113,13 @@ impl Table {
                 Some(c.complete.into_pyarray(py).unbind()),
             ),
             None => (None, None, None),
+        };
+        let (amplitudes, amplitude_reasons) = match self.amplitudes {
+            Some(columns) => {
+                let (arrays, reasons) = columns.finish(py);
+                (Some(arrays), Some(reasons))
+            }
+            None => (None, None),
         };
         PyRays {
             source: self.source.into_pyarray(py).unbind(),
@@ -129,6 +142,7 @@ impl Table {
                 codes: self.reason,
                 any: self.any_reason.into_inner(),
                 interfaces: interface_names(scene),
+                amplitude: amplitude_reasons,
             }),
             status_names: status_names(),
             path_names: scene.paths().iter().map(|p| p.name.clone()).collect(),
@@ -136,6 +150,7 @@ impl Table {
             arrival,
             kink,
             complete,
+            amplitudes,
         }
     }
 }
@@ -144,7 +159,7 @@ impl Table {
 /// per stationary path, and one `no_path` or `not_converged` per triple that has none).
 pub(crate) fn stationary_table(scene: &Scene, rays: &StationaryRays) -> Table {
     let n = rays.entries();
-    let mut table = Table::new(n, width(scene));
+    let mut table = Table::new(n, width(scene), scene.amplitudes().is_some());
     let mut columns = StationaryColumns {
         arrival: Vec::with_capacity(n),
         kink: Vec::with_capacity(n),
@@ -155,6 +170,7 @@ pub(crate) fn stationary_table(scene: &Scene, rays: &StationaryRays) -> Table {
         let triple = [e.source, e.receiver, e.path];
         let media = e.media.map(|m| m.iter().copied());
         rows.write(row, scene, triple, &e.record, e.points, media);
+        rows.write_amplitude(row, e.amplitude);
         columns.arrival.push(e.arrival as i64);
         columns.kink.push(kink_name(e.kink));
         columns.complete.push(e.complete);
@@ -172,13 +188,17 @@ pub(crate) fn pairs_table(
     path: usize,
 ) -> Table {
     let scene = tracer.scene();
-    let mut table = Table::new(sources.len(), width(scene));
+    let mut table = Table::new(sources.len(), width(scene), scene.amplitudes().is_some());
     fill_parallel(table.rows(), 0, &Workspace::new, &|ws, first, rows| {
         for row in 0..rows.time.len() {
             let i = first + row;
             let record = tracer.solve(sources[i], receivers[i], path, ws);
             let media = Some(ws.media().iter().copied());
             rows.write(row, scene, [i, i, path], &record, ws.points(), media);
+            if rows.has_amplitudes() {
+                let amplitude = tracer.amplitude(path, &record, ws);
+                rows.write_amplitude(row, amplitude.as_ref());
+            }
         }
     });
     table

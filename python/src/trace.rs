@@ -4,7 +4,10 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 
-use eigenray::{BatchOptions, Tracer, sink::BatchScratch};
+use eigenray::{
+    BatchOptions, Tracer,
+    sink::{BatchScratch, BatchSink},
+};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 
@@ -12,7 +15,7 @@ use crate::error::scene_error;
 use crate::out_arrays::OutArrays;
 use crate::progress::Progress;
 use crate::rays::PyRays;
-use crate::sink::RowSink;
+use crate::sink::{AmplitudeSink, RowSink};
 use crate::table::{Table, width};
 
 /// Every ray of `tracer` as `Rays` (see `Tracer.trace`): into the arrays of `out` (the `Rays`
@@ -33,18 +36,37 @@ pub(crate) fn trace_rays(
             let mut arrays = OutArrays::borrow(py, out.get(), scene)?;
             let sink = RowSink::new(scene, arrays.rows(py)?);
             let progress = Progress::new(py, progress, n)?;
-            let reported = trace_into(py, tracer, scratch, warm_start, progress, sink)?;
+            let reported = trace_rows(py, tracer, scratch, warm_start, progress, sink)?;
             arrays.finish(scene);
             reported?;
             Ok(out.unbind())
         }
         None => {
-            let mut table = py.detach(|| Table::new(n, w));
+            let amplitudes = scene.amplitudes().is_some();
+            let mut table = py.detach(|| Table::new(n, w, amplitudes));
             let sink = RowSink::new(scene, table.rows());
             let progress = Progress::new(py, progress, n)?;
-            trace_into(py, tracer, scratch, warm_start, progress, sink)??;
+            trace_rows(py, tracer, scratch, warm_start, progress, sink)??;
             Py::new(py, table.finish(py, scene))
         }
+    }
+}
+
+/// [`trace_into`] the rows of `sink`, with their amplitudes when they have amplitude columns
+/// (the one choice of the batch: a batch without amplitudes runs the plain sink).
+fn trace_rows(
+    py: Python<'_>,
+    tracer: &Tracer,
+    scratch: &mut BatchScratch,
+    warm_start: bool,
+    progress: Option<Progress<'_>>,
+    sink: RowSink<'_>,
+) -> PyResult<PyResult<()>> {
+    if sink.has_amplitudes() {
+        let sink = AmplitudeSink::new(tracer, sink);
+        trace_into(py, tracer, scratch, warm_start, progress, sink)
+    } else {
+        trace_into(py, tracer, scratch, warm_start, progress, sink)
     }
 }
 
@@ -52,13 +74,13 @@ pub(crate) fn trace_rays(
 /// `progress` from the calling thread while it runs. `Err` when the batch did not run
 /// (nothing is written); else the error of a progress report, if one failed (the rows are
 /// written all the same).
-fn trace_into(
+fn trace_into<S: BatchSink>(
     py: Python<'_>,
     tracer: &Tracer,
     scratch: &mut BatchScratch,
     warm_start: bool,
     progress: Option<Progress<'_>>,
-    sink: RowSink<'_>,
+    sink: S,
 ) -> PyResult<PyResult<()>> {
     let total = tracer.scene().num_rays();
     let done = AtomicUsize::new(0);

@@ -188,12 +188,14 @@ impl PyTracer {
             .solve(source, receiver, path, &mut self.workspace);
         let scene = self.tracer.scene();
         let ws = &self.workspace;
+        let amplitude = self.tracer.amplitude(path, &record, ws);
         Ok(PyRay::from_record(
             py,
             scene,
             &record,
             ws.points(),
             ws.media(),
+            amplitude.as_ref(),
         ))
     }
 
@@ -215,6 +217,44 @@ impl PyTracer {
             .tracer
             .solve(source, receiver, path, &mut self.workspace);
         Ok(record.time)
+    }
+
+    /// The complex amplitude of one ray of path `path` (index or name) between any two points
+    /// (NaN without one: no time, or no ray-theory amplitude, as on a `vertex` path), for a
+    /// scene with `"amplitudes"`: `solve` without building a `Ray`, the call of a loop over
+    /// receivers (the library's `Tracer::solve_with_amplitude`). `Ray.amplitude` of `solve`
+    /// is the same number, with its parts and the reason it has none.
+    #[pyo3(signature = (source, receiver, path = None))]
+    fn amplitude(
+        &mut self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Complex64> {
+        if self.inner_scene().amplitudes().is_none() {
+            return Err(argument_error(
+                py,
+                "amplitudes",
+                "the scene does not ask for amplitudes: give it an \"amplitudes\" section \
+                 ({\"source\": \"point\"}, \"axisymmetric\" or \"line\")",
+            ));
+        }
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let mut amplitude = None;
+        self.tracer.solve_with_amplitude(
+            source,
+            receiver,
+            path,
+            &mut self.workspace,
+            &mut amplitude,
+        );
+        let none = Complex64::new(f64::NAN, f64::NAN);
+        Ok(amplitude.map_or(none, |a| a.value))
     }
 
     /// Solves one ray of path `path` between any two points and returns the derivatives of
@@ -450,7 +490,8 @@ impl PyTracer {
     /// The scene's `search` (its `"search"` section): every arrival per (source, receiver),
     /// ordered by time, as a list of dicts with `source`, `receiver`, `steps` (as in the
     /// scene: `{"reflect": name}`), `media`, `status`, `time`, `points`, `iterations`,
-    /// `complete`.
+    /// `complete`; with `"amplitudes"` also `amplitude`, `spreading`, `coefficient`,
+    /// `attenuation_db` and `amplitude_reason` (as on a `Ray`).
     fn search<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         search_list(py, &self.tracer)
     }

@@ -1,5 +1,5 @@
 """The Python package gives the command-line tool's answers bit for bit: every field of
-every ray of every fixture and benchmark scene, and the same refusals."""
+every ray of every fixture and benchmark scene (amplitudes too), and the same refusals."""
 
 import json
 import math
@@ -20,6 +20,7 @@ SCENES = sorted(
         "fixtures/fuzz/*.json",
         "fixtures/pyroomacoustics/*.json",
         "fixtures/every_stationary.json",
+        "fixtures/amplitudes/*.json",
         "examples/scenes/*.json",
     )
     for p in ROOT.glob(pattern)
@@ -39,6 +40,31 @@ def run_cli(cli, scene, *extra):
 
 def same_number(a, b):
     return a == b or (math.isnan(a) and math.isnan(b))
+
+
+def same_complex(z, pair):
+    """A complex number against the CLI's `[re, im]` (`null`: NaN), bit for bit."""
+    if pair is None:
+        return math.isnan(z.real) and math.isnan(z.imag)
+    return z.real == pair[0] and z.imag == pair[1]
+
+
+def check_amplitude(e, amplitude, spreading, coefficient, attenuation_db, reason, where):
+    """One entry's amplitude fields against the CLI's JSON entry `e`, which has them when it
+    has a time (`null` where there is no number); NaN and no reason without a time."""
+    if "time" not in e:
+        assert "amplitude" not in e, where
+        numbers = [amplitude.real, amplitude.imag, spreading, coefficient.real, attenuation_db]
+        assert all(math.isnan(x) for x in numbers) and reason is None, where
+        return
+    assert same_complex(amplitude, e["amplitude"]), where
+    assert same_number(spreading, e["spreading"] if e["spreading"] is not None else math.nan)
+    assert same_complex(coefficient, e["coefficient"]), where
+    expected_db = e["attenuation_db"] if e["attenuation_db"] is not None else math.nan
+    assert same_number(attenuation_db, expected_db), where
+    assert reason == e.get("amplitude_reason"), where
+    # A missing amplitude is never 0.
+    assert (e["amplitude"] is None) == (reason is not None), where
 
 
 def check_rays(expected, rays, tracer_scene, stationary):
@@ -69,11 +95,31 @@ def check_rays(expected, rays, tracer_scene, stationary):
             assert rays.complete[i] == e["complete"], where
         else:
             assert rays.arrival is None and rays.kink is None and rays.complete is None
+    asks = "amplitudes" in tracer_scene
+    assert (rays.amplitude is not None) == asks
+    if not asks:
+        assert rays.spreading is None and rays.coefficient is None
+        assert rays.attenuation_db is None and rays.amplitude_reason is None
+        return
+    assert rays.amplitude.dtype == np.complex128 and rays.coefficient.dtype == np.complex128
+    reasons = rays.amplitude_reason
+    for i, e in enumerate(expected):
+        check_amplitude(
+            e, rays.amplitude[i], rays.spreading[i], rays.coefficient[i],
+            rays.attenuation_db[i], reasons[i], f"ray {i}: {e}",
+        )
 
 
-def check_arrivals(expected, arrivals):
+def check_arrivals(expected, arrivals, asks):
     assert len(arrivals) == len(expected)
     for a, e in zip(arrivals, expected):
+        if asks:
+            check_amplitude(
+                e, a["amplitude"], a["spreading"], a["coefficient"], a["attenuation_db"],
+                a["amplitude_reason"], f"arrival {e}",
+            )
+        else:
+            assert "amplitude" not in a
         assert a["source"] == e["source"] and a["receiver"] == e["receiver"]
         assert a["steps"] == e["steps"]
         assert a["media"] == e["media"]
@@ -95,19 +141,20 @@ def test_the_package_gives_the_cli_output(cli, scene_file, warm_start):
     expected = json.loads(out.stdout)
     scene = eigenray.Scene(scene_file)
     tracer = eigenray.Tracer(scene)
-    stationary = json.loads(scene_file.read_text()).get("solver", {}).get("stationary") == "all"
+    document = json.loads(scene_file.read_text())
+    stationary = document.get("solver", {}).get("stationary") == "all"
     if stationary:
         rays = tracer.trace_stationary()
     else:
         rays = tracer.trace(warm_start=warm_start)
-    check_rays(expected["rays"], rays, scene, stationary)
+    check_rays(expected["rays"], rays, document, stationary)
     if not stationary:
         # Into the arrays of an earlier result (of the other start), rewritten in place.
         earlier = tracer.trace(warm_start=not warm_start)
         rays = tracer.trace(warm_start=warm_start, out=earlier)
-        check_rays(expected["rays"], rays, scene, stationary)
+        check_rays(expected["rays"], rays, document, stationary)
     if "arrivals" in expected:
-        check_arrivals(expected["arrivals"], tracer.search())
+        check_arrivals(expected["arrivals"], tracer.search(), "amplitudes" in document)
 
 
 INVALID = sorted((ROOT / "fixtures/invalid").glob("*.json"))

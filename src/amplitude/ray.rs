@@ -50,6 +50,46 @@ fn leg_length_unusual(d: Vec2) -> Option<f64> {
     (l > 0.0 && l.is_finite()).then_some(l)
 }
 
+/// A leg as the one-interaction form reads it: its length, its component across the segment
+/// (along the unit normal), and the square of its cosine with the normal.
+#[derive(Clone, Copy, Debug)]
+struct LegAcross {
+    length: f64,
+    across: f64,
+    cos_squared: f64,
+}
+
+/// The leg `d` against the unit normal `n` (`None` for a leg of zero length). The cosine's
+/// square is `(d · n)² / |d|²`: its division runs beside the square root, not after it.
+#[inline(always)]
+fn leg_across(d: Vec2, n: Vec2) -> Option<LegAcross> {
+    let l2 = d.x * d.x + d.y * d.y;
+    let across = d.dot(n);
+    if (f64::MIN_POSITIVE..1e300).contains(&l2) {
+        let cos_squared = across * across / l2;
+        Some(LegAcross {
+            length: l2.sqrt(),
+            across,
+            cos_squared,
+        })
+    } else {
+        leg_across_unusual(d, across)
+    }
+}
+
+/// [`leg_across`] for a leg of zero, tiny or huge length, out of line.
+#[cold]
+#[inline(never)]
+fn leg_across_unusual(d: Vec2, across: f64) -> Option<LegAcross> {
+    let length = leg_length_unusual(d)?;
+    let cos = across / length;
+    Some(LegAcross {
+        length,
+        across,
+        cos_squared: cos * cos,
+    })
+}
+
 /// The segment of `line` that interaction point `i` at `p` lies on: the only one, the solve's
 /// (in `segments`) when `p` lies on it (to round-off), else the nearest.
 #[inline(always)]
@@ -77,18 +117,19 @@ fn segment_of(line: &Polyline, p: Point, segments: Option<&[usize]>, i: usize) -
 struct Walk {
     /// The product of the coefficients.
     coefficient: Complex64,
-    /// `Π cos θ₂ / cos θ₁` over the interactions that change the medium.
-    cos_ratio: f64,
+    /// The tube's in-plane factor `Π (cos θ₂ / cos θ₁) / W` (the cosines' ratio over the
+    /// interactions that change the medium, `W` the in-plane width `|∂x⊥/∂φ₀|`: how far the
+    /// receiver moves across the last leg per unit turn of the take-off angle), as
+    /// `tube_num / tube_den` (the one-interaction form gives it without a division).
+    tube_num: f64,
+    tube_den: f64,
     /// `w₀ Σ ℓⱼ / wⱼ`: the out-of-plane width of a point source (the out-of-plane slowness
     /// is conserved).
     out_of_plane: f64,
     /// `Σ αⱼ ℓⱼ` (dB).
     attenuation_db: f64,
-    /// The in-plane width `|∂x⊥/∂φ₀|`: how far the receiver moves across the last leg per
-    /// unit turn of the take-off angle.
-    width: f64,
-    /// The first leg's direction and slowness.
-    first: Vec2,
+    /// The first leg's length and slowness.
+    l0: f64,
     w0: f64,
     /// The first converted reflection (legs in two media), which has no coefficient.
     converted: Option<usize>,
@@ -111,12 +152,16 @@ struct Interaction<'a> {
     /// Where the incoming leg starts, and the interaction point.
     from: Point,
     here: Point,
-    /// The incoming leg's direction and the segment's tangent.
-    u_in: Vec2,
+    /// The incoming leg as a vector along it (its unit direction, or the leg itself) and that
+    /// vector's length; the segment's tangent.
+    leg_in: Vec2,
+    len_in: f64,
     t: Vec2,
-    /// `|cos θ|` of the incoming and the outgoing leg.
+    /// `|cos θ|` of the incoming and the outgoing leg, both times `cos_scale` (> 0; a
+    /// transmission coefficient depends on their ratio only).
     cos1: f64,
     cos2: f64,
+    cos_scale: f64,
     /// The media of the two legs and their slownesses.
     m_in: usize,
     m: usize,
@@ -124,41 +169,39 @@ struct Interaction<'a> {
     w: f64,
 }
 
-/// The coefficient of one interaction; a refraction or a converted reflection multiplies
-/// `walk`'s cosine ratio (a converted reflection is noted there, with coefficient 1).
+/// Whether the wave leaves interaction `x` in another medium than it came in (a refraction,
+/// or a converted reflection): its tube's in-plane width then changes by `cos θ₂ / cos θ₁`.
 #[inline(always)]
-fn coefficient(
-    cx: Context<'_>,
-    x: &Interaction<'_>,
-    walk: &mut Walk,
-) -> Result<Complex64, NoAmplitude> {
+fn changes_medium(x: &Interaction<'_>) -> bool {
+    x.step.kind == StepKind::Refract || x.m_in != x.m
+}
+
+/// The coefficient of one interaction (1 on a converted reflection, whose coefficient is not
+/// modelled: the caller notes it).
+#[inline(always)]
+fn coefficient(cx: Context<'_>, x: &Interaction<'_>) -> Result<Complex64, NoAmplitude> {
     let (cos1, cos2) = (x.cos1, x.cos2);
     if cos1 == 0.0 || cos2 == 0.0 {
         return Err(NoAmplitude::Grazing { step: x.i });
     }
     Ok(match x.step.kind {
         StepKind::Refract => {
-            walk.cos_ratio *= cos2 / cos1;
             let weights = Weights::of(cx.settings, [x.m_in, x.m], [x.w_in, x.w]);
             Complex64::new(weights.transmission(cos1, cos2), 0.0)
         }
-        StepKind::Reflect if x.m_in != x.m => {
-            // A converted wave: its tube narrows as a refraction's, its coefficient is not
-            // modelled.
-            walk.cos_ratio *= cos2 / cos1;
-            walk.converted.get_or_insert(x.i);
-            Complex64::new(1.0, 0.0)
-        }
+        // A converted wave: its coefficient is not modelled.
+        StepKind::Reflect if x.m_in != x.m => Complex64::new(1.0, 0.0),
         StepKind::Reflect => match cx.settings.reflection[x.step.interface] {
             Reflection::Fixed(r) => Complex64::new(r, 0.0),
             Reflection::Media => {
                 let line = &cx.scene.interfaces()[x.step.interface].polyline;
                 let across = medium_across(cx.regions, line, x.step, x.seg, x.from, x.here)
                     .ok_or(NoAmplitude::NoMediumAcross { step: x.i })?;
-                let along = x.u_in.dot(x.t);
+                let along = x.leg_in.dot(x.t) / x.len_in;
                 let w_across = cx.scene.media()[across].slowness;
                 let weights = Weights::of(cx.settings, [x.m_in, across], [x.w_in, w_across]);
-                weights.reflection(cos1, cos_across(x.w_in / w_across, along * along))
+                let cos_in = cos1 / x.cos_scale;
+                weights.reflection(cos_in, cos_across(x.w_in / w_across, along * along))
             }
         },
     })
@@ -238,25 +281,23 @@ fn finish(cx: Context<'_>, points: &[Point], walk: &Walk) -> Amplitude {
     let (settings, w0) = (cx.settings, walk.w0);
     // spreading = √(Π cos θ₂/cos θ₁ / (W Y)) / (4π), or √(… / W) / √(8π k₀) for a line, whose
     // amplitude also takes the phase e^(iπ/4) of the 2-D Green's function's far field.
-    let width = walk.width;
     let quarter = 0.25 / PI;
-    let (area, scale, phase) = match settings.source {
-        SourceModel::Point => (width * walk.out_of_plane, quarter, (1.0, 0.0)),
+    let (out, scale) = match settings.source {
+        SourceModel::Point => (walk.out_of_plane, quarter),
         SourceModel::Axisymmetric => {
-            let out = match out_of_plane_axisymmetric(points, walk.first) {
+            let out = match out_of_plane_axisymmetric(points, walk.l0) {
                 Ok(Some(y)) => y,
                 Ok(None) => walk.out_of_plane,
                 Err(reason) => return Amplitude::none(reason),
             };
-            (width * out, quarter, (1.0, 0.0))
+            (out, quarter)
         }
         SourceModel::Line => {
             let k0 = 2.0 * PI * settings.frequency.unwrap_or(f64::NAN) * w0;
-            let h = std::f64::consts::FRAC_1_SQRT_2;
-            (width * k0, 1.0 / (8.0 * PI).sqrt(), (h, h))
+            (k0, 1.0 / (8.0 * PI).sqrt())
         }
     };
-    let spreading = (walk.cos_ratio / area).sqrt() * scale;
+    let spreading = (walk.tube_num / (walk.tube_den * out)).sqrt() * scale;
     // A degenerate tube gives 0, ∞ or NaN.
     if !positive_finite(spreading) {
         return Amplitude::none(NoAmplitude::Caustic);
@@ -274,9 +315,16 @@ fn finish(cx: Context<'_>, points: &[Point], walk: &Walk) -> Amplitude {
     }
     let mut size = spreading;
     if walk.attenuation_db > 0.0 {
-        size *= 10f64.powf(-walk.attenuation_db / 20.0);
+        // 10^(−dB/20).
+        size *= (walk.attenuation_db * (-std::f64::consts::LN_10 / 20.0)).exp();
     }
-    let value = walk.coefficient * Complex64::new(phase.0 * size, phase.1 * size);
+    let value = match settings.source {
+        SourceModel::Line => {
+            let h = std::f64::consts::FRAC_1_SQRT_2 * size;
+            walk.coefficient * Complex64::new(h, h)
+        }
+        SourceModel::Point | SourceModel::Axisymmetric => walk.coefficient * size,
+    };
     Amplitude {
         value,
         spreading,
@@ -293,14 +341,15 @@ fn positive_finite(x: f64) -> bool {
     x.to_bits().wrapping_sub(1) < f64::MAX.to_bits()
 }
 
-/// The out-of-plane width of an axisymmetric scene: `|x_R| / |t₀ₓ|`; `None` for a path along
-/// the axis (the point source's width is the limit there).
+/// The out-of-plane width of an axisymmetric scene, `|x_R| / |t₀ₓ|` with `t₀` the first leg's
+/// direction (`ℓ₀` its length); `None` for a path along the axis (the point source's width is
+/// the limit there).
 #[inline(never)]
-fn out_of_plane_axisymmetric(points: &[Point], first: Vec2) -> Result<Option<f64>, NoAmplitude> {
+fn out_of_plane_axisymmetric(points: &[Point], l0: f64) -> Result<Option<f64>, NoAmplitude> {
     if points[0].x != 0.0 {
         return Err(NoAmplitude::SourceOffAxis);
     }
-    let side = first.x;
+    let side = points[1].x - points[0].x;
     let rest = &points[1..];
     if side == 0.0 {
         // Along the axis: every point on it, the tube a cone about the axis.
@@ -314,7 +363,7 @@ fn out_of_plane_axisymmetric(points: &[Point], first: Vec2) -> Result<Option<f64
         return Err(NoAmplitude::OnAxis);
     }
     let range = points[points.len() - 1].x.abs();
-    Ok(Some(range / side.abs()))
+    Ok(Some(range * l0 / side.abs()))
 }
 
 /// The slowness of medium `m`.
@@ -328,8 +377,11 @@ fn slowness(scene: &Scene, m: usize) -> Result<f64, NoAmplitude> {
 }
 
 /// [`walk`] for a path of one interaction, written out: its Hessian is one number, so the
-/// in-plane width is `(w₀ c₀² ℓ₁ + w₁ c₁² ℓ₀) / (w₁ |c₀ c₁|)` (`cⱼ` the cosines of the legs
-/// with the normal).
+/// in-plane width is `W = (w₀ c₀² ℓ₁ + w₁ c₁² ℓ₀) / (w₁ |c₀ c₁|)` (`cⱼ` the cosines of the legs
+/// with the normal), and the tube's factor `(cos θ₂ / cos θ₁) / W` is `c₁² / D` across a change
+/// of medium and `|c₀ c₁| / D` on a reflection, with `D = q c₀² ℓ₁ + c₁² ℓ₀` and `q = w₀ / w₁`.
+/// The squared cosines' divisions run beside the legs' square roots, and `q`'s beside both:
+/// after the square roots, one division (the coefficient's) and the spreading's.
 #[inline(always)]
 fn walk_one(
     cx: Context<'_>,
@@ -339,45 +391,50 @@ fn walk_one(
     [m0, m1]: [usize; 2],
 ) -> Result<Walk, NoAmplitude> {
     let (w0, w1) = (slowness(cx.scene, m0)?, slowness(cx.scene, m1)?);
-    let (u0, l0, _) = leg(points[0], points[1]).ok_or(NoAmplitude::VanishedLeg { leg: 0 })?;
-    let (u1, l1, _) = leg(points[1], points[2]).ok_or(NoAmplitude::VanishedLeg { leg: 1 })?;
     let t = at.tangent;
     let n = t.perp();
-    let (c0, c1) = (u0.dot(n), u1.dot(n));
-    let (cos1, cos2) = (c0.abs(), c1.abs());
+    let d0 = points[1] - points[0];
+    let leg0 = leg_across(d0, n).ok_or(NoAmplitude::VanishedLeg { leg: 0 })?;
+    let leg1 = leg_across(points[2] - points[1], n).ok_or(NoAmplitude::VanishedLeg { leg: 1 })?;
+    let (l0, l1) = (leg0.length, leg1.length);
+    let (cc0, cc1) = (leg0.cos_squared, leg1.cos_squared);
     let attenuation_db = if cx.settings.attenuates {
         let a = &cx.settings.attenuation;
         a[m0] * l0 + a[m1] * l1
     } else {
         0.0
     };
-    let mut walk = Walk {
-        coefficient: Complex64::new(1.0, 0.0),
-        cos_ratio: 1.0,
-        out_of_plane: l0 + l1 * (w0 / w1),
-        attenuation_db,
-        width: (w0 * c0 * c0 * l1 + w1 * c1 * c1 * l0) / (w1 * cos1 * cos2),
-        first: u0,
-        w0,
-        converted: None,
-    };
+    let q = w0 / w1;
     let x = Interaction {
         i: 0,
         step,
         seg: at.seg,
         from: points[0],
         here: points[1],
-        u_in: u0,
+        leg_in: d0,
+        len_in: l0,
         t,
-        cos1,
-        cos2,
+        // |cos θⱼ| ℓ₀ℓ₁.
+        cos1: (leg0.across * l1).abs(),
+        cos2: (leg1.across * l0).abs(),
+        cos_scale: l0 * l1,
         m_in: m0,
         m: m1,
         w_in: w0,
         w: w1,
     };
-    walk.coefficient = coefficient(cx, &x, &mut walk)?;
-    Ok(walk)
+    let coefficient = coefficient(cx, &x)?;
+    let crosses = changes_medium(&x);
+    Ok(Walk {
+        coefficient,
+        tube_num: if crosses { cc1 } else { (cc0 * cc1).sqrt() },
+        tube_den: q * cc0 * l1 + cc1 * l0,
+        out_of_plane: l0 + l1 * q,
+        attenuation_db,
+        l0,
+        w0,
+        converted: (crosses && step.kind == StepKind::Reflect).then_some(0),
+    })
 }
 
 /// One pass over the path's interactions: the coefficients, the lengths, and the forward
@@ -391,14 +448,17 @@ fn walk(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
     let attenuation = &cx.settings.attenuation;
     let mut out = Walk {
         coefficient: Complex64::new(1.0, 0.0),
-        cos_ratio: 1.0,
+        // The direct path: W = ℓ₀.
+        tube_num: 1.0,
+        tube_den: l0,
         out_of_plane: l0,
         attenuation_db: attenuation[legs[0]] * l0,
-        width: l0,
-        first: u0,
+        l0,
         w0,
         converted: None,
     };
+    // `Π cos θ₂ / cos θ₁` over the interactions that change the medium.
+    let mut cos_ratio = 1.0;
     let (mut u_in, mut inv_in, mut w_in) = (u0, inv0, w0);
     // The sweep: the last pivot, the product so far, the previous tangent; the first cosine.
     let (mut pivot, mut product, mut prev) = (1.0, 1.0, Vec2::default());
@@ -433,17 +493,24 @@ fn walk(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
             seg,
             from: points[i],
             here: points[i + 1],
-            u_in,
+            leg_in: u_in,
+            len_in: 1.0,
             t,
             cos1: c1.abs(),
             cos2: c2.abs(),
+            cos_scale: 1.0,
             m_in,
             m,
             w_in,
             w,
         };
-        let c = coefficient(cx, &x, &mut out)?;
-        out.coefficient *= c;
+        out.coefficient *= coefficient(cx, &x)?;
+        if changes_medium(&x) {
+            cos_ratio *= x.cos2 / x.cos1;
+            if step.kind == StepKind::Reflect {
+                out.converted.get_or_insert(i);
+            }
+        }
         out.out_of_plane += l * (w0 / w);
         out.attenuation_db += attenuation[m] * l;
         (u_in, inv_in, w_in) = (u, inv, w);
@@ -451,10 +518,12 @@ fn walk(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
     if !path.steps.is_empty() {
         // The receiver moved across the last leg by one unit: the right-hand side's one entry
         // β = (t_{k−1} · n_k) w_k / ℓ_k, the first point's move x₀ along its tangent, and the
-        // first leg's turn (t₀ · n₀) x₀ / ℓ₀ (n the legs' normals; t · n = −(u · t⊥)).
+        // first leg's turn (t₀ · n₀) x₀ / ℓ₀ (n the legs' normals; t · n = −(u · t⊥)): the
+        // inverse of W.
         let beta = prev.dot(u_in.perp()) * (w_in * inv_in);
         let x0 = beta * product / pivot;
-        out.width = 1.0 / (first_cos * x0 * inv0).abs();
+        out.tube_num = cos_ratio * (first_cos * x0 * inv0).abs();
+        out.tube_den = 1.0;
     }
     Ok(out)
 }
@@ -472,4 +541,103 @@ fn medium_across(
     let a = line.segment(seg).start;
     let s = line.start(seg) + (here - a).dot(line.tangent(seg));
     regions?.medium_across(step.interface, seg, s, from)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::demo::SplitMix64;
+
+    /// A refraction, a reflection and a converted reflection at one tilted segment (fluids).
+    fn scene(amplitudes: &str) -> Scene {
+        Scene::from_json(&format!(
+            r#"{{ "media": {{ "a": {{ "speed": 1, "density": 1.2 }},
+                             "b": {{ "speed": 1.7, "density": 2.5 }} }},
+                 "interfaces": {{ "tilted": {{ "points": [[-3, -1], [9, 2]],
+                                               "reflection": {{ "absorption": 0.3 }} }} }},
+                 "sources": [[0, 2]], "receivers": [[1, -2]],
+                 "paths": [{{ "steps": [{{ "refract": "tilted" }}], "media": ["a", "b"] }},
+                           {{ "steps": [{{ "reflect": "tilted" }}], "media": ["a", "a"] }},
+                           {{ "steps": [{{ "reflect": "tilted" }}], "media": ["a", "b"] }}],
+                 "amplitudes": {amplitudes} }}"#
+        ))
+        .unwrap()
+    }
+
+    /// The relative difference of two numbers (0 when equal).
+    fn rel(a: f64, b: f64) -> f64 {
+        if a == b {
+            0.0
+        } else {
+            (a - b).abs() / a.abs().max(b.abs())
+        }
+    }
+
+    /// The written-out form of one interaction (`walk_one`: no sweep, its divisions moved)
+    /// against the general pass (`walk`: the forward sweep through a Hessian of one row) on
+    /// random points, for every source model and kind of step.
+    #[test]
+    fn the_one_interaction_form_is_the_sweep() {
+        let mut rng = SplitMix64(31);
+        let mut worst = 0.0f64;
+        for model in [
+            r#"{ "source": "point" }"#,
+            r#"{ "source": "axisymmetric" }"#,
+            r#"{ "source": "line", "frequency": 3 }"#,
+        ] {
+            let s = scene(model);
+            let settings = s.amplitudes().unwrap();
+            let cx = Context {
+                scene: &s,
+                settings,
+                regions: None,
+            };
+            let line = &s.interfaces()[0].polyline;
+            let at = OnSegment {
+                seg: 0,
+                tangent: line.tangent(0),
+            };
+            for path in s.paths() {
+                let legs = path.media.as_ref().unwrap();
+                let media = [legs[0], legs[1]];
+                for _ in 0..200 {
+                    let mut u = || rng.next_f64();
+                    let source = Point::new(0.0, 2.0 + 3.0 * u());
+                    let here = line.point_on(0, line.length() * (0.3 + 0.6 * u()));
+                    let receiver = Point::new(8.0 * u() + 0.5, 4.0 * u() - 2.0);
+                    let points = [source, here, receiver];
+                    let one = of_one(&s, settings, None, &path.steps[0], at, points, media);
+                    let geometry = PathGeometry {
+                        steps: &path.steps,
+                        points: &points,
+                        media: &media,
+                        segments: None,
+                    };
+                    let swept = match walk(cx, geometry) {
+                        Ok(w) => finish(cx, &points, &w),
+                        Err(reason) => Amplitude::none(reason),
+                    };
+                    assert_eq!(one.reason, swept.reason, "{model} {points:?}");
+                    assert!(one.spreading > 0.0, "{model} {points:?}");
+                    let mut errors = vec![
+                        rel(one.spreading, swept.spreading),
+                        rel(one.attenuation_db, swept.attenuation_db),
+                    ];
+                    if one.has_value() {
+                        for (a, b) in [
+                            (one.value, swept.value),
+                            (one.coefficient, swept.coefficient),
+                        ] {
+                            errors.push((a - b).norm() / a.norm());
+                        }
+                    }
+                    for e in errors {
+                        assert!(e < 1e-13, "{model} {points:?}: {e:e}");
+                        worst = worst.max(e);
+                    }
+                }
+            }
+        }
+        println!("one interaction against the sweep: {worst:.3e}");
+    }
 }
