@@ -151,10 +151,10 @@ pub mod path_problem {
 pub mod limits {
     pub use crate::scene::{
         DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, MAX_COORDINATE, MAX_ITERATIONS_LIMIT,
-        MAX_SPEED_RATIO, MAX_STATIONARY_STEPS, MIN_COORDINATE, REGION_RANGE_BITS,
+        MAX_SEARCH_STEPS, MAX_SPEED_RATIO, MAX_STATIONARY_STEPS, MIN_COORDINATE, REGION_RANGE_BITS,
     };
     pub use crate::scene::{DEFAULT_TAPS, MAX_RATE, MAX_SAMPLES, MAX_TAPS};
-    pub use crate::search::MAX_SEARCH_WORK;
+    pub use crate::search::{MAX_PAIR_WORK, MAX_SEARCH_ARRIVALS, MAX_SEARCH_BEAMS};
 }
 
 /// The geometry beneath a scene: polylines and their queries, boxes, and the robust

@@ -1353,7 +1353,7 @@ fn write_rays_and_arrivals<W: Write>(
 /// an arrivals `.npy` record.
 fn arrival_steps(scene: &Scene, arrivals: &[SearchArrival]) -> usize {
     let most = arrivals.iter().map(|a| a.steps.len()).max().unwrap_or(0);
-    most.max(scene.search().map_or(0, |s| s.max_steps))
+    most.max(scene.search().and_then(|s| s.max_steps).unwrap_or(0))
 }
 
 /// The `.npy` header of `n` arrival records of at most `k` steps, with the gradient fields of

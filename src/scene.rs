@@ -320,8 +320,14 @@ pub enum StationaryMode {
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SearchSpec {
-    /// Every sequence of 0 to `max_steps` steps is considered (0: the direct ray).
-    pub max_steps: u64,
+    /// Every sequence of 0 to `max_steps` steps is considered (0: the direct ray). At least
+    /// one of `max_steps` and `max_time` is required.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_steps: Option<u64>,
+    /// Every arrival with a time of at most `max_time` is listed, of any number of steps
+    /// (within `max_steps` when both are given).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_time: Option<f64>,
     /// The interfaces the steps may use (default: all).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub interfaces: Option<Vec<String>>,
@@ -334,13 +340,18 @@ pub struct SearchSpec {
     /// Whether obstructed paths are listed too (default false).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub obstructed: Option<bool>,
+    /// Whether `vertex` (edge-held) arrivals are listed too (default false).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vertex: Option<bool>,
 }
 
 /// The search settings of a validated scene (see [`SearchSpec`]).
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SearchOptions {
-    /// The longest sequence considered.
-    pub max_steps: usize,
+    /// The longest sequence considered (`None`: bounded by `max_time` alone).
+    pub max_steps: Option<usize>,
+    /// The latest arrival listed (`None`: bounded by `max_steps` alone).
+    pub max_time: Option<f64>,
     /// Indices of the interfaces the steps may use, increasing.
     pub interfaces: Vec<usize>,
     /// Whether steps may reflect.
@@ -349,6 +360,21 @@ pub struct SearchOptions {
     pub refract: bool,
     /// Whether obstructed paths are listed too.
     pub obstructed: bool,
+    /// Whether `vertex` (edge-held) arrivals are listed too.
+    pub vertex: bool,
+}
+
+impl SearchOptions {
+    /// The most steps of a sequence: `max_steps`, or without it no bound (`usize::MAX`;
+    /// `max_time` bounds the search).
+    pub fn step_limit(&self) -> usize {
+        self.max_steps.unwrap_or(usize::MAX)
+    }
+
+    /// The latest time listed: `max_time`, or without it no bound (infinite).
+    pub fn time_limit(&self) -> f64 {
+        self.max_time.unwrap_or(f64::INFINITY)
+    }
 }
 
 /// A medium of a validated scene.
@@ -598,19 +624,42 @@ fn positive(key: String, v: f64) -> Result<f64, SceneError> {
 }
 
 /// Steps a sequence may have for the complete search of its stationary paths (each assignment
-/// of segments is tried with every choice of held vertices, `2^steps` of them), and so the
-/// largest `search.max_steps`.
+/// of segments is tried with every choice of held vertices, `2^steps` of them): the longest
+/// sequence with a refraction (or, with `vertex`, the longest reflect-only sequence whose
+/// edge-held arrivals) a `search` lists. Reflections alone go through the beam tree, up to
+/// [`MAX_SEARCH_STEPS`].
 pub const MAX_STATIONARY_STEPS: usize = 12;
+
+/// The largest `search.max_steps`: the depth of the beam tree (its stack holds one node per
+/// step).
+pub const MAX_SEARCH_STEPS: usize = 1 << 16;
 
 /// The validated `search` section.
 fn search_options(
     spec: &SearchSpec,
     interfaces: &[Interface],
 ) -> Result<SearchOptions, SceneError> {
-    if spec.max_steps > MAX_STATIONARY_STEPS as u64 {
+    if spec.max_steps.is_none() && spec.max_time.is_none() {
+        return Err(SceneError::new(
+            "search",
+            "give `max_steps` (the most steps of a sequence), `max_time` (the latest arrival \
+             listed), or both",
+        ));
+    }
+    if let Some(k) = spec.max_steps
+        && k > MAX_SEARCH_STEPS as u64
+    {
         return Err(SceneError::new(
             "search.max_steps",
-            format!("must be at most {MAX_STATIONARY_STEPS}"),
+            format!("must be at most {MAX_SEARCH_STEPS} (give `max_time` to bound by time)"),
+        ));
+    }
+    if let Some(t) = spec.max_time
+        && !(t.is_finite() && t > 0.0)
+    {
+        return Err(SceneError::new(
+            "search.max_time",
+            format!("must be finite and positive (got {t})"),
         ));
     }
     let interfaces = match &spec.interfaces {
@@ -633,7 +682,7 @@ fn search_options(
         }
     };
     let (reflect, refract) = (spec.reflect.unwrap_or(true), spec.refract.unwrap_or(true));
-    if !reflect && !refract && spec.max_steps > 0 {
+    if !reflect && !refract && spec.max_steps != Some(0) {
         return Err(SceneError::new(
             "search",
             "`reflect` and `refract` are both false: no step is allowed (set `max_steps` to 0 \
@@ -641,11 +690,13 @@ fn search_options(
         ));
     }
     Ok(SearchOptions {
-        max_steps: spec.max_steps as usize,
+        max_steps: spec.max_steps.map(|k| k as usize),
+        max_time: spec.max_time,
         interfaces,
         reflect,
         refract,
         obstructed: spec.obstructed.unwrap_or(false),
+        vertex: spec.vertex.unwrap_or(false),
     })
 }
 

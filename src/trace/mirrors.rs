@@ -1,19 +1,39 @@
-//! Every reflect-only path through a room of one-segment mirrors, by the image-source tree
-//! with beam pruning: the fast path of the automatic search for rooms whose walls are each
-//! an open interface of one segment, with one slowness on every leg.
+//! Every reflect-only path from one source, by the image-source tree with beam pruning: the
+//! automatic search's tree for reflections, shared by every receiver of the source. Each
+//! segment of each reflecting interface (open or closed, of any number of segments) is one
+//! wall; every leg is in the source's medium (a reflection keeps the medium), so one slowness.
 //!
-//! A depth-first walk over wall sequences from the source, shared by every receiver. Each
-//! node of the tree holds the source's image (mirrored in each wall's line in turn) and its
-//! beam: the wedge from the image through the part of the last wall that rays can reach
-//! (clipped by the parent's beam), beyond that wall's line. A child wall is visited only where
-//! part of it lies in the beam; an empty clip prunes the whole subtree. At each node, each
-//! receiver in the beam gets the image method's path (the line from the image to the
-//! receiver meets the last wall's line, the line from the image before to that point the wall
+//! A depth-first walk over wall sequences from the source. Each node of the tree holds the
+//! source's image (mirrored in each wall's line in turn) and its beam: the wedge from the
+//! image through the part of the last wall that rays can reach (clipped by the parent's
+//! beam), beyond that wall's line. A child wall is visited only where part of it lies in the
+//! beam; an empty clip prunes the whole subtree. The same wall twice in a row is no path (its
+//! two points would lie on one line); two adjacent segments of one polyline are two walls, and
+//! the beam's clip keeps the pair only where their corner is concave. At each node, each
+//! receiver in the beam gets the image method's path (the line from the image to the receiver
+//! meets the last wall's line, the line from the image before to that point the wall
 //! before's, …), validated as the classifier validates a ray: each point strictly inside its
-//! segment, both legs of each reflection strictly on one side of its wall
-//! ([`leg_sides`], [`sides_suit`]), no vanished leg between two reflections, and no leg
-//! crossing an interface strictly between its ends ([`Scene::first_crossing`] with the
-//! classifier's margin and the legs' own segments left out).
+//! segment (a point exactly on a polyline's vertex is a `vertex` case, not a specular
+//! reflection), both legs of each reflection strictly on one side of its wall ([`leg_sides`],
+//! [`sides_suit`]), no vanished leg between two reflections, and no leg crossing an interface
+//! strictly between its ends ([`Scene::first_crossing`] with the classifier's margin and the
+//! legs' own segments left out).
+//!
+//! The arithmetic of a wall depends only on its segment's end points and its polyline's unit
+//! normal there, which are the same whether the segment is an interface of its own or one
+//! segment of a polyline: a room drawn as one closed polyline gives the same paths, to the
+//! bit, as the room drawn one interface per wall.
+//!
+//! **The time bound.** Every path at or below a node, to any receiver `r`, is at least
+//! `|I − r|` long, `I` the node's image: the path up to the node's last reflection point `p`
+//! unfolds to the straight segment from `I` to `p`, and the rest is at least `|p − r|` long,
+//! so the whole is at least `|I − p| + |p − r| ≥ |I − r|`; and it is at least `|I − p|`, `p`
+//! on the part of the wall the beam reaches. So a node whose image lies farther than
+//! `max_time / slowness` from the receivers' box, or from its wall's reachable part, is pruned
+//! with its whole subtree, as is a receiver farther than that from the image; the margin is
+//! the beam tests' (far more than the round-off of the distances), so a path whose computed
+//! time is within `max_time` is never pruned by rounding. Each path's own computed time then
+//! decides.
 //!
 //! The pruning is certain: every beam test is widened by [`BEAM_MARGIN`] of the coordinates'
 //! magnitude (far more than the round-off of the images, which grows by a few ulps a level),
@@ -21,29 +41,34 @@
 //! validation alone decides. Where the side of a wall's line an image lies on is within that
 //! margin, the child's beam is the whole plane (no pruning below it).
 
-use crate::geom::{Point, Segment, Vec2};
-use crate::scene::{Scene, SegmentRef, StepKind};
+use crate::geom::{Aabb, Point, Vec2};
+use crate::scene::{MAX_SEARCH_STEPS, Scene, SegmentRef, StepKind};
 
 use super::classify::{END_MARGIN, leg_sides, sides_suit};
+use super::occlusion::{OCCLUSION_MARGIN, Occluders, Target, Window};
 use super::{Reason, Status};
 
 /// The beam tests' margin, relative to the largest coordinate an image can have: each
-/// mirroring and clip adds a few ulps (about 1e-16) of it, so this covers thousands of levels.
+/// mirroring and clip adds a few ulps (about 1e-16) of it, so this covers thousands of levels
+/// (and it grows with the deepest level a search allows).
 const BEAM_MARGIN: f64 = 1e-11;
 
-/// One wall: an open interface of one segment `p → q`.
+/// Beams between two calls of a search's progress.
+pub(crate) const PROGRESS_BEAMS: u64 = 1 << 14;
+
+/// One wall: segment `p → q` of an interface.
 #[derive(Clone, Copy, Debug)]
 struct Wall {
-    /// The interface's index in the scene.
-    interface: usize,
-    /// Its segment, as the obstruction test names it.
+    /// Its segment, as the obstruction test names it (interface and segment index).
     own: SegmentRef,
+    /// The arclength of the polyline where the segment starts.
+    start: f64,
     /// Start and end.
     p: Point,
     q: Point,
     /// `q − p`.
     e: Vec2,
-    /// The unit normal (the polyline's: `e` turned left, normalised).
+    /// The unit normal (the polyline's: the segment's tangent turned left).
     n: Vec2,
 }
 
@@ -61,13 +86,28 @@ impl Wall {
     }
 }
 
-/// The walls a search may reflect off: interfaces of one segment (open, 2 vertices).
+/// The walls a search may reflect off: every segment of the reflecting interfaces.
 #[derive(Clone, Debug)]
 pub(crate) struct MirrorWalls {
-    /// Per wall: its interface, ends, direction and unit normal.
+    /// Per wall: its segment, ends, direction and unit normal.
     walls: Vec<Wall>,
     /// The largest absolute coordinate of any wall end.
     extent: f64,
+    /// Every interface segment of the scene, for the occlusion of beams.
+    occluders: Occluders,
+}
+
+/// Where a wall of [`MirrorWalls`] lies in the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct WallPlace {
+    /// The interface's index in the scene.
+    pub interface: usize,
+    /// The segment's index in its interface.
+    pub segment: usize,
+    /// The arclength of the polyline where the segment starts.
+    pub start: f64,
+    /// The segment's first vertex.
+    pub p: Point,
 }
 
 /// The beam of a node of the image-source tree: the rays from the node's image through the
@@ -84,6 +124,9 @@ struct Beam {
     /// `|to_a|₁` and `|to_b|₁`, for the tests' margins.
     reach_a: f64,
     reach_b: f64,
+    /// The window's ends `a` and `b` themselves.
+    a: Point,
+    b: Point,
 }
 
 /// A node of the image-source tree on the search's stack.
@@ -100,36 +143,74 @@ struct Node {
     next: usize,
 }
 
-/// The search's reusable state: the stack of the beam tree and the points of the path under
-/// validation. Once grown to the longest sequence, a search allocates nothing but its
-/// results.
+/// The search's reusable state: the stack of the beam tree, its walls, and the points of the
+/// path under validation. Once grown to the longest sequence, a search allocates nothing but
+/// its results.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct MirrorScratch {
     /// The nodes from the root to the present one.
     stack: Vec<Node>,
+    /// The walls of the nodes below the root (the present sequence).
+    walls: Vec<usize>,
     /// Source, reflection points, receiver of the path under validation.
     points: Vec<Point>,
     /// The points relative to the source.
     rel: Vec<Vec2>,
     /// The legs' lengths.
     lens: Vec<f64>,
+    /// The hidden intervals of a child wall (the occlusion's scratch).
+    shadows: Vec<[f64; 2]>,
 }
 
-/// One path that [`MirrorWalls::arrivals`] found.
-#[derive(Clone, Debug, PartialEq)]
-pub(crate) struct MirrorArrival {
+/// One source's search: what the tree walks and its bounds.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct MirrorSearch<'a> {
+    /// The scene (for the obstruction test).
+    pub scene: &'a Scene,
+    /// The source.
+    pub source: Point,
+    /// The receivers.
+    pub receivers: &'a [Point],
+    /// The most reflections of a path (at most [`MAX_SEARCH_STEPS`] are walked).
+    pub max_steps: usize,
+    /// The latest time listed (infinite: no bound).
+    pub max_time: f64,
+    /// The slowness of every leg (time = slowness × length).
+    pub slowness: f64,
+    /// Whether obstructed paths are listed too (with [`Status::Obstructed`] and
+    /// [`Reason::Crosses`]).
+    pub obstructed: bool,
+    /// Beams visited before the search stops.
+    pub max_beams: u64,
+}
+
+/// One path the tree found, as the tree holds it (valid during the call that reports it).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct MirrorPath<'a> {
     /// The receiver's index in the receivers given.
     pub receiver: usize,
-    /// The interface index of each reflection, in order.
-    pub walls: Vec<usize>,
+    /// The walls of its reflections, in order (indices into [`MirrorWalls`]).
+    pub walls: &'a [usize],
     /// Source, reflection points, receiver.
-    pub points: Vec<Point>,
+    pub points: &'a [Point],
     /// Travel time: the slowness times the path's length.
     pub time: f64,
     /// [`Status::Converged`], or [`Status::Obstructed`] when a leg crosses an interface.
     pub status: Status,
     /// For an obstructed path, the first leg that crosses an interface and that interface.
     pub reason: Option<Reason>,
+}
+
+/// What one source's search did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct MirrorStats {
+    /// Beams visited (nodes of the tree below the root).
+    pub beams: u64,
+    /// Paths validated (receivers in a node's beam and within the time bound).
+    pub leaves: u64,
+    /// Whether the search stopped before the end of its tree: at `max_beams`, where its
+    /// `found` said so, or at [`MAX_SEARCH_STEPS`] deep with more allowed.
+    pub stopped: bool,
 }
 
 /// How a beam test of a point came out, with the margin it is widened by.
@@ -199,89 +280,185 @@ fn restrict(range: [f64; 2], g0: f64, g1: f64, margin: f64) -> Option<[f64; 2]> 
     (lo <= hi).then_some([lo, hi])
 }
 
+/// Whether `wall` shares an end with `last` (exactly) and its other end lies strictly on the
+/// side of `last`'s line that the beam's rays do not travel on (`side`, exact orientation):
+/// every point of `wall` but the shared corner is then behind `last`, so no path reflects off
+/// `last` and then strictly inside `wall` (the beam's margins alone would keep a sliver at
+/// the corner, and a chain of slivers below it).
+#[inline]
+fn behind_corner(last: &Wall, wall: &Wall, side: f64) -> bool {
+    let other = if wall.p == last.p || wall.p == last.q {
+        wall.q
+    } else if wall.q == last.p || wall.q == last.q {
+        wall.p
+    } else {
+        return false;
+    };
+    // `n` is `e` turned left: the positive side is the left of `p → q`.
+    let o = crate::geom::orient(last.p, last.q, other);
+    o != 0.0 && o.signum() != side
+}
+
+/// Whether `wall` meets the beam at a window's end alone: it starts at that end exactly (a
+/// corner it shares with the window's wall) and its other end lies certainly outside the
+/// beam's edge through that end (beyond the margin), so that every point of it but the
+/// corner lies outside the beam. (The margins alone would keep a sliver at the corner.)
+#[inline]
+fn beyond_edge(beam: &Beam, last: &Wall, image: Point, wall: &Wall, delta: f64) -> bool {
+    [(beam.a, 1), (beam.b, 2)].into_iter().any(|(end, c)| {
+        let other = if end == wall.p {
+            wall.q
+        } else if end == wall.q {
+            wall.p
+        } else {
+            return false;
+        };
+        let g = beam.gauge(last, image, other, delta);
+        g.values[c] < -g.margins[c]
+    })
+}
+
+/// The distance from `x` to the segment `a–b`.
+#[inline(always)]
+fn segment_distance(x: Point, a: Point, b: Point) -> f64 {
+    let e = b - a;
+    let ee = e.dot(e);
+    if ee > 0.0 {
+        let t = ((x - a).dot(e) / ee).clamp(0.0, 1.0);
+        x.distance(a + e * t)
+    } else {
+        x.distance(a)
+    }
+}
+
+/// The bounds of one search, fixed at its start: the margin of the beam tests and the time
+/// bound's test.
+#[derive(Clone, Copy, Debug)]
+struct Bounds {
+    /// The absolute margin on positions.
+    delta: f64,
+    /// The receivers' box.
+    receivers: Aabb,
+    /// `max_time / slowness` (infinite: no bound).
+    reach: f64,
+}
+
+impl Bounds {
+    /// Whether every path at or below a node of image `image`, whose beam reaches its wall's
+    /// part `a–b` (`None`: the root), certainly takes longer than the time bound.
+    #[inline(always)]
+    fn late(&self, image: Point, part: Option<(Point, Point)>) -> bool {
+        if self.reach.is_infinite() {
+            return false;
+        }
+        let mut d = self.receivers.distance_sq(image).sqrt();
+        if let Some((a, b)) = part {
+            d = d.max(segment_distance(image, a, b));
+        }
+        d - 4.0 * self.delta > self.reach
+    }
+}
+
 impl MirrorWalls {
-    /// `walls`: interface indices; each must be an open polyline of one segment (checked in
-    /// debug builds; the caller filters).
-    pub(crate) fn new(scene: &Scene, walls: &[usize]) -> MirrorWalls {
-        let walls: Vec<Wall> = walls
-            .iter()
-            .map(|&interface| {
-                let line = &scene.interfaces()[interface].polyline;
-                debug_assert!(line.num_segments() == 1 && !line.is_closed());
-                let Segment { start: p, end: q } = line.segment(0);
-                Wall {
-                    interface,
+    /// Every segment of each of `interfaces` (scene interface indices), in order.
+    pub(crate) fn new(scene: &Scene, interfaces: &[usize]) -> MirrorWalls {
+        let mut walls = Vec::new();
+        for &interface in interfaces {
+            let line = &scene.interfaces()[interface].polyline;
+            for segment in 0..line.num_segments() {
+                let s = line.segment(segment);
+                walls.push(Wall {
                     own: SegmentRef {
                         interface: interface as u32,
-                        segment: 0,
+                        segment: segment as u32,
                     },
-                    p,
-                    q,
-                    e: q - p,
-                    n: line.normal(0),
-                }
-            })
-            .collect();
+                    start: line.start(segment),
+                    p: s.start,
+                    q: s.end,
+                    e: s.end - s.start,
+                    n: line.normal(segment),
+                });
+            }
+        }
         let extent = walls
             .iter()
             .flat_map(|w| [w.p, w.q])
             .fold(0.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
-        MirrorWalls { walls, extent }
+        MirrorWalls {
+            walls,
+            extent,
+            occluders: Occluders::new(scene),
+        }
     }
 
-    /// Every reflect-only sequence of 0..=`max_steps` walls from `source` to each receiver
-    /// whose path exists, appended to `out` (not cleared) in the order of the tree's walk:
-    /// each reflection point strictly inside its wall, both legs of each reflection strictly
-    /// on one side of it, no vanished leg between reflections, and (unless `obstructed`, which
-    /// lists obstructed paths too, with [`Status::Obstructed`] and [`Reason::Crosses`]) no leg
-    /// crossing an interface of the scene strictly between its ends (the classifier's test).
-    /// Sequence 0 is the direct ray. `slowness` is the one slowness of every leg (time =
-    /// slowness × length).
-    #[expect(
-        clippy::too_many_arguments,
-        reason = "the search's inputs, its scratch and its output"
-    )]
+    /// Where wall `i` lies in the scene.
+    pub(crate) fn place(&self, i: usize) -> WallPlace {
+        let w = &self.walls[i];
+        WallPlace {
+            interface: w.own.interface as usize,
+            segment: w.own.segment as usize,
+            start: w.start,
+            p: w.p,
+        }
+    }
+
+    /// Every reflect-only sequence of 0..=`max_steps` walls from the source to each receiver
+    /// whose path exists and arrives by `max_time`, reported to `found` in the order of the
+    /// tree's walk: each reflection point strictly inside its wall, both legs of each
+    /// reflection strictly on one side of it, no vanished leg between reflections, and
+    /// (unless `obstructed`, which lists obstructed paths too, with [`Status::Obstructed`] and
+    /// [`Reason::Crosses`]) no leg crossing an interface of the scene strictly between its
+    /// ends (the classifier's test). Sequence 0 is the direct ray. `found` returns `false` to
+    /// stop the search; `progress` hears of every [`PROGRESS_BEAMS`] beams.
     pub(crate) fn arrivals(
         &self,
-        scene: &Scene,
-        source: Point,
-        receivers: &[Point],
-        max_steps: usize,
-        slowness: f64,
-        obstructed: bool,
+        search: &MirrorSearch<'_>,
         scratch: &mut MirrorScratch,
-        out: &mut Vec<MirrorArrival>,
-    ) {
-        let big = |p: &Point| p.x.abs().max(p.y.abs());
-        let far = receivers.iter().map(big).fold(0.0f64, f64::max);
-        // |image| ≤ |source| + 2 k |wall point| (a mirroring keeps distances to its line's
-        // points), in the max-norm within a factor √2.
-        let scale = 1.5 * big(&source) + (3 * max_steps + 1) as f64 * self.extent + far;
-        let delta = BEAM_MARGIN * scale;
-        let stack = &mut scratch.stack;
+        found: &mut impl FnMut(MirrorPath<'_>) -> bool,
+        progress: &mut impl FnMut(u64),
+    ) -> MirrorStats {
+        let mut stats = MirrorStats::default();
+        let max_steps = search.max_steps.min(MAX_SEARCH_STEPS);
+        let bounds = self.bounds(search, max_steps);
+        let MirrorScratch {
+            stack,
+            walls,
+            points,
+            rel,
+            lens,
+            shadows,
+        } = scratch;
         stack.clear();
+        walls.clear();
+        if bounds.late(search.source, None) {
+            return stats;
+        }
         stack.push(Node {
             wall: usize::MAX,
-            image: source,
+            image: search.source,
             beam: None,
             next: 0,
         });
         let mut validation = Validation {
-            scene,
+            search,
             walls: &self.walls,
-            source,
-            slowness,
-            obstructed,
-            points: &mut scratch.points,
-            rel: &mut scratch.rel,
-            lens: &mut scratch.lens,
+            points,
+            rel,
+            lens,
         };
-        validation.node(stack, receivers, delta, out);
-        while !stack.is_empty() {
-            let depth = stack.len() - 1;
-            let top = &mut stack[depth];
+        if !validation.node(stack, walls, &bounds, found, &mut stats) {
+            stats.stopped = true;
+            return stats;
+        }
+        while let Some(top) = stack.last_mut() {
+            let depth = walls.len();
             if depth >= max_steps || top.next >= self.walls.len() {
+                if depth >= max_steps && search.max_steps > max_steps && depth > 0 {
+                    // The tree's own depth limit, below which paths may remain.
+                    stats.stopped = true;
+                }
                 stack.pop();
+                walls.pop();
                 continue;
             }
             let w = top.next;
@@ -290,21 +467,72 @@ impl MirrorWalls {
                 continue;
             }
             let node = *top;
-            let Some(child) = self.child(&node, w, delta) else {
+            let occlusion = (!search.obstructed).then_some(&mut *shadows);
+            let Some(child) = self.child(&node, w, &bounds, occlusion) else {
                 continue;
             };
+            stats.beams += 1;
+            if stats.beams % PROGRESS_BEAMS == 0 {
+                progress(PROGRESS_BEAMS);
+            }
+            if stats.beams > search.max_beams {
+                stats.beams -= 1;
+                stats.stopped = true;
+                break;
+            }
             stack.push(child);
-            validation.node(stack, receivers, delta, out);
+            walls.push(w);
+            if !validation.node(stack, walls, &bounds, found, &mut stats) {
+                stats.stopped = true;
+                break;
+            }
+        }
+        progress(stats.beams % PROGRESS_BEAMS);
+        stats
+    }
+
+    /// The margin and time bound of `search`, walked `max_steps` deep.
+    fn bounds(&self, search: &MirrorSearch<'_>, max_steps: usize) -> Bounds {
+        let big = |p: &Point| p.x.abs().max(p.y.abs());
+        let far = search.receivers.iter().map(big).fold(0.0f64, f64::max);
+        let reach = search.max_time / search.slowness;
+        // |image| ≤ |source| + 2 k |wall point| (a mirroring keeps distances to its line's
+        // points), in the max-norm within a factor √2; an image the time bound keeps lies
+        // within `reach` of the receivers' box, and its children one mirroring (at most
+        // three times its distance from a wall point) farther.
+        let by_steps = (3 * max_steps + 1) as f64 * self.extent;
+        let by_time = 3.0 * (far + 1.01 * reach) + 3.0 * self.extent;
+        let scale = 1.5 * big(&search.source) + far + by_steps.min(by_time);
+        // Round-off grows by a few ulps a level: more margin for deeper trees.
+        let levels = 1.0 + max_steps as f64 / 1000.0;
+        Bounds {
+            delta: BEAM_MARGIN * scale * levels,
+            receivers: Aabb::around(search.receivers),
+            reach,
         }
     }
 
-    /// The child of `node` through wall `w`, if part of the wall lies in the node's beam.
+    /// The child of `node` through wall `w`, if part of the wall lies in the node's beam (and,
+    /// with `occlusion`, is not hidden from it) and a path through that part may arrive in
+    /// time.
     #[inline]
-    fn child(&self, node: &Node, w: usize, delta: f64) -> Option<Node> {
+    fn child(
+        &self,
+        node: &Node,
+        w: usize,
+        bounds: &Bounds,
+        occlusion: Option<&mut Vec<[f64; 2]>>,
+    ) -> Option<Node> {
         let wall = &self.walls[w];
+        let delta = bounds.delta;
         let mut range = [0.0, 1.0];
         if let Some(beam) = &node.beam {
             let last = &self.walls[node.wall];
+            if behind_corner(last, wall, beam.side)
+                || beyond_edge(beam, last, node.image, wall, delta)
+            {
+                return None;
+            }
             let gp = beam.gauge(last, node.image, wall.p, delta);
             let gq = beam.gauge(last, node.image, wall.q, delta);
             for c in 0..3 {
@@ -312,11 +540,28 @@ impl MirrorWalls {
                 range = restrict(range, gp.values[c], gq.values[c], margin)?;
             }
         }
+        if let Some(shadows) = occlusion
+            && let Some(window) = self.window(node)
+        {
+            let target = Target {
+                own: wall.own,
+                p: wall.p,
+                q: wall.q,
+                n: wall.n,
+            };
+            let m = OCCLUSION_MARGIN * delta;
+            range = self
+                .occluders
+                .unhidden(&window, &target, range, m, shadows)?;
+        }
         let h = wall.height(node.image);
         let image = node.image - wall.n * (2.0 * h);
+        let (a, b) = (wall.at(range[0]), wall.at(range[1]));
+        if bounds.late(image, Some((a, b))) {
+            return None;
+        }
         // Where the image's side of the line is not certain, the beam is the whole plane.
         let beam = (h.abs() > 2.0 * delta).then(|| {
-            let (a, b) = (wall.at(range[0]), wall.at(range[1]));
             let (to_a, to_b) = (a - image, b - image);
             Beam {
                 side: h.signum(),
@@ -324,6 +569,8 @@ impl MirrorWalls {
                 to_b,
                 reach_a: to_a.x.abs() + to_a.y.abs(),
                 reach_b: to_b.x.abs() + to_b.y.abs(),
+                a,
+                b,
             }
         });
         Some(Node {
@@ -335,47 +582,96 @@ impl MirrorWalls {
     }
 }
 
-/// What the validation of a node's paths needs: the scene, the walls, the source, the
-/// slowness, whether obstructed paths are listed, and the scratch for one path.
-struct Validation<'a> {
-    scene: &'a Scene,
+impl MirrorWalls {
+    /// Where the legs of `node`'s children start, for their occlusion: the source at the
+    /// root, the beam's part of its wall below it; `None` where its beam is the whole plane.
+    fn window(&self, node: &Node) -> Option<Window> {
+        if node.wall == usize::MAX {
+            return Some(Window {
+                image: node.image,
+                start: None,
+                own: SegmentRef::NONE,
+                bounds: Aabb::from_points(node.image, node.image),
+            });
+        }
+        let beam = node.beam.as_ref()?;
+        let last = &self.walls[node.wall];
+        Some(Window {
+            image: node.image,
+            start: Some((last.n * beam.side, last.p)),
+            own: last.own,
+            bounds: Aabb::from_points(node.image + beam.to_a, node.image + beam.to_b),
+        })
+    }
+}
+
+/// What the validation of a node's paths needs: the search, the walls, and the scratch for
+/// one path.
+struct Validation<'a, 's> {
+    search: &'a MirrorSearch<'s>,
     walls: &'a [Wall],
-    source: Point,
-    slowness: f64,
-    obstructed: bool,
     points: &'a mut Vec<Point>,
     rel: &'a mut Vec<Vec2>,
     lens: &'a mut Vec<f64>,
 }
 
-impl Validation<'_> {
-    /// The paths of the node on top of `stack` to each receiver in its beam, validated, into
-    /// `out`.
+impl Validation<'_, '_> {
+    /// The paths of the node on top of `stack` (its walls `walls`) to each receiver in its
+    /// beam and within the time bound, validated, reported to `found`; `false` when `found`
+    /// stops the search.
     #[inline]
     fn node(
         &mut self,
         stack: &[Node],
-        receivers: &[Point],
-        delta: f64,
-        out: &mut Vec<MirrorArrival>,
-    ) {
+        walls: &[usize],
+        bounds: &Bounds,
+        found: &mut impl FnMut(MirrorPath<'_>) -> bool,
+        stats: &mut MirrorStats,
+    ) -> bool {
         let top = stack[stack.len() - 1];
-        for (r, &receiver) in receivers.iter().enumerate() {
+        let search = self.search;
+        for (r, &receiver) in search.receivers.iter().enumerate() {
             let inside = match &top.beam {
-                Some(beam) => beam.holds(&self.walls[top.wall], top.image, receiver, delta),
+                Some(beam) => beam.holds(&self.walls[top.wall], top.image, receiver, bounds.delta),
                 None => true,
             };
-            if inside && let Some(arrival) = self.path(stack, r, receiver) {
-                out.push(arrival);
+            if !inside || top.image.distance(receiver) - 4.0 * bounds.delta > bounds.reach {
+                continue;
+            }
+            stats.leaves += 1;
+            let Some((length, reason)) = self.path(stack, receiver) else {
+                continue;
+            };
+            let time = search.slowness * length;
+            if time > search.max_time {
+                continue;
+            }
+            let path = MirrorPath {
+                receiver: r,
+                walls,
+                points: self.points,
+                time,
+                status: if reason.is_some() {
+                    Status::Obstructed
+                } else {
+                    Status::Converged
+                },
+                reason,
+            };
+            if !found(path) {
+                return false;
             }
         }
+        true
     }
 
-    /// The image method's path of the sequence on `stack` to `receiver`, if it is valid.
+    /// The image method's path of the sequence on `stack` to `receiver` into the scratch's
+    /// points, if it is valid: its length, and for an obstructed one (listed when asked) the
+    /// first leg that crosses an interface and that interface.
     #[inline]
-    fn path(&mut self, stack: &[Node], r: usize, receiver: Point) -> Option<MirrorArrival> {
+    fn path(&mut self, stack: &[Node], receiver: Point) -> Option<(f64, Option<Reason>)> {
         let k = stack.len() - 1;
-        let source = self.source;
+        let source = self.search.source;
         let points = &mut *self.points;
         points.clear();
         points.resize(k + 2, source);
@@ -415,7 +711,6 @@ impl Validation<'_> {
                 return None;
             }
         }
-        let mut reason = None;
         let mut own_a = SegmentRef::NONE;
         for leg in 0..=k {
             let own_b = if leg < k {
@@ -425,34 +720,23 @@ impl Validation<'_> {
             };
             let (a, b) = (points[leg], points[leg + 1]);
             if a != b
-                && let Some(hit) = self.scene.first_crossing(a, b, END_MARGIN, [own_a, own_b])
+                && let Some(hit) =
+                    self.search
+                        .scene
+                        .first_crossing(a, b, END_MARGIN, [own_a, own_b])
             {
-                if !self.obstructed {
+                if !self.search.obstructed {
                     return None;
                 }
-                reason = Some(Reason::Crosses {
+                let reason = Reason::Crosses {
                     leg,
                     interface: hit.interface as usize,
-                });
-                break;
+                };
+                return Some((total, Some(reason)));
             }
             own_a = own_b;
         }
-        Some(MirrorArrival {
-            receiver: r,
-            walls: stack[1..]
-                .iter()
-                .map(|n| self.walls[n.wall].interface)
-                .collect(),
-            points: points.clone(),
-            time: self.slowness * total,
-            status: if reason.is_some() {
-                Status::Obstructed
-            } else {
-                Status::Converged
-            },
-            reason,
-        })
+        Some((total, None))
     }
 }
 
@@ -462,6 +746,73 @@ mod tests {
     use crate::demo::SplitMix64;
     use crate::trace::Tracer;
     use std::collections::BTreeMap;
+
+    /// One path that [`arrivals`] found.
+    #[derive(Clone, Debug, PartialEq)]
+    struct MirrorArrival {
+        /// The receiver's index in the receivers given.
+        receiver: usize,
+        /// The interface index of each reflection, in order.
+        walls: Vec<usize>,
+        /// Source, reflection points, receiver.
+        points: Vec<Point>,
+        /// Travel time.
+        time: f64,
+        /// Converged or obstructed.
+        status: Status,
+        /// For an obstructed path, its first crossing.
+        reason: Option<Reason>,
+    }
+
+    /// [`MirrorWalls::arrivals`] without a time bound or a limit, into `out` (not cleared),
+    /// each path's walls as interface indices.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the search's inputs, its scratch and its output"
+    )]
+    fn arrivals(
+        mirrors: &MirrorWalls,
+        scene: &Scene,
+        source: Point,
+        receivers: &[Point],
+        max_steps: usize,
+        slowness: f64,
+        obstructed: bool,
+        scratch: &mut MirrorScratch,
+        out: &mut Vec<MirrorArrival>,
+    ) {
+        let search = MirrorSearch {
+            scene,
+            source,
+            receivers,
+            max_steps,
+            max_time: f64::INFINITY,
+            slowness,
+            obstructed,
+            max_beams: u64::MAX,
+        };
+        let stats = mirrors.arrivals(
+            &search,
+            scratch,
+            &mut |p: MirrorPath<'_>| {
+                out.push(MirrorArrival {
+                    receiver: p.receiver,
+                    walls: p
+                        .walls
+                        .iter()
+                        .map(|&w| mirrors.place(w).interface)
+                        .collect(),
+                    points: p.points.to_vec(),
+                    time: p.time,
+                    status: p.status,
+                    reason: p.reason,
+                });
+                true
+            },
+            &mut |_| {},
+        );
+        assert!(!stats.stopped);
+    }
 
     /// A room: its corners (counter-clockwise, each wall from one corner to the next), its
     /// sources and receivers.
@@ -663,7 +1014,8 @@ mod tests {
         let mut listing = Listing::new();
         for (s, &source) in scene.sources().iter().enumerate() {
             out.clear();
-            mirrors.arrivals(
+            arrivals(
+                &mirrors,
                 scene,
                 source,
                 scene.receivers(),
@@ -782,7 +1134,7 @@ mod tests {
                 b.reason
             );
             if let Some((l, interface)) = leg(a.reason) {
-                let Segment { start: p, end: q } =
+                let crate::geom::Segment { start: p, end: q } =
                     scene.interfaces()[interface].polyline.segment(0);
                 let t = crate::polyline::segment_intersection(a.points[l], a.points[l + 1], p, q);
                 assert!(
@@ -1060,7 +1412,8 @@ mod tests {
         let (mut scratch, mut out) = (MirrorScratch::default(), Vec::new());
         let source = scene.sources()[0];
         let receivers = scene.receivers();
-        mirrors.arrivals(
+        arrivals(
+            &mirrors,
             &scene,
             source,
             receivers,
@@ -1101,7 +1454,8 @@ mod tests {
         let mirrors = MirrorWalls::new(&scene, &walls);
         let (mut scratch, mut out) = (MirrorScratch::default(), Vec::new());
         let source = room.sources[0];
-        mirrors.arrivals(
+        arrivals(
+            &mirrors,
             &scene,
             source,
             &room.receivers,
@@ -1115,7 +1469,8 @@ mod tests {
         assert!(out.len() > 50, "{} paths", out.len());
         out.clear();
         let info = allocation_counter::measure(|| {
-            mirrors.arrivals(
+            arrivals(
+                &mirrors,
                 &scene,
                 source,
                 &room.receivers,
@@ -1145,7 +1500,8 @@ mod tests {
                 let mirrors = MirrorWalls::new(&scene, &walls);
                 out.clear();
                 for &source in &room.sources {
-                    mirrors.arrivals(
+                    arrivals(
+                        &mirrors,
                         &scene,
                         source,
                         &room.receivers,

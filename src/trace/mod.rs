@@ -26,6 +26,7 @@ mod classify;
 mod complete;
 mod flat;
 mod mirrors;
+mod occlusion;
 mod one_step;
 mod plan;
 mod result;
@@ -40,7 +41,7 @@ pub(crate) use classify::{Classifier, Sequence};
 pub(crate) use complete::SearchBudget;
 pub use complete::{Arrival, Kink, SearchOutcome, StationaryError};
 pub(crate) use flat::SegmentFrame;
-pub(crate) use mirrors::{MirrorArrival, MirrorScratch, MirrorWalls};
+pub(crate) use mirrors::{MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls};
 pub use plan::Kernels;
 pub use result::{Ray, RayRecord, Reason, Status};
 

@@ -246,7 +246,7 @@ impl Tracer {
     }
 
     /// The pairs of media on the sides of interface `interface`, found on first use.
-    fn interface_sides(&self, interface: usize) -> &[crate::regions::Sides] {
+    pub(crate) fn interface_sides(&self, interface: usize) -> &[crate::regions::Sides] {
         self.sides[interface].get_or_init(|| {
             self.regions
                 .as_ref()

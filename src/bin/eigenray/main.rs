@@ -367,11 +367,7 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         StationaryMode::All => Solved::Stationary(trace_stationary(&tracer)?),
     };
     let arrivals = match scene.search() {
-        Some(_) => Some(
-            tracer
-                .search()
-                .map_err(|e| Failure::Input(format!("search: {e}")))?,
-        ),
+        Some(_) => Some(search(&tracer)?),
         None => None,
     };
     write_outputs(args, &scene, &solved, arrivals.as_deref())?;
@@ -455,6 +451,78 @@ fn write_outputs(
         io::stdout().lock(),
     )
     .map_err(Failure::stdout)
+}
+
+/// The arrivals of the scene's `search`, refused before it starts where its table of pairs
+/// would not fit in the memory this machine has available; a spinner with the beams visited
+/// on standard error when it is a terminal, and one summary line there at the end: arrivals,
+/// beams, the bounds, and the pairs a limit left short.
+fn search(tracer: &Tracer) -> Result<Vec<SearchArrival>, Failure> {
+    let scene = tracer.scene();
+    let options = scene.search().expect("a scene with a search section");
+    let pairs = scene.sources().len() as u128 * scene.receivers().len() as u128;
+    let need = pairs * eigenray::search::PAIR_BYTES as u128;
+    if let Some(have) = available_memory()
+        && need > have as u128
+    {
+        return Err(Failure::Input(format!(
+            "search: {pairs} source-receiver pairs need {:.1} GB for their table alone \
+             ({} bytes each), more than the {:.1} GB this machine has available: search fewer \
+             sources and receivers at a time",
+            need as f64 / 1e9,
+            eigenray::search::PAIR_BYTES,
+            have as f64 / 1e9
+        )));
+    }
+    let bar = std::io::IsTerminal::is_terminal(&io::stderr()).then(|| {
+        let bar = ProgressBar::new_spinner();
+        if let Ok(style) = ProgressStyle::with_template("{spinner} search: {pos} beams, {msg}") {
+            bar.set_style(style);
+        }
+        bar
+    });
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let progress = |p: eigenray::search::SearchProgress| {
+        if let Some(bar) = &bar {
+            bar.inc(p.beams);
+            let pairs = done.fetch_add(p.pairs, std::sync::atomic::Ordering::Relaxed) + p.pairs;
+            if p.pairs > 0 {
+                bar.set_message(format!("{pairs} pairs searched for refractions"));
+            }
+        }
+    };
+    let started = Instant::now();
+    let report = tracer
+        .search_with(&eigenray::search::SearchLimits::default(), &progress)
+        .map_err(|e| Failure::Input(format!("search: {e}")))?;
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    let n = report.arrivals.len();
+    let mut line = format!(
+        "search: {n} {} in {:.3} s, {} beams",
+        if n == 1 { "arrival" } else { "arrivals" },
+        started.elapsed().as_secs_f64(),
+        report.beams
+    );
+    if report.work > 0 {
+        let _ = write!(line, ", {} sequences and tuples", report.work);
+    }
+    match (options.max_steps, options.max_time) {
+        (Some(k), Some(t)) => _ = write!(line, "; up to {k} steps and time {t}"),
+        (Some(k), None) => _ = write!(line, "; up to {k} steps"),
+        (None, Some(t)) => _ = write!(line, "; up to time {t}"),
+        (None, None) => {}
+    }
+    if report.incomplete_pairs > 0 {
+        let _ = write!(
+            line,
+            "; {} pairs stopped at a limit (their arrivals say complete: false)",
+            report.incomplete_pairs
+        );
+    }
+    eprintln!("{line}");
+    Ok(report.arrivals)
 }
 
 /// Every stationary path of every ray (`"stationary": "all"`), with a progress bar on standard

@@ -1,0 +1,145 @@
+//! The search's beam trees: every reflect-only sequence, one tree per source (in parallel)
+//! shared by all its receivers, through [`MirrorWalls`] (`trace/mirrors.rs`, which walks the
+//! geometry and validates each path as the classifier does). Every segment of each allowed
+//! interface is a wall (none when reflections are not allowed: the tree is then its root, the
+//! direct ray). Every leg is in the source's medium.
+
+use rayon::prelude::*;
+
+use crate::scene::{SearchOptions, Step, StepKind};
+use crate::trace::{
+    Arrival, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls, Tracer,
+};
+
+use super::{ArrivalCount, SearchArrival, SearchLimits, SearchProgress};
+
+/// What one source's tree gives: its arrivals and what it did.
+pub(super) struct SourceTree {
+    /// Its arrivals (their `complete` is the caller's to set).
+    pub arrivals: Vec<SearchArrival>,
+    /// Beams, leaves, and whether it stopped short.
+    pub stats: MirrorStats,
+}
+
+impl Tracer {
+    /// The beam tree of every source, in parallel, in source order.
+    pub(super) fn beam_trees(
+        &self,
+        options: &SearchOptions,
+        limits: &SearchLimits,
+        listed: &ArrivalCount,
+        progress: &(dyn Fn(SearchProgress) + Sync),
+    ) -> Vec<SourceTree> {
+        let scene = self.scene();
+        let walls = if options.reflect {
+            MirrorWalls::new(scene, &options.interfaces)
+        } else {
+            MirrorWalls::new(scene, &[])
+        };
+        (0..scene.sources().len())
+            .into_par_iter()
+            .map_init(MirrorScratch::default, |scratch, source| {
+                self.beam_tree(options, limits, listed, progress, &walls, source, scratch)
+            })
+            .collect()
+    }
+
+    /// The beam tree of source `source`: its reflect-only arrivals (the direct ray included),
+    /// `converged` ones and, when the search asks, `obstructed` ones.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the search's settings, its shared counters, the walls, the source, scratch"
+    )]
+    fn beam_tree(
+        &self,
+        options: &SearchOptions,
+        limits: &SearchLimits,
+        listed: &ArrivalCount,
+        progress: &(dyn Fn(SearchProgress) + Sync),
+        walls: &MirrorWalls,
+        source: usize,
+        scratch: &mut MirrorScratch,
+    ) -> SourceTree {
+        let scene = self.scene();
+        let s = scene.sources()[source];
+        let mut arrivals = Vec::new();
+        // No medium at the source: no path at all (a proof).
+        let Some(medium) = self.source_medium(false, s) else {
+            return SourceTree {
+                arrivals,
+                stats: MirrorStats::default(),
+            };
+        };
+        let search = MirrorSearch {
+            scene,
+            source: s,
+            receivers: scene.receivers(),
+            max_steps: options.step_limit(),
+            max_time: options.time_limit(),
+            slowness: scene.media()[medium].slowness,
+            obstructed: options.obstructed,
+            max_beams: limits.beams,
+        };
+        let stats = walls.arrivals(
+            &search,
+            scratch,
+            &mut |p: MirrorPath<'_>| {
+                if !listed.take(1) {
+                    return false;
+                }
+                arrivals.push(beam_arrival(walls, source, medium, p));
+                true
+            },
+            &mut |beams| {
+                progress(SearchProgress {
+                    beams,
+                    ..SearchProgress::default()
+                })
+            },
+        );
+        SourceTree { arrivals, stats }
+    }
+}
+
+/// A path of the beam tree as a [`SearchArrival`]: its walls' steps, segments and arclengths,
+/// every leg in the source's medium.
+fn beam_arrival(
+    walls: &MirrorWalls,
+    source: usize,
+    medium: usize,
+    p: MirrorPath<'_>,
+) -> SearchArrival {
+    let k = p.walls.len();
+    let mut steps = Vec::with_capacity(k);
+    let mut segments = Vec::with_capacity(k);
+    let mut parameters = Vec::with_capacity(k);
+    for (&w, &point) in p.walls.iter().zip(&p.points[1..=k]) {
+        let place = walls.place(w);
+        steps.push(Step {
+            kind: StepKind::Reflect,
+            interface: place.interface,
+        });
+        segments.push(place.segment);
+        parameters.push(place.start + place.p.distance(point));
+    }
+    SearchArrival {
+        source,
+        receiver: p.receiver,
+        steps,
+        arrival: Arrival {
+            status: p.status,
+            time: p.time,
+            points: p.points.to_vec(),
+            parameters,
+            segments,
+            media: vec![medium; k + 1],
+            iterations: 0,
+            reason: p.reason,
+            kink: None,
+            // The image method's points: no solve, no residual.
+            residual: f64::NAN,
+            amplitude: None,
+        },
+        complete: true,
+    }
+}

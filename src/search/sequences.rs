@@ -1,0 +1,444 @@
+//! The walk over step sequences that the beam tree does not cover: sequences with refractions
+//! and, when `vertex` arrivals are asked for, reflect-only sequences through interfaces with
+//! vertices (their edge-held arrivals; the tree lists their specular ones). Each is searched
+//! completely (`Tracer::stationary_of`, at most [`MAX_STATIONARY_STEPS`] steps) per (source,
+//! receiver) pair, depth first, each prefix pruned where no extension can hold a path:
+//!
+//! - **Repeats.** A reflection off the one-segment interface of the reflection before it has
+//!   its two points on one line: no path.
+//! - **Media.** Each leg's possible media, as a set: the source's medium first; a reflection
+//!   keeps the set; a refraction at interface `I` takes every medium across `I` from one in
+//!   the set (the pairs of media on `I`'s sides). This is the rule by which the complete
+//!   search enumerates a sequence's media, so an empty set means that the search of the
+//!   sequence, and of every sequence it begins, has nothing to search.
+//! - **Need.** A reflect-only prefix (which the beam tree covers) is extended only where a
+//!   refraction can still follow (some allowed interface has a medium across from one in the
+//!   set) or `vertex` arrivals are asked for and an allowed interface has vertices.
+//! - **Time.** For a prefix of steps at interfaces `I₁ … I_k` with leg media sets
+//!   `S₀ … S_k`, every path that begins with it takes at least
+//!   `w(S₀)·d(s, B₁) + Σ w(Sᵢ)·d(Bᵢ, Bᵢ₊₁) + w_min·d(B_k, r)`, with `Bᵢ` the bounding box of
+//!   `Iᵢ`, `w(S)` the least slowness in `S`, `w_min` the least of every medium, and `d` the
+//!   distance between boxes (or from a point to a box): leg `i` runs from a point of `Bᵢ` to
+//!   a point of `Bᵢ₊₁` in a medium of `Sᵢ`, and whatever follows the point on `I_k` reaches
+//!   the receiver. The bound holds for every extension of the prefix, so a prefix whose bound
+//!   exceeds `max_time` (by more than its round-off) is pruned with everything below it.
+//!
+//! The work, counted against the limit per pair, is one per sequence visited plus the tuples
+//! of each complete search. A pair whose walk stops at that limit, or at
+//! [`MAX_STATIONARY_STEPS`] with longer sequences allowed and still possible, or whose
+//! complete search of some sequence is itself incomplete, says `complete: false`.
+
+use rayon::prelude::*;
+
+use crate::geom::{Aabb, Point};
+use crate::scene::{MAX_STATIONARY_STEPS, SearchOptions, Step, StepKind};
+use crate::trace::{Arrival, SearchBudget, Sequence, Status, Tracer};
+
+use super::{ArrivalCount, SEARCH_TUPLES, SearchArrival, SearchLimits, SearchProgress};
+
+/// A set of media as bits (media beyond 128 are not told apart: [`MediaSets`] then keeps
+/// every set full).
+type MediaSet = u128;
+
+/// Media sets are exact up to this many media.
+const MAX_SET_MEDIA: usize = 128;
+
+/// The prefix bound's relative margin: far more than its round-off.
+const TIME_MARGIN: f64 = 1e-9;
+
+/// The media-set rules of the scene's interfaces.
+#[derive(Clone, Debug)]
+struct MediaSets {
+    /// Per interface (scene index), per medium `m`: the media across from `m`.
+    across: Vec<Vec<MediaSet>>,
+    /// Per medium: its slowness.
+    slowness: Vec<f64>,
+    /// Whether the sets are exact (at most [`MAX_SET_MEDIA`] media); otherwise every set is
+    /// taken as full.
+    exact: bool,
+}
+
+impl MediaSets {
+    fn new(tracer: &Tracer) -> MediaSets {
+        let scene = tracer.scene();
+        let media = scene.media().len();
+        let exact = media <= MAX_SET_MEDIA;
+        let across = (0..scene.interfaces().len())
+            .map(|i| {
+                let mut across = vec![0 as MediaSet; media.min(MAX_SET_MEDIA)];
+                if exact {
+                    for s in tracer.interface_sides(i) {
+                        if let (Some(l), Some(r)) = (s.left, s.right) {
+                            across[l] |= 1 << r;
+                            across[r] |= 1 << l;
+                        }
+                    }
+                }
+                across
+            })
+            .collect();
+        MediaSets {
+            across,
+            slowness: scene.media().iter().map(|m| m.slowness).collect(),
+            exact,
+        }
+    }
+
+    /// The set of the one medium `m`.
+    fn only(&self, m: usize) -> MediaSet {
+        if self.exact { 1 << m } else { MediaSet::MAX }
+    }
+
+    /// The media a leg after `step` may have, from a leg in `set`.
+    fn after(&self, set: MediaSet, step: Step) -> MediaSet {
+        if !self.exact || step.kind == StepKind::Reflect {
+            return set;
+        }
+        let mut out = 0;
+        let mut rest = set;
+        while rest != 0 {
+            let m = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            out |= self.across[step.interface][m];
+        }
+        out
+    }
+
+    /// The least slowness of a medium in `set`.
+    fn least(&self, set: MediaSet) -> f64 {
+        if !self.exact {
+            return self.slowness.iter().copied().fold(f64::INFINITY, f64::min);
+        }
+        let mut least = f64::INFINITY;
+        let mut rest = set;
+        while rest != 0 {
+            let m = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            least = least.min(self.slowness[m]);
+        }
+        least
+    }
+}
+
+/// Distance between two boxes (0 where they overlap).
+fn box_gap(a: Aabb, b: Aabb) -> f64 {
+    let dx = (a.min.x - b.max.x).max(b.min.x - a.max.x).max(0.0);
+    let dy = (a.min.y - b.max.y).max(b.min.y - a.max.y).max(0.0);
+    dx.hypot(dy)
+}
+
+/// The walk's view of the scene, built once per search: the step choices and the rules of
+/// its pruning.
+struct Walk<'a> {
+    tracer: &'a Tracer,
+    options: &'a SearchOptions,
+    /// The steps a sequence may take next, in a fixed order.
+    choices: Vec<Step>,
+    media: MediaSets,
+    /// Per interface (scene index): its bounding box.
+    boxes: Vec<Aabb>,
+    /// Per interface: whether it has a vertex a path can be held on (a closed polyline, or an
+    /// open one of two or more segments).
+    has_vertices: Vec<bool>,
+    /// The least slowness of every medium.
+    least: f64,
+    /// Whether `vertex` arrivals are asked for and some allowed reflection is off an
+    /// interface with vertices.
+    vertex_reflections: bool,
+    /// The deepest sequence walked: `max_steps`, at most [`MAX_STATIONARY_STEPS`].
+    depth: usize,
+    /// Work per pair before the walk stops.
+    max_work: u64,
+    /// The arrivals listed over the whole search.
+    listed: &'a ArrivalCount,
+}
+
+/// One pair's walk: its arrivals and what it did.
+pub(super) struct PairWalk {
+    /// The arrivals listed (their `complete` is the caller's to set).
+    pub arrivals: Vec<SearchArrival>,
+    /// Whether the walk covered every sequence it had to.
+    pub complete: bool,
+    /// Sequences visited plus tuples of their complete searches.
+    pub work: u64,
+}
+
+/// What the walk knows of a prefix of steps.
+#[derive(Clone, Copy, Debug)]
+struct Prefix {
+    /// The media its last leg may have.
+    set: MediaSet,
+    /// The bound on its legs before the last (the module's sum without its last term).
+    bound: f64,
+    /// The box its last leg starts in (the source's point at first).
+    from: Aabb,
+    /// Whether it has a refraction.
+    refracts: bool,
+    /// Whether it reflects off an interface with vertices.
+    vertices: bool,
+}
+
+/// The state of one pair's walk.
+struct PairState<'w> {
+    walk: &'w Walk<'w>,
+    source: usize,
+    receiver: usize,
+    s: Point,
+    r: Point,
+    medium: usize,
+    steps: Vec<Step>,
+    found: Vec<Arrival>,
+    out: PairWalk,
+    /// Whether the walk stopped at a limit.
+    stopped: bool,
+}
+
+impl Tracer {
+    /// The walk over sequences of every pair that needs it, in parallel: (pair index, walk).
+    pub(super) fn walks(
+        &self,
+        options: &SearchOptions,
+        limits: &SearchLimits,
+        listed: &ArrivalCount,
+        progress: &(dyn Fn(SearchProgress) + Sync),
+    ) -> Vec<(usize, PairWalk)> {
+        let scene = self.scene();
+        let walk = Walk::new(self, options, limits, listed);
+        let nr = scene.receivers().len();
+        let media: Vec<Option<usize>> = scene
+            .sources()
+            .iter()
+            .map(|&s| self.source_medium(false, s))
+            .collect();
+        let needed: Vec<usize> = (0..scene.sources().len() * nr)
+            .filter(|&pair| media[pair / nr].is_some_and(|m| walk.needed(m)))
+            .collect();
+        needed
+            .into_par_iter()
+            .map(|pair| {
+                let (source, receiver) = (pair / nr, pair % nr);
+                let medium = media[source].expect("a pair that needs the walk has a medium");
+                let found = walk.pair(source, receiver, medium);
+                progress(SearchProgress {
+                    pairs: 1,
+                    ..SearchProgress::default()
+                });
+                (pair, found)
+            })
+            .collect()
+    }
+}
+
+impl<'a> Walk<'a> {
+    fn new(
+        tracer: &'a Tracer,
+        options: &'a SearchOptions,
+        limits: &SearchLimits,
+        listed: &'a ArrivalCount,
+    ) -> Walk<'a> {
+        let scene = tracer.scene();
+        let mut choices = Vec::new();
+        for &interface in &options.interfaces {
+            if options.reflect {
+                choices.push(Step {
+                    kind: StepKind::Reflect,
+                    interface,
+                });
+            }
+            if options.refract {
+                choices.push(Step {
+                    kind: StepKind::Refract,
+                    interface,
+                });
+            }
+        }
+        let media = MediaSets::new(tracer);
+        let has_vertices: Vec<bool> = scene
+            .interfaces()
+            .iter()
+            .map(|i| i.polyline.is_closed() || i.polyline.num_segments() > 1)
+            .collect();
+        let vertex_reflections = options.vertex
+            && choices
+                .iter()
+                .any(|c| c.kind == StepKind::Reflect && has_vertices[c.interface]);
+        Walk {
+            tracer,
+            options,
+            least: media.slowness.iter().copied().fold(f64::INFINITY, f64::min),
+            choices,
+            media,
+            boxes: scene
+                .interfaces()
+                .iter()
+                .map(|i| i.polyline.bbox())
+                .collect(),
+            has_vertices,
+            vertex_reflections,
+            depth: options.step_limit().min(MAX_STATIONARY_STEPS),
+            max_work: limits.work,
+            listed,
+        }
+    }
+
+    /// Whether a pair whose source lies in `medium` needs the walk.
+    fn needed(&self, medium: usize) -> bool {
+        self.depth > 0 && (self.can_refract(self.media.only(medium)) || self.vertex_reflections)
+    }
+
+    /// Whether a refraction is allowed and possible from a leg in `set`.
+    fn can_refract(&self, set: MediaSet) -> bool {
+        self.choices
+            .iter()
+            .any(|&c| c.kind == StepKind::Refract && self.media.after(set, c) != 0)
+    }
+
+    /// The walk of one pair, `medium` the source's.
+    fn pair(&self, source: usize, receiver: usize, medium: usize) -> PairWalk {
+        let scene = self.tracer.scene();
+        let s = scene.sources()[source];
+        let mut state = PairState {
+            walk: self,
+            source,
+            receiver,
+            s,
+            r: scene.receivers()[receiver],
+            medium,
+            steps: Vec::with_capacity(self.depth),
+            found: Vec::new(),
+            out: PairWalk {
+                arrivals: Vec::new(),
+                complete: true,
+                work: 0,
+            },
+            stopped: false,
+        };
+        state.extend(Prefix {
+            set: self.media.only(medium),
+            bound: 0.0,
+            from: Aabb::from_points(s, s),
+            refracts: false,
+            vertices: false,
+        });
+        state.out.complete &= !state.stopped;
+        state.out
+    }
+
+    /// The prefix after `prefix` takes `step`, if some path may begin with it.
+    fn child(&self, prefix: &Prefix, last: Option<Step>, step: Step, r: Point) -> Option<Prefix> {
+        let interfaces = self.tracer.scene().interfaces();
+        let repeat = last.is_some_and(|l| {
+            l.interface == step.interface
+                && l.kind == StepKind::Reflect
+                && step.kind == StepKind::Reflect
+                && interfaces[step.interface].polyline.num_segments() == 1
+        });
+        if repeat {
+            return None;
+        }
+        let set = self.media.after(prefix.set, step);
+        if set == 0 {
+            return None;
+        }
+        let refracts = prefix.refracts || step.kind == StepKind::Refract;
+        let vertices = prefix.vertices
+            || (step.kind == StepKind::Reflect && self.has_vertices[step.interface]);
+        if !refracts && !self.vertex_reflections && !self.can_refract(set) {
+            return None;
+        }
+        let to = self.boxes[step.interface];
+        let bound = prefix.bound + self.media.least(prefix.set) * box_gap(prefix.from, to);
+        let rest = self.least * to.distance_sq(r).sqrt();
+        if let Some(t) = self.options.max_time
+            && (bound + rest) * (1.0 - TIME_MARGIN) > t
+        {
+            return None;
+        }
+        Some(Prefix {
+            set,
+            bound,
+            from: to,
+            refracts,
+            vertices,
+        })
+    }
+}
+
+impl PairState<'_> {
+    /// Searches the sequence in `steps` (begun by `prefix`), then every extension of it.
+    fn extend(&mut self, prefix: Prefix) {
+        let walk = self.walk;
+        let k = self.steps.len();
+        if k > 0 && (prefix.refracts || (walk.vertex_reflections && prefix.vertices)) {
+            self.search(prefix.refracts);
+        }
+        self.out.work += 1;
+        if self.out.work > walk.max_work {
+            self.stopped = true;
+        }
+        if self.stopped || k == walk.options.step_limit() {
+            return;
+        }
+        for c in 0..walk.choices.len() {
+            let step = walk.choices[c];
+            let Some(next) = walk.child(&prefix, self.steps.last().copied(), step, self.r) else {
+                continue;
+            };
+            if k == walk.depth {
+                // A possible sequence longer than the complete search takes.
+                self.stopped = true;
+                return;
+            }
+            self.steps.push(step);
+            self.extend(next);
+            self.steps.pop();
+            if self.stopped {
+                return;
+            }
+        }
+    }
+
+    /// The complete search of the sequence in `steps`: its listed arrivals (with
+    /// `refracts` false, only its `vertex` ones: the beam tree lists the rest) by `max_time`.
+    fn search(&mut self, refracts: bool) {
+        let walk = self.walk;
+        let options = walk.options;
+        let sequence = Sequence {
+            steps: &self.steps,
+            path: None,
+        };
+        let budget = SearchBudget::tuples(SEARCH_TUPLES);
+        let outcome = walk.tracer.stationary_of(
+            sequence,
+            None,
+            self.s,
+            Some(self.medium),
+            self.r,
+            budget,
+            &mut self.found,
+        );
+        self.out.work += outcome.tuples as u64;
+        self.out.complete &= outcome.complete;
+        for a in self.found.drain(..) {
+            let kept = if refracts {
+                Tracer::listed(a.status, options)
+            } else {
+                options.vertex && a.status == Status::Vertex
+            };
+            if !kept || a.time > options.time_limit() {
+                continue;
+            }
+            if !walk.listed.take(1) {
+                self.stopped = true;
+                return;
+            }
+            self.out.arrivals.push(SearchArrival {
+                source: self.source,
+                receiver: self.receiver,
+                steps: self.steps.clone(),
+                arrival: a,
+                complete: true,
+            });
+        }
+    }
+}
