@@ -521,7 +521,11 @@ fn search(tracer: &Tracer) -> Result<Vec<SearchArrival>, Failure> {
             report.incomplete_pairs
         );
     }
-    eprintln!("{line}");
+    // On a terminal always; otherwise only when it warns (standard error stays empty for a
+    // script unless something is short).
+    if report.incomplete_pairs > 0 || std::io::IsTerminal::is_terminal(&io::stderr()) {
+        eprintln!("{line}");
+    }
     Ok(report.arrivals)
 }
 
