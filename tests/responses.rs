@@ -11,6 +11,16 @@ use eigenray::{Scene, Tracer, amplitudes::Complex64};
 
 const BIN: &str = env!("CARGO_BIN_EXE_eigenray");
 
+/// `eigenray solve SCENE ARGS…`.
+fn solve(scene: &std::path::Path, args: &[&std::ffi::OsStr]) -> std::process::Output {
+    Command::new(BIN)
+        .arg("solve")
+        .arg(scene)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
 /// A rectangle `w × h` of four absorbing walls (α = 0.19, so R = 0.9), source (1, 1),
 /// receiver (3.3, 2.2), reflections up to `order`, amplitudes of a point source, responses at
 /// 8 kHz for 0.1 s.
@@ -145,15 +155,7 @@ fn the_cli_writes_the_responses_as_npy() {
     let scene = dir.0.join("room.json");
     std::fs::write(&scene, rectangle(3)).unwrap();
     let out = dir.0.join("ir.npy");
-    let run = Command::new(BIN)
-        .args([
-            "solve",
-            scene.to_str().unwrap(),
-            "--ir",
-            out.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let run = solve(&scene, &["--ir".as_ref(), out.as_os_str()]);
     assert!(
         run.status.success(),
         "{}",
@@ -209,15 +211,7 @@ fn bad_response_requests_exit_2_and_write_nothing() {
     for (text, file, message) in cases {
         std::fs::write(&scene, text).unwrap();
         let out = dir.0.join(file);
-        let run = Command::new(BIN)
-            .args([
-                "solve",
-                scene.to_str().unwrap(),
-                "--ir",
-                out.to_str().unwrap(),
-            ])
-            .output()
-            .unwrap();
+        let run = solve(&scene, &["--ir".as_ref(), out.as_os_str()]);
         let stderr = String::from_utf8_lossy(&run.stderr);
         assert_eq!(run.status.code(), Some(2), "{stderr}");
         assert!(stderr.contains(message), "{stderr}");
@@ -238,13 +232,15 @@ fn the_cli_draws_the_echogram_and_the_map() {
     let scene = dir.0.join("room.json");
     std::fs::write(&scene, rectangle(2)).unwrap();
     let (echogram, map) = (dir.0.join("echo.svg"), dir.0.join("tl.svg"));
-    let run = Command::new(BIN)
-        .args(["solve", scene.to_str().unwrap(), "--echogram"])
-        .arg(&echogram)
-        .arg("--tl-map")
-        .arg(&map)
-        .output()
-        .unwrap();
+    let run = solve(
+        &scene,
+        &[
+            "--echogram".as_ref(),
+            echogram.as_os_str(),
+            "--tl-map".as_ref(),
+            map.as_os_str(),
+        ],
+    );
     assert!(
         run.status.success(),
         "{}",
@@ -262,24 +258,14 @@ fn the_cli_draws_the_echogram_and_the_map() {
     let map = std::fs::read_to_string(&map).unwrap();
     assert!(map.contains("transmission loss (dB)") && map.contains("at 500 Hz"));
     // A receiver the scene does not have, and a map without a frequency: exit 2.
-    let run = Command::new(BIN)
-        .args([
-            "solve",
-            scene.to_str().unwrap(),
-            "--echogram",
-            "x.svg",
-            "--receiver",
-            "1",
-        ])
-        .output()
-        .unwrap();
+    let run = solve(
+        &scene,
+        &["--echogram", "x.svg", "--receiver", "1"].map(std::ffi::OsStr::new),
+    );
     assert_eq!(run.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&run.stderr).contains("--receiver"));
     std::fs::write(&scene, rectangle(2).replace(r#", "frequency": 500"#, "")).unwrap();
-    let run = Command::new(BIN)
-        .args(["solve", scene.to_str().unwrap(), "--tl-map", "x.svg"])
-        .output()
-        .unwrap();
+    let run = solve(&scene, &["--tl-map", "x.svg"].map(std::ffi::OsStr::new));
     assert_eq!(run.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&run.stderr).contains("amplitudes.frequency"));
 }

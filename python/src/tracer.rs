@@ -93,6 +93,23 @@ impl PyTracer {
         })
     }
 
+    /// The arguments of a one-ray call: a source, a receiver and a path (index or name,
+    /// default 0), checked for a ray.
+    fn ray_arguments(
+        &self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        receiver: &Bound<'_, PyAny>,
+        path: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<(Point, Point, usize)> {
+        let path = match path {
+            Some(p) => self.path_index(py, p)?,
+            None => 0,
+        };
+        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        Ok((source, receiver, path))
+    }
+
     /// A source and a receiver from Python points, checked for a ray of path `path`.
     fn checked_points(
         &self,
@@ -178,11 +195,7 @@ impl PyTracer {
         receiver: &Bound<'_, PyAny>,
         path: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyRay> {
-        let path = match path {
-            Some(p) => self.path_index(py, p)?,
-            None => 0,
-        };
-        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let (source, receiver, path) = self.ray_arguments(py, source, receiver, path)?;
         let record = self
             .tracer
             .solve(source, receiver, path, &mut self.workspace);
@@ -208,11 +221,7 @@ impl PyTracer {
         receiver: &Bound<'_, PyAny>,
         path: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<f64> {
-        let path = match path {
-            Some(p) => self.path_index(py, p)?,
-            None => 0,
-        };
-        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let (source, receiver, path) = self.ray_arguments(py, source, receiver, path)?;
         let record = self
             .tracer
             .solve(source, receiver, path, &mut self.workspace);
@@ -240,11 +249,7 @@ impl PyTracer {
                  ({\"source\": \"point\"}, \"axisymmetric\" or \"line\")",
             ));
         }
-        let path = match path {
-            Some(p) => self.path_index(py, p)?,
-            None => 0,
-        };
-        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let (source, receiver, path) = self.ray_arguments(py, source, receiver, path)?;
         let mut amplitude = None;
         self.tracer.solve_with_amplitude(
             source,
@@ -269,11 +274,7 @@ impl PyTracer {
         receiver: &Bound<'_, PyAny>,
         path: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyGradient> {
-        let path = match path {
-            Some(p) => self.path_index(py, p)?,
-            None => 0,
-        };
-        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let (source, receiver, path) = self.ray_arguments(py, source, receiver, path)?;
         let record = self
             .tracer
             .solve_with_gradient(
@@ -302,11 +303,7 @@ impl PyTracer {
         receiver: &Bound<'_, PyAny>,
         path: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyPointSensitivities> {
-        let path = match path {
-            Some(p) => self.path_index(py, p)?,
-            None => 0,
-        };
-        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let (source, receiver, path) = self.ray_arguments(py, source, receiver, path)?;
         let record = self
             .tracer
             .solve(source, receiver, path, &mut self.workspace);
@@ -377,11 +374,7 @@ impl PyTracer {
         receiver: &Bound<'_, PyAny>,
         path: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<(Vec<PyRay>, bool)> {
-        let path = match path {
-            Some(p) => self.path_index(py, p)?,
-            None => 0,
-        };
-        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
+        let (source, receiver, path) = self.ray_arguments(py, source, receiver, path)?;
         let tracer = &self.tracer;
         let out = &mut self.arrivals;
         let search = py
