@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use crate::amplitude::Amplitude;
 use crate::geom::Point;
 use crate::scene::{MAX_STATIONARY_STEPS, Scene};
-pub use crate::trace::{Arrival, Kink, SearchOutcome, StationaryError};
+pub use crate::trace::{Arrival, Kink, SearchOutcome, StationaryError, Threshold};
 use crate::trace::{RayRecord, Reason, Status, Tracer};
 
 /// Every stationary path of one (source, receiver, path) triple.
@@ -25,11 +25,14 @@ pub struct TripleArrivals {
     /// with `true` the list holds every stationary path of the triple, and an empty list is a
     /// proof that it has none; with `false` it may be short.
     pub complete: bool,
+    /// The rule with a threshold that ruled out a candidate, if one did (see
+    /// [`SearchOutcome::undecided`]); the search is then not complete.
+    pub undecided: Option<Threshold>,
 }
 
 impl TripleArrivals {
     /// The status of this triple's entry when it has no arrivals: `no_path` (a proof) when the
-    /// search was complete, `not_converged` when it stopped at a limit.
+    /// search was complete, `not_converged` when it stopped at a limit or a threshold decided.
     pub fn status_without_arrivals(&self) -> Status {
         if self.complete {
             Status::NoPath
@@ -38,13 +41,15 @@ impl TripleArrivals {
         }
     }
 
-    /// The reason of that entry: [`Reason::NoStationaryPath`] or [`Reason::SearchLimit`].
+    /// The reason of that entry: [`Reason::NoStationaryPath`], [`Reason::Undecided`] or
+    /// [`Reason::SearchLimit`] (see [`SearchOutcome::reason_without_arrivals`]).
     pub fn reason_without_arrivals(&self) -> Reason {
-        if self.complete {
-            Reason::NoStationaryPath
-        } else {
-            Reason::SearchLimit
+        SearchOutcome {
+            complete: self.complete,
+            undecided: self.undecided,
+            ..SearchOutcome::new()
         }
+        .reason_without_arrivals()
     }
 }
 
@@ -244,6 +249,7 @@ impl Tracer {
                     path,
                     arrivals,
                     complete: search.complete,
+                    undecided: search.undecided,
                 })
             })
             .collect::<Result<Vec<_>, StationaryError>>()?;

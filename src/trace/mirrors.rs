@@ -9,8 +9,8 @@
 //! part of it lies in the beam; an empty clip prunes the whole subtree. At each node, each
 //! receiver in the beam gets the image method's path (the line from the image to the
 //! receiver meets the last wall's line, the line from the image before to that point the wall
-//! before's, …), validated as the classifier validates a ray: each point strictly inside its
-//! segment, both legs of each reflection strictly on one side of its wall
+//! before's, …), validated as the classifier validates a ray: each point on its segment (its
+//! ends included, as the complete search takes them), both legs of each reflection strictly on one side of its wall
 //! ([`leg_sides`], [`sides_suit`]), no vanished leg between two reflections, and no leg
 //! crossing an interface strictly between its ends ([`Scene::first_crossing`] with the
 //! classifier's margin and the legs' own segments left out).
@@ -231,7 +231,7 @@ impl MirrorWalls {
 
     /// Every reflect-only sequence of 0..=`max_steps` walls from `source` to each receiver
     /// whose path exists, appended to `out` (not cleared) in the order of the tree's walk:
-    /// each reflection point strictly inside its wall, both legs of each reflection strictly
+    /// each reflection point on its wall (its ends included), both legs of each reflection strictly
     /// on one side of it, no vanished leg between reflections, and (unless `obstructed`, which
     /// lists obstructed paths too, with [`Status::Obstructed`] and [`Reason::Crosses`]) no leg
     /// crossing an interface of the scene strictly between its ends (the classifier's test).
@@ -388,8 +388,9 @@ impl Validation<'_> {
             let d = to - node.image;
             let den = d.cross(wall.e);
             let u = (wall.p - node.image).cross(d) / den;
-            // Strictly inside the segment (NaN, for a leg along the line, fails too).
-            if !(u > 0.0 && u < 1.0) {
+            // On the segment, its ends included: a path through a wall's end reflects there,
+            // as the complete search finds it (NaN, for a leg along the line, fails).
+            if !(0.0..=1.0).contains(&u) {
                 return None;
             }
             to = wall.at(u);
@@ -410,7 +411,7 @@ impl Validation<'_> {
         rel.extend(points.iter().map(|&p| p - source));
         for i in 0..k {
             let n = self.walls[stack[i + 1].wall].n;
-            let (a, b) = leg_sides(n, 1.0, &rel[i..i + 3], &lens[i..i + 2]);
+            let (a, b) = leg_sides(n, vanish, &rel[i..i + 3], &lens[i..i + 2]);
             if !sides_suit(StepKind::Reflect, a, b) {
                 return None;
             }
@@ -1041,9 +1042,9 @@ mod tests {
     }
 
     /// A receiver exactly on a beam's boundary: the path of two reflections between parallel
-    /// mirrors whose second point is a wall's end (exact in floating point) has no path; a
-    /// receiver just inside the beam has one (its time the image's distance), one just outside
-    /// none. The complete search says the same.
+    /// mirrors whose second point is a wall's end (exact in floating point) reflects there (a
+    /// path, as one exactly at an open end is); a receiver just inside the beam has one (its
+    /// time the image's distance), one just outside none. The complete search says the same.
     #[test]
     fn a_path_through_a_wall_end_is_no_path() {
         let doc = r#"{
@@ -1071,11 +1072,14 @@ mod tests {
             &mut out,
         );
         let two: Vec<&MirrorArrival> = out.iter().filter(|a| a.walls == [low, high]).collect();
-        assert_eq!(two.len(), 1, "{two:?}");
-        assert_eq!(two[0].receiver, 1);
-        // The source's image in `low`, then in `high`: (1, 5).
-        let expected = Point::new(1.0, 5.0).distance(receivers[1]);
-        assert!((two[0].time - expected).abs() <= 1e-15 * expected);
+        assert_eq!(two.len(), 2, "{two:?}");
+        for (a, r) in two.iter().zip([0, 1]) {
+            assert_eq!(a.receiver, r);
+            // The source's image in `low`, then in `high`: (1, 5).
+            let expected = Point::new(1.0, 5.0).distance(receivers[r]);
+            assert!((a.time - expected).abs() <= 1e-15 * expected);
+        }
+        assert_eq!(two[0].points[2], Point::new(4.0, 2.0));
         let tracer = Tracer::new(&scene).unwrap();
         let mut arrivals = Vec::new();
         for (r, &receiver) in receivers.iter().enumerate() {
@@ -1084,7 +1088,7 @@ mod tests {
                 .unwrap();
             assert_eq!(
                 arrivals.len(),
-                usize::from(r == 1),
+                usize::from(r < 2),
                 "receiver {r}: {arrivals:?}"
             );
         }

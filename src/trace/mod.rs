@@ -42,7 +42,7 @@ pub use complete::{Arrival, Kink, SearchOutcome, StationaryError};
 pub(crate) use flat::SegmentFrame;
 pub(crate) use mirrors::{MirrorArrival, MirrorScratch, MirrorWalls};
 pub use plan::Kernels;
-pub use result::{Ray, RayRecord, Reason, Status};
+pub use result::{Ray, RayRecord, Reason, Status, Threshold};
 
 use one_step::{OneStepStart, flat_status};
 use plan::{OneStepPath, PathPlan};

@@ -142,12 +142,7 @@ impl Tracer {
         out: &mut Vec<Arrival>,
     ) -> SearchOutcome {
         complete::recycle(out);
-        let mut stats = SearchOutcome {
-            complete: true,
-            tuples: 0,
-            solves: 0,
-            work: 0,
-        };
+        let mut stats = SearchOutcome::new();
         let k = sequence.steps.len();
         let mut held: [&Hierarchy; MAX_STATIONARY_STEPS];
         let hierarchies: &[&Hierarchy] = match sequence.steps.first() {
@@ -331,11 +326,7 @@ impl Tracer {
                     Status::NotConverged
                 },
                 time: f64::NAN,
-                reason: Some(if stats.complete {
-                    Reason::NoStationaryPath
-                } else {
-                    Reason::SearchLimit
-                }),
+                reason: Some(stats.reason_without_arrivals()),
                 ..record
             },
         };
