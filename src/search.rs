@@ -7,6 +7,7 @@ use rayon::prelude::*;
 
 use std::fmt;
 
+use crate::control::{Stop, within};
 use crate::geom::Point;
 pub use crate::scene::SearchOptions;
 use crate::scene::{MAX_STATIONARY_STEPS, Step, StepKind};
@@ -167,6 +168,16 @@ impl Tracer {
     /// [`SearchError::NoSearch`] without a `search` section; [`SearchError::TooLarge`] when
     /// the sequences times the pairs exceed [`MAX_SEARCH_WORK`].
     pub fn search(&self) -> Result<Vec<SearchArrival>, SearchError> {
+        self.search_with(None)
+    }
+
+    /// [`search`](Self::search) that stops when `stop` is requested (from another thread):
+    /// the pairs not yet searched are skipped and the searches under way stop (the caller that
+    /// asked discards the result).
+    ///
+    /// # Errors
+    /// As [`search`](Self::search).
+    pub fn search_with(&self, stop: Option<&Stop>) -> Result<Vec<SearchArrival>, SearchError> {
         let scene = self.scene();
         let options = scene.search().ok_or(SearchError::NoSearch)?;
         let pairs = (scene.sources().len() as u64) * (scene.receivers().len() as u64);
@@ -184,9 +195,9 @@ impl Tracer {
                 !line.is_closed() && line.num_segments() == 1
             });
         let mut out = if rooms {
-            self.search_rooms(options)
+            self.search_rooms(options, stop)
         } else {
-            self.search_sequences(options)
+            self.search_sequences(options, stop)
         };
         // By pair and time; ties (none but equal times) by the sequence, for a fixed order.
         fn key(s: &[Step]) -> impl Iterator<Item = (usize, bool)> + '_ {
@@ -214,7 +225,7 @@ impl Tracer {
     }
 
     /// [`search`](Self::search) sequence by sequence, pair by pair in parallel.
-    fn search_sequences(&self, options: &SearchOptions) -> Vec<SearchArrival> {
+    fn search_sequences(&self, options: &SearchOptions, stop: Option<&Stop>) -> Vec<SearchArrival> {
         let scene = self.scene();
         let choices = step_choices(options);
         let nr = scene.receivers().len();
@@ -226,11 +237,17 @@ impl Tracer {
                 let medium = self.source_medium(false, s);
                 let mut found = Vec::new();
                 let mut arrivals = Vec::new();
+                // The pair's work budget, spent over its sequences.
+                let mut left = self.search_budget().work;
                 let mut visit = |steps: &[Step]| {
                     let sequence = Sequence { steps, path: None };
-                    let limit = SearchBudget::tuples(SEARCH_TUPLES);
+                    let limit = SearchBudget {
+                        tuples: SEARCH_TUPLES,
+                        work: left,
+                    };
                     let outcome =
                         self.stationary_of(sequence, None, s, medium, r, limit, &mut arrivals);
+                    left = left.saturating_sub(outcome.work);
                     for a in arrivals.drain(..) {
                         if Self::listed(a.status, options) {
                             found.push(SearchArrival {
@@ -244,7 +261,17 @@ impl Tracer {
                     }
                 };
                 let mut steps = Vec::with_capacity(options.max_steps);
-                for_each_sequence(scene, &choices, options.max_steps, &mut steps, &mut visit);
+                if !stop.is_some_and(Stop::requested) {
+                    within(stop, || {
+                        for_each_sequence(
+                            scene,
+                            &choices,
+                            options.max_steps,
+                            &mut steps,
+                            &mut visit,
+                        )
+                    });
+                }
                 found
             })
             .collect()
@@ -252,14 +279,15 @@ impl Tracer {
 
     /// [`search`](Self::search) for reflections off one-segment walls: the image-source tree
     /// once per source, for all receivers (every leg in the source's medium).
-    fn search_rooms(&self, options: &SearchOptions) -> Vec<SearchArrival> {
+    fn search_rooms(&self, options: &SearchOptions, stop: Option<&Stop>) -> Vec<SearchArrival> {
         let scene = self.scene();
         let walls = MirrorWalls::new(scene, &options.interfaces);
         (0..scene.sources().len())
             .into_par_iter()
             .flat_map_iter(|source| {
                 let s = scene.sources()[source];
-                let Some(medium) = self.source_medium(false, s) else {
+                let medium = self.source_medium(false, s);
+                let Some(medium) = medium.filter(|_| !stop.is_some_and(Stop::requested)) else {
                     return Vec::new();
                 };
                 let slowness = scene.media()[medium].slowness;

@@ -5,6 +5,7 @@
 use rayon::prelude::*;
 
 use crate::amplitude::Amplitude;
+use crate::control::{Stop, within};
 use crate::geom::Point;
 use crate::scene::{MAX_STATIONARY_STEPS, Scene};
 pub use crate::trace::{Arrival, Kink, SearchOutcome, StationaryError, Threshold};
@@ -219,6 +220,20 @@ impl Tracer {
         &self,
         progress: &(dyn Fn(usize) + Sync),
     ) -> Result<StationaryRays, StationaryError> {
+        self.trace_stationary_with(progress, None)
+    }
+
+    /// [`Tracer::trace_stationary_with_progress`] that stops when `stop` is requested (from
+    /// another thread): the triples not yet searched are left empty and incomplete, and the
+    /// searches under way stop (the caller that asked discards the result).
+    ///
+    /// # Errors
+    /// As [`Tracer::trace_stationary`].
+    pub fn trace_stationary_with(
+        &self,
+        progress: &(dyn Fn(usize) + Sync),
+        stop: Option<&Stop>,
+    ) -> Result<StationaryRays, StationaryError> {
         let scene = self.scene();
         for (path, p) in scene.paths().iter().enumerate() {
             if p.steps.len() > MAX_STATIONARY_STEPS {
@@ -236,12 +251,20 @@ impl Tracer {
                 let receiver = (ray / paths) % receivers;
                 let source = ray / paths / receivers;
                 let mut arrivals = Vec::new();
-                let search = self.stationary_paths(
-                    scene.sources()[source],
-                    scene.receivers()[receiver],
-                    path,
-                    &mut arrivals,
-                )?;
+                let search = within(stop, || {
+                    if stop.is_some_and(Stop::requested) {
+                        return Ok(SearchOutcome {
+                            complete: false,
+                            ..SearchOutcome::new()
+                        });
+                    }
+                    self.stationary_paths(
+                        scene.sources()[source],
+                        scene.receivers()[receiver],
+                        path,
+                        &mut arrivals,
+                    )
+                })?;
                 progress(1);
                 Ok(TripleArrivals {
                     source,

@@ -21,6 +21,10 @@ impl Search<'_> {
         out: &mut Vec<Arrival>,
     ) {
         let k = segs.len();
+        // Each choice's bound is work too (2^k of them a leaf).
+        if self.over_budget(k + 1) {
+            return;
+        }
         let is_held = |i: usize| held >> i & 1 == 1;
         self.sc.places.clear();
         for (i, &j) in segs.iter().enumerate() {
@@ -50,8 +54,7 @@ impl Search<'_> {
             return;
         }
         self.stats.solves += 1;
-        if self.stats.solves > self.budget.tuples || self.stats.work > self.budget.work {
-            self.stats.complete = false;
+        if self.over_budget(0) {
             return;
         }
         let nw = &mut self.sc.nw;

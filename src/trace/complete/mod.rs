@@ -71,6 +71,7 @@ pub(crate) use hierarchy::Hierarchy;
 pub(crate) use listing::{finish, recycle, retain};
 pub use result::{Arrival, Kink, SearchOutcome, StationaryError};
 
+use crate::control::{self, Stop};
 use crate::geom::Point;
 use crate::problem::ProblemRef;
 use crate::scene::{MAX_STATIONARY_STEPS, Scene};
@@ -98,6 +99,7 @@ pub(crate) struct SearchBudget {
 
 impl SearchBudget {
     /// A budget of `tuples` tuples and no limit on work.
+    #[cfg(test)]
     pub(crate) fn tuples(tuples: usize) -> SearchBudget {
         SearchBudget {
             tuples,
@@ -158,6 +160,25 @@ struct Search<'a> {
     /// How many times the present solve moved a point off a vertex that a held point shares
     /// ([`move_off`](Search::move_off)).
     moved_off: usize,
+    /// The stop request of the job that runs the search ([`crate::control`]).
+    stop: Option<Stop>,
+}
+
+impl Search<'_> {
+    /// Counts `work` and tells whether the search must end here: its budget of tuples (and
+    /// solves) or of work is spent, or its job was asked to stop. The search is then not
+    /// complete. The one test of a search's limits.
+    fn over_budget(&mut self, work: usize) -> bool {
+        self.stats.work += work;
+        let spent = self.stats.tuples > self.budget.tuples
+            || self.stats.solves > self.budget.tuples
+            || self.stats.work > self.budget.work;
+        let over = spent || self.stop.as_ref().is_some_and(Stop::requested);
+        if over {
+            self.stats.complete = false;
+        }
+        over
+    }
 }
 
 /// Every stationary path of one sequence with given leg media, appended to `out` unsorted
@@ -200,6 +221,7 @@ fn searching(input: SequenceSearch<'_>, f: impl FnOnce(&mut Search<'_>)) -> Sear
         pinned: 0,
         smoothed: false,
         moved_off: 0,
+        stop: control::current(),
     };
     f(&mut search);
     let done = search.stats;
