@@ -46,6 +46,16 @@ impl Stop {
     pub fn requested(&self) -> bool {
         self.0.load(Ordering::Relaxed)
     }
+
+    /// Runs `f` with this `Stop` as the stop request of the library calls it makes on this
+    /// thread (a ray's search where its start finds no path, every stationary path of one
+    /// triple): they stop soon after it is requested. The calls that work in parallel take
+    /// their `Stop` as an argument instead ([`BatchOptions::stop`](crate::BatchOptions),
+    /// [`Tracer::trace_stationary_with`](crate::Tracer::trace_stationary_with),
+    /// [`Tracer::search_with`](crate::Tracer::search_with)).
+    pub fn run<R>(&self, f: impl FnOnce() -> R) -> R {
+        within(Some(self), f)
+    }
 }
 
 thread_local! {
