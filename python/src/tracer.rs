@@ -1,6 +1,7 @@
 //! `Tracer`: a prepared scene and everything asked of it, each call converting its arguments,
 //! calling the library and converting the result (the work is in the other modules).
 
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, PoisonError, RwLock, RwLockReadGuard, RwLockWriteGuard, TryLockError};
 
 use eigenray::options::Stop;
@@ -17,6 +18,7 @@ use crate::error::{argument_error, check_memory, scene_error};
 use crate::gradient::PyGradient;
 use crate::gradients::PyGradients;
 use crate::interrupt::interruptible;
+use crate::progress::Progress;
 use crate::ray::PyRay;
 use crate::rays::PyRays;
 use crate::scene::PyScene;
@@ -171,21 +173,48 @@ impl PyTracer {
     /// reaches), in parallel with the GIL released, as `Rays` with `arrival`, `kink` and
     /// `complete`: one entry per stationary path, ordered by time within its triple, and one
     /// `no_path` (a proof) or `not_converged` entry per triple that has none. Ctrl-C stops it.
-    fn trace_stationary(&self, py: Python<'_>) -> PyResult<PyRays> {
+    /// `progress`: as `trace`'s, counting the triples searched.
+    #[pyo3(signature = (*, progress = None))]
+    fn trace_stationary(
+        &self,
+        py: Python<'_>,
+        progress: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyRays> {
         let tracer = self.read();
         let scene = tracer.scene();
+        let total = scene.num_rays();
         check_memory(
-            &format!("trace_stationary: {} rays", scene.num_rays()),
-            Table::bytes(scene.num_rays(), width(scene), false),
+            &format!("trace_stationary: {total} rays"),
+            Table::bytes(total, width(scene), false),
         )?;
-        let stop = Stop::new();
+        let progress = Progress::new(py, progress, total)?;
+        let done = AtomicUsize::new(0);
+        let count = |n: usize| {
+            done.fetch_add(n, Ordering::Relaxed);
+        };
+        let (stop, mut shown, mut reported) = (Stop::new(), 0, Ok(()));
         let rays = interruptible(
             py,
             &stop,
-            || tracer.trace_stationary_with(&|_| {}, Some(&stop)),
-            || {},
+            || tracer.trace_stationary_with(&count, Some(&stop)),
+            || {
+                let now = done.load(Ordering::Relaxed);
+                if let Some(progress) = &progress
+                    && reported.is_ok()
+                    && now > shown
+                {
+                    reported = progress.report(now, shown, total);
+                    shown = now;
+                }
+            },
         )?
         .map_err(|e| scene_error(py, &e.into()))?;
+        if let Some(progress) = &progress {
+            if reported.is_ok() && shown < total {
+                reported = progress.report(total, shown, total);
+            }
+            reported.and(progress.close())?;
+        }
         let table = py.detach(|| stationary_table(scene, &rays));
         Ok(table.finish(py, scene))
     }

@@ -282,3 +282,15 @@ def test_a_hundred_million_vertices_are_a_memory_error():
 def test_an_endless_file_stops_at_the_input_limit():
     out = capped("", "eigenray.Scene('/dev/zero')", "eigenray.EigenrayError")
     assert out.startswith("RAISED EigenrayError") and "256 MiB" in out, out
+
+
+def test_every_stationary_path_reports_its_progress():
+    scene = walls(2, [[1.0, 1.0], [1.1, 1.0]], [[9.0, 1.1], [8.9, 1.1]],
+                  solver={"stationary": "all"})
+    tracer = eigenray.Tracer(eigenray.Scene(scene))
+    seen = []
+    rays = tracer.trace_stationary(progress=lambda done, total: seen.append((done, total)))
+    assert seen and seen[-1] == (4, 4), seen
+    assert len(rays.time) >= 4
+    with pytest.raises(TypeError, match="progress"):
+        tracer.trace_stationary(progress=5)
