@@ -4,6 +4,7 @@ use rayon::iter::plumbing::{Consumer, Producer, ProducerCallback, UnindexedConsu
 use rayon::prelude::*;
 
 use crate::amplitude::Amplitude;
+use crate::control::{Stop, within};
 use crate::geom::Point;
 use crate::scene::{RayTriple, SceneError};
 use crate::trace::{ChainLink, ChainRays, Ray, RayRecord, Status, Tracer, WarmStarts, Workspace};
@@ -32,6 +33,10 @@ pub struct BatchOptions<'a> {
     pub chunk: usize,
     /// Called from the worker threads with the number of rays each finished unit solved.
     pub progress: Option<&'a (dyn Fn(usize) + Sync)>,
+    /// A request to stop (from another thread): once made, the work units not yet begun are
+    /// skipped (their rays are not written) and the complete searches of the rays being
+    /// solved stop; the caller that made it discards the batch.
+    pub stop: Option<&'a Stop>,
 }
 
 impl Default for BatchOptions<'_> {
@@ -40,6 +45,7 @@ impl Default for BatchOptions<'_> {
             warm_start: true,
             chunk: 256,
             progress: None,
+            stop: None,
         }
     }
 }
@@ -967,6 +973,9 @@ impl Tracer {
         Parts::new(sink, chunk).enumerate().for_each_init(
             || (Workspace::new(), WarmStarts::new(param_offsets[np], np)),
             |(ws, warm), (unit, out)| {
+                if opts.stop.is_some_and(Stop::requested) {
+                    return;
+                }
                 let n = out.blocks();
                 let mut unit = Unit {
                     first: unit * chunk,
@@ -986,7 +995,9 @@ impl Tracer {
                         have: false,
                         last: Point::default(),
                     };
-                    self.solve_chain(p, params, &mut rays, warm, ws);
+                    within(opts.stop, || {
+                        self.solve_chain(p, params, &mut rays, warm, ws)
+                    });
                 }
                 if let Some(progress) = opts.progress {
                     progress(n * np);

@@ -62,6 +62,7 @@
 mod amplitude;
 mod batch;
 mod bvh;
+mod control;
 pub mod demo;
 mod derivatives;
 mod geom;
@@ -121,6 +122,7 @@ pub mod amplitudes {
 /// What a [`Tracer`] can be told besides its scene: the solver's options, the start of each
 /// ray, and which kernels it may use (for comparing the kernels with the general solve).
 pub mod options {
+    pub use crate::control::Stop;
     pub use crate::scene::SolverOptions;
     pub use crate::trace::{InitialGuess, Kernels};
 }
@@ -149,12 +151,14 @@ pub mod path_problem {
 
 /// The limits a scene is validated against, and the solver's defaults.
 pub mod limits {
+    pub use crate::control::{MAX_INPUT_BYTES, available_memory, fits_in_memory, read_limited};
     pub use crate::scene::{
-        DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, MAX_COORDINATE, MAX_ITERATIONS_LIMIT,
-        MAX_SEARCH_STEPS, MAX_SPEED_RATIO, MAX_STATIONARY_STEPS, MIN_COORDINATE, REGION_RANGE_BITS,
+        DEFAULT_MAX_ITERATIONS, DEFAULT_MAX_WORK, DEFAULT_TOLERANCE, FALLBACK_MAX_WORK,
+        MAX_COORDINATE, MAX_ITERATIONS_LIMIT, MAX_SEARCH_STEPS, MAX_SPEED_RATIO,
+        MAX_STATIONARY_STEPS, MAX_WORK_LIMIT, MIN_COORDINATE, REGION_RANGE_BITS,
     };
     pub use crate::scene::{DEFAULT_TAPS, MAX_RATE, MAX_SAMPLES, MAX_TAPS};
-    pub use crate::search::{MAX_PAIR_WORK, MAX_SEARCH_ARRIVALS, MAX_SEARCH_BEAMS};
+    pub use crate::search::{MAX_SEARCH_ARRIVALS, MAX_SEARCH_BEAMS};
 }
 
 /// The geometry beneath a scene: polylines and their queries, boxes, and the robust

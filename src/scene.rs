@@ -30,6 +30,17 @@ pub const DEFAULT_TOLERANCE: f64 = 1e-12;
 pub const DEFAULT_MAX_ITERATIONS: usize = 100;
 /// Largest `solver.max_iterations` accepted (so that no scene can make a ray run for ever).
 pub const MAX_ITERATIONS_LIMIT: usize = 100_000;
+/// Default `solver.max_work`: the work budget of each complete search (per triple of
+/// `"stationary": "all"`, per source–receiver pair of a `search`). A unit of work is a point
+/// moved by a Newton step or weighed in a bound (about 35 ns of one core): 2^25 units are
+/// about a second, whatever the scene.
+pub const DEFAULT_MAX_WORK: u64 = 1 << 25;
+/// Largest `solver.max_work` accepted: 2^40 units, about ten hours of one core per search.
+pub const MAX_WORK_LIMIT: u64 = 1 << 40;
+/// The work budget of the default mode's search of one ray, where its start leads to no
+/// path (at most `solver.max_work`): 2^18 units, about 10 ms of one core, so that a batch
+/// of many rays stays bounded; beyond it the ray is `not_converged` (`search_limit`).
+pub const FALLBACK_MAX_WORK: u64 = 1 << 18;
 
 /// An invalid scene: the key that holds the first problem, and what is wrong with it.
 ///
@@ -302,6 +313,9 @@ pub struct SolverSpec {
     /// Whether each ray with a time also carries the derivatives of its time (`"gradient"`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub derivatives: Option<bool>,
+    /// The work budget of each complete search (see [`SolverOptions::max_work`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_work: Option<u64>,
 }
 
 /// Which stationary paths a ray reports.
@@ -440,6 +454,14 @@ pub struct SolverOptions {
     pub stationary: StationaryMode,
     /// Whether the output carries each timed ray's [`Gradient`](crate::Gradient).
     pub derivatives: bool,
+    /// The work budget of each complete search: of each triple's with `"stationary": "all"`
+    /// ([`Tracer::stationary_paths`](crate::Tracer::stationary_paths)), of each source–receiver
+    /// pair's over all its sequences in a `search`, and of the default mode's search of a ray
+    /// whose start leads to no path (there at most [`FALLBACK_MAX_WORK`]). A search that spends
+    /// it stops and says so (`complete: false`, or `not_converged` with the reason
+    /// `search_limit`). Units: points moved by Newton steps or weighed in bounds (about 35 ns
+    /// each); default [`DEFAULT_MAX_WORK`], at most [`MAX_WORK_LIMIT`].
+    pub max_work: u64,
 }
 
 impl SolverOptions {
@@ -447,8 +469,8 @@ impl SolverOptions {
     /// `max_iterations` may be 0 (a solve then returns its start: useful to inspect it).
     ///
     /// # Errors
-    /// `solver.tolerance` outside `(0, 1)`, or `solver.max_iterations` above
-    /// [`MAX_ITERATIONS_LIMIT`].
+    /// `solver.tolerance` outside `(0, 1)`, `solver.max_iterations` above
+    /// [`MAX_ITERATIONS_LIMIT`], or `solver.max_work` outside `1 ..=` [`MAX_WORK_LIMIT`].
     pub fn validate(&self) -> Result<(), SceneError> {
         let t = self.tolerance;
         if !(t.is_finite() && t > 0.0 && t < 1.0) {
@@ -463,6 +485,15 @@ impl SolverOptions {
                 format!("must be between 1 and {MAX_ITERATIONS_LIMIT}"),
             ));
         }
+        if !(1..=MAX_WORK_LIMIT).contains(&self.max_work) {
+            return Err(SceneError::new(
+                "solver.max_work",
+                format!(
+                    "must be a whole number between 1 and {MAX_WORK_LIMIT} (2^40; the default \
+                     is {DEFAULT_MAX_WORK}, about a second of one core per search)"
+                ),
+            ));
+        }
         Ok(())
     }
 }
@@ -474,6 +505,7 @@ impl Default for SolverOptions {
             max_iterations: DEFAULT_MAX_ITERATIONS,
             stationary: StationaryMode::One,
             derivatives: false,
+            max_work: DEFAULT_MAX_WORK,
         }
     }
 }
@@ -958,6 +990,9 @@ fn solver_of(spec: Option<&SolverSpec>) -> Result<SolverOptions, SceneError> {
         }
         if let Some(d) = s.derivatives {
             solver.derivatives = d;
+        }
+        if let Some(w) = s.max_work {
+            solver.max_work = w;
         }
         solver.validate()?;
     }

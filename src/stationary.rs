@@ -5,9 +5,10 @@
 use rayon::prelude::*;
 
 use crate::amplitude::Amplitude;
+use crate::control::{Stop, within};
 use crate::geom::Point;
 use crate::scene::{MAX_STATIONARY_STEPS, Scene};
-pub use crate::trace::{Arrival, Kink, SearchOutcome, StationaryError};
+pub use crate::trace::{Arrival, Kink, SearchOutcome, StationaryError, Threshold};
 use crate::trace::{RayRecord, Reason, Status, Tracer};
 
 /// Every stationary path of one (source, receiver, path) triple.
@@ -25,11 +26,14 @@ pub struct TripleArrivals {
     /// with `true` the list holds every stationary path of the triple, and an empty list is a
     /// proof that it has none; with `false` it may be short.
     pub complete: bool,
+    /// The rule with a threshold that ruled out a candidate, if one did (see
+    /// [`SearchOutcome::undecided`]); the search is then not complete.
+    pub undecided: Option<Threshold>,
 }
 
 impl TripleArrivals {
     /// The status of this triple's entry when it has no arrivals: `no_path` (a proof) when the
-    /// search was complete, `not_converged` when it stopped at a limit.
+    /// search was complete, `not_converged` when it stopped at a limit or a threshold decided.
     pub fn status_without_arrivals(&self) -> Status {
         if self.complete {
             Status::NoPath
@@ -38,13 +42,15 @@ impl TripleArrivals {
         }
     }
 
-    /// The reason of that entry: [`Reason::NoStationaryPath`] or [`Reason::SearchLimit`].
+    /// The reason of that entry: [`Reason::NoStationaryPath`], [`Reason::Undecided`] or
+    /// [`Reason::SearchLimit`] (see [`SearchOutcome::reason_without_arrivals`]).
     pub fn reason_without_arrivals(&self) -> Reason {
-        if self.complete {
-            Reason::NoStationaryPath
-        } else {
-            Reason::SearchLimit
+        SearchOutcome {
+            complete: self.complete,
+            undecided: self.undecided,
+            ..SearchOutcome::new()
         }
+        .reason_without_arrivals()
     }
 }
 
@@ -214,6 +220,20 @@ impl Tracer {
         &self,
         progress: &(dyn Fn(usize) + Sync),
     ) -> Result<StationaryRays, StationaryError> {
+        self.trace_stationary_with(progress, None)
+    }
+
+    /// [`Tracer::trace_stationary_with_progress`] that stops when `stop` is requested (from
+    /// another thread): the triples not yet searched are left empty and incomplete, and the
+    /// searches under way stop (the caller that asked discards the result).
+    ///
+    /// # Errors
+    /// As [`Tracer::trace_stationary`].
+    pub fn trace_stationary_with(
+        &self,
+        progress: &(dyn Fn(usize) + Sync),
+        stop: Option<&Stop>,
+    ) -> Result<StationaryRays, StationaryError> {
         let scene = self.scene();
         for (path, p) in scene.paths().iter().enumerate() {
             if p.steps.len() > MAX_STATIONARY_STEPS {
@@ -231,12 +251,20 @@ impl Tracer {
                 let receiver = (ray / paths) % receivers;
                 let source = ray / paths / receivers;
                 let mut arrivals = Vec::new();
-                let search = self.stationary_paths(
-                    scene.sources()[source],
-                    scene.receivers()[receiver],
-                    path,
-                    &mut arrivals,
-                )?;
+                let search = within(stop, || {
+                    if stop.is_some_and(Stop::requested) {
+                        return Ok(SearchOutcome {
+                            complete: false,
+                            ..SearchOutcome::new()
+                        });
+                    }
+                    self.stationary_paths(
+                        scene.sources()[source],
+                        scene.receivers()[receiver],
+                        path,
+                        &mut arrivals,
+                    )
+                })?;
                 progress(1);
                 Ok(TripleArrivals {
                     source,
@@ -244,6 +272,7 @@ impl Tracer {
                     path,
                     arrivals,
                     complete: search.complete,
+                    undecided: search.undecided,
                 })
             })
             .collect::<Result<Vec<_>, StationaryError>>()?;

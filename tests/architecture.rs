@@ -6,6 +6,7 @@ use std::path::Path;
 
 /// The modules in order: each may use only those before it.
 const ORDER: &[&str] = &[
+    "control",
     "geom",
     "bvh",
     "polyline",

@@ -26,6 +26,10 @@ pub(crate) struct AmplitudeColumns {
 }
 
 impl AmplitudeColumns {
+    /// The bytes of one ray's entries.
+    pub(crate) const BYTES_PER_RAY: u64 =
+        16 + 8 + 16 + 8 + std::mem::size_of::<Option<NoAmplitude>>() as u64;
+
     /// The columns of `rays` rays, every entry missing until written.
     pub(crate) fn new(rays: usize) -> AmplitudeColumns {
         AmplitudeColumns {

@@ -4,10 +4,10 @@
 use eigenray::{Point, Scene, Status, npy::STATUS_CODES, stationary::Kink};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2};
-use pyo3::exceptions::{PyIndexError, PyKeyError};
+use pyo3::exceptions::{PyIndexError, PyKeyError, PyMemoryError, PyTypeError};
 use pyo3::prelude::*;
 
-use crate::error::argument_error;
+use crate::error::{argument_error, check_memory};
 
 /// The status names in the order of their codes (the `.npy` output's codes).
 pub(crate) fn status_names() -> Vec<&'static str> {
@@ -22,20 +22,39 @@ pub(crate) fn status_code(status: Status) -> u8 {
         .expect("every status has a code") as u8
 }
 
+/// `TypeError` when `value` holds complex numbers (numpy would keep only their real parts).
+fn refuse_complex(py: Python<'_>, key: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
+    let complex: bool = py
+        .import("numpy")?
+        .call_method1("iscomplexobj", (value,))?
+        .extract()?;
+    if complex {
+        return Err(PyTypeError::new_err(format!(
+            "{key}: complex numbers are not coordinates (give real x and y)"
+        )));
+    }
+    Ok(())
+}
+
 /// A point from any Python sequence of two numbers (tuple, list, numpy array).
 pub(crate) fn point_arg(py: Python<'_>, key: &str, value: &Bound<'_, PyAny>) -> PyResult<Point> {
+    refuse_complex(py, key, value)?;
     let xy: [f64; 2] = value
         .extract()
         .map_err(|_| argument_error(py, key, "needs a point: a sequence of two numbers"))?;
     Ok(Point::new(xy[0], xy[1]))
 }
 
-/// Points from an array-like of shape `(n, 2)`.
+/// Points from an array-like of shape `(n, 2)`, for a call that builds `per_row` bytes from
+/// each (at least the point's 16): `MemoryError` before anything is copied when that does not
+/// fit in the memory available.
 pub(crate) fn points_arg(
     py: Python<'_>,
     key: &str,
     value: &Bound<'_, PyAny>,
+    per_row: u64,
 ) -> PyResult<Vec<Point>> {
+    refuse_complex(py, key, value)?;
     let numpy = py.import("numpy")?;
     let array = numpy
         .call_method1("asarray", (value, "float64"))
@@ -51,11 +70,16 @@ pub(crate) fn points_arg(
             format!("needs an array of shape (n, 2), not {:?}", view.shape()),
         ));
     }
-    Ok(view
-        .rows()
-        .into_iter()
-        .map(|r| Point::new(r[0], r[1]))
-        .collect())
+    let rows = view.nrows() as u64;
+    check_memory(
+        &format!("{key}: {rows} points"),
+        rows.checked_mul(per_row.max(16)),
+    )?;
+    let mut out = Vec::new();
+    out.try_reserve_exact(view.nrows())
+        .map_err(|_| PyMemoryError::new_err(format!("{key}: {rows} points do not fit")))?;
+    out.extend(view.rows().into_iter().map(|r| Point::new(r[0], r[1])));
+    Ok(out)
 }
 
 /// `points` as a numpy array of shape `(n, 2)`.

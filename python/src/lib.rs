@@ -9,6 +9,7 @@ mod convert;
 mod error;
 mod gradient;
 mod gradients;
+mod interrupt;
 mod out_arrays;
 mod progress;
 mod ray;

@@ -1,7 +1,8 @@
 //! Where a long batch reports its progress: a tqdm bar or the caller's callable.
 
-use pyo3::exceptions::PyRuntimeError;
+use pyo3::exceptions::{PyRuntimeError, PyTypeError};
 use pyo3::prelude::*;
+use pyo3::types::PyBool;
 use pyo3::types::PyDict;
 
 /// Where a long batch reports its progress.
@@ -26,6 +27,13 @@ impl<'py> Progress<'py> {
         }
         if arg.is_callable() {
             return Ok(Some(Progress::Callback(arg.clone())));
+        }
+        if !arg.is_instance_of::<PyBool>() {
+            return Err(PyTypeError::new_err(format!(
+                "progress: needs True (a tqdm bar), False, None or a callable \
+                 progress(done, total), not {}",
+                arg.get_type().name()?
+            )));
         }
         if !arg.is_truthy()? {
             return Ok(None);

@@ -4,6 +4,7 @@
 use std::sync::Arc;
 
 use eigenray::Scene;
+use eigenray::limits::{MAX_INPUT_BYTES, read_limited};
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::exceptions::PyIOError;
 use pyo3::prelude::*;
@@ -83,8 +84,30 @@ impl PyScene {
     fn from_file(py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<PyScene> {
         let os = py.import("os")?;
         let path: String = os.call_method1("fspath", (path,))?.extract()?;
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| PyIOError::new_err(format!("{path}: {e}")))?;
+        // At most the command-line tool's limit is read (an endless `/dev/zero` included).
+        let read = py.detach(|| std::fs::File::open(&path).and_then(|mut f| read_limited(&mut f)));
+        let bytes = read
+            .map_err(|e| PyIOError::new_err(format!("{path}: {e}")))?
+            .ok_or_else(|| {
+                argument_error(
+                    py,
+                    "scene",
+                    format!(
+                        "{path}: larger than {} MiB, the largest scene file read",
+                        MAX_INPUT_BYTES >> 20
+                    ),
+                )
+            })?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            argument_error(
+                py,
+                "scene",
+                format!(
+                    "{path}: not UTF-8 text (invalid byte at offset {})",
+                    e.utf8_error().valid_up_to()
+                ),
+            )
+        })?;
         PyScene::parse(py, &text)
     }
 

@@ -1,5 +1,7 @@
 //! `Tracer.search`: the arrivals of a scene's automatic search, as a list of dicts.
 
+use eigenray::options::Stop;
+use eigenray::search::SearchLimits;
 use eigenray::{Scene, SearchArrival, Tracer, scene_parts::StepKind};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -7,13 +9,17 @@ use pyo3::types::{PyDict, PyList};
 use crate::amplitude::RayAmplitude;
 use crate::convert::{kink_name, medium_names, points_array};
 use crate::error::argument_error;
+use crate::interrupt::interruptible;
 
 /// The arrivals of the scene's `search` of `tracer` (see `Tracer.search`), searched with the
-/// GIL released.
+/// GIL released on a thread of its own (Ctrl-C stops it).
 pub(crate) fn search_list<'py>(py: Python<'py>, tracer: &Tracer) -> PyResult<Bound<'py, PyList>> {
-    let arrivals = py
-        .detach(|| tracer.search())
-        .map_err(|e| argument_error(py, "search", e.to_string()))?;
+    let stop = Stop::new();
+    let limits = SearchLimits::default();
+    let search = || tracer.search_with(&limits, &|_| {}, Some(&stop));
+    let arrivals = interruptible(py, &stop, search, || {})?
+        .map_err(|e| argument_error(py, "search", e.to_string()))?
+        .arrivals;
     let scene = tracer.scene();
     let list = PyList::empty(py);
     for a in &arrivals {

@@ -5,6 +5,7 @@
 use std::sync::Mutex;
 use std::sync::atomic::AtomicBool;
 
+use eigenray::options::Stop;
 use eigenray::{Point, Reason, Scene, StationaryRays, Tracer, Workspace};
 use numpy::IntoPyArray;
 use numpy::ndarray::{Array2, Array3};
@@ -61,6 +62,26 @@ struct StationaryColumns {
 }
 
 impl Table {
+    /// The bytes of the arrays of `rays` rays of `width` points each, and of the batch's
+    /// copy of them when it solves in a spatial order (`sorted`): what `new` and the batch
+    /// allocate (`None`: more than can be addressed).
+    pub(crate) fn bytes(rays: usize, width: usize, sorted: bool, amplitudes: bool) -> Option<u64> {
+        let (rays, width) = (rays as u64, width as u64);
+        // Indices, status, time, iterations, residual, the reason; the points and media.
+        let row = 8 * 3 + 1 + 8 + 8 + 4 + 8 + std::mem::size_of::<Option<Reason>>() as u64;
+        let mut per_ray = row + width.checked_mul(16)? + (width - 1) * 4;
+        if amplitudes {
+            per_ray += AmplitudeColumns::BYTES_PER_RAY;
+        }
+        // The batch's copy: a record, the points and the media of each ray.
+        let copy = if sorted {
+            48 + width * 16 + width * 4
+        } else {
+            0
+        };
+        rays.checked_mul(per_ray + copy)
+    }
+
     /// The arrays of `rays` rays of `width` points each, with amplitude columns when
     /// `amplitudes` (the scene asks for amplitudes).
     pub(crate) fn new(rays: usize, width: usize, amplitudes: bool) -> Table {
@@ -186,20 +207,27 @@ pub(crate) fn pairs_table(
     sources: &[Point],
     receivers: &[Point],
     path: usize,
+    stop: &Stop,
 ) -> Table {
     let scene = tracer.scene();
     let mut table = Table::new(sources.len(), width(scene), scene.amplitudes().is_some());
     fill_parallel(table.rows(), 0, &Workspace::new, &|ws, first, rows| {
-        for row in 0..rows.time.len() {
-            let i = first + row;
-            let record = tracer.solve(sources[i], receivers[i], path, ws);
-            let media = Some(ws.media().iter().copied());
-            rows.write(row, scene, [i, i, path], &record, ws.points(), media);
-            if rows.has_amplitudes() {
-                let amplitude = tracer.amplitude(path, &record, ws);
-                rows.write_amplitude(row, amplitude.as_ref());
-            }
+        // Once stopped, the rest is skipped (the caller raises).
+        if stop.requested() {
+            return;
         }
+        stop.run(|| {
+            for row in 0..rows.time.len() {
+                let i = first + row;
+                let record = tracer.solve(sources[i], receivers[i], path, ws);
+                let media = Some(ws.media().iter().copied());
+                rows.write(row, scene, [i, i, path], &record, ws.points(), media);
+                if rows.has_amplitudes() {
+                    let amplitude = tracer.amplitude(path, &record, ws);
+                    rows.write_amplitude(row, amplitude.as_ref());
+                }
+            }
+        });
     });
     table
 }

@@ -1,17 +1,17 @@
 //! `Tracer.trace`: the batch of every ray, written into numpy's arrays by its own workers,
-//! with progress reported from the calling thread.
+//! with progress reported from the calling thread, which Ctrl-C interrupts.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::Duration;
 
+use eigenray::options::Stop;
 use eigenray::{
     BatchOptions, Tracer,
     sink::{BatchScratch, BatchSink},
 };
-use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 
-use crate::error::scene_error;
+use crate::error::{check_memory, scene_error};
+use crate::interrupt::interruptible;
 use crate::out_arrays::OutArrays;
 use crate::progress::Progress;
 use crate::rays::PyRays;
@@ -43,6 +43,8 @@ pub(crate) fn trace_rays(
         }
         None => {
             let amplitudes = scene.amplitudes().is_some();
+            let bytes = Table::bytes(n, w, warm_start, amplitudes);
+            check_memory(&format!("trace: {n} rays"), bytes)?;
             let mut table = py.detach(|| Table::new(n, w, amplitudes));
             let sink = RowSink::new(scene, table.rows());
             let progress = Progress::new(py, progress, n)?;
@@ -70,10 +72,10 @@ fn trace_rows(
     }
 }
 
-/// Runs the batch of every ray of `tracer` into `sink` (the GIL released), reporting to
-/// `progress` from the calling thread while it runs. `Err` when the batch did not run
-/// (nothing is written); else the error of a progress report, if one failed (the rows are
-/// written all the same).
+/// Runs the batch of every ray of `tracer` into `sink` (the GIL released, on a thread of its
+/// own: Ctrl-C stops it), reporting to `progress` from the calling thread while it runs.
+/// `Err` when the batch did not run or was interrupted (nothing useful is written); else the
+/// error of a progress report, if one failed (the rows are written all the same).
 fn trace_into<S: BatchSink>(
     py: Python<'_>,
     tracer: &Tracer,
@@ -87,44 +89,35 @@ fn trace_into<S: BatchSink>(
     let count = |n: usize| {
         done.fetch_add(n, Ordering::Relaxed);
     };
+    let stop = Stop::new();
     let opts = BatchOptions {
         warm_start,
         progress: progress.as_ref().map(|_| &count as &(dyn Fn(usize) + Sync)),
+        stop: Some(&stop),
         ..BatchOptions::default()
     };
-    let (solved, reported) = match &progress {
-        None => (
-            py.detach(|| tracer.trace_batch_to(&opts, sink, scratch)),
-            Ok(()),
-        ),
-        Some(progress) => {
-            let (finished, mut shown) = (AtomicUsize::new(0), 0);
-            let result = std::thread::scope(|scope| {
-                let worker = scope.spawn(|| {
-                    let solved = tracer.trace_batch_to(&opts, sink, scratch);
-                    finished.store(1, Ordering::Release);
-                    solved
-                });
-                let mut reported = Ok(());
-                while finished.load(Ordering::Acquire) == 0 {
-                    py.detach(|| std::thread::sleep(Duration::from_millis(50)));
-                    let now = done.load(Ordering::Relaxed);
-                    if reported.is_ok() && now > shown {
-                        reported = progress.report(now, shown, total);
-                        shown = now;
-                    }
-                }
-                let solved = py.detach(|| worker.join());
-                (solved, reported)
-            });
-            let (solved, mut reported) = result;
-            let solved = solved.map_err(|_| PyRuntimeError::new_err("the batch panicked"))?;
-            if reported.is_ok() && solved.is_ok() && shown < total {
-                reported = progress.report(total, shown, total);
+    let (mut shown, mut reported) = (0, Ok(()));
+    let solved = interruptible(
+        py,
+        &stop,
+        || tracer.trace_batch_to(&opts, sink, scratch),
+        || {
+            let now = done.load(Ordering::Relaxed);
+            if let Some(progress) = &progress
+                && reported.is_ok()
+                && now > shown
+            {
+                reported = progress.report(now, shown, total);
+                shown = now;
             }
-            (solved, reported.and(progress.close()))
-        }
-    };
+        },
+    )?;
     solved.map_err(|e| scene_error(py, &e))?;
+    if let Some(progress) = &progress {
+        if reported.is_ok() && shown < total {
+            reported = progress.report(total, shown, total);
+        }
+        reported = reported.and(progress.close());
+    }
     Ok(reported)
 }

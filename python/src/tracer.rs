@@ -1,9 +1,11 @@
 //! `Tracer`: a prepared scene and everything asked of it, each call converting its arguments,
 //! calling the library and converting the result (the work is in the other modules).
 
-use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex, PoisonError, RwLock, RwLockReadGuard, RwLockWriteGuard, TryLockError};
 
 use eigenray::amplitudes::Complex64;
+use eigenray::options::Stop;
 use eigenray::{
     Arrival, Gradient, Point, PointSensitivities, Scene, SceneError, Tracer, Workspace,
     sink::BatchScratch,
@@ -11,121 +13,132 @@ use eigenray::{
 use numpy::{PyArray2, PyArray3};
 use pyo3::exceptions::{PyIndexError, PyKeyError, PyRuntimeError};
 use pyo3::prelude::*;
-use pyo3::types::PyList;
+use pyo3::types::{PyDict, PyList};
 
 use crate::convert::{named_index, point_arg, points_arg};
-use crate::error::{argument_error, scene_error};
+use crate::error::{argument_error, check_memory, scene_error};
 use crate::gradient::PyGradient;
 use crate::gradients::PyGradients;
+use crate::interrupt::interruptible;
+use crate::progress::Progress;
 use crate::ray::PyRay;
 use crate::rays::PyRays;
 use crate::response;
 use crate::scene::PyScene;
 use crate::search::search_list;
 use crate::sensitivities::PyPointSensitivities;
-use crate::table::{pairs_table, stationary_table};
+use crate::table::{Table, pairs_table, stationary_table, width};
 use crate::trace::trace_rays;
 
 /// Traces the rays of a scene. `Tracer(scene)` prepares it once (region lookup, segment
 /// hierarchies); every call after that reuses it.
-#[pyclass(module = "eigenray", name = "Tracer")]
+///
+/// Calls from several Python threads at once run side by side: the tracer is shared (read)
+/// by every call and changed (`set_*`) only between them; each call takes the scratch it
+/// reuses if no other call holds it, else works with its own.
+#[pyclass(module = "eigenray", name = "Tracer", frozen)]
 pub(crate) struct PyTracer {
-    /// The library's tracer, which owns its scene.
-    tracer: Tracer,
+    /// The library's tracer, which owns its scene: read by the calls, written by `set_*`.
+    tracer: RwLock<Tracer>,
     /// What the next `trace` reuses (the rays in solving order, for receivers solved in a
     /// spatial order).
-    scratch: BatchScratch,
+    scratch: Mutex<BatchScratch>,
     /// What the one-ray calls reuse.
-    workspace: Workspace,
+    workspace: Mutex<Workspace>,
     /// The last `stationary_paths`' arrivals (reused).
-    arrivals: Vec<Arrival>,
+    arrivals: Mutex<Vec<Arrival>>,
     /// The last `gradient`'s derivatives (reused).
-    gradient: Gradient,
+    gradient: Mutex<Gradient>,
+}
+
+/// The value in `lock` if no other call holds it, else a fresh one (a call never waits for
+/// another's scratch, nor fails for it); given back to the lock at the end if it came from it.
+fn scratch<T: Default, R>(lock: &Mutex<T>, f: impl FnOnce(&mut T) -> R) -> R {
+    match lock.try_lock() {
+        Ok(mut held) => f(&mut held),
+        Err(TryLockError::Poisoned(poisoned)) => f(&mut poisoned.into_inner()),
+        Err(TryLockError::WouldBlock) => f(&mut T::default()),
+    }
 }
 
 impl PyTracer {
-    /// The tracer's scene.
-    fn inner_scene(&self) -> &Scene {
-        self.tracer.scene()
+    /// The tracer, for a call that reads it (several at once).
+    fn read(&self) -> RwLockReadGuard<'_, Tracer> {
+        self.tracer.read().unwrap_or_else(PoisonError::into_inner)
     }
 
-    /// The index of a path given by name or index.
-    fn path_index(&self, py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<usize> {
-        let scene = self.inner_scene();
-        if let Ok(name) = path.extract::<&str>() {
-            return scene
-                .paths()
-                .iter()
-                .position(|p| p.name.as_deref() == Some(name))
-                .ok_or_else(|| PyKeyError::new_err(format!("no path is named `{name}`")));
+    /// The tracer, for a call that changes it: waits (the GIL released) for the calls that
+    /// read it to end.
+    fn write(&self, py: Python<'_>) -> RwLockWriteGuard<'_, Tracer> {
+        loop {
+            match self.tracer.try_write() {
+                Ok(tracer) => return tracer,
+                Err(TryLockError::Poisoned(poisoned)) => return poisoned.into_inner(),
+                Err(TryLockError::WouldBlock) => {
+                    py.detach(|| std::thread::sleep(std::time::Duration::from_millis(1)));
+                }
+            }
         }
-        let index: i64 = path
-            .extract()
-            .map_err(|_| argument_error(py, "path", "needs a path index or a path name"))?;
-        usize::try_from(index)
-            .ok()
-            .filter(|&i| i < scene.paths().len())
-            .ok_or_else(|| {
-                PyIndexError::new_err(format!(
-                    "path index {index} is out of range (the scene has {} paths)",
-                    scene.paths().len()
-                ))
-            })
-    }
-
-    /// The index of an interface given by name or index.
-    fn interface_index(&self, py: Python<'_>, interface: &Bound<'_, PyAny>) -> PyResult<usize> {
-        let scene = self.inner_scene();
-        named_index(
-            py,
-            "interface",
-            interface,
-            scene.interfaces().len(),
-            |name| scene.interface_index(name),
-        )
-    }
-
-    /// The index of a medium given by name or index.
-    fn medium_index(&self, py: Python<'_>, medium: &Bound<'_, PyAny>) -> PyResult<usize> {
-        let scene = self.inner_scene();
-        named_index(py, "medium", medium, scene.media().len(), |name| {
-            scene.medium_index(name)
-        })
-    }
-
-    /// The arguments of a one-ray call: a source, a receiver and a path (index or name,
-    /// default 0), checked for a ray.
-    fn ray_arguments(
-        &self,
-        py: Python<'_>,
-        source: &Bound<'_, PyAny>,
-        receiver: &Bound<'_, PyAny>,
-        path: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<(Point, Point, usize)> {
-        let path = match path {
-            Some(p) => self.path_index(py, p)?,
-            None => 0,
-        };
-        let (source, receiver) = self.checked_points(py, source, receiver, path)?;
-        Ok((source, receiver, path))
-    }
-
-    /// A source and a receiver from Python points, checked for a ray of path `path`.
-    fn checked_points(
-        &self,
-        py: Python<'_>,
-        source: &Bound<'_, PyAny>,
-        receiver: &Bound<'_, PyAny>,
-        path: usize,
-    ) -> PyResult<(Point, Point)> {
-        let source = point_arg(py, "source", source)?;
-        let receiver = point_arg(py, "receiver", receiver)?;
-        self.inner_scene()
-            .check_solve(source, receiver, path)
-            .map_err(|e| scene_error(py, &e))?;
-        Ok((source, receiver))
     }
 }
+
+/// The index of a path of `scene` given by name or index (`None`: path 0).
+fn path_index(py: Python<'_>, scene: &Scene, path: Option<&Bound<'_, PyAny>>) -> PyResult<usize> {
+    let Some(path) = path else { return Ok(0) };
+    if let Ok(name) = path.extract::<&str>() {
+        return scene
+            .paths()
+            .iter()
+            .position(|p| p.name.as_deref() == Some(name))
+            .ok_or_else(|| PyKeyError::new_err(format!("no path is named `{name}`")));
+    }
+    let index: i64 = path
+        .extract()
+        .map_err(|_| argument_error(py, "path", "needs a path index or a path name"))?;
+    usize::try_from(index)
+        .ok()
+        .filter(|&i| i < scene.paths().len())
+        .ok_or_else(|| {
+            PyIndexError::new_err(format!(
+                "path index {index} is out of range (the scene has {} paths)",
+                scene.paths().len()
+            ))
+        })
+}
+
+/// The arguments of a one-ray call on `scene`: a source, a receiver and a path (index or
+/// name, default 0), checked for a ray.
+fn ray_arguments(
+    py: Python<'_>,
+    scene: &Scene,
+    source: &Bound<'_, PyAny>,
+    receiver: &Bound<'_, PyAny>,
+    path: Option<&Bound<'_, PyAny>>,
+) -> PyResult<(Point, Point, usize)> {
+    let path = path_index(py, scene, path)?;
+    let (source, receiver) = checked_points(py, scene, source, receiver, path)?;
+    Ok((source, receiver, path))
+}
+
+/// A source and a receiver from Python points, checked for a ray of path `path` of `scene`.
+fn checked_points(
+    py: Python<'_>,
+    scene: &Scene,
+    source: &Bound<'_, PyAny>,
+    receiver: &Bound<'_, PyAny>,
+    path: usize,
+) -> PyResult<(Point, Point)> {
+    let source = point_arg(py, "source", source)?;
+    let receiver = point_arg(py, "receiver", receiver)?;
+    scene
+        .check_solve(source, receiver, path)
+        .map_err(|e| scene_error(py, &e))?;
+    Ok((source, receiver))
+}
+
+/// Bytes a vertex of an interface costs a tracer (the polyline, the segment index, the
+/// hierarchy and the region lookup's triangulation; generous).
+const BYTES_PER_VERTEX: u64 = 512;
 
 #[pymethods]
 impl PyTracer {
@@ -135,11 +148,11 @@ impl PyTracer {
         let tracer = py.detach(|| Tracer::new(shared));
         let tracer = tracer.map_err(|e| scene_error(py, &e))?;
         Ok(PyTracer {
-            tracer,
-            scratch: BatchScratch::default(),
-            workspace: Workspace::new(),
-            arrivals: Vec::new(),
-            gradient: Gradient::default(),
+            tracer: RwLock::new(tracer),
+            scratch: Mutex::default(),
+            workspace: Mutex::default(),
+            arrivals: Mutex::default(),
+            gradient: Mutex::default(),
         })
     }
 
@@ -147,11 +160,12 @@ impl PyTracer {
     #[getter]
     fn scene(&self) -> PyScene {
         PyScene {
-            scene: Arc::new(self.inner_scene().clone()),
+            scene: Arc::new(self.read().scene().clone()),
         }
     }
 
     /// Every ray of the scene, in parallel (the GIL released), as numpy arrays (`Rays`).
+    /// Ctrl-C stops it (`KeyboardInterrupt`); `MemoryError` when the arrays would not fit.
     ///
     /// `warm_start`: start each receiver from its neighbour's solution (see the library's
     /// `BatchOptions::warm_start`). `progress`: `True` for a tqdm bar, or a callable
@@ -160,28 +174,64 @@ impl PyTracer {
     /// allocates its arrays once).
     #[pyo3(signature = (*, warm_start = true, progress = None, out = None))]
     fn trace(
-        &mut self,
+        &self,
         py: Python<'_>,
         warm_start: bool,
         progress: Option<&Bound<'_, PyAny>>,
         out: Option<Bound<'_, PyRays>>,
     ) -> PyResult<Py<PyRays>> {
-        let PyTracer {
-            tracer, scratch, ..
-        } = self;
-        trace_rays(py, tracer, scratch, warm_start, progress, out)
+        let tracer = self.read();
+        scratch(&self.scratch, |scratch| {
+            trace_rays(py, &tracer, scratch, warm_start, progress, out)
+        })
     }
 
     /// Every stationary path of every ray of the scene (not only the one the default start
     /// reaches), in parallel with the GIL released, as `Rays` with `arrival`, `kink` and
     /// `complete`: one entry per stationary path, ordered by time within its triple, and one
-    /// `no_path` (a proof) or `not_converged` entry per triple that has none.
-    fn trace_stationary(&self, py: Python<'_>) -> PyResult<PyRays> {
-        let tracer = &self.tracer;
-        let scene = self.inner_scene();
-        let rays = py
-            .detach(|| tracer.trace_stationary())
-            .map_err(|e| scene_error(py, &e.into()))?;
+    /// `no_path` (a proof) or `not_converged` entry per triple that has none. Ctrl-C stops it.
+    /// `progress`: as `trace`'s, counting the triples searched.
+    #[pyo3(signature = (*, progress = None))]
+    fn trace_stationary(
+        &self,
+        py: Python<'_>,
+        progress: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyRays> {
+        let tracer = self.read();
+        let scene = tracer.scene();
+        let total = scene.num_rays();
+        check_memory(
+            &format!("trace_stationary: {total} rays"),
+            Table::bytes(total, width(scene), false, scene.amplitudes().is_some()),
+        )?;
+        let progress = Progress::new(py, progress, total)?;
+        let done = AtomicUsize::new(0);
+        let count = |n: usize| {
+            done.fetch_add(n, Ordering::Relaxed);
+        };
+        let (stop, mut shown, mut reported) = (Stop::new(), 0, Ok(()));
+        let rays = interruptible(
+            py,
+            &stop,
+            || tracer.trace_stationary_with(&count, Some(&stop)),
+            || {
+                let now = done.load(Ordering::Relaxed);
+                if let Some(progress) = &progress
+                    && reported.is_ok()
+                    && now > shown
+                {
+                    reported = progress.report(now, shown, total);
+                    shown = now;
+                }
+            },
+        )?
+        .map_err(|e| scene_error(py, &e.into()))?;
+        if let Some(progress) = &progress {
+            if reported.is_ok() && shown < total {
+                reported = progress.report(total, shown, total);
+            }
+            reported.and(progress.close())?;
+        }
         let table = py.detach(|| stationary_table(scene, &rays));
         Ok(table.finish(py, scene))
     }
@@ -189,43 +239,44 @@ impl PyTracer {
     /// One ray of path `path` (index or name) between any two points.
     #[pyo3(signature = (source, receiver, path = None))]
     fn solve(
-        &mut self,
+        &self,
         py: Python<'_>,
         source: &Bound<'_, PyAny>,
         receiver: &Bound<'_, PyAny>,
         path: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyRay> {
-        let (source, receiver, path) = self.ray_arguments(py, source, receiver, path)?;
-        let record = self
-            .tracer
-            .solve(source, receiver, path, &mut self.workspace);
-        let scene = self.tracer.scene();
-        let ws = &self.workspace;
-        let amplitude = self.tracer.amplitude(path, &record, ws);
-        Ok(PyRay::from_record(
-            py,
-            scene,
-            &record,
-            ws.points(),
-            ws.media(),
-            amplitude.as_ref(),
-        ))
+        let tracer = self.read();
+        let scene = tracer.scene();
+        let (source, receiver, path) = ray_arguments(py, scene, source, receiver, path)?;
+        scratch(&self.workspace, |ws| {
+            let record = tracer.solve(source, receiver, path, ws);
+            let amplitude = tracer.amplitude(path, &record, ws);
+            Ok(PyRay::from_record(
+                py,
+                scene,
+                &record,
+                ws.points(),
+                ws.media(),
+                amplitude.as_ref(),
+            ))
+        })
     }
 
     /// The travel time of one ray (NaN without one): `solve` without building a `Ray`.
     #[pyo3(signature = (source, receiver, path = None))]
     fn time(
-        &mut self,
+        &self,
         py: Python<'_>,
         source: &Bound<'_, PyAny>,
         receiver: &Bound<'_, PyAny>,
         path: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<f64> {
-        let (source, receiver, path) = self.ray_arguments(py, source, receiver, path)?;
-        let record = self
-            .tracer
-            .solve(source, receiver, path, &mut self.workspace);
-        Ok(record.time)
+        let tracer = self.read();
+        let scene = tracer.scene();
+        let (source, receiver, path) = ray_arguments(py, scene, source, receiver, path)?;
+        Ok(scratch(&self.workspace, |ws| {
+            tracer.solve(source, receiver, path, ws).time
+        }))
     }
 
     /// The complex amplitude of one ray of path `path` (index or name) between any two points
@@ -235,13 +286,15 @@ impl PyTracer {
     /// is the same number, with its parts and the reason it has none.
     #[pyo3(signature = (source, receiver, path = None))]
     fn amplitude(
-        &mut self,
+        &self,
         py: Python<'_>,
         source: &Bound<'_, PyAny>,
         receiver: &Bound<'_, PyAny>,
         path: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Complex64> {
-        if self.inner_scene().amplitudes().is_none() {
+        let tracer = self.read();
+        let scene = tracer.scene();
+        if scene.amplitudes().is_none() {
             return Err(argument_error(
                 py,
                 "amplitudes",
@@ -249,15 +302,11 @@ impl PyTracer {
                  ({\"source\": \"point\"}, \"axisymmetric\" or \"line\")",
             ));
         }
-        let (source, receiver, path) = self.ray_arguments(py, source, receiver, path)?;
+        let (source, receiver, path) = ray_arguments(py, scene, source, receiver, path)?;
         let mut amplitude = None;
-        self.tracer.solve_with_amplitude(
-            source,
-            receiver,
-            path,
-            &mut self.workspace,
-            &mut amplitude,
-        );
+        scratch(&self.workspace, |ws| {
+            tracer.solve_with_amplitude(source, receiver, path, ws, &mut amplitude);
+        });
         let none = Complex64::new(f64::NAN, f64::NAN);
         Ok(amplitude.map_or(none, |a| a.value))
     }
@@ -268,26 +317,24 @@ impl PyTracer {
     /// things with the `set_*` calls, ask again.
     #[pyo3(signature = (source, receiver, path = None))]
     fn gradient(
-        &mut self,
+        &self,
         py: Python<'_>,
         source: &Bound<'_, PyAny>,
         receiver: &Bound<'_, PyAny>,
         path: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyGradient> {
-        let (source, receiver, path) = self.ray_arguments(py, source, receiver, path)?;
-        let record = self
-            .tracer
-            .solve_with_gradient(
-                source,
-                receiver,
-                path,
-                &mut self.workspace,
-                &mut self.gradient,
-            )
-            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-        let scene = self.tracer.scene();
-        let gradient = record.status.has_time().then_some(&self.gradient);
-        PyGradient::new(py, scene, &record, gradient)
+        let tracer = self.read();
+        let scene = tracer.scene();
+        let (source, receiver, path) = ray_arguments(py, scene, source, receiver, path)?;
+        scratch(&self.workspace, |ws| {
+            scratch(&self.gradient, |gradient| {
+                let record = tracer
+                    .solve_with_gradient(source, receiver, path, ws, gradient)
+                    .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+                let gradient = record.status.has_time().then_some(&*gradient);
+                PyGradient::new(py, scene, &record, gradient)
+            })
+        })
     }
 
     /// Solves one ray of path `path` between any two points and returns how its points move
@@ -297,23 +344,24 @@ impl PyTracer {
     /// `RuntimeError` at a caustic, where the points do not move smoothly.
     #[pyo3(signature = (source, receiver, path = None))]
     fn point_sensitivities(
-        &mut self,
+        &self,
         py: Python<'_>,
         source: &Bound<'_, PyAny>,
         receiver: &Bound<'_, PyAny>,
         path: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyPointSensitivities> {
-        let (source, receiver, path) = self.ray_arguments(py, source, receiver, path)?;
-        let record = self
-            .tracer
-            .solve(source, receiver, path, &mut self.workspace);
-        let scene = self.tracer.scene();
-        if !record.status.has_time() {
-            return PyPointSensitivities::new(py, scene, &record, None);
-        }
-        let sens = PointSensitivities::of_solved(scene, path, &self.workspace)
-            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-        PyPointSensitivities::new(py, scene, &record, Some(&sens))
+        let tracer = self.read();
+        let scene = tracer.scene();
+        let (source, receiver, path) = ray_arguments(py, scene, source, receiver, path)?;
+        scratch(&self.workspace, |ws| {
+            let record = tracer.solve(source, receiver, path, ws);
+            if !record.status.has_time() {
+                return PyPointSensitivities::new(py, scene, &record, None);
+            }
+            let sens = PointSensitivities::of_solved(scene, path, ws)
+                .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+            PyPointSensitivities::new(py, scene, &record, Some(&sens))
+        })
     }
 
     /// The derivatives of the times of `rays` (from `trace`, `trace_stationary` or
@@ -321,25 +369,29 @@ impl PyTracer {
     /// points and leg media in parallel with the GIL released, the same numbers as
     /// `gradient` and the command-line tool's `"derivatives": true`.
     fn gradients(&self, py: Python<'_>, rays: &Bound<'_, PyRays>) -> PyResult<PyGradients> {
-        PyGradients::of_rays(py, self.tracer.scene(), rays.get())
+        PyGradients::of_rays(py, self.read().scene(), rays.get())
     }
 
     /// Rays of path `path` between `sources[i]` and `receivers[i]` (arrays of shape `(n, 2)`),
     /// in parallel with the GIL released, as `Rays` (their `source` and `receiver` hold `i`).
+    /// Ctrl-C stops it; `MemoryError` when the rays would not fit.
     #[pyo3(signature = (sources, receivers, path = None))]
     fn solve_pairs(
-        &mut self,
+        &self,
         py: Python<'_>,
         sources: &Bound<'_, PyAny>,
         receivers: &Bound<'_, PyAny>,
         path: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyRays> {
-        let path = match path {
-            Some(p) => self.path_index(py, p)?,
-            None => 0,
-        };
-        let sources = points_arg(py, "sources", sources)?;
-        let receivers = points_arg(py, "receivers", receivers)?;
+        let tracer = self.read();
+        let scene = tracer.scene();
+        let path = path_index(py, scene, path)?;
+        // Each pair: its two points, and its ray's row of the table.
+        let per_row = 32
+            + Table::bytes(1, width(scene), false, scene.amplitudes().is_some())
+                .unwrap_or(u64::MAX);
+        let sources = points_arg(py, "sources", sources, per_row)?;
+        let receivers = points_arg(py, "receivers", receivers, 16)?;
         if sources.len() != receivers.len() {
             return Err(argument_error(
                 py,
@@ -351,77 +403,78 @@ impl PyTracer {
                 ),
             ));
         }
-        let scene = self.tracer.scene();
         for (i, (&s, &r)) in sources.iter().zip(&receivers).enumerate() {
             scene.check_solve(s, r, path).map_err(|e| {
                 let key = format!("{}s[{i}]", e.key);
                 scene_error(py, &SceneError::new(key, e.message))
             })?;
         }
-        let tracer = &self.tracer;
-        let table = py.detach(|| pairs_table(tracer, &sources, &receivers, path));
+        let stop = Stop::new();
+        let table = interruptible(
+            py,
+            &stop,
+            || pairs_table(&tracer, &sources, &receivers, path, &stop),
+            || {},
+        )?;
         Ok(table.finish(py, scene))
     }
 
     /// Every stationary path of path `path` between two points, ordered by time (a `Ray`
     /// each, with its `arrival` index and, on `vertex` paths, its `kink`). Returns the list
     /// and whether the search was complete (with `True`, an empty list proves there is none).
+    /// Ctrl-C stops it.
     #[pyo3(signature = (source, receiver, path = None))]
     fn stationary_paths(
-        &mut self,
+        &self,
         py: Python<'_>,
         source: &Bound<'_, PyAny>,
         receiver: &Bound<'_, PyAny>,
         path: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<(Vec<PyRay>, bool)> {
-        let (source, receiver, path) = self.ray_arguments(py, source, receiver, path)?;
-        let tracer = &self.tracer;
-        let out = &mut self.arrivals;
-        let search = py
-            .detach(|| tracer.stationary_paths(source, receiver, path, out))
+        let tracer = self.read();
+        let scene = tracer.scene();
+        let (source, receiver, path) = ray_arguments(py, scene, source, receiver, path)?;
+        scratch(&self.arrivals, |out| {
+            let stop = Stop::new();
+            let search = interruptible(
+                py,
+                &stop,
+                || stop.run(|| tracer.stationary_paths(source, receiver, path, out)),
+                || {},
+            )?
             .map_err(|e| scene_error(py, &e.into()))?;
-        let scene = self.tracer.scene();
-        let rays = self
-            .arrivals
-            .iter()
-            .enumerate()
-            .map(|(i, a)| PyRay::from_arrival(py, scene, i, a))
-            .collect();
-        Ok((rays, search.complete))
+            let rays = out
+                .iter()
+                .enumerate()
+                .map(|(i, a)| PyRay::from_arrival(py, scene, i, a))
+                .collect();
+            Ok((rays, search.complete))
+        })
     }
 
     /// Moves source `index` to `point`, checked as `sources[index]` of a scene file (a
     /// refused move leaves the tracer as it was). Cheap: nothing is rebuilt.
-    fn set_source(
-        &mut self,
-        py: Python<'_>,
-        index: usize,
-        point: &Bound<'_, PyAny>,
-    ) -> PyResult<()> {
+    fn set_source(&self, py: Python<'_>, index: usize, point: &Bound<'_, PyAny>) -> PyResult<()> {
         let p = point_arg(py, &format!("sources[{index}]"), point)?;
-        self.tracer
+        self.write(py)
             .set_source(index, p)
             .map_err(|e| scene_error(py, &e))
     }
 
     /// Moves receiver `index` to `point`, checked as `receivers[index]`. Cheap.
-    fn set_receiver(
-        &mut self,
-        py: Python<'_>,
-        index: usize,
-        point: &Bound<'_, PyAny>,
-    ) -> PyResult<()> {
+    fn set_receiver(&self, py: Python<'_>, index: usize, point: &Bound<'_, PyAny>) -> PyResult<()> {
         let p = point_arg(py, &format!("receivers[{index}]"), point)?;
-        self.tracer
+        self.write(py)
             .set_receiver(index, p)
             .map_err(|e| scene_error(py, &e))
     }
 
     /// Moves every receiver: `points` of shape `(n, 2)`, `n` the scene's receivers. Moves
     /// are checked one by one; a refused one raises, and the receivers before it stay moved.
-    fn set_receivers(&mut self, py: Python<'_>, points: &Bound<'_, PyAny>) -> PyResult<()> {
-        let points = points_arg(py, "receivers", points)?;
-        let n = self.inner_scene().receivers().len();
+    fn set_receivers(&self, py: Python<'_>, points: &Bound<'_, PyAny>) -> PyResult<()> {
+        let points = points_arg(py, "receivers", points, 16)?;
+        let mut tracer = self.write(py);
+        let n = tracer.scene().receivers().len();
         if points.len() != n {
             return Err(argument_error(
                 py,
@@ -430,52 +483,60 @@ impl PyTracer {
             ));
         }
         for (i, p) in points.into_iter().enumerate() {
-            self.tracer
-                .set_receiver(i, p)
-                .map_err(|e| scene_error(py, &e))?;
+            tracer.set_receiver(i, p).map_err(|e| scene_error(py, &e))?;
         }
         Ok(())
     }
 
     /// Gives interface `interface` (a name or an index) new vertices, `points` of shape
     /// `(n, 2)`, checked as `interfaces.NAME.points` of a scene file (a refused change leaves
-    /// the tracer as it was). Rebuilds what depends on the interfaces.
+    /// the tracer as it was). Rebuilds what depends on the interfaces. `MemoryError` when
+    /// that would not fit.
     fn set_interface_points(
-        &mut self,
+        &self,
         py: Python<'_>,
         interface: &Bound<'_, PyAny>,
         points: &Bound<'_, PyAny>,
     ) -> PyResult<()> {
-        let index = self.interface_index(py, interface)?;
-        let name = &self.inner_scene().interfaces()[index].name;
-        let points = points_arg(py, &format!("interfaces.{name}.points"), points)?;
-        self.tracer
+        let (index, name) = {
+            let tracer = self.read();
+            let scene = tracer.scene();
+            let index = named_index(py, "interface", interface, scene.interfaces().len(), |n| {
+                scene.interface_index(n)
+            })?;
+            (index, scene.interfaces()[index].name.clone())
+        };
+        let key = format!("interfaces.{name}.points");
+        let points = points_arg(py, &key, points, BYTES_PER_VERTEX)?;
+        self.write(py)
             .set_interface_points(index, &points)
             .map_err(|e| scene_error(py, &e))
     }
 
     /// Gives medium `medium` (a name or an index) the speed `speed`.
     fn set_medium_speed(
-        &mut self,
+        &self,
         py: Python<'_>,
         medium: &Bound<'_, PyAny>,
         speed: f64,
     ) -> PyResult<()> {
-        let index = self.medium_index(py, medium)?;
-        self.tracer
+        let mut tracer = self.write(py);
+        let index = medium_index(py, tracer.scene(), medium)?;
+        tracer
             .set_medium_speed(index, speed)
             .map_err(|e| scene_error(py, &e))
     }
 
     /// Gives medium `medium` (a name or an index) the refractive index `index`.
     fn set_medium_index(
-        &mut self,
+        &self,
         py: Python<'_>,
         medium: &Bound<'_, PyAny>,
         index: f64,
     ) -> PyResult<()> {
-        let medium = self.medium_index(py, medium)?;
-        self.tracer
+        let mut tracer = self.write(py);
+        let medium = medium_index(py, tracer.scene(), medium)?;
+        tracer
             .set_medium_index(medium, index)
             .map_err(|e| scene_error(py, &e))
     }
@@ -484,17 +545,17 @@ impl PyTracer {
     /// ordered by time, as a list of dicts with `source`, `receiver`, `steps` (as in the
     /// scene: `{"reflect": name}`), `media`, `status`, `time`, `points`, `iterations`,
     /// `complete`; with `"amplitudes"` also `amplitude`, `spreading`, `coefficient`,
-    /// `attenuation_db` and `amplitude_reason` (as on a `Ray`).
+    /// `attenuation_db` and `amplitude_reason` (as on a `Ray`). Ctrl-C stops it.
     fn search<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
-        search_list(py, &self.tracer)
+        search_list(py, &self.read())
     }
 
     /// Every arrival that reaches a receiver with an amplitude (each `converged` ray of the
     /// scene's paths and arrival of its search), as a dict of numpy arrays: `source`,
     /// `receiver`, `order` (interactions, uint32), `time` (float64) and `amplitude`
     /// (complex128): what `impulse_response`, `pressure` and `eigenray.plotting.echogram` sum.
-    fn echoes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
-        response::echoes(py, &self.tracer)
+    fn echoes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        response::echoes(py, &self.read())
     }
 
     /// The impulse response of every (source, receiver), as float64 `[sources, receivers,
@@ -511,7 +572,7 @@ impl PyTracer {
         duration: Option<f64>,
         taps: Option<usize>,
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
-        response::impulse_response(py, &self.tracer, rate, duration, taps)
+        response::impulse_response(py, &self.read(), rate, duration, taps)
     }
 
     /// The coherent pressure of every (source, receiver) at `frequency` (default: the
@@ -523,7 +584,7 @@ impl PyTracer {
         py: Python<'py>,
         frequency: Option<f64>,
     ) -> PyResult<Bound<'py, PyArray2<Complex64>>> {
-        response::pressure(py, &self.tracer, frequency)
+        response::pressure(py, &self.read(), frequency)
     }
 
     /// The transmission loss `−20 log10(|p| · 4π)` in dB of every (source, receiver) at
@@ -535,6 +596,13 @@ impl PyTracer {
         py: Python<'py>,
         frequency: Option<f64>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        response::transmission_loss_db(py, &self.tracer, frequency)
+        response::transmission_loss_db(py, &self.read(), frequency)
     }
+}
+
+/// The index of a medium of `scene` given by name or index.
+fn medium_index(py: Python<'_>, scene: &Scene, medium: &Bound<'_, PyAny>) -> PyResult<usize> {
+    named_index(py, "medium", medium, scene.media().len(), |name| {
+        scene.medium_index(name)
+    })
 }

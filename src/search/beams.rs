@@ -11,7 +11,7 @@ use crate::trace::{
     Arrival, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls, Tracer,
 };
 
-use super::{ArrivalCount, SearchArrival, SearchLimits, SearchProgress};
+use super::{Control, SearchArrival, SearchProgress};
 
 /// What one source's tree gives: its arrivals and what it did.
 pub(super) struct SourceTree {
@@ -26,9 +26,7 @@ impl Tracer {
     pub(super) fn beam_trees(
         &self,
         options: &SearchOptions,
-        limits: &SearchLimits,
-        listed: &ArrivalCount,
-        progress: &(dyn Fn(SearchProgress) + Sync),
+        control: &Control<'_>,
     ) -> Vec<SourceTree> {
         let scene = self.scene();
         let walls = if options.reflect {
@@ -39,23 +37,17 @@ impl Tracer {
         (0..scene.sources().len())
             .into_par_iter()
             .map_init(MirrorScratch::default, |scratch, source| {
-                self.beam_tree(options, limits, listed, progress, &walls, source, scratch)
+                self.beam_tree(options, control, &walls, source, scratch)
             })
             .collect()
     }
 
     /// The beam tree of source `source`: its reflect-only arrivals (the direct ray included),
     /// `converged` ones and, when the search asks, `obstructed` ones.
-    #[expect(
-        clippy::too_many_arguments,
-        reason = "the search's settings, its shared counters, the walls, the source, scratch"
-    )]
     fn beam_tree(
         &self,
         options: &SearchOptions,
-        limits: &SearchLimits,
-        listed: &ArrivalCount,
-        progress: &(dyn Fn(SearchProgress) + Sync),
+        control: &Control<'_>,
         walls: &MirrorWalls,
         source: usize,
         scratch: &mut MirrorScratch,
@@ -63,6 +55,15 @@ impl Tracer {
         let scene = self.scene();
         let s = scene.sources()[source];
         let mut arrivals = Vec::new();
+        if control.stopped() {
+            return SourceTree {
+                arrivals,
+                stats: MirrorStats {
+                    stopped: true,
+                    ..MirrorStats::default()
+                },
+            };
+        }
         // No medium at the source: no path at all (a proof).
         let Some(medium) = self.source_medium(false, s) else {
             return SourceTree {
@@ -78,23 +79,24 @@ impl Tracer {
             max_time: options.time_limit(),
             slowness: scene.media()[medium].slowness,
             obstructed: options.obstructed,
-            max_beams: limits.beams,
+            max_beams: control.limits.beams,
         };
         let stats = walls.arrivals(
             &search,
             scratch,
             &mut |p: MirrorPath<'_>| {
-                if !listed.take(1) {
+                if !control.listed.take(1) {
                     return false;
                 }
                 arrivals.push(beam_arrival(walls, source, medium, p));
                 true
             },
             &mut |beams| {
-                progress(SearchProgress {
+                (control.progress)(SearchProgress {
                     beams,
                     ..SearchProgress::default()
-                })
+                });
+                !control.stopped()
             },
         );
         SourceTree { arrivals, stats }

@@ -12,11 +12,12 @@
 //!   `vertex` the edge-held arrivals of reflect-only ones through polylines with vertices,
 //!   each searched completely per pair (as [`Tracer::stationary_paths`] does, at most
 //!   [`MAX_STATIONARY_STEPS`](crate::limits::MAX_STATIONARY_STEPS) steps), every prefix
-//!   pruned where no medium or no time allows a path. It counts sequences and tuples.
+//!   pruned where no medium or no time allows a path. It counts sequences and the work of
+//!   their complete searches.
 //!
-//! Limits count the work actually done ([`SearchLimits`]): a source's tree that reaches its
-//! limit of beams, a pair's walk that reaches its limit of work, or a search that reaches its
-//! limit of arrivals stops there, and every arrival of the pairs it leaves short says
+//! Limits count the work actually done ([`SearchLimits`], and the scene's `solver.max_work`
+//! per pair's walk): a source's tree that reaches its limit of beams, a pair's walk that
+//! spends its budget, or a search that reaches its limit of arrivals stops there, and every arrival of the pairs it leaves short says
 //! `complete: false`. A search is refused up front only where its table of pairs cannot be
 //! allocated ([`SearchError::TooLarge`]).
 
@@ -28,6 +29,7 @@ use rayon::prelude::*;
 use std::fmt;
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use crate::control::Stop;
 pub use crate::scene::SearchOptions;
 use crate::scene::{Step, StepKind};
 use crate::trace::{Arrival, Status, Tracer};
@@ -56,10 +58,6 @@ pub const MAX_SEARCH_BEAMS: u64 = 1 << 28;
 /// Arrivals a search may list before it stops: a few gigabytes of results.
 pub const MAX_SEARCH_ARRIVALS: u64 = 1 << 24;
 
-/// Work one pair's walk over sequences with refractions may do before it stops: sequences
-/// visited plus the tuples of their complete searches.
-pub const MAX_PAIR_WORK: u64 = 1 << 26;
-
 /// Tuples (and assignments solved) of the complete search of one sequence between one pair,
 /// beyond which that search gives up and its pair says `complete: false`.
 const SEARCH_TUPLES: usize = 1 << 20;
@@ -70,24 +68,23 @@ const SEARCH_TUPLES: usize = 1 << 20;
 pub const PAIR_BYTES: usize = std::mem::size_of::<PairRecord>();
 
 /// The limits of a search's work: what it does before it stops and says `complete: false`
-/// on the pairs it leaves short. The one place a budget plugs in.
+/// on the pairs it leaves short. With the scene's `solver.max_work` (the budget of each
+/// pair's walk over sequences with refractions, in the complete search's work units, one
+/// more per sequence visited), the one place a budget plugs in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SearchLimits {
     /// Beams per source's tree.
     pub beams: u64,
     /// Arrivals over the whole search.
     pub arrivals: u64,
-    /// Sequences and tuples per pair's walk.
-    pub work: u64,
 }
 
 impl Default for SearchLimits {
-    /// [`MAX_SEARCH_BEAMS`], [`MAX_SEARCH_ARRIVALS`], [`MAX_PAIR_WORK`].
+    /// [`MAX_SEARCH_BEAMS`], [`MAX_SEARCH_ARRIVALS`].
     fn default() -> SearchLimits {
         SearchLimits {
             beams: MAX_SEARCH_BEAMS,
             arrivals: MAX_SEARCH_ARRIVALS,
-            work: MAX_PAIR_WORK,
         }
     }
 }
@@ -101,7 +98,8 @@ pub struct SearchReport {
     pub beams: u64,
     /// Paths the trees validated (receivers in a beam and within the time bound).
     pub leaves: u64,
-    /// Sequences and tuples the walks visited, over all pairs.
+    /// Work the walks did over all pairs: sequences visited plus the work units of their
+    /// complete searches (as `solver.max_work` counts them).
     pub work: u64,
     /// Pairs whose search stopped at a limit (their arrivals say `complete: false`).
     pub incomplete_pairs: usize,
@@ -145,6 +143,23 @@ impl fmt::Display for SearchError {
 }
 
 impl std::error::Error for SearchError {}
+
+/// What every part of one search shares: its limits, its count of arrivals, its progress
+/// and its stop request.
+#[derive(Clone, Copy)]
+struct Control<'a> {
+    limits: &'a SearchLimits,
+    listed: &'a ArrivalCount,
+    progress: &'a (dyn Fn(SearchProgress) + Sync),
+    stop: Option<&'a Stop>,
+}
+
+impl Control<'_> {
+    /// Whether the search was asked to stop.
+    fn stopped(&self) -> bool {
+        self.stop.is_some_and(Stop::requested)
+    }
+}
 
 /// What the search keeps per pair.
 #[derive(Clone, Copy, Debug, Default)]
@@ -200,12 +215,15 @@ impl Tracer {
     /// As [`search_with`](Self::search_with).
     pub fn search(&self) -> Result<Vec<SearchArrival>, SearchError> {
         Ok(self
-            .search_with(&SearchLimits::default(), &|_| {})?
+            .search_with(&SearchLimits::default(), &|_| {}, None)?
             .arrivals)
     }
 
-    /// [`search`](Self::search) within `limits`, with everything the search did
-    /// ([`SearchReport`]); `progress` hears of the work as it is done, from the worker threads.
+    /// [`search`](Self::search) within `limits` (and each pair's walk within the scene's
+    /// `solver.max_work`), with everything the search did ([`SearchReport`]); `progress` hears
+    /// of the work as it is done, from the worker threads. When `stop` is requested (from
+    /// another thread), the trees and walks under way stop and those not begun are skipped:
+    /// the result is then short (the caller that asked discards it).
     ///
     /// Reflect-only sequences go through the beam tree, one per source in parallel, shared by
     /// its receivers: each segment of each reflecting interface is a wall, each node an image
@@ -227,7 +245,7 @@ impl Tracer {
     ///     "search": { "max_time": 3 }
     /// }"#).unwrap();
     /// let tracer = Tracer::new(&scene).unwrap();
-    /// let report = tracer.search_with(&SearchLimits::default(), &|_| {}).unwrap();
+    /// let report = tracer.search_with(&SearchLimits::default(), &|_| {}, None).unwrap();
     /// assert_eq!(report.incomplete_pairs, 0);
     /// assert!(report.arrivals.iter().all(|a| a.arrival.time <= 3.0 && a.complete));
     /// assert!(report.arrivals.iter().any(|a| a.steps.len() >= 4));
@@ -240,6 +258,7 @@ impl Tracer {
         &self,
         limits: &SearchLimits,
         progress: &(dyn Fn(SearchProgress) + Sync),
+        stop: Option<&Stop>,
     ) -> Result<SearchReport, SearchError> {
         let scene = self.scene();
         let options = scene.search().ok_or(SearchError::NoSearch)?;
@@ -262,8 +281,14 @@ impl Tracer {
             limit: limits.arrivals,
         };
         let mut report = SearchReport::default();
-        let trees = self.beam_trees(options, limits, &listed, progress);
-        let walks = self.walks(options, limits, &listed, progress);
+        let control = Control {
+            limits,
+            listed: &listed,
+            progress,
+            stop,
+        };
+        let trees = self.beam_trees(options, &control);
+        let walks = self.walks(options, &control);
         let mut arrivals = Vec::new();
         for (source, tree) in trees.into_iter().enumerate() {
             report.beams += tree.stats.beams;

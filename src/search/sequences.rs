@@ -23,18 +23,20 @@
 //!   the receiver. The bound holds for every extension of the prefix, so a prefix whose bound
 //!   exceeds `max_time` (by more than its round-off) is pruned with everything below it.
 //!
-//! The work, counted against the limit per pair, is one per sequence visited plus the tuples
-//! of each complete search. A pair whose walk stops at that limit, or at
+//! The work, counted against the scene's `solver.max_work` per pair, is one per sequence
+//! visited plus the work units of each complete search (what that budget counts: points moved
+//! by Newton steps and weighed in bounds); each complete search gets what is left of it. A pair whose walk stops at that limit, or at
 //! [`MAX_STATIONARY_STEPS`] with longer sequences allowed and still possible, or whose
 //! complete search of some sequence is itself incomplete, says `complete: false`.
 
 use rayon::prelude::*;
 
+use crate::control::within;
 use crate::geom::{Aabb, Point};
 use crate::scene::{MAX_STATIONARY_STEPS, SearchOptions, Step, StepKind};
 use crate::trace::{Arrival, SearchBudget, Sequence, Status, Tracer};
 
-use super::{ArrivalCount, SEARCH_TUPLES, SearchArrival, SearchLimits, SearchProgress};
+use super::{ArrivalCount, Control, SEARCH_TUPLES, SearchArrival, SearchProgress};
 
 /// A set of media as bits (media beyond 128 are not told apart: [`MediaSets`] then keeps
 /// every set full).
@@ -159,7 +161,7 @@ pub(super) struct PairWalk {
     pub arrivals: Vec<SearchArrival>,
     /// Whether the walk covered every sequence it had to.
     pub complete: bool,
-    /// Sequences visited plus tuples of their complete searches.
+    /// Sequences visited plus the work units of their complete searches.
     pub work: u64,
 }
 
@@ -198,12 +200,10 @@ impl Tracer {
     pub(super) fn walks(
         &self,
         options: &SearchOptions,
-        limits: &SearchLimits,
-        listed: &ArrivalCount,
-        progress: &(dyn Fn(SearchProgress) + Sync),
+        control: &Control<'_>,
     ) -> Vec<(usize, PairWalk)> {
         let scene = self.scene();
-        let walk = Walk::new(self, options, limits, listed);
+        let walk = Walk::new(self, options, control.listed);
         let nr = scene.receivers().len();
         let media: Vec<Option<usize>> = scene
             .sources()
@@ -218,8 +218,17 @@ impl Tracer {
             .map(|pair| {
                 let (source, receiver) = (pair / nr, pair % nr);
                 let medium = media[source].expect("a pair that needs the walk has a medium");
-                let found = walk.pair(source, receiver, medium);
-                progress(SearchProgress {
+                let found = if control.stopped() {
+                    PairWalk {
+                        arrivals: Vec::new(),
+                        complete: false,
+                        work: 0,
+                    }
+                } else {
+                    // The complete searches take the stop request from their thread.
+                    within(control.stop, || walk.pair(source, receiver, medium))
+                };
+                (control.progress)(SearchProgress {
                     pairs: 1,
                     ..SearchProgress::default()
                 });
@@ -230,12 +239,7 @@ impl Tracer {
 }
 
 impl<'a> Walk<'a> {
-    fn new(
-        tracer: &'a Tracer,
-        options: &'a SearchOptions,
-        limits: &SearchLimits,
-        listed: &'a ArrivalCount,
-    ) -> Walk<'a> {
+    fn new(tracer: &'a Tracer, options: &'a SearchOptions, listed: &'a ArrivalCount) -> Walk<'a> {
         let scene = tracer.scene();
         let mut choices = Vec::new();
         for &interface in &options.interfaces {
@@ -276,7 +280,7 @@ impl<'a> Walk<'a> {
             has_vertices,
             vertex_reflections,
             depth: options.step_limit().min(MAX_STATIONARY_STEPS),
-            max_work: limits.work,
+            max_work: scene.solver().max_work,
             listed,
         }
     }
@@ -407,7 +411,11 @@ impl PairState<'_> {
             steps: &self.steps,
             path: None,
         };
-        let budget = SearchBudget::tuples(SEARCH_TUPLES);
+        let left = walk.max_work.saturating_sub(self.out.work);
+        let budget = SearchBudget {
+            tuples: SEARCH_TUPLES,
+            work: usize::try_from(left).unwrap_or(usize::MAX),
+        };
         let outcome = walk.tracer.stationary_of(
             sequence,
             None,
@@ -417,7 +425,7 @@ impl PairState<'_> {
             budget,
             &mut self.found,
         );
-        self.out.work += outcome.tuples as u64;
+        self.out.work += outcome.work as u64;
         self.out.complete &= outcome.complete;
         for a in self.found.drain(..) {
             let kept = if refracts {

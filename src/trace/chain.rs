@@ -355,6 +355,7 @@ impl Tracer {
             sides,
             &rel,
             &e.len,
+            e.vanish,
             &points,
             &[j],
             &sol,

@@ -10,7 +10,7 @@
 //! interactions fall on one spot or a side is wrong; `obstructed` when only the crossing test
 //! fails.
 
-use crate::geom::{Aabb, Point, Segment, Vec2, vertex_side};
+use crate::geom::{Aabb, Point, Segment, Vec2, orient, vertex_side};
 use crate::problem::Pin;
 use crate::regions::Regions;
 use crate::scene::{Scene, SegmentRef, Step, StepKind};
@@ -159,7 +159,8 @@ impl Classifier {
     /// strictly inside their segments with no leg vanished (what the kernels give): the side
     /// test at each point, then the obstruction test. `sides` gives each step's kind and its
     /// segment's unit normal, `rel` the points relative to the source (source, interactions,
-    /// receiver), `len` the legs' lengths, `pts` the points and `seg` their segments.
+    /// receiver), `len` the legs' lengths, `vanish` the ray's vanishing threshold (see
+    /// [`leg_sides`]), `pts` the points and `seg` their segments.
     #[expect(
         clippy::too_many_arguments,
         reason = "the parts of a ray held in registers by the kernels"
@@ -172,12 +173,13 @@ impl Classifier {
         sides: impl Iterator<Item = (StepKind, Vec2)>,
         rel: &[Vec2],
         len: &[f64],
+        vanish: f64,
         pts: &[Point],
         seg: &[usize],
         sol: &Solution,
     ) -> RayRecord {
         for (i, (kind, n)) in sides.enumerate() {
-            let (a, b) = leg_sides(n, 1.0, &rel[i..i + 3], &len[i..i + 2]);
+            let (a, b) = leg_sides(n, vanish, &rel[i..i + 3], &len[i..i + 2]);
             if !sides_suit(kind, a, b) {
                 return RayRecord::untimed(Status::NoPath, Reason::WrongSide { step: i }, sol);
             }
@@ -329,47 +331,104 @@ pub(crate) fn lookup_media(
 /// on a vertex: the sum of the two segments' normals; next to a vanished leg: the other leg
 /// must lie on a side).
 fn wrong_side(scene: &Scene, steps: &[Step], nw: &NewtonWorkspace) -> Option<usize> {
-    let (k, e) = (steps.len(), &nw.eval);
-    let (seg, pin, rel, len) = (&nw.seg[..k], &nw.pin[..k], &e.rel[..k + 2], &e.len[..k + 1]);
-    for (i, step) in steps.iter().enumerate() {
-        let line = &scene.interfaces()[step.interface].polyline;
-        let j = seg[i];
-        let (near, legs) = (&rel[i..i + 3], &len[i..i + 2]);
-        let (a, b) = leg_sides(line.normal(j), 1.0, near, legs);
-        // At a vertex, each leg's side of the polyline there (see `vertex_side`).
-        let (a, b) = if pin[i] == Pin::Vertex {
-            let before = if j > 0 {
-                j - 1
-            } else {
-                line.num_segments() - 1
-            };
-            let (a0, b0) = leg_sides(line.normal(before), 1.0, near, legs);
-            let left = line.tangent(before).cross(line.tangent(j)) > 0.0;
-            (vertex_side(left, a0, a), vertex_side(left, b0, b))
+    (0..steps.len()).find(|&i| {
+        let sides = step_sides(scene, steps, nw, i);
+        match sides.gone {
+            // A vanished leg (an end point on the interface there) lies on both sides: the
+            // other leg must still lie on one.
+            [true, gone_b] => gone_b || sides.side[1] == 0.0,
+            [false, true] => sides.side[0] == 0.0,
+            [false, false] => !sides_suit(steps[i].kind, sides.side[0], sides.side[1]),
+        }
+    })
+}
+
+/// Whether the side test of step `step` ([`wrong_side`]) rests on a leg that [`leg_sides`]
+/// puts on neither side by its threshold (not a proof), the points in `nw`, `points` the
+/// path's points as classified (source, interactions, receiver). A leg whose far end lies
+/// exactly on the line of the step's segment (the source, the receiver or a held vertex
+/// there, by the exact orientation test; a free point on a segment of that line) runs along
+/// it exactly: that verdict is exact.
+pub(crate) fn side_undecided(
+    scene: &Scene,
+    steps: &[Step],
+    nw: &NewtonWorkspace,
+    points: &[Point],
+    step: usize,
+) -> bool {
+    let sides = step_sides(scene, steps, nw, step);
+    let line_of = |i: usize| &scene.interfaces()[steps[i].interface].polyline;
+    let (line, j) = (line_of(step), nw.seg[step]);
+    // The step's segment, and at a held vertex the one before it too.
+    let before = if j > 0 {
+        j - 1
+    } else {
+        line.num_segments() - 1
+    };
+    let held = nw.pin[step] == Pin::Vertex;
+    let lines = [line.segment(j), line.segment(if held { before } else { j })];
+    let on_line = |x: Point| lines.iter().any(|g| orient(g.start, g.end, x) == 0.0);
+    // The far end of leg `l` (0: from the point before, 1: to the point after) exactly on the
+    // step's line.
+    let exact = |l: usize| {
+        let far = if l == 0 {
+            step.checked_sub(1)
         } else {
-            (a, b)
+            Some(step + 1).filter(|&i| i < steps.len())
         };
-        let (la, lb) = (len[i], len[i + 1]);
-        // A vanished leg (an end point on the interface there) lies on both sides: the
-        // other leg must still lie on one.
-        let tiny = e.vanish;
-        let (gone_a, gone_b) = (la <= tiny, lb <= tiny);
-        if gone_a || gone_b {
-            let other_on_a_side = if gone_a {
-                !gone_b && b != 0.0
+        match far {
+            None => on_line(if l == 0 {
+                points[0]
             } else {
-                a != 0.0
-            };
-            if !other_on_a_side {
-                return Some(i);
+                points[steps.len() + 1]
+            }),
+            Some(i) if nw.pin[i] == Pin::Vertex => on_line(line_of(i).vertices()[nw.seg[i]]),
+            Some(i) => {
+                let g = line_of(i).segment(nw.seg[i]);
+                lines.iter().any(|l| {
+                    orient(l.start, l.end, g.start) == 0.0 && orient(l.start, l.end, g.end) == 0.0
+                })
             }
-            continue;
         }
-        if !sides_suit(step.kind, a, b) {
-            return Some(i);
-        }
+    };
+    (0..2).any(|l| !sides.gone[l] && sides.side[l] == 0.0 && !exact(l))
+}
+
+/// The legs of one interaction against its interface: see [`step_sides`].
+struct StepSides {
+    /// The source-side and receiver-side legs' sides ([`leg_sides`]; at a held vertex, see
+    /// [`vertex_side`]).
+    side: [f64; 2],
+    /// Whether each has vanished.
+    gone: [bool; 2],
+}
+
+/// The sides of the two legs of step `i` at the points in `nw`.
+fn step_sides(scene: &Scene, steps: &[Step], nw: &NewtonWorkspace, i: usize) -> StepSides {
+    let (k, e) = (steps.len(), &nw.eval);
+    let (rel, len) = (&e.rel[..k + 2], &e.len[..k + 1]);
+    let line = &scene.interfaces()[steps[i].interface].polyline;
+    let j = nw.seg[i];
+    let (near, legs) = (&rel[i..i + 3], &len[i..i + 2]);
+    let (a, b) = leg_sides(line.normal(j), e.vanish, near, legs);
+    // At a vertex, each leg's side of the polyline there (see `vertex_side`).
+    let (a, b) = if nw.pin[i] == Pin::Vertex {
+        let before = if j > 0 {
+            j - 1
+        } else {
+            line.num_segments() - 1
+        };
+        let (a0, b0) = leg_sides(line.normal(before), e.vanish, near, legs);
+        let left = line.tangent(before).cross(line.tangent(j)) > 0.0;
+        (vertex_side(left, a0, a), vertex_side(left, b0, b))
+    } else {
+        (a, b)
+    };
+    let tiny = e.vanish;
+    StepSides {
+        side: [a, b],
+        gone: [len[i] <= tiny, len[i + 1] <= tiny],
     }
-    None
 }
 
 /// A leg between two interactions has its end points on their interfaces, so it lies in the
@@ -521,25 +580,31 @@ fn meets_convex(p: Point, q: Point, hull: &[Point], pad: f64) -> bool {
     !axes.into_iter().any(separated)
 }
 
-/// A leg whose sine with the interface is below this runs along it, on neither side.
+/// A leg whose sine with the interface is below this runs along it, on neither side (or
+/// nearer it than the vanishing threshold, whichever is less: see [`leg_sides`]).
 pub(crate) const SIDE_MARGIN: f64 = 1e-10;
 
-/// Where the legs of an interaction lie against the normal `n` (of length `n_len`) of its
-/// interface there, from the points before, at and after it (`rel`, relative to the source)
-/// and the two legs' lengths (`len`): `(a, b)`, the source-side and receiver-side legs'
-/// components along `n`, zero for a leg within [`SIDE_MARGIN`] rad of the interface (it runs
-/// along it: on neither side).
+/// Where the legs of an interaction lie against the unit normal `n` of its interface there,
+/// from the points before, at and after it (`rel`, relative to the source) and the two legs'
+/// lengths (`len`): `(a, b)`, the source-side and receiver-side legs' components along `n`,
+/// zero for a leg that runs along the interface, on neither side: one within [`SIDE_MARGIN`]
+/// rad of it and nearer its line than `vanish` (the ray's vanishing threshold,
+/// [`Eval::vanish`](crate::problem::Eval): 1e-12 of the path's length plus the round-off of
+/// its coordinates, what the solve resolves). A leg that grazes its interface at a height
+/// above that, however small its angle, lies on its side (the grazing reflection of a source
+/// 1e-10 above a mirror). A zero component is a threshold's verdict, not a proof
+/// ([`side_undecided`]).
 #[inline(always)]
-pub(crate) fn leg_sides(n: Vec2, n_len: f64, rel: &[Vec2], len: &[f64]) -> (f64, f64) {
+pub(crate) fn leg_sides(n: Vec2, vanish: f64, rel: &[Vec2], len: &[f64]) -> (f64, f64) {
     let a = n.dot(rel[0] - rel[1]);
     let b = n.dot(rel[2] - rel[1]);
     let (la, lb) = (len[0], len[1]);
-    let a = if a.abs() <= SIDE_MARGIN * la * n_len {
+    let a = if a.abs() <= (SIDE_MARGIN * la).min(vanish) {
         0.0
     } else {
         a
     };
-    let b = if b.abs() <= SIDE_MARGIN * lb * n_len {
+    let b = if b.abs() <= (SIDE_MARGIN * lb).min(vanish) {
         0.0
     } else {
         b

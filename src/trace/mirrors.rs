@@ -12,9 +12,10 @@
 //! the beam's clip keeps the pair only where their corner is concave. At each node, each
 //! receiver in the beam gets the image method's path (the line from the image to the receiver
 //! meets the last wall's line, the line from the image before to that point the wall
-//! before's, …), validated as the classifier validates a ray: each point strictly inside its
-//! segment (a point exactly on a polyline's vertex is a `vertex` case, not a specular
-//! reflection), both legs of each reflection strictly on one side of its wall ([`leg_sides`],
+//! before's, …), validated as the classifier validates a ray: each point on its segment,
+//! strictly inside it except at an open end of its polyline (a path through an open end
+//! reflects there, as the complete search finds it; a point exactly on a vertex between two
+//! segments is a `vertex` case, not a specular reflection), both legs of each reflection strictly on one side of its wall ([`leg_sides`],
 //! [`sides_suit`]), no vanished leg between two reflections, and no leg crossing an interface
 //! strictly between its ends ([`Scene::first_crossing`] with the classifier's margin and the
 //! legs' own segments left out).
@@ -70,6 +71,9 @@ struct Wall {
     e: Vec2,
     /// The unit normal (the polyline's: the segment's tangent turned left).
     n: Vec2,
+    /// Whether `p`, and `q`, is an open end of the polyline (not a vertex between two of its
+    /// segments): a reflection may lie there.
+    open: [bool; 2],
 }
 
 impl Wall {
@@ -377,6 +381,10 @@ impl MirrorWalls {
                     q: s.end,
                     e: s.end - s.start,
                     n: line.normal(segment),
+                    open: [
+                        !line.is_closed() && segment == 0,
+                        !line.is_closed() && segment + 1 == line.num_segments(),
+                    ],
                 });
             }
         }
@@ -404,18 +412,19 @@ impl MirrorWalls {
 
     /// Every reflect-only sequence of 0..=`max_steps` walls from the source to each receiver
     /// whose path exists and arrives by `max_time`, reported to `found` in the order of the
-    /// tree's walk: each reflection point strictly inside its wall, both legs of each
-    /// reflection strictly on one side of it, no vanished leg between reflections, and
+    /// tree's walk: each reflection point strictly inside its wall or on an open end of its
+    /// polyline, both legs of each reflection strictly on one side of it, no vanished leg between reflections, and
     /// (unless `obstructed`, which lists obstructed paths too, with [`Status::Obstructed`] and
     /// [`Reason::Crosses`]) no leg crossing an interface of the scene strictly between its
     /// ends (the classifier's test). Sequence 0 is the direct ray. `found` returns `false` to
-    /// stop the search; `progress` hears of every [`PROGRESS_BEAMS`] beams.
+    /// stop the search; `progress` hears of every [`PROGRESS_BEAMS`] beams, and returns `false`
+    /// to stop it (a stop request).
     pub(crate) fn arrivals(
         &self,
         search: &MirrorSearch<'_>,
         scratch: &mut MirrorScratch,
         found: &mut impl FnMut(MirrorPath<'_>) -> bool,
-        progress: &mut impl FnMut(u64),
+        progress: &mut impl FnMut(u64) -> bool,
     ) -> MirrorStats {
         let mut stats = MirrorStats::default();
         let max_steps = search.max_steps.min(MAX_SEARCH_STEPS);
@@ -472,8 +481,9 @@ impl MirrorWalls {
                 continue;
             };
             stats.beams += 1;
-            if stats.beams % PROGRESS_BEAMS == 0 {
-                progress(PROGRESS_BEAMS);
+            if stats.beams % PROGRESS_BEAMS == 0 && !progress(PROGRESS_BEAMS) {
+                stats.stopped = true;
+                break;
             }
             if stats.beams > search.max_beams {
                 stats.beams -= 1;
@@ -684,8 +694,13 @@ impl Validation<'_, '_> {
             let d = to - node.image;
             let den = d.cross(wall.e);
             let u = (wall.p - node.image).cross(d) / den;
-            // Strictly inside the segment (NaN, for a leg along the line, fails too).
-            if !(u > 0.0 && u < 1.0) {
+            // Strictly inside the segment, or on an open end of its polyline: a path through
+            // an open end reflects there, as the complete search finds it, while one through a
+            // vertex between two segments is a `vertex` case (NaN, for a leg along the line,
+            // fails every test).
+            let inside =
+                (u > 0.0 && u < 1.0) || (u == 0.0 && wall.open[0]) || (u == 1.0 && wall.open[1]);
+            if !inside {
                 return None;
             }
             to = wall.at(u);
@@ -706,7 +721,7 @@ impl Validation<'_, '_> {
         rel.extend(points.iter().map(|&p| p - source));
         for i in 0..k {
             let n = self.walls[stack[i + 1].wall].n;
-            let (a, b) = leg_sides(n, 1.0, &rel[i..i + 3], &lens[i..i + 2]);
+            let (a, b) = leg_sides(n, vanish, &rel[i..i + 3], &lens[i..i + 2]);
             if !sides_suit(StepKind::Reflect, a, b) {
                 return None;
             }
@@ -809,7 +824,7 @@ mod tests {
                 });
                 true
             },
-            &mut |_| {},
+            &mut |_| true,
         );
         assert!(!stats.stopped);
     }
@@ -1393,11 +1408,11 @@ mod tests {
     }
 
     /// A receiver exactly on a beam's boundary: the path of two reflections between parallel
-    /// mirrors whose second point is a wall's end (exact in floating point) has no path; a
-    /// receiver just inside the beam has one (its time the image's distance), one just outside
-    /// none. The complete search says the same.
+    /// mirrors whose second point is a wall's end (exact in floating point) reflects there (a
+    /// path, as one exactly at an open end is); a receiver just inside the beam has one (its
+    /// time the image's distance), one just outside none. The complete search says the same.
     #[test]
-    fn a_path_through_a_wall_end_is_no_path() {
+    fn a_path_through_an_open_wall_end_reflects_there() {
         let doc = r#"{
             "media": { "air": { "speed": 1.0 } },
             "interfaces": { "high": { "points": [[0, 2], [4, 2]] },
@@ -1424,11 +1439,14 @@ mod tests {
             &mut out,
         );
         let two: Vec<&MirrorArrival> = out.iter().filter(|a| a.walls == [low, high]).collect();
-        assert_eq!(two.len(), 1, "{two:?}");
-        assert_eq!(two[0].receiver, 1);
-        // The source's image in `low`, then in `high`: (1, 5).
-        let expected = Point::new(1.0, 5.0).distance(receivers[1]);
-        assert!((two[0].time - expected).abs() <= 1e-15 * expected);
+        assert_eq!(two.len(), 2, "{two:?}");
+        for (a, r) in two.iter().zip([0, 1]) {
+            assert_eq!(a.receiver, r);
+            // The source's image in `low`, then in `high`: (1, 5).
+            let expected = Point::new(1.0, 5.0).distance(receivers[r]);
+            assert!((a.time - expected).abs() <= 1e-15 * expected);
+        }
+        assert_eq!(two[0].points[2], Point::new(4.0, 2.0));
         let tracer = Tracer::new(&scene).unwrap();
         let mut arrivals = Vec::new();
         for (r, &receiver) in receivers.iter().enumerate() {
@@ -1437,7 +1455,7 @@ mod tests {
                 .unwrap();
             assert_eq!(
                 arrivals.len(),
-                usize::from(r == 1),
+                usize::from(r < 2),
                 "receiver {r}: {arrivals:?}"
             );
         }

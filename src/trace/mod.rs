@@ -43,7 +43,7 @@ pub use complete::{Arrival, Kink, SearchOutcome, StationaryError};
 pub(crate) use flat::SegmentFrame;
 pub(crate) use mirrors::{MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls};
 pub use plan::Kernels;
-pub use result::{Ray, RayRecord, Reason, Status};
+pub use result::{Ray, RayRecord, Reason, Status, Threshold};
 
 use one_step::{OneStepStart, flat_status};
 use plan::{OneStepPath, PathPlan};

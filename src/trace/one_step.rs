@@ -107,8 +107,17 @@ impl OneStepPath {
         points.extend_from_slice(&[source, line.point_on(j, nw.s[0]), receiver]);
         let (rel, len) = (&nw.eval.rel[..3], &nw.eval.len[..2]);
         let sides = std::iter::once((step.kind, line.normal(j)));
-        cx.classifier
-            .free_points(scene, path, sides, rel, len, points, &[j], &sol)
+        cx.classifier.free_points(
+            scene,
+            path,
+            sides,
+            rel,
+            len,
+            nw.eval.vanish,
+            points,
+            &[j],
+            &sol,
+        )
     }
 
     /// The ray of a converged [`FlatRefraction::solve`] (its legs are on the sides a
@@ -206,7 +215,7 @@ pub(crate) fn flat_status(
     // side test always passes (checked in debug builds).
     debug_assert!({
         let rel = [Vec2::default(), p - source, receiver - source];
-        let (a, b) = super::classify::leg_sides(flat.normal(), 1.0, &rel, &sol.len);
+        let (a, b) = super::classify::leg_sides(flat.normal(), f64::INFINITY, &rel, &sol.len);
         super::classify::sides_suit(StepKind::Refract, a, b)
     });
     let solution = Solution {

@@ -18,14 +18,16 @@ pub enum Status {
     /// Time is stationary only with an interaction held on a polyline vertex (a kink: an
     /// edge-diffracted path, not a specular one).
     Vertex,
-    /// No such path exists: the sequence has no stationary path whose interactions lie inside
-    /// their interfaces with every leg on the side its step demands (a proof: where the
-    /// documented start leads to none, a complete search rules every one out).
+    /// No such path exists: the sequence has no stationary path whose interactions lie on
+    /// their interfaces with every leg on the side its step demands (a proof, to round-off:
+    /// where the documented start leads to none, a complete search rules every one out
+    /// without a threshold; where only a threshold could, the ray is
+    /// [`NotConverged`](Status::NotConverged) with [`Reason::Undecided`]).
     NoPath,
     /// The stationary path exists but a leg crosses another interface.
     Obstructed,
     /// The search for the sequence's stationary paths reached a limit before it could rule
-    /// one out.
+    /// one out, or ruled one out only by a threshold ([`Reason::Undecided`]).
     NotConverged,
 }
 
@@ -109,9 +111,74 @@ pub enum Reason {
     /// showed that a leg would reach its mirror from behind, so that no path exists.
     NoStationaryPath,
     /// The search for the sequence's stationary paths reached a limit (more steps than
-    /// [`MAX_STATIONARY_STEPS`](crate::limits::MAX_STATIONARY_STEPS), or its limit of tuples)
-    /// before it could rule out a path.
+    /// [`MAX_STATIONARY_STEPS`](crate::limits::MAX_STATIONARY_STEPS), its limit of tuples or
+    /// of work) before it could rule out a path.
     SearchLimit,
+    /// A search of the sequence found no stationary path, but a rule with a threshold, not
+    /// exact arithmetic, ruled out a candidate: a path may exist (a leg shorter or a grazing
+    /// angle smaller than the rule's threshold), so the answer is not a proof.
+    Undecided {
+        /// The rule that decided.
+        rule: Threshold,
+    },
+}
+
+/// A rule with a threshold that the complete search of a sequence
+/// ([`Tracer::stationary_paths`](crate::Tracer::stationary_paths)) may use to rule out a
+/// candidate where exact arithmetic cannot decide. A search that used one says so
+/// ([`SearchOutcome::undecided`](super::SearchOutcome::undecided)) and is not
+/// complete; a triple without a path then answers `not_converged` with
+/// [`Reason::Undecided`], never `no_path`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Threshold {
+    /// A leg not longer than the vanishing threshold (1e-12 of the path's length plus the
+    /// round-off of its coordinates) counted as vanished, the path collapsed (a slab thinner
+    /// than that, an end point that near an interface).
+    VanishedLeg,
+    /// A solve that stalled next to a leg shorter than 1e-3 of the path's length (1e-6 where
+    /// three interactions met) was taken to approach its collapse.
+    ShortLeg,
+    /// A solve that stalled with a leg whose sine with its interface's line is below 1e-7 was
+    /// taken to run along it.
+    Grazing,
+    /// A leg nearer its interface's line than the vanishing threshold counted as on neither
+    /// side of it.
+    Side,
+}
+
+impl Threshold {
+    /// Its name in every output format: `vanished_leg`, `short_leg`, `grazing`, `side`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Threshold::VanishedLeg => "vanished_leg",
+            Threshold::ShortLeg => "short_leg",
+            Threshold::Grazing => "grazing",
+            Threshold::Side => "side",
+        }
+    }
+}
+
+/// The rule in words, with its threshold.
+impl fmt::Display for Threshold {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Threshold::VanishedLeg => {
+                "a leg shorter than 1e-12 of the path's length counted as vanished"
+            }
+            Threshold::ShortLeg => {
+                "a stalled solve next to a leg shorter than 1e-3 of the path's length was taken \
+                 to collapse"
+            }
+            Threshold::Grazing => {
+                "a stalled solve with a leg within 1e-7 rad of its interface was taken to run \
+                 along it"
+            }
+            Threshold::Side => {
+                "a leg within 1e-12 of the path's length of its interface's line counted as on \
+                 neither side"
+            }
+        })
+    }
 }
 
 impl Reason {
@@ -172,8 +239,12 @@ impl fmt::Display for Reason {
                 f.write_str("a complete search of the sequence found no stationary path")
             }
             Reason::SearchLimit => f.write_str(
-                "the search for the sequence's stationary paths reached its limit (steps or \
-                 tuples)",
+                "the search for the sequence's stationary paths reached its limit (steps, \
+                 tuples or work)",
+            ),
+            Reason::Undecided { rule } => write!(
+                f,
+                "no stationary path found, but a threshold decided (not a proof): {rule}"
             ),
         }
     }

@@ -85,10 +85,17 @@ impl StraightPath {
         let nw = &ws.newton;
         let (rel, len) = (&nw.eval.rel[..k + 2], &nw.eval.len[..k + 1]);
         let sides = lines.iter().map(|l| (StepKind::Refract, l.normal()));
-        Some(
-            cx.classifier
-                .free_points(scene, path, sides, rel, len, points, &nw.seg[..k], &sol),
-        )
+        Some(cx.classifier.free_points(
+            scene,
+            path,
+            sides,
+            rel,
+            len,
+            nw.eval.vanish,
+            points,
+            &nw.seg[..k],
+            &sol,
+        ))
     }
 }
 

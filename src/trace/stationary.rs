@@ -11,25 +11,16 @@ use std::cell::Cell;
 
 use crate::geom::Point;
 use crate::regions::Regions;
-use crate::scene::{MAX_STATIONARY_STEPS, StepKind};
+use crate::scene::{FALLBACK_MAX_WORK, MAX_STATIONARY_STEPS, StepKind};
 
 use super::classify::Sequence;
 use super::complete::{self, Arrival, Hierarchy, SearchBudget, SequenceSearch};
 use super::{RayRecord, Reason, SearchOutcome, StationaryError, Status, Tracer, Workspace};
 
-/// What the default mode's search of one ray may do, beyond which it answers `not_converged`
-/// (`Reason::SearchLimit`): tuples (and assignments solved), and work, so that the search of a
-/// ray stays within about 10 ms, where a sequence over long polylines with many steps could
-/// otherwise take minutes.
-const FALLBACK_BUDGET: SearchBudget = SearchBudget {
-    tuples: 1 << 14,
-    work: FALLBACK_WORK,
-};
-
-/// The work (see [`SearchBudget`]) of the default mode's search of one ray: about 10 ms of
-/// one core, whatever the sequence, where its tuples alone allowed a second for a sequence
-/// of 12 reflections between two wavy walls of 50 segments each.
-const FALLBACK_WORK: usize = 1 << 18;
+/// Tuples (and assignments solved) the default mode's search of one ray visits at most,
+/// beyond which it answers `not_converged` (`Reason::SearchLimit`); its work is bounded by
+/// [`FALLBACK_MAX_WORK`] (about 10 ms of one core), or `solver.max_work` when that is less.
+const FALLBACK_TUPLES: usize = 1 << 14;
 
 thread_local! {
     /// Each thread's arrivals for the default mode's fallback, reused from ray to ray.
@@ -108,11 +99,20 @@ impl Tracer {
             source,
             source_medium,
             receiver,
-            SearchBudget::tuples(complete::MAX_TUPLES),
+            self.search_budget(),
             out,
         );
         self.arrival_amplitudes(&spec.steps, out);
         Ok(search)
+    }
+
+    /// The budget of one complete search with `"stationary": "all"` (and of one pair's in a
+    /// `search`): the tuples' limit, and `solver.max_work`.
+    pub(crate) fn search_budget(&self) -> SearchBudget {
+        SearchBudget {
+            tuples: complete::MAX_TUPLES,
+            work: work_units(self.scene.solver().max_work),
+        }
     }
 
     /// The medium at `source` when the media are looked up (`given`: they are not).
@@ -142,12 +142,7 @@ impl Tracer {
         out: &mut Vec<Arrival>,
     ) -> SearchOutcome {
         complete::recycle(out);
-        let mut stats = SearchOutcome {
-            complete: true,
-            tuples: 0,
-            solves: 0,
-            work: 0,
-        };
+        let mut stats = SearchOutcome::new();
         let k = sequence.steps.len();
         let mut held: [&Hierarchy; MAX_STATIONARY_STEPS];
         let hierarchies: &[&Hierarchy] = match sequence.steps.first() {
@@ -298,7 +293,10 @@ impl Tracer {
             source,
             if given { None } else { source_medium },
             receiver,
-            FALLBACK_BUDGET,
+            SearchBudget {
+                tuples: FALLBACK_TUPLES,
+                work: work_units(self.scene.solver().max_work.min(FALLBACK_MAX_WORK)),
+            },
             &mut arrivals,
         );
         let best = arrivals
@@ -331,17 +329,18 @@ impl Tracer {
                     Status::NotConverged
                 },
                 time: f64::NAN,
-                reason: Some(if stats.complete {
-                    Reason::NoStationaryPath
-                } else {
-                    Reason::SearchLimit
-                }),
+                reason: Some(stats.reason_without_arrivals()),
                 ..record
             },
         };
         FALLBACK.set(arrivals);
         answer
     }
+}
+
+/// `work` as a count of this machine's words (saturating).
+fn work_units(work: u64) -> usize {
+    usize::try_from(work).unwrap_or(usize::MAX)
 }
 
 /// The media of the legs of a sequence so far.

@@ -6,6 +6,8 @@
 //! output. Library cases call the API directly. `round2.rs` holds the second round of
 //! cases: work that must stay bounded, memory, and answers that must not be wrong.
 
+mod budgets;
+mod proofs;
 mod round2;
 
 use std::io::Read;

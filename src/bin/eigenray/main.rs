@@ -9,17 +9,18 @@ mod svg;
 
 use std::fmt::Write as _;
 use std::fs;
-use std::io::{self, Read, Write};
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use eigenray::{
     Batch, BatchOptions, RaySet, Scene, SceneError, SearchArrival, StationaryRays, Status, Tracer,
+    limits::{MAX_INPUT_BYTES, available_memory, read_limited},
     spec::StationaryMode,
 };
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// Receivers of the demo scene by default.
 const DEMO_RECEIVERS: u64 = 500;
@@ -29,9 +30,6 @@ const DEMO_MAX_RECEIVERS: u64 = 10_000_000;
 const DEMO_SEED: u64 = 1;
 /// Where the demo writes its picture by default.
 const DEMO_SVG: &str = "eigenray-demo.svg";
-/// Largest scene file read: a scene document beyond it is refused before it fills the memory
-/// (100,000 interfaces of a few points each take about 10 MB).
-const MAX_INPUT_BYTES: u64 = 256 << 20;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -296,29 +294,6 @@ fn check_batch_memory(scene: &Scene, warm_start: bool) -> Result<(), Failure> {
     )))
 }
 
-/// Memory available to a new allocation, if known: Linux's `MemAvailable`, or less where the
-/// process's address space is limited (`ulimit -v`): the limit less what the process already
-/// maps.
-fn available_memory() -> Option<u64> {
-    let field = |text: &str, key: &str| -> Option<u64> {
-        let line = text.lines().find(|l| l.starts_with(key))?;
-        line[key.len()..].split_whitespace().next()?.parse().ok()
-    };
-    let info = fs::read_to_string("/proc/meminfo").ok()?;
-    let free = field(&info, "MemAvailable:")?.checked_mul(1024)?;
-    let limit = fs::read_to_string("/proc/self/limits")
-        .ok()
-        .and_then(|l| field(&l, "Max address space"));
-    let mapped = fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| field(&s, "VmSize:"))
-        .map_or(0, |kb| kb.saturating_mul(1024));
-    Some(match limit {
-        Some(limit) => free.min(limit.saturating_sub(mapped)),
-        None => free,
-    })
-}
-
 /// What `eigenray solve` found: one ray per triple, or every stationary path of each.
 enum Solved {
     /// `"stationary": "one"`.
@@ -474,30 +449,20 @@ fn search(tracer: &Tracer) -> Result<Vec<SearchArrival>, Failure> {
             have as f64 / 1e9
         )));
     }
-    let bar = std::io::IsTerminal::is_terminal(&io::stderr()).then(|| {
-        let bar = ProgressBar::new_spinner();
-        if let Ok(style) = ProgressStyle::with_template("{spinner} search: {pos} beams, {msg}") {
-            bar.set_style(style);
-        }
-        bar
-    });
+    let bar = Progress::new(None, "beams");
     let done = std::sync::atomic::AtomicUsize::new(0);
     let progress = |p: eigenray::search::SearchProgress| {
-        if let Some(bar) = &bar {
-            bar.inc(p.beams);
-            let pairs = done.fetch_add(p.pairs, std::sync::atomic::Ordering::Relaxed) + p.pairs;
-            if p.pairs > 0 {
-                bar.set_message(format!("{pairs} pairs searched for refractions"));
-            }
+        bar.inc(p.beams as usize);
+        let pairs = done.fetch_add(p.pairs, std::sync::atomic::Ordering::Relaxed) + p.pairs;
+        if p.pairs > 0 {
+            bar.message(format!(", {pairs} pairs searched for refractions"));
         }
     };
     let started = Instant::now();
     let report = tracer
-        .search_with(&eigenray::search::SearchLimits::default(), &progress)
+        .search_with(&eigenray::search::SearchLimits::default(), &progress, None)
         .map_err(|e| Failure::Input(format!("search: {e}")))?;
-    if let Some(bar) = bar {
-        bar.finish_and_clear();
-    }
+    bar.finish();
     let n = report.arrivals.len();
     let mut line = format!(
         "search: {n} {} in {:.3} s, {} beams",
@@ -506,7 +471,11 @@ fn search(tracer: &Tracer) -> Result<Vec<SearchArrival>, Failure> {
         report.beams
     );
     if report.work > 0 {
-        let _ = write!(line, ", {} sequences and tuples", report.work);
+        let _ = write!(
+            line,
+            ", {} units of work on refracting sequences",
+            report.work
+        );
     }
     match (options.max_steps, options.max_time) {
         (Some(k), Some(t)) => _ = write!(line, "; up to {k} steps and time {t}"),
@@ -530,53 +499,23 @@ fn search(tracer: &Tracer) -> Result<Vec<SearchArrival>, Failure> {
 }
 
 /// Every stationary path of every ray (`"stationary": "all"`), with a progress bar on standard
-/// error for many rays when it is a terminal; a path beyond the search's step limit is refused
-/// with its key.
+/// error when it is a terminal and the run is long; a path beyond the search's step limit is
+/// refused with its key.
 fn trace_stationary(tracer: &Tracer) -> Result<StationaryRays, Failure> {
-    let n = tracer.scene().num_rays();
-    let bar = progress_bar(n, STATIONARY_PROGRESS_RAYS);
-    let progress = |done: usize| {
-        if let Some(bar) = &bar {
-            bar.inc(done as u64);
-        }
-    };
+    let bar = Progress::new(Some(tracer.scene().num_rays()), "rays searched");
+    let progress = |done: usize| bar.inc(done);
     let rays = tracer
         .trace_stationary_with_progress(&progress)
-        .map_err(|e| Failure::scene(e.into()))?;
-    if let Some(bar) = bar {
-        bar.finish_and_clear();
-    }
-    Ok(rays)
+        .map_err(|e| Failure::scene(e.into()));
+    bar.finish();
+    rays
 }
 
-/// Rays searched for every stationary path in about a second: beyond this a progress bar is
-/// shown.
-const STATIONARY_PROGRESS_RAYS: usize = 20_000;
-
-/// A progress bar on standard error over `n` rays when there are at least `threshold` and it is
-/// a terminal.
-fn progress_bar(n: usize, threshold: usize) -> Option<ProgressBar> {
-    (n >= threshold && std::io::IsTerminal::is_terminal(&io::stderr())).then(|| {
-        let bar = ProgressBar::new(n as u64);
-        if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} rays, {eta} left") {
-            bar.set_style(style);
-        }
-        bar
-    })
-}
-
-/// Rays expected to take about a second to solve: beyond this a progress bar is shown.
-const PROGRESS_RAYS: usize = 1_000_000;
-
-/// Solves every ray; a progress bar on standard error for big batches when it is a terminal.
+/// Solves every ray; a progress bar on standard error when it is a terminal and the run is
+/// long.
 fn trace(tracer: &Tracer, warm_start: bool) -> Result<Batch, Failure> {
-    let n = tracer.scene().num_rays();
-    let bar = progress_bar(n, PROGRESS_RAYS);
-    let progress = |done: usize| {
-        if let Some(bar) = &bar {
-            bar.inc(done as u64);
-        }
-    };
+    let bar = Progress::new(Some(tracer.scene().num_rays()), "rays");
+    let progress = |done: usize| bar.inc(done);
     let opts = BatchOptions {
         warm_start,
         progress: Some(&progress),
@@ -584,35 +523,95 @@ fn trace(tracer: &Tracer, warm_start: bool) -> Result<Batch, Failure> {
     };
     // Where the memory check could not tell (no `MemAvailable`, or other processes took it
     // meanwhile), the allocation itself fails with a message instead of an abort.
-    let batch = tracer.try_trace_batch(&opts).map_err(Failure::scene)?;
-    if let Some(bar) = bar {
-        bar.finish_and_clear();
+    let batch = tracer.try_trace_batch(&opts).map_err(Failure::scene);
+    bar.finish();
+    batch
+}
+
+/// How long a run goes before its progress is shown.
+const PROGRESS_AFTER: Duration = Duration::from_millis(500);
+
+/// The progress of a long run on standard error, whatever its size: a bar over its rays (a
+/// spinner where they are not counted), with the time spent and left, redrawn a few times a
+/// second. Nothing is drawn unless standard error is a terminal, nor before the run has gone
+/// on for [`PROGRESS_AFTER`] (a quick run leaves no trace).
+struct Progress {
+    /// The bar, hidden until shown.
+    bar: ProgressBar,
+    /// Set when the run is over: the thread that shows the bar stops waiting.
+    done: std::sync::Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl Progress {
+    /// The progress of a run over `total` rays (`None`: not counted), described by `what`.
+    fn new(total: Option<usize>, what: &str) -> Progress {
+        let bar = match total {
+            Some(n) => ProgressBar::with_draw_target(Some(n as u64), ProgressDrawTarget::hidden()),
+            None => ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden()),
+        };
+        let template = match total {
+            Some(_) => {
+                format!("{{bar:40}} {{pos}}/{{len}} {what}, {{elapsed}} spent, {{eta}} left")
+            }
+            None => format!("{{spinner}} {{pos}} {what}{{msg}}, {{elapsed}} spent"),
+        };
+        if let Ok(style) = ProgressStyle::with_template(&template) {
+            bar.set_style(style);
+        }
+        let done = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        if std::io::IsTerminal::is_terminal(&io::stderr()) {
+            let (bar, done) = (bar.clone(), std::sync::Arc::clone(&done));
+            std::thread::spawn(move || {
+                let start = Instant::now();
+                while start.elapsed() < PROGRESS_AFTER {
+                    if done.load(std::sync::atomic::Ordering::Relaxed) {
+                        return;
+                    }
+                    std::thread::sleep(Duration::from_millis(20));
+                }
+                if !done.load(std::sync::atomic::Ordering::Relaxed) {
+                    bar.set_draw_target(ProgressDrawTarget::stderr());
+                    bar.enable_steady_tick(Duration::from_millis(200));
+                }
+            });
+        }
+        Progress { bar, done }
     }
-    Ok(batch)
+
+    /// `n` more rays (or what the run counts) done.
+    fn inc(&self, n: usize) {
+        self.bar.inc(n as u64);
+    }
+
+    /// What else the run tells, after its count.
+    fn message(&self, text: String) {
+        self.bar.set_message(text);
+    }
+
+    /// The run is over: the bar, if shown, is cleared.
+    fn finish(self) {
+        self.done.store(true, std::sync::atomic::Ordering::Relaxed);
+        self.bar.finish_and_clear();
+    }
 }
 
 /// The scene file as text: `-` is standard input; errors name the path.
 fn read_scene_text(path: &Path) -> Result<String, Failure> {
     let name = display_name(path);
-    // At most one byte more than the limit is read: enough to know that it is exceeded.
-    let read = |r: &mut dyn Read| {
-        let mut buf = Vec::new();
-        r.take(MAX_INPUT_BYTES + 1)
-            .read_to_end(&mut buf)
-            .map(|_| buf)
-    };
+    // At most one byte more than the limit is read: enough to know that it is exceeded (a
+    // scene document beyond it is refused before it fills the memory).
     let bytes = if path.as_os_str() == "-" {
-        read(&mut io::stdin().lock())
+        read_limited(&mut io::stdin().lock())
     } else {
-        fs::File::open(path).and_then(|mut f| read(&mut f))
+        fs::File::open(path).and_then(|mut f| read_limited(&mut f))
     }
     .map_err(|e| Failure::Input(format!("{name}: cannot read: {}", io_message(&e))))?;
-    if bytes.len() as u64 > MAX_INPUT_BYTES {
+    let Some(bytes) = bytes else {
         return Err(Failure::Input(format!(
             "{name}: larger than {} MiB, the largest scene file read",
             MAX_INPUT_BYTES >> 20
         )));
-    }
+    };
     let mut text = String::from_utf8(bytes).map_err(|e| {
         Failure::Input(format!(
             "{name}: not UTF-8 text (invalid byte at offset {})",

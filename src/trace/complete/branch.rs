@@ -41,9 +41,7 @@ impl Search<'_> {
             tuple.copy_from_slice(&stack[at..]);
             stack.truncate(at);
             self.stats.tuples += 1;
-            self.stats.work += k + 1;
-            if self.stats.tuples > self.budget.tuples || self.stats.work > self.budget.work {
-                self.stats.complete = false;
+            if self.over_budget(k + 1) {
                 return;
             }
             self.sc.places.clear();

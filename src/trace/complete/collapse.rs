@@ -1,8 +1,9 @@
 //! Collapsing legs and stalled solves: points pinned at a crossing, the subgradient test,
 //! restarts apart, and the thresholds of a stall.
 
-use crate::geom::Vec2;
+use crate::geom::{Vec2, orient};
 use crate::problem::Pin;
+use crate::trace::Threshold;
 
 use super::Search;
 use super::minimise::Settled;
@@ -45,8 +46,9 @@ impl Search<'_> {
     /// is smooth only away from collapsed legs: the shortest leg between two free points on
     /// crossing lines is pinned ([`pin`](Self::pin); the subgradient test then decides
     /// exactly). Without such a leg: next to a vanishing leg (within [`COLLAPSE`] of the
-    /// path's length), or with a leg along its interaction's line (within [`ALONG`]), no
-    /// stationary path ([`Settled::Degenerate`], by these thresholds); otherwise not settled.
+    /// path's length), or with a leg along its interaction's line (within [`ALONG`]), taken to
+    /// hold no stationary path ([`Settled::Threshold`]: by these thresholds, not a proof);
+    /// otherwise not settled.
     pub(super) fn stalled(&mut self, held: usize) -> Kinked {
         let k = self.g.k();
         let e = &self.sc.nw.eval;
@@ -67,10 +69,33 @@ impl Search<'_> {
             e.u[i].cross(e.tan[i]).abs() <= ALONG || e.u[i + 1].cross(e.tan[i]).abs() <= ALONG
         };
         let short = (0..=k).any(|j| e.len[j] <= COLLAPSE * total);
-        Kinked::Settled(if short || (0..k).any(along) {
-            Settled::Degenerate
-        } else {
+        Kinked::Settled(if short {
+            Settled::Threshold(Threshold::ShortLeg)
+        } else if !(0..k).any(along) {
             Settled::No
+        } else if self.along_exactly() {
+            Settled::Collapsed
+        } else {
+            Settled::Threshold(Threshold::Grazing)
+        })
+    }
+
+    /// Whether every leg that runs along its interaction's line (within [`ALONG`]) does so
+    /// exactly: the source or the receiver at its far end lies exactly on that line (by the
+    /// orientation test). Such a leg lies on neither side wherever its point is, or vanishes
+    /// onto the end (a collapse), so the assignment holds no stationary path.
+    fn along_exactly(&self) -> bool {
+        let (k, nw) = (self.g.k(), &self.sc.nw);
+        let e = &nw.eval;
+        let on = |i: usize, x: crate::geom::Point| {
+            let g = self.g.line(i).segment(nw.seg[i]);
+            orient(g.start, g.end, x) == 0.0
+        };
+        (0..k).all(|i| {
+            let a = e.u[i].cross(e.tan[i]).abs() <= ALONG;
+            let b = e.u[i + 1].cross(e.tan[i]).abs() <= ALONG;
+            (!a || (i == 0 && on(0, self.g.source)))
+                && (!b || (i + 1 == k && on(k - 1, self.g.receiver)))
         })
     }
 
@@ -101,10 +126,12 @@ impl Search<'_> {
     }
 
     /// Pins collapsing leg `j`: its two points to the crossing of their segments' lines, held
-    /// there while the others settle. Points held on vertices, a point already held by a
-    /// pinned neighbour (three points on one spot), or no crossing inside the segments
-    /// (points meeting along one line, where no side holds): no stationary path, by the rule
-    /// of [`COLLAPSE`].
+    /// there while the others settle. Where it cannot: a point held on a vertex (or by a pinned
+    /// neighbour) that the other reached, or no crossing inside the segments. Decided exactly
+    /// where it can be ([`collapse_onto_fixed`](Self::collapse_onto_fixed): the subgradient at
+    /// the held point; [`on_one_line`](Self::on_one_line): a leg along one line lies on no
+    /// side): no stationary path. Otherwise taken to hold none by the rule of [`COLLAPSE`] (or
+    /// of the vanishing threshold, for a leg that short): not a proof.
     pub(super) fn pin(&mut self, held: usize, j: usize) -> Kinked {
         let (a, b) = (j - 1, j);
         if self.pinned_points() & ((1 << a) | (1 << b)) != 0 && !self.smoothed {
@@ -114,13 +141,98 @@ impl Search<'_> {
         }
         let fixed = (held | self.pinned_points()) & ((1 << a) | (1 << b)) != 0;
         let Some([sa, sb]) = self.crossing(j).filter(|_| !fixed) else {
-            return Kinked::Settled(Settled::Degenerate);
+            let exact = if fixed {
+                self.collapse_onto_fixed(held | self.pinned_points(), j)
+            } else {
+                self.on_one_line(j)
+            };
+            if exact {
+                return Kinked::Settled(Settled::Collapsed);
+            }
+            if fixed
+                && self.moved_off < MAX_RESTARTS
+                && self.move_off(held | self.pinned_points(), j)
+            {
+                self.moved_off += 1;
+                return Kinked::Restarted;
+            }
+            if fixed && !self.smoothed {
+                // Not the minimum, or not decided: the smoothed time moves the points apart
+                // or decides.
+                self.smoothed = true;
+                return self.smooth_away(held);
+            }
+            let e = &self.sc.nw.eval;
+            return Kinked::Settled(Settled::Threshold(if e.len[j] <= e.vanish {
+                Threshold::VanishedLeg
+            } else {
+                Threshold::ShortLeg
+            }));
         };
         let nw = &mut self.sc.nw;
         (nw.s[a], nw.s[b]) = (sa, sb);
         (nw.pin[a], nw.pin[b]) = (Pin::Vertex, Pin::Vertex);
         self.pinned |= 1 << j;
         Kinked::Restarted
+    }
+
+    /// Whether the two segments of leg `j`'s points lie on one line (exactly): a leg between
+    /// them runs along it wherever the points are, on neither side of either, so the
+    /// assignment holds no stationary path.
+    fn on_one_line(&self, j: usize) -> bool {
+        let nw = &self.sc.nw;
+        let sa = self.g.line(j - 1).segment(nw.seg[j - 1]);
+        let sb = self.g.line(j).segment(nw.seg[j]);
+        orient(sa.start, sa.end, sb.start) == 0.0 && orient(sa.start, sa.end, sb.end) == 0.0
+    }
+
+    /// Whether the collapse of leg `j` onto a held point (in `fixed`) is exactly the minimum:
+    /// the run of vanished legs through it (at most three points on one spot) on one vertex,
+    /// the time rising from it in every direction the free points may move
+    /// ([`cluster_is_minimum`](Self::cluster_is_minimum)).
+    fn collapse_onto_fixed(&self, fixed: usize, j: usize) -> bool {
+        let [a, b] = self.vanished_run(j);
+        self.cluster_is_minimum(a, b, fixed)
+    }
+
+    /// The points `[a, b]` joined by the run of vanished legs through leg `j`.
+    fn vanished_run(&self, j: usize) -> [usize; 2] {
+        let (k, e) = (self.g.k(), &self.sc.nw.eval);
+        let gone = |l: usize| e.len[l] <= e.vanish;
+        let first = (1..=j).rev().take_while(|&l| gone(l)).last().unwrap_or(j);
+        let last = (j..k).take_while(|&l| gone(l)).last().unwrap_or(j);
+        [first - 1, last]
+    }
+
+    /// Where the run of vanished legs through leg `j` holds one free point on a held point's
+    /// vertex and the time falls as it moves off into its segment
+    /// ([`falls_off`](Self::falls_off)): moves it there, by the one of 10⁻¹ … 10⁻⁶ of the
+    /// path's length where the time is least. `false` when it cannot.
+    fn move_off(&mut self, fixed: usize, j: usize) -> bool {
+        let [a, b] = self.vanished_run(j);
+        let Some((i, sign)) = self.falls_off(a, b, fixed) else {
+            return false;
+        };
+        let k = self.g.k();
+        let total: f64 = self.sc.nw.eval.len[..=k].iter().sum();
+        let [lo, hi] = self.extent(i);
+        let from = self.sc.nw.s[i];
+        let mut best = (f64::INFINITY, from);
+        let mut delta = 0.1 * total;
+        for _ in 0..6 {
+            let sc = &mut *self.sc;
+            sc.s_try[..k].copy_from_slice(&sc.nw.s[..k]);
+            sc.s_try[i] = (from + sign * delta).clamp(lo, hi);
+            let nw = &sc.nw;
+            self.g
+                .evaluate(&sc.s_try, &nw.seg, &nw.pin, &mut sc.trial, false, false);
+            if sc.trial.time < best.0 {
+                best = (sc.trial.time, sc.s_try[i]);
+            }
+            delta *= 0.1;
+        }
+        self.sc.nw.s[i] = best.1;
+        best.1 != from
     }
 
     /// The other points settled with the pinned legs held: every pinned leg whose collapse is
@@ -136,7 +248,13 @@ impl Search<'_> {
                 continue;
             }
             let Some(kink) = self.kink_direction(j) else {
-                return Kinked::Settled(Settled::No);
+                // A neighbouring leg vanished too: exactly a collapse where every leg is
+                // zero (the source is the receiver, every point on it).
+                return Kinked::Settled(if total == 0.0 {
+                    Settled::Collapsed
+                } else {
+                    Settled::No
+                });
             };
             if kink.least <= 1.0 {
                 at_end |= kink.at_end;
@@ -156,7 +274,7 @@ impl Search<'_> {
             // The minimum over the segments has points at their ends.
             Kinked::Settled(Settled::Outside)
         } else {
-            Kinked::Settled(Settled::Degenerate)
+            Kinked::Settled(Settled::Collapsed)
         }
     }
 
@@ -380,8 +498,9 @@ mod tests {
         }
     }
 
-    /// Parallel segments have no crossing; a point already held by a vertex cannot be pinned
-    /// (no stationary path, by the rule).
+    /// Parallel segments have no crossing; a point already held by a vertex cannot be pinned,
+    /// and where the other is not on its vertex the collapse is not a proof (the smoothed time
+    /// takes over).
     #[test]
     fn parallel_or_held_points_do_not_pin() {
         let v = [
@@ -396,8 +515,9 @@ mod tests {
             assert_eq!(search.crossing(1), None);
             place(search, [0, 1], [0.5, 0.5]);
             assert_eq!(search.crossing(1), Some([1.0, 1.0]));
-            let degenerate = |k| matches!(k, super::Kinked::Settled(super::Settled::Degenerate));
-            assert!(degenerate(search.pin(0b01, 1)));
+            let proof = |k| matches!(k, super::Kinked::Settled(super::Settled::Collapsed));
+            assert!(!proof(search.pin(0b01, 1)));
+            assert!(search.smoothed);
             assert_eq!(search.pinned, 0);
         });
     }

@@ -1,6 +1,6 @@
 //! The exact solve of one assignment of segments (with its held vertices), and its arrival.
 
-use crate::geom::{Aabb, Segment};
+use crate::geom::{Aabb, Segment, orient};
 use crate::problem::Pin;
 use crate::solver::{Outcome, Solution};
 
@@ -8,7 +8,8 @@ use super::Search;
 use super::minimise::Settled;
 use super::place::Place;
 use super::result::{Arrival, Kink};
-use crate::trace::Status;
+use crate::trace::classify::side_undecided;
+use crate::trace::{Reason, Status, Threshold};
 
 impl Search<'_> {
     /// The assignment of segments `segs` with the points in the bit set `held` on the first
@@ -20,6 +21,10 @@ impl Search<'_> {
         out: &mut Vec<Arrival>,
     ) {
         let k = segs.len();
+        // Each choice's bound is work too (2^k of them a leaf).
+        if self.over_budget(k + 1) {
+            return;
+        }
         let is_held = |i: usize| held >> i & 1 == 1;
         self.sc.places.clear();
         for (i, &j) in segs.iter().enumerate() {
@@ -45,12 +50,11 @@ impl Search<'_> {
             }
             self.sc.places[i].interface = self.g.steps[i].interface;
         }
-        if self.pruned() {
+        if self.pruned() || self.consecutive_on_one_line(segs) {
             return;
         }
         self.stats.solves += 1;
-        if self.stats.solves > self.budget.tuples || self.stats.work > self.budget.work {
-            self.stats.complete = false;
+        if self.over_budget(0) {
             return;
         }
         let nw = &mut self.sc.nw;
@@ -71,50 +75,28 @@ impl Search<'_> {
         self.stats.work += (iterations + 1) * (k + 1);
         match settled {
             Settled::Yes => {}
-            Settled::Degenerate | Settled::Outside => return,
+            Settled::Collapsed | Settled::Outside => return,
+            Settled::Threshold(rule) => return self.undecided(rule),
             Settled::No => {
                 self.stats.complete = false;
                 return;
             }
         }
+        // Free points on their segments, ends included (the solve keeps them there, and
+        // takes a minimiser within round-off of an end to be at it).
+        for (i, &j) in segs.iter().enumerate() {
+            let line = self.g.line(i);
+            let s = self.sc.nw.s[i];
+            let on_segment = (line.start(j)..=line.start(j + 1)).contains(&s);
+            if !is_held(i) && !on_segment {
+                return;
+            }
+        }
+        let Some(kink) = self.held_kink(segs, held) else {
+            return;
+        };
         let nw = &self.sc.nw;
         let e = &nw.eval;
-        // Free points strictly inside their segments.
-        for (i, &j) in segs.iter().enumerate() {
-            let line = self.g.line(i);
-            let inside = nw.s[i] > line.start(j) && nw.s[i] < line.start(j + 1);
-            if !is_held(i) && !inside {
-                return;
-            }
-        }
-        // Held points: the one-sided derivatives bracket zero.
-        let w = self.g.slowness;
-        let mut kink = None;
-        for (i, &j) in segs.iter().enumerate() {
-            if !is_held(i) {
-                continue;
-            }
-            let line = self.g.line(i);
-            let before = if j > 0 {
-                j - 1
-            } else {
-                line.num_segments() - 1
-            };
-            let v = e.u[i] * w[i] - e.u[i + 1] * w[i + 1];
-            let (r_before, r_after) = (v.dot(line.tangent(before)), v.dot(line.tangent(j)));
-            let this = if r_before < 0.0 && r_after > 0.0 {
-                Kink::Minimum
-            } else if r_before > 0.0 && r_after < 0.0 {
-                Kink::Maximum
-            } else {
-                return;
-            };
-            kink = Some(match kink {
-                None => this,
-                Some(k) if k == this => this,
-                Some(_) => Kink::Mixed,
-            });
-        }
         let sol = Solution {
             outcome: if held == 0 {
                 Outcome::Converged
@@ -135,6 +117,19 @@ impl Search<'_> {
             &mut self.sc.points,
         );
         if !record.status.has_time() {
+            // A side or a vanished leg decided by a threshold is not a proof.
+            let rule = match record.reason {
+                Some(Reason::Coincident { .. }) => Some(Threshold::VanishedLeg),
+                Some(Reason::WrongSide { step })
+                    if side_undecided(self.g.scene, self.g.steps, nw, &self.sc.points, step) =>
+                {
+                    Some(Threshold::Side)
+                }
+                _ => None,
+            };
+            if let Some(rule) = rule {
+                self.undecided(rule);
+            }
             return;
         }
         let mut a = self.sc.spare.pop().unwrap_or_else(Arrival::empty);
@@ -154,6 +149,67 @@ impl Search<'_> {
         a.residual = record.residual;
         a.amplitude = None;
         out.push(a);
+    }
+
+    /// Whether two consecutive points of the assignment `segs` lie on segments of one line
+    /// (exactly, by the orientation test of both ends): the leg between them runs along it,
+    /// on neither side of either (or vanishes), so the assignment holds no stationary path.
+    fn consecutive_on_one_line(&self, segs: &[usize]) -> bool {
+        (1..segs.len()).any(|i| {
+            let a = self.g.line(i - 1).segment(segs[i - 1]);
+            let b = self.g.line(i).segment(segs[i]);
+            orient(a.start, a.end, b.start) == 0.0 && orient(a.start, a.end, b.end) == 0.0
+        })
+    }
+
+    /// A candidate ruled out by `rule`, a threshold: the search is not complete, and says why.
+    fn undecided(&mut self, rule: Threshold) {
+        self.stats.complete = false;
+        self.stats.undecided.get_or_insert(rule);
+    }
+
+    /// The kind of kink at the points of `held` (on the first vertices of their segments in
+    /// `segs`), the evaluation at the solved points in `self.sc.nw`: `None` when at some held
+    /// point the one-sided derivatives along its two segments do not bracket zero (no
+    /// stationary path holds it there), or are both zero to round-off (the time is smooth
+    /// there: the path is the interior one of either segment, which lists it at the segment's
+    /// end). A derivative zero to round-off on one side only brackets zero either way (the
+    /// kink is of the kind of the other side).
+    fn held_kink(&self, segs: &[usize], held: usize) -> Option<Option<Kink>> {
+        let (w, e) = (self.g.slowness, &self.sc.nw.eval);
+        let mut kink = None;
+        for (i, &j) in segs.iter().enumerate() {
+            if held >> i & 1 == 0 {
+                continue;
+            }
+            let line = self.g.line(i);
+            let before = if j > 0 {
+                j - 1
+            } else {
+                line.num_segments() - 1
+            };
+            let v = e.u[i] * w[i] - e.u[i + 1] * w[i + 1];
+            let slack = self.residual_round_off(i);
+            let sign = |r: f64| {
+                if r.abs() <= slack {
+                    0
+                } else {
+                    r.signum() as i32
+                }
+            };
+            let (r_before, r_after) = (v.dot(line.tangent(before)), v.dot(line.tangent(j)));
+            let this = match (sign(r_before), sign(r_after)) {
+                (-1, 1) | (0, 1) | (-1, 0) => Kink::Minimum,
+                (1, -1) | (0, -1) | (1, 0) => Kink::Maximum,
+                _ => return None,
+            };
+            kink = Some(match kink {
+                None => this,
+                Some(k) if k == this => this,
+                Some(_) => Kink::Mixed,
+            });
+        }
+        Some(kink)
     }
 }
 

@@ -1,7 +1,9 @@
 //! The damped Newton minimisation of the time over one assignment's segments.
 
+use crate::geom::orient;
 use crate::scene::MAX_STATIONARY_STEPS;
 use crate::solver::thomas;
+use crate::trace::Threshold;
 
 use super::Search;
 use super::collapse::Kinked;
@@ -13,9 +15,13 @@ const MAX_STEPS: usize = 200;
 pub(super) enum Settled {
     /// At the minimiser (to the tolerance or round-off).
     Yes,
-    /// At a minimiser where a leg vanished (no stationary path: the classifier's
-    /// `coincident`).
-    Degenerate,
+    /// At a minimiser where a leg vanished, decided exactly (the subgradient at a collapse
+    /// between two interactions, an end point exactly on its interaction's line): no
+    /// stationary path (the classifier's `coincident`).
+    Collapsed,
+    /// Taken to approach a minimiser where a leg vanishes or runs along its interface by a
+    /// rule with a threshold: no stationary path found, but not a proof.
+    Threshold(Threshold),
     /// At the minimum over the segments, with a point at an end of its segment that `T`
     /// pushes outwards: `T` being convex, no stationary point lies inside the segments.
     Outside,
@@ -53,6 +59,7 @@ impl Search<'_> {
         let (mut steps, mut budget, mut restarts) = (0, MAX_STEPS, 0);
         self.pinned = 0;
         self.smoothed = false;
+        self.moved_off = 0;
         loop {
             let nw = &mut self.sc.nw;
             self.g
@@ -68,7 +75,7 @@ impl Search<'_> {
                 Some(self.pin(held, j))
             } else if self.sc.nw.eval.vanished > 0 {
                 // The source or the receiver on an interaction's spot.
-                return (Settled::Degenerate, steps);
+                return (self.end_collapsed(), steps);
             } else if !self.sc.nw.eval.rmax.is_finite() {
                 return (Settled::No, steps);
             } else if self.residual(now) <= tol || k == 0 || now == (1 << k) - 1 {
@@ -120,18 +127,66 @@ impl Search<'_> {
         }))
     }
 
-    /// Whether one more Newton step from the settled points leaves every free point strictly
-    /// inside its segment: the minimiser of `T` on the segments' lines itself, not a point the
-    /// tolerance accepted next to a segment's end while the minimiser lies on or beyond it.
+    /// Whether one more Newton step from the settled points leaves every free point inside
+    /// its segment, ends included: the minimiser of `T` on the segments' lines itself, not a
+    /// point the tolerance accepted next to a segment's end while the minimiser lies beyond
+    /// it. A minimiser beyond an end by no more than the round-off of the parameters counts as
+    /// at that end (a path that reflects exactly at an open end, or at a vertex between two
+    /// segments on one line, is a path); the point is put there.
     fn minimiser_inside(&mut self, held: usize) -> bool {
         if !self.newton_direction(held) {
             return true;
         }
-        (0..self.g.k()).filter(|&i| held >> i & 1 == 0).all(|i| {
+        let inside = (0..self.g.k()).filter(|&i| held >> i & 1 == 0).all(|i| {
             let [lo, hi] = self.extent(i);
             let s = self.sc.nw.s[i] + self.sc.delta[i];
-            s > lo && s < hi
-        })
+            let slack = 16.0 * f64::EPSILON * (lo.abs() + hi.abs());
+            s >= lo - slack && s <= hi + slack
+        });
+        if inside {
+            // Points that the step would take past an end (to round-off) stay at it.
+            for i in (0..self.g.k()).filter(|&i| held >> i & 1 == 0) {
+                let [lo, hi] = self.extent(i);
+                let s = &mut self.sc.nw.s[i];
+                *s = s.clamp(lo, hi);
+            }
+        }
+        inside
+    }
+
+    /// The round-off of the residual of point `i` at the evaluation in `self.sc.nw`: a few
+    /// ulps of the slownesses, grown by the ratio of the path's length to its shorter leg (the
+    /// directions of the legs are differences of points). A residual this small is zero to
+    /// round-off.
+    pub(super) fn residual_round_off(&self, i: usize) -> f64 {
+        let (k, e, w) = (self.g.k(), &self.sc.nw.eval, self.g.slowness);
+        let total: f64 = e.len[..=k].iter().sum();
+        // (A vanished leg, whose direction does not count, is left out.)
+        let shorter = [e.len[i], e.len[i + 1]]
+            .into_iter()
+            .filter(|&l| l > e.vanish)
+            .fold(total, f64::min);
+        16.0 * f64::EPSILON * (w[i] + w[i + 1]) * (1.0 + total / shorter)
+    }
+
+    /// A leg to the source or the receiver vanished (within the vanishing threshold): exactly
+    /// a collapse when that end lies exactly on the line of its interaction's segment (the
+    /// exact orientation test), by the threshold otherwise (an end that near the line, whose
+    /// path may exist with a leg that short).
+    fn end_collapsed(&self) -> Settled {
+        let (k, e) = (self.g.k(), &self.sc.nw.eval);
+        let on_line = |i: usize, end: crate::geom::Point| {
+            let (line, j) = (self.g.line(i), self.sc.nw.seg[i]);
+            let seg = line.segment(j);
+            orient(seg.start, seg.end, end) == 0.0
+        };
+        let exact = (e.len[0] > e.vanish || on_line(0, self.g.source))
+            && (e.len[k] > e.vanish || on_line(k - 1, self.g.receiver));
+        if exact {
+            Settled::Collapsed
+        } else {
+            Settled::Threshold(Threshold::VanishedLeg)
+        }
     }
 
     /// The extent `[start, end]` of point `i`'s segment, in its polyline's parameter.
@@ -141,15 +196,16 @@ impl Search<'_> {
     }
 
     /// The points not in `fixed` that sit at an end of their segment with the residual
-    /// pushing them out of it.
+    /// pushing them out of it (beyond its round-off: a residual zero to round-off at an end
+    /// is a minimiser there).
     fn outward(&self, fixed: usize) -> usize {
         let nw = &self.sc.nw;
         (0..self.g.k())
             .filter(|&i| fixed >> i & 1 == 0)
             .filter(|&i| {
                 let [lo, hi] = self.extent(i);
-                let r = nw.eval.r[i];
-                (nw.s[i] <= lo && r > 0.0) || (nw.s[i] >= hi && r < 0.0)
+                let (r, slack) = (nw.eval.r[i], self.residual_round_off(i));
+                (nw.s[i] <= lo && r > slack) || (nw.s[i] >= hi && r < -slack)
             })
             .fold(0, |m, i| m | 1 << i)
     }
@@ -317,7 +373,7 @@ mod tests {
     /// of the two points to its segments: the solve ends at the minimum of the time over
     /// the segments that a brute force (nested ternary searches on the convex time) finds
     /// and says `Yes` where that minimum lies inside both segments (apart); it says `Outside`
-    /// or `Degenerate` where the minimum lies at an end or on a collapse.
+    /// or a collapse (exactly or by a threshold) where the minimum lies at an end or on one.
     #[test]
     fn the_solve_finds_the_brute_force_minimum() {
         let mut rng = SplitMix64(0x3a1c);
@@ -386,9 +442,9 @@ mod tests {
                         assert!((solved - best).abs() <= 1e-9 * best, "{what}");
                         seen[0] += 1;
                     }
-                    Settled::Outside | Settled::Degenerate => {
+                    Settled::Outside | Settled::Collapsed | Settled::Threshold(_) => {
                         assert_ne!(expected, Minimum::Inside, "{what}");
-                        seen[1 + matches!(settled, Settled::Degenerate) as usize] += 1;
+                        seen[1 + !matches!(settled, Settled::Outside) as usize] += 1;
                     }
                     Settled::No => panic!("not settled: {what}"),
                 }

@@ -30,22 +30,31 @@
 //!
 //! An assignment's solve is damped Newton on the analytic Hessian of `problem` with
 //! backtracking on `T` itself (convex there), each point kept on its segment (a point that `T`
-//! pushes out at an end stays there: the minimum then lies outside and no path is inside).
-//! It cannot be the solver's own loop, which moves points across vertices. Where two points
-//! collapse onto the crossing of their lines (`T` has a kink there), they are held there while
-//! the others settle, and the subgradient decides whether the collapse is the minimum (no
-//! path) or the points restart apart; where three points share one spot, the minimum of `T`
-//! with its kinks smoothed away decides. A solve that stalls next to a collapse that cannot be
-//! tested (points held on vertices, parallel lines; within [`COLLAPSE`] of the path's length),
-//! or with a leg whose sine with its segment's line is below [`ALONG`], is taken to approach a
-//! minimum that holds no stationary path: a rule with these thresholds, not a proof. Any other
-//! solve that does not settle marks the search incomplete.
+//! pushes out at an end, beyond the residual's round-off, stays there: the minimum then lies
+//! outside and no path is inside; a minimiser within the parameters' round-off of an end is at
+//! that end, a path). It cannot be the solver's own loop, which moves points across vertices.
+//! Where two points collapse onto the crossing of their lines (`T` has a kink there), they are
+//! held there while the others settle, and the subgradient decides whether the collapse is
+//! the minimum (no path) or the points restart apart; where points collapse onto a held vertex
+//! or three share one spot, the directional derivative of `T` off that vertex decides
+//! (`cluster.rs`), or the minimum of `T` with its kinks smoothed away moves them apart. Legs
+//! that run along their line wherever the points are (consecutive points on segments of one
+//! line, an end exactly on the line: exact orientation tests) rule their assignment out.
+//!
+//! What only a threshold decides is not a proof: a solve that stalls next to a collapse that
+//! cannot be tested (within [`COLLAPSE`] of the path's length), with a leg whose sine with its
+//! segment's line is below [`ALONG`], a leg below the vanishing threshold, or a side within
+//! it. Such a candidate is dropped, but the search says so: it is not complete, and its
+//! outcome names the rule ([`SearchOutcome::undecided`]), so that a triple without a path
+//! answers `not_converged` with that reason rather than `no_path`. Any other solve that does
+//! not settle marks the search incomplete too.
 //!
 //! [`COLLAPSE`]: collapse::COLLAPSE
 //! [`ALONG`]: collapse::ALONG
 
 mod bounds;
 mod branch;
+mod cluster;
 mod collapse;
 #[cfg(test)]
 mod fixture;
@@ -62,6 +71,7 @@ pub(crate) use hierarchy::Hierarchy;
 pub(crate) use listing::{finish, recycle, retain};
 pub use result::{Arrival, Kink, SearchOutcome, StationaryError};
 
+use crate::control::{self, Stop};
 use crate::geom::Point;
 use crate::problem::ProblemRef;
 use crate::scene::{MAX_STATIONARY_STEPS, Scene};
@@ -89,6 +99,7 @@ pub(crate) struct SearchBudget {
 
 impl SearchBudget {
     /// A budget of `tuples` tuples and no limit on work.
+    #[cfg(test)]
     pub(crate) fn tuples(tuples: usize) -> SearchBudget {
         SearchBudget {
             tuples,
@@ -146,6 +157,28 @@ struct Search<'a> {
     /// Whether the present solve has followed the smoothed time once
     /// ([`smooth_away`](Search::smooth_away)).
     smoothed: bool,
+    /// How many times the present solve moved a point off a vertex that a held point shares
+    /// ([`move_off`](Search::move_off)).
+    moved_off: usize,
+    /// The stop request of the job that runs the search ([`crate::control`]).
+    stop: Option<Stop>,
+}
+
+impl Search<'_> {
+    /// Counts `work` and tells whether the search must end here: its budget of tuples (and
+    /// solves) or of work is spent, or its job was asked to stop. The search is then not
+    /// complete. The one test of a search's limits.
+    fn over_budget(&mut self, work: usize) -> bool {
+        self.stats.work += work;
+        let spent = self.stats.tuples > self.budget.tuples
+            || self.stats.solves > self.budget.tuples
+            || self.stats.work > self.budget.work;
+        let over = spent || self.stop.as_ref().is_some_and(Stop::requested);
+        if over {
+            self.stats.complete = false;
+        }
+        over
+    }
 }
 
 /// Every stationary path of one sequence with given leg media, appended to `out` unsorted
@@ -156,10 +189,7 @@ pub(crate) fn search_sequence(
     stats: &mut SearchOutcome,
 ) {
     let done = searching(input, |search| search.run(out));
-    stats.complete &= done.complete;
-    stats.tuples += done.tuples;
-    stats.solves += done.solves;
-    stats.work += done.work;
+    stats.add(done);
 }
 
 /// Runs `f` on the search of `input` (with this thread's scratch, given back at the end);
@@ -187,14 +217,11 @@ fn searching(input: SequenceSearch<'_>, f: impl FnOnce(&mut Search<'_>)) -> Sear
         hierarchies: input.hierarchies,
         tolerance: input.tolerance,
         sc,
-        stats: SearchOutcome {
-            complete: true,
-            tuples: 0,
-            solves: 0,
-            work: 0,
-        },
+        stats: SearchOutcome::new(),
         pinned: 0,
         smoothed: false,
+        moved_off: 0,
+        stop: control::current(),
     };
     f(&mut search);
     let done = search.stats;
@@ -222,12 +249,7 @@ mod tests {
         ];
         let fixture = mirror(&v, Point::new(-0.5, 2.0), Point::new(0.5, 2.0));
         let run = |work: usize| {
-            let mut stats = SearchOutcome {
-                complete: true,
-                tuples: 0,
-                solves: 0,
-                work: 0,
-            };
+            let mut stats = SearchOutcome::new();
             let mut out = Vec::new();
             fixture.with_input(0, MAX_TUPLES, |mut input| {
                 input.budget.work = work;
@@ -255,10 +277,10 @@ mod tests {
         let fixture = mirror(&v, Point::new(-0.5, 2.0), Point::new(0.5, 2.0));
         let mut out = Vec::new();
         let start = SearchOutcome {
-            complete: true,
             tuples: 5,
             solves: 7,
             work: 11,
+            ..SearchOutcome::new()
         };
         let mut stats = start;
         fixture.with_input(0, MAX_TUPLES, |input| {

@@ -6,7 +6,7 @@ use crate::amplitude::Amplitude;
 use crate::geom::Point;
 use crate::scene::MAX_STATIONARY_STEPS;
 
-use crate::trace::{Reason, Status};
+use crate::trace::{Reason, Status, Threshold};
 
 /// How the time behaves at the held vertices of a `vertex` path.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -83,11 +83,14 @@ impl Arrival {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SearchOutcome {
     /// Whether every stationary path of the triple is listed: `false` when the search reached
-    /// its limit of tuples, or an assignment's solve did not settle (the list may then be
-    /// short). With `true`, an empty list says that the sequence has no stationary path: the
-    /// pruning is certain, and an assignment is ruled out by its solve, with the thresholds
-    /// of the module's documentation for solves that stall at a vanishing or grazing leg.
+    /// its limit of tuples or work, an assignment's solve did not settle, or a rule with a
+    /// threshold ruled out a candidate ([`undecided`](Self::undecided)): the list may then be
+    /// short. With `true`, an empty list is a proof that the sequence has no stationary path:
+    /// the pruning is certain, and every assignment is ruled out by its solve exactly (to
+    /// round-off).
     pub complete: bool,
+    /// The rule with a threshold that ruled out a candidate, if one did (the first).
+    pub undecided: Option<Threshold>,
     /// Tuples of hierarchy nodes visited.
     pub tuples: usize,
     /// Assignments solved.
@@ -95,6 +98,45 @@ pub struct SearchOutcome {
     /// Work done: the points its Newton steps moved (a step of `k` points counts `k + 1`),
     /// and `k + 1` for each tuple visited. What a search's work budget counts.
     pub work: usize,
+}
+
+impl SearchOutcome {
+    /// A search that has done nothing yet (complete until it finds otherwise).
+    pub fn new() -> SearchOutcome {
+        SearchOutcome {
+            complete: true,
+            undecided: None,
+            tuples: 0,
+            solves: 0,
+            work: 0,
+        }
+    }
+
+    /// Adds what another search did (of another sequence of media for the same triple).
+    pub fn add(&mut self, other: SearchOutcome) {
+        self.complete &= other.complete;
+        self.undecided = self.undecided.or(other.undecided);
+        self.tuples += other.tuples;
+        self.solves += other.solves;
+        self.work += other.work;
+    }
+
+    /// The reason of a triple without a stationary path: [`Reason::NoStationaryPath`] (a
+    /// proof) when the search is complete, [`Reason::Undecided`] when a threshold ruled out
+    /// a candidate, [`Reason::SearchLimit`] otherwise.
+    pub fn reason_without_arrivals(&self) -> Reason {
+        match (self.complete, self.undecided) {
+            (true, _) => Reason::NoStationaryPath,
+            (false, Some(rule)) => Reason::Undecided { rule },
+            (false, None) => Reason::SearchLimit,
+        }
+    }
+}
+
+impl Default for SearchOutcome {
+    fn default() -> Self {
+        SearchOutcome::new()
+    }
 }
 
 /// Why a search cannot run.

@@ -14,9 +14,11 @@ impl Search<'_> {
     /// Where several points collapse onto one spot, follows the minimum of the time with its
     /// kinks smoothed away (`|d| → √(|d|² + ε²)` on the legs between interactions, ε from
     /// 10⁻² down to 10⁻¹⁰ of the path's length; `T_ε` is convex and smooth, its minimisers
-    /// tend to `T`'s): where the collapsed legs stay below 10⁻⁶ of the path's length, the
-    /// collapse is the minimum (no stationary path); otherwise the points, now apart, go on
-    /// with `T` itself. Pins are cleared either way.
+    /// tend to `T`'s): where legs stay below 10⁻⁶ of the path's length, the collapse is taken
+    /// to be the minimum, exactly where the points sit on one vertex and the time rises from
+    /// it every way ([`cluster_is_minimum`](Self::cluster_is_minimum): no stationary path),
+    /// by that threshold otherwise (not a proof); where none does, the points, now apart, go
+    /// on with `T` itself. Pins are cleared either way.
     pub(super) fn smooth_away(&mut self, held: usize) -> Kinked {
         let k = self.g.k();
         let fixed = held;
@@ -27,6 +29,12 @@ impl Search<'_> {
         }
         self.pinned = 0;
         let total: f64 = self.sc.nw.eval.len[..=k].iter().sum();
+        if total == 0.0 {
+            // Every point on the source, which is the receiver: exactly a collapse.
+            return Kinked::Settled(Settled::Collapsed);
+        } else if !(total > 0.0 && total.is_finite()) {
+            return Kinked::Settled(Settled::No);
+        }
         let mut eps = 1e-2 * total;
         while eps >= 1e-10 * total {
             for _ in 0..60 {
@@ -37,12 +45,25 @@ impl Search<'_> {
             eps *= 0.1;
         }
         let len = self.smoothed_legs(0.0);
-        let apart = (1..k).all(|l| len[l] > 1e-6 * total);
-        if apart {
-            Kinked::Restarted
-        } else {
-            Kinked::Settled(Settled::Degenerate)
+        let collapsed = |l: usize| len[l] <= 1e-6 * total;
+        if !(1..k).any(collapsed) {
+            return Kinked::Restarted;
         }
+        // One run of collapsed legs on one vertex, its derivative positive every way: exactly
+        // the minimum. Otherwise the rule's threshold decided.
+        let first = (1..k).find(|&l| collapsed(l)).unwrap_or(1);
+        let last = (first..k)
+            .take_while(|&l| collapsed(l))
+            .last()
+            .unwrap_or(first);
+        let one_run = !(last + 1..k).any(collapsed);
+        Kinked::Settled(
+            if one_run && self.cluster_is_minimum(first - 1, last, fixed) {
+                Settled::Collapsed
+            } else {
+                Settled::Threshold(crate::trace::Threshold::ShortLeg)
+            },
+        )
     }
 
     /// The legs' lengths at the present points, those between interactions smoothed by
