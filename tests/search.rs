@@ -235,7 +235,7 @@ fn one_polyline_gives_the_arrivals_of_one_interface_per_wall() {
             let k = a.steps.len();
             a.arrival.points[1..=k]
                 .iter()
-                .any(|p| corners.iter().any(|c| [p.x, p.y] == *c))
+                .any(|p| corners.contains(&[p.x, p.y]))
         };
         let (cornered, walls): (Vec<SearchArrival>, Vec<SearchArrival>) =
             walls.into_iter().partition(|a| at_corner(a));
