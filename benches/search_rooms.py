@@ -185,7 +185,7 @@ def main():
         exact = exact_paths(r["corners"], r["sources"], r["receivers"])
         n_exact = sum(len(v) for v in exact.values())
         ours = {}
-        for s, rec, walls, status, t in listing[name]["list"]:
+        for s, rec, walls, status, t, _segments in listing[name]["list"]:
             ours.setdefault((s, rec), {})[tuple(int(w[1:]) for w in walls)] = (status, t)
         missing, extra, worst = [], [], 0.0
         for key, paths in exact.items():

@@ -1272,6 +1272,41 @@ impl Scene {
         hit
     }
 
+    /// [`first_crossing`](Self::first_crossing) for a leg `a–b` known to lie on the line
+    /// through `line` (points that hold it more exactly than its rounded ends, such as a beam's
+    /// image and the receiver mirrored back): which side of that line each segment's ends lie
+    /// on is decided by the exact orientation test, so that a leg through a vertex exactly is
+    /// found to touch it (the leg's own rounded ends may pass it by a hair).
+    pub(crate) fn first_crossing_on_line(
+        &self,
+        a: Point,
+        b: Point,
+        line: [Point; 2],
+        margin: f64,
+        own: [SegmentRef; 2],
+    ) -> Option<SegmentRef> {
+        let sbox = middle_box(a, b, margin);
+        let mut hit = None;
+        self.segment_bvh.any_near_segment_in(sbox, a, b, |i| {
+            let r = self.segments[i as usize];
+            let crossed = r != own[0] && r != own[1] && {
+                let Segment { start: p, end: q } = self.segment_ends[i as usize];
+                let (d, e) = (b - a, q - p);
+                let den = d.cross(e);
+                let t = (p - a).cross(e) / den;
+                den != 0.0
+                    && t > margin
+                    && t < 1.0 - margin
+                    && orient(line[0], line[1], p) * orient(line[0], line[1], q) <= 0.0
+            };
+            if crossed {
+                hit = Some(r);
+            }
+            crossed
+        });
+        hit
+    }
+
     /// [`first_crossing`](Self::first_crossing) among `candidates` only (scene segment
     /// indices, which must include every segment that can meet `a–b`, as
     /// [`segments_in`](Self::segments_in) of a box holding it gives): the first one listed

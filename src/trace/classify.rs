@@ -122,22 +122,14 @@ impl Classifier {
         if let Some(step) = interior.iter().position(|&l| l <= nw.eval.vanish) {
             return no_path(Reason::Coincident { step });
         }
-        // A point held where a leg to the source or receiver vanished must still be strictly
-        // inside a segment: at an open end there is no path, at a vertex it is a kink there.
-        let mut at_vertex = None;
-        for (i, step) in steps.iter().enumerate() {
-            if nw.pin[i] != Pin::Kink {
-                continue;
-            }
-            let line = &scene.interfaces()[step.interface].polyline;
-            let (s, j) = (nw.s[i], nw.seg[i]);
-            if s > line.start(j) && s < line.start(j + 1) {
-                continue;
-            }
-            if !line.is_closed() && (s <= 0.0 || s >= line.length()) {
-                return no_path(Reason::LeavesEnd { step: i });
-            }
-            at_vertex.get_or_insert(i);
+        // An interaction on the source or the receiver (the leg between them vanished): the
+        // path without it, which is no path of this sequence (it is listed once, as that one).
+        let ends = &nw.eval.len[..=k];
+        if k > 0 && ends[0] <= nw.eval.vanish {
+            return no_path(Reason::AtEnd { step: 0 });
+        }
+        if k > 0 && ends[k] <= nw.eval.vanish {
+            return no_path(Reason::AtEnd { step: k - 1 });
         }
         if let Some(step) = wrong_side(scene, steps, nw) {
             return no_path(Reason::WrongSide { step });
@@ -149,7 +141,7 @@ impl Classifier {
         if let Some(crossing) = crossing {
             return crossing.record(sol);
         }
-        if let Some(step) = nw.pin.iter().position(|p| *p == Pin::Vertex).or(at_vertex) {
+        if let Some(step) = nw.pin.iter().position(|p| *p == Pin::Vertex) {
             return RayRecord::timed(Status::Vertex, Some(Reason::AtVertex { step }), sol);
         }
         RayRecord::timed(Status::Converged, None, sol)

@@ -42,7 +42,7 @@
 //! validation alone decides. Where the side of a wall's line an image lies on is within that
 //! margin, the child's beam is the whole plane (no pruning below it).
 
-use crate::geom::{Aabb, Point, Vec2};
+use crate::geom::{Aabb, Point, Vec2, orient};
 use crate::scene::{MAX_SEARCH_STEPS, Scene, SegmentRef, StepKind};
 
 use super::classify::{END_MARGIN, leg_sides, sides_suit};
@@ -81,6 +81,12 @@ impl Wall {
     #[inline(always)]
     fn height(&self, x: Point) -> f64 {
         self.n.dot(x - self.p)
+    }
+
+    /// `x` mirrored in the wall's line.
+    #[inline(always)]
+    fn mirror(&self, x: Point) -> Point {
+        x - self.n * (2.0 * self.height(x))
     }
 
     /// The point at fraction `u` of the way from `p` to `q`.
@@ -162,6 +168,9 @@ pub(crate) struct MirrorScratch {
     rel: Vec<Vec2>,
     /// The legs' lengths.
     lens: Vec<f64>,
+    /// Per leg, the receiver mirrored back into the leg's frame: the leg lies on the line
+    /// from its node's image through it.
+    far: Vec<Point>,
     /// The hidden intervals of a child wall (the occlusion's scratch).
     shadows: Vec<[f64; 2]>,
 }
@@ -435,6 +444,7 @@ impl MirrorWalls {
             points,
             rel,
             lens,
+            far,
             shadows,
         } = scratch;
         stack.clear();
@@ -454,6 +464,7 @@ impl MirrorWalls {
             points,
             rel,
             lens,
+            far,
         };
         if !validation.node(stack, walls, &bounds, found, &mut stats) {
             stats.stopped = true;
@@ -623,6 +634,7 @@ struct Validation<'a, 's> {
     points: &'a mut Vec<Point>,
     rel: &'a mut Vec<Vec2>,
     lens: &'a mut Vec<f64>,
+    far: &'a mut Vec<Point>,
 }
 
 impl Validation<'_, '_> {
@@ -687,24 +699,40 @@ impl Validation<'_, '_> {
         points.resize(k + 2, source);
         points[k + 1] = receiver;
         // Backwards: the point of each wall's line that the point after sees its image at.
-        let mut to = receiver;
+        // `far` is the receiver mirrored back into wall `i`'s frame: the line from node `i`'s
+        // image through it is the path's line there, so which side of it each end of the
+        // wall lies on (exact orientation tests) decides where the path meets the wall:
+        // exactly for exact images (a dyadic room of axis-aligned walls), to round-off else.
+        let fars = &mut *self.far;
+        fars.clear();
+        fars.resize(k + 1, receiver);
+        let (mut to, mut far) = (receiver, receiver);
         for i in (1..=k).rev() {
             let node = &stack[i];
             let wall = &self.walls[node.wall];
-            let d = to - node.image;
-            let den = d.cross(wall.e);
-            let u = (wall.p - node.image).cross(d) / den;
+            let sp = orient(node.image, far, wall.p);
+            let sq = orient(node.image, far, wall.q);
             // Strictly inside the segment, or on an open end of its polyline: a path through
             // an open end reflects there, as the complete search finds it, while one through a
-            // vertex between two segments is a `vertex` case (NaN, for a leg along the line,
-            // fails every test).
-            let inside =
-                (u > 0.0 && u < 1.0) || (u == 0.0 && wall.open[0]) || (u == 1.0 && wall.open[1]);
-            if !inside {
+            // vertex between two segments is a `vertex` case.
+            let u = if sp * sq < 0.0 {
+                let d = to - node.image;
+                ((wall.p - node.image).cross(d) / d.cross(wall.e)).clamp(0.0, 1.0)
+            } else if sp == 0.0 && sq != 0.0 && wall.open[0] {
+                0.0
+            } else if sq == 0.0 && sp != 0.0 && wall.open[1] {
+                1.0
+            } else {
+                return None;
+            };
+            // A leg along the wall's line (NaN) is no path.
+            if u.is_nan() {
                 return None;
             }
             to = wall.at(u);
             points[i] = to;
+            far = wall.mirror(far);
+            fars[i - 1] = far;
         }
         let lens = &mut *self.lens;
         lens.clear();
@@ -734,11 +762,12 @@ impl Validation<'_, '_> {
                 SegmentRef::NONE
             };
             let (a, b) = (points[leg], points[leg + 1]);
+            let line = [stack[leg].image, fars[leg]];
             if a != b
                 && let Some(hit) =
                     self.search
                         .scene
-                        .first_crossing(a, b, END_MARGIN, [own_a, own_b])
+                        .first_crossing_on_line(a, b, line, END_MARGIN, [own_a, own_b])
             {
                 if !self.search.obstructed {
                     return None;

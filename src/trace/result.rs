@@ -97,6 +97,13 @@ pub enum Reason {
         /// Index of the step.
         step: usize,
     },
+    /// Interaction `step` fell on the source or the receiver (the leg between them vanished):
+    /// the path is the one without this step (the direct path, for one step), which the
+    /// sequence without it lists; so this one is not listed twice.
+    AtEnd {
+        /// Index of the step.
+        step: usize,
+    },
     /// The iteration limit was reached.
     IterationLimit,
     /// Interaction `step` lies beyond the end of its open interface at the one stationary
@@ -229,6 +236,11 @@ impl fmt::Display for Reason {
                     step + 1
                 )
             }
+            Reason::AtEnd { step } => write!(
+                f,
+                "step {step} falls on the source or the receiver (the leg between them \
+                 vanished): it is the path without this step"
+            ),
             Reason::IterationLimit => f.write_str("iteration limit reached"),
             Reason::BeyondEnd { step } => write!(
                 f,

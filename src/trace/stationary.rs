@@ -329,7 +329,12 @@ impl Tracer {
                     Status::NotConverged
                 },
                 time: f64::NAN,
-                reason: Some(stats.reason_without_arrivals()),
+                // A proof whose start collapsed onto an end says so: the path is the one
+                // without that step.
+                reason: Some(match record.reason {
+                    Some(at @ Reason::AtEnd { .. }) if stats.complete => at,
+                    _ => stats.reason_without_arrivals(),
+                }),
                 ..record
             },
         };

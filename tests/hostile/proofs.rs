@@ -186,3 +186,59 @@ fn a_reflection_exactly_at_a_vertex_is_one_path_in_both_modes() {
         assert_eq!(arrivals[0].points[1], Point::new(0.0, 0.0));
     }
 }
+
+/// A receiver exactly on an interface: the direct path is the one arrival. The reflection
+/// and the refraction there collapse onto it (their last leg vanishes), so they are no path
+/// of their own sequences, saying why, in both modes (they were `converged` with the direct
+/// path's time: an echogram counted one arrival three times); the reflection's `no_path` is
+/// a proof, the refraction's solve stalls next to its collapse and says that a threshold
+/// decided. 1e-13 above the mirror the reflection is below the vanishing threshold: not a
+/// proof.
+#[test]
+fn a_receiver_on_an_interface_is_reached_once() {
+    let paths = json!([
+        { "steps": [], "media": ["air"] },
+        { "steps": [{ "reflect": "sea" }], "media": ["air", "air"] },
+        { "steps": [{ "refract": "sea" }], "media": ["air", "glass"] }
+    ]);
+    let mut doc = scene(
+        json!({ "sea": { "points": [[-10.0, 0.0], [10.0, 0.0]] } }),
+        json!([]),
+        json!(["air"]),
+        [[0.0, 1.0], [3.0, 0.0]],
+    );
+    doc["paths"] = paths;
+    for doc in [doc.clone(), all(doc.clone())] {
+        let rays = cli(&doc);
+        let converged: Vec<&Value> = rays.iter().filter(|r| r["status"] == "converged").collect();
+        assert_eq!(converged.len(), 1, "{rays:?}");
+        assert_eq!(converged[0]["path"], 0);
+        let reflected = rays.iter().find(|r| r["path"] == 1).unwrap();
+        assert_eq!(reflected["status"], "no_path", "{reflected}");
+        if reflected.get("complete").is_some() {
+            assert_eq!(reflected["complete"], true);
+        }
+        // The refraction into the glass stalls next to its collapse: by a threshold, so not
+        // a proof, and not an arrival.
+        let refracted = rays.iter().find(|r| r["path"] == 2).unwrap();
+        assert!(
+            ["no_path", "not_converged"].contains(&refracted["status"].as_str().unwrap()),
+            "{refracted}"
+        );
+    }
+    let scene = Scene::from_json(&doc.to_string()).unwrap();
+    let tracer = Tracer::new(&scene).unwrap();
+    let (s, r) = (scene.sources()[0], scene.receivers()[0]);
+    let ray = tracer.solve(s, r, 1, &mut Workspace::new());
+    assert_eq!(ray.reason, Some(Reason::AtEnd { step: 0 }), "{ray:?}");
+    let mut arrivals = Vec::new();
+    let search = tracer.stationary_paths(s, r, 1, &mut arrivals).unwrap();
+    assert!(arrivals.is_empty() && search.complete);
+    // Just above the mirror the two legs' collapse is a threshold's decision.
+    let above = Point::new(3.0, 1e-13);
+    let search = tracer.stationary_paths(s, above, 1, &mut arrivals).unwrap();
+    assert!(search.complete || search.undecided == Some(Threshold::VanishedLeg));
+    if search.complete {
+        assert_eq!(arrivals.len(), 1, "{arrivals:?}");
+    }
+}

@@ -1147,8 +1147,8 @@ fn normal_stack() -> Case {
 
 fn receiver_on_refracting_interface() -> Case {
     // T(x) = |S − X| / 1 + 1.5 |X − R| along y = 0 has a kink minimum at X = R (the one-sided
-    // derivatives are sin θ ∓ 1.5 = 0.707 ∓ 1.5): the ray ends where it meets the interface,
-    // and the interaction point is the receiver.
+    // derivatives are sin θ ∓ 1.5 = 0.707 ∓ 1.5): the ray would end where it meets the
+    // interface, the interaction point the receiver: the direct path, listed once, as such.
     let s = [0.0, 1.0];
     let r = [1.0, 0.0];
     let v = one_path(
@@ -1161,14 +1161,9 @@ fn receiver_on_refracting_interface() -> Case {
     );
     case(
         "receiver_on_refracting_interface",
-        "receiver exactly on the interface it is refracted through: the interaction point is the receiver, T = |S − R| (a zero-length last leg)",
+        "receiver exactly on the interface it is refracted through: the interaction point would be the receiver (a zero-length last leg), which is the direct path, not a refraction: no path of this sequence, saying why",
         v,
-        Expect::Path(Candidate {
-            status: Status::Converged,
-            time: 2f64.sqrt(),
-            points: vec![r],
-            point_tol: Some(1e-12),
-        }),
+        Expect::NoPath(vec![Reason::AtEnd { step: 0 }]),
     )
 }
 
@@ -1185,14 +1180,9 @@ fn receiver_on_mirror() -> Case {
     );
     case(
         "receiver_on_mirror",
-        "receiver exactly on the mirror: the reflection point is the receiver (the image method's point), T = |S − R|",
+        "receiver exactly on the mirror: the reflection point would be the receiver (the image method's point), which is the direct path: no path of this sequence, saying why",
         v,
-        Expect::Path(Candidate {
-            status: Status::Converged,
-            time: 2f64.sqrt(),
-            points: vec![r],
-            point_tol: Some(1e-12),
-        }),
+        Expect::NoPath(vec![Reason::AtEnd { step: 0 }]),
     )
 }
 

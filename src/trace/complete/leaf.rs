@@ -120,6 +120,11 @@ impl Search<'_> {
             // A side or a vanished leg decided by a threshold is not a proof.
             let rule = match record.reason {
                 Some(Reason::Coincident { .. }) => Some(Threshold::VanishedLeg),
+                // Exact where the end lies on the step's segment (the path through it is the
+                // one without the step); a threshold where it lies only near.
+                Some(Reason::AtEnd { step }) if !self.end_on_segment(nw, step) => {
+                    Some(Threshold::VanishedLeg)
+                }
                 Some(Reason::WrongSide { step })
                     if side_undecided(self.g.scene, self.g.steps, nw, &self.sc.points, step) =>
                 {
@@ -160,6 +165,25 @@ impl Search<'_> {
             let b = self.g.line(i).segment(segs[i]);
             orient(a.start, a.end, b.start) == 0.0 && orient(a.start, a.end, b.end) == 0.0
         })
+    }
+
+    /// Whether the end (source or receiver) that interaction `step` fell on
+    /// ([`Reason::AtEnd`]) lies exactly on the step's segment (the exact orientation test, and
+    /// within the segment's box): the path through it is then exactly the one without the
+    /// step, the points in `nw` and `self.sc.points` (source, interactions, receiver).
+    fn end_on_segment(&self, nw: &crate::solver::NewtonWorkspace, step: usize) -> bool {
+        let k = self.g.steps.len();
+        let points = &self.sc.points;
+        let end = if step == 0 && nw.eval.len[0] <= nw.eval.vanish {
+            points[0]
+        } else {
+            points[k + 1]
+        };
+        let g = self.g.line(step).segment(nw.seg[step]);
+        let inside = |x: f64, a: f64, b: f64| a.min(b) <= x && x <= a.max(b);
+        orient(g.start, g.end, end) == 0.0
+            && inside(end.x, g.start.x, g.end.x)
+            && inside(end.y, g.start.y, g.end.y)
     }
 
     /// A candidate ruled out by `rule`, a threshold: the search is not complete, and says why.
