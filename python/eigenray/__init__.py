@@ -15,6 +15,7 @@ piecewise-linear interfaces between media of different speeds.
 
 from ._eigenray import (
     STATUS_NAMES,
+    Arrivals,
     EigenrayError,
     Gradient,
     Gradients,
@@ -26,8 +27,8 @@ from ._eigenray import (
 )
 
 __all__ = [
-    "STATUS_NAMES", "EigenrayError", "Gradient", "Gradients", "PointSensitivities", "Ray", "Rays",
-    "Scene", "Tracer", "plot",
+    "STATUS_NAMES", "Arrivals", "EigenrayError", "Gradient", "Gradients", "PointSensitivities",
+    "Ray", "Rays", "Scene", "Tracer", "plot",
 ]
 
 

@@ -1,7 +1,7 @@
 """Type stubs of the compiled core (`eigenray._eigenray`); the package re-exports these."""
 
 import os
-from typing import Any, Callable, Optional, Sequence, Union
+from typing import Any, Callable, Iterator, Optional, Sequence, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -123,6 +123,75 @@ class Rays:
     amplitude_reason: Optional[list[Optional[str]]]
     def __len__(self) -> int: ...
 
+class Arrivals:
+    """A search's arrivals (`Tracer.search`) as numpy arrays, ordered as the search lists
+    them: source-major, then receiver, then by time. `len(arrivals)`, `arrivals[i]`
+    (negative indices and slices too), iteration and `to_dicts()` give each arrival as a dict
+    (`source`, `receiver`, `steps`, `media`, `status`, `time`, `points`, `iterations`,
+    `residual`, `reason`, `kink`, `complete`, and with "amplitudes" `amplitude`,
+    `spreading`, `coefficient`, `attenuation_db`, `amplitude_reason`), made from the arrays.
+    K below is the largest `order`."""
+
+    source: npt.NDArray[np.int64]
+    """Source index of each arrival, `(n,)`."""
+    receiver: npt.NDArray[np.int64]
+    """Receiver index of each arrival, `(n,)`."""
+    time: npt.NDArray[np.float64]
+    """Travel time, `(n,)` (every arrival has one)."""
+    order: npt.NDArray[np.uint32]
+    """Steps (reflections and refractions) of each arrival, `(n,)`: 0 for the direct ray."""
+    status: npt.NDArray[np.uint8]
+    """Status code, `(n,)`: `status_names[code]` is `converged`, `vertex` or `obstructed`."""
+    complete: npt.NDArray[np.bool_]
+    """Whether the search of the arrival's (source, receiver) pair was complete, `(n,)`."""
+    iterations: npt.NDArray[np.uint32]
+    """Newton steps of the arrival's solve, `(n,)`."""
+    residual: npt.NDArray[np.float64]
+    """Final relative residual, `(n,)` (NaN where there is none)."""
+    points: npt.NDArray[np.float64]
+    """Source, interaction points and receiver, `(n, K + 2, 2)`; NaN past the arrival's own
+    `order + 2` points."""
+    step_interface: npt.NDArray[np.int64]
+    """The interface of each step, `(n, K)`: indices into `interface_names`, -1 past the
+    arrival's own `order` steps."""
+    step_kind: npt.NDArray[np.uint8]
+    """The kind of each step, `(n, K)`: 0 reflect, 1 refract (`step_kind_names[code]`), 255
+    past the arrival's own steps."""
+    media: npt.NDArray[np.int64]
+    """Leg media, `(n, K + 1)`: indices into `medium_names`, -1 past the arrival's own
+    `order + 1` legs."""
+    status_names: list[str]
+    """The status names, by code."""
+    step_kind_names: list[str]
+    """`["reflect", "refract"]`: the step kinds, by code."""
+    interface_names: list[str]
+    """The scene's interface names, by index."""
+    medium_names: list[str]
+    """The scene's medium names, by index."""
+    reason: list[Optional[str]]
+    """Why an arrival is not `converged` (`None` where it is), naming interfaces."""
+    kink: list[Optional[str]]
+    """`minimum`, `maximum` or `mixed` on `vertex` arrivals, else `None`."""
+    # With "amplitudes" (None without): NaN where there is no value (see amplitude_reason).
+    amplitude: Optional[npt.NDArray[np.complex128]]
+    """The complex pressure amplitude for a unit source, without the travel-time phase."""
+    spreading: Optional[npt.NDArray[np.float64]]
+    """The geometric spreading factor."""
+    coefficient: Optional[npt.NDArray[np.complex128]]
+    """The product of the reflection and transmission coefficients."""
+    attenuation_db: Optional[npt.NDArray[np.float64]]
+    """The attenuation of the media along the path, dB."""
+    amplitude_reason: Optional[list[Optional[str]]]
+    """Why an amplitude has no value (`None` where it has one)."""
+    def to_dicts(self) -> list[dict[str, Any]]:
+        """Every arrival as a dict: the list `search` gave before it gave arrays."""
+    def __len__(self) -> int: ...
+    @overload
+    def __getitem__(self, index: int) -> dict[str, Any]: ...
+    @overload
+    def __getitem__(self, index: slice) -> list[dict[str, Any]]: ...
+    def __iter__(self) -> Iterator[dict[str, Any]]: ...
+
 class Tracer:
     """Traces the rays of a scene (prepared once, reused by every call)."""
 
@@ -164,7 +233,7 @@ class Tracer:
     def point_sensitivities(
         self, source: PointLike, receiver: PointLike, path: Union[int, str, None] = None
     ) -> PointSensitivities: ...
-    def search(self) -> list[dict[str, Any]]: ...
+    def search(self) -> Arrivals: ...
     def echoes(self) -> dict[str, npt.NDArray[Any]]: ...
     def impulse_response(
         self,

@@ -23,7 +23,7 @@ def _rays_polylines(rays, max_rays):
             rays.path_names[rays.path[i]] or f"path {rays.path[i]}" for i in chosen
         ]
         return lines, times, labels, left_out
-    # A list of rays (Ray objects or search arrivals as dicts).
+    # A list of rays (Ray objects or search arrivals as dicts), or `Arrivals` (its dicts).
     items = list(rays)
     left_out = max(0, len(items) - max_rays)
     if left_out:
@@ -51,7 +51,8 @@ def plot(scene, rays=None, *, colour_by="time", ax=None, max_rays=2000, labels=T
     """Draws `scene` (its interfaces, sources and receivers) and `rays` on matplotlib axes.
 
     `rays` is a `Rays` (from `Tracer.trace`, `trace_stationary` or `solve_pairs`), a list of
-    `Ray` (from `Tracer.stationary_paths`), or the list of arrivals from `Tracer.search`.
+    `Ray` (from `Tracer.stationary_paths`), or the `Arrivals` from `Tracer.search` (or a list
+    of its dicts).
     `colour_by`: ``"time"`` (a colour bar of travel time) or ``"path"`` (a colour per path
     name, or per step sequence for search arrivals, with a legend). Past `max_rays` rays an
     even sample is drawn and the title says so. Returns the axes.

@@ -23,10 +23,10 @@ scene = eigenray.Scene({
     "receivers": [[4.4, 2.7]],
     "search": {"max_steps": 3, "refract": False},
 })
-arrivals = eigenray.Tracer(scene).search()  # ordered by time
+arrivals = eigenray.Tracer(scene).search()  # numpy arrays, ordered by time
 
-times = np.array([a["time"] for a in arrivals])
-orders = np.array([len(a["steps"]) for a in arrivals])
+times = arrivals.time
+orders = arrivals.order  # reflections of each arrival
 # Level of each arrival relative to the direct sound: spherical spreading only (1/r).
 level = 20 * np.log10(times[0] / times)
 for order in range(4):

@@ -1,6 +1,6 @@
-//! Amplitudes in Python (a scene with `"amplitudes"`): the columns of a `Rays` (`amplitude`,
-//! `spreading`, `coefficient`, `attenuation_db`, and why an amplitude has no value), the
-//! fields of a `Ray` and the keys of a search's arrival. A missing amplitude is NaN, never 0.
+//! Amplitudes in Python (a scene with `"amplitudes"`): the columns of a `Rays` or an
+//! `Arrivals` (`amplitude`, `spreading`, `coefficient`, `attenuation_db`, and why an amplitude
+//! has no value), the fields of a `Ray` and the keys of a search's arrival's dict. A missing amplitude is NaN, never 0.
 
 use eigenray::Amplitude;
 use eigenray::amplitudes::{Complex64, NoAmplitude};

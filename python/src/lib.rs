@@ -5,6 +5,7 @@
 //! package (`python/eigenray/`) re-exports these classes and adds the plotting helper.
 
 mod amplitude;
+mod arrivals;
 mod convert;
 mod error;
 mod gradient;
@@ -26,6 +27,7 @@ mod tracer;
 
 use pyo3::prelude::*;
 
+use crate::arrivals::PyArrivals;
 use crate::convert::status_names;
 use crate::error::EigenrayError;
 use crate::gradient::PyGradient;
@@ -43,6 +45,7 @@ fn _eigenray(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyTracer>()?;
     m.add_class::<PyRay>()?;
     m.add_class::<PyRays>()?;
+    m.add_class::<PyArrivals>()?;
     m.add_class::<PyGradient>()?;
     m.add_class::<PyPointSensitivities>()?;
     m.add_class::<PyGradients>()?;

@@ -155,12 +155,18 @@ pub(crate) struct Reasons {
 
 impl Reasons {
     /// Each ray's reason in words (`None` where it has none).
-    fn words(&self) -> Vec<Option<String>> {
+    pub(crate) fn words(&self) -> Vec<Option<String>> {
+        (0..self.codes.len()).map(|i| self.word(i)).collect()
+    }
+
+    /// Ray `i`'s reason in words (`None` where it has none or there is no ray `i`).
+    pub(crate) fn word(&self, i: usize) -> Option<String> {
         let name = |i: usize| self.interfaces.get(i).map(String::as_str);
         self.codes
-            .iter()
-            .map(|r| r.map(|r| r.describe_with(name)))
-            .collect()
+            .get(i)
+            .copied()
+            .flatten()
+            .map(|r| r.describe_with(name))
     }
 }
 

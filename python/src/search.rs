@@ -1,63 +1,207 @@
-//! `Tracer.search`: the arrivals of a scene's automatic search, as a list of dicts.
+//! `Tracer.search`: the scene's automatic search, run with the GIL released on a thread of its
+//! own, and its arrivals written there into the columns of an `Arrivals` (no Python object per
+//! arrival).
 
 use eigenray::options::Stop;
 use eigenray::search::SearchLimits;
-use eigenray::{Scene, SearchArrival, Tracer, scene_parts::StepKind};
+use eigenray::stationary::Kink;
+use eigenray::{Reason, Scene, SearchArrival, Tracer, scene_parts::StepKind};
+use numpy::IntoPyArray;
+use numpy::ndarray::{Array2, Array3};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
 
-use crate::amplitude::RayAmplitude;
-use crate::convert::{kink_name, medium_names, points_array};
-use crate::error::argument_error;
+use crate::amplitude::AmplitudeColumns;
+use crate::arrivals::{NO_STEP, PyArrivals, STEP_KIND_NAMES};
+use crate::convert::{interface_names, status_code, status_names};
+use crate::error::{argument_error, check_memory};
 use crate::interrupt::interruptible;
+use crate::rays::Reasons;
 
-/// The arrivals of the scene's `search` of `tracer` (see `Tracer.search`), searched with the
-/// GIL released on a thread of its own (Ctrl-C stops it).
-pub(crate) fn search_list<'py>(py: Python<'py>, tracer: &Tracer) -> PyResult<Bound<'py, PyList>> {
+/// The arrivals of the scene's `search` of `tracer` (see `Tracer.search`): searched and
+/// written into arrays with the GIL released, on a thread of its own (Ctrl-C stops the
+/// search); `MemoryError` when the arrays would not fit.
+pub(crate) fn search_arrivals(py: Python<'_>, tracer: &Tracer) -> PyResult<PyArrivals> {
     let stop = Stop::new();
     let limits = SearchLimits::default();
-    let search = || tracer.search_with(&limits, &|_| {}, Some(&stop));
-    let arrivals = interruptible(py, &stop, search, || {})?
-        .map_err(|e| argument_error(py, "search", e.to_string()))?
-        .arrivals;
-    let scene = tracer.scene();
-    let list = PyList::empty(py);
-    for a in &arrivals {
-        list.append(search_arrival(py, scene, a)?)?;
-    }
-    Ok(list)
+    let amplitudes = tracer.scene().amplitudes().is_some();
+    let search = || {
+        tracer
+            .search_with(&limits, &|_| {}, Some(&stop))
+            .map(|report| ArrivalTable::of(report.arrivals, amplitudes))
+    };
+    let table = interruptible(py, &stop, search, || {})?
+        .map_err(|e| argument_error(py, "search", e.to_string()))??;
+    Ok(table.finish(py, tracer.scene()))
 }
 
-/// One arrival of a search as a dict (`source`, `receiver`, `steps`, `media`, `status`, ...).
-fn search_arrival<'py>(
-    py: Python<'py>,
-    scene: &Scene,
-    a: &SearchArrival,
-) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    d.set_item("source", a.source)?;
-    d.set_item("receiver", a.receiver)?;
-    let steps = PyList::empty(py);
-    for step in &a.steps {
-        let s = PyDict::new(py);
-        let kind = match step.kind {
-            StepKind::Reflect => "reflect",
-            StepKind::Refract => "refract",
+/// The columns of a search's arrivals while they are filled: one entry per arrival, and
+/// `steps` (the most steps of any arrival) columns in the tables of steps.
+struct ArrivalTable {
+    /// The most steps of any arrival (its order).
+    steps: usize,
+    /// Source index of each arrival.
+    source: Vec<i64>,
+    /// Receiver index of each arrival.
+    receiver: Vec<i64>,
+    /// Travel time of each arrival.
+    time: Vec<f64>,
+    /// Steps of each arrival.
+    order: Vec<u32>,
+    /// Status code of each arrival.
+    status: Vec<u8>,
+    /// Whether the search of each arrival's pair was complete.
+    complete: Vec<bool>,
+    /// Newton steps of each arrival's solve.
+    iterations: Vec<u32>,
+    /// Final relative residual of each arrival.
+    residual: Vec<f64>,
+    /// Why each arrival is not `converged`.
+    reason: Vec<Option<Reason>>,
+    /// The kink of each `vertex` arrival.
+    kink: Vec<Option<Kink>>,
+    /// `steps + 2` points an arrival, `(x, y)` each, NaN past its own.
+    points: Vec<f64>,
+    /// `steps` interface indices an arrival, −1 past its own steps.
+    step_interface: Vec<i64>,
+    /// `steps` step kinds an arrival, [`NO_STEP`] past its own steps.
+    step_kind: Vec<u8>,
+    /// `steps + 1` leg media an arrival, −1 past its own legs.
+    media: Vec<i64>,
+    /// The amplitude columns, when the scene asks for amplitudes.
+    amplitudes: Option<AmplitudeColumns>,
+}
+
+impl ArrivalTable {
+    /// The bytes of the columns of `n` arrivals of at most `steps` steps (`None`: more than
+    /// can be addressed).
+    fn bytes(n: usize, steps: usize, amplitudes: bool) -> Option<u64> {
+        let steps = steps as u64;
+        let codes = std::mem::size_of::<Option<Reason>>() + std::mem::size_of::<Option<Kink>>();
+        // Indices, time, order, status, complete, iterations, residual, reason and kink.
+        let row = 8 + 8 + 8 + 4 + 1 + 1 + 4 + 8 + codes as u64;
+        // The points, the steps' interfaces and kinds, and the leg media.
+        let tables = steps
+            .checked_add(2)?
+            .checked_mul(16)?
+            .checked_add(steps.checked_mul(9)?)?
+            .checked_add(steps.checked_add(1)?.checked_mul(8)?)?;
+        let amplitude = if amplitudes {
+            AmplitudeColumns::BYTES_PER_RAY
+        } else {
+            0
         };
-        s.set_item(kind, &scene.interfaces()[step.interface].name)?;
-        steps.append(s)?;
+        (n as u64).checked_mul(row.checked_add(tables)?.checked_add(amplitude)?)
     }
-    d.set_item("steps", steps)?;
-    let arrival = &a.arrival;
-    d.set_item("media", medium_names(scene, arrival.media.iter().copied()))?;
-    d.set_item("status", arrival.status.as_str())?;
-    d.set_item("time", arrival.time)?;
-    d.set_item("points", points_array(py, &arrival.points))?;
-    d.set_item("iterations", arrival.iterations)?;
-    d.set_item("residual", arrival.residual)?;
-    d.set_item("reason", arrival.reason.map(|r| r.describe(scene)))?;
-    d.set_item("kink", kink_name(arrival.kink))?;
-    d.set_item("complete", a.complete)?;
-    RayAmplitude::new(scene.amplitudes().is_some(), arrival.amplitude.as_ref()).set_items(&d)?;
-    Ok(d)
+
+    /// The columns of `arrivals` (with amplitude columns when `amplitudes`), each arrival
+    /// freed once written; `MemoryError` when they would not fit.
+    fn of(arrivals: Vec<SearchArrival>, amplitudes: bool) -> PyResult<ArrivalTable> {
+        let n = arrivals.len();
+        let steps = arrivals.iter().map(|a| a.steps.len()).max().unwrap_or(0);
+        check_memory(
+            &format!("search: {n} arrivals of up to {steps} steps"),
+            ArrivalTable::bytes(n, steps, amplitudes),
+        )?;
+        let mut table = ArrivalTable {
+            steps,
+            source: arrivals.iter().map(|a| a.source as i64).collect(),
+            receiver: arrivals.iter().map(|a| a.receiver as i64).collect(),
+            time: arrivals.iter().map(|a| a.arrival.time).collect(),
+            order: arrivals.iter().map(|a| a.steps.len() as u32).collect(),
+            status: arrivals
+                .iter()
+                .map(|a| status_code(a.arrival.status))
+                .collect(),
+            complete: arrivals.iter().map(|a| a.complete).collect(),
+            iterations: arrivals
+                .iter()
+                .map(|a| u32::try_from(a.arrival.iterations).unwrap_or(u32::MAX))
+                .collect(),
+            residual: arrivals.iter().map(|a| a.arrival.residual).collect(),
+            reason: arrivals.iter().map(|a| a.arrival.reason).collect(),
+            kink: arrivals.iter().map(|a| a.arrival.kink).collect(),
+            points: vec![f64::NAN; n * (steps + 2) * 2],
+            step_interface: vec![-1; n * steps],
+            step_kind: vec![NO_STEP; n * steps],
+            media: vec![-1; n * (steps + 1)],
+            amplitudes: amplitudes.then(|| AmplitudeColumns::new(n)),
+        };
+        for (i, a) in arrivals.into_iter().enumerate() {
+            table.write_row(i, &a);
+        }
+        Ok(table)
+    }
+
+    /// The rows of arrival `i` in the tables of points, steps and media, and its amplitude.
+    fn write_row(&mut self, i: usize, a: &SearchArrival) {
+        let w = self.steps + 2;
+        let points = &mut self.points[i * w * 2..(i + 1) * w * 2];
+        for (xy, p) in points.chunks_exact_mut(2).zip(&a.arrival.points) {
+            xy.copy_from_slice(&[p.x, p.y]);
+        }
+        let steps = i * self.steps..(i + 1) * self.steps;
+        let interfaces = self.step_interface[steps.clone()].iter_mut();
+        for ((interface, kind), step) in interfaces.zip(&mut self.step_kind[steps]).zip(&a.steps) {
+            *interface = step.interface as i64;
+            *kind = match step.kind {
+                StepKind::Reflect => 0,
+                StepKind::Refract => 1,
+            };
+        }
+        let legs = &mut self.media[i * (w - 1)..(i + 1) * (w - 1)];
+        for (leg, &m) in legs.iter_mut().zip(&a.arrival.media) {
+            *leg = m as i64;
+        }
+        if let Some(columns) = &mut self.amplitudes {
+            columns.rows().write(i, a.arrival.amplitude.as_ref());
+        }
+    }
+
+    /// The columns as the `Arrivals` of `scene`.
+    fn finish(self, py: Python<'_>, scene: &Scene) -> PyArrivals {
+        let (n, steps) = (self.time.len(), self.steps);
+        let (amplitudes, amplitude_reasons) = match self.amplitudes {
+            Some(columns) => {
+                let (arrays, reasons) = columns.finish(py);
+                (Some(arrays), Some(reasons))
+            }
+            None => (None, None),
+        };
+        let interfaces = interface_names(scene);
+        let table = |columns: usize, values: Vec<_>| {
+            Array2::from_shape_vec((n, columns), values).expect("columns entries a row")
+        };
+        PyArrivals {
+            source: self.source.into_pyarray(py).unbind(),
+            receiver: self.receiver.into_pyarray(py).unbind(),
+            time: self.time.into_pyarray(py).unbind(),
+            order: self.order.into_pyarray(py).unbind(),
+            status: self.status.into_pyarray(py).unbind(),
+            complete: self.complete.into_pyarray(py).unbind(),
+            iterations: self.iterations.into_pyarray(py).unbind(),
+            residual: self.residual.into_pyarray(py).unbind(),
+            points: Array3::from_shape_vec((n, steps + 2, 2), self.points)
+                .expect("steps + 2 points a row")
+                .into_pyarray(py)
+                .unbind(),
+            step_interface: table(steps, self.step_interface).into_pyarray(py).unbind(),
+            step_kind: Array2::from_shape_vec((n, steps), self.step_kind)
+                .expect("steps kinds a row")
+                .into_pyarray(py)
+                .unbind(),
+            media: table(steps + 1, self.media).into_pyarray(py).unbind(),
+            status_names: status_names(),
+            step_kind_names: STEP_KIND_NAMES.to_vec(),
+            interface_names: interfaces.clone(),
+            medium_names: scene.media().iter().map(|m| m.name.clone()).collect(),
+            reasons: Reasons {
+                any: self.reason.iter().any(Option::is_some),
+                codes: self.reason,
+                interfaces,
+                amplitude: amplitude_reasons,
+            },
+            kinks: self.kink,
+            amplitudes,
+        }
+    }
 }

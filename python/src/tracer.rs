@@ -13,8 +13,9 @@ use eigenray::{
 use numpy::{PyArray2, PyArray3};
 use pyo3::exceptions::{PyIndexError, PyKeyError, PyRuntimeError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::PyDict;
 
+use crate::arrivals::PyArrivals;
 use crate::convert::{named_index, point_arg, points_arg};
 use crate::error::{argument_error, check_memory, scene_error};
 use crate::gradient::PyGradient;
@@ -25,7 +26,7 @@ use crate::ray::PyRay;
 use crate::rays::PyRays;
 use crate::response;
 use crate::scene::PyScene;
-use crate::search::search_list;
+use crate::search::search_arrivals;
 use crate::sensitivities::PyPointSensitivities;
 use crate::table::{Table, pairs_table, stationary_table, width};
 use crate::trace::trace_rays;
@@ -542,12 +543,15 @@ impl PyTracer {
     }
 
     /// The scene's `search` (its `"search"` section): every arrival per (source, receiver),
-    /// ordered by time, as a list of dicts with `source`, `receiver`, `steps` (as in the
-    /// scene: `{"reflect": name}`), `media`, `status`, `time`, `points`, `iterations`,
-    /// `complete`; with `"amplitudes"` also `amplitude`, `spreading`, `coefficient`,
-    /// `attenuation_db` and `amplitude_reason` (as on a `Ray`). Ctrl-C stops it.
-    fn search<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
-        search_list(py, &self.read())
+    /// ordered by time, as `Arrivals`: numpy arrays (`source`, `receiver`, `time`, `order`,
+    /// `status`, `points`, the steps as `step_interface` and `step_kind`, `media`, ...; with
+    /// `"amplitudes"` also `amplitude`, `spreading`, `coefficient`, `attenuation_db` and
+    /// `amplitude_reason`). `len`, indexing and iteration give each arrival as a dict with
+    /// `source`, `receiver`, `steps` (as in the scene: `{"reflect": name}`), `media`,
+    /// `status`, `time`, `points`, `iterations`, `complete`, ... (`to_dicts()`: all of them).
+    /// Ctrl-C stops it; `MemoryError` when the arrays would not fit.
+    fn search(&self, py: Python<'_>) -> PyResult<PyArrivals> {
+        search_arrivals(py, &self.read())
     }
 
     /// Every arrival that reaches a receiver with an amplitude (each `converged` ray of the
