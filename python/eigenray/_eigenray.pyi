@@ -158,7 +158,7 @@ class Arrivals:
     """The kind of each step, `(n, K)`: 0 reflect, 1 refract (`step_kind_names[code]`), 255
     past the arrival's own steps."""
     media: npt.NDArray[np.int64]
-    """Leg media, `(n, K + 1)`: indices into `medium_names`, -1 past the arrival's own
+    """Leg media, `(n, K + 1)`: indices into `media_names`, -1 past the arrival's own
     `order + 1` legs."""
     status_names: list[str]
     """The status names, by code."""
@@ -166,7 +166,7 @@ class Arrivals:
     """`["reflect", "refract"]`: the step kinds, by code."""
     interface_names: list[str]
     """The scene's interface names, by index."""
-    medium_names: list[str]
+    media_names: list[str]
     """The scene's medium names, by index."""
     reason: list[Optional[str]]
     """Why an arrival is not `converged` (`None` where it is), naming interfaces."""

@@ -64,7 +64,7 @@ pub(crate) struct PyArrivals {
     /// `step_kind_names`), 255 past an arrival's own steps.
     #[pyo3(get)]
     pub(crate) step_kind: Py<PyArray2<u8>>,
-    /// Leg media, shape `(n, K + 1)`: indices into `medium_names`, −1 past an arrival's own
+    /// Leg media, shape `(n, K + 1)`: indices into `media_names`, −1 past an arrival's own
     /// `order + 1` legs.
     #[pyo3(get)]
     pub(crate) media: Py<PyArray2<i64>>,
@@ -79,7 +79,7 @@ pub(crate) struct PyArrivals {
     pub(crate) interface_names: Vec<String>,
     /// The scene's medium names, by medium index.
     #[pyo3(get)]
-    pub(crate) medium_names: Vec<String>,
+    pub(crate) media_names: Vec<String>,
     /// Why each arrival is not `converged`, and why its amplitude has no value: read through
     /// the `reason` and `amplitude_reason` getters.
     pub(crate) reasons: Reasons,
@@ -222,7 +222,7 @@ impl PyArrivals {
         }
         d.set_item("steps", steps)?;
         let media = (0..=order)
-            .map(|j| name(&self.medium_names, at(py, &self.media, [i, j])?))
+            .map(|j| name(&self.media_names, at(py, &self.media, [i, j])?))
             .collect::<PyResult<Vec<_>>>()?;
         d.set_item("media", media)?;
         d.set_item(

@@ -193,7 +193,7 @@ impl ArrivalTable {
             status_names: status_names(),
             step_kind_names: STEP_KIND_NAMES.to_vec(),
             interface_names: interfaces.clone(),
-            medium_names: scene.media().iter().map(|m| m.name.clone()).collect(),
+            media_names: scene.media().iter().map(|m| m.name.clone()).collect(),
             reasons: Reasons {
                 any: self.reason.iter().any(Option::is_some),
                 codes: self.reason,

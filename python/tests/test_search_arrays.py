@@ -92,7 +92,7 @@ def decoded_media(arrivals, i):
     k = int(arrivals.order[i])
     row = arrivals.media[i]
     assert (row[k + 1 :] == -1).all() and (row[: k + 1] >= 0).all()
-    return [arrivals.medium_names[m] for m in row[: k + 1]]
+    return [arrivals.media_names[m] for m in row[: k + 1]]
 
 
 def check_shapes(arrivals, asks):
@@ -177,7 +177,7 @@ def test_a_rooms_reflections_as_arrays_are_the_dicts():
     assert (arrivals.status == 0).all() and arrivals.complete.all()
     assert arrivals.interface_names == tracer.scene.interface_names
     assert sorted(arrivals.interface_names) == ["east", "north", "south", "west"]
-    assert arrivals.medium_names == tracer.scene.media_names == ["air"]
+    assert arrivals.media_names == tracer.scene.media_names == ["air"]
     assert (arrivals.step_kind[arrivals.step_interface >= 0] == 0).all()
     check_arrays_are_the_dicts(arrivals, asks=False)
 
