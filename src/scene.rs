@@ -12,6 +12,7 @@ use crate::polyline::{Polyline, PolylineError};
 mod amplitudes;
 mod builder;
 mod crossings;
+mod document;
 mod impulse;
 mod names;
 mod update;
@@ -547,6 +548,8 @@ pub struct Scene {
     batch_size: BatchSize,
     amplitudes: Option<Amplitudes>,
     impulse_response: Option<ImpulseResponseOptions>,
+    /// The document's keys as given, for [`Scene::to_spec`].
+    document: document::Document,
 }
 
 /// A copy of the scene in an `Arc`: what lets [`Tracer::new`](crate::Tracer::new) take a
@@ -1077,6 +1080,7 @@ impl Scene {
             batch_size,
             amplitudes,
             impulse_response,
+            document: document::Document::of(spec),
         })
     }
 

@@ -1,7 +1,8 @@
 //! The tracer's updates (`Tracer::set_source`, `set_receiver`, `set_interface_points`,
 //! `set_medium_speed`, `set_medium_index`): after every update of a random sequence, the
 //! tracer's rays are those of a tracer built afresh from the edited scene document, bit for
-//! bit, and a refused update gives the document's own error and changes nothing.
+//! bit, and a refused update gives the document's own error and changes nothing; the edited
+//! scene's document (`Scene::to_json`) reads back to the edited scene, bit for bit.
 
 use eigenray::{BatchOptions, MediumSpec, Point, Scene, SceneError, SceneSpec, Tracer};
 
@@ -208,6 +209,14 @@ fn random_updates(spec: SceneSpec, steps: usize, seed: u64) -> (usize, usize) {
                     results(&expected, thorough),
                     "step {step}: the updated tracer differs from a fresh one"
                 );
+                // The edited scene's document reads back to it, bit for bit (`Debug` prints
+                // every number so that it reads back to the same bits).
+                let read = Scene::from_json(&tracer.scene().to_json()).expect("its document");
+                assert_eq!(
+                    format!("{read:?}"),
+                    format!("{:?}", tracer.scene()),
+                    "step {step}: the edited scene's document reads back to another scene"
+                );
             }
             (Err(e), Err(expected)) => {
                 refused += 1;
@@ -333,6 +342,48 @@ fn updates_of_a_lens_with_regions_give_a_fresh_tracers_rays() {
         accepted >= 80 && refused >= 5,
         "{accepted} accepted, {refused} refused"
     );
+}
+
+/// Moving every receiver at once (`set_receivers`: the blocks of a large map) gives the rays
+/// of a tracer built afresh, whether the receivers' box shrinks, grows or shifts; a refused
+/// point moves no receiver.
+#[test]
+fn moving_every_receiver_gives_a_fresh_tracers_rays() {
+    for mut spec in [refraction(), room(), lens()] {
+        let mut tracer = fresh(&spec).unwrap();
+        for (scale, shift) in [(0.5, 0.0), (1.3, 0.25), (1.0, -0.2), (1.0, 0.0)] {
+            let moved: Vec<[f64; 2]> = spec
+                .receivers
+                .iter()
+                .map(|p| [p[0] * scale + shift, p[1] * scale - shift])
+                .collect();
+            let points: Vec<Point> = moved.iter().map(|p| Point::new(p[0], p[1])).collect();
+            tracer.set_receivers(&points).unwrap();
+            spec.receivers = moved;
+            assert_eq!(
+                results(&tracer, true),
+                results(&fresh(&spec).unwrap(), true)
+            );
+            let read = Scene::from_json(&tracer.scene().to_json()).unwrap();
+            assert_eq!(format!("{read:?}"), format!("{:?}", tracer.scene()));
+        }
+        let before = results(&tracer, false);
+        let mut bad: Vec<Point> = tracer
+            .scene()
+            .receivers()
+            .iter()
+            .map(|p| Point::new(p.x * 2.0, p.y))
+            .collect();
+        bad[2] = Point::new(0.0, f64::NAN);
+        let e = tracer.set_receivers(&bad).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "receivers[2]: coordinates must be finite numbers"
+        );
+        let e = tracer.set_receivers(&bad[1..]).unwrap_err();
+        assert_eq!(e.key, "receivers");
+        assert_eq!(results(&tracer, false), before);
+    }
 }
 
 /// The refusals a layout tool meets, with the document's keys.

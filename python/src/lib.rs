@@ -12,6 +12,7 @@ mod gradient;
 mod gradients;
 mod interrupt;
 mod out_arrays;
+mod pickling;
 mod progress;
 mod ray;
 mod rays;

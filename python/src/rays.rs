@@ -7,9 +7,11 @@ use eigenray::Reason;
 use eigenray::amplitudes::{Complex64, NoAmplitude};
 use numpy::{PyArray1, PyArray2, PyArray3, PyUntypedArrayMethods};
 use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyType};
 use rayon::iter::ParallelExtend;
 
 use crate::amplitude::{AmplitudeArrays, reason_words};
+use crate::pickling;
 
 /// Every ray of a scene as numpy arrays, in ray order (source-major, then receiver, then
 /// path). Rays without a time have `time` NaN and NaN points.
@@ -127,6 +129,23 @@ impl PyRays {
             let reasons = self.reasons.lock().ok()?;
             reasons.amplitude.as_deref().map(reason_words)
         })
+    }
+
+    /// Pickling (`multiprocessing`, joblib, Dask): the arrays, the names and the reasons;
+    /// the unpickled `Rays` has every attribute of this one, equal array by array.
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyDict>,))> {
+        let py = slf.py();
+        let state = pickling::rays_state(py, slf.get())?;
+        let from_state = py.get_type::<PyRays>().getattr("_from_state")?;
+        Ok((from_state, (state,)))
+    }
+
+    /// The `Rays` of a pickled state (see `__reduce__`).
+    #[classmethod]
+    fn _from_state(_cls: &Bound<'_, PyType>, state: &Bound<'_, PyDict>) -> PyResult<PyRays> {
+        pickling::rays_of_state(state)
     }
 
     fn __len__(&self, py: Python<'_>) -> usize {

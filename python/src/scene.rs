@@ -8,7 +8,7 @@ use eigenray::limits::{MAX_INPUT_BYTES, read_limited};
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::exceptions::PyIOError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyString};
+use pyo3::types::{PyDict, PyString, PyType};
 
 use crate::convert::points_array;
 use crate::error::{argument_error, scene_error};
@@ -177,6 +177,20 @@ impl PyScene {
     #[getter]
     fn num_rays(&self) -> usize {
         self.scene.num_rays()
+    }
+
+    /// The scene as a JSON document, edits included: `Scene(scene.to_json())` is this
+    /// scene again, bit for bit (every number written with the digits that read back to
+    /// it; a medium's speed as given, not recomputed from its slowness).
+    fn to_json(&self, py: Python<'_>) -> String {
+        py.detach(|| self.scene.to_json())
+    }
+
+    /// Pickling (`multiprocessing`, joblib, Dask, Ray): the scene as its JSON document
+    /// (`to_json`), which reads back to the same scene, bit for bit.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyType>, (String,))> {
+        let py = slf.py();
+        Ok((py.get_type::<PyScene>(), (slf.get().to_json(py),)))
     }
 
     fn __repr__(&self) -> String {

@@ -13,7 +13,7 @@ use eigenray::{
 use numpy::{PyArray2, PyArray3};
 use pyo3::exceptions::{PyIndexError, PyKeyError, PyRuntimeError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyType};
 
 use crate::arrivals::PyArrivals;
 use crate::convert::{named_index, point_arg, points_arg};
@@ -163,6 +163,14 @@ impl PyTracer {
         PyScene {
             scene: Arc::new(self.read().scene().clone()),
         }
+    }
+
+    /// Pickling (`multiprocessing`, joblib, Dask, Ray): the tracer as its scene, edits
+    /// included (`set_*`); unpickling prepares a tracer of it again (`Tracer(scene)`), which
+    /// gives the same rays bit for bit.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyType>, (PyScene,))> {
+        let py = slf.py();
+        Ok((py.get_type::<PyTracer>(), (slf.get().scene(),)))
     }
 
     /// Every ray of the scene, in parallel (the GIL released), as numpy arrays (`Rays`).
@@ -470,23 +478,16 @@ impl PyTracer {
             .map_err(|e| scene_error(py, &e))
     }
 
-    /// Moves every receiver: `points` of shape `(n, 2)`, `n` the scene's receivers. Moves
-    /// are checked one by one; a refused one raises, and the receivers before it stay moved.
+    /// Moves every receiver: `points` of shape `(n, 2)`, `n` the scene's receivers. All or
+    /// nothing: a refused point raises, naming `receivers[i]`, and leaves every receiver
+    /// where it was. Costs time in proportion to the receivers (a map computed in blocks
+    /// moves one tracer from block to block).
     fn set_receivers(&self, py: Python<'_>, points: &Bound<'_, PyAny>) -> PyResult<()> {
         let points = points_arg(py, "receivers", points, 16)?;
         let mut tracer = self.write(py);
-        let n = tracer.scene().receivers().len();
-        if points.len() != n {
-            return Err(argument_error(
-                py,
-                "receivers",
-                format!("has {} points; the scene has {n} receivers", points.len()),
-            ));
-        }
-        for (i, p) in points.into_iter().enumerate() {
-            tracer.set_receiver(i, p).map_err(|e| scene_error(py, &e))?;
-        }
-        Ok(())
+        tracer
+            .set_receivers(&points)
+            .map_err(|e| scene_error(py, &e))
     }
 
     /// Gives interface `interface` (a name or an index) new vertices, `points` of shape

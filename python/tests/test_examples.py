@@ -12,9 +12,15 @@ import eigenray
 EXAMPLES = sorted((pathlib.Path(__file__).parents[1] / "examples").glob("*.py"))
 
 
+# What an example needs beyond the test extras: skipped without it.
+NEEDS = {"dask_tl_map.py": "distributed"}
+
+
 @pytest.mark.parametrize("example", EXAMPLES, ids=lambda p: p.name)
 def test_the_example_runs_and_draws(example, tmp_path):
     pytest.importorskip("matplotlib")
+    if example.name in NEEDS:
+        pytest.importorskip(NEEDS[example.name])
     picture = tmp_path / "picture.png"
     out = subprocess.run(
         [sys.executable, str(example), str(picture)], capture_output=True, text=True, check=False

@@ -84,6 +84,8 @@ def test_random_updates_give_the_rebuilt_tracers_rays():
         (lambda t: t.set_receiver(99, (0, -1)), "receivers"),
         (lambda t: t.set_source(0, (0, 1, 2)), "sources[0]"),
         (lambda t: t.set_receivers(np.zeros((3, 2))), "receivers"),
+        (lambda t: t.set_receivers(np.vstack([np.full((5, 2), -2.0), [[0, np.nan]],
+                                              np.full((6, 2), -3.0)])), "receivers[5]"),
         (lambda t: t.set_interface_points("surface", [[-10, 0]]), "interfaces.surface.points"),
         (lambda t: t.set_interface_points("surface", [[-10, 0], [10, -20]]),
          "interfaces.surface.points"),

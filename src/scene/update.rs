@@ -94,6 +94,34 @@ impl Scene {
         Ok(())
     }
 
+    /// Moves every receiver at once: `points` holds one point per receiver, each checked as
+    /// `receivers[i]` of a scene document. All or nothing: a refused point leaves every
+    /// receiver where it was.
+    ///
+    /// # Errors
+    /// `receivers` when `points` does not hold one point per receiver, or the problem with
+    /// the first refused point at `receivers[i]`; the scene is then left as it was.
+    pub fn set_receivers(&mut self, points: &[Point]) -> Result<(), SceneError> {
+        let len = self.receivers.len();
+        if points.len() != len {
+            return Err(SceneError::new(
+                "receivers",
+                format!("has {} points; the scene has {len} receivers", points.len()),
+            ));
+        }
+        let checked = points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| point(&format!("receivers[{i}]"), [p.x, p.y]))
+            .collect::<Result<Vec<Point>, SceneError>>()?;
+        let old = std::mem::replace(&mut self.receivers, checked);
+        if let Err(e) = self.check_range() {
+            self.receivers = old;
+            return Err(e);
+        }
+        Ok(())
+    }
+
     /// Gives interface `interface` (an index into [`interfaces`](Self::interfaces); see
     /// [`interface_index`](Self::interface_index)) new vertices, any number of them; it stays
     /// open or closed. Checked as `interfaces.NAME.points` of a scene document: each point,
@@ -201,7 +229,7 @@ impl Scene {
     /// `media` for an index out of range, or the problem with the speed; the scene is then
     /// left as it was.
     pub fn set_medium_speed(&mut self, medium: usize, speed: f64) -> Result<(), SceneError> {
-        self.set_slowness(medium, "speed", |key| positive(key, speed).map(|v| 1.0 / v))
+        self.set_slowness(medium, false, speed)
     }
 
     /// Gives medium `medium` the refractive index `index` (its slowness), checked as
@@ -211,21 +239,20 @@ impl Scene {
     /// `media` for an index out of range, or the problem with the index; the scene is then
     /// left as it was.
     pub fn set_medium_index(&mut self, medium: usize, index: f64) -> Result<(), SceneError> {
-        self.set_slowness(medium, "index", |key| positive(key, index))
+        self.set_slowness(medium, true, index)
     }
 
-    /// Sets a medium's slowness from `value` of the key `media.NAME.<what>`.
-    fn set_slowness(
-        &mut self,
-        medium: usize,
-        what: &str,
-        value: impl FnOnce(String) -> Result<f64, SceneError>,
-    ) -> Result<(), SceneError> {
+    /// Sets a medium's slowness from `value`, its refractive index when `index`, else its
+    /// speed (the key `media.NAME.index` or `media.NAME.speed`); the document that
+    /// [`to_spec`](Scene::to_spec) writes keeps `value` as given.
+    fn set_slowness(&mut self, medium: usize, index: bool, value: f64) -> Result<(), SceneError> {
         let len = self.media.len();
         let Some(m) = self.media.get_mut(medium) else {
             return Err(out_of_range("media", "media", medium, len));
         };
-        let slowness = value(format!("media.{}.{what}", m.name))?;
+        let what = if index { "index" } else { "speed" };
+        let v = positive(format!("media.{}.{what}", m.name), value)?;
+        let slowness = if index { v } else { 1.0 / v };
         if !(slowness.is_finite() && slowness > 0.0) {
             return Err(SceneError::new(
                 format!("media.{}", m.name),
@@ -233,13 +260,15 @@ impl Scene {
             ));
         }
         // The document's check of kinds, on the media as they would be.
-        let (was, index) = (m.index, what == "index");
+        let was = m.index;
         m.index = index;
         if let Err(e) = one_kind_of_medium(&self.media) {
             self.media[medium].index = was;
             return Err(e);
         }
         self.media[medium].slowness = slowness;
+        self.document
+            .set_medium_value(&self.media[medium].name, index, value);
         Ok(())
     }
 

@@ -1,6 +1,6 @@
-//! Cheap updates of a tracer's scene: a source, a receiver, an interface's vertices, a
-//! medium's speed, each validated as the scene document is (see `scene/update.rs`), and only
-//! what depends on it prepared again.
+//! Cheap updates of a tracer's scene: a source, a receiver (or all of them), an interface's
+//! vertices, a medium's speed, each validated as the scene document is (see
+//! `scene/update.rs`), and only what depends on it prepared again.
 //!
 //! What the tracer prepares, and what each update touches:
 //!
@@ -100,6 +100,23 @@ impl Tracer {
         if let Some(old) = old {
             let p = self.scene.receivers()[receiver];
             self.refresh_ends(1, old, p);
+        }
+        Ok(())
+    }
+
+    /// Moves every receiver at once ([`Scene::set_receivers`]'s checks, all or nothing):
+    /// what a block of a large map does, with one tracer moved from block to block. Nothing
+    /// is prepared again but the classifier's candidates, when the box around the receivers
+    /// changes; unlike as many [`set_receiver`](Self::set_receiver) calls, each of which may
+    /// look at every receiver, it costs time in proportion to the receivers.
+    ///
+    /// # Errors
+    /// As [`Scene::set_receivers`]; the tracer is then left as it was.
+    pub fn set_receivers(&mut self, points: &[Point]) -> Result<(), SceneError> {
+        let old = self.classifier.ends()[1];
+        self.scene_mut().set_receivers(points)?;
+        if !same_box(old, Aabb::around(self.scene.receivers())) {
+            self.classifier = Classifier::new(&self.scene);
         }
         Ok(())
     }

@@ -1,0 +1,350 @@
+//! Pickling (`multiprocessing`, `concurrent.futures`, joblib, Dask, Ray): a `Scene` and a
+//! `Tracer` as the scene's JSON document (the library's `Scene::to_json`, which reads back to
+//! the same scene bit for bit), a `Rays` as its arrays, its names and its reasons as codes.
+
+use std::sync::Mutex;
+
+use eigenray::Reason;
+use eigenray::amplitudes::NoAmplitude;
+use eigenray::stationary::Threshold;
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::amplitude::AmplitudeArrays;
+use crate::convert::status_names;
+use crate::rays::{PyRays, Reasons};
+
+/// The rules with a threshold, by their code in a pickled `Rays`.
+const THRESHOLDS: [Threshold; 4] = [
+    Threshold::VanishedLeg,
+    Threshold::ShortLeg,
+    Threshold::Grazing,
+    Threshold::Side,
+];
+
+/// A reason as three numbers: its kind (1, 2, …) and its indices (0 where it has none).
+fn reason_code(r: Reason) -> [u64; 3] {
+    let n = |i: usize| i as u64;
+    match r {
+        Reason::LeavesEnd { step } => [1, n(step), 0],
+        Reason::WrongSide { step } => [2, n(step), 0],
+        Reason::AtVertex { step } => [3, n(step), 0],
+        Reason::Crosses { leg, interface } => [4, n(leg), n(interface)],
+        Reason::NoMedium { leg } => [5, n(leg), 0],
+        Reason::MediaUnsettled => [6, 0, 0],
+        Reason::Coincident { step } => [7, n(step), 0],
+        Reason::IterationLimit => [8, 0, 0],
+        Reason::BeyondEnd { step } => [9, n(step), 0],
+        Reason::NoStationaryPath => [10, 0, 0],
+        Reason::SearchLimit => [11, 0, 0],
+        Reason::Undecided { rule } => {
+            let code = THRESHOLDS.iter().position(|&t| t == rule);
+            [12, n(code.expect("every rule has a code")), 0]
+        }
+        Reason::AtEnd { step } => [13, n(step), 0],
+    }
+}
+
+/// The reason of [`reason_code`]'s numbers.
+fn reason_of(code: [u64; 3]) -> Option<Reason> {
+    let [kind, a, b] = code;
+    let (a, b) = (usize::try_from(a).ok()?, usize::try_from(b).ok()?);
+    Some(match kind {
+        1 => Reason::LeavesEnd { step: a },
+        2 => Reason::WrongSide { step: a },
+        3 => Reason::AtVertex { step: a },
+        4 => Reason::Crosses {
+            leg: a,
+            interface: b,
+        },
+        5 => Reason::NoMedium { leg: a },
+        6 => Reason::MediaUnsettled,
+        7 => Reason::Coincident { step: a },
+        8 => Reason::IterationLimit,
+        9 => Reason::BeyondEnd { step: a },
+        10 => Reason::NoStationaryPath,
+        11 => Reason::SearchLimit,
+        12 => Reason::Undecided {
+            rule: *THRESHOLDS.get(a)?,
+        },
+        13 => Reason::AtEnd { step: a },
+        _ => return None,
+    })
+}
+
+/// Why an amplitude has none, as three numbers: its `.npy` code, its index, 0.
+fn no_amplitude_code(r: NoAmplitude) -> [u64; 3] {
+    let index = match r {
+        NoAmplitude::ConvertedReflection { step }
+        | NoAmplitude::NoMediumAcross { step }
+        | NoAmplitude::Grazing { step } => step,
+        NoAmplitude::VanishedLeg { leg } => leg,
+        NoAmplitude::Vertex
+        | NoAmplitude::Obstructed
+        | NoAmplitude::Caustic
+        | NoAmplitude::OnAxis
+        | NoAmplitude::SourceOffAxis
+        | NoAmplitude::UnknownMedia => 0,
+    };
+    [u64::from(r.code()), index as u64, 0]
+}
+
+/// The reason of [`no_amplitude_code`]'s numbers.
+fn no_amplitude_of(code: [u64; 3]) -> Option<NoAmplitude> {
+    let place = usize::try_from(code[0]).ok()?.checked_sub(1)?;
+    let i = usize::try_from(code[1]).ok()?;
+    Some(match *NoAmplitude::CODES.get(place)? {
+        NoAmplitude::ConvertedReflection { .. } => NoAmplitude::ConvertedReflection { step: i },
+        NoAmplitude::NoMediumAcross { .. } => NoAmplitude::NoMediumAcross { step: i },
+        NoAmplitude::Grazing { .. } => NoAmplitude::Grazing { step: i },
+        NoAmplitude::VanishedLeg { .. } => NoAmplitude::VanishedLeg { leg: i },
+        other => other,
+    })
+}
+
+/// The entries of `items` that are not `None`: their rows and their codes, three a row.
+fn sparse<T: Copy>(items: &[Option<T>], code: impl Fn(T) -> [u64; 3]) -> (Vec<i64>, Vec<u64>) {
+    let (mut rows, mut codes) = (Vec::new(), Vec::new());
+    for (i, item) in items.iter().enumerate() {
+        if let Some(r) = item {
+            rows.push(i as i64);
+            codes.extend(code(*r));
+        }
+    }
+    (rows, codes)
+}
+
+/// [`sparse`]'s rows and codes under `KEY_rows` (`(k,)`) and `KEY_codes` (`(k, 3)`).
+fn set_sparse(
+    d: &Bound<'_, PyDict>,
+    key: &str,
+    (rows, codes): (Vec<i64>, Vec<u64>),
+) -> PyResult<()> {
+    let py = d.py();
+    let codes = Array2::from_shape_vec((rows.len(), 3), codes).expect("three numbers a row");
+    d.set_item(format!("{key}_rows"), rows.into_pyarray(py))?;
+    d.set_item(format!("{key}_codes"), codes.into_pyarray(py))
+}
+
+/// `n` entries, `None` but at the rows of [`sparse`]'s arrays under `key`.
+fn dense<T: Copy>(
+    state: &Bound<'_, PyDict>,
+    key: &str,
+    n: usize,
+    of: impl Fn([u64; 3]) -> Option<T>,
+) -> PyResult<Vec<Option<T>>> {
+    let rows: Bound<'_, PyArray1<i64>> = item(state, &format!("{key}_rows"))?;
+    let codes: Bound<'_, PyArray2<u64>> = item(state, &format!("{key}_codes"))?;
+    let (rows, codes) = (rows.to_vec()?, codes.to_owned_array());
+    let bad = || PyValueError::new_err(format!("Rays state: bad `{key}` codes"));
+    if codes.dim() != (rows.len(), 3) {
+        return Err(bad());
+    }
+    let mut out = vec![None; n];
+    for (row, code) in rows.iter().zip(codes.rows()) {
+        let entry = usize::try_from(*row)
+            .ok()
+            .and_then(|i| out.get_mut(i))
+            .ok_or_else(bad)?;
+        *entry = Some(of([code[0], code[1], code[2]]).ok_or_else(bad)?);
+    }
+    Ok(out)
+}
+
+/// The value under `key` of a pickled state, as a `T`.
+fn item<'py, T>(state: &Bound<'py, PyDict>, key: &str) -> PyResult<T>
+where
+    T: for<'a> FromPyObject<'a, 'py>,
+{
+    let value = state
+        .get_item(key)?
+        .ok_or_else(|| PyValueError::new_err(format!("Rays state: no `{key}`")))?;
+    value.extract::<T>().map_err(|e| {
+        let e: PyErr = e.into();
+        PyValueError::new_err(format!("Rays state: `{key}`: {e}"))
+    })
+}
+
+/// The state of `rays` that [`rays_of_state`] reads back: its arrays (shared, not copied:
+/// pickling copies them), its names, and its reasons as sparse codes.
+pub(crate) fn rays_state<'py>(py: Python<'py>, rays: &PyRays) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("source", &rays.source)?;
+    d.set_item("receiver", &rays.receiver)?;
+    d.set_item("path", &rays.path)?;
+    d.set_item("status", &rays.status)?;
+    d.set_item("time", &rays.time)?;
+    d.set_item("points", &rays.points)?;
+    d.set_item("num_points", &rays.num_points)?;
+    d.set_item("media", &rays.media)?;
+    d.set_item("iterations", &rays.iterations)?;
+    d.set_item("residual", &rays.residual)?;
+    d.set_item("path_names", &rays.path_names)?;
+    d.set_item("media_names", &rays.media_names)?;
+    d.set_item("arrival", &rays.arrival)?;
+    d.set_item("kink", &rays.kink)?;
+    d.set_item("complete", &rays.complete)?;
+    if let Some(a) = &rays.amplitudes {
+        d.set_item("amplitude", &a.value)?;
+        d.set_item("spreading", &a.spreading)?;
+        d.set_item("coefficient", &a.coefficient)?;
+        d.set_item("attenuation_db", &a.attenuation_db)?;
+    }
+    // The GIL released while waiting, as the `reason` getter does: a `trace(out=...)` of
+    // these rays in another thread holds the lock through its batch.
+    let reasons = py.detach(|| {
+        let reasons = rays.reasons.lock().ok()?;
+        Some((
+            reasons.interfaces.clone(),
+            sparse(&reasons.codes, reason_code),
+            reasons
+                .amplitude
+                .as_deref()
+                .map(|a| sparse(a, no_amplitude_code)),
+        ))
+    });
+    let (interfaces, codes, amplitude) =
+        reasons.ok_or_else(|| PyValueError::new_err("the rays' reasons are poisoned"))?;
+    d.set_item("interfaces", interfaces)?;
+    set_sparse(&d, "reason", codes)?;
+    if let Some(amplitude) = amplitude {
+        set_sparse(&d, "amplitude_reason", amplitude)?;
+    }
+    Ok(d)
+}
+
+/// The `Rays` of a state of [`rays_state`], its arrays checked for their types and lengths.
+///
+/// # Errors
+/// `ValueError` for a state that is not one.
+pub(crate) fn rays_of_state(state: &Bound<'_, PyDict>) -> PyResult<PyRays> {
+    let time: Bound<'_, PyArray1<f64>> = item(state, "time")?;
+    let n = time.len();
+    let points: Bound<'_, PyArray3<f64>> = item(state, "points")?;
+    let media: Bound<'_, PyArray2<i32>> = item(state, "media")?;
+    let width = points.shape()[1];
+    let shapes_agree =
+        points.shape() == [n, width, 2] && width >= 2 && media.shape() == [n, width - 1];
+    if !shapes_agree {
+        return Err(PyValueError::new_err(
+            "Rays state: `points` and `media` do not fit the rays",
+        ));
+    }
+    /// A column of `n` entries.
+    fn column<'py, T: numpy::Element + 'static>(
+        state: &Bound<'py, PyDict>,
+        key: &str,
+        n: usize,
+    ) -> PyResult<Py<PyArray1<T>>> {
+        let a: Bound<'py, PyArray1<T>> = item(state, key)?;
+        if a.len() != n {
+            return Err(PyValueError::new_err(format!(
+                "Rays state: `{key}` has {} entries for {n} rays",
+                a.len()
+            )));
+        }
+        Ok(a.unbind())
+    }
+    let optional =
+        |key: &str| -> PyResult<bool> { Ok(state.get_item(key)?.is_some_and(|v| !v.is_none())) };
+    let amplitudes = if optional("amplitude")? {
+        Some(AmplitudeArrays {
+            value: column(state, "amplitude", n)?,
+            spreading: column(state, "spreading", n)?,
+            coefficient: column(state, "coefficient", n)?,
+            attenuation_db: column(state, "attenuation_db", n)?,
+        })
+    } else {
+        None
+    };
+    let amplitude_reasons = if amplitudes.is_some() {
+        Some(dense(state, "amplitude_reason", n, no_amplitude_of)?)
+    } else {
+        None
+    };
+    let codes = dense(state, "reason", n, reason_of)?;
+    let any = codes.iter().any(Option::is_some);
+    let stationary = optional("arrival")?;
+    let kink: Option<Vec<Option<String>>> = if stationary {
+        Some(item(state, "kink")?)
+    } else {
+        None
+    };
+    if kink.as_ref().is_some_and(|k| k.len() != n) {
+        return Err(PyValueError::new_err(
+            "Rays state: `kink` does not fit the rays",
+        ));
+    }
+    Ok(PyRays {
+        source: column(state, "source", n)?,
+        receiver: column(state, "receiver", n)?,
+        path: column(state, "path", n)?,
+        status: column(state, "status", n)?,
+        time: time.unbind(),
+        points: points.unbind(),
+        num_points: column(state, "num_points", n)?,
+        media: media.unbind(),
+        iterations: column(state, "iterations", n)?,
+        residual: column(state, "residual", n)?,
+        reasons: Mutex::new(Reasons {
+            codes,
+            any,
+            interfaces: item(state, "interfaces")?,
+            amplitude: amplitude_reasons,
+        }),
+        status_names: status_names(),
+        path_names: item(state, "path_names")?,
+        media_names: item(state, "media_names")?,
+        arrival: stationary
+            .then(|| column(state, "arrival", n))
+            .transpose()?,
+        kink,
+        complete: stationary
+            .then(|| column(state, "complete", n))
+            .transpose()?,
+        amplitudes,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_reason_reads_back() {
+        let reasons = [
+            Reason::LeavesEnd { step: 3 },
+            Reason::WrongSide { step: 1 },
+            Reason::AtVertex { step: 7 },
+            Reason::Crosses {
+                leg: 2,
+                interface: 5,
+            },
+            Reason::NoMedium { leg: 4 },
+            Reason::MediaUnsettled,
+            Reason::Coincident { step: 6 },
+            Reason::AtEnd { step: 2 },
+            Reason::IterationLimit,
+            Reason::BeyondEnd { step: 8 },
+            Reason::NoStationaryPath,
+            Reason::SearchLimit,
+        ]
+        .into_iter()
+        .chain(THRESHOLDS.map(|rule| Reason::Undecided { rule }));
+        for r in reasons {
+            assert_eq!(reason_of(reason_code(r)), Some(r));
+        }
+        for (k, r) in NoAmplitude::CODES.into_iter().enumerate() {
+            let r = match r {
+                NoAmplitude::Grazing { .. } => NoAmplitude::Grazing { step: k },
+                other => other,
+            };
+            assert_eq!(no_amplitude_of(no_amplitude_code(r)), Some(r));
+        }
+        assert_eq!(reason_of([13, 0, 0]), None);
+        assert_eq!(no_amplitude_of([0, 0, 0]), None);
+    }
+}
