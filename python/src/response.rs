@@ -2,8 +2,9 @@
 //! at each receiver, from every echo of the scene, as numpy arrays.
 
 use eigenray::amplitudes::Complex64;
+use eigenray::options::Stop;
 use eigenray::response::{
-    Echo, ImpulseResponses, echoes_of_scene, pressure_into, transmission_loss,
+    Echo, ImpulseResponses, echoes_of_scene_with, pressure_into, transmission_loss,
 };
 use eigenray::scene_parts::ImpulseResponseOptions;
 use eigenray::spec::ImpulseResponseSpec;
@@ -15,6 +16,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::error::{argument_error, scene_error};
+use crate::interrupt::interruptible;
 
 /// Every echo of the scene (its paths' rays and its search's arrivals), found with the GIL
 /// released; refused, naming `amplitudes`, for a scene that does not ask for them.
@@ -27,8 +29,14 @@ fn scene_echoes(py: Python<'_>, tracer: &Tracer) -> PyResult<Vec<Echo>> {
              (or another source model)",
         ));
     }
-    py.detach(|| echoes_of_scene(tracer))
-        .map_err(|e| argument_error(py, "scene", e.to_string()))
+    let stop = Stop::new();
+    interruptible(
+        py,
+        &stop,
+        || echoes_of_scene_with(tracer, Some(&stop)),
+        || {},
+    )?
+    .map_err(|e| argument_error(py, "scene", e.to_string()))
 }
 
 /// The response settings: the arguments where given (`rate` and `duration` together), else

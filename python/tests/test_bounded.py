@@ -82,6 +82,18 @@ sources = np.column_stack([np.linspace(1, 5, n), np.full(n, -1.0)])
 receivers = np.column_stack([np.linspace(9, 5, n), np.full(n, 1.1)])
 """
 
+# The comb room's every arrival to 0.15 s: 57 million beams, tens of seconds.
+LATE_ROOM = """
+corners = [[0, 0], [0, 5], [1, 5], [1, 2], [2, 2], [2, 5], [3, 5], [3, 0], [2, 0], [2, 1],
+           [1, 1], [1, 0]]
+tracer = eigenray.Tracer(eigenray.Scene({
+    "media": {"air": {"speed": 343.0, "at": [0.5, 0.5]}},
+    "interfaces": {"room": {"points": corners, "closed": True}},
+    "sources": [[0.5, 0.5]], "receivers": [[2.5, 4.5], [1.5, 1.5]],
+    "search": {"max_time": 0.15}, "amplitudes": {"source": "point"},
+}))
+"""
+
 
 def interrupt(setup, call):
     """Runs `call` after `setup` in a child; sends SIGINT once it has run 0.5 s. Returns how
@@ -123,8 +135,12 @@ def interrupt(setup, call):
         (EVERY_PATH, "tracer.stationary_paths([1.0, 1.0], [9.0, 1.1])"),
         (SEARCH, "tracer.search()"),
         (PAIRS, "tracer.solve_pairs(sources, receivers)"),
+        (LATE_ROOM, "tracer.search()"),
+        (LATE_ROOM, "tracer.impulse_response(rate=8000, duration=0.15)"),
+        (LATE_ROOM, "tracer.transmission_loss(frequency=500)"),
     ],
-    ids=["trace", "trace-progress", "trace_stationary", "stationary_paths", "search", "solve_pairs"],
+    ids=["trace", "trace-progress", "trace_stationary", "stationary_paths", "search", "solve_pairs",
+         "search-beams", "impulse_response", "transmission_loss"],
 )
 def test_ctrl_c_raises_keyboard_interrupt_within_half_a_second(setup, call):
     late = interrupt(setup, call)

@@ -4,9 +4,11 @@ use std::fmt;
 
 use num_complex::Complex64;
 
+use crate::control::Stop;
 use crate::output::RaySet;
+use crate::scene::SceneError;
 use crate::scene::StationaryMode;
-use crate::search::{SearchArrival, SearchError};
+use crate::search::{SearchArrival, SearchError, SearchLimits};
 use crate::trace::{Arrival, StationaryError, Status, Tracer};
 use crate::{Amplitude, BatchOptions, Ray};
 
@@ -89,6 +91,8 @@ pub enum EchoError {
     Stationary(StationaryError),
     /// The scene's `search` was refused.
     Search(SearchError),
+    /// The batch of the paths' rays cannot be allocated.
+    Batch(SceneError),
 }
 
 impl fmt::Display for EchoError {
@@ -96,6 +100,7 @@ impl fmt::Display for EchoError {
         match self {
             EchoError::Stationary(e) => write!(f, "solver.stationary: {e}"),
             EchoError::Search(e) => write!(f, "search: {e}"),
+            EchoError::Batch(e) => write!(f, "{e}"),
         }
     }
 }
@@ -107,22 +112,40 @@ impl std::error::Error for EchoError {}
 /// of its `search`.
 ///
 /// # Errors
-/// A refused every-stationary-path search or `search`.
+/// A refused every-stationary-path search or `search`, or a batch too large to allocate.
 pub fn echoes_of_scene(tracer: &Tracer) -> Result<Vec<Echo>, EchoError> {
+    echoes_of_scene_with(tracer, None)
+}
+
+/// [`echoes_of_scene`] that stops soon after `stop` is requested (from another thread): the
+/// batch, the every-stationary-path search and the `search` it runs take it, and the caller
+/// that asked discards the (short) result.
+///
+/// # Errors
+/// As [`echoes_of_scene`].
+pub fn echoes_of_scene_with(tracer: &Tracer, stop: Option<&Stop>) -> Result<Vec<Echo>, EchoError> {
     let scene = tracer.scene();
     let mut echoes: Vec<Echo> = match scene.solver().stationary {
         StationaryMode::One => {
-            let batch = tracer.trace_batch(&BatchOptions::default());
+            let opts = BatchOptions {
+                stop,
+                ..BatchOptions::default()
+            };
+            let batch = tracer.try_trace_batch(&opts).map_err(EchoError::Batch)?;
             echoes_of_rays(RaySet::Batch(&batch)).collect()
         }
         StationaryMode::All => {
-            let all = tracer.trace_stationary().map_err(EchoError::Stationary)?;
+            let all = tracer
+                .trace_stationary_with(&|_| {}, stop)
+                .map_err(EchoError::Stationary)?;
             echoes_of_rays(RaySet::Stationary(&all)).collect()
         }
     };
     if scene.search().is_some() {
-        let arrivals = tracer.search().map_err(EchoError::Search)?;
-        echoes.extend(echoes_of_arrivals(&arrivals));
+        let report = tracer
+            .search_with(&SearchLimits::default(), &|_| {}, stop)
+            .map_err(EchoError::Search)?;
+        echoes.extend(echoes_of_arrivals(&report.arrivals));
     }
     Ok(echoes)
 }
