@@ -1,6 +1,8 @@
 //! What both fuzz targets check on a valid scene: tracing and writing it neither panics nor
 //! produces non-finite times or points, and the output is valid JSON.
 
+use std::time::{Duration, Instant};
+
 use eigenray::{Scene, SolverOptions, Tracer, write};
 
 #[path = "../../tests/support/interface.rs"]
@@ -13,6 +15,24 @@ const MAX_STEPS: usize = 16;
 const MAX_SEGMENTS: usize = 2000;
 /// Iteration cap per ray, so that a timeout means a hang rather than a large legitimate limit.
 const MAX_ITERATIONS: usize = 200;
+
+/// Runs `f`, the work of one input of `bytes` bytes, and fails when it took longer than the
+/// input's CPU budget: issue 29's contract of at most 1 s of CPU per KB of input with default
+/// settings, with a floor of 1 s for the smallest inputs, doubled for the instrumented build
+/// (wall time, which bounds the CPU time of the one thread a fuzzer runs on). An input that
+/// exceeds it is a finding, like a panic.
+#[allow(dead_code, reason = "not every target uses it")]
+pub fn within_budget<R>(bytes: usize, f: impl FnOnce() -> R) -> R {
+    let budget = Duration::from_secs_f64(2.0 * (1.0 + bytes as f64 / 1024.0));
+    let start = Instant::now();
+    let out = f();
+    let took = start.elapsed();
+    assert!(
+        took <= budget,
+        "an input of {bytes} bytes took {took:?}, beyond its budget of {budget:?}"
+    );
+    out
+}
 
 /// Traces every ray of `scene` (if it is small enough) and checks the results.
 pub fn trace_and_check(mut scene: Scene) {
@@ -57,6 +77,24 @@ pub fn trace_and_check(mut scene: Scene) {
             }
         } else {
             assert!(r.time.is_nan() && r.points.is_empty(), "{r:?}");
+        }
+    }
+    // Every stationary path and the search, where the scene asks: bounded by their work
+    // budgets (`solver.max_work`), so within the input's CPU budget too.
+    if scene.solver().stationary == eigenray::spec::StationaryMode::All
+        && let Ok(all) = tracer.trace_stationary()
+    {
+        for t in &all.triples {
+            for a in &t.arrivals {
+                assert!(a.time.is_nan() || (a.time.is_finite() && a.time >= 0.0), "{a:?}");
+            }
+        }
+    }
+    if scene.search().is_some()
+        && let Ok(arrivals) = tracer.search()
+    {
+        for a in &arrivals {
+            assert!(a.arrival.time.is_finite() && a.arrival.time >= 0.0, "{a:?}");
         }
     }
     let mut out = Vec::new();

@@ -10,11 +10,11 @@ fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
-    match Scene::from_json(text) {
+    common::within_budget(data.len(), || match Scene::from_json(text) {
         Ok(scene) => common::trace_and_check(scene),
         Err(e) => assert!(
             !e.key.is_empty() && !e.message.is_empty(),
             "error without a key or message: {e:?}"
         ),
-    }
+    });
 });

@@ -75,6 +75,8 @@ pub fn build(input: &Input) -> SceneSpec {
                 speed: (!as_index).then_some(v),
                 index: as_index.then(|| if v > 0.0 { 1.0 / v } else { v }),
                 at: at.as_ref().map(pt),
+                density: None,
+                attenuation: None,
             },
         );
     }
@@ -88,6 +90,7 @@ pub fn build(input: &Input) -> SceneSpec {
                 InterfaceSpec {
                     points: points.iter().take(12).map(pt).collect(),
                     closed: *closed,
+                    reflection: None,
                 },
             )
         })
@@ -150,6 +153,8 @@ pub fn build(input: &Input) -> SceneSpec {
             ..SolverSpec::default()
         }),
         search: None,
+        amplitudes: None,
+        impulse_response: None,
     }
 }
 

@@ -25,11 +25,13 @@ fuzz_target!(|input: Input| {
             ),
         }
     }
-    match direct {
+    // The budget of the scene as the JSON document it would be.
+    let bytes = serde_json::to_string(&spec).map_or(0, |t| t.len());
+    common::within_budget(bytes, || match direct {
         Ok(scene) => common::trace_and_check(scene),
         Err(e) => assert!(
             !e.key.is_empty() && !e.message.is_empty(),
             "error without a key or message: {e:?}"
         ),
-    }
+    });
 });

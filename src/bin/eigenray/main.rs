@@ -320,6 +320,8 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
     }
     let text = read_scene_text(&args.scene)?;
     let scene = Scene::from_json(&text).map_err(Failure::scene)?;
+    // The document is no longer needed: its memory goes back before the rays take theirs.
+    drop(text);
     if args.arrivals.is_some() && scene.search().is_none() {
         return Err(Failure::Input(
             "--arrivals: the scene has no `search` section, so it has no arrivals to write".into(),
