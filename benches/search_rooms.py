@@ -28,10 +28,13 @@ import statistics
 import subprocess
 import sys
 import time
-from fractions import Fraction
 
 import numpy as np
 import pyroomacoustics as pra
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python",
+                                "tests"))
+import exact_rooms  # noqa: E402
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
 EXAMPLE = os.path.join(ROOT, "target", "release", "examples", "search_rooms")
@@ -65,104 +68,18 @@ def time_ism(room, repetitions):
     return statistics.median(times)
 
 
-# Exact geometry: points as pairs of Fractions.
-def sub(a, b):
-    return (a[0] - b[0], a[1] - b[1])
-
-
-def cross(a, b):
-    return a[0] * b[1] - a[1] * b[0]
-
-
-def mirror(x, p, q):
-    """`x` mirrored in the line through `p` and `q`, exactly."""
-    e = sub(q, p)
-    w = sub(x, p)
-    k = 2 * (w[0] * e[0] + w[1] * e[1]) / (e[0] ** 2 + e[1] ** 2)
-    return (p[0] + k * e[0] - w[0], p[1] + k * e[1] - w[1])
-
-
-def meet(a, b, p, q):
-    """Where segment `a -> b` meets the line through `p`, `q`: (t along a->b, u along p->q),
-    or None when parallel."""
-    d, e = sub(b, a), sub(q, p)
-    den = cross(d, e)
-    if den == 0:
-        return None
-    w = sub(p, a)
-    return cross(w, e) / den, cross(w, d) / den
-
-
-def touches(a, b, p, q):
-    """Whether segments `a-b` and `p-q` share a point (exact orientation tests)."""
-    def orient(x, y, z):
-        c = cross(sub(y, x), sub(z, x))
-        return (c > 0) - (c < 0)
-
-    def on(x, y, z):  # z on segment x-y, given collinear
-        return min(x[0], y[0]) <= z[0] <= max(x[0], y[0]) and min(x[1], y[1]) <= z[1] <= max(x[1], y[1])
-
-    o1, o2, o3, o4 = orient(a, b, p), orient(a, b, q), orient(p, q, a), orient(p, q, b)
-    if o1 != o2 and o3 != o4 and 0 not in (o1, o2, o3, o4):
-        return True
-    return (o1 == 0 and on(a, b, p)) or (o2 == 0 and on(a, b, q)) or (
-        o3 == 0 and on(p, q, a)) or (o4 == 0 and on(p, q, b))
-
-
 def exact_paths(corners, sources, receivers):
-    """{(source, receiver): {walls tuple: exact time as Decimal}} of every valid path."""
-    c = [(Fraction(x), Fraction(y)) for x, y in corners]
-    walls = [(c[i], c[(i + 1) % len(c)]) for i in range(len(c))]
-    seqs = [()]
-    level = [()]
-    for _ in range(ORDER):
-        level = [s + (w,) for s in level for w in range(len(walls)) if not s or s[-1] != w]
-        seqs += level
+    """{(source, receiver): {walls tuple: exact time as Decimal}} of every valid path: the
+    exhaustive enumeration of `python/tests/exact_rooms.py`, in rational arithmetic."""
     out = {}
     for si, s in enumerate(sources):
-        src = (Fraction(s[0]), Fraction(s[1]))
-        images = {(): src}
-        for seq in seqs:
-            if seq:
-                images[seq] = mirror(images[seq[:-1]], *walls[seq[-1]])
-        for ri, r in enumerate(receivers):
-            rec = (Fraction(r[0]), Fraction(r[1]))
-            found = {}
-            for seq in seqs:
-                # Back from the receiver: each point where the leg towards the image meets
-                # its wall, strictly inside the leg and the wall.
-                points = [rec]
-                to, ok = rec, True
-                for i in range(len(seq) - 1, -1, -1):
-                    p, q = walls[seq[i]]
-                    m = meet(to, images[seq[: i + 1]], p, q)
-                    if m is None or not (0 < m[0] < 1 and 0 < m[1] < 1):
-                        ok = False
-                        break
-                    to = (p[0] + m[1] * (q[0] - p[0]), p[1] + m[1] * (q[1] - p[1]))
-                    points.append(to)
-                if not ok:
-                    continue
-                points.append(src)
-                points.reverse()  # source, reflection points, receiver
-                # No leg meets a wall other than at its own reflection points.
-                on_wall = [None] + list(seq) + [None]
-                clear = True
-                for j in range(len(points) - 1):
-                    for w, (p, q) in enumerate(walls):
-                        if w in (on_wall[j], on_wall[j + 1]):
-                            continue
-                        if touches(points[j], points[j + 1], p, q):
-                            clear = False
-                    if not clear:
-                        break
-                if not clear:
-                    continue
-                d = sub(rec, images[seq])
-                d2 = d[0] ** 2 + d[1] ** 2
-                dist = (decimal.Decimal(d2.numerator) / decimal.Decimal(d2.denominator)).sqrt()
-                found[tuple(seq)] = dist / SPEED
-            out[(si, ri)] = found
+        paths = exact_rooms.exact_paths(corners, s, receivers, ORDER, exhaustive=True)
+        for ri, found in paths.items():
+            out[(si, ri)] = {
+                seq: (decimal.Decimal(d2.numerator) / decimal.Decimal(d2.denominator)).sqrt()
+                / SPEED
+                for seq, (d2, _) in found.items()
+            }
     return out
 
 

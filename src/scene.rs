@@ -1263,11 +1263,23 @@ impl Scene {
         margin: f64,
         own: [SegmentRef; 2],
     ) -> Option<SegmentRef> {
+        self.first_crossing_by(a, b, margin, own, |i| self.crosses(i, a, b, margin))
+    }
+
+    /// The first segment near `a–b` (not one of `own`) that `crosses` says the leg crosses.
+    fn first_crossing_by(
+        &self,
+        a: Point,
+        b: Point,
+        margin: f64,
+        own: [SegmentRef; 2],
+        crosses: impl Fn(u32) -> bool,
+    ) -> Option<SegmentRef> {
         let sbox = middle_box(a, b, margin);
         let mut hit = None;
         self.segment_bvh.any_near_segment_in(sbox, a, b, |i| {
             let r = self.segments[i as usize];
-            let crossed = r != own[0] && r != own[1] && self.crosses(i, a, b, margin);
+            let crossed = r != own[0] && r != own[1] && crosses(i);
             if crossed {
                 hit = Some(r);
             }
@@ -1289,26 +1301,16 @@ impl Scene {
         margin: f64,
         own: [SegmentRef; 2],
     ) -> Option<SegmentRef> {
-        let sbox = middle_box(a, b, margin);
-        let mut hit = None;
-        self.segment_bvh.any_near_segment_in(sbox, a, b, |i| {
-            let r = self.segments[i as usize];
-            let crossed = r != own[0] && r != own[1] && {
-                let Segment { start: p, end: q } = self.segment_ends[i as usize];
-                let (d, e) = (b - a, q - p);
-                let den = d.cross(e);
-                let t = (p - a).cross(e) / den;
-                den != 0.0
-                    && t > margin
-                    && t < 1.0 - margin
-                    && orient(line[0], line[1], p) * orient(line[0], line[1], q) <= 0.0
-            };
-            if crossed {
-                hit = Some(r);
-            }
-            crossed
-        });
-        hit
+        self.first_crossing_by(a, b, margin, own, |i| {
+            let Segment { start: p, end: q } = self.segment_ends[i as usize];
+            let (d, e) = (b - a, q - p);
+            let den = d.cross(e);
+            let t = (p - a).cross(e) / den;
+            den != 0.0
+                && t > margin
+                && t < 1.0 - margin
+                && orient(line[0], line[1], p) * orient(line[0], line[1], q) <= 0.0
+        })
     }
 
     /// [`first_crossing`](Self::first_crossing) among `candidates` only (scene segment

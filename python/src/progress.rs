@@ -72,3 +72,55 @@ impl<'py> Progress<'py> {
         Ok(())
     }
 }
+
+/// The reports of one call that runs on a thread of its own: its workers count what they
+/// finish into `done`, and the calling thread [`poll`](Self::poll)s it (at most one report a
+/// poll, none after one failed), then [`finish`](Self::finish)es.
+pub(crate) struct Reports<'a, 'py> {
+    progress: Option<&'a Progress<'py>>,
+    done: &'a std::sync::atomic::AtomicUsize,
+    total: usize,
+    shown: usize,
+    reported: PyResult<()>,
+}
+
+impl<'a, 'py> Reports<'a, 'py> {
+    /// The reports of a call over `total` items to `progress` (none without one).
+    pub(crate) fn new(
+        progress: Option<&'a Progress<'py>>,
+        done: &'a std::sync::atomic::AtomicUsize,
+        total: usize,
+    ) -> Reports<'a, 'py> {
+        Reports {
+            progress,
+            done,
+            total,
+            shown: 0,
+            reported: Ok(()),
+        }
+    }
+
+    /// Reports what was done since the last report, if anything was.
+    pub(crate) fn poll(&mut self) {
+        let now = self.done.load(std::sync::atomic::Ordering::Relaxed);
+        if let Some(progress) = self.progress
+            && self.reported.is_ok()
+            && now > self.shown
+        {
+            self.reported = progress.report(now, self.shown, self.total);
+            self.shown = now;
+        }
+    }
+
+    /// The call is over: reports it whole and closes the progress; the error of a report, if
+    /// one failed.
+    pub(crate) fn finish(mut self) -> PyResult<()> {
+        if let Some(progress) = self.progress {
+            if self.reported.is_ok() && self.shown < self.total {
+                self.reported = progress.report(self.total, self.shown, self.total);
+            }
+            self.reported = self.reported.and(progress.close());
+        }
+        self.reported
+    }
+}

@@ -13,7 +13,7 @@ use pyo3::prelude::*;
 use crate::error::{check_memory, scene_error};
 use crate::interrupt::interruptible;
 use crate::out_arrays::OutArrays;
-use crate::progress::Progress;
+use crate::progress::{Progress, Reports};
 use crate::rays::PyRays;
 use crate::sink::{AmplitudeSink, RowSink};
 use crate::table::{Table, width};
@@ -96,28 +96,13 @@ fn trace_into<S: BatchSink>(
         stop: Some(&stop),
         ..BatchOptions::default()
     };
-    let (mut shown, mut reported) = (0, Ok(()));
+    let mut reports = Reports::new(progress.as_ref(), &done, total);
     let solved = interruptible(
         py,
         &stop,
         || tracer.trace_batch_to(&opts, sink, scratch),
-        || {
-            let now = done.load(Ordering::Relaxed);
-            if let Some(progress) = &progress
-                && reported.is_ok()
-                && now > shown
-            {
-                reported = progress.report(now, shown, total);
-                shown = now;
-            }
-        },
+        || reports.poll(),
     )?;
     solved.map_err(|e| scene_error(py, &e))?;
-    if let Some(progress) = &progress {
-        if reported.is_ok() && shown < total {
-            reported = progress.report(total, shown, total);
-        }
-        reported = reported.and(progress.close());
-    }
-    Ok(reported)
+    Ok(reports.finish())
 }

@@ -21,7 +21,7 @@ use crate::error::{argument_error, check_memory, scene_error};
 use crate::gradient::PyGradient;
 use crate::gradients::PyGradients;
 use crate::interrupt::interruptible;
-use crate::progress::Progress;
+use crate::progress::{Progress, Reports};
 use crate::ray::PyRay;
 use crate::rays::PyRays;
 use crate::response;
@@ -218,29 +218,16 @@ impl PyTracer {
         let count = |n: usize| {
             done.fetch_add(n, Ordering::Relaxed);
         };
-        let (stop, mut shown, mut reported) = (Stop::new(), 0, Ok(()));
+        let stop = Stop::new();
+        let mut reports = Reports::new(progress.as_ref(), &done, total);
         let rays = interruptible(
             py,
             &stop,
             || tracer.trace_stationary_with(&count, Some(&stop)),
-            || {
-                let now = done.load(Ordering::Relaxed);
-                if let Some(progress) = &progress
-                    && reported.is_ok()
-                    && now > shown
-                {
-                    reported = progress.report(now, shown, total);
-                    shown = now;
-                }
-            },
+            || reports.poll(),
         )?
         .map_err(|e| scene_error(py, &e.into()))?;
-        if let Some(progress) = &progress {
-            if reported.is_ok() && shown < total {
-                reported = progress.report(total, shown, total);
-            }
-            reported.and(progress.close())?;
-        }
+        reports.finish()?;
         let table = py.detach(|| stationary_table(scene, &rays));
         Ok(table.finish(py, scene))
     }
