@@ -13,10 +13,12 @@
 //! receiver in the beam gets the image method's path (the line from the image to the receiver
 //! meets the last wall's line, the line from the image before to that point the wall
 //! before's, …), validated as the classifier validates a ray: each point on its segment,
-//! strictly inside it except at an open end of its polyline (a path through an open end
-//! reflects there, as the complete search finds it; a point exactly on a vertex between two
-//! segments is a `vertex` case, not a specular reflection), both legs of each reflection strictly on one side of its wall ([`leg_sides`],
-//! [`sides_suit`]), no vanished leg between two reflections, and no leg crossing an interface
+//! strictly inside it except at a free end (an open end of its polyline where no other
+//! segment ends: a path through it reflects there, as the complete search finds it; a point
+//! exactly on a vertex between two segments is a `vertex` case, and one on a corner where two
+//! interfaces end is no reflection either, so that a room drawn one interface per wall gives
+//! the arrivals of its polyline), both legs of each reflection strictly on one side of its
+//! wall ([`leg_sides`], [`sides_suit`]), no vanished leg between two reflections, and no leg crossing an interface
 //! strictly between its ends ([`Scene::first_crossing`] with the classifier's margin and the
 //! legs' own segments left out).
 //!
@@ -71,8 +73,9 @@ struct Wall {
     e: Vec2,
     /// The unit normal (the polyline's: the segment's tangent turned left).
     n: Vec2,
-    /// Whether `p`, and `q`, is an open end of the polyline (not a vertex between two of its
-    /// segments): a reflection may lie there.
+    /// Whether `p`, and `q`, is a free end: an open end of its polyline where no other segment
+    /// of the scene ends (not a vertex between two of its segments, nor a corner where two
+    /// interfaces meet): a reflection may lie there.
     open: [bool; 2],
 }
 
@@ -375,6 +378,23 @@ impl Bounds {
 impl MirrorWalls {
     /// Every segment of each of `interfaces` (scene interface indices), in order.
     pub(crate) fn new(scene: &Scene, interfaces: &[usize]) -> MirrorWalls {
+        // The ends of every segment of the scene, to tell a free end from a corner where
+        // another interface ends too (a room drawn one interface per wall).
+        let mut ends: Vec<(u64, u64)> = (0..scene.interfaces().len())
+            .flat_map(|i| {
+                let line = &scene.interfaces()[i].polyline;
+                (0..line.num_segments()).flat_map(move |j| {
+                    let s = line.segment(j);
+                    [s.start, s.end]
+                })
+            })
+            .map(|p| (p.x.to_bits(), p.y.to_bits()))
+            .collect();
+        ends.sort_unstable();
+        let shared = |p: Point| {
+            let key = (p.x.to_bits(), p.y.to_bits());
+            ends.partition_point(|&e| e < key) + 1 < ends.partition_point(|&e| e <= key)
+        };
         let mut walls = Vec::new();
         for &interface in interfaces {
             let line = &scene.interfaces()[interface].polyline;
@@ -391,8 +411,8 @@ impl MirrorWalls {
                     e: s.end - s.start,
                     n: line.normal(segment),
                     open: [
-                        !line.is_closed() && segment == 0,
-                        !line.is_closed() && segment + 1 == line.num_segments(),
+                        !line.is_closed() && segment == 0 && !shared(s.start),
+                        !line.is_closed() && segment + 1 == line.num_segments() && !shared(s.end),
                     ],
                 });
             }
@@ -421,8 +441,8 @@ impl MirrorWalls {
 
     /// Every reflect-only sequence of 0..=`max_steps` walls from the source to each receiver
     /// whose path exists and arrives by `max_time`, reported to `found` in the order of the
-    /// tree's walk: each reflection point strictly inside its wall or on an open end of its
-    /// polyline, both legs of each reflection strictly on one side of it, no vanished leg between reflections, and
+    /// tree's walk: each reflection point strictly inside its wall or on a free end, both legs
+    /// of each reflection strictly on one side of it, no vanished leg between reflections, and
     /// (unless `obstructed`, which lists obstructed paths too, with [`Status::Obstructed`] and
     /// [`Reason::Crosses`]) no leg crossing an interface of the scene strictly between its
     /// ends (the classifier's test). Sequence 0 is the direct ray. `found` returns `false` to
@@ -712,9 +732,9 @@ impl Validation<'_, '_> {
             let wall = &self.walls[node.wall];
             let sp = orient(node.image, far, wall.p);
             let sq = orient(node.image, far, wall.q);
-            // Strictly inside the segment, or on an open end of its polyline: a path through
-            // an open end reflects there, as the complete search finds it, while one through a
-            // vertex between two segments is a `vertex` case.
+            // Strictly inside the segment, or on a free end: a path through a free end reflects
+            // there, as the complete search finds it, while one through a vertex between two
+            // segments is a `vertex` case and one through a corner of two walls no reflection.
             let u = if sp * sq < 0.0 {
                 let d = to - node.image;
                 ((wall.p - node.image).cross(d) / d.cross(wall.e)).clamp(0.0, 1.0)
