@@ -327,6 +327,20 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
             "--arrivals: the scene has no `search` section, so it has no arrivals to write".into(),
         ));
     }
+    if scene.search().is_some()
+        && args.arrivals.is_none()
+        && matches!(args.format, Format::Csv | Format::Npy)
+    {
+        let name = if args.format == Format::Csv {
+            "csv"
+        } else {
+            "npy"
+        };
+        return Err(Failure::Input(format!(
+            "--format {name}: the scene's `search` arrivals are a table of their own; give \
+             --arrivals FILE to write them"
+        )));
+    }
     check_batch_memory(&scene, !args.no_warm_start)?;
     let ir = match &args.ir {
         Some(path) => Some(response::IrOutput::check(path, &scene)?),
@@ -366,7 +380,8 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
 /// Writes what `solve` found: the name tables and the picture when asked for, the arrivals of
 /// a scene's search (`Some` exactly for a scene with a `search` section) to `--arrivals` when
 /// given, and the rays (and, in JSON and JSON Lines without `--arrivals`, the arrivals) to
-/// standard output. Nothing is written when the arrivals cannot go anywhere.
+/// standard output. (Arrivals that could go nowhere, CSV or npy without `--arrivals`, are
+/// refused before the solve.)
 fn write_outputs(
     args: &SolveArgs,
     scene: &Scene,
@@ -374,20 +389,6 @@ fn write_outputs(
     arrivals: Option<&[SearchArrival]>,
 ) -> Result<(), Failure> {
     let format = eigenray::Format::from(args.format);
-    if arrivals.is_some()
-        && args.arrivals.is_none()
-        && matches!(args.format, Format::Csv | Format::Npy)
-    {
-        let name = if args.format == Format::Csv {
-            "csv"
-        } else {
-            "npy"
-        };
-        return Err(Failure::Input(format!(
-            "--format {name}: the scene's `search` arrivals are a table of their own; give \
-             --arrivals FILE to write them"
-        )));
-    }
     if let Some(path) = &args.names {
         let mut names = Vec::new();
         eigenray::npy::write_names(scene, &mut names).map_err(|e| write_failure(path, &e))?;
