@@ -3,8 +3,25 @@
 # (benches/adversarial_scenes.py): prints scene, bytes, user+system CPU seconds, CPU s per KB,
 # peak resident memory and the entries' statuses. Usage: benches/adversarial_cpu.sh [EIGENRAY]
 set -euo pipefail
+usage='Usage: benches/adversarial_cpu.sh [EIGENRAY]
+
+Writes the adversarial scenes of benches/adversarial_scenes.py to a temporary folder, solves
+each once with EIGENRAY (default: target/release/eigenray) and prints scene, bytes, user+system
+CPU seconds, CPU s per KB, peak resident memory (MB) and the entries statuses.'
+case ${1:-} in
+    -h | --help) echo "$usage"; exit 0 ;;
+    -*) echo "$usage" >&2; exit 2 ;;
+esac
+if [ $# -gt 1 ]; then
+    echo "$usage" >&2
+    exit 2
+fi
 cd "$(dirname "$0")/.."
 bin=${1:-target/release/eigenray}
+if [ ! -x "$bin" ]; then
+    echo "error: $bin is not an executable (build it first: cargo build --release)" >&2
+    exit 2
+fi
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 python3 benches/adversarial_scenes.py "$dir" > /dev/null

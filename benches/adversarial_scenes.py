@@ -10,9 +10,11 @@
   (`walls_fallback_K_1.json`: one ray);
 - `walls_search_S.json`: `"search": {"max_steps": S, "refract": false}` over the walls.
 
-Usage: python3 benches/adversarial_scenes.py OUTDIR   (then benches/adversarial_cpu.sh OUTDIR)
+Usage: python3 benches/adversarial_scenes.py [OUTDIR]   (default: ./adversarial; or let
+benches/adversarial_cpu.sh write and time them). `--help` prints this and writes nothing.
 """
 
+import argparse
 import json
 import math
 import os
@@ -45,8 +47,24 @@ def reflections(k):
     return [{"name": f"zigzag{k}", "steps": steps, "media": ["air"] * (k + 1)}]
 
 
-def main():
-    out = sys.argv[1] if len(sys.argv) > 1 else "adversarial"
+def arguments(argv):
+    """The command line: one optional output folder, which must not look like an option."""
+    parser = argparse.ArgumentParser(
+        prog="adversarial_scenes.py",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument(
+        "outdir",
+        nargs="?",
+        default="adversarial",
+        help="folder the scenes are written to (created if missing; default: adversarial)",
+    )
+    return parser.parse_args(argv)
+
+
+def main(argv=None):
+    out = arguments(sys.argv[1:] if argv is None else argv).outdir
     os.makedirs(out, exist_ok=True)
     scenes = {}
     for k in (8, 10, 12):

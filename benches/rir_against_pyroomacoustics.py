@@ -8,9 +8,22 @@ How to run (pyroomacoustics and matplotlib in a venv, the package installed):
   python benches/rir_against_pyroomacoustics.py [picture.png]
 """
 
+import argparse
 import math
 import pathlib
 import sys
+
+# The arguments first: `--help` prints this and writes nothing (not a picture named `--help`).
+parser = argparse.ArgumentParser(
+    description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+)
+parser.add_argument(
+    "picture",
+    nargs="?",
+    default="rir_against_pyroomacoustics.png",
+    help="the PNG written (default: rir_against_pyroomacoustics.png)",
+)
+picture = parser.parse_args().picture
 
 import matplotlib
 
@@ -43,6 +56,5 @@ ax.set_title(f"L-shaped room, order {order}, {rooms.RATE} Hz: relative L2 differ
              f"{error:.1e}", fontsize=10)
 ax.legend(fontsize=8)
 ax.grid(alpha=0.3)
-picture = sys.argv[1] if len(sys.argv) > 1 else "rir_against_pyroomacoustics.png"
 fig.savefig(picture, dpi=120)
 print(f"wrote {picture}: relative L2 difference {error:.2e}")

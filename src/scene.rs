@@ -1011,6 +1011,16 @@ impl Scene {
         Scene::from_spec(&SceneSpec::from_json(text)?)
     }
 
+    /// Parses and validates a scene document that the caller generated from its own data
+    /// (the Python package's `dict`, serialised): errors name the key path only, without the
+    /// line and column of a text the user never wrote ([`SceneSpec::from_generated_json`]).
+    ///
+    /// # Errors
+    /// The first problem found, with the key that holds it.
+    pub fn from_generated_json(text: &str) -> Result<Scene, SceneError> {
+        Scene::from_spec(&SceneSpec::from_generated_json(text)?)
+    }
+
     /// Validates a scene document: every rule of the scene format, plus finite numbers and
     /// interfaces that neither cross nor overlap (themselves or each other).
     ///
@@ -1424,6 +1434,21 @@ impl SceneSpec {
     /// # Errors
     /// Bad JSON, or a value of the wrong type, with the key that holds it.
     pub fn from_json(text: &str) -> Result<SceneSpec, SceneError> {
+        SceneSpec::parse(text, JsonOrigin::Written)
+    }
+
+    /// Parses a scene document that the caller generated from its own data (the Python
+    /// package's `dict`, serialised): as [`from_json`](SceneSpec::from_json), but an error
+    /// names the key path only, without the line and column of a text the user never wrote.
+    ///
+    /// # Errors
+    /// Bad JSON, or a value of the wrong type, with the key that holds it.
+    pub fn from_generated_json(text: &str) -> Result<SceneSpec, SceneError> {
+        SceneSpec::parse(text, JsonOrigin::Generated)
+    }
+
+    /// Parses a scene document; `origin` says whether its errors may point into the text.
+    fn parse(text: &str, origin: JsonOrigin) -> Result<SceneSpec, SceneError> {
         // serde would also accept a struct written as an array: a scene is an object.
         if !text.trim_start().starts_with('{') {
             let msg = if text.trim().is_empty() {
@@ -1438,11 +1463,17 @@ impl SceneSpec {
             let path = e.path().to_string();
             let inner = e.into_inner();
             let root = path == "." || path.is_empty() || path == "?";
-            let text = inner.to_string();
+            let text = origin.message(&inner);
             if inner.is_syntax() || inner.is_eof() {
                 if text.starts_with("trailing characters") && !root {
                     // An array with too many elements, such as a point with 3 coordinates.
-                    return SceneError::new(path, format!("too many elements ({text})"));
+                    return SceneError::new(
+                        path,
+                        match origin {
+                            JsonOrigin::Written => format!("too many elements ({text})"),
+                            JsonOrigin::Generated => "too many elements".to_string(),
+                        },
+                    );
                 }
                 return SceneError::new(
                     if root { "scene".to_string() } else { path },
@@ -1464,9 +1495,36 @@ impl SceneSpec {
         })?;
         // Anything but whitespace after the document (a second document, stray text) is bad
         // JSON too.
-        de.end()
-            .map_err(|e| SceneError::new("scene", format!("invalid JSON: {e}")))?;
+        de.end().map_err(|e| {
+            SceneError::new("scene", format!("invalid JSON: {}", origin.message(&e)))
+        })?;
         Ok(spec)
+    }
+}
+
+/// Who wrote a scene document's text: the user (a file, a string), whose errors may say
+/// where in it they are, or the caller from its own data, whose errors name the key only.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum JsonOrigin {
+    /// Text the user wrote: errors keep serde_json's line and column.
+    Written,
+    /// Text serialised from the caller's data: errors without a line and column.
+    Generated,
+}
+
+impl JsonOrigin {
+    /// serde_json's message for `e`, without its ` at line L column C` where the text was
+    /// generated.
+    fn message(self, e: &serde_json::Error) -> String {
+        let text = e.to_string();
+        if self == JsonOrigin::Written || e.line() == 0 {
+            return text;
+        }
+        let position = format!(" at line {} column {}", e.line(), e.column());
+        match text.strip_suffix(&position) {
+            Some(message) => message.to_string(),
+            None => text,
+        }
     }
 }
 
@@ -1775,5 +1833,71 @@ mod tests {
         assert!(e.message.contains("points"), "{e}");
         let ok = batch_size(3, 5, &[path(0), path(2)]).expect("fits");
         assert_eq!((ok.rays, ok.points, ok.legs), (30, 15 * 6, 15 * 4));
+    }
+
+    /// A scene document generated from the caller's data gives the same error, key and words
+    /// as the same text written by the user, without serde_json's line and column; a valid one
+    /// gives the same scene.
+    #[test]
+    fn generated_json_errors_name_the_key_path_only() {
+        let base = serde_json::json!({
+            "media": {"air": {"speed": 1.0}},
+            "sources": [[0, 1]], "receivers": [[1, 1]], "paths": []
+        });
+        for (key_set, value, key, words) in [
+            (
+                "sources",
+                serde_json::json!([[0, "x"]]),
+                "sources[0][1]",
+                "invalid type: string",
+            ),
+            (
+                "sources",
+                serde_json::json!([[0, 1, 2]]),
+                "sources[0]",
+                "too many elements",
+            ),
+            (
+                "solver",
+                serde_json::json!({"max_iterations": -3}),
+                "solver.max_iterations",
+                "invalid value",
+            ),
+            (
+                "paths",
+                serde_json::json!([{"media": ["air"]}]),
+                "paths[0].steps",
+                "missing",
+            ),
+        ] {
+            let mut doc = base.clone();
+            doc[key_set] = value;
+            let text = serde_json::to_string_pretty(&doc).expect("JSON");
+            let written = Scene::from_json(&text).map(|_| ()).expect_err(&text);
+            let generated = Scene::from_generated_json(&text)
+                .map(|_| ())
+                .expect_err(&text);
+            assert_eq!(
+                (written.key.as_str(), generated.key.as_str()),
+                (key, key),
+                "{text}"
+            );
+            assert!(generated.message.contains(words), "{generated}");
+            assert!(
+                !generated.message.contains("line") && !generated.message.contains("column"),
+                "{generated}"
+            );
+            // serde_json places its type errors in the text; a missing key has no place.
+            if words == "missing" {
+                assert_eq!(written.message, generated.message);
+            } else {
+                assert!(written.message.contains(" at line "), "{written}");
+            }
+        }
+        let text = base.to_string();
+        assert_eq!(
+            Scene::from_generated_json(&text).unwrap().to_json(),
+            Scene::from_json(&text).unwrap().to_json()
+        );
     }
 }

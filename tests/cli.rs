@@ -847,3 +847,127 @@ fn the_readme_square_room_gives_its_arrivals() {
         "jsonl",
     );
 }
+
+/// Whether the segment `p`–`q` crosses the segment `a`–`b` (proper crossings: the test's
+/// points are in general position).
+fn segments_cross(p: [f64; 2], q: [f64; 2], a: [f64; 2], b: [f64; 2]) -> bool {
+    let side = |o: [f64; 2], u: [f64; 2], v: [f64; 2]| {
+        (u[0] - o[0]) * (v[1] - o[1]) - (u[1] - o[1]) * (v[0] - o[0])
+    };
+    side(p, q, a) * side(p, q, b) < 0.0 && side(a, b, p) * side(a, b, q) < 0.0
+}
+
+/// A search for direct arrivals only (`max_steps: 0`) past one opaque wall, 2 sources × 3
+/// receivers: the pairs whose direct leg crosses the wall have no arrival.
+const WALL: [[f64; 2]; 2] = [[-1.0, 0.5], [1.0, 0.5]];
+const SEARCH_SOURCES: [[f64; 2]; 2] = [[0.0, 0.0], [5.0, 0.0]];
+const SEARCH_RECEIVERS: [[f64; 2]; 3] = [[0.0, 1.0], [0.5, 2.0], [3.0, 0.0]];
+
+/// How many pairs no arrival reaches is said on standard error, in every format and with
+/// standard error not a terminal (a pipe here), and agrees with the pairs whose direct leg
+/// the wall blocks (brute force) and with the pairs that have no entry in the output.
+#[test]
+fn a_search_says_how_many_pairs_no_arrival_reaches() {
+    let scene = serde_json::json!({
+        "media": { "air": { "speed": 1.0 } },
+        "background": "air",
+        "interfaces": { "wall": { "points": WALL } },
+        "sources": SEARCH_SOURCES,
+        "receivers": SEARCH_RECEIVERS,
+        "search": { "max_steps": 0 }
+    });
+    let blocked: Vec<(usize, usize)> = (0..SEARCH_SOURCES.len())
+        .flat_map(|s| (0..SEARCH_RECEIVERS.len()).map(move |r| (s, r)))
+        .filter(|&(s, r)| segments_cross(SEARCH_SOURCES[s], SEARCH_RECEIVERS[r], WALL[0], WALL[1]))
+        .collect();
+    assert_eq!(blocked, [(0, 0), (0, 1)]);
+    let file = TempFile::with("search-wall.json", scene.to_string());
+    // CSV's arrivals are a table of their own: in a file of their own.
+    let table = TempFile::path_only("search-wall-arrivals.csv");
+    for format in ["jsonl", "csv", "json"] {
+        let mut args = vec![
+            OsStr::new("solve"),
+            file.path().as_os_str(),
+            OsStr::new("--format"),
+            OsStr::new(format),
+        ];
+        if format == "csv" {
+            args.extend([OsStr::new("--arrivals"), table.path().as_os_str()]);
+        }
+        let out = run(args);
+        assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
+        let stderr = text(&out.stderr);
+        assert_eq!(stderr.lines().count(), 1, "{format}: {stderr}");
+        assert!(
+            stderr.starts_with("search: 4 arrivals")
+                && stderr.trim_end().ends_with(
+                    "; no arrival reaches 2 of the 6 source-receiver pairs \
+                     (source 0 to receiver 0, source 0 to receiver 1)"
+                ),
+            "{format}: {stderr}"
+        );
+        // The output has entries for the other four pairs only.
+        let arrivals_table;
+        let stdout = if format == "csv" {
+            arrivals_table = std::fs::read_to_string(table.path()).expect("arrivals written");
+            &arrivals_table
+        } else {
+            text(&out.stdout)
+        };
+        let pairs: Vec<(u64, u64)> = match format {
+            "jsonl" => stdout
+                .lines()
+                .map(|l| serde_json::from_str::<Value>(l).expect("a JSON line"))
+                .map(|a| {
+                    (
+                        a["source"].as_u64().unwrap(),
+                        a["receiver"].as_u64().unwrap(),
+                    )
+                })
+                .collect(),
+            "csv" => stdout
+                .lines()
+                .skip(1)
+                .map(|l| {
+                    let mut cells = l.split(',').map(|c| c.parse::<u64>().expect("an index"));
+                    (cells.next().unwrap(), cells.next().unwrap())
+                })
+                .collect(),
+            _ => serde_json::from_str::<Value>(stdout).expect("one JSON document")["arrivals"]
+                .as_array()
+                .expect("arrivals")
+                .iter()
+                .map(|a| {
+                    (
+                        a["source"].as_u64().unwrap(),
+                        a["receiver"].as_u64().unwrap(),
+                    )
+                })
+                .collect(),
+        };
+        assert_eq!(
+            pairs,
+            [(0, 2), (1, 0), (1, 1), (1, 2)],
+            "{format}: {stdout}"
+        );
+    }
+    // Every pair reached: the line says none, still.
+    let mut open = scene.clone();
+    open["interfaces"]["wall"]["points"] = serde_json::json!([[-1.0, -5.0], [1.0, -5.0]]);
+    let file = TempFile::with("search-open.json", open.to_string());
+    let out = run([
+        OsStr::new("solve"),
+        file.path().as_os_str(),
+        OsStr::new("--format"),
+        OsStr::new("jsonl"),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
+    assert_eq!(text(&out.stdout).lines().count(), 6);
+    assert!(
+        text(&out.stderr)
+            .trim_end()
+            .ends_with("; no arrival reaches 0 of the 6 source-receiver pairs"),
+        "{}",
+        text(&out.stderr)
+    );
+}

@@ -26,9 +26,19 @@ pub(crate) struct PyScene {
 }
 
 impl PyScene {
-    /// A scene from its JSON text, parsed with the GIL released.
+    /// A scene from JSON text the user wrote, parsed with the GIL released.
     fn parse(py: Python<'_>, text: &str) -> PyResult<PyScene> {
-        let scene = py.detach(|| Scene::from_json(text));
+        PyScene::validated(py, py.detach(|| Scene::from_json(text)))
+    }
+
+    /// A scene from JSON text serialised from the user's `dict`: its errors name the key path
+    /// only (no line and column of a text the user never wrote).
+    fn parse_generated(py: Python<'_>, text: &str) -> PyResult<PyScene> {
+        PyScene::validated(py, py.detach(|| Scene::from_generated_json(text)))
+    }
+
+    /// The Python face of a parsed scene, or its error.
+    fn validated(py: Python<'_>, scene: Result<Scene, eigenray::SceneError>) -> PyResult<PyScene> {
         scene
             .map(|scene| PyScene {
                 scene: Arc::new(scene),
@@ -76,7 +86,7 @@ impl PyScene {
         let text = json
             .call_method("dumps", (scene,), Some(&kwargs))
             .map_err(|e| argument_error(py, "scene", format!("is not JSON: {e}")))?;
-        PyScene::parse(py, text.extract::<&str>()?)
+        PyScene::parse_generated(py, text.extract::<&str>()?)
     }
 
     /// A scene from a file.

@@ -1,6 +1,7 @@
 """The package's calls: one ray, pairs, every stationary path, search, progress, and every
 error path (bad scenes, bad arguments, wrong shapes, NaN)."""
 
+import json
 import math
 
 import numpy as np
@@ -150,6 +151,32 @@ def test_bad_scenes_raise_naming_the_key(scene, key):
     with pytest.raises(eigenray.EigenrayError) as caught:
         eigenray.Scene(scene)
     assert key in str(caught.value)
+
+
+@pytest.mark.parametrize(
+    "change, key, words",
+    [
+        ({"sources": [[0, "x"]]}, "sources[0][1]", "invalid type: string"),
+        ({"sources": [[0, 1, 2]]}, "sources[0]", "too many elements"),
+        ({"solver": {"max_iterations": -3}}, "solver.max_iterations", "invalid value"),
+        ({"paths": [{"media": ["air"]}]}, "paths[0].steps", "missing"),
+    ],
+)
+def test_a_dict_scenes_errors_name_the_key_path_not_a_place_in_json(change, key, words):
+    # The dict becomes JSON text inside the package; the user never saw that text, so no
+    # line and column of it may appear (the same scene as JSON text keeps them where serde
+    # has them: the user wrote that text).
+    scene = {**AIR_WATER, **change}
+    with pytest.raises(eigenray.EigenrayError) as caught:
+        eigenray.Scene(scene)
+    error = caught.value
+    assert error.key == key and words in error.message, str(error)
+    assert "line" not in str(error) and "column" not in str(error), str(error)
+    with pytest.raises(eigenray.EigenrayError) as written:
+        eigenray.Scene(json.dumps(scene, indent=1))
+    assert written.value.key == key
+    if words != "missing":
+        assert " at line " in written.value.message, str(written.value)
 
 
 def test_nan_in_a_dict_scene_is_refused():

@@ -1,9 +1,9 @@
 //! Hostile and careless input: every case ends in a right answer or a clear error, never in a
 //! silent wrong answer, an abort, a panic or a hang.
 //!
-//! Command-line cases run the binary with a memory limit (`ulimit -v`) and a time limit, and
-//! check the exit status, the first line of standard error and that nothing reached standard
-//! output. Library cases call the API directly. `round2.rs` holds the second round of
+//! Command-line cases run the binary with a memory limit (`ulimit -v`) and a net for a hang
+//! (killed after ten minutes; no answer depends on a clock), and check the exit status, the
+//! first line of standard error and that nothing reached standard output. Library cases call the API directly. `round2.rs` holds the second round of
 //! cases: work that must stay bounded, memory, and answers that must not be wrong.
 
 mod budgets;
@@ -95,20 +95,19 @@ impl Run {
     }
 }
 
+/// How long a run of the binary may go before it is killed and the test fails: a net for a
+/// hang, not a check of speed (every run here bounds its work, and takes seconds at most even
+/// on a loaded machine); no test's answer depends on a clock otherwise.
+const HANG_GUARD: Duration = Duration::from_secs(600);
+
 /// Runs `eigenray ARGS` through `sh` (`redirect` is put after the command: redirections), with
-/// at most 4 GB of address space and `limit` of time; kills it beyond that.
-fn run_bounded(args: &str, redirect: &str, stdin: Option<&[u8]>, limit: Duration) -> Run {
-    run_capped(4_000_000, args, redirect, stdin, limit)
+/// at most 4 GB of address space; kills it after [`HANG_GUARD`].
+fn run_bounded(args: &str, redirect: &str, stdin: Option<&[u8]>) -> Run {
+    run_capped(4_000_000, args, redirect, stdin)
 }
 
 /// [`run_bounded`] with at most `kilobytes` of address space.
-fn run_capped(
-    kilobytes: u64,
-    args: &str,
-    redirect: &str,
-    stdin: Option<&[u8]>,
-    limit: Duration,
-) -> Run {
+fn run_capped(kilobytes: u64, args: &str, redirect: &str, stdin: Option<&[u8]>) -> Run {
     let script = format!("ulimit -v {kilobytes}; exec {BIN} {args} {redirect}");
     let mut child = Command::new("sh")
         .arg("-c")
@@ -146,10 +145,10 @@ fn run_capped(
         if let Some(status) = child.try_wait().expect("wait") {
             break status;
         }
-        if start.elapsed() > limit {
+        if start.elapsed() > HANG_GUARD {
             let _ = child.kill();
             let _ = child.wait();
-            panic!("eigenray {args} ran longer than {limit:?}");
+            panic!("eigenray {args} still ran after {HANG_GUARD:?}: it hangs");
         }
         std::thread::sleep(Duration::from_millis(20));
     };
@@ -160,15 +159,10 @@ fn run_capped(
     }
 }
 
-/// `eigenray solve FILE` on `scene`, bounded to 60 s.
+/// `eigenray solve FILE` on `scene`, as [`run_bounded`].
 fn solve_file(scene: &str) -> Run {
     let file = TempFile::with(scene);
-    run_bounded(
-        &format!("solve {}", file.path()),
-        "",
-        None,
-        Duration::from_secs(60),
-    )
+    run_bounded(&format!("solve {}", file.path()), "", None)
 }
 
 /// The error of `Tracer::new` (a tracer is not `Debug`).
@@ -519,10 +513,10 @@ fn at_outside_the_domain_is_refused() {
 
 #[test]
 fn endless_input_stops_at_the_size_limit() {
-    let run = run_bounded("solve /dev/zero", "", None, Duration::from_secs(60));
+    let run = run_bounded("solve /dev/zero", "", None);
     run.assert_refused("/dev/zero: larger than 256 MiB");
     let big = vec![b' '; (256 << 20) + 10];
-    let run = run_bounded("solve -", "", Some(&big), Duration::from_secs(60));
+    let run = run_bounded("solve -", "", Some(&big));
     run.assert_refused("<stdin>: larger than 256 MiB");
 }
 
@@ -581,15 +575,19 @@ fn diagonals(n: usize) -> String {
     .to_string()
 }
 
+/// Large scenes validate and give a tracer (in O(n log n): a quadratic check of 10^5
+/// interfaces would take minutes; the times are printed, not checked: `cargo test --profile
+/// test-opt --test hostile large_scenes -- --nocapture`); a crossing hidden among 40,000
+/// overlapping diagonals is found.
 #[test]
-fn validation_of_large_scenes_is_fast() {
-    for (name, text, limit) in [
-        ("100,000 layers", layers(100_000), 10.0),
-        ("40,000 overlapping diagonals", diagonals(40_000), 10.0),
+fn large_scenes_validate_and_a_crossing_among_them_is_found() {
+    for (name, text, interfaces) in [
+        ("100,000 layers", layers(100_000), 100_000),
+        ("40,000 overlapping diagonals", diagonals(40_000), 40_000),
         (
             "a 10^6-step path over 100,000 interfaces",
             long_path(),
-            20.0,
+            100_000,
         ),
     ] {
         let start = Instant::now();
@@ -599,11 +597,7 @@ fn validation_of_large_scenes_is_fast() {
         drop(Tracer::new(&scene).expect("tracer"));
         let tracer = start.elapsed().as_secs_f64();
         eprintln!("{name}: validated in {secs:.3} s, tracer prepared in {tracer:.3} s");
-        assert!(secs < limit, "{name}: {secs:.2} s to validate");
-        assert!(
-            tracer < limit,
-            "{name}: {tracer:.2} s to prepare the tracer"
-        );
+        assert_eq!(scene.interfaces().len(), interfaces, "{name}");
     }
     // The diagonals with one crossing added: found.
     let mut v: Value = serde_json::from_str(&diagonals(40_000)).expect("json");
@@ -746,23 +740,13 @@ fn control_characters_in_names_are_escaped() {
 fn closed_or_null_stdout_succeeds_and_a_full_one_exits_1() {
     let file = TempFile::with(contract_example().to_string());
     for redirect in [">&-", ">/dev/null", "1<>/dev/null"] {
-        let run = run_bounded(
-            &format!("solve {}", file.path()),
-            redirect,
-            None,
-            Duration::from_secs(60),
-        );
+        let run = run_bounded(&format!("solve {}", file.path()), redirect, None);
         assert_eq!(run.code, Some(0), "{redirect}: {}", run.stderr);
-        let run = run_bounded("demo --no-svg", redirect, None, Duration::from_secs(60));
+        let run = run_bounded("demo --no-svg", redirect, None);
         assert_eq!(run.code, Some(0), "demo {redirect}: {}", run.stderr);
     }
     if Path::new("/dev/full").exists() {
-        let run = run_bounded(
-            &format!("solve {}", file.path()),
-            ">/dev/full",
-            None,
-            Duration::from_secs(60),
-        );
+        let run = run_bounded(&format!("solve {}", file.path()), ">/dev/full", None);
         assert_eq!(run.code, Some(1), "stderr: {}", run.stderr);
         assert!(run.first_line().starts_with("error:"), "{}", run.stderr);
     }

@@ -148,11 +148,9 @@ pub struct Case {
     pub json: Value,
     /// The answer.
     pub expect: Expect,
-    /// Iterations allowed.
+    /// Iterations allowed: the bound on the solve's work (no case is held to a wall time;
+    /// the table's column of milliseconds is for reading only).
     pub max_iterations: usize,
-    /// Wall time allowed for validating the scene, setting up the tracer and solving, in
-    /// seconds (checked in optimised builds only).
-    pub max_seconds: Option<f64>,
     /// An optional scaled or translated copy to compare with.
     pub twin: Option<Twin>,
 }
@@ -243,7 +241,8 @@ pub struct Outcome {
     pub point_err: Option<f64>,
     /// The 2-norm condition of the Hessian at the solution (converged rays).
     pub condition: Option<f64>,
-    /// Wall time of scene validation, tracer set-up and the solve.
+    /// Wall time of scene validation, tracer set-up and the solve: printed in the table, never
+    /// checked.
     pub elapsed: Duration,
     /// Every failed check, in words.
     pub failures: Vec<String>,
@@ -360,14 +359,6 @@ pub fn run(case: &Case) -> Outcome {
             }
         }
         Err(e) => fail.push(format!("JSON output does not parse: {e}")),
-    }
-    if let Some(limit) = case.max_seconds {
-        if !cfg!(debug_assertions) && elapsed.as_secs_f64() > limit {
-            fail.push(format!(
-                "took {:.3} s, more than the {limit} s allowed",
-                elapsed.as_secs_f64()
-            ));
-        }
     }
     if ray.iterations > case.max_iterations {
         fail.push(format!(
@@ -818,7 +809,6 @@ fn case(name: &'static str, what: impl Into<String>, json: Value, expect: Expect
         json,
         expect,
         max_iterations: ITERATIONS,
-        max_seconds: None,
         twin: None,
     }
 }
@@ -1237,6 +1227,9 @@ fn sea_floor() -> Vec<P> {
         .collect()
 }
 
+/// Newton steps allowed on the digitised sea floor (it takes 3 or 4).
+const FLOOR_ITERATIONS: usize = 8;
+
 fn floor_case(name: &'static str, s: P, r: P) -> Case {
     let pts = sea_floor();
     let (v, cands) = polyline_reflection(&pts, false, s, r, 1500.0);
@@ -1250,8 +1243,9 @@ fn floor_case(name: &'static str, s: P, r: P) -> Case {
         v,
         Expect::OneOf(cands),
     );
-    // Building the scene is O(M log M); each Newton step is O(log M).
-    c.max_seconds = Some(1.0);
+    // Each Newton step is O(log M) (the nearest segments from the hierarchy): the solve's work
+    // is bounded by its steps, 3 to 4 from the documented start (docs/method.md's table).
+    c.max_iterations = FLOOR_ITERATIONS;
     c
 }
 

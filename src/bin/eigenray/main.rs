@@ -327,6 +327,20 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
             "--arrivals: the scene has no `search` section, so it has no arrivals to write".into(),
         ));
     }
+    if scene.search().is_some()
+        && args.arrivals.is_none()
+        && matches!(args.format, Format::Csv | Format::Npy)
+    {
+        let name = if args.format == Format::Csv {
+            "csv"
+        } else {
+            "npy"
+        };
+        return Err(Failure::Input(format!(
+            "--format {name}: the scene's `search` arrivals are a table of their own; give \
+             --arrivals FILE to write them"
+        )));
+    }
     check_batch_memory(&scene, !args.no_warm_start)?;
     let ir = match &args.ir {
         Some(path) => Some(response::IrOutput::check(path, &scene)?),
@@ -366,7 +380,8 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
 /// Writes what `solve` found: the name tables and the picture when asked for, the arrivals of
 /// a scene's search (`Some` exactly for a scene with a `search` section) to `--arrivals` when
 /// given, and the rays (and, in JSON and JSON Lines without `--arrivals`, the arrivals) to
-/// standard output. Nothing is written when the arrivals cannot go anywhere.
+/// standard output. (Arrivals that could go nowhere, CSV or npy without `--arrivals`, are
+/// refused before the solve.)
 fn write_outputs(
     args: &SolveArgs,
     scene: &Scene,
@@ -374,20 +389,6 @@ fn write_outputs(
     arrivals: Option<&[SearchArrival]>,
 ) -> Result<(), Failure> {
     let format = eigenray::Format::from(args.format);
-    if arrivals.is_some()
-        && args.arrivals.is_none()
-        && matches!(args.format, Format::Csv | Format::Npy)
-    {
-        let name = if args.format == Format::Csv {
-            "csv"
-        } else {
-            "npy"
-        };
-        return Err(Failure::Input(format!(
-            "--format {name}: the scene's `search` arrivals are a table of their own; give \
-             --arrivals FILE to write them"
-        )));
-    }
     if let Some(path) = &args.names {
         let mut names = Vec::new();
         eigenray::npy::write_names(scene, &mut names).map_err(|e| write_failure(path, &e))?;
@@ -432,8 +433,10 @@ fn write_outputs(
 
 /// The arrivals of the scene's `search`, refused before it starts where its table of pairs
 /// would not fit in the memory this machine has available; a spinner with the beams visited
-/// on standard error when it is a terminal, and one summary line there at the end: arrivals,
-/// beams, the bounds, and the pairs a limit left short.
+/// on standard error when it is a terminal, and one summary line there at the end, whatever
+/// the format and whether or not standard error is a terminal: arrivals, beams, the bounds,
+/// the pairs a limit left short, and how many pairs no arrival reaches (they have no entry in
+/// the output).
 fn search(tracer: &Tracer) -> Result<Vec<SearchArrival>, Failure> {
     let scene = tracer.scene();
     let options = scene.search().expect("a scene with a search section");
@@ -492,12 +495,48 @@ fn search(tracer: &Tracer) -> Result<Vec<SearchArrival>, Failure> {
             report.incomplete_pairs
         );
     }
-    // On a terminal always; otherwise only when it warns (standard error stays empty for a
-    // script unless something is short).
-    if report.incomplete_pairs > 0 || std::io::IsTerminal::is_terminal(&io::stderr()) {
-        eprintln!("{line}");
-    }
+    let _ = write!(line, "; {}", unreached_pairs(scene, &report.arrivals));
+    eprintln!("{line}");
     Ok(report.arrivals)
+}
+
+/// Pairs named in the search's summary line, at most.
+const UNREACHED_NAMED: usize = 5;
+
+/// How many (source, receiver) pairs of `scene` no arrival of `arrivals` (ordered by source and
+/// receiver) reaches, in words, with the first few of them named.
+fn unreached_pairs(scene: &Scene, arrivals: &[SearchArrival]) -> String {
+    let receivers = scene.receivers().len();
+    let pairs = scene.sources().len() * receivers;
+    let mut reached = arrivals
+        .iter()
+        .map(|a| a.source * receivers + a.receiver)
+        .peekable();
+    let mut unreached = 0;
+    let mut named = Vec::new();
+    for pair in 0..pairs {
+        while reached.next_if(|&r| r < pair).is_some() {}
+        if reached.peek() == Some(&pair) {
+            continue;
+        }
+        unreached += 1;
+        if named.len() < UNREACHED_NAMED {
+            named.push(format!(
+                "source {} to receiver {}",
+                pair / receivers,
+                pair % receivers
+            ));
+        }
+    }
+    let mut text = format!(
+        "no arrival reaches {unreached} of the {pairs} source-receiver {}",
+        if pairs == 1 { "pair" } else { "pairs" }
+    );
+    if !named.is_empty() {
+        let more = if unreached > named.len() { ", …" } else { "" };
+        let _ = write!(text, " ({}{more})", named.join(", "));
+    }
+    text
 }
 
 /// Every stationary path of every ray (`"stationary": "all"`), with a progress bar on standard
