@@ -20,6 +20,7 @@ use std::fmt::Write as _;
 
 use eigenray::{Point, RaySet, Scene, SearchArrival};
 
+pub use axes::{Axes, AxisSpec};
 pub use colour::Colouring;
 pub use markup::thousands;
 
@@ -47,6 +48,18 @@ pub fn scene_svg(
     title: &str,
     colouring: Colouring,
 ) -> String {
+    scene_svg_with_axes(scene, rays, arrivals, title, colouring, &Axes::default())
+}
+
+/// [`scene_svg`] with the axes named, and numbered, as `axes` says.
+pub fn scene_svg_with_axes(
+    scene: &Scene,
+    rays: RaySet<'_>,
+    arrivals: &[SearchArrival],
+    title: &str,
+    colouring: Colouring,
+    axes: &Axes,
+) -> String {
     let entries = Entries::new(scene, rays, arrivals);
     let drawn = entries.drawn();
     let rays = &drawn.items;
@@ -68,7 +81,7 @@ pub fn scene_svg(
         &caption::drawn_caption(&entries, &drawn, colouring),
         &caption::marks_caption(&receivers, frame.stretch),
     );
-    axes::draw_axes(&mut s, &frame);
+    axes::draw_axes(&mut s, &frame, axes);
     draw_domain(&mut s, scene, &frame.view);
     draw_rays(&mut s, scene, &frame.view, rays, &colours);
     draw_interfaces(&mut s, scene, &frame.view);
