@@ -330,6 +330,14 @@ impl Solved {
             Solved::Stationary(st) => RaySet::Stationary(st),
         }
     }
+
+    /// Whether there is no ray (a scene without `paths`).
+    fn is_empty(&self) -> bool {
+        match self {
+            Solved::Batch(b) => b.is_empty(),
+            Solved::Stationary(st) => st.triples.is_empty(),
+        }
+    }
 }
 
 /// The response outputs asked for, by option: with any of them, standard output stays empty
@@ -544,17 +552,17 @@ fn response_summary(
     let (rays_to, arrivals_to) = destinations(args);
     let arrivals_to = arrivals_to.unwrap_or_else(|| rays_to.clone());
     let mut unwritten = Vec::new();
-    if rays_to == Destination::Nowhere {
-        unwritten.push(("rays", "--rays -"));
+    if rays_to == Destination::Nowhere && !solved.is_empty() {
+        unwritten.push(("the rays", "--rays -"));
     }
     if arrivals.is_some() && arrivals_to == Destination::Nowhere {
-        unwritten.push(("arrivals", "--arrivals -"));
+        unwritten.push(("the arrivals", "--arrivals -"));
     }
     if !unwritten.is_empty() {
         let (what, how): (Vec<&str>, Vec<&str>) = unwritten.into_iter().unzip();
         let _ = write!(
             line,
-            "; the {} not written ({} for standard output)",
+            "; not written: {} ({} for standard output)",
             what.join(" and "),
             how.join(", ")
         );

@@ -647,4 +647,75 @@ mod tests {
             "{texts:?}"
         );
     }
+
+    /// Long sequences (a waveguide's ten bounces) wrap in the legend, and every row of text
+    /// ends inside the canvas: the legend is not cut off at the right edge.
+    #[test]
+    fn a_legend_of_long_sequences_stays_inside_the_canvas() {
+        let scene = Scene::from_json(ROOM).unwrap();
+        let mut arrivals = Vec::new();
+        for n in [1usize, 4, 10, 16] {
+            let steps: Vec<(StepKind, &str)> = (0..n)
+                .map(|k| {
+                    (
+                        StepKind::Reflect,
+                        if k % 2 == 0 { "north" } else { "south" },
+                    )
+                })
+                .collect();
+            arrivals.push(search_arrival(
+                &scene,
+                &steps,
+                Status::Converged,
+                0.02,
+                &[[1.5, 1.2], [4.5, 2.5]],
+            ));
+        }
+        let svg = scene_svg(
+            &scene,
+            RaySet::Rays(&[]),
+            &arrivals,
+            "t",
+            Colouring::Sequence,
+        );
+        let doc = roxmltree::Document::parse(&svg).unwrap();
+        let width: f64 = doc
+            .root_element()
+            .attribute("width")
+            .unwrap()
+            .parse()
+            .unwrap();
+        let legend = doc
+            .descendants()
+            .find(|n| n.attribute("class") == Some("legend"))
+            .unwrap();
+        let rows: Vec<(f64, String)> = legend
+            .children()
+            .filter(|n| n.has_tag_name("text"))
+            .map(|n| {
+                let x: f64 = n.attribute("x").unwrap().parse().unwrap();
+                (x, n.text().unwrap().to_string())
+            })
+            .collect();
+        // The 16 steps' line wraps onto several rows, each continued with an arrow.
+        assert!(
+            rows.iter().filter(|r| r.1.starts_with("→ ")).count() >= 3,
+            "{rows:?}"
+        );
+        for (x, text) in &rows {
+            // DejaVu Sans at 12 px: no character is wider than 7.4 px on average over a row.
+            let right = x + super::legend::LEGEND_CHAR_W * text.chars().count() as f64;
+            assert!(
+                right <= width,
+                "{text:?} ends at {right}, the canvas at {width}"
+            );
+        }
+        // Every step of every sequence is there, in order, once the rows are joined.
+        let joined: String = rows
+            .iter()
+            .map(|r| r.1.as_str())
+            .collect::<Vec<_>>()
+            .join(" ");
+        assert!(joined.contains(&["reflect north", "reflect south"].repeat(8).join(" → ")));
+    }
 }
