@@ -355,6 +355,12 @@ pub struct TlMap<'a> {
 /// The interface that bounds the water below `source`: of the open interfaces that pass
 /// beneath it (a segment spanning its x), the one nearest below it.
 fn bottom_below(scene: &Scene, source: Point) -> Option<usize> {
+    nearest_interface(scene, source, -1.0)
+}
+
+/// Of the open interfaces that pass over or under `source` (a segment spanning its x), the
+/// one nearest to it on the side of `side` (+1 above, −1 below).
+fn nearest_interface(scene: &Scene, source: Point, side: f64) -> Option<usize> {
     let mut best: Option<(usize, f64)> = None;
     for (k, interface) in scene.interfaces().iter().enumerate() {
         if interface.polyline.is_closed() {
@@ -367,12 +373,39 @@ fn bottom_below(scene: &Scene, source: Point) -> Option<usize> {
                 continue;
             }
             let y = a.y + (b.y - a.y) * (source.x - a.x) / (b.x - a.x);
-            if y < source.y && best.is_none_or(|(_, top)| y > top) {
-                best = Some((k, y));
+            let distance = side * (y - source.y);
+            if distance > 0.0 && best.is_none_or(|(_, d)| distance < d) {
+                best = Some((k, distance));
             }
         }
     }
     best.map(|(k, _)| k)
+}
+
+/// The lowest and highest y of `vertices` (a polyline) over `x0 ≤ x ≤ x1`, `None` where it
+/// does not reach there.
+fn y_range_within(vertices: &[Point], x0: f64, x1: f64) -> Option<(f64, f64)> {
+    let mut range: Option<(f64, f64)> = None;
+    let mut take = |y: f64| {
+        range = Some(range.map_or((y, y), |(lo, hi)| (lo.min(y), hi.max(y))));
+    };
+    for w in vertices.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        for p in [a, b] {
+            if x0 <= p.x && p.x <= x1 {
+                take(p.y);
+            }
+        }
+        if a.x != b.x {
+            for x in [x0, x1] {
+                let t = (x - a.x) / (b.x - a.x);
+                if (0.0..=1.0).contains(&t) {
+                    take(a.y + t * (b.y - a.y));
+                }
+            }
+        }
+    }
+    range
 }
 
 /// The transmission-loss map of one source: each receiver's loss in dB as a cell of a grid
@@ -413,6 +446,22 @@ pub fn tl_map_svg(map: &TlMap<'_>) -> String {
     }
     if source.y < y0 || source.y > y1 {
         (y0, y1) = (y0.min(source.y - my), y1.max(source.y + my));
+    }
+    // The surface above the source and the bottom below it in view too, where they lie
+    // within half the map's height of it.
+    let reach = 0.5 * (y1 - y0);
+    for side in [1.0, -1.0] {
+        let Some(k) = nearest_interface(scene, source, side) else {
+            continue;
+        };
+        let vertices = scene.interfaces()[k].polyline.vertices();
+        if let Some((lo, hi)) = y_range_within(vertices, x0, x1) {
+            if side < 0.0 && lo < y0 && y0 - lo <= reach {
+                y0 = lo - 0.03 * (y1 - lo);
+            } else if side > 0.0 && hi > y1 && hi - y1 <= reach {
+                y1 = hi + 0.03 * (hi - y0);
+            }
+        }
     }
     let plot = Plot {
         x0,
@@ -461,7 +510,7 @@ pub fn tl_map_svg(map: &TlMap<'_>) -> String {
     let missing = tl.iter().filter(|v| !v.is_finite()).count();
     let mut caption = format!(
         "{} receivers at {frequency} Hz; TL = −20 log10(|p| · 4π)",
-        receivers.len()
+        super::markup::thousands(receivers.len())
     );
     if missing > 0 {
         let _ = write!(caption, "; grey: {missing} that nothing reaches");
