@@ -65,10 +65,11 @@ def _scaled_locator(scale):
     return ScaledLocator()
 
 
-def _bottom_below(scene, source):
-    """The open interface nearest below `source` among those that pass beneath it (a segment
-    spanning its x): the bottom of the water it lies in, or None."""
-    best, best_y = None, -np.inf
+def _nearest_interface(scene, source, side):
+    """Of the open interfaces that pass over or under `source` (a segment spanning its x), the
+    name of the one nearest to it on the side of `side` (+1 above: the surface; -1 below: the
+    bottom of the water it lies in), or None."""
+    best, best_distance = None, np.inf
     for name, v in scene.interfaces.items():
         if scene.closed[name]:
             continue
@@ -77,9 +78,23 @@ def _bottom_below(scene, source):
             if not (lo <= source[0] <= hi) or hi <= lo:
                 continue
             y = a[1] + (b[1] - a[1]) * (source[0] - a[0]) / (b[0] - a[0])
-            if y < source[1] and y > best_y:
-                best, best_y = name, y
+            distance = side * (y - source[1])
+            if 0 < distance < best_distance:
+                best, best_distance = name, distance
     return best
+
+
+def _y_within(vertices, x0, x1):
+    """The heights of a polyline over x0 <= x <= x1: its vertices there and its crossings of
+    x0 and x1."""
+    ys = [p[1] for p in vertices if x0 <= p[0] <= x1]
+    for a, b in zip(vertices[:-1], vertices[1:]):
+        if a[0] != b[0]:
+            for x in (x0, x1):
+                t = (x - a[0]) / (b[0] - a[0])
+                if 0 <= t <= 1:
+                    ys.append(a[1] + t * (b[1] - a[1]))
+    return np.asarray(ys, dtype=float)
 
 
 def _rays_polylines(rays, max_rays):
@@ -178,7 +193,8 @@ def plot(scene, rays=None, *, colour_by="time", ax=None, max_rays=2000, labels=T
                 ax.add_collection(
                     LineCollection(chosen, colors=[cmap(k % cmap.N)], linewidths=0.9, label=label)
                 )
-            ax.legend(loc="best", fontsize=8, title="path")
+            ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+                      fontsize=8, title="path")
         drawn = len(lines)
         title = f"{drawn} rays" if not left_out else f"{drawn} of {drawn + left_out} rays drawn"
     sources, receivers = scene.sources, scene.receivers
@@ -255,6 +271,10 @@ def echogram(echoes, source=0, receiver=0, *, ax=None, range_db=60.0, from_zero=
         mappable = ScalarMappable(norm=BoundaryNorm(boundaries, bar_colours.N), cmap=bar_colours)
         bar = ax.figure.colorbar(mappable, ax=ax)
         bar.set_label("order (interactions; 0: direct)")
+        # Whole orders, at the middles of their blocks: about 8 of them.
+        step = max(1, int(np.ceil((hi - lo + 1) / 8)))
+        step = next(s for s in (1, 2, 5, 10, 20, 25, 50, 100, step) if s >= step)
+        bar.set_ticks(np.arange(int(np.ceil(lo / step)) * step, hi + 1, step))
         bar.ax.invert_yaxis()
     ax.set_ylim(floor, top)
     if len(time):
@@ -324,7 +344,21 @@ def _draw_scene_on_map(ax, scene, source):
     if not y0 <= at[1] <= y1:
         margin = 0.04 * (y1 - y0)
         y0, y1 = min(y0, at[1] - margin), max(y1, at[1] + margin)
-    bottom = _bottom_below(scene, at)
+    bottom = _nearest_interface(scene, at, -1.0)
+    # The surface above the source and the bottom below it in view too, where they lie
+    # within half the map's height of it.
+    reach = 0.5 * (y1 - y0)
+    for side in (1.0, -1.0):
+        name = _nearest_interface(scene, at, side)
+        if name is None:
+            continue
+        ys = _y_within(scene.interfaces[name], x0, x1)
+        if not len(ys):
+            continue
+        if side < 0 and ys.min() < y0 and y0 - ys.min() <= reach:
+            y0 = ys.min() - 0.03 * (y1 - ys.min())
+        elif side > 0 and ys.max() > y1 and ys.max() - y1 <= reach:
+            y1 = ys.max() + 0.03 * (ys.max() - y0)
     for name, v in scene.interfaces.items():
         v = np.vstack([v, v[:1]]) if scene.closed[name] else v
         ax.plot(v[:, 0], v[:, 1], color="0.2", linewidth=1.6, zorder=3, label=name)
