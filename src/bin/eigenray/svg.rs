@@ -654,15 +654,24 @@ mod tests {
     fn a_legend_of_long_sequences_stays_inside_the_canvas() {
         let scene = Scene::from_json(ROOM).unwrap();
         let mut arrivals = Vec::new();
+        // Sixteen steps that repeat no block from their start, and shorter ones that do.
+        let irregular = [
+            "north", "east", "south", "west", "west", "south", "north", "east", "north", "north",
+            "east", "south", "south", "west", "east", "north",
+        ];
         for n in [1usize, 4, 10, 16] {
-            let steps: Vec<(StepKind, &str)> = (0..n)
-                .map(|k| {
-                    (
-                        StepKind::Reflect,
-                        if k % 2 == 0 { "north" } else { "south" },
-                    )
-                })
-                .collect();
+            let steps: Vec<(StepKind, &str)> = if n == 16 {
+                irregular.iter().map(|&w| (StepKind::Reflect, w)).collect()
+            } else {
+                (0..n)
+                    .map(|k| {
+                        (
+                            StepKind::Reflect,
+                            if k % 2 == 0 { "north" } else { "south" },
+                        )
+                    })
+                    .collect()
+            };
             arrivals.push(search_arrival(
                 &scene,
                 &steps,
@@ -710,12 +719,18 @@ mod tests {
                 "{text:?} ends at {right}, the canvas at {width}"
             );
         }
-        // Every step of every sequence is there, in order, once the rows are joined.
+        // Every step of every sequence is there, in order, once the rows are joined; a
+        // repeated block once, with its count.
         let joined: String = rows
             .iter()
             .map(|r| r.1.as_str())
             .collect::<Vec<_>>()
             .join(" ");
-        assert!(joined.contains(&["reflect north", "reflect south"].repeat(8).join(" → ")));
+        let irregular: Vec<String> = irregular.iter().map(|w| format!("reflect {w}")).collect();
+        assert!(joined.contains(&irregular.join(" → ")), "{joined}");
+        assert!(
+            joined.contains("(reflect north → reflect south) ×5 (1)"),
+            "{joined}"
+        );
     }
 }

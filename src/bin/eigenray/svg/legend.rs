@@ -37,7 +37,9 @@ pub(super) fn wrap_label(text: &str) -> Vec<String> {
     rows
 }
 
-/// The sequence in the scene's words: `reflect w0 → refract surface`, or `direct`.
+/// The sequence in the scene's words: `reflect w0 → refract surface`, or `direct`; a sequence
+/// that repeats a block of steps from its start says so, `(reflect surface → reflect bottom) ×6`
+/// (then the steps after the last whole block).
 pub(super) fn sequence_label(scene: &Scene, steps: &[Step]) -> String {
     if steps.is_empty() {
         return "direct".to_string();
@@ -56,6 +58,28 @@ pub(super) fn sequence_label(scene: &Scene, steps: &[Step]) -> String {
             format!("{kind} {name}")
         })
         .collect();
+    repeats_label(&words)
+}
+
+/// `words` joined by ` → `, the shortest block that repeats from the start at least twice (and
+/// then goes on to the end, a part of it after the last whole one) written once with its count.
+fn repeats_label(words: &[String]) -> String {
+    let n = words.len();
+    for period in 1..=n / 2 {
+        if (period..n).all(|i| words[i] == words[i - period]) {
+            let block = words[..period].join(" → ");
+            let mut label = if period == 1 {
+                format!("{block} ×{}", n / period)
+            } else {
+                format!("({block}) ×{}", n / period)
+            };
+            for word in &words[n - n % period..] {
+                label.push_str(" → ");
+                label.push_str(word);
+            }
+            return label;
+        }
+    }
     words.join(" → ")
 }
 
@@ -243,5 +267,28 @@ mod tests {
         assert!(rows[1..].iter().all(|r| r.starts_with("→ ")), "{rows:?}");
         assert_eq!(rows.join(" "), label);
         assert_eq!(wrap_label("direct (3)"), ["direct (3)"]);
+    }
+
+    #[test]
+    fn repeated_blocks_of_steps_are_counted() {
+        let words = |list: &[&str]| -> Vec<String> { list.iter().map(|w| w.to_string()).collect() };
+        let (s, b) = ("reflect surface", "reflect bottom");
+        assert_eq!(
+            repeats_label(&words(&[s, b, s, b, s, b])),
+            "(reflect surface → reflect bottom) ×3"
+        );
+        assert_eq!(
+            repeats_label(&words(&[s, b, s, b, s])),
+            "(reflect surface → reflect bottom) ×2 → reflect surface"
+        );
+        assert_eq!(repeats_label(&words(&[b, b, b])), "reflect bottom ×3");
+        assert_eq!(
+            repeats_label(&words(&[s, b, s])),
+            "reflect surface → reflect bottom → reflect surface"
+        );
+        assert_eq!(
+            repeats_label(&words(&[s, b, b, s])),
+            "reflect surface → reflect bottom → reflect bottom → reflect surface"
+        );
     }
 }
