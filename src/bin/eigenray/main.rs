@@ -54,7 +54,7 @@ enum Command {
     ///
     /// The scene file and every output field are described in docs/scene-format.md of
     /// eigenray's repository.
-    Solve(SolveArgs),
+    Solve(Box<SolveArgs>),
     /// Solve the built-in air-over-water scene, print a summary and draw it (the default).
     Demo(DemoArgs),
 }
@@ -340,16 +340,26 @@ impl Solved {
     }
 }
 
-/// The response outputs asked for, by option: with any of them, standard output stays empty
-/// unless `--rays -` or `--arrivals -` asks for it, and a summary goes to standard error.
-fn response_outputs(args: &SolveArgs) -> Vec<(&'static str, &Path)> {
+/// An output file asked for on the command line.
+#[derive(Clone, Copy, Debug)]
+struct OutputFile<'a> {
+    /// The option that names it (`--tl-map`).
+    option: &'static str,
+    /// Its path.
+    path: &'a Path,
+}
+
+/// The response outputs asked for: with any of them, standard output stays empty unless
+/// `--rays -` or `--arrivals -` asks for it, and a summary goes to standard error. (A new
+/// response output joins this rule by a line here.)
+fn response_outputs(args: &SolveArgs) -> Vec<OutputFile<'_>> {
     [
         ("--ir", &args.ir),
         ("--echogram", &args.echogram),
         ("--tl-map", &args.tl_map),
     ]
     .into_iter()
-    .filter_map(|(option, path)| path.as_deref().map(|p| (option, p)))
+    .filter_map(|(option, path)| path.as_deref().map(|path| OutputFile { option, path }))
     .collect()
 }
 
@@ -375,36 +385,49 @@ impl Destination {
     }
 }
 
-/// Where the rays and the arrivals go: the rays where `--rays` says, else to standard output
-/// unless a response output is asked for; the arrivals where `--arrivals` says (`None`:
-/// beside the rays).
-fn destinations(args: &SolveArgs) -> (Destination, Option<Destination>) {
-    let rays = match &args.rays {
-        Some(path) => Destination::of(path),
-        None if response_outputs(args).is_empty() => Destination::Stdout,
-        None => Destination::Nowhere,
-    };
-    (rays, args.arrivals.as_deref().map(Destination::of))
+/// Where the rays and the arrivals of `solve` go.
+struct Destinations {
+    /// The rays': where `--rays` says, else standard output unless a response output is asked
+    /// for.
+    rays: Destination,
+    /// The arrivals': where `--arrivals` says (`None`: beside the rays).
+    arrivals: Option<Destination>,
 }
 
-/// Every file `solve` is asked to write, with its option.
-fn output_files(args: &SolveArgs) -> Vec<(&'static str, &Path)> {
-    let mut files = vec![
-        ("--names", args.names.as_deref()),
-        ("--svg", args.svg.as_deref()),
-        ("--rays", args.rays.as_deref()),
-        ("--arrivals", args.arrivals.as_deref()),
-    ];
-    files.extend(
-        response_outputs(args)
-            .into_iter()
-            .map(|(o, p)| (o, Some(p))),
-    );
+impl Destinations {
+    /// The destinations of `args`.
+    fn of(args: &SolveArgs) -> Destinations {
+        let rays = match &args.rays {
+            Some(path) => Destination::of(path),
+            None if response_outputs(args).is_empty() => Destination::Stdout,
+            None => Destination::Nowhere,
+        };
+        Destinations {
+            rays,
+            arrivals: args.arrivals.as_deref().map(Destination::of),
+        }
+    }
+
+    /// Where the arrivals end up: their own destination, or the rays'.
+    fn of_arrivals(&self) -> &Destination {
+        self.arrivals.as_ref().unwrap_or(&self.rays)
+    }
+}
+
+/// Every file `solve` is asked to write (not `-`).
+fn output_files(args: &SolveArgs) -> Vec<OutputFile<'_>> {
+    let mut files: Vec<OutputFile<'_>> = [
+        ("--names", &args.names),
+        ("--svg", &args.svg),
+        ("--rays", &args.rays),
+        ("--arrivals", &args.arrivals),
+    ]
+    .into_iter()
+    .filter_map(|(option, path)| path.as_deref().map(|path| OutputFile { option, path }))
+    .collect();
+    files.extend(response_outputs(args));
+    files.retain(|f| f.path.as_os_str() != "-");
     files
-        .into_iter()
-        .filter_map(|(option, path)| path.map(|p| (option, p)))
-        .filter(|(_, p)| p.as_os_str() != "-")
-        .collect()
 }
 
 /// Refuses, before anything is solved, an output file that cannot be written (a missing
@@ -412,14 +435,16 @@ fn output_files(args: &SolveArgs) -> Vec<(&'static str, &Path)> {
 /// the option and the path. A file that does not exist yet is created to try, then removed.
 fn check_output_files(args: &SolveArgs) -> Result<(), Failure> {
     let files = output_files(args);
-    for (k, (option, path)) in files.iter().enumerate() {
-        if let Some((other, _)) = files[..k].iter().find(|(_, p)| p == path) {
+    for (k, file) in files.iter().enumerate() {
+        if let Some(other) = files[..k].iter().find(|f| f.path == file.path) {
             return Err(Failure::Input(format!(
-                "{option}: {} is also the file of {other}; give each output a file of its own",
-                path.display()
+                "{}: {} is also the file of {}; give each output a file of its own",
+                file.option,
+                file.path.display(),
+                other.option
             )));
         }
-        check_writable(option, path)?;
+        check_writable(file.option, file.path)?;
     }
     Ok(())
 }
@@ -461,8 +486,8 @@ fn check_writable(option: &str, path: &Path) -> Result<(), Failure> {
 
 /// `eigenray solve`: everything is computed before anything is written.
 fn solve(args: &SolveArgs) -> Result<(), Failure> {
-    let (rays_to, arrivals_to) = destinations(args);
-    let to_stdout = rays_to == Destination::Stdout || arrivals_to == Some(Destination::Stdout);
+    let to = Destinations::of(args);
+    let to_stdout = to.rays == Destination::Stdout || to.arrivals == Some(Destination::Stdout);
     if args.format == Format::Npy && to_stdout && std::io::IsTerminal::is_terminal(&io::stdout()) {
         return Err(Failure::Input(
             "--format npy: binary output; redirect standard output to a file".into(),
@@ -535,27 +560,26 @@ fn axes(args: &SolveArgs) -> svg::Axes {
 /// The line on standard error of a run that wrote response outputs: what was solved, what was
 /// written where, and what was not written (with the options that would write it).
 fn response_summary(
-    responses: &[(&str, &Path)],
+    responses: &[OutputFile<'_>],
     solved: &Solved,
     arrivals: Option<&[SearchArrival]>,
     args: &SolveArgs,
 ) -> String {
     let written: Vec<String> = responses
         .iter()
-        .map(|(option, path)| format!("{option} {}", path.display()))
+        .map(|f| format!("{} {}", f.option, f.path.display()))
         .collect();
     let mut line = format!(
         "solve: {}; wrote {}",
         solved_summary(solved, arrivals),
         written.join(", ")
     );
-    let (rays_to, arrivals_to) = destinations(args);
-    let arrivals_to = arrivals_to.unwrap_or_else(|| rays_to.clone());
+    let to = Destinations::of(args);
     let mut unwritten = Vec::new();
-    if rays_to == Destination::Nowhere && !solved.is_empty() {
+    if to.rays == Destination::Nowhere && !solved.is_empty() {
         unwritten.push(("the rays", "--rays -"));
     }
-    if arrivals.is_some() && arrivals_to == Destination::Nowhere {
+    if arrivals.is_some() && *to.of_arrivals() == Destination::Nowhere {
         unwritten.push(("the arrivals", "--arrivals -"));
     }
     if !unwritten.is_empty() {
@@ -572,7 +596,7 @@ fn response_summary(
 
 /// Writes what `solve` found: the name tables and the picture when asked for, then the rays
 /// and the arrivals of a scene's search (`Some` exactly for a scene with a `search` section)
-/// where [`destinations`] sends them, files first and standard output last. Arrivals without
+/// where [`Destinations`] sends them, files first and standard output last. Arrivals without
 /// a destination of their own go beside the rays, in JSON and JSON Lines; nothing is written
 /// when they would share a CSV or npy table with the rays.
 fn write_outputs(
@@ -582,7 +606,10 @@ fn write_outputs(
     arrivals: Option<&[SearchArrival]>,
 ) -> Result<(), Failure> {
     let format = eigenray::Format::from(args.format);
-    let (rays_to, arrivals_to) = destinations(args);
+    let Destinations {
+        rays: rays_to,
+        arrivals: arrivals_to,
+    } = Destinations::of(args);
     // The arrivals share the rays' document when they have no destination of their own, or
     // when both go to standard output.
     let beside = match (&arrivals_to, &rays_to) {
@@ -1042,7 +1069,7 @@ mod tests {
     fn solve_args(args: &[&str]) -> SolveArgs {
         let cli = Cli::try_parse_from(["eigenray", "solve"].iter().chain(args)).unwrap();
         match cli.command {
-            Some(Command::Solve(args)) => args,
+            Some(Command::Solve(args)) => *args,
             other => panic!("{other:?}"),
         }
     }
