@@ -1202,3 +1202,41 @@ fn the_charts_take_their_time_axis_and_named_axes() {
         assert!(out.stdout.is_empty());
     }
 }
+
+/// The room of `examples/scenes/room_orders.json` to 30 orders: every order's stems share one
+/// colour, and the 31 orders' colours all differ ("20 interactions" is not "direct").
+#[test]
+fn a_room_echogram_of_30_orders_gives_each_order_its_colour() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples")
+        .join("scenes")
+        .join("room_orders.json");
+    let echogram = TempFile::path_only("room.svg");
+    let out = run([
+        OsStr::new("solve"),
+        scene.as_os_str(),
+        OsStr::new("--echogram"),
+        echogram.path().as_os_str(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(out.stdout.is_empty());
+    let svg = std::fs::read_to_string(echogram.path()).unwrap();
+    let doc = roxmltree::Document::parse(&svg).unwrap();
+    let mut colours: std::collections::BTreeMap<String, std::collections::BTreeSet<String>> =
+        Default::default();
+    for stem in doc.descendants().filter(|n| n.has_tag_name("circle")) {
+        let title = stem.children().find_map(|c| c.text()).unwrap();
+        let order = title.rsplit(", ").next().unwrap().to_string();
+        colours
+            .entry(order)
+            .or_default()
+            .insert(stem.attribute("fill").unwrap().to_string());
+    }
+    assert_eq!(colours.len(), 31, "{:?}", colours.keys());
+    assert!(colours.values().all(|c| c.len() == 1));
+    let distinct: std::collections::BTreeSet<&String> =
+        colours.values().flat_map(|c| c.iter()).collect();
+    assert_eq!(distinct.len(), 31);
+    assert_ne!(colours["direct"], colours["20 interactions"]);
+    assert!(svg.contains(r#"class="order-bar""#));
+}
