@@ -342,7 +342,8 @@ fn solve_svg_option_draws_the_scene_and_keeps_stdout() {
     assert!(picture.contains("<polyline"));
     assert!(picture.trim_end().ends_with("</svg>"));
 
-    // An SVG that cannot be written: exit 1, nothing on stdout.
+    // An SVG that cannot be written: refused before anything is solved (exit 2), nothing on
+    // stdout.
     let bad = std::env::temp_dir()
         .join("eigenray-no-such-dir-for-cli-test")
         .join("x.svg");
@@ -352,7 +353,7 @@ fn solve_svg_option_draws_the_scene_and_keeps_stdout() {
         OsStr::new("--svg"),
         bad.as_os_str(),
     ]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     assert!(out.stdout.is_empty());
     assert!(text(&out.stderr).starts_with("error: "));
 }
@@ -970,4 +971,396 @@ fn a_search_says_how_many_pairs_no_arrival_reaches() {
         "{}",
         text(&out.stderr)
     );
+}
+
+/// Shallow water 100 deep (a pressure-release surface, a rigid bottom), a source 25 below the
+/// surface, a receiver at 4,000 in range and one at 2,000; every arrival of up to 8 bounces,
+/// with amplitudes at 100 Hz and impulse responses.
+const SHALLOW: &str = r#"{
+    "media": { "water": { "speed": 1500 } },
+    "background": "water",
+    "interfaces": {
+        "surface": { "points": [[-10, 0], [5100, 0]], "reflection": "pressure-release" },
+        "bottom": { "points": [[-10, -100], [5100, -100]] }
+    },
+    "sources": [[0, -25]],
+    "receivers": [[4000, -50], [2000, -30]],
+    "paths": [{ "name": "direct", "steps": [] }],
+    "search": { "max_steps": 8, "refract": false },
+    "amplitudes": { "source": "point", "frequency": 100 },
+    "impulse_response": { "rate": 1000, "duration": 4 }
+}"#;
+
+/// Runs `eigenray solve SCENE` with `args`; asserts exit status 0.
+fn solve_with(scene: &TempFile, args: &[&OsStr]) -> Output {
+    let mut all = vec![OsStr::new("solve"), scene.path().as_os_str()];
+    all.extend_from_slice(args);
+    let out = run(all);
+    assert_eq!(out.status.code(), Some(0), "stderr: {}", text(&out.stderr));
+    out
+}
+
+/// A response output (`--ir`, `--echogram`, `--tl-map`) keeps standard output empty and says
+/// on standard error what it wrote and what it did not; `--rays -` and `--arrivals -` bring
+/// the rays and the arrivals back, exactly as a run without a response writes them.
+#[test]
+fn response_outputs_keep_stdout_empty_unless_asked() {
+    let scene = TempFile::with("shallow.json", SHALLOW);
+    let plain = solve_with(&scene, &[]);
+    // The summary of a response run: its line that starts with `solve: ` (a search may say
+    // more on lines of its own).
+    let summary_of = |out: &Output| -> Option<String> {
+        text(&out.stderr)
+            .lines()
+            .find(|l| l.starts_with("solve: "))
+            .map(str::to_string)
+    };
+    assert_eq!(summary_of(&plain), None, "{}", text(&plain.stderr));
+    let doc: Value = serde_json::from_slice(&plain.stdout).unwrap();
+    assert_eq!(doc["rays"].as_array().unwrap().len(), 2);
+    assert!(doc["arrivals"].as_array().unwrap().len() > 10);
+
+    let (ir, echogram, map) = (
+        TempFile::path_only("ir.npy"),
+        TempFile::path_only("echo.svg"),
+        TempFile::path_only("tl.svg"),
+    );
+    let options: [[&OsStr; 2]; 3] = [
+        [OsStr::new("--ir"), ir.path().as_os_str()],
+        [OsStr::new("--echogram"), echogram.path().as_os_str()],
+        [OsStr::new("--tl-map"), map.path().as_os_str()],
+    ];
+    for [option, path] in options {
+        let quiet = solve_with(&scene, &[option, path]);
+        assert!(
+            quiet.stdout.is_empty(),
+            "{option:?}: {}",
+            text(&quiet.stdout)
+        );
+        let summary = summary_of(&quiet).expect("a summary line");
+        assert!(
+            summary.starts_with("solve: 2 rays")
+                && summary.contains("search arrivals")
+                && summary.contains(&format!(
+                    "wrote {} {}",
+                    option.to_str().unwrap(),
+                    Path::new(path).display()
+                ))
+                && summary
+                    .contains("not written: the rays and the arrivals (--rays -, --arrivals -"),
+            "{summary}"
+        );
+        assert!(
+            std::fs::metadata(path).is_ok_and(|m| m.len() > 0),
+            "{option:?} written"
+        );
+
+        // Asked for: the rays (with the arrivals beside them), as without a response.
+        let both = solve_with(
+            &scene,
+            &[option, path, OsStr::new("--rays"), OsStr::new("-")],
+        );
+        assert_eq!(both.stdout, plain.stdout, "{option:?}");
+        assert!(
+            !text(&both.stderr).contains("not written"),
+            "{}",
+            text(&both.stderr)
+        );
+        let both = solve_with(
+            &scene,
+            &[
+                option,
+                path,
+                OsStr::new("--rays"),
+                OsStr::new("-"),
+                OsStr::new("--arrivals"),
+                OsStr::new("-"),
+            ],
+        );
+        assert_eq!(both.stdout, plain.stdout, "{option:?}");
+    }
+
+    // The arrivals alone, and the rays to a file of their own.
+    let rays = TempFile::path_only("rays.json");
+    let arrivals_only = solve_with(
+        &scene,
+        &[
+            OsStr::new("--echogram"),
+            echogram.path().as_os_str(),
+            OsStr::new("--arrivals"),
+            OsStr::new("-"),
+            OsStr::new("--rays"),
+            rays.path().as_os_str(),
+        ],
+    );
+    let shown: Value = serde_json::from_slice(&arrivals_only.stdout).unwrap();
+    assert_eq!(shown.as_object().unwrap().len(), 1);
+    assert_eq!(shown["arrivals"], doc["arrivals"]);
+    let filed: Value = serde_json::from_slice(&std::fs::read(rays.path()).unwrap()).unwrap();
+    assert_eq!(filed.as_object().unwrap().len(), 1);
+    assert_eq!(filed["rays"], doc["rays"]);
+    assert!(!text(&arrivals_only.stderr).contains("not written"));
+
+    // CSV: the arrivals' table on standard output is the one `--arrivals FILE` writes.
+    let table = TempFile::path_only("arrivals.csv");
+    let csv = [OsStr::new("--format"), OsStr::new("csv")];
+    let _ = solve_with(
+        &scene,
+        &[
+            csv[0],
+            csv[1],
+            OsStr::new("--arrivals"),
+            table.path().as_os_str(),
+        ],
+    );
+    let piped = solve_with(
+        &scene,
+        &[
+            csv[0],
+            csv[1],
+            OsStr::new("--tl-map"),
+            map.path().as_os_str(),
+            OsStr::new("--arrivals"),
+            OsStr::new("-"),
+        ],
+    );
+    assert_eq!(piped.stdout, std::fs::read(table.path()).unwrap());
+    // Two tables cannot share standard output.
+    let file = scene.path().as_os_str();
+    let out = run([
+        OsStr::new("solve"),
+        file,
+        csv[0],
+        csv[1],
+        OsStr::new("--rays"),
+        OsStr::new("-"),
+        OsStr::new("--arrivals"),
+        OsStr::new("-"),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.is_empty());
+    assert!(
+        text(&out.stderr).starts_with("error: --format csv: "),
+        "{}",
+        text(&out.stderr)
+    );
+}
+
+/// An output that cannot be written (`--ir`, `--echogram`, `--tl-map` as much as `--rays`,
+/// `--arrivals`, `--svg` and `--names`) is refused before anything is solved or written:
+/// exit status 2, the option and the path named, nothing on standard output, no other file.
+#[test]
+fn unwritable_outputs_are_refused_before_anything_is_written() {
+    let scene = TempFile::with("shallow.json", SHALLOW);
+    let missing = std::env::temp_dir().join(format!("eigenray-cli-missing-{}", std::process::id()));
+    let written = TempFile::path_only("other.svg");
+    for (option, name) in [
+        ("--ir", "ir.npy"),
+        ("--echogram", "e.svg"),
+        ("--tl-map", "tl.svg"),
+        ("--rays", "rays.json"),
+        ("--arrivals", "arrivals.json"),
+        ("--svg", "scene.svg"),
+        ("--names", "names.json"),
+    ] {
+        let bad = missing.join(name);
+        // Another output beside it, which must not be written either.
+        let other = if option == "--echogram" {
+            "--tl-map"
+        } else {
+            "--echogram"
+        };
+        let out = run([
+            OsStr::new("solve"),
+            scene.path().as_os_str(),
+            OsStr::new(other),
+            written.path().as_os_str(),
+            OsStr::new(option),
+            bad.as_os_str(),
+        ]);
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{option}: {stderr}");
+        assert!(out.stdout.is_empty(), "{option}");
+        assert!(
+            stderr.starts_with(&format!(
+                "error: {option}: {}: cannot write: ",
+                bad.display()
+            )),
+            "{stderr}"
+        );
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(!written.path().exists(), "{option}: {other} written");
+    }
+    // A directory, and one file named by two options.
+    let dir = std::env::temp_dir();
+    let out = run([
+        OsStr::new("solve"),
+        scene.path().as_os_str(),
+        OsStr::new("--tl-map"),
+        dir.as_os_str(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        text(&out.stderr).starts_with("error: --tl-map: ")
+            && text(&out.stderr).contains("is a directory")
+    );
+    let out = run([
+        OsStr::new("solve"),
+        scene.path().as_os_str(),
+        OsStr::new("--echogram"),
+        written.path().as_os_str(),
+        OsStr::new("--tl-map"),
+        written.path().as_os_str(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        text(&out.stderr).starts_with("error: --tl-map: ")
+            && text(&out.stderr).contains("also the file of --echogram"),
+        "{}",
+        text(&out.stderr)
+    );
+    assert!(!written.path().exists() && out.stdout.is_empty());
+    // An existing file is checked without being changed.
+    let kept = TempFile::with("kept.svg", "before");
+    let out = run([
+        OsStr::new("solve"),
+        scene.path().as_os_str(),
+        OsStr::new("--echogram"),
+        kept.path().as_os_str(),
+        OsStr::new("--source"),
+        OsStr::new("7"),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(std::fs::read_to_string(kept.path()).unwrap(), "before");
+}
+
+/// The texts of the elements of `class` in an SVG document.
+fn texts_of_class(svg: &str, class: &str) -> Vec<String> {
+    let doc = roxmltree::Document::parse(svg).expect("well-formed SVG");
+    doc.descendants()
+        .filter(|n| n.attribute("class") == Some(class))
+        .map(|n| n.text().unwrap_or_default().to_string())
+        .collect()
+}
+
+/// The echogram at 4 km starts just before the first arrival (2.667 s), or at 0 when asked;
+/// the map names its axes in km and depth and draws the surface, the bottom and the source.
+#[test]
+fn the_charts_take_their_time_axis_and_named_axes() {
+    let scene = TempFile::with("shallow.json", SHALLOW);
+    let echogram = TempFile::path_only("echo.svg");
+    let e = [OsStr::new("--echogram"), echogram.path().as_os_str()];
+    let _ = solve_with(&scene, &e);
+    let ticks = texts_of_class(&std::fs::read_to_string(echogram.path()).unwrap(), "x-tick");
+    let first: f64 = ticks[0].parse().unwrap();
+    assert!((2.5..2.7).contains(&first) || first == 2.7, "{ticks:?}");
+    let _ = solve_with(&scene, &[e[0], e[1], OsStr::new("--echogram-from-zero")]);
+    let ticks = texts_of_class(&std::fs::read_to_string(echogram.path()).unwrap(), "x-tick");
+    assert_eq!(ticks[0], "0", "{ticks:?}");
+
+    let map = TempFile::path_only("tl.svg");
+    let _ = solve_with(
+        &scene,
+        &[
+            OsStr::new("--tl-map"),
+            map.path().as_os_str(),
+            OsStr::new("--x-axis"),
+            OsStr::new("range,km,0.001"),
+            OsStr::new("--y-axis"),
+            OsStr::new("depth,m,-1"),
+        ],
+    );
+    let svg = std::fs::read_to_string(map.path()).unwrap();
+    assert_eq!(texts_of_class(&svg, "x-title"), ["range (km)"]);
+    assert_eq!(texts_of_class(&svg, "y-title"), ["depth (m)"]);
+    // Depth ticks: positive, and growing down the picture.
+    let doc = roxmltree::Document::parse(&svg).unwrap();
+    let depths: Vec<(f64, f64)> = doc
+        .descendants()
+        .filter(|n| n.attribute("class") == Some("y-tick"))
+        .map(|n| {
+            let depth: f64 = n.text().unwrap().parse().unwrap();
+            (depth, n.attribute("y").unwrap().parse().unwrap())
+        })
+        .collect();
+    assert!(depths.len() >= 3, "{depths:?}");
+    assert!(
+        depths.iter().all(|&(d, _)| d >= 0.0)
+            && depths
+                .windows(2)
+                .all(|w| (w[0].0 < w[1].0) == (w[0].1 < w[1].1)),
+        "{depths:?}"
+    );
+    for title in ["surface", "bottom", "bottom (bottom)", "source 0"] {
+        assert!(
+            doc.descendants().any(|n| n.text() == Some(title)),
+            "{title}"
+        );
+    }
+    // The scene picture takes the same axes; a bad one is refused naming its option.
+    let picture = TempFile::path_only("scene.svg");
+    let _ = solve_with(
+        &scene,
+        &[
+            OsStr::new("--svg"),
+            picture.path().as_os_str(),
+            OsStr::new("--y-axis"),
+            OsStr::new("depth,m,-1"),
+        ],
+    );
+    let svg = std::fs::read_to_string(picture.path()).unwrap();
+    assert_eq!(texts_of_class(&svg, "y-title"), ["depth (m)"]);
+    for bad in ["range,km,0", "range,km,x", ",km"] {
+        let out = run([
+            OsStr::new("solve"),
+            scene.path().as_os_str(),
+            OsStr::new("--x-axis"),
+            OsStr::new(bad),
+        ]);
+        assert_eq!(out.status.code(), Some(2), "{bad}");
+        assert!(
+            text(&out.stderr).contains("--x-axis"),
+            "{}",
+            text(&out.stderr)
+        );
+        assert!(out.stdout.is_empty());
+    }
+}
+
+/// The room of `examples/scenes/room_orders.json` to 30 orders: every order's stems share one
+/// colour, and the 31 orders' colours all differ ("20 interactions" is not "direct").
+#[test]
+fn a_room_echogram_of_30_orders_gives_each_order_its_colour() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples")
+        .join("scenes")
+        .join("room_orders.json");
+    let echogram = TempFile::path_only("room.svg");
+    let out = run([
+        OsStr::new("solve"),
+        scene.as_os_str(),
+        OsStr::new("--echogram"),
+        echogram.path().as_os_str(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(out.stdout.is_empty());
+    let svg = std::fs::read_to_string(echogram.path()).unwrap();
+    let doc = roxmltree::Document::parse(&svg).unwrap();
+    let mut colours: std::collections::BTreeMap<String, std::collections::BTreeSet<String>> =
+        Default::default();
+    for stem in doc.descendants().filter(|n| n.has_tag_name("circle")) {
+        let title = stem.children().find_map(|c| c.text()).unwrap();
+        let order = title.rsplit(", ").next().unwrap().to_string();
+        colours
+            .entry(order)
+            .or_default()
+            .insert(stem.attribute("fill").unwrap().to_string());
+    }
+    assert_eq!(colours.len(), 31, "{:?}", colours.keys());
+    assert!(colours.values().all(|c| c.len() == 1));
+    let distinct: std::collections::BTreeSet<&String> =
+        colours.values().flat_map(|c| c.iter()).collect();
+    assert_eq!(distinct.len(), 31);
+    assert_ne!(colours["direct"], colours["20 interactions"]);
+    assert!(svg.contains(r#"class="order-bar""#));
 }

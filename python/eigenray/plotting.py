@@ -7,6 +7,95 @@ import numpy as np
 
 __all__ = ["plot", "echogram", "tl_map"]
 
+#: Most orders an echogram keys by a legend; with more, a colour bar of orders.
+MAX_ORDER_LEGEND = 10
+
+
+def _axis_spec(spec, default):
+    """An axis's title and scale from `spec`: None (`default`, scale 1), a name, or a tuple
+    (name, unit) or (name, unit, scale). Tick numbers are scale × coordinate; a negative scale
+    numbers the axis downwards (("depth", "m", -1): depth positive down below y = 0)."""
+    if spec is None:
+        return default, 1.0
+    if isinstance(spec, str):
+        return spec, 1.0
+    parts = tuple(spec)
+    if not 1 <= len(parts) <= 3:
+        raise ValueError(f"an axis is a name or (name, unit[, scale]), not {spec!r}")
+    name = str(parts[0])
+    unit = parts[1] if len(parts) > 1 else None
+    scale = float(parts[2]) if len(parts) > 2 else 1.0
+    if not np.isfinite(scale) or scale == 0.0:
+        raise ValueError(f"an axis's scale must be a finite number other than 0, not {scale!r}")
+    return (f"{name} ({unit})" if unit else name), scale
+
+
+def _name_axes(ax, x_axis, y_axis, default_x="x", default_y="y"):
+    """Titles `ax`'s axes and numbers their ticks as `x_axis` and `y_axis` say: ticks at round
+    numbers of the axis (scale × coordinate), the data left in the scene's coordinates."""
+    from matplotlib.ticker import FuncFormatter
+
+    for spec, default, axis, set_label in (
+        (x_axis, default_x, ax.xaxis, ax.set_xlabel),
+        (y_axis, default_y, ax.yaxis, ax.set_ylabel),
+    ):
+        title, scale = _axis_spec(spec, default)
+        set_label(title)
+        if scale != 1.0:
+            axis.set_major_locator(_scaled_locator(scale))
+            axis.set_major_formatter(FuncFormatter(lambda v, _pos, s=scale: f"{v * s:.10g}"))
+
+
+def _scaled_locator(scale):
+    """A matplotlib locator of ticks at round numbers of scale × coordinate, placed in
+    coordinates."""
+    from matplotlib.ticker import Locator, MaxNLocator
+
+    round_numbers = MaxNLocator(nbins="auto", steps=[1, 2, 2.5, 5, 10])
+
+    class ScaledLocator(Locator):
+        def __call__(self):
+            lo, hi = self.axis.get_view_interval()
+            return self.tick_values(lo, hi)
+
+        def tick_values(self, vmin, vmax):
+            a, b = sorted((vmin * scale, vmax * scale))
+            return np.asarray(round_numbers.tick_values(a, b)) / scale
+
+    return ScaledLocator()
+
+
+def _nearest_interface(scene, source, side):
+    """Of the open interfaces that pass over or under `source` (a segment spanning its x), the
+    name of the one nearest to it on the side of `side` (+1 above: the surface; -1 below: the
+    bottom of the water it lies in), or None."""
+    best, best_distance = None, np.inf
+    for name, v in scene.interfaces.items():
+        if scene.closed[name]:
+            continue
+        for a, b in zip(v[:-1], v[1:]):
+            lo, hi = min(a[0], b[0]), max(a[0], b[0])
+            if not (lo <= source[0] <= hi) or hi <= lo:
+                continue
+            y = a[1] + (b[1] - a[1]) * (source[0] - a[0]) / (b[0] - a[0])
+            distance = side * (y - source[1])
+            if 0 < distance < best_distance:
+                best, best_distance = name, distance
+    return best
+
+
+def _y_within(vertices, x0, x1):
+    """The heights of a polyline over x0 <= x <= x1: its vertices there and its crossings of
+    x0 and x1."""
+    ys = [p[1] for p in vertices if x0 <= p[0] <= x1]
+    for a, b in zip(vertices[:-1], vertices[1:]):
+        if a[0] != b[0]:
+            for x in (x0, x1):
+                t = (x - a[0]) / (b[0] - a[0])
+                if 0 <= t <= 1:
+                    ys.append(a[1] + t * (b[1] - a[1]))
+    return np.asarray(ys, dtype=float)
+
 
 def _rays_polylines(rays, max_rays):
     """The drawn rays' polylines, their times and path labels, and how many were left out."""
@@ -47,7 +136,8 @@ def _rays_polylines(rays, max_rays):
     return lines, np.asarray(times, dtype=float), labels, left_out
 
 
-def plot(scene, rays=None, *, colour_by="time", ax=None, max_rays=2000, labels=True):
+def plot(scene, rays=None, *, colour_by="time", ax=None, max_rays=2000, labels=True,
+         aspect="equal", x_axis=None, y_axis=None):
     """Draws `scene` (its interfaces, sources and receivers) and `rays` on matplotlib axes.
 
     `rays` is a `Rays` (from `Tracer.trace`, `trace_stationary` or `solve_pairs`), a list of
@@ -55,7 +145,14 @@ def plot(scene, rays=None, *, colour_by="time", ax=None, max_rays=2000, labels=T
     of its dicts).
     `colour_by`: ``"time"`` (a colour bar of travel time) or ``"path"`` (a colour per path
     name, or per step sequence for search arrivals, with a legend). Past `max_rays` rays an
-    even sample is drawn and the title says so. Returns the axes.
+    even sample is drawn and the title says so.
+    `aspect`: ``"equal"`` (the default: one unit as long along both axes), ``"auto"`` (the
+    axes fill the figure: a 5 km × 120 m waveguide is not a sliver) or a number (y stretched by
+    it), as matplotlib's `set_aspect`.
+    `x_axis`, `y_axis`: the axes' names and units, as a name or `(name, unit)` or
+    `(name, unit, scale)`, tick numbers being scale × coordinate; `("range", "km", 1e-3)` for a
+    scene in metres, `("depth", "m", -1)` for depth positive down below y = 0.
+    Returns the axes.
     """
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
@@ -96,16 +193,16 @@ def plot(scene, rays=None, *, colour_by="time", ax=None, max_rays=2000, labels=T
                 ax.add_collection(
                     LineCollection(chosen, colors=[cmap(k % cmap.N)], linewidths=0.9, label=label)
                 )
-            ax.legend(loc="best", fontsize=8, title="path")
+            ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+                      fontsize=8, title="path")
         drawn = len(lines)
         title = f"{drawn} rays" if not left_out else f"{drawn} of {drawn + left_out} rays drawn"
     sources, receivers = scene.sources, scene.receivers
     ax.scatter(sources[:, 0], sources[:, 1], marker="*", s=120, c="crimson", zorder=6, label=None)
     ax.scatter(receivers[:, 0], receivers[:, 1], marker="v", s=14, c="black", zorder=6)
-    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_aspect(aspect, adjustable="datalim")
     ax.autoscale_view()
-    ax.set_xlabel("x")
-    ax.set_ylabel("y")
+    _name_axes(ax, x_axis, y_axis)
     if title:
         ax.set_title(title, fontsize=10)
     return ax
@@ -125,12 +222,15 @@ def _order_label(order):
     return "direct" if order == 0 else f"{order} interaction" + ("" if order == 1 else "s")
 
 
-def echogram(echoes, source=0, receiver=0, *, ax=None, range_db=60.0):
+def echogram(echoes, source=0, receiver=0, *, ax=None, range_db=60.0, from_zero=False):
     """Draws the echogram of one (source, receiver): each arrival as a stem at its time, up to
     its level in dB re the free field 1 unit of length from a point source, 20·log10(|a|·4π),
-    coloured by its number of interactions, with a legend. `echoes` is `Tracer.echoes()` (a
-    dict of arrays). Stems start `range_db` below the loudest. Returns the axes."""
+    coloured by its number of interactions. `echoes` is `Tracer.echoes()` (a dict of arrays).
+    Stems start `range_db` below the loudest. Up to 10 orders are keyed by a legend beside the
+    plot; more by a colour bar of orders (each order its colour). The time axis starts just
+    before the first arrival, or at 0 with `from_zero`. Returns the axes."""
     import matplotlib.pyplot as plt
+    from matplotlib.colors import BoundaryNorm
 
     if ax is None:
         _, ax = plt.subplots(figsize=(8, 4.5), layout="constrained")
@@ -142,30 +242,67 @@ def echogram(echoes, source=0, receiver=0, *, ax=None, range_db=60.0):
     order = np.asarray(echoes["order"])[chosen]
     top = np.ceil(level.max() / 10) * 10 + 5 if len(level) else 0.0
     floor = top - range_db - 5
-    cmap = plt.get_cmap("tab10" if len(set(order)) <= 10 else "tab20")
-    for k, o in enumerate(sorted(set(order.tolist()))):
-        mine = order == o
-        ax.vlines(time[mine], floor, np.maximum(level[mine], floor), color=cmap(k % cmap.N),
-                  linewidth=1.4, label=_order_label(o))
-        ax.plot(time[mine], np.maximum(level[mine], floor), "o", ms=3, color=cmap(k % cmap.N))
+    orders = sorted(set(order.tolist()))
+    shown = np.maximum(level, floor)
+    if len(orders) <= MAX_ORDER_LEGEND:
+        cmap = plt.get_cmap("tab10")
+        for k, o in enumerate(orders):
+            mine = order == o
+            ax.vlines(time[mine], floor, shown[mine], color=cmap(k), linewidth=1.4,
+                      label=_order_label(o))
+            ax.plot(time[mine], shown[mine], "o", ms=3, color=cmap(k))
+        if len(time):
+            ax.legend(title="order", fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                      borderaxespad=0.0)
+    else:
+        lo, hi = orders[0], orders[-1]
+        # One colour per order, short of viridis's palest yellow.
+        cmap = plt.get_cmap("viridis").resampled(256)
+        colours = cmap(0.92 * (order - lo) / max(hi - lo, 1))
+        # The quietest first, so that the loud ones are on top.
+        by_level = np.argsort(level)
+        ax.vlines(time[by_level], floor, shown[by_level], colors=colours[by_level], linewidth=1.2)
+        ax.scatter(time[by_level], shown[by_level], s=9, c=colours[by_level], zorder=3)
+        boundaries = np.arange(lo, hi + 2) - 0.5
+        from matplotlib.cm import ScalarMappable
+        from matplotlib.colors import ListedColormap
+
+        bar_colours = ListedColormap(cmap(0.92 * (np.arange(lo, hi + 1) - lo) / max(hi - lo, 1)))
+        mappable = ScalarMappable(norm=BoundaryNorm(boundaries, bar_colours.N), cmap=bar_colours)
+        bar = ax.figure.colorbar(mappable, ax=ax)
+        bar.set_label("order (interactions; 0: direct)")
+        # Whole orders, at the middles of their blocks: about 8 of them.
+        step = max(1, int(np.ceil((hi - lo + 1) / 8)))
+        step = next(s for s in (1, 2, 5, 10, 20, 25, 50, 100, step) if s >= step)
+        bar.set_ticks(np.arange(int(np.ceil(lo / step)) * step, hi + 1, step))
+        bar.ax.invert_yaxis()
     ax.set_ylim(floor, top)
-    ax.set_xlim(0, time.max() * 1.05 if len(time) else 1.0)
+    if len(time):
+        first, last = time.min(), time.max()
+        spread = last - first
+        pad = 0.05 * spread if spread > 0 else (0.05 * last if last > 0 else 0.05)
+        start = min(0.0, first - pad) if from_zero else max(first - pad, 0.0) if first >= 0 else first - pad
+        ax.set_xlim(start, last + pad)
+    else:
+        ax.set_xlim(0.0, 1.0)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("level (dB re free field at 1 unit)")
     ax.set_title(f"Echogram: source {source} at receiver {receiver}, {len(time)} arrivals",
                  fontsize=10)
-    if len(time):
-        ax.legend(title="order", fontsize=8, loc="upper right")
     ax.grid(alpha=0.3)
     return ax
 
 
-def tl_map(receivers, tl, *, ax=None, range_db=60.0, title=None):
+def tl_map(receivers, tl, *, ax=None, range_db=60.0, title=None, scene=None, source=0,
+           x_axis=None, y_axis=None):
     """Draws a transmission-loss map: `tl` (dB, one per receiver, as a row of
     `Tracer.transmission_loss()`) at the `receivers` (an (n, 2) array), as an image when they
     form a grid (every pair of their distinct x and y) and as dots otherwise, over `range_db`
     from the lowest loss, loud bright, with a colour bar. Receivers nothing reaches (inf) are
-    grey. Returns the axes."""
+    grey. With `scene`, its interfaces are drawn over the map, the bottom (below the first open
+    interface under source `source`) shaded and that source marked with a star.
+    `x_axis`, `y_axis`: the axes' names and units, as for `plot` (`("range", "km", 1e-3)`,
+    `("depth", "m", -1)`). Returns the axes."""
     import matplotlib.pyplot as plt
 
     receivers = np.asarray(receivers, dtype=float)
@@ -188,8 +325,48 @@ def tl_map(receivers, tl, *, ax=None, range_db=60.0, title=None):
     bar = ax.figure.colorbar(artist, ax=ax)
     bar.set_label("transmission loss (dB)")
     bar.ax.invert_yaxis()
-    ax.set_xlabel("x (range)")
-    ax.set_ylabel("y (height)")
+    if scene is not None:
+        _draw_scene_on_map(ax, scene, source)
+    _name_axes(ax, x_axis, y_axis)
     if title:
         ax.set_title(title, fontsize=10)
     return ax
+
+
+def _draw_scene_on_map(ax, scene, source):
+    """Draws `scene`'s interfaces, the bottom under source `source` shaded and the source as a
+    star over a map, keeping the map's extent (widened to take the source in)."""
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    at = np.asarray(scene.sources[source], dtype=float)
+    if not x0 <= at[0] <= x1:
+        margin = 0.02 * (x1 - x0)
+        x0, x1 = min(x0, at[0] - margin), max(x1, at[0] + margin)
+    if not y0 <= at[1] <= y1:
+        margin = 0.04 * (y1 - y0)
+        y0, y1 = min(y0, at[1] - margin), max(y1, at[1] + margin)
+    bottom = _nearest_interface(scene, at, -1.0)
+    # The surface above the source and the bottom below it in view too, where they lie
+    # within half the map's height of it.
+    reach = 0.5 * (y1 - y0)
+    for side in (1.0, -1.0):
+        name = _nearest_interface(scene, at, side)
+        if name is None:
+            continue
+        ys = _y_within(scene.interfaces[name], x0, x1)
+        if not len(ys):
+            continue
+        if side < 0 and ys.min() < y0 and y0 - ys.min() <= reach:
+            y0 = ys.min() - 0.03 * (y1 - ys.min())
+        elif side > 0 and ys.max() > y1 and ys.max() - y1 <= reach:
+            y1 = ys.max() + 0.03 * (ys.max() - y0)
+    for name, v in scene.interfaces.items():
+        v = np.vstack([v, v[:1]]) if scene.closed[name] else v
+        ax.plot(v[:, 0], v[:, 1], color="0.2", linewidth=1.6, zorder=3, label=name)
+        if name == bottom:
+            below = y0 - (y1 - y0)
+            ax.fill_between(v[:, 0], v[:, 1], below, color="#b59b6d", alpha=0.8, zorder=2,
+                            linewidth=0, label=f"{name} (bottom)")
+    ax.scatter([at[0]], [at[1]], marker="*", s=160, c="#e4572e", edgecolors="0.1",
+               linewidths=0.8, zorder=4, label=f"source {source}")
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)

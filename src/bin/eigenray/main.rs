@@ -54,7 +54,7 @@ enum Command {
     ///
     /// The scene file and every output field are described in docs/scene-format.md of
     /// eigenray's repository.
-    Solve(SolveArgs),
+    Solve(Box<SolveArgs>),
     /// Solve the built-in air-over-water scene, print a summary and draw it (the default).
     Demo(DemoArgs),
 }
@@ -78,10 +78,16 @@ struct SolveArgs {
     /// their names). The `.npy` format holds numbers only; this file names them.
     #[arg(long, value_name = "PATH")]
     names: Option<PathBuf>,
-    /// Write the arrivals of the scene's `search` section to this file, in the format of
-    /// `--format`, instead of beside the rays (JSON: `{"arrivals": [...]}`; JSON Lines: one
-    /// arrival per line; CSV: a table of their own; npy: records of their own). CSV and npy
-    /// hold one table each, so a scene with a `search` section needs it with them.
+    /// Where the rays go: `-` is standard output (the default, unless a response output
+    /// `--ir`, `--echogram` or `--tl-map` is asked for: then the rays are written only where
+    /// this says), or a file, in the format of `--format`.
+    #[arg(long, value_name = "PATH")]
+    rays: Option<PathBuf>,
+    /// Where the arrivals of the scene's `search` section go: a file, or `-` for standard
+    /// output, in the format of `--format` (JSON: `{"arrivals": [...]}`; JSON Lines: one
+    /// arrival per line; CSV: a table of their own; npy: records of their own). Without it
+    /// they go beside the rays, in JSON and JSON Lines; CSV and npy hold one table each, so a
+    /// scene with a `search` section needs it with them.
     #[arg(long, value_name = "PATH")]
     arrivals: Option<PathBuf>,
     /// Also draw the scene and its rays to this SVG file (with axes; past 2,000 rays a
@@ -91,17 +97,24 @@ struct SolveArgs {
     /// Write the scene's impulse responses (`"impulse_response"`) to this file: `.npy`,
     /// float64 `[sources, receivers, samples]`; or `.wav`, 32-bit float, one channel per
     /// (source, receiver), source-major. Every `converged` ray and arrival with an amplitude
-    /// adds its pulse.
+    /// adds its pulse. A response output: standard output stays empty unless `--rays -` or
+    /// `--arrivals -` asks for it, and a summary goes to standard error.
     #[arg(long, value_name = "PATH")]
     ir: Option<PathBuf>,
     /// Draw the echogram of one source at one receiver (`--source`, `--receiver`) to this SVG
     /// file: each arrival as a stem at its time, up to its level in dB, coloured by its
-    /// number of interactions. Needs `amplitudes`.
+    /// number of interactions; the time axis starts just before the first arrival. Needs
+    /// `amplitudes`. A response output, as `--ir`.
     #[arg(long, value_name = "PATH")]
     echogram: Option<PathBuf>,
+    /// Start the echogram's time axis at t = 0 instead of just before the first arrival.
+    #[arg(long)]
+    echogram_from_zero: bool,
     /// Draw the transmission-loss map of one source (`--source`) over every receiver to this
     /// SVG file, at `amplitudes.frequency`: −20 log10(|p| · 4π) dB of the coherent sum of
-    /// each receiver's arrivals, as a grid of cells where the receivers form one.
+    /// each receiver's arrivals, as a grid of cells where the receivers form one, with the
+    /// interfaces, the bottom under the source and the source drawn over it. A response
+    /// output, as `--ir`.
     #[arg(long, value_name = "PATH")]
     tl_map: Option<PathBuf>,
     /// The source of `--echogram` and `--tl-map`.
@@ -110,6 +123,14 @@ struct SolveArgs {
     /// The receiver of `--echogram`.
     #[arg(long, value_name = "N", default_value_t = 0)]
     receiver: usize,
+    /// The horizontal axis of `--svg` and `--tl-map`: its name, unit and the scale from the
+    /// scene's x to the numbers on its ticks (`range,km,0.001` for a scene in metres).
+    #[arg(long, value_name = "NAME[,UNIT[,SCALE]]", default_value = "x")]
+    x_axis: svg::AxisSpec,
+    /// The vertical axis of `--svg` and `--tl-map`, as `--x-axis`; a negative scale numbers it
+    /// downwards (`depth,m,-1`: depth positive down below y = 0).
+    #[arg(long, value_name = "NAME[,UNIT[,SCALE]]", default_value = "y")]
+    y_axis: svg::AxisSpec,
     /// What colours the rays in the picture: `time` (travel time, with a colour bar giving the
     /// range), `path` (one colour per path, with a legend of path names) or `sequence` (one
     /// colour per step sequence, with a legend listing the sequences).
@@ -309,11 +330,182 @@ impl Solved {
             Solved::Stationary(st) => RaySet::Stationary(st),
         }
     }
+
+    /// Whether there is no ray (a scene without `paths`).
+    fn is_empty(&self) -> bool {
+        match self {
+            Solved::Batch(b) => b.is_empty(),
+            Solved::Stationary(st) => st.triples.is_empty(),
+        }
+    }
+}
+
+/// An output file asked for on the command line.
+#[derive(Clone, Copy, Debug)]
+struct OutputFile<'a> {
+    /// The option that names it (`--tl-map`).
+    option: &'static str,
+    /// Its path.
+    path: &'a Path,
+}
+
+/// The response outputs asked for: with any of them, standard output stays empty unless
+/// `--rays -` or `--arrivals -` asks for it, and a summary goes to standard error. (A new
+/// response output joins this rule by a line here.)
+fn response_outputs(args: &SolveArgs) -> Vec<OutputFile<'_>> {
+    [
+        ("--ir", &args.ir),
+        ("--echogram", &args.echogram),
+        ("--tl-map", &args.tl_map),
+    ]
+    .into_iter()
+    .filter_map(|(option, path)| path.as_deref().map(|path| OutputFile { option, path }))
+    .collect()
+}
+
+/// Where a table of `solve` goes.
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum Destination {
+    /// Standard output (`-`).
+    Stdout,
+    /// A file.
+    File(PathBuf),
+    /// Not written.
+    Nowhere,
+}
+
+impl Destination {
+    /// The destination named by an option's value: `-` is standard output.
+    fn of(path: &Path) -> Destination {
+        if path.as_os_str() == "-" {
+            Destination::Stdout
+        } else {
+            Destination::File(path.to_path_buf())
+        }
+    }
+}
+
+/// Where the rays and the arrivals of `solve` go.
+struct Destinations {
+    /// The rays': where `--rays` says, else standard output unless a response output is asked
+    /// for.
+    rays: Destination,
+    /// The arrivals': where `--arrivals` says (`None`: beside the rays).
+    arrivals: Option<Destination>,
+}
+
+impl Destinations {
+    /// The destinations of `args`.
+    fn of(args: &SolveArgs) -> Destinations {
+        let rays = match &args.rays {
+            Some(path) => Destination::of(path),
+            None if response_outputs(args).is_empty() => Destination::Stdout,
+            None => Destination::Nowhere,
+        };
+        Destinations {
+            rays,
+            arrivals: args.arrivals.as_deref().map(Destination::of),
+        }
+    }
+
+    /// Whether the arrivals would go beside the rays into one CSV or npy table, which holds
+    /// one kind of entry only: refused before the solve.
+    fn share_one_table(&self, format: Format) -> bool {
+        self.rays != Destination::Nowhere
+            && self.arrivals_beside_rays()
+            && matches!(format, Format::Csv | Format::Npy)
+    }
+
+    /// Whether the arrivals share the rays' document: they have no destination of their own,
+    /// or both go to standard output.
+    fn arrivals_beside_rays(&self) -> bool {
+        match &self.arrivals {
+            None => true,
+            Some(a) => *a == Destination::Stdout && self.rays == Destination::Stdout,
+        }
+    }
+
+    /// Where the arrivals end up: their own destination, or the rays'.
+    fn of_arrivals(&self) -> &Destination {
+        self.arrivals.as_ref().unwrap_or(&self.rays)
+    }
+}
+
+/// Every file `solve` is asked to write (not `-`).
+fn output_files(args: &SolveArgs) -> Vec<OutputFile<'_>> {
+    let mut files: Vec<OutputFile<'_>> = [
+        ("--names", &args.names),
+        ("--svg", &args.svg),
+        ("--rays", &args.rays),
+        ("--arrivals", &args.arrivals),
+    ]
+    .into_iter()
+    .filter_map(|(option, path)| path.as_deref().map(|path| OutputFile { option, path }))
+    .collect();
+    files.extend(response_outputs(args));
+    files.retain(|f| f.path.as_os_str() != "-");
+    files
+}
+
+/// Refuses, before anything is solved, an output file that cannot be written (a missing
+/// directory, no permission, a directory) or that two options name: exit status 2, naming
+/// the option and the path. A file that does not exist yet is created to try, then removed.
+fn check_output_files(args: &SolveArgs) -> Result<(), Failure> {
+    let files = output_files(args);
+    for (k, file) in files.iter().enumerate() {
+        if let Some(other) = files[..k].iter().find(|f| f.path == file.path) {
+            return Err(Failure::Input(format!(
+                "{}: {} is also the file of {}; give each output a file of its own",
+                file.option,
+                file.path.display(),
+                other.option
+            )));
+        }
+        check_writable(file.option, file.path)?;
+    }
+    Ok(())
+}
+
+/// Whether `path` can be written, without changing it: an existing file is opened to append
+/// (nothing appended), a new one created and removed.
+fn check_writable(option: &str, path: &Path) -> Result<(), Failure> {
+    let refuse = |e: &io::Error| {
+        Failure::Input(format!(
+            "{option}: {}: cannot write: {}",
+            path.display(),
+            io_message(e)
+        ))
+    };
+    if path.is_dir() {
+        return Err(Failure::Input(format!(
+            "{option}: {}: is a directory, not a file",
+            path.display()
+        )));
+    }
+    match fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(path)
+    {
+        Ok(file) => {
+            drop(file);
+            let _ = fs::remove_file(path);
+            Ok(())
+        }
+        Err(e) if e.kind() == io::ErrorKind::AlreadyExists => fs::OpenOptions::new()
+            .append(true)
+            .open(path)
+            .map(drop)
+            .map_err(|e| refuse(&e)),
+        Err(e) => Err(refuse(&e)),
+    }
 }
 
 /// `eigenray solve`: everything is computed before anything is written.
 fn solve(args: &SolveArgs) -> Result<(), Failure> {
-    if args.format == Format::Npy && std::io::IsTerminal::is_terminal(&io::stdout()) {
+    let to = Destinations::of(args);
+    let to_stdout = to.rays == Destination::Stdout || to.arrivals == Some(Destination::Stdout);
+    if args.format == Format::Npy && to_stdout && std::io::IsTerminal::is_terminal(&io::stdout()) {
         return Err(Failure::Input(
             "--format npy: binary output; redirect standard output to a file".into(),
         ));
@@ -327,10 +519,7 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
             "--arrivals: the scene has no `search` section, so it has no arrivals to write".into(),
         ));
     }
-    if scene.search().is_some()
-        && args.arrivals.is_none()
-        && matches!(args.format, Format::Csv | Format::Npy)
-    {
+    if scene.search().is_some() && Destinations::of(args).share_one_table(args.format) {
         let name = if args.format == Format::Csv {
             "csv"
         } else {
@@ -346,12 +535,18 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         Some(path) => Some(response::IrOutput::check(path, &scene)?),
         None => None,
     };
+    let style = response::ChartStyle {
+        axes: axes(args),
+        echogram_from_zero: args.echogram_from_zero,
+    };
     let charts = response::Charts::check(
         args.echogram.as_deref(),
         args.tl_map.as_deref(),
         (args.source, args.receiver),
+        style,
         &scene,
     )?;
+    check_output_files(args)?;
     let tracer = Tracer::new(&scene).map_err(Failure::scene)?;
     let solved = match scene.solver().stationary {
         StationaryMode::One => Solved::Batch(trace(&tracer, !args.no_warm_start)?),
@@ -361,7 +556,6 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         Some(_) => Some(search(&tracer)?),
         None => None,
     };
-    write_outputs(args, &scene, &solved, arrivals.as_deref())?;
     if ir.is_some() || charts.is_some() {
         let from_rays = eigenray::response::echoes_of_rays(solved.rays());
         let from_arrivals =
@@ -374,14 +568,65 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
             charts.write(&scene, &echoes)?;
         }
     }
+    write_outputs(args, &scene, &solved, arrivals.as_deref())?;
+    let responses = response_outputs(args);
+    if !responses.is_empty() {
+        let line = response_summary(&responses, &solved, arrivals.as_deref(), args);
+        let _ = writeln!(io::stderr().lock(), "{line}");
+    }
     Ok(())
 }
 
-/// Writes what `solve` found: the name tables and the picture when asked for, the arrivals of
-/// a scene's search (`Some` exactly for a scene with a `search` section) to `--arrivals` when
-/// given, and the rays (and, in JSON and JSON Lines without `--arrivals`, the arrivals) to
-/// standard output. (Arrivals that could go nowhere, CSV or npy without `--arrivals`, are
-/// refused before the solve.)
+/// The axes of the pictures, as `--x-axis` and `--y-axis` name them.
+fn axes(args: &SolveArgs) -> svg::Axes {
+    svg::Axes {
+        x: args.x_axis.clone(),
+        y: args.y_axis.clone(),
+    }
+}
+
+/// The line on standard error of a run that wrote response outputs: what was solved, what was
+/// written where, and what was not written (with the options that would write it).
+fn response_summary(
+    responses: &[OutputFile<'_>],
+    solved: &Solved,
+    arrivals: Option<&[SearchArrival]>,
+    args: &SolveArgs,
+) -> String {
+    let written: Vec<String> = responses
+        .iter()
+        .map(|f| format!("{} {}", f.option, f.path.display()))
+        .collect();
+    let mut line = format!(
+        "solve: {}; wrote {}",
+        solved_summary(solved, arrivals),
+        written.join(", ")
+    );
+    let to = Destinations::of(args);
+    let mut unwritten = Vec::new();
+    if to.rays == Destination::Nowhere && !solved.is_empty() {
+        unwritten.push(("the rays", "--rays -"));
+    }
+    if arrivals.is_some() && *to.of_arrivals() == Destination::Nowhere {
+        unwritten.push(("the arrivals", "--arrivals -"));
+    }
+    if !unwritten.is_empty() {
+        let (what, how): (Vec<&str>, Vec<&str>) = unwritten.into_iter().unzip();
+        let _ = write!(
+            line,
+            "; not written: {} ({} for standard output)",
+            what.join(" and "),
+            how.join(", ")
+        );
+    }
+    line
+}
+
+/// Writes what `solve` found: the name tables and the picture when asked for, then the rays
+/// and the arrivals of a scene's search (`Some` exactly for a scene with a `search` section)
+/// where [`Destinations`] sends them, files first and standard output last. Arrivals without
+/// a destination of their own go beside the rays, in JSON and JSON Lines (sharing a CSV or npy
+/// table with the rays is refused before the solve: [`Destinations::share_one_table`]).
 fn write_outputs(
     args: &SolveArgs,
     scene: &Scene,
@@ -389,6 +634,12 @@ fn write_outputs(
     arrivals: Option<&[SearchArrival]>,
 ) -> Result<(), Failure> {
     let format = eigenray::Format::from(args.format);
+    let to = Destinations::of(args);
+    let beside = to.arrivals_beside_rays();
+    let Destinations {
+        rays: rays_to,
+        arrivals: arrivals_to,
+    } = to;
     if let Some(path) = &args.names {
         let mut names = Vec::new();
         eigenray::npy::write_names(scene, &mut names).map_err(|e| write_failure(path, &e))?;
@@ -400,35 +651,46 @@ fn write_outputs(
             display_name(&args.scene),
             solved_summary(solved, arrivals)
         );
-        let svg = svg::scene_svg(
+        let svg = svg::scene_svg_with_axes(
             scene,
             solved.rays(),
             arrivals.unwrap_or_default(),
             &title,
             args.colour_by,
+            &axes(args),
         );
         fs::write(path, svg).map_err(|e| write_failure(path, &e))?;
     }
-    let inline = match (arrivals, &args.arrivals) {
-        (Some(arrivals), Some(path)) => {
-            let mut file = Vec::new();
-            eigenray::write(scene, arrivals, format, &mut file)
-                .map_err(|e| write_failure(path, &e))?;
-            fs::write(path, file).map_err(|e| write_failure(path, &e))?;
-            None
-        }
-        (arrivals, _) => arrivals,
+    // The documents of each destination: the rays' (with the arrivals beside them), and the
+    // arrivals' own.
+    let rays_document = eigenray::Document {
+        rays: Some(solved.rays()),
+        arrivals: if beside { arrivals } else { None },
     };
-    eigenray::write(
-        scene,
-        eigenray::Document {
-            rays: Some(solved.rays()),
-            arrivals: inline,
-        },
-        format,
-        io::stdout().lock(),
-    )
-    .map_err(Failure::stdout)
+    let arrivals_document = match (&arrivals_to, arrivals) {
+        (Some(to), Some(arrivals)) if !beside => Some((to, arrivals)),
+        _ => None,
+    };
+    if let Some((Destination::File(path), arrivals)) = arrivals_document {
+        let mut file = Vec::new();
+        eigenray::write(scene, arrivals, format, &mut file).map_err(|e| write_failure(path, &e))?;
+        fs::write(path, file).map_err(|e| write_failure(path, &e))?;
+    }
+    if let Destination::File(path) = &rays_to {
+        let mut file = Vec::new();
+        eigenray::write(scene, rays_document, format, &mut file)
+            .map_err(|e| write_failure(path, &e))?;
+        fs::write(path, file).map_err(|e| write_failure(path, &e))?;
+    }
+    if let Some((Destination::Stdout, arrivals)) = arrivals_document {
+        return eigenray::write(scene, arrivals, format, io::stdout().lock())
+            .map_err(Failure::stdout);
+    }
+    if rays_to == Destination::Stdout {
+        return eigenray::write(scene, rays_document, format, io::stdout().lock())
+            .map_err(Failure::stdout);
+    }
+    Ok(())
 }
 
 /// The arrivals of the scene's `search`, refused before it starts where its table of pairs
@@ -854,7 +1116,7 @@ mod tests {
     fn solve_args(args: &[&str]) -> SolveArgs {
         let cli = Cli::try_parse_from(["eigenray", "solve"].iter().chain(args)).unwrap();
         match cli.command {
-            Some(Command::Solve(args)) => args,
+            Some(Command::Solve(args)) => *args,
             other => panic!("{other:?}"),
         }
     }

@@ -151,6 +151,16 @@ pub(super) struct Charts {
     tl_map: Option<(PathBuf, f64)>,
     source: usize,
     receiver: usize,
+    /// How the charts are drawn.
+    style: ChartStyle,
+}
+
+/// How the charts are drawn: the map's axes and the echogram's start of time.
+pub(super) struct ChartStyle {
+    /// The map's axes: names, units and scales.
+    pub(super) axes: super::svg::Axes,
+    /// Whether the echogram's time axis starts at t = 0 (else just before the first arrival).
+    pub(super) echogram_from_zero: bool,
 }
 
 impl Charts {
@@ -161,6 +171,7 @@ impl Charts {
         echogram: Option<&Path>,
         tl_map: Option<&Path>,
         (source, receiver): (usize, usize),
+        style: ChartStyle,
         scene: &Scene,
     ) -> Result<Option<Charts>, Failure> {
         let option = match (echogram, tl_map) {
@@ -206,6 +217,7 @@ impl Charts {
             tl_map,
             source,
             receiver,
+            style,
         }))
     }
 
@@ -221,7 +233,8 @@ impl Charts {
                 "Echogram: source {} at receiver {}",
                 self.source, self.receiver
             );
-            let svg = super::svg::charts::echogram_svg(&title, &pair);
+            let svg =
+                super::svg::charts::echogram_svg(&title, &pair, self.style.echogram_from_zero);
             fs::write(path, svg).map_err(|e| write_failure(path, &e))?;
         }
         if let Some((path, frequency)) = &self.tl_map {
@@ -236,7 +249,14 @@ impl Charts {
             let row = &p[self.source * receivers..(self.source + 1) * receivers];
             let tl: Vec<f64> = row.iter().map(|&p| transmission_loss(p)).collect();
             let title = format!("Transmission loss from source {}", self.source);
-            let svg = super::svg::charts::tl_map_svg(&title, scene.receivers(), &tl, *frequency);
+            let svg = super::svg::charts::tl_map_svg(&super::svg::charts::TlMap {
+                title: &title,
+                scene,
+                source: self.source,
+                tl: &tl,
+                frequency: *frequency,
+                axes: &self.style.axes,
+            });
             fs::write(path, svg).map_err(|e| write_failure(path, &e))?;
         }
         Ok(())

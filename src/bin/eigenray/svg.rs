@@ -20,6 +20,7 @@ use std::fmt::Write as _;
 
 use eigenray::{Point, RaySet, Scene, SearchArrival};
 
+pub use axes::{Axes, AxisSpec};
 pub use colour::Colouring;
 pub use markup::thousands;
 
@@ -47,6 +48,18 @@ pub fn scene_svg(
     title: &str,
     colouring: Colouring,
 ) -> String {
+    scene_svg_with_axes(scene, rays, arrivals, title, colouring, &Axes::default())
+}
+
+/// [`scene_svg`] with the axes named, and numbered, as `axes` says.
+pub fn scene_svg_with_axes(
+    scene: &Scene,
+    rays: RaySet<'_>,
+    arrivals: &[SearchArrival],
+    title: &str,
+    colouring: Colouring,
+    axes: &Axes,
+) -> String {
     let entries = Entries::new(scene, rays, arrivals);
     let drawn = entries.drawn();
     let rays = &drawn.items;
@@ -68,7 +81,7 @@ pub fn scene_svg(
         &caption::drawn_caption(&entries, &drawn, colouring),
         &caption::marks_caption(&receivers, frame.stretch),
     );
-    axes::draw_axes(&mut s, &frame);
+    axes::draw_axes(&mut s, &frame, axes);
     draw_domain(&mut s, scene, &frame.view);
     draw_rays(&mut s, scene, &frame.view, rays, &colours);
     draw_interfaces(&mut s, scene, &frame.view);
@@ -632,6 +645,92 @@ mod tests {
                     64 - MAX_LEGEND_LINES
                 )),
             "{texts:?}"
+        );
+    }
+
+    /// Long sequences (a waveguide's ten bounces) wrap in the legend, and every row of text
+    /// ends inside the canvas: the legend is not cut off at the right edge.
+    #[test]
+    fn a_legend_of_long_sequences_stays_inside_the_canvas() {
+        let scene = Scene::from_json(ROOM).unwrap();
+        let mut arrivals = Vec::new();
+        // Sixteen steps that repeat no block from their start, and shorter ones that do.
+        let irregular = [
+            "north", "east", "south", "west", "west", "south", "north", "east", "north", "north",
+            "east", "south", "south", "west", "east", "north",
+        ];
+        for n in [1usize, 4, 10, 16] {
+            let steps: Vec<(StepKind, &str)> = if n == 16 {
+                irregular.iter().map(|&w| (StepKind::Reflect, w)).collect()
+            } else {
+                (0..n)
+                    .map(|k| {
+                        (
+                            StepKind::Reflect,
+                            if k % 2 == 0 { "north" } else { "south" },
+                        )
+                    })
+                    .collect()
+            };
+            arrivals.push(search_arrival(
+                &scene,
+                &steps,
+                Status::Converged,
+                0.02,
+                &[[1.5, 1.2], [4.5, 2.5]],
+            ));
+        }
+        let svg = scene_svg(
+            &scene,
+            RaySet::Rays(&[]),
+            &arrivals,
+            "t",
+            Colouring::Sequence,
+        );
+        let doc = roxmltree::Document::parse(&svg).unwrap();
+        let width: f64 = doc
+            .root_element()
+            .attribute("width")
+            .unwrap()
+            .parse()
+            .unwrap();
+        let legend = doc
+            .descendants()
+            .find(|n| n.attribute("class") == Some("legend"))
+            .unwrap();
+        let rows: Vec<(f64, String)> = legend
+            .children()
+            .filter(|n| n.has_tag_name("text"))
+            .map(|n| {
+                let x: f64 = n.attribute("x").unwrap().parse().unwrap();
+                (x, n.text().unwrap().to_string())
+            })
+            .collect();
+        // The 16 steps' line wraps onto several rows, each continued with an arrow.
+        assert!(
+            rows.iter().filter(|r| r.1.starts_with("→ ")).count() >= 3,
+            "{rows:?}"
+        );
+        for (x, text) in &rows {
+            // DejaVu Sans at 12 px: no character is wider than 7.4 px on average over a row.
+            let right = x + super::legend::LEGEND_CHAR_W * text.chars().count() as f64;
+            assert!(
+                right <= width,
+                "{text:?} ends at {right}, the canvas at {width}"
+            );
+        }
+        // Every step of every sequence is there, in order, once the rows are joined; a
+        // repeated block once, with its count.
+        let joined: String = rows
+            .iter()
+            .map(|r| r.1.as_str())
+            .collect::<Vec<_>>()
+            .join(" ");
+        let irregular: Vec<String> = irregular.iter().map(|w| format!("reflect {w}")).collect();
+        assert!(joined.contains(&irregular.join(" → ")), "{joined}");
+        assert!(
+            joined.contains("(reflect north → reflect south) ×5 (1)"),
+            "{joined}"
         );
     }
 }

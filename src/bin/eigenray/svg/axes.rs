@@ -1,11 +1,115 @@
-//! The axes: round ticks with labels that tell them apart, and their drawing along the plot.
+//! The axes: their names and units, round ticks with labels that tell them apart, and their
+//! drawing along the plot.
 
 use std::fmt::Write as _;
+use std::str::FromStr;
 
 use eigenray::Point;
 
 use super::layout::Frame;
 use super::markup::esc;
+
+/// How one axis of a picture is named and numbered: its name, its unit, and the scale from the
+/// scene's coordinates to the numbers on its ticks. A negative scale numbers the axis the other
+/// way round: `depth,m,-1` numbers y = −80 as 80 (depth positive down), the picture unchanged.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AxisSpec {
+    /// What the axis shows (`range`, `depth`).
+    pub name: String,
+    /// Its unit (`km`), if named.
+    pub unit: Option<String>,
+    /// Tick number = scale × coordinate; finite and not zero.
+    pub scale: f64,
+}
+
+impl AxisSpec {
+    /// An axis named `name`, without a unit, numbered in the scene's coordinates.
+    pub fn plain(name: &str) -> AxisSpec {
+        AxisSpec {
+            name: name.to_string(),
+            unit: None,
+            scale: 1.0,
+        }
+    }
+
+    /// The axis's title: `range (km)`, or the name alone.
+    pub fn title(&self) -> String {
+        match &self.unit {
+            Some(unit) => format!("{} ({unit})", self.name),
+            None => self.name.clone(),
+        }
+    }
+
+    /// Ticks at round numbers of this axis over the coordinates `[lo, hi]`: each as its
+    /// coordinate and its label (the number scale × coordinate), about `target` of them.
+    pub fn ticks(&self, lo: f64, hi: f64, target: f64) -> Vec<(f64, String)> {
+        let (a, b) = (self.scale * lo, self.scale * hi);
+        axis_ticks(a.min(b), a.max(b), target)
+            .into_iter()
+            .map(|(number, label)| (number / self.scale, label))
+            .collect()
+    }
+}
+
+impl FromStr for AxisSpec {
+    type Err = String;
+
+    /// `NAME`, `NAME,UNIT` or `NAME,UNIT,SCALE` (an empty unit is none): `range,km,0.001`,
+    /// `depth,m,-1`.
+    fn from_str(text: &str) -> Result<AxisSpec, String> {
+        let mut parts = text.split(',');
+        let name = parts.next().unwrap_or_default().trim();
+        if name.is_empty() {
+            return Err("give NAME[,UNIT[,SCALE]], for example range,km,0.001".into());
+        }
+        let unit = parts
+            .next()
+            .map(str::trim)
+            .filter(|u| !u.is_empty())
+            .map(str::to_string);
+        let scale = match parts.next() {
+            None => 1.0,
+            Some(s) => {
+                let scale: f64 = s.trim().parse().map_err(|_| {
+                    format!("SCALE `{}` is not a number (NAME[,UNIT[,SCALE]])", s.trim())
+                })?;
+                if !scale.is_finite() || scale == 0.0 {
+                    return Err(format!(
+                        "SCALE must be a finite number other than 0, not {scale}"
+                    ));
+                }
+                scale
+            }
+        };
+        if parts.next().is_some() {
+            return Err("at most three parts: NAME[,UNIT[,SCALE]]".into());
+        }
+        Ok(AxisSpec {
+            name: name.to_string(),
+            unit,
+            scale,
+        })
+    }
+}
+
+/// The names, units and scales of a picture's two axes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Axes {
+    /// The horizontal axis.
+    pub x: AxisSpec,
+    /// The vertical axis.
+    pub y: AxisSpec,
+}
+
+impl Default for Axes {
+    /// `x` and `y`, in the scene's coordinates.
+    fn default() -> Axes {
+        Axes {
+            x: AxisSpec::plain("x"),
+            y: AxisSpec::plain("y"),
+        }
+    }
+}
 
 /// A tick label: enough decimals to tell `lo` from `hi` apart.
 pub(super) fn tick_label(v: f64, span: f64) -> String {
@@ -83,11 +187,15 @@ pub(super) fn axis_ticks(lo: f64, hi: f64, target: f64) -> Vec<(f64, String)> {
 
 /// Draws the axes of `frame`: ticks, grid lines and coordinates along the plot's left and
 /// bottom edges, and the axes' names.
-pub(super) fn draw_axes(s: &mut String, frame: &Frame) {
+pub(super) fn draw_axes(s: &mut String, frame: &Frame, axes: &Axes) {
     let view = &frame.view;
     let (centre, hw, hh) = (view.c, view.hw, view.hh);
-    let xt = axis_ticks(centre.x - hw, centre.x + hw, frame.plot_w / 90.0);
-    let yt = axis_ticks(centre.y - hh, centre.y + hh, frame.plot_h / 60.0);
+    let xt = axes
+        .x
+        .ticks(centre.x - hw, centre.x + hw, frame.plot_w / 90.0);
+    let yt = axes
+        .y
+        .ticks(centre.y - hh, centre.y + hh, frame.plot_h / 60.0);
     let _ = writeln!(
         s,
         r##"<g class="axes" stroke="#e4e4e4" stroke-width="1" font-size="11" fill="#444">"##
@@ -117,13 +225,14 @@ pub(super) fn draw_axes(s: &mut String, frame: &Frame) {
             esc(label)
         );
     }
+    let (yx, yy) = (view.left() - 62.0, view.pc.1);
     let _ = writeln!(
         s,
-        r##"<text x="{:.2}" y="{:.2}" text-anchor="middle" stroke="none" font-size="12">x</text><text x="{:.2}" y="{:.2}" text-anchor="middle" stroke="none" font-size="12">y</text>"##,
+        r##"<text class="x-title" x="{:.2}" y="{:.2}" text-anchor="middle" stroke="none" font-size="12">{}</text><text class="y-title" x="{yx:.2}" y="{yy:.2}" text-anchor="middle" stroke="none" font-size="12" transform="rotate(-90 {yx:.2} {yy:.2})">{}</text>"##,
         view.pc.0,
         view.bottom() + 36.0,
-        view.left() - 62.0,
-        view.pc.1 + 4.0
+        esc(&axes.x.title()),
+        esc(&axes.y.title())
     );
     let _ = writeln!(s, "</g>");
 }
@@ -137,6 +246,25 @@ mod tests {
         assert_eq!(tick_label(1.8912, 0.81), "1.8912");
         assert_eq!(tick_label(1234.5, 100.0), "1234.5");
         assert_eq!(tick_label(2.5e7, 1.0), "2.500e7");
+    }
+
+    #[test]
+    fn axis_specs_parse_and_number_their_ticks() {
+        let km: AxisSpec = "range,km,0.001".parse().unwrap();
+        assert_eq!(km.title(), "range (km)");
+        let ticks = km.ticks(0.0, 5000.0, 5.0);
+        let labels: Vec<&str> = ticks.iter().map(|t| t.1.as_str()).collect();
+        assert_eq!(labels, ["0", "1", "2", "3", "4", "5"]);
+        assert!((ticks[3].0 - 3000.0).abs() < 1e-9);
+        let depth: AxisSpec = "depth,m,-1".parse().unwrap();
+        let ticks = depth.ticks(-120.0, 0.0, 6.0);
+        assert!(ticks.contains(&(-100.0, "100".to_string())), "{ticks:?}");
+        assert!(ticks.iter().all(|(v, l)| l.parse::<f64>().unwrap() == -v));
+        assert_eq!("y".parse::<AxisSpec>().unwrap(), AxisSpec::plain("y"));
+        assert_eq!("h,,2".parse::<AxisSpec>().unwrap().unit, None);
+        for bad in ["", ",m", "r,km,0", "r,km,x", "r,km,inf", "r,km,1,2"] {
+            assert!(bad.parse::<AxisSpec>().is_err(), "{bad}");
+        }
     }
 
     #[test]

@@ -4,8 +4,8 @@ use std::fmt::Write as _;
 
 use super::axes::tick_label;
 use super::colour::{Colouring, PATH_COLOURS, VIRIDIS, path_dash, viridis};
-use super::legend::{LEGEND_LINE, Legend, MAX_LEGEND_LINES};
-use super::markup::{esc, thousands};
+use super::legend::{LEGEND_LINE, Legend, rest_line};
+use super::markup::esc;
 
 /// Draws the key of `colouring` with its left edge at `x` and its top at `top`: the colour bar
 /// of `range` (as tall as the plot area, `area_h`) or the `legend`.
@@ -111,31 +111,38 @@ fn path_legend(s: &mut String, x: f64, top: f64, legend: &Legend) {
             top + 30.0
         );
     }
-    for (k, e) in legend.entries.iter().take(MAX_LEGEND_LINES).enumerate() {
-        let y = top + 32.0 + LEGEND_LINE * k as f64;
+    let shown = legend.shown();
+    let mut row = 0;
+    for e in &legend.entries[..shown] {
+        let y = top + 32.0 + LEGEND_LINE * row as f64;
         let _ = writeln!(
             s,
-            r#"<path d="M{:.2},{:.2}h22" stroke="{}" stroke-width="3"{}/><text x="{:.2}" y="{:.2}">{} ({})</text>"#,
+            r#"<path d="M{:.2},{:.2}h22" stroke="{}" stroke-width="3"{}/>"#,
             x - 8.0,
             y - 4.0,
             PATH_COLOURS[e.colour % PATH_COLOURS.len()],
             path_dash(e.colour),
-            x + 20.0,
-            y,
-            esc(&e.label),
-            thousands(e.count)
         );
+        for text in e.rows() {
+            let y = top + 32.0 + LEGEND_LINE * row as f64;
+            let _ = writeln!(
+                s,
+                r#"<text x="{:.2}" y="{y:.2}">{}</text>"#,
+                x + 20.0,
+                esc(&text)
+            );
+            row += 1;
+        }
     }
-    if legend.entries.len() > MAX_LEGEND_LINES {
-        let rest = &legend.entries[MAX_LEGEND_LINES..];
+    if shown < legend.entries.len() {
+        let rest = &legend.entries[shown..];
         let drawn: usize = rest.iter().map(|e| e.count).sum();
-        let y = top + 32.0 + LEGEND_LINE * MAX_LEGEND_LINES as f64;
+        let y = top + 32.0 + LEGEND_LINE * row as f64;
         let _ = writeln!(
             s,
-            r##"<text x="{:.2}" y="{y:.2}" fill="#555">… {} more ({})</text>"##,
+            r##"<text x="{:.2}" y="{y:.2}" fill="#555">{}</text>"##,
             x - 8.0,
-            thousands(rest.len()),
-            thousands(drawn)
+            rest_line(rest.len(), drawn)
         );
     }
     let _ = writeln!(s, "</g>");

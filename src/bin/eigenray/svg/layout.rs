@@ -9,8 +9,7 @@ use eigenray::{Point, Scene};
 
 use super::colour::Colouring;
 use super::entries::Item;
-use super::legend::{LEGEND_LINE, Legend, MAX_LEGEND_LINES};
-use super::markup::thousands;
+use super::legend::{LEGEND_CHAR_W, LEGEND_LINE, Legend};
 
 /// Largest plot's width, in pixels.
 const PLOT_MAX_W: f64 = 820.0;
@@ -217,20 +216,15 @@ impl KeySize {
     /// The room of `legend` under `colouring`.
     fn of(legend: &Legend, colouring: Colouring) -> KeySize {
         let h = match colouring {
-            Colouring::Path | Colouring::Sequence => 40.0 + LEGEND_LINE * legend.lines() as f64,
+            Colouring::Path | Colouring::Sequence => 40.0 + LEGEND_LINE * legend.rows() as f64,
             Colouring::Time => 0.0,
         };
-        let longest = legend
-            .entries
-            .iter()
-            .take(MAX_LEGEND_LINES)
-            .map(|e| e.label.chars().count() + thousands(e.count).len() + 3)
-            .max()
-            .unwrap_or(0);
+        // The legend's rows start 20 px right of its left edge, which is 26 px right of the
+        // plot area; 16 px to spare at the canvas's right edge.
         let w = match colouring {
             Colouring::Time => BAR_AREA,
             Colouring::Path | Colouring::Sequence => {
-                (60.0 + 7.0 * longest as f64).clamp(BAR_AREA, 360.0)
+                (62.0 + LEGEND_CHAR_W * legend.widest_row() as f64).max(BAR_AREA)
             }
         };
         KeySize { w, h }

@@ -85,7 +85,7 @@ pub(super) fn draw_sources(s: &mut String, scene: &Scene, view: &View) {
 }
 
 /// A five-pointed star of outer radius `r` centred on `(x, y)`, as polygon points.
-fn star(x: f64, y: f64, r: f64) -> String {
+pub(super) fn star(x: f64, y: f64, r: f64) -> String {
     let mut s = String::new();
     for k in 0..10 {
         let rad = if k % 2 == 0 { r } else { 0.45 * r };
