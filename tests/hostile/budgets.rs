@@ -4,9 +4,9 @@
 //!
 //! No test here reads a clock to pass or fail: each bounds the work (the budgets, counted in
 //! units of work) and checks what the bound promises (`complete: false`, the limit named as
-//! the reason). The command-line runs are killed after a generous minute
-//! ([`run_bounded`]) and the stop's call after [`STOP_WATCHDOG`] only so that a broken bound
-//! cannot hang the test run.
+//! the reason). The command-line runs are killed after ten minutes ([`run_bounded`]) and
+//! the stop's call is given up after [`STOP_WATCHDOG`] only so that a broken bound cannot
+//! hang the test run.
 
 use std::sync::{Arc, mpsc};
 use std::time::Duration;

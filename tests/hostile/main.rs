@@ -3,8 +3,9 @@
 //!
 //! Command-line cases run the binary with a memory limit (`ulimit -v`) and a net for a hang
 //! (killed after ten minutes; no answer depends on a clock), and check the exit status, the
-//! first line of standard error and that nothing reached standard output. Library cases call the API directly. `round2.rs` holds the second round of
-//! cases: work that must stay bounded, memory, and answers that must not be wrong.
+//! first line of standard error and that nothing reached standard output. Library cases call
+//! the API directly. `round2.rs` holds the second round of cases: work that must stay
+//! bounded, memory, and answers that must not be wrong.
 
 mod budgets;
 mod proofs;
