@@ -519,10 +519,7 @@ impl Tracer {
     /// its rays (a refraction at an open interface of one segment, the media given).
     #[inline(always)]
     pub(crate) fn flat_segment(&self, path: usize) -> Option<SegmentFrame> {
-        match self.plans.get(path) {
-            Some(PathPlan::FlatRefraction(_, flat)) => Some(flat.frame()),
-            _ => None,
-        }
+        self.plans.get(path)?.flat().map(|flat| flat.frame())
     }
 
     /// Solves one ray from `start` as its path's plan says: the one dispatch of every ray.
@@ -537,8 +534,9 @@ impl Tracer {
         start: Start,
         ws: &mut Workspace,
     ) -> RayRecord {
-        let record = match &self.plans[path] {
-            PathPlan::FlatRefraction(one, flat) => {
+        let plan = &self.plans[path];
+        let record = match (plan.one_step(), plan.flat()) {
+            (Some(one), Some(flat)) => {
                 if let Start::Default = start
                     && let Some(sol) = flat.solve(source, receiver)
                 {
@@ -548,8 +546,8 @@ impl Tracer {
                     one.solve(&self.context(), path, source, receiver, start, ws)
                 }
             }
-            PathPlan::OneStep(one) => one.solve(&self.context(), path, source, receiver, start, ws),
-            plan => self.solve_general(plan, source, src_medium, receiver, path, start, ws),
+            (Some(one), None) => one.solve(&self.context(), path, source, receiver, start, ws),
+            (None, _) => self.solve_general(plan, source, src_medium, receiver, path, start, ws),
         };
         if record.status.has_time() || matches!(start, Start::Trial(_)) {
             return record;
@@ -576,7 +574,7 @@ impl Tracer {
         ws: &mut Workspace,
     ) -> RayRecord {
         let cx = self.context();
-        if let (Start::Default, PathPlan::Stack(sp)) = (start, plan)
+        if let (Start::Default, Some(sp)) = (start, plan.stack())
             && let Some(ray) = sp.solve_stack(&cx, path, source, receiver, ws)
         {
             return ray;
