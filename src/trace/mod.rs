@@ -46,7 +46,7 @@ pub use plan::Kernels;
 pub use result::{Ray, RayRecord, Reason, Status, Threshold};
 
 use one_step::{OneStepStart, flat_status};
-use plan::{OneStepPath, PathPlan};
+use plan::{OneStepPath, PathPlan, PlanKernel};
 use start::given_param;
 
 use start::{StartScratch, given_start, initial_guess, refraction_guess};
@@ -534,9 +534,8 @@ impl Tracer {
         start: Start,
         ws: &mut Workspace,
     ) -> RayRecord {
-        let plan = &self.plans[path];
-        let record = match (plan.one_step(), plan.flat()) {
-            (Some(one), Some(flat)) => {
+        let record = match self.plans[path].kernel() {
+            PlanKernel::Flat(one, flat) => {
                 if let Start::Default = start
                     && let Some(sol) = flat.solve(source, receiver)
                 {
@@ -546,8 +545,12 @@ impl Tracer {
                     one.solve(&self.context(), path, source, receiver, start, ws)
                 }
             }
-            (Some(one), None) => one.solve(&self.context(), path, source, receiver, start, ws),
-            (None, _) => self.solve_general(plan, source, src_medium, receiver, path, start, ws),
+            PlanKernel::OneStep(one) => {
+                one.solve(&self.context(), path, source, receiver, start, ws)
+            }
+            PlanKernel::General(plan) => {
+                self.solve_general(plan, source, src_medium, receiver, path, start, ws)
+            }
         };
         if record.status.has_time() || matches!(start, Start::Trial(_)) {
             return record;

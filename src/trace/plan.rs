@@ -2,7 +2,8 @@
 //!
 //! Every ray goes through [`PathPlan`]: [`Tracer::solve`](super::Tracer::solve) and the
 //! batches' chains (`trace::chain`) dispatch on it and on nothing else. Its variants are
-//! inspected here only: the rest of `trace/` asks it through [`PathPlan::one_step`],
+//! inspected here only: the rest of `trace/` asks it through [`PathPlan::kernel`] (the
+//! dispatch), [`PathPlan::one_step`],
 //! [`PathPlan::flat`], [`PathPlan::stack`], [`PathPlan::straight`] and
 //! [`PathPlan::skips_warm_start`]. A kernel is a shortcut for a common case
 //! that ends in the same classifier (`classify`) as the general solve, and hands every ray
@@ -49,6 +50,17 @@ pub(crate) enum PathPlan {
     /// One refraction at an interface of one segment, the media given: from the default
     /// start, the flat kernel (`trace::flat`); otherwise as `OneStep`.
     FlatRefraction(OneStepPath, FlatRefraction),
+}
+
+/// Which code solves a path's rays ([`PathPlan::kernel`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum PlanKernel<'p> {
+    /// The flat kernel from the default start, the one-step code otherwise.
+    Flat(&'p OneStepPath, &'p FlatRefraction),
+    /// The one-step code.
+    OneStep(&'p OneStepPath),
+    /// The general solve (with the stack kernel first where the plan has it).
+    General(&'p PathPlan),
 }
 
 /// A path of one interaction whose leg media are given.
@@ -101,6 +113,17 @@ impl PathPlan {
         match self {
             PathPlan::Straight(sp) | PathPlan::Stack(sp) => Some(sp),
             _ => None,
+        }
+    }
+
+    /// The code that solves the path's rays: the one dispatch of every ray on its own
+    /// (`Tracer::solve_planned`).
+    #[inline(always)]
+    pub(crate) fn kernel(&self) -> PlanKernel<'_> {
+        match self {
+            PathPlan::FlatRefraction(one, flat) => PlanKernel::Flat(one, flat),
+            PathPlan::OneStep(one) => PlanKernel::OneStep(one),
+            plan => PlanKernel::General(plan),
         }
     }
 
