@@ -66,6 +66,7 @@ mod control;
 pub mod demo;
 mod derivatives;
 mod geom;
+mod leg;
 mod output;
 mod polyline;
 mod problem;

@@ -10,7 +10,11 @@
 //! Hᵢ,ᵢ₊₁ = −wᵢ₊₁ (uᵢ₊₁ × tᵢ)(uᵢ₊₁ × tᵢ₊₁) / ℓᵢ₊₁
 //! ```
 //!
-//! (0-based in the code: point `i` sits between leg `i` and leg `i + 1`.) Each leg adds the
+//! (0-based in the code: point `i` sits between leg `i` and leg `i + 1`.) Every term is a
+//! leg's, through the leg model (`leg.rs`): `T` the sum of [`Leg::time`], `rᵢ` the arriving
+//! minus the departing slowness vector ([`Leg::arrival`], [`Leg::departure`]) along `tᵢ`, and
+//! the Hessian's entries the legs' blocks ([`Leg::end_block`], [`Leg::start_block`],
+//! [`Leg::coupling`]); the formulas above are the uniform medium's. Each leg adds the
 //! rank-one matrix `(w/ℓ) g gᵀ` with `g = (−u × tᵢ, u × tᵢ₊₁)`, so on fixed segments `T` is
 //! convex and `H` positive semi-definite. The bracketed curvature term is zero on a straight
 //! segment; the solver adds an estimate of it only while points travel across the vertices
@@ -18,6 +22,7 @@
 //! saddles that the segment-wise Hessian cannot see.
 
 use crate::geom::{Point, Segment, Vec2};
+use crate::leg::{Leg, LegModel, StraightLeg, Uniform};
 use crate::polyline::Polyline;
 use crate::scene::{Scene, Step};
 
@@ -230,23 +235,23 @@ impl<'a> ProblemRef<'a> {
             rel[i + 1] = frames[i].offset(s[i]);
         }
         rel[k + 1] = self.receiver - self.source;
-        // Legs: `leg_length` and `inv` without their branches (checked below).
+        // Legs: `Uniform::leg_along` without its branches (checked below).
         let mut plain = true;
         for j in 0..=k {
-            let d = rel[j + 1] - rel[j];
-            let l2 = d.x * d.x + d.y * d.y;
-            plain &= (f64::MIN_POSITIVE..1e300).contains(&l2);
-            let l = l2.sqrt();
-            let il = 1.0 / l;
-            len[j] = l;
-            inv_len[j] = il;
-            u[j] = d * il;
+            let (leg, ok) = Uniform::new(w[j]).leg_plain(rel[j + 1] - rel[j]);
+            plain &= ok;
+            len[j] = leg.len;
+            inv_len[j] = leg.inv_len;
+            u[j] = leg.u;
         }
+        let (u, len, inv_len) = (&*u, &*len, &*inv_len);
+        let leg = |j: usize| leg_from(u, len, inv_len, j, w[j]);
         let (mut time, mut total, mut shortest) = (0.0, 0.0, f64::INFINITY);
         for j in 0..=k {
-            time += w[j] * len[j];
-            total += len[j];
-            shortest = min_num(shortest, len[j]);
+            let leg = leg(j);
+            time += leg.time();
+            total += leg.len;
+            shortest = min_num(shortest, leg.len);
         }
         let vanish = vanish_threshold(total, self.coord());
         if !plain || shortest <= vanish {
@@ -258,17 +263,16 @@ impl<'a> ProblemRef<'a> {
         // Per point: residual, Hessian row.
         for i in 0..k {
             let t = frames[i].t;
-            let (ua, ub) = (u[i], u[i + 1]);
-            r[i] = (ua * w[i] - ub * w[i + 1]).dot(t);
-            let ca = ua.cross(t);
-            let cb = ub.cross(t);
-            let mut h = w[i] * ca * ca * inv_len[i] + w[i + 1] * cb * cb * inv_len[i + 1];
+            let (before, after) = (leg(i), leg(i + 1));
+            let turn = before.arrival() - after.departure();
+            r[i] = turn.dot(t);
+            let mut h = before.end_block(t) + after.start_block(t);
             if curvature && frames[i].kappa != 0.0 {
-                h += frames[i].kappa * (ua * w[i] - ub * w[i + 1]).dot(t.perp());
+                h += frames[i].kappa * turn.dot(t.perp());
             }
             diag[i] = h;
             if i + 1 < k {
-                off[i] = -w[i + 1] * cb * ub.cross(frames[i + 1].t) * inv_len[i + 1];
+                off[i] = after.coupling(t, frames[i + 1].t);
             }
         }
         // Merit, and the forward sweep of `thomas`.
@@ -313,38 +317,32 @@ impl<'a> ProblemRef<'a> {
         coord: f64,
         curvature: bool,
     ) -> OnePointEval {
-        // Written out in scalars, operation for operation as the `Vec2` forms of
-        // `evaluate_framed` (so bit for bit): fewer shuffles and spills than the vector forms.
+        // Through the leg model, in registers, operation for operation as `evaluate_framed`
+        // (so bit for bit).
         let p = f.offset(s);
-        let (d0x, d0y) = (p.x - 0.0, p.y - 0.0);
-        let (d1x, d1y) = (to_receiver.x - p.x, to_receiver.y - p.y);
-        let l0 = leg_length(Vec2::new(d0x, d0y));
-        let l1 = leg_length(Vec2::new(d1x, d1y));
-        let (i0, i1) = (inv(l0), inv(l1));
-        let (u0x, u0y, u1x, u1y) = (d0x * i0, d0y * i0, d1x * i1, d1y * i1);
-        let time = 0.0 + w[0] * l0 + w[1] * l1;
-        let total = 0.0 + l0 + l1;
+        let leg0 = Uniform::new(w[0]).leg(Vec2::default(), p);
+        let leg1 = Uniform::new(w[1]).leg(p, to_receiver);
+        let time = 0.0 + leg0.time() + leg1.time();
+        let total = 0.0 + leg0.len + leg1.len;
         let vanish = vanish_threshold(total, coord);
         let t = f.t;
-        let (vx, vy) = (u0x * w[0] - u1x * w[1], u0y * w[0] - u1y * w[1]);
-        let r = vx * t.x + vy * t.y;
+        let turn = leg0.arrival() - leg1.departure();
+        let r = turn.dot(t);
         let rel = r / (w[0] + w[1]);
-        let vanished = l0 <= vanish || l1 <= vanish;
+        let vanished = leg0.len <= vanish || leg1.len <= vanish;
         let (phi, rmax) = if vanished {
             (0.0, 0.0)
         } else {
             (0.0 + rel * rel, max_num(0.0, rel.abs()))
         };
-        let ca = u0x * t.y - u0y * t.x;
-        let cb = u1x * t.y - u1y * t.x;
-        let mut h = w[0] * ca * ca * i0 + w[1] * cb * cb * i1;
+        let mut h = leg0.end_block(t) + leg1.start_block(t);
         if curvature && f.kappa != 0.0 {
-            h += f.kappa * (vx * -t.y + vy * t.x);
+            h += f.kappa * turn.dot(t.perp());
         }
         let (u, len, inv_len) = (
-            [Vec2::new(u0x, u0y), Vec2::new(u1x, u1y)],
-            [l0, l1],
-            [i0, i1],
+            [leg0.u, leg1.u],
+            [leg0.len, leg1.len],
+            [leg0.inv_len, leg1.inv_len],
         );
         OnePointEval {
             p,
@@ -384,23 +382,22 @@ impl<'a> ProblemRef<'a> {
         let mut time = 0.0;
         let mut total = 0.0;
         for j in 0..=k {
-            let d = rel[j + 1] - rel[j];
-            let l = leg_length(d);
-            let il = inv(l);
-            len[j] = l;
-            inv_len[j] = il;
-            // `inv` gives 0 for a zero-length leg, whose `d` is zero: `u` is then zero too.
-            u[j] = d * il;
-            time += w[j] * l;
-            total += l;
+            let leg = Uniform::new(w[j]).leg(rel[j], rel[j + 1]);
+            len[j] = leg.len;
+            inv_len[j] = leg.inv_len;
+            u[j] = leg.u;
+            time += leg.time();
+            total += leg.len;
         }
+        let (u, len, inv_len) = (&*u, &*len, &*inv_len);
+        let leg = |j: usize| leg_from(u, len, inv_len, j, w[j]);
         e.time = time;
         let vanish = vanish_threshold(total, self.coord());
         let r = &mut e.r[..k];
         let (mut phi, mut rmax, mut held, mut vanished) = (0.0, 0.0f64, 0, 0);
         for i in 0..k {
             let t = tan[i];
-            let ri = (u[i] * w[i] - u[i + 1] * w[i + 1]).dot(t);
+            let ri = (leg(i).arrival() - leg(i + 1).departure()).dot(t);
             r[i] = ri;
             let rel = ri / (w[i] + w[i + 1]);
             let p = pin(i);
@@ -433,19 +430,17 @@ impl<'a> ProblemRef<'a> {
         let (diag, off) = (&mut e.diag[..k], &mut e.off[..k.saturating_sub(1)]);
         for i in 0..k {
             let t = tan[i];
-            let (ua, ub) = (u[i], u[i + 1]);
-            let ca = ua.cross(t);
-            let cb = ub.cross(t);
-            let mut h = w[i] * ca * ca * inv_len[i] + w[i + 1] * cb * cb * inv_len[i + 1];
+            let (before, after) = (leg(i), leg(i + 1));
+            let mut h = before.end_block(t) + after.start_block(t);
             if let Some(kappa) = &kappa {
                 let kappa = kappa(i);
                 if kappa != 0.0 {
-                    h += kappa * (ua * w[i] - ub * w[i + 1]).dot(t.perp());
+                    h += kappa * (before.arrival() - after.departure()).dot(t.perp());
                 }
             }
             diag[i] = h;
             if i + 1 < k {
-                off[i] = -w[i + 1] * cb * ub.cross(tan[i + 1]) * inv_len[i + 1];
+                off[i] = after.coupling(t, tan[i + 1]);
             }
         }
     }
@@ -595,16 +590,15 @@ pub(crate) fn vanish_threshold(total: f64, coord: f64) -> f64 {
     1e-12 * total + 8.0 * f64::EPSILON * coord
 }
 
-/// `|d|`: a plain square root where the squares neither overflow nor lose precision to
-/// underflow, `hypot` otherwise.
-#[inline]
-fn leg_length(d: Vec2) -> f64 {
-    let l2 = d.x * d.x + d.y * d.y;
-    // (`is_normal` for a sum of squares, as two compares.)
-    if (f64::MIN_POSITIVE..1e300).contains(&l2) {
-        l2.sqrt()
-    } else {
-        d.length()
+/// Leg `j` of the columns of an evaluation ([`Eval`]: directions, lengths and their
+/// reciprocals), in the medium of slowness `w`.
+#[inline(always)]
+fn leg_from(u: &[Vec2], len: &[f64], inv_len: &[f64], j: usize, w: f64) -> StraightLeg {
+    StraightLeg {
+        slowness: w,
+        u: u[j],
+        len: len[j],
+        inv_len: inv_len[j],
     }
 }
 
@@ -640,12 +634,6 @@ pub(crate) fn max_num(a: f64, b: f64) -> f64 {
 #[inline(always)]
 pub(crate) fn min_num(a: f64, b: f64) -> f64 {
     if b < a { b } else { a }
-}
-
-/// `1/ℓ`, with a zero-length leg contributing nothing (its direction is undefined).
-#[inline]
-fn inv(l: f64) -> f64 {
-    if l > 0.0 { 1.0 / l } else { 0.0 }
 }
 
 /// One path's travel-time function of the interaction parameters, for inspection, tests and

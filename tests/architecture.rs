@@ -10,6 +10,7 @@ const ORDER: &[&str] = &[
     "geom",
     "bvh",
     "polyline",
+    "leg",
     "scene",
     "demo",
     "regions",
@@ -311,4 +312,138 @@ fn no_function_in_src_is_over_150_lines() {
         long_functions(&text),
         [format!("long ({} lines)", MAX_FUNCTION_LINES + 2)]
     );
+}
+
+/// The sibling files that the code of a file in a folder names: `super::NAME` (grouped or
+/// not) and `crate::PREFIX::NAME`, `PREFIX` the folder's module path (`trace::complete`;
+/// empty at a crate's root), for each `NAME` in `siblings`. Comment lines (doc links) do not
+/// count.
+fn sibling_uses(text: &str, prefix: &str, siblings: &[String]) -> Vec<String> {
+    let code: String = text
+        .lines()
+        .filter(|l| !l.trim_start().starts_with("//"))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let mut named = Vec::new();
+    let crate_prefix = if prefix.is_empty() {
+        "crate::".to_string()
+    } else {
+        format!("crate::{prefix}::")
+    };
+    for anchor in ["super::", crate_prefix.as_str()] {
+        // `uses` reads the names after `crate::`: the same after the anchor, and nothing
+        // after any other `crate::`.
+        let shifted = code
+            .replace(anchor, "\u{1}")
+            .replace("crate::", "\u{2}")
+            .replace('\u{1}', "crate::");
+        named.extend(uses(&shifted).into_iter().filter(|n| siblings.contains(n)));
+    }
+    named.sort();
+    named.dedup();
+    named
+}
+
+/// The files of one folder (mod.rs, lib.rs and main.rs, the folder's own module, left out)
+/// and the sibling each uses; a cycle among them, if any.
+fn folder_cycle(folder: &Path, prefix: &str) -> Option<Vec<String>> {
+    let mut names: Vec<String> = std::fs::read_dir(folder)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "rs"))
+        .map(|p| p.file_stem().unwrap().to_string_lossy().to_string())
+        .filter(|n| !["mod", "lib", "main"].contains(&n.as_str()))
+        .collect();
+    names.sort();
+    let edges: Vec<Vec<usize>> = names
+        .iter()
+        .map(|n| {
+            let text = code(&folder.join(format!("{n}.rs")));
+            sibling_uses(&text, prefix, &names)
+                .iter()
+                .filter(|m| *m != n)
+                .map(|m| names.iter().position(|x| x == m).unwrap())
+                .collect()
+        })
+        .collect();
+    // Depth first, colouring: 0 unvisited, 1 on the stack, 2 done.
+    fn visit(v: usize, edges: &[Vec<usize>], colour: &mut [u8], stack: &mut Vec<usize>) -> bool {
+        colour[v] = 1;
+        stack.push(v);
+        for &w in &edges[v] {
+            if colour[w] == 1 {
+                stack.push(w);
+                return true;
+            }
+            if colour[w] == 0 && visit(w, edges, colour, stack) {
+                return true;
+            }
+        }
+        stack.pop();
+        colour[v] = 2;
+        false
+    }
+    let mut colour = vec![0u8; names.len()];
+    for v in 0..names.len() {
+        let mut stack = Vec::new();
+        if colour[v] == 0 && visit(v, &edges, &mut colour, &mut stack) {
+            let last = *stack.last().unwrap();
+            let from = stack.iter().position(|&x| x == last).unwrap();
+            return Some(stack[from..].iter().map(|&i| names[i].clone()).collect());
+        }
+    }
+    None
+}
+
+/// The folders of a crate rooted at `root` (itself included), with their module paths.
+fn folders(root: &Path, prefix: &str, out: &mut Vec<(std::path::PathBuf, String)>) {
+    out.push((root.to_path_buf(), prefix.to_string()));
+    for entry in std::fs::read_dir(root).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            let name = path.file_name().unwrap().to_string_lossy().to_string();
+            let inner = if prefix.is_empty() {
+                name
+            } else {
+                format!("{prefix}::{name}")
+            };
+            folders(&path, &inner, out);
+        }
+    }
+}
+
+/// No import circle among the files of any folder, in the library, the command-line tool and
+/// the Python package: two files that use each other are one concept or share a third.
+#[test]
+fn no_import_circles() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut all = Vec::new();
+    for crate_root in ["src", "src/bin/eigenray", "python/src"] {
+        let mut found = Vec::new();
+        folders(&root.join(crate_root), "", &mut found);
+        // The binary's folder is its own crate, not the library's `bin` module.
+        if crate_root == "src" {
+            found.retain(|(p, _)| !p.starts_with(root.join("src/bin")));
+        }
+        all.extend(found);
+    }
+    assert!(all.len() >= 6, "{} folders", all.len());
+    for (folder, prefix) in &all {
+        if let Some(cycle) = folder_cycle(folder, prefix) {
+            panic!(
+                "{}: an import circle: {}",
+                folder.display(),
+                cycle.join(" → ")
+            );
+        }
+    }
+    // The detector finds a circle where there is one.
+    let dir = std::env::temp_dir().join(format!("eigenray-circle-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("a.rs"), "use super::b::B;\npub struct A;\n").unwrap();
+    std::fs::write(dir.join("b.rs"), "use super::{a::A, c};\npub struct B;\n").unwrap();
+    std::fs::write(dir.join("c.rs"), "// super::a in a comment\n").unwrap();
+    let cycle = folder_cycle(&dir, "x");
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(cycle, Some(vec!["a".into(), "b".into(), "a".into()]));
 }

@@ -16,6 +16,7 @@ mod pickling;
 mod progress;
 mod ray;
 mod rays;
+mod rays_data;
 mod response;
 mod rows;
 mod scene;

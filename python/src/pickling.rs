@@ -15,7 +15,7 @@ use pyo3::types::PyDict;
 
 use crate::amplitude::AmplitudeArrays;
 use crate::convert::status_names;
-use crate::rays::{PyRays, Reasons};
+use crate::rays_data::{PyRays, Reasons};
 
 /// The rules with a threshold, by their code in a pickled `Rays`.
 const THRESHOLDS: [Threshold; 4] = [

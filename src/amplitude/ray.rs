@@ -9,6 +9,7 @@ use num_complex::Complex64;
 use super::coefficients::{Weights, cos_across};
 use super::{Amplitude, NoAmplitude};
 use crate::geom::{Point, Vec2};
+use crate::leg::{Leg, LegModel, StraightLeg, Uniform};
 use crate::polyline::Polyline;
 use crate::regions::Regions;
 use crate::scene::{Amplitudes, Reflection, Scene, SourceModel, Step, StepKind};
@@ -24,70 +25,6 @@ pub(crate) struct PathGeometry<'a> {
     pub media: &'a [usize],
     /// The segment of each interaction point, when the solve knows it (tried first).
     pub segments: Option<&'a [usize]>,
-}
-
-/// The unit direction, length and inverse length of the leg from `p` to `q` (`None` for a
-/// leg of zero length).
-#[inline(always)]
-fn leg(p: Point, q: Point) -> Option<(Vec2, f64, f64)> {
-    let d = q - p;
-    let l2 = d.x * d.x + d.y * d.y;
-    // The common leg without `hypot`: a squared length that neither underflows nor overflows.
-    let l = if (f64::MIN_POSITIVE..1e300).contains(&l2) {
-        l2.sqrt()
-    } else {
-        leg_length_unusual(d)?
-    };
-    let inv = 1.0 / l;
-    Some((d * inv, l, inv))
-}
-
-/// The length of a leg of zero, tiny or huge length (`None` for zero), out of line.
-#[cold]
-#[inline(never)]
-fn leg_length_unusual(d: Vec2) -> Option<f64> {
-    let l = d.length();
-    (l > 0.0 && l.is_finite()).then_some(l)
-}
-
-/// A leg as the one-interaction form reads it: its length, its component across the segment
-/// (along the unit normal), and the square of its cosine with the normal.
-#[derive(Clone, Copy, Debug)]
-struct LegAcross {
-    length: f64,
-    across: f64,
-    cos_squared: f64,
-}
-
-/// The leg `d` against the unit normal `n` (`None` for a leg of zero length). The cosine's
-/// square is `(d · n)² / |d|²`: its division runs beside the square root, not after it.
-#[inline(always)]
-fn leg_across(d: Vec2, n: Vec2) -> Option<LegAcross> {
-    let l2 = d.x * d.x + d.y * d.y;
-    let across = d.dot(n);
-    if (f64::MIN_POSITIVE..1e300).contains(&l2) {
-        let cos_squared = across * across / l2;
-        Some(LegAcross {
-            length: l2.sqrt(),
-            across,
-            cos_squared,
-        })
-    } else {
-        leg_across_unusual(d, across)
-    }
-}
-
-/// [`leg_across`] for a leg of zero, tiny or huge length, out of line.
-#[cold]
-#[inline(never)]
-fn leg_across_unusual(d: Vec2, across: f64) -> Option<LegAcross> {
-    let length = leg_length_unusual(d)?;
-    let cos = across / length;
-    Some(LegAcross {
-        length,
-        across,
-        cos_squared: cos * cos,
-    })
 }
 
 /// The segment of `line` that interaction point `i` at `p` lies on: the only one, the solve's
@@ -376,7 +313,8 @@ fn slowness(scene: &Scene, m: usize) -> Result<f64, NoAmplitude> {
         .ok_or(NoAmplitude::UnknownMedia)
 }
 
-/// [`walk`] for a path of one interaction, written out: its Hessian is one number, so the
+/// [`walk`] for a path of one interaction in uniform media (straight legs, the legs' cosines
+/// with the normal from [`Uniform::leg_across`]), written out: its Hessian is one number, so the
 /// in-plane width is `W = (w₀ c₀² ℓ₁ + w₁ c₁² ℓ₀) / (w₁ |c₀ c₁|)` (`cⱼ` the cosines of the legs
 /// with the normal), and the tube's factor `(cos θ₂ / cos θ₁) / W` is `c₁² / D` across a change
 /// of medium and `|c₀ c₁| / D` on a reflection, with `D = q c₀² ℓ₁ + c₁² ℓ₀` and `q = w₀ / w₁`.
@@ -394,8 +332,9 @@ fn walk_one(
     let t = at.tangent;
     let n = t.perp();
     let d0 = points[1] - points[0];
-    let leg0 = leg_across(d0, n).ok_or(NoAmplitude::VanishedLeg { leg: 0 })?;
-    let leg1 = leg_across(points[2] - points[1], n).ok_or(NoAmplitude::VanishedLeg { leg: 1 })?;
+    let across =
+        |d: Vec2, leg: usize| Uniform::leg_across(d, n).ok_or(NoAmplitude::VanishedLeg { leg });
+    let (leg0, leg1) = (across(d0, 0)?, across(points[2] - points[1], 1)?);
     let (l0, l1) = (leg0.length, leg1.length);
     let (cc0, cc1) = (leg0.cos_squared, leg1.cos_squared);
     let attenuation_db = if cx.settings.attenuates {
@@ -444,13 +383,17 @@ fn walk_one(
 fn walk(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
     let (points, legs) = (path.points, path.media);
     let w0 = slowness(cx.scene, legs[0])?;
-    let (u0, l0, inv0) = leg(points[0], points[1]).ok_or(NoAmplitude::VanishedLeg { leg: 0 })?;
+    let first = Uniform::new(w0)
+        .valid_leg(points[0], points[1])
+        .ok_or(NoAmplitude::VanishedLeg { leg: 0 })?;
+    let (l0, inv0) = (first.len, first.inv_len);
     let attenuation = &cx.settings.attenuation;
     let mut out = Walk {
         coefficient: Complex64::new(1.0, 0.0),
         // The direct path: W = ℓ₀.
         tube_num: 1.0,
         tube_den: l0,
+        // (The first leg's `out_of_plane_width(w₀)`.)
         out_of_plane: l0,
         attenuation_db: attenuation[legs[0]] * l0,
         l0,
@@ -459,27 +402,30 @@ fn walk(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
     };
     // `Π cos θ₂ / cos θ₁` over the interactions that change the medium.
     let mut cos_ratio = 1.0;
-    let (mut u_in, mut inv_in, mut w_in) = (u0, inv0, w0);
+    let mut incoming: StraightLeg = first;
     // The sweep: the last pivot, the product so far, the previous tangent; the first cosine.
     let (mut pivot, mut product, mut prev) = (1.0, 1.0, Vec2::default());
     let mut first_cos = 0.0;
     for (i, step) in path.steps.iter().enumerate() {
-        let (u, l, inv) =
-            leg(points[i + 1], points[i + 2]).ok_or(NoAmplitude::VanishedLeg { leg: i + 1 })?;
         let (m_in, m) = (legs[i], legs[i + 1]);
         let w = slowness(cx.scene, m)?;
+        let leg = Uniform::new(w)
+            .valid_leg(points[i + 1], points[i + 2])
+            .ok_or(NoAmplitude::VanishedLeg { leg: i + 1 })?;
+        let w_in = incoming.slowness;
         let line = &cx.scene.interfaces()[step.interface].polyline;
         let seg = segment_of(line, points[i + 1], path.segments, i);
         let t = line.tangent(seg);
         let n = t.perp();
-        let (c1, c2) = (u_in.dot(n), u.dot(n));
+        let u_in = incoming.direction_at_end();
+        let (c1, c2) = (u_in.dot(n), leg.direction_at_start().dot(n));
         // Row i of the Hessian, and the forward sweep through it.
-        let diag = w_in * c1 * c1 * inv_in + w * c2 * c2 * inv;
+        let diag = incoming.end_block(t) + leg.start_block(t);
         let r = if i == 0 {
             first_cos = c1;
             diag
         } else {
-            let off = -t.dot(prev - u_in * u_in.dot(prev)) * (w_in * inv_in);
+            let off = incoming.coupling_projected(prev, t);
             product *= -off / pivot;
             diag - off * off / pivot
         };
@@ -511,16 +457,17 @@ fn walk(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
                 out.converted.get_or_insert(i);
             }
         }
-        out.out_of_plane += l * (w0 / w);
-        out.attenuation_db += attenuation[m] * l;
-        (u_in, inv_in, w_in) = (u, inv, w);
+        out.out_of_plane += leg.out_of_plane_width(w0);
+        out.attenuation_db += attenuation[m] * leg.len;
+        incoming = leg;
     }
     if !path.steps.is_empty() {
         // The receiver moved across the last leg by one unit: the right-hand side's one entry
         // β = (t_{k−1} · n_k) w_k / ℓ_k, the first point's move x₀ along its tangent, and the
         // first leg's turn (t₀ · n₀) x₀ / ℓ₀ (n the legs' normals; t · n = −(u · t⊥)): the
         // inverse of W.
-        let beta = prev.dot(u_in.perp()) * (w_in * inv_in);
+        let beta =
+            prev.dot(incoming.direction_at_end().perp()) * (incoming.slowness * incoming.inv_len);
         let x0 = beta * product / pivot;
         out.tube_num = cos_ratio * (first_cos * x0 * inv0).abs();
         out.tube_den = 1.0;

@@ -2,7 +2,9 @@
 //! steps, or up to `max_time`, or within both, per (source, receiver) pair. Its results are
 //! [`SearchArrival`]s.
 //!
-//! Two strategies share the work, each with its own counter of the work it does:
+//! Two strategies share the work, each with its own counter of the work it does; which
+//! lists which arrivals of which sequence is one function, `strategy.rs` (`owner`), whose
+//! tests check that every sequence is claimed exactly once:
 //!
 //! - **The beam tree** (`beams.rs`, over `trace/mirrors.rs`): every reflect-only sequence,
 //!   one tree per source shared by all its receivers, each segment of each reflecting
@@ -23,6 +25,7 @@
 
 mod beams;
 mod sequences;
+mod strategy;
 
 use rayon::prelude::*;
 

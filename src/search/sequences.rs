@@ -1,6 +1,7 @@
 //! The walk over step sequences that the beam tree does not cover: sequences with refractions
 //! and, when `vertex` arrivals are asked for, reflect-only sequences through interfaces with
-//! vertices (their edge-held arrivals; the tree lists their specular ones). Each is searched
+//! vertices (their edge-held arrivals; the tree lists their specular ones): what
+//! `strategy.rs` gives the walk, asked per sequence. Each is searched
 //! completely (`Tracer::stationary_of`, at most [`MAX_STATIONARY_STEPS`] steps) per (source,
 //! receiver) pair, depth first, each prefix pruned where no extension can hold a path:
 //!
@@ -13,7 +14,8 @@
 //!   sequence, and of every sequence it begins, has nothing to search.
 //! - **Need.** A reflect-only prefix (which the beam tree covers) is extended only where a
 //!   refraction can still follow (some allowed interface has a medium across from one in the
-//!   set) or `vertex` arrivals are asked for and an allowed interface has vertices.
+//!   set) or `vertex` arrivals are asked for and an allowed interface has vertices: where
+//!   some extension is the walk's (`strategy.rs`, `walk_may_extend`).
 //! - **Time.** For a prefix of steps at interfaces `I₁ … I_k` with leg media sets
 //!   `S₀ … S_k`, every path that begins with it takes at least
 //!   `w(S₀)·d(s, B₁) + Σ w(Sᵢ)·d(Bᵢ, Bᵢ₊₁) + w_min·d(B_k, r)`, with `Bᵢ` the bounding box of
@@ -22,6 +24,8 @@
 //!   a point of `Bᵢ₊₁` in a medium of `Sᵢ`, and whatever follows the point on `I_k` reaches
 //!   the receiver. The bound holds for every extension of the prefix, so a prefix whose bound
 //!   exceeds `max_time` (by more than its round-off) is pruned with everything below it.
+//!   Each term is the leg model's lower bound (`LegModel::least_time`, `leg.rs`) of the
+//!   fastest medium of the set: for uniform media, slowness times distance.
 //!
 //! The work, counted against the scene's `solver.max_work` per pair, is one per sequence
 //! visited plus the work units of each complete search (what that budget counts: points moved
@@ -33,9 +37,11 @@ use rayon::prelude::*;
 
 use crate::control::within;
 use crate::geom::{Aabb, Point};
+use crate::leg::{LegModel, Uniform};
 use crate::scene::{MAX_STATIONARY_STEPS, SearchOptions, Step, StepKind};
 use crate::trace::{Arrival, SearchBudget, Sequence, Status, Tracer};
 
+use super::strategy::{Claim, Shape, Strategy, walk_may_extend};
 use super::{ArrivalCount, Control, SEARCH_TUPLES, SearchArrival, SearchProgress};
 
 /// A set of media as bits (media beyond 128 are not told apart: [`MediaSets`] then keeps
@@ -122,13 +128,6 @@ impl MediaSets {
     }
 }
 
-/// Distance between two boxes (0 where they overlap).
-fn box_gap(a: Aabb, b: Aabb) -> f64 {
-    let dx = (a.min.x - b.max.x).max(b.min.x - a.max.x).max(0.0);
-    let dy = (a.min.y - b.max.y).max(b.min.y - a.max.y).max(0.0);
-    dx.hypot(dy)
-}
-
 /// The walk's view of the scene, built once per search: the step choices and the rules of
 /// its pruning.
 struct Walk<'a> {
@@ -174,10 +173,8 @@ struct Prefix {
     bound: f64,
     /// The box its last leg starts in (the source's point at first).
     from: Aabb,
-    /// Whether it has a refraction.
-    refracts: bool,
-    /// Whether it reflects off an interface with vertices.
-    vertices: bool,
+    /// What it is made of: which strategy lists what of it (`strategy.rs`).
+    shape: Shape,
 }
 
 /// The state of one pair's walk.
@@ -321,8 +318,7 @@ impl<'a> Walk<'a> {
             set: self.media.only(medium),
             bound: 0.0,
             from: Aabb::from_points(s, s),
-            refracts: false,
-            vertices: false,
+            shape: Shape::default(),
         });
         state.out.complete &= !state.stopped;
         state.out
@@ -344,15 +340,15 @@ impl<'a> Walk<'a> {
         if set == 0 {
             return None;
         }
-        let refracts = prefix.refracts || step.kind == StepKind::Refract;
-        let vertices = prefix.vertices
-            || (step.kind == StepKind::Reflect && self.has_vertices[step.interface]);
-        if !refracts && !self.vertex_reflections && !self.can_refract(set) {
+        let shape = prefix.shape.then(step, &self.has_vertices);
+        if !walk_may_extend(shape, self.vertex_reflections, || self.can_refract(set)) {
             return None;
         }
         let to = self.boxes[step.interface];
-        let bound = prefix.bound + self.media.least(prefix.set) * box_gap(prefix.from, to);
-        let rest = self.least * to.distance_sq(r).sqrt();
+        // The leg model's bounds: the least slowness's legs are the fastest.
+        let bound =
+            prefix.bound + Uniform::new(self.media.least(prefix.set)).least_time(prefix.from, to);
+        let rest = Uniform::new(self.least).least_time_to(to, r);
         if let Some(t) = self.options.max_time
             && (bound + rest) * (1.0 - TIME_MARGIN) > t
         {
@@ -362,8 +358,7 @@ impl<'a> Walk<'a> {
             set,
             bound,
             from: to,
-            refracts,
-            vertices,
+            shape,
         })
     }
 }
@@ -373,8 +368,9 @@ impl PairState<'_> {
     fn extend(&mut self, prefix: Prefix) {
         let walk = self.walk;
         let k = self.steps.len();
-        if k > 0 && (prefix.refracts || (walk.vertex_reflections && prefix.vertices)) {
-            self.search(prefix.refracts);
+        let claim = Claim::of(Strategy::Walk, prefix.shape, walk.options);
+        if k > 0 && claim.any() {
+            self.search(claim);
         }
         self.out.work += 1;
         if self.out.work > walk.max_work {
@@ -402,9 +398,10 @@ impl PairState<'_> {
         }
     }
 
-    /// The complete search of the sequence in `steps`: its listed arrivals (with
-    /// `refracts` false, only its `vertex` ones: the beam tree lists the rest) by `max_time`.
-    fn search(&mut self, refracts: bool) {
+    /// The complete search of the sequence in `steps`: its listed arrivals of the kinds the
+    /// walk claims (`claim`: a reflect-only sequence's specular arrivals are the beam tree's)
+    /// by `max_time`.
+    fn search(&mut self, claim: Claim) {
         let walk = self.walk;
         let options = walk.options;
         let sequence = Sequence {
@@ -428,10 +425,9 @@ impl PairState<'_> {
         self.out.work += outcome.work as u64;
         self.out.complete &= outcome.complete;
         for a in self.found.drain(..) {
-            let kept = if refracts {
-                Tracer::listed(a.status, options)
-            } else {
-                options.vertex && a.status == Status::Vertex
+            let kept = match a.status {
+                Status::Vertex => claim.vertex,
+                status => claim.specular && Tracer::listed(status, options),
             };
             if !kept || a.time > options.time_limit() {
                 continue;

@@ -6,7 +6,7 @@ use crate::amplitude::{Amplitude, NoAmplitude, OnSegment, PathGeometry, of_one, 
 use crate::geom::Point;
 use crate::scene::Step;
 
-use super::{Arrival, PathPlan, RayRecord, Status, Tracer, Workspace};
+use super::{Arrival, RayRecord, Status, Tracer, Workspace};
 
 impl Tracer {
     /// The amplitude of a ray of `steps` through `points` (source, interaction points,
@@ -82,10 +82,7 @@ impl Tracer {
         amplitude: &mut Option<Amplitude>,
     ) -> RayRecord {
         let record = self.solve(source, receiver, path, ws);
-        let flat = match &self.plans[path] {
-            PathPlan::FlatRefraction(_, flat) => Some(flat.frame()),
-            _ => None,
-        };
+        let flat = self.flat_segment(path);
         *amplitude = match (self.scene.amplitudes(), flat, ws.points(), ws.media()) {
             (Some(settings), Some(frame), &[p0, p1, p2], &[m0, m1])
                 if record.status == Status::Converged =>

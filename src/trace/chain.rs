@@ -4,13 +4,13 @@
 //!
 //! The caller ([`ChainRays`]: the batch) says which ray comes next, whether it is warm-started,
 //! and where each solved ray goes; [`Tracer::solve_chain`] chooses how the path's rays are
-//! solved from its plan ([`PathPlan`]) and keeps the solutions the next starts are predicted
+//! solved from its plan ([`PathPlan`](super::PathPlan)) and keeps the solutions the next starts are predicted
 //! from ([`WarmStarts`]).
 
 use std::ops::Range;
 
 use super::{
-    OneStepPath, OneStepStart, PathPlan, RayRecord, Start, Status, Tracer, Workspace, flat_status,
+    OneStepPath, OneStepStart, RayRecord, Start, Status, Tracer, Workspace, flat_status,
     given_param,
 };
 use crate::geom::{Point, Vec2};
@@ -35,7 +35,7 @@ pub(crate) struct ChainLink {
     pub moved: Vec2,
     /// Whether the caller starts the ray from the last ray's solution (it converged, and its
     /// receiver is near); the chain still starts it from the default start where that is the
-    /// better one ([`PathPlan::skips_warm_start`]).
+    /// better one ([`PathPlan::skips_warm_start`](super::PathPlan::skips_warm_start)).
     pub warm: bool,
 }
 
@@ -180,11 +180,9 @@ impl Tracer {
         warm: &mut WarmStarts,
         ws: &mut Workspace,
     ) {
-        match self.plan_of(path) {
-            PathPlan::OneStep(one) | PathPlan::FlatRefraction(one, _) => {
-                self.one_step_chain(one, path, params.start, rays, warm, ws)
-            }
-            _ => self.path_chain(path, params, rays, warm, ws),
+        match self.plan_of(path).one_step() {
+            Some(one) => self.one_step_chain(one, path, params.start, rays, warm, ws),
+            None => self.path_chain(path, params, rays, warm, ws),
         }
     }
 
@@ -266,10 +264,7 @@ impl Tracer {
         let mut seg = 0;
         // Off a flat mirror the default start is already the solution; at a flat interface
         // the kernel's steps from its own start cost less than a warm start saves.
-        let flat = match self.plan_of(p) {
-            PathPlan::FlatRefraction(_, flat) => Some(flat),
-            _ => None,
-        };
+        let flat = self.plan_of(p).flat();
         let skip = self.plan_of(p).skips_warm_start(self.initial_guess());
         let warm_start = rays.warm_starts() && !skip;
         let cx = self.context();

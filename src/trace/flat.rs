@@ -293,7 +293,7 @@ mod tests {
     use super::*;
     use crate::demo::SplitMix64;
     use crate::scene::{Scene, SolverOptions};
-    use crate::trace::{Kernels, PathPlan, Status, Tracer};
+    use crate::trace::{Kernels, Status, Tracer};
     use crate::{Ray, Workspace};
 
     /// `T′(x)` of the ray from `s` to `r` refracting at `x` along the segment `o + x t`.
@@ -565,10 +565,7 @@ mod tests {
                 }
             }
             let (src, rcv) = (scene.sources()[a.source], scene.receivers()[a.receiver]);
-            let flat = match tracer.plan_of(a.path) {
-                PathPlan::FlatRefraction(_, flat) => Some(flat),
-                _ => None,
-            };
+            let flat = tracer.plan_of(a.path).flat();
             kernel += flat.and_then(|f| f.solve(src, rcv)).is_some() as usize;
         }
         kernel

@@ -1,7 +1,8 @@
 //! Every reflect-only path from one source, by the image-source tree with beam pruning: the
 //! automatic search's tree for reflections, shared by every receiver of the source. Each
 //! segment of each reflecting interface (open or closed, of any number of segments) is one
-//! wall; every leg is in the source's medium (a reflection keeps the medium), so one slowness.
+//! wall; every leg is in the source's medium (a reflection keeps the medium), so one slowness:
+//! a uniform medium's straight legs (`leg.rs`, [`Uniform`]), the image method's.
 //!
 //! A depth-first walk over wall sequences from the source. Each node of the tree holds the
 //! source's image (mirrored in each wall's line in turn) and its beam: the wedge from the
@@ -45,6 +46,7 @@
 //! margin, the child's beam is the whole plane (no pruning below it).
 
 use crate::geom::{Aabb, Point, Vec2, orient};
+use crate::leg::Uniform;
 use crate::scene::{MAX_SEARCH_STEPS, Scene, SegmentRef, StepKind};
 
 use super::classify::{END_MARGIN, leg_sides, sides_suit};
@@ -198,6 +200,16 @@ pub(crate) struct MirrorSearch<'a> {
     pub obstructed: bool,
     /// Beams visited before the search stops.
     pub max_beams: u64,
+}
+
+impl MirrorSearch<'_> {
+    /// The medium of every leg: a uniform one, whose legs are straight (the image method's
+    /// legs; a medium with a speed gradient has no images, and its reflect-only sequences go
+    /// to the walk over sequences).
+    #[inline]
+    fn medium(&self) -> Uniform {
+        Uniform::new(self.slowness)
+    }
 }
 
 /// One path the tree found, as the tree holds it (valid during the call that reports it).
@@ -536,7 +548,7 @@ impl MirrorWalls {
     fn bounds(&self, search: &MirrorSearch<'_>, max_steps: usize) -> Bounds {
         let big = |p: &Point| p.x.abs().max(p.y.abs());
         let far = search.receivers.iter().map(big).fold(0.0f64, f64::max);
-        let reach = search.max_time / search.slowness;
+        let reach = search.medium().reach(search.max_time);
         // |image| ≤ |source| + 2 k |wall point| (a mirroring keeps distances to its line's
         // points), in the max-norm within a factor √2; an image the time bound keeps lies
         // within `reach` of the receivers' box, and its children one mirroring (at most
@@ -684,7 +696,7 @@ impl Validation<'_, '_> {
             let Some((length, reason)) = self.path(stack, receiver) else {
                 continue;
             };
-            let time = search.slowness * length;
+            let time = search.medium().time_along(length);
             if time > search.max_time {
                 continue;
             }

@@ -46,7 +46,7 @@ pub use plan::Kernels;
 pub use result::{Ray, RayRecord, Reason, Status, Threshold};
 
 use one_step::{OneStepStart, flat_status};
-use plan::{OneStepPath, PathPlan};
+use plan::{OneStepPath, PathPlan, PlanKernel};
 use start::given_param;
 
 use start::{StartScratch, given_start, initial_guess, refraction_guess};
@@ -519,10 +519,7 @@ impl Tracer {
     /// its rays (a refraction at an open interface of one segment, the media given).
     #[inline(always)]
     pub(crate) fn flat_segment(&self, path: usize) -> Option<SegmentFrame> {
-        match self.plans.get(path) {
-            Some(PathPlan::FlatRefraction(_, flat)) => Some(flat.frame()),
-            _ => None,
-        }
+        self.plans.get(path)?.flat().map(|flat| flat.frame())
     }
 
     /// Solves one ray from `start` as its path's plan says: the one dispatch of every ray.
@@ -537,8 +534,8 @@ impl Tracer {
         start: Start,
         ws: &mut Workspace,
     ) -> RayRecord {
-        let record = match &self.plans[path] {
-            PathPlan::FlatRefraction(one, flat) => {
+        let record = match self.plans[path].kernel() {
+            PlanKernel::Flat(one, flat) => {
                 if let Start::Default = start
                     && let Some(sol) = flat.solve(source, receiver)
                 {
@@ -548,8 +545,12 @@ impl Tracer {
                     one.solve(&self.context(), path, source, receiver, start, ws)
                 }
             }
-            PathPlan::OneStep(one) => one.solve(&self.context(), path, source, receiver, start, ws),
-            plan => self.solve_general(plan, source, src_medium, receiver, path, start, ws),
+            PlanKernel::OneStep(one) => {
+                one.solve(&self.context(), path, source, receiver, start, ws)
+            }
+            PlanKernel::General(plan) => {
+                self.solve_general(plan, source, src_medium, receiver, path, start, ws)
+            }
         };
         if record.status.has_time() || matches!(start, Start::Trial(_)) {
             return record;
@@ -576,7 +577,7 @@ impl Tracer {
         ws: &mut Workspace,
     ) -> RayRecord {
         let cx = self.context();
-        if let (Start::Default, PathPlan::Stack(sp)) = (start, plan)
+        if let (Start::Default, Some(sp)) = (start, plan.stack())
             && let Some(ray) = sp.solve_stack(&cx, path, source, receiver, ws)
         {
             return ray;

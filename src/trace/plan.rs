@@ -1,7 +1,11 @@
 //! The per-path plan: which kernel solves a path's rays, decided once in `Tracer::new`.
 //!
 //! Every ray goes through [`PathPlan`]: [`Tracer::solve`](super::Tracer::solve) and the
-//! batches' chains (`trace::chain`) dispatch on it and on nothing else. A kernel is a shortcut for a common case
+//! batches' chains (`trace::chain`) dispatch on it and on nothing else. Its variants are
+//! inspected here only: the rest of `trace/` asks it through [`PathPlan::kernel`] (the
+//! dispatch), [`PathPlan::one_step`],
+//! [`PathPlan::flat`], [`PathPlan::stack`], [`PathPlan::straight`] and
+//! [`PathPlan::skips_warm_start`]. A kernel is a shortcut for a common case
 //! that ends in the same classifier (`classify`) as the general solve, and hands every ray
 //! outside its case to the general code from the same start.
 
@@ -46,6 +50,17 @@ pub(crate) enum PathPlan {
     /// One refraction at an interface of one segment, the media given: from the default
     /// start, the flat kernel (`trace::flat`); otherwise as `OneStep`.
     FlatRefraction(OneStepPath, FlatRefraction),
+}
+
+/// Which code solves a path's rays ([`PathPlan::kernel`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum PlanKernel<'p> {
+    /// The flat kernel from the default start, the one-step code otherwise.
+    Flat(&'p OneStepPath, &'p FlatRefraction),
+    /// The one-step code.
+    OneStep(&'p OneStepPath),
+    /// The general solve (with the stack kernel first where the plan has it).
+    General(&'p PathPlan),
 }
 
 /// A path of one interaction whose leg media are given.
@@ -97,6 +112,45 @@ impl PathPlan {
     pub(crate) fn straight(&self) -> Option<&StraightPath> {
         match self {
             PathPlan::Straight(sp) | PathPlan::Stack(sp) => Some(sp),
+            _ => None,
+        }
+    }
+
+    /// The code that solves the path's rays: the one dispatch of every ray on its own
+    /// (`Tracer::solve_planned`).
+    #[inline(always)]
+    pub(crate) fn kernel(&self) -> PlanKernel<'_> {
+        match self {
+            PathPlan::FlatRefraction(one, flat) => PlanKernel::Flat(one, flat),
+            PathPlan::OneStep(one) => PlanKernel::OneStep(one),
+            plan => PlanKernel::General(plan),
+        }
+    }
+
+    /// The segments of a path whose rays from the default start take the stack kernel.
+    #[inline(always)]
+    pub(crate) fn stack(&self) -> Option<&StraightPath> {
+        match self {
+            PathPlan::Stack(sp) => Some(sp),
+            _ => None,
+        }
+    }
+
+    /// The one-interaction data of a path solved by the one-step code (the flat kernel's
+    /// path too, whose rays outside its case the one-step code solves).
+    #[inline(always)]
+    pub(crate) fn one_step(&self) -> Option<&OneStepPath> {
+        match self {
+            PathPlan::OneStep(one) | PathPlan::FlatRefraction(one, _) => Some(one),
+            _ => None,
+        }
+    }
+
+    /// The flat kernel of a path whose rays from the default start take it.
+    #[inline(always)]
+    pub(crate) fn flat(&self) -> Option<&FlatRefraction> {
+        match self {
+            PathPlan::FlatRefraction(_, flat) => Some(flat),
             _ => None,
         }
     }

@@ -106,7 +106,7 @@ mod tests {
     use crate::geom::{Point, Vec2};
     use crate::scene::Scene;
     use crate::trace::test_support::kernels_agree;
-    use crate::trace::{InitialGuess, Kernels, PathPlan, RayRecord, Status, Tracer};
+    use crate::trace::{InitialGuess, Kernels, RayRecord, Status, Tracer};
 
     /// A stack of `n` parallel interfaces at random: any direction, some drawn the other way
     /// round, far from the origin or not, random thicknesses and speeds (contrasts up to 4:
@@ -179,7 +179,7 @@ mod tests {
         let general_tracer = Tracer::new(scene)
             .unwrap()
             .with_kernels(Kernels::GeneralOnly);
-        let PathPlan::Stack(sp) = tracer.plan_of(0) else {
+        let Some(sp) = tracer.plan_of(0).stack() else {
             panic!("a stack");
         };
         let cx = tracer.context();
@@ -251,7 +251,7 @@ mod tests {
     /// The kernel is not taken from the paraxial start, nor for a path without its media.
     #[test]
     fn the_kernel_applies_to_its_case_only() {
-        let stack = |t: &Tracer| matches!(t.plan_of(0), PathPlan::Stack(_));
+        let stack = |t: &Tracer| t.plan_of(0).stack().is_some();
         let scene = Scene::from_spec(&demo::layer_stack(4, 3)).unwrap();
         assert!(stack(&Tracer::new(&scene).unwrap()));
         let paraxial = Tracer::new(&scene)

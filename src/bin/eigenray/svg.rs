@@ -8,6 +8,7 @@ mod axes;
 mod caption;
 pub mod charts;
 mod colour;
+mod colouring;
 mod entries;
 mod key;
 mod labels;

@@ -3,6 +3,7 @@
 use std::f64::consts::PI;
 
 use crate::geom::{Aabb, Point, Vec2};
+use crate::leg::{LegModel, Uniform};
 
 use super::place::{CONE_PAD, Place};
 
@@ -171,7 +172,10 @@ fn dot_range(legs: Legs, t: Vec2) -> [f64; 2] {
 
 /// Whether the places of the points (with the source and receiver around them) hold no
 /// stationary path: for some point the bound of `rᵢ = (wᵢ uᵢ − wᵢ₊₁ uᵢ₊₁) · tᵢ` excludes zero,
-/// `rᵢ` within `(wᵢ uᵢ − wᵢ₊₁ uᵢ₊₁) · t₀ ± (wᵢ + wᵢ₊₁) |tᵢ − t₀|`.
+/// `rᵢ` within `(wᵢ uᵢ − wᵢ₊₁ uᵢ₊₁) · t₀ ± (wᵢ + wᵢ₊₁) |tᵢ − t₀|`. The directions `u` are the
+/// legs' chords' (the boxes' differences); the slowness vectors at the legs' ends come from
+/// them through the leg model ([`LegModel::along_at_ends`], [`LegModel::greatest_slowness`]:
+/// for the uniform medium's straight legs, `w u` and `w`).
 pub(super) fn pruned(places: &[Place], source: Point, receiver: Point, w: &[f64]) -> bool {
     let k = places.len();
     let end = |p: Point| Aabb::from_points(p, p);
@@ -193,13 +197,17 @@ pub(super) fn pruned(places: &[Place], source: Point, receiver: Point, w: &[f64]
         let after = leg(i + 1);
         if !matches!(before, LegBound::Unknown) && !matches!(after, LegBound::Unknown) {
             let (t, spread) = (places[i].tangent, places[i].spread);
-            let (wa, wb) = (w[i], w[i + 1]);
+            // The legs' slowness vectors at the point, through the leg model: their sizes,
+            // and their components along `t` from their chords'.
+            let (ma, mb) = (Uniform::new(w[i]), Uniform::new(w[i + 1]));
+            let (wa, wb) = (ma.greatest_slowness(), mb.greatest_slowness());
             let slack = (wa + wb) * spread + 1e-10 * (wa + wb);
-            let excludes = |a: [f64; 2], b: [f64; 2]| {
-                wa * a[0] - wb * b[1] - slack > 0.0 || wa * a[1] - wb * b[0] + slack < 0.0
-            };
+            let excludes =
+                |a: [f64; 2], b: [f64; 2]| a[0] - b[1] - slack > 0.0 || a[1] - b[0] + slack < 0.0;
             let (a0, a1) = before.dot_ranges(t);
             let (b0, b1) = after.dot_ranges(t);
+            let (a0, a1) = (ma.along_at_ends(a0), a1.map(|a| ma.along_at_ends(a)));
+            let (b0, b1) = (mb.along_at_ends(b0), b1.map(|b| mb.along_at_ends(b)));
             let all = [Some(a0), a1]
                 .into_iter()
                 .flatten()

@@ -6,7 +6,7 @@ use crate::problem::Pin;
 use crate::trace::Threshold;
 
 use super::Search;
-use super::minimise::Settled;
+use super::outcome::{Kinked, Settled};
 
 /// Restarts away from collapses per assignment (see `Search::unpin`).
 const MAX_RESTARTS: usize = 6;
@@ -21,15 +21,6 @@ pub(super) const COLLAPSE: f64 = 1e-3;
 /// Sine of the angle between a leg and its interaction's segment below which a stalled solve
 /// is taken to run along the segment's line.
 pub(super) const ALONG: f64 = 1e-7;
-
-/// What a collapse or a stall of an assignment's solve leads to.
-pub(super) enum Kinked {
-    /// The solve ends so.
-    Settled(Settled),
-    /// Points were pinned at a collapse, or moved away from one that is not the minimum:
-    /// the solve goes on.
-    Restarted,
-}
 
 /// What [`Search::kink_direction`] finds of a pinned leg.
 struct KinkDirection {
@@ -378,6 +369,7 @@ mod tests {
     use crate::problem::Pin;
     use crate::trace::complete::Search;
     use crate::trace::complete::fixture::{Fixture, points_json};
+    use crate::trace::complete::outcome::{Kinked, Settled};
 
     /// Two reflections off the polyline through `v`, from `s` to `r`.
     fn twice(v: &[Point], s: Point, r: Point) -> Fixture {
@@ -449,7 +441,7 @@ mod tests {
                         assert!((line.point_on(ja, sa) - x).length() <= scale);
                         assert!((line.point_on(jb, sb) - x).length() <= scale);
                         // Pinned: both points held there.
-                        assert!(matches!(search.pin(0, 1), super::Kinked::Restarted));
+                        assert!(matches!(search.pin(0, 1), Kinked::Restarted));
                         let nw = &search.sc.nw;
                         assert_eq!(
                             (nw.s[0], nw.s[1], nw.pin[0], nw.pin[1]),
@@ -515,7 +507,7 @@ mod tests {
             assert_eq!(search.crossing(1), None);
             place(search, [0, 1], [0.5, 0.5]);
             assert_eq!(search.crossing(1), Some([1.0, 1.0]));
-            let proof = |k| matches!(k, super::Kinked::Settled(super::Settled::Collapsed));
+            let proof = |k| matches!(k, Kinked::Settled(Settled::Collapsed));
             assert!(!proof(search.pin(0b01, 1)));
             assert!(search.smoothed);
             assert_eq!(search.pinned, 0);

@@ -5,7 +5,7 @@ use crate::problem::Pin;
 use crate::solver::{Outcome, Solution};
 
 use super::Search;
-use super::minimise::Settled;
+use super::outcome::Settled;
 use super::place::Place;
 use super::result::{Arrival, Kink};
 use crate::trace::classify::side_undecided;

@@ -6,28 +6,10 @@ use crate::solver::thomas;
 use crate::trace::Threshold;
 
 use super::Search;
-use super::collapse::Kinked;
+use super::outcome::{Kinked, Settled};
 
 /// Newton steps per assignment (again after each pin or restart).
 const MAX_STEPS: usize = 200;
-
-/// How an assignment's solve ended.
-pub(super) enum Settled {
-    /// At the minimiser (to the tolerance or round-off).
-    Yes,
-    /// At a minimiser where a leg vanished, decided exactly (the subgradient at a collapse
-    /// between two interactions, an end point exactly on its interaction's line): no
-    /// stationary path (the classifier's `coincident`).
-    Collapsed,
-    /// Taken to approach a minimiser where a leg vanishes or runs along its interface by a
-    /// rule with a threshold: no stationary path found, but not a proof.
-    Threshold(Threshold),
-    /// At the minimum over the segments, with a point at an end of its segment that `T`
-    /// pushes outwards: `T` being convex, no stationary point lies inside the segments.
-    Outside,
-    /// Not settled (the search is then not complete).
-    No,
-}
 
 /// How one Newton step of an assignment's solve went.
 enum NewtonStep {

@@ -62,6 +62,7 @@ mod hierarchy;
 mod leaf;
 mod listing;
 mod minimise;
+mod outcome;
 mod place;
 mod result;
 mod scratch;

@@ -7,8 +7,7 @@ use crate::scene::MAX_STATIONARY_STEPS;
 use crate::solver::thomas;
 
 use super::Search;
-use super::collapse::Kinked;
-use super::minimise::Settled;
+use super::outcome::{Kinked, Settled};
 
 impl Search<'_> {
     /// Where several points collapse onto one spot, follows the minimum of the time with its

@@ -1,6 +1,7 @@
 //! The colours of rays: what colours them (time, path or sequence), viridis for travel times,
 //! the palette and dashes of paths and sequences.
 
+pub use super::colouring::Colouring;
 use super::entries::Item;
 use super::legend::Legend;
 
@@ -23,20 +24,6 @@ pub(super) const PATH_COLOURS: [&str; 20] = [
     "#9c755f", "#bab0ac", "#a0cbe8", "#ffbe7d", "#ff9d9a", "#86bcb6", "#8cd17d", "#f1ce63",
     "#d4a6c8", "#fabfd2", "#d7b5a6", "#79706e",
 ];
-
-/// What gives a ray its colour.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum Colouring {
-    /// Travel time, on viridis, with a colour bar.
-    #[default]
-    Time,
-    /// The path, with a legend of path names (a search arrival, which has no path: its step
-    /// sequence).
-    Path,
-    /// The step sequence: one colour per distinct sequence of steps, with a legend listing the
-    /// sequences (`reflect w0 → refract surface`).
-    Sequence,
-}
 
 /// Viridis at `t ∈ [0, 1]` (clamped; NaN is 0) as `#rrggbb`.
 pub fn viridis(t: f64) -> String {

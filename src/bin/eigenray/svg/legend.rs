@@ -4,7 +4,7 @@
 use eigenray::Scene;
 use eigenray::scene_parts::{Step, StepKind};
 
-use super::colour::Colouring;
+use super::colouring::Colouring;
 use super::entries::Item;
 use super::markup::thousands;
 

@@ -1,0 +1,551 @@
+//! The leg model: what a ray does between two consecutive points of its path, in one medium.
+//!
+//! A path is a chain of legs, each joining two points (the source, interaction points, the
+//! receiver) inside one medium. Everything the solver, the amplitude and the searches need of
+//! a leg is a function of its two end points `a`, `b` and its medium, and comes from here:
+//!
+//! | quantity | [`Leg`] / [`LegModel`] | uniform medium ([`Uniform`], [`StraightLeg`]) |
+//! | --- | --- | --- |
+//! | time `T(a, b)` | [`Leg::time`] | `w ℓ` |
+//! | gradient: `∇_b T`, `−∇_a T` (slowness vectors at the ends) | [`Leg::arrival`], [`Leg::departure`] | `w u`, `w u` |
+//! | unit directions at the ends | [`Leg::direction_at_end`], [`Leg::direction_at_start`] | `u`, `u` |
+//! | Hessian blocks along tangents: `tᵀ ∂²T/∂b² t`, `tᵀ ∂²T/∂a² t`, `t_aᵀ ∂²T/∂a∂b t_b` | [`Leg::end_block`], [`Leg::start_block`], [`Leg::coupling`] | `w (u × t)² / ℓ`, the same, `−w (u × t_a)(u × t_b) / ℓ` |
+//! | tube width out of the plane, `w₀ ∫ c ds` | [`Leg::out_of_plane_width`] | `ℓ w₀ / w` |
+//! | validity (a leg exists between the ends) | [`LegModel::valid_leg`] | `ℓ` positive and finite |
+//! | lower bound on `T` between two boxes | [`LegModel::least_time`], [`LegModel::least_time_to`] | `w` × the boxes' distance |
+//! | the slowness at the ends from the chord's direction (bounds) | [`LegModel::along_at_ends`], [`LegModel::greatest_slowness`] | `w u`, `w` |
+//!
+//! (`ℓ = |b − a|`, `u = (b − a)/ℓ`, `w` the slowness.) The path's time is the sum of its legs'
+//! times; its residual at point `i` is `(arrival of leg i − departure of leg i + 1) · tᵢ`; its
+//! tridiagonal Hessian has `Hᵢᵢ = end_block(leg i, tᵢ) + start_block(leg i + 1, tᵢ)` and
+//! `Hᵢ,ᵢ₊₁ = coupling(leg i + 1, tᵢ, tᵢ₊₁)` (`problem.rs`). Every leg depends on its two ends
+//! only, so the Hessian stays tridiagonal for any leg model.
+//!
+//! The uniform medium, whose legs are straight, is the one model so far. A medium with a
+//! speed gradient (circular arcs in a medium whose speed is linear in position;
+//! `design/curved-rays.md` of the team's notes) is a second [`LegModel`]: its legs' times
+//! `(2/g) asinh(g ℓ / (2 √(c_a c_b)))` and their derivatives in closed form, its validity the
+//! test that the arc stays inside its medium, its bound the time at the medium's greatest
+//! speed. Each caller's formulas are written with [`Leg`]'s methods, so the caller stays as it
+//! is; the calls are static (the model is a type, every method inlined), so the uniform
+//! medium's arithmetic is the code's before the seam, operation for operation.
+//!
+//! Two places are the uniform medium's own and say so: the image method of the beam tree
+//! (`trace/mirrors.rs`: straight legs in one medium, [`Uniform::time_along`],
+//! [`Uniform::reach`]) and the one-interaction closed form of the amplitude
+//! (`amplitude/ray.rs`, [`Uniform::leg_across`]); a medium with a gradient takes the general
+//! forms there (the walk over sequences; the amplitude's sweep).
+
+use crate::geom::{Aabb, Point, Vec2};
+
+/// One leg of a ray in one medium, evaluated from its two end points (see the module).
+pub(crate) trait Leg: Copy {
+    /// The travel time along the leg.
+    fn time(&self) -> f64;
+    /// `∇_b T`: the slowness vector with which the leg arrives at its end `b`.
+    fn arrival(&self) -> Vec2;
+    /// `−∇_a T`: the slowness vector with which the leg leaves its start `a`.
+    fn departure(&self) -> Vec2;
+    /// The unit direction of the leg at its end.
+    fn direction_at_end(&self) -> Vec2;
+    /// The unit direction of the leg at its start.
+    fn direction_at_start(&self) -> Vec2;
+    /// `tᵀ (∂²T/∂b²) t`: the Hessian block of the end along the unit vector `t`.
+    fn end_block(&self, t: Vec2) -> f64;
+    /// `tᵀ (∂²T/∂a²) t`: the Hessian block of the start along the unit vector `t`.
+    fn start_block(&self, t: Vec2) -> f64;
+    /// `t_aᵀ (∂²T/∂a∂b) t_b`: the block that couples the start (along `ta`) and the end
+    /// (along `tb`).
+    fn coupling(&self, ta: Vec2, tb: Vec2) -> f64;
+    /// `w₀ ∫ c ds` along the leg, `w₀` the slowness at the source: what the leg adds to the
+    /// out-of-plane width of a point source's tube (the out-of-plane slowness is conserved).
+    fn out_of_plane_width(&self, source_slowness: f64) -> f64;
+}
+
+/// A medium's model of the legs through it (see the module).
+pub(crate) trait LegModel: Copy {
+    /// An evaluated leg.
+    type Leg: Leg;
+    /// The leg from `a` to `b` (positions relative to one origin, the same for every leg of a
+    /// path), evaluated whatever the ends: a leg of zero length has zero direction and zero
+    /// inverse length (the solver judges vanished legs by their length).
+    fn leg(self, a: Vec2, b: Vec2) -> Self::Leg;
+    /// The leg from `a` to `b` if one exists between them in this medium (`None`: no leg, for
+    /// a straight leg one of zero or non-finite length).
+    fn valid_leg(self, a: Point, b: Point) -> Option<Self::Leg>;
+    /// A lower bound on the time of every leg from a point of `from` to a point of `to`.
+    fn least_time(self, from: Aabb, to: Aabb) -> f64;
+    /// A lower bound on the time of every leg from a point of `from` to the point `to`.
+    fn least_time_to(self, from: Aabb, to: Point) -> f64;
+    /// The range of `p · t` (`p` the slowness vector at either end of a leg) over the legs
+    /// whose chords' unit directions `u` have `u · t` in `chord_along` (the complete search's
+    /// residual bounds).
+    fn along_at_ends(self, chord_along: [f64; 2]) -> [f64; 2];
+    /// The greatest size of the slowness vector at a leg's ends.
+    fn greatest_slowness(self) -> f64;
+}
+
+/// A uniform medium: one slowness, straight legs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Uniform {
+    /// The slowness (1 / speed).
+    pub slowness: f64,
+}
+
+/// A straight leg in a [`Uniform`] medium.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct StraightLeg {
+    /// The medium's slowness.
+    pub slowness: f64,
+    /// The unit direction from the start to the end (zero for a leg of zero length).
+    pub u: Vec2,
+    /// The length.
+    pub len: f64,
+    /// `1 / len` (zero for a leg of zero length).
+    pub inv_len: f64,
+}
+
+impl Uniform {
+    /// The uniform medium of slowness `slowness`.
+    #[inline(always)]
+    pub fn new(slowness: f64) -> Uniform {
+        Uniform { slowness }
+    }
+
+    /// The straight leg along `d` (its end minus its start), its length by [`length`] where
+    /// the squares are plain, else `hypot` (the solver's general evaluation).
+    #[inline(always)]
+    pub fn leg_along(self, d: Vec2) -> StraightLeg {
+        let l = length(d);
+        let il = inverse(l);
+        StraightLeg {
+            slowness: self.slowness,
+            // `inverse` gives 0 for a zero-length leg, whose `d` is zero: `u` is then zero too.
+            u: d * il,
+            len: l,
+            inv_len: il,
+        }
+    }
+
+    /// The straight leg along `d` with a plain square root and reciprocal, and whether its
+    /// squared length was a normal number below 1e300 (otherwise the leg's numbers are not to
+    /// be used: the caller falls back to [`Uniform::leg_along`]). The solver's fast passes.
+    #[inline(always)]
+    pub fn leg_plain(self, d: Vec2) -> (StraightLeg, bool) {
+        let l2 = d.x * d.x + d.y * d.y;
+        let plain = (f64::MIN_POSITIVE..1e300).contains(&l2);
+        let l = l2.sqrt();
+        let il = 1.0 / l;
+        let leg = StraightLeg {
+            slowness: self.slowness,
+            u: d * il,
+            len: l,
+            inv_len: il,
+        };
+        (leg, plain)
+    }
+
+    /// The leg `d` against the unit normal `n` of the segment it meets (`None` for a leg of
+    /// zero or non-finite length): the uniform medium's one-interaction form of the amplitude,
+    /// whose cosines with the normal are the legs' own (straight legs). The cosine's square is
+    /// `(d · n)² / |d|²`: its division runs beside the square root, not after it.
+    #[inline(always)]
+    pub fn leg_across(d: Vec2, n: Vec2) -> Option<LegAcross> {
+        let l2 = d.x * d.x + d.y * d.y;
+        let across = d.dot(n);
+        if (f64::MIN_POSITIVE..1e300).contains(&l2) {
+            let cos_squared = across * across / l2;
+            Some(LegAcross {
+                length: l2.sqrt(),
+                across,
+                cos_squared,
+            })
+        } else {
+            leg_across_unusual(d, across)
+        }
+    }
+
+    /// The time of a straight path of length `length` through the medium (the image method's
+    /// paths: every leg in this one medium).
+    #[inline(always)]
+    pub fn time_along(self, length: f64) -> f64 {
+        self.slowness * length
+    }
+
+    /// The length of the longest straight path within the time `time` (infinite for no bound).
+    #[inline]
+    pub fn reach(self, time: f64) -> f64 {
+        time / self.slowness
+    }
+
+    /// [`Leg::out_of_plane_width`] of a leg of length `len` in a uniform medium of slowness
+    /// `w`, for a source of slowness `w0`: `ℓ w₀ / w`.
+    #[inline(always)]
+    fn out_of_plane(len: f64, w0: f64, w: f64) -> f64 {
+        len * (w0 / w)
+    }
+}
+
+impl LegModel for Uniform {
+    type Leg = StraightLeg;
+
+    #[inline(always)]
+    fn leg(self, a: Vec2, b: Vec2) -> StraightLeg {
+        self.leg_along(b - a)
+    }
+
+    #[inline(always)]
+    fn valid_leg(self, a: Point, b: Point) -> Option<StraightLeg> {
+        let d = b - a;
+        let l2 = d.x * d.x + d.y * d.y;
+        // The common leg without `hypot`: a squared length that neither underflows nor
+        // overflows.
+        let l = if (f64::MIN_POSITIVE..1e300).contains(&l2) {
+            l2.sqrt()
+        } else {
+            length_unusual(d)?
+        };
+        let inv = 1.0 / l;
+        Some(StraightLeg {
+            slowness: self.slowness,
+            u: d * inv,
+            len: l,
+            inv_len: inv,
+        })
+    }
+
+    #[inline]
+    fn least_time(self, from: Aabb, to: Aabb) -> f64 {
+        self.slowness * box_gap(from, to)
+    }
+
+    #[inline]
+    fn least_time_to(self, from: Aabb, to: Point) -> f64 {
+        self.slowness * from.distance_sq(to).sqrt()
+    }
+
+    #[inline]
+    fn along_at_ends(self, [lo, hi]: [f64; 2]) -> [f64; 2] {
+        [self.slowness * lo, self.slowness * hi]
+    }
+
+    #[inline]
+    fn greatest_slowness(self) -> f64 {
+        self.slowness
+    }
+}
+
+impl Leg for StraightLeg {
+    #[inline(always)]
+    fn time(&self) -> f64 {
+        self.slowness * self.len
+    }
+    #[inline(always)]
+    fn arrival(&self) -> Vec2 {
+        self.u * self.slowness
+    }
+    #[inline(always)]
+    fn departure(&self) -> Vec2 {
+        self.u * self.slowness
+    }
+    #[inline(always)]
+    fn direction_at_end(&self) -> Vec2 {
+        self.u
+    }
+    #[inline(always)]
+    fn direction_at_start(&self) -> Vec2 {
+        self.u
+    }
+    // The blocks take `u · t⊥` (= −(u × t) exactly, rounding being symmetric: the same
+    // bits once squared or multiplied in pairs), the form a caller that has the normal
+    // `t⊥` shares with its cosines.
+    #[inline(always)]
+    fn end_block(&self, t: Vec2) -> f64 {
+        let c = self.u.dot(t.perp());
+        self.slowness * c * c * self.inv_len
+    }
+    #[inline(always)]
+    fn start_block(&self, t: Vec2) -> f64 {
+        let c = self.u.dot(t.perp());
+        self.slowness * c * c * self.inv_len
+    }
+    #[inline(always)]
+    fn coupling(&self, ta: Vec2, tb: Vec2) -> f64 {
+        -self.slowness * self.u.dot(ta.perp()) * self.u.dot(tb.perp()) * self.inv_len
+    }
+    #[inline(always)]
+    fn out_of_plane_width(&self, source_slowness: f64) -> f64 {
+        Uniform::out_of_plane(self.len, source_slowness, self.slowness)
+    }
+}
+
+impl StraightLeg {
+    /// [`Leg::coupling`] written as `−t_b · (t_a − u (u · t_a)) w / ℓ` (the projection of `t_a`
+    /// across the leg): the same number to round-off, in the order of the amplitude's sweep,
+    /// which keeps it so that amplitudes stay as they were bit for bit.
+    #[inline(always)]
+    pub fn coupling_projected(&self, ta: Vec2, tb: Vec2) -> f64 {
+        let u = self.u;
+        -tb.dot(ta - u * u.dot(ta)) * (self.slowness * self.inv_len)
+    }
+}
+
+/// A straight leg against the unit normal of a segment ([`Uniform::leg_across`]): its length,
+/// its component along the normal, and the square of its cosine with the normal.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LegAcross {
+    /// The leg's length.
+    pub length: f64,
+    /// `d · n`.
+    pub across: f64,
+    /// `(d · n)² / |d|²`.
+    pub cos_squared: f64,
+}
+
+/// [`Uniform::leg_across`] for a leg of zero, tiny or huge length, out of line.
+#[cold]
+#[inline(never)]
+fn leg_across_unusual(d: Vec2, across: f64) -> Option<LegAcross> {
+    let length = length_unusual(d)?;
+    let cos = across / length;
+    Some(LegAcross {
+        length,
+        across,
+        cos_squared: cos * cos,
+    })
+}
+
+/// The length of a leg of zero, tiny or huge length (`None` for zero or non-finite), out of
+/// line.
+#[cold]
+#[inline(never)]
+fn length_unusual(d: Vec2) -> Option<f64> {
+    let l = d.length();
+    (l > 0.0 && l.is_finite()).then_some(l)
+}
+
+/// `|d|`: a plain square root where the squares neither overflow nor lose precision to
+/// underflow, `hypot` otherwise.
+#[inline(always)]
+pub(crate) fn length(d: Vec2) -> f64 {
+    let l2 = d.x * d.x + d.y * d.y;
+    // (`is_normal` for a sum of squares, as two compares.)
+    if (f64::MIN_POSITIVE..1e300).contains(&l2) {
+        l2.sqrt()
+    } else {
+        d.length()
+    }
+}
+
+/// `1/ℓ`, with a zero-length leg contributing nothing (its direction is undefined).
+#[inline(always)]
+fn inverse(l: f64) -> f64 {
+    if l > 0.0 { 1.0 / l } else { 0.0 }
+}
+
+/// Distance between two boxes (0 where they overlap).
+#[inline]
+fn box_gap(a: Aabb, b: Aabb) -> f64 {
+    let dx = (a.min.x - b.max.x).max(b.min.x - a.max.x).max(0.0);
+    let dy = (a.min.y - b.max.y).max(b.min.y - a.max.y).max(0.0);
+    dx.hypot(dy)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::demo::SplitMix64;
+
+    /// The unit vector at angle `a`.
+    fn unit(a: f64) -> Vec2 {
+        Vec2::new(a.cos(), a.sin())
+    }
+
+    /// A random point in [−5, 5]².
+    fn point(rng: &mut SplitMix64) -> Vec2 {
+        Vec2::new(10.0 * rng.next_f64() - 5.0, 10.0 * rng.next_f64() - 5.0)
+    }
+
+    /// The time of the straight leg from `a` to `b` at slowness `w`, the reference: the
+    /// distance times the slowness.
+    fn reference_time(w: f64, a: Vec2, b: Vec2) -> f64 {
+        w * (b - a).length()
+    }
+
+    /// The leg's time, gradient and Hessian blocks against central finite differences of the
+    /// reference time, on random legs and directions: the gradient to 1e-7, the blocks to
+    /// 1e-5 (relative to the leg's scale `w` and `w / ℓ`).
+    #[test]
+    fn derivatives_match_finite_differences() {
+        let mut rng = SplitMix64(0x1e9);
+        let h = 1e-5;
+        let mut checked = 0;
+        for _ in 0..500 {
+            let (a, b) = (point(&mut rng), point(&mut rng));
+            let w = 0.2 + 3.0 * rng.next_f64();
+            let leg = Uniform::new(w).leg(a, b);
+            if leg.len < 1.0 {
+                continue;
+            }
+            assert!((leg.time() - reference_time(w, a, b)).abs() <= 1e-14 * leg.time());
+            let (ta, tb) = (unit(7.0 * rng.next_f64()), unit(7.0 * rng.next_f64()));
+            let t = |da: f64, db: f64| reference_time(w, a + ta * da, b + tb * db);
+            // First derivatives along ta and tb.
+            let d_end = (t(0.0, h) - t(0.0, -h)) / (2.0 * h);
+            let d_start = (t(h, 0.0) - t(-h, 0.0)) / (2.0 * h);
+            assert!((leg.arrival().dot(tb) - d_end).abs() < 1e-7 * w, "{d_end}");
+            assert!(
+                (-leg.departure().dot(ta) - d_start).abs() < 1e-7 * w,
+                "{d_start}"
+            );
+            // Second derivatives.
+            let h2 = 1e-3;
+            let t2 = |da: f64, db: f64| reference_time(w, a + ta * da, b + tb * db);
+            let dd_end = (t2(0.0, h2) - 2.0 * t2(0.0, 0.0) + t2(0.0, -h2)) / (h2 * h2);
+            let dd_start = (t2(h2, 0.0) - 2.0 * t2(0.0, 0.0) + t2(-h2, 0.0)) / (h2 * h2);
+            let dd_mixed =
+                (t2(h2, h2) - t2(h2, -h2) - t2(-h2, h2) + t2(-h2, -h2)) / (4.0 * h2 * h2);
+            let scale = w / leg.len;
+            assert!(
+                (leg.end_block(tb) - dd_end).abs() < 1e-5 * scale,
+                "{dd_end}"
+            );
+            assert!(
+                (leg.start_block(ta) - dd_start).abs() < 1e-5 * scale,
+                "{dd_start}"
+            );
+            assert!(
+                (leg.coupling(ta, tb) - dd_mixed).abs() < 1e-5 * scale,
+                "{dd_mixed}"
+            );
+            let projected = leg.coupling_projected(ta, tb);
+            assert!((projected - leg.coupling(ta, tb)).abs() < 1e-13 * scale);
+            // The directions at the ends are the slowness vectors over the slowness, unit.
+            assert!((leg.direction_at_end().length() - 1.0).abs() < 1e-15);
+            assert!((leg.arrival().length() - w).abs() < 1e-14 * w);
+            checked += 1;
+        }
+        assert!(checked > 300, "{checked} legs checked");
+    }
+
+    /// The gradient is the slowness vector: its size is the slowness (the eikonal equation)
+    /// and it points along the leg, at both ends.
+    #[test]
+    fn the_gradient_is_the_slowness_vector() {
+        let leg = Uniform::new(2.0).leg(Vec2::new(1.0, 1.0), Vec2::new(4.0, 5.0));
+        assert_eq!(leg.len, 5.0);
+        assert_eq!(leg.time(), 10.0);
+        for p in [leg.arrival(), leg.departure()] {
+            assert!((p - Vec2::new(1.2, 1.6)).length() < 1e-15, "{p:?}");
+        }
+        // Across the leg the blocks are w / ℓ; along it zero.
+        let across = Vec2::new(-0.8, 0.6);
+        assert!((leg.end_block(across) - 0.4).abs() < 1e-15);
+        assert!(leg.end_block(Vec2::new(0.6, 0.8)).abs() < 1e-15);
+        assert!((leg.coupling(across, across) + 0.4).abs() < 1e-15);
+        // The out-of-plane width: ℓ c (w₀ = 1).
+        assert_eq!(leg.out_of_plane_width(1.0), 2.5);
+    }
+
+    /// The residual bounds' view of a leg: for random legs and tangents, the slowness vector
+    /// at either end along `t` lies in `along_at_ends` of the chord's `u · t` (here exactly
+    /// the slowness times it), and its size is at most `greatest_slowness`.
+    #[test]
+    fn the_slowness_at_the_ends_is_bounded_by_the_chord() {
+        let mut rng = SplitMix64(0xa10e);
+        for _ in 0..1000 {
+            let (a, b) = (point(&mut rng), point(&mut rng));
+            let m = Uniform::new(0.1 + 4.0 * rng.next_f64());
+            let leg = m.leg(a, b);
+            if leg.len == 0.0 {
+                continue;
+            }
+            let t = unit(7.0 * rng.next_f64());
+            let chord = (b - a) * (1.0 / (b - a).length());
+            let along = chord.dot(t);
+            let [lo, hi] = m.along_at_ends([along - 1e-12, along + 1e-12]);
+            for p in [leg.arrival(), leg.departure()] {
+                let x = p.dot(t);
+                assert!(lo <= x && x <= hi, "{x} outside [{lo}, {hi}]");
+                assert!(p.length() <= m.greatest_slowness() * (1.0 + 1e-15));
+            }
+        }
+    }
+
+    /// A leg of zero length: zero direction and inverse length, no valid leg; a leg of
+    /// tiny or huge length through `hypot`.
+    #[test]
+    fn degenerate_legs() {
+        let m = Uniform::new(1.0);
+        let zero = m.leg(Vec2::new(1.0, 2.0), Vec2::new(1.0, 2.0));
+        assert_eq!(
+            (zero.len, zero.inv_len, zero.u),
+            (0.0, 0.0, Vec2::default())
+        );
+        let p = Point::new(1.0, 2.0);
+        assert!(m.valid_leg(p, p).is_none());
+        assert!(m.valid_leg(p, Point::new(f64::INFINITY, 0.0)).is_none());
+        let origin = Point::new(0.0, 0.0);
+        let tiny = m.valid_leg(origin, Point::new(1e-160, 0.0)).expect("a leg");
+        assert!(tiny.len > 0.0 && (tiny.u.x - 1.0).abs() < 1e-15);
+        let huge = m.leg(Vec2::new(-1e200, 0.0), Vec2::new(1e200, 0.0));
+        assert_eq!(huge.len, 2e200);
+        let (_, plain) = m.leg_plain(Vec2::new(1e200, 0.0));
+        assert!(!plain);
+        let (leg, plain) = m.leg_plain(Vec2::new(3.0, 4.0));
+        assert!(plain);
+        assert_eq!(leg, m.leg_along(Vec2::new(3.0, 4.0)));
+    }
+
+    /// The lower bounds hold every leg between random points of two random boxes, and
+    /// are reached by the boxes' nearest points.
+    #[test]
+    fn the_least_time_bounds_every_leg() {
+        let mut rng = SplitMix64(0xb0c5);
+        for _ in 0..300 {
+            let corner = |rng: &mut SplitMix64| {
+                let (p, q) = (point(rng), point(rng));
+                Aabb::from_points(p.to_point(), (p + (q - p) * 0.3).to_point())
+            };
+            let (from, to) = (corner(&mut rng), corner(&mut rng));
+            let m = Uniform::new(0.5 + rng.next_f64());
+            let bound = m.least_time(from, to);
+            assert!(bound >= 0.0);
+            let at = |b: Aabb, rng: &mut SplitMix64| {
+                Point::new(
+                    b.min.x + rng.next_f64() * (b.max.x - b.min.x),
+                    b.min.y + rng.next_f64() * (b.max.y - b.min.y),
+                )
+            };
+            for _ in 0..20 {
+                let (a, b) = (at(from, &mut rng), at(to, &mut rng));
+                let leg = m.leg(a.to_vec2(), b.to_vec2());
+                assert!(
+                    leg.time() >= bound * (1.0 - 1e-12),
+                    "{} < {bound}",
+                    leg.time()
+                );
+                assert!(leg.time() >= m.least_time_to(from, b) * (1.0 - 1e-12));
+            }
+            // The nearest points, axis by axis: the facing ends where the boxes' ranges are
+            // apart, one shared coordinate where they overlap. The bound is their leg's time.
+            let nearest = |a: [f64; 2], b: [f64; 2]| {
+                if a[1] < b[0] {
+                    (a[1], b[0])
+                } else if b[1] < a[0] {
+                    (a[0], b[1])
+                } else {
+                    (a[0].max(b[0]), a[0].max(b[0]))
+                }
+            };
+            let (xa, xb) = nearest([from.min.x, from.max.x], [to.min.x, to.max.x]);
+            let (ya, yb) = nearest([from.min.y, from.max.y], [to.min.y, to.max.y]);
+            let leg = m.leg(Vec2::new(xa, ya), Vec2::new(xb, yb));
+            assert!(
+                (leg.time() - bound).abs() <= 1e-14 * (1.0 + bound),
+                "{} {bound}",
+                leg.time()
+            );
+        }
+    }
+}
