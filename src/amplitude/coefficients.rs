@@ -51,16 +51,55 @@ impl Weights {
     #[inline(always)]
     pub(crate) fn reflection(self, cos1: f64, cos2: Complex64) -> Complex64 {
         let (a, b) = (self.a * cos1, cos2 * self.b);
-        if cos2.im == 0.0 {
-            return Complex64::new((a - b.re) / (a + b.re), 0.0);
+        let r = if cos2.im == 0.0 {
+            Complex64::new((a - b.re) / (a + b.re), 0.0)
+        } else {
+            (a - b) / (a + b)
+        };
+        if r.re.is_finite() && r.im.is_finite() {
+            return r;
         }
+        self.reflection_scaled(cos1, cos2)
+    }
+
+    /// [`reflection`](Self::reflection) where its products overflow or underflow (media whose
+    /// impedances or speeds differ by far more than any material's): the weights divided by
+    /// the larger, then both terms by the larger term. Out of line; never taken where the
+    /// direct form has a number.
+    #[cold]
+    #[inline(never)]
+    fn reflection_scaled(self, cos1: f64, cos2: Complex64) -> Complex64 {
+        let big = self.a.max(self.b);
+        let a = self.a / big * cos1;
+        let b = cos2 * (self.b / big);
+        let size = a.abs().max(b.re.abs()).max(b.im.abs());
+        let (a, b) = (a / size, b / size);
         (a - b) / (a + b)
     }
 
     /// The transmission coefficient for `cos θ₁` and a real `cos θ₂` (a refracted ray).
     #[inline(always)]
     pub(crate) fn transmission(self, cos1: f64, cos2: f64) -> f64 {
-        2.0 * self.n * cos1 / (self.a * cos1 + self.b * cos2)
+        let t = 2.0 * self.n * cos1 / (self.a * cos1 + self.b * cos2);
+        if t.is_finite() {
+            return t;
+        }
+        self.transmission_scaled(cos1, cos2)
+    }
+
+    /// [`transmission`](Self::transmission) where its products overflow or underflow, as
+    /// [`reflection_scaled`](Self::reflection_scaled).
+    #[cold]
+    #[inline(never)]
+    fn transmission_scaled(self, cos1: f64, cos2: f64) -> f64 {
+        let big = self.a.max(self.b).max(self.n);
+        let (a, b, n) = (
+            self.a / big * cos1,
+            self.b / big * cos2,
+            self.n / big * cos1,
+        );
+        let size = a.abs().max(b.abs());
+        2.0 * (n / size) / (a / size + b / size)
     }
 }
 
@@ -72,8 +111,11 @@ pub(crate) fn cos_across(speed_ratio: f64, sin1_squared: f64) -> Complex64 {
     let q2 = speed_ratio * speed_ratio * sin1_squared;
     if q2 <= 1.0 {
         Complex64::new((1.0 - q2).sqrt(), 0.0)
-    } else {
+    } else if q2 < f64::INFINITY {
         Complex64::new(0.0, (q2 - 1.0).sqrt())
+    } else {
+        // (c₂/c₁)² overflows (speeds 1e±100 apart): √(q² − 1) is q to every digit.
+        Complex64::new(0.0, speed_ratio * sin1_squared.sqrt())
     }
 }
 
