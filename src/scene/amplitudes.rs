@@ -280,7 +280,7 @@ fn on_axis(source: SourceModel, k: usize, p: Point) -> Result<(), SceneError> {
 /// media are of one kind: the scene's validation refuses a mix before this).
 struct MediaAmplitudes {
     density: Vec<f64>,
-    /// dB per unit length; NaN where given per wavelength until the frequency is known.
+    /// dB per unit length (at the frequency, where given per wavelength).
     attenuation: Vec<f64>,
     attenuation_per_wavelength: Vec<Option<f64>>,
     waves: Waves,
