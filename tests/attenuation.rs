@@ -348,7 +348,7 @@ fn medium_updates_move_an_attenuation_per_wavelength() {
     assert_eq!(amplitudes(&s), amplitudes(&fresh));
 
     // The same through a tracer.
-    let mut tracer = Tracer::new(&scene(&layered("0.002", per_wavelength))).unwrap();
+    let mut tracer = Tracer::new(scene(&layered("0.002", per_wavelength))).unwrap();
     tracer.set_medium_speed(sediment, 1650.0).unwrap();
     let want: Vec<_> = Tracer::new(&fresh).unwrap().trace_all();
     let got = tracer.trace_all();

@@ -322,7 +322,7 @@ pub(super) fn per_unit_length(
     } else {
         a * frequency / value
     };
-    if !(db <= MAX_ATTENUATION) {
+    if db.is_nan() || db > MAX_ATTENUATION {
         return Err(SceneError::new(
             key(),
             format!(
