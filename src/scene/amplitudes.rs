@@ -91,7 +91,7 @@ struct PerWavelengthDocument {
 #[derive(Deserialize)]
 #[serde(
     untagged,
-    expecting = "an attenuation: a number of dB per unit length, or {\"db_per_wavelength\": a}"
+    expecting = "expected a number (dB per unit length) or {\"db_per_wavelength\": a}"
 )]
 enum AttenuationDocument {
     Number(f64),
