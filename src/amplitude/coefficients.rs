@@ -51,24 +51,23 @@ impl Weights {
     #[inline(always)]
     pub(crate) fn reflection(self, cos1: f64, cos2: Complex64) -> Complex64 {
         let (a, b) = (self.a * cos1, cos2 * self.b);
-        let r = if cos2.im == 0.0 {
-            Complex64::new((a - b.re) / (a + b.re), 0.0)
-        } else {
-            (a - b) / (a + b)
-        };
+        if cos2.im == 0.0 {
+            return Complex64::new((a - b.re) / (a + b.re), 0.0);
+        }
+        let r = (a - b) / (a + b);
         if r.re.is_finite() && r.im.is_finite() {
             return r;
         }
-        self.reflection_scaled(cos1, cos2)
+        self.evanescent_scaled(cos1, cos2)
     }
 
-    /// [`reflection`](Self::reflection) where its products overflow or underflow (media whose
-    /// impedances or speeds differ by far more than any material's): the weights divided by
-    /// the larger, then both terms by the larger term. Out of line; never taken where the
-    /// direct form has a number.
+    /// [`reflection`](Self::reflection) beyond the critical angle where its products
+    /// overflow (media whose impedances and speeds differ by far more than any material's):
+    /// the weights divided by the larger, then both terms by the larger term. Out of line;
+    /// never taken where the direct form has a number.
     #[cold]
     #[inline(never)]
-    fn reflection_scaled(self, cos1: f64, cos2: Complex64) -> Complex64 {
+    fn evanescent_scaled(self, cos1: f64, cos2: Complex64) -> Complex64 {
         let big = self.a.max(self.b);
         let a = self.a / big * cos1;
         let b = cos2 * (self.b / big);
@@ -80,26 +79,7 @@ impl Weights {
     /// The transmission coefficient for `cos θ₁` and a real `cos θ₂` (a refracted ray).
     #[inline(always)]
     pub(crate) fn transmission(self, cos1: f64, cos2: f64) -> f64 {
-        let t = 2.0 * self.n * cos1 / (self.a * cos1 + self.b * cos2);
-        if t.is_finite() {
-            return t;
-        }
-        self.transmission_scaled(cos1, cos2)
-    }
-
-    /// [`transmission`](Self::transmission) where its products overflow or underflow, as
-    /// [`reflection_scaled`](Self::reflection_scaled).
-    #[cold]
-    #[inline(never)]
-    fn transmission_scaled(self, cos1: f64, cos2: f64) -> f64 {
-        let big = self.a.max(self.b).max(self.n);
-        let (a, b, n) = (
-            self.a / big * cos1,
-            self.b / big * cos2,
-            self.n / big * cos1,
-        );
-        let size = a.abs().max(b.abs());
-        2.0 * (n / size) / (a / size + b / size)
+        2.0 * self.n * cos1 / (self.a * cos1 + self.b * cos2)
     }
 }
 
