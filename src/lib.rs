@@ -100,8 +100,9 @@ pub use trace::{Arrival, InitialGuess, Ray, RayRecord, Reason, Status, Tracer, W
 /// scenes written in code or read with serde.
 pub mod spec {
     pub use crate::scene::{
-        AmplitudesSpec, ImpulseResponseSpec, InterfaceSpec, MediumSpec, PathSpec, Polarization,
-        ReflectionSpec, SceneSpec, SearchSpec, SolverSpec, SourceModel, StationaryMode, StepSpec,
+        AmplitudesSpec, AttenuationSpec, ImpulseResponseSpec, InterfaceSpec, MediumSpec, PathSpec,
+        Polarization, ReflectionSpec, SceneSpec, SearchSpec, SolverSpec, SourceModel,
+        StationaryMode, StepSpec,
     };
 }
 
@@ -155,7 +156,7 @@ pub mod limits {
     pub use crate::control::{MAX_INPUT_BYTES, available_memory, fits_in_memory, read_limited};
     pub use crate::scene::{
         DEFAULT_MAX_ITERATIONS, DEFAULT_MAX_WORK, DEFAULT_TOLERANCE, FALLBACK_MAX_WORK,
-        MAX_COORDINATE, MAX_ITERATIONS_LIMIT, MAX_SEARCH_STEPS, MAX_SPEED_RATIO,
+        MAX_ATTENUATION, MAX_COORDINATE, MAX_ITERATIONS_LIMIT, MAX_SEARCH_STEPS, MAX_SPEED_RATIO,
         MAX_STATIONARY_STEPS, MAX_WORK_LIMIT, MIN_COORDINATE, REGION_RANGE_BITS,
     };
     pub use crate::scene::{DEFAULT_TAPS, MAX_RATE, MAX_SAMPLES, MAX_TAPS};

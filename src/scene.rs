@@ -18,7 +18,8 @@ mod names;
 mod update;
 
 pub use amplitudes::{
-    Amplitudes, AmplitudesSpec, Polarization, Reflection, ReflectionSpec, SourceModel, Waves,
+    Amplitudes, AmplitudesSpec, AttenuationSpec, MAX_ATTENUATION, Polarization, Reflection,
+    ReflectionSpec, SourceModel, Waves,
 };
 pub use builder::SceneBuilder;
 pub use impulse::{
@@ -225,9 +226,10 @@ pub struct MediumSpec {
     /// Density (> 0, default 1): with the speed, the impedance ρc (amplitudes).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub density: Option<f64>,
-    /// Attenuation in dB per unit length (≥ 0, default 0; amplitudes).
+    /// Attenuation (default none; amplitudes): dB per unit length, or dB per wavelength at the
+    /// scene's `amplitudes.frequency`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub attenuation: Option<f64>,
+    pub attenuation: Option<AttenuationSpec>,
 }
 
 /// An interface polyline.

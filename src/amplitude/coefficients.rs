@@ -54,6 +54,25 @@ impl Weights {
         if cos2.im == 0.0 {
             return Complex64::new((a - b.re) / (a + b.re), 0.0);
         }
+        let r = (a - b) / (a + b);
+        if r.re.is_finite() && r.im.is_finite() {
+            return r;
+        }
+        self.evanescent_scaled(cos1, cos2)
+    }
+
+    /// [`reflection`](Self::reflection) beyond the critical angle where its products
+    /// overflow (media whose impedances and speeds differ by far more than any material's):
+    /// the weights divided by the larger, then both terms by the larger term. Out of line;
+    /// never taken where the direct form has a number.
+    #[cold]
+    #[inline(never)]
+    fn evanescent_scaled(self, cos1: f64, cos2: Complex64) -> Complex64 {
+        let big = self.a.max(self.b);
+        let a = self.a / big * cos1;
+        let b = cos2 * (self.b / big);
+        let size = a.abs().max(b.re.abs()).max(b.im.abs());
+        let (a, b) = (a / size, b / size);
         (a - b) / (a + b)
     }
 
@@ -72,8 +91,11 @@ pub(crate) fn cos_across(speed_ratio: f64, sin1_squared: f64) -> Complex64 {
     let q2 = speed_ratio * speed_ratio * sin1_squared;
     if q2 <= 1.0 {
         Complex64::new((1.0 - q2).sqrt(), 0.0)
-    } else {
+    } else if q2 < f64::INFINITY {
         Complex64::new(0.0, (q2 - 1.0).sqrt())
+    } else {
+        // (c₂/c₁)² overflows (speeds 1e±100 apart): √(q² − 1) is q to every digit.
+        Complex64::new(0.0, speed_ratio * sin1_squared.sqrt())
     }
 }
 

@@ -234,10 +234,13 @@ fn finish(cx: Context<'_>, points: &[Point], walk: &Walk) -> Amplitude {
             (k0, 1.0 / (8.0 * PI).sqrt())
         }
     };
-    let spreading = (walk.tube_num / (walk.tube_den * out)).sqrt() * scale;
-    // A degenerate tube gives 0, ∞ or NaN.
+    let mut spreading = (walk.tube_num / (walk.tube_den * out)).sqrt() * scale;
     if !positive_finite(spreading) {
-        return Amplitude::none(NoAmplitude::Caustic);
+        // A degenerate tube gives 0, ∞ or NaN; so does a product that overflows.
+        spreading = spreading_scaled(walk.tube_num, walk.tube_den, out, scale);
+        if !positive_finite(spreading) {
+            return Amplitude::none(NoAmplitude::Caustic);
+        }
     }
     if let Some(step) = walk.converted {
         // The geometry's spreading and the attenuation, but no coefficient.
@@ -269,6 +272,16 @@ fn finish(cx: Context<'_>, points: &[Point], walk: &Walk) -> Amplitude {
         attenuation_db: walk.attenuation_db,
         reason: None,
     }
+}
+
+/// The spreading `√(num / (den · out)) · scale` with each factor's square root taken first,
+/// for the tube whose product `den · out` overflows or underflows (media whose speeds differ
+/// by far more than any material's): out of line, never taken where the direct form has a
+/// number.
+#[cold]
+#[inline(never)]
+fn spreading_scaled(num: f64, den: f64, out: f64, scale: f64) -> f64 {
+    num.sqrt() / den.sqrt() / out.sqrt() * scale
 }
 
 /// Whether `x` is a positive finite number, in one integer comparison of its bits (the

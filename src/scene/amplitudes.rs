@@ -1,9 +1,15 @@
 //! The scene's amplitude keys (`media.*.density`, `media.*.attenuation`,
 //! `interfaces.*.reflection`, `amplitudes`): their specs, constructors and validation.
 
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::{InterfaceSpec, MediumSpec, Point, Scene, SceneError, SceneSpec, positive};
+
+/// The largest attenuation a medium may have, in dB per unit length (given so, or per
+/// wavelength at the scene's frequency): with coordinates within
+/// [`MAX_COORDINATE`](super::MAX_COORDINATE), a path's attenuation in dB stays a finite
+/// number, however many legs it has.
+pub const MAX_ATTENUATION: f64 = 1e100;
 
 /// What the scene's plane is a section of (`amplitudes.source`), which fixes how a ray tube
 /// spreads out of the plane.
@@ -62,6 +68,59 @@ pub enum ReflectionSpec {
     Media,
 }
 
+/// A medium's attenuation (`media.*.attenuation`): a number of dB per unit length, or
+/// `{"db_per_wavelength": a}` as sediment tables give it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AttenuationSpec {
+    /// dB per unit length, frequency independent (`"attenuation": 0.5`).
+    DbPerLength(f64),
+    /// dB per wavelength (`{"db_per_wavelength": a}`): `a·f/c` dB per unit length at the
+    /// scene's `amplitudes.frequency` `f`, with the medium's speed `c` (`a·f·n` for a medium
+    /// of index `n`, whose wavelength is `1/(n f)` with `c = 1`).
+    DbPerWavelength(f64),
+}
+
+/// The object form of an attenuation, `{"db_per_wavelength": a}`.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PerWavelengthDocument {
+    db_per_wavelength: f64,
+}
+
+/// An attenuation as the document writes it.
+#[derive(Deserialize)]
+#[serde(
+    untagged,
+    expecting = "expected a number (dB per unit length) or {\"db_per_wavelength\": a}"
+)]
+enum AttenuationDocument {
+    Number(f64),
+    PerWavelength(PerWavelengthDocument),
+}
+
+impl Serialize for AttenuationSpec {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match *self {
+            AttenuationSpec::DbPerLength(a) => s.serialize_f64(a),
+            AttenuationSpec::DbPerWavelength(a) => PerWavelengthDocument {
+                db_per_wavelength: a,
+            }
+            .serialize(s),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for AttenuationSpec {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<AttenuationSpec, D::Error> {
+        Ok(match AttenuationDocument::deserialize(d)? {
+            AttenuationDocument::Number(a) => AttenuationSpec::DbPerLength(a),
+            AttenuationDocument::PerWavelength(p) => {
+                AttenuationSpec::DbPerWavelength(p.db_per_wavelength)
+            }
+        })
+    }
+}
+
 /// The `amplitudes` section: ask every timed ray for its amplitude.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -117,7 +176,17 @@ impl MediumSpec {
     /// default 0).
     pub fn attenuation(self, db_per_length: f64) -> MediumSpec {
         MediumSpec {
-            attenuation: Some(db_per_length),
+            attenuation: Some(AttenuationSpec::DbPerLength(db_per_length)),
+            ..self
+        }
+    }
+
+    /// The same medium with an attenuation in dB per wavelength
+    /// (`"attenuation": {"db_per_wavelength": 0.5}`), which needs the scene's
+    /// `amplitudes.frequency`.
+    pub fn attenuation_per_wavelength(self, db_per_wavelength: f64) -> MediumSpec {
+        MediumSpec {
+            attenuation: Some(AttenuationSpec::DbPerWavelength(db_per_wavelength)),
             ..self
         }
     }
@@ -166,8 +235,13 @@ pub struct Amplitudes {
     pub waves: Waves,
     /// Each medium's density, in the order of [`Scene::media`] (1 where not given).
     pub density: Vec<f64>,
-    /// Each medium's attenuation in dB per unit length (0 where not given).
+    /// Each medium's attenuation in dB per unit length (0 where not given; at
+    /// [`frequency`](Self::frequency) where given per wavelength).
     pub attenuation: Vec<f64>,
+    /// Each medium's attenuation in dB per wavelength where the document gives it so
+    /// (`{"db_per_wavelength": a}`), else `None`: a change of the medium's speed changes its
+    /// [`attenuation`](Self::attenuation).
+    pub attenuation_per_wavelength: Vec<Option<f64>>,
     /// Whether some medium attenuates.
     pub attenuates: bool,
     /// Each interface's reflection law, in the order of [`Scene::interfaces`].
@@ -206,15 +280,72 @@ fn on_axis(source: SourceModel, k: usize, p: Point) -> Result<(), SceneError> {
 /// media are of one kind: the scene's validation refuses a mix before this).
 struct MediaAmplitudes {
     density: Vec<f64>,
+    /// dB per unit length (at the frequency, where given per wavelength).
     attenuation: Vec<f64>,
+    attenuation_per_wavelength: Vec<Option<f64>>,
     waves: Waves,
 }
 
-/// The media's amplitude keys, checked whether or not the scene asks for amplitudes.
-fn media_amplitudes(spec: &SceneSpec) -> Result<MediaAmplitudes, SceneError> {
+/// An attenuation at `key` as given: a finite number from 0 to [`MAX_ATTENUATION`], in
+/// `unit`.
+fn attenuation_value(key: String, a: f64, unit: &str) -> Result<f64, SceneError> {
+    if !(a.is_finite() && a >= 0.0) {
+        return Err(SceneError::new(
+            key,
+            format!("must be a finite number ≥ 0 ({unit})"),
+        ));
+    }
+    if a > MAX_ATTENUATION {
+        return Err(SceneError::new(
+            key,
+            format!(
+                "must be at most {MAX_ATTENUATION:e} ({unit}; more would make a path's \
+                 attenuation in dB overflow)"
+            ),
+        ));
+    }
+    Ok(a)
+}
+
+/// The dB per unit length of an attenuation of `a` dB per wavelength at `frequency` in a
+/// medium of speed `value` (or of index `value`, when `index`): `a·f/c` (or `a·f·n`), refused
+/// at `key` above [`MAX_ATTENUATION`].
+pub(super) fn per_unit_length(
+    key: impl FnOnce() -> String,
+    a: f64,
+    frequency: f64,
+    index: bool,
+    value: f64,
+) -> Result<f64, SceneError> {
+    let db = if index {
+        a * frequency * value
+    } else {
+        a * frequency / value
+    };
+    if db.is_nan() || db > MAX_ATTENUATION {
+        return Err(SceneError::new(
+            key(),
+            format!(
+                "{a:e} dB per wavelength at {frequency:e} Hz is {db:e} dB per unit length in \
+                 this medium, more than {MAX_ATTENUATION:e} (a path's attenuation in dB would \
+                 overflow)"
+            ),
+        ));
+    }
+    Ok(db)
+}
+
+/// The media's amplitude keys, checked whether or not the scene asks for amplitudes; an
+/// attenuation per wavelength is turned into dB per unit length at `frequency`, and refused
+/// without one.
+fn media_amplitudes(
+    spec: &SceneSpec,
+    frequency: Option<f64>,
+) -> Result<MediaAmplitudes, SceneError> {
     let mut out = MediaAmplitudes {
         density: Vec::with_capacity(spec.media.len()),
         attenuation: Vec::with_capacity(spec.media.len()),
+        attenuation_per_wavelength: Vec::with_capacity(spec.media.len()),
         waves: match spec.media.values().next() {
             Some(m) if m.index.is_some() => Waves::Optics,
             _ => Waves::Fluid,
@@ -226,16 +357,33 @@ fn media_amplitudes(spec: &SceneSpec) -> Result<MediaAmplitudes, SceneError> {
             Some(d) => positive(format!("{key}.density"), d)?,
             None => 1.0,
         });
-        out.attenuation.push(match m.attenuation {
-            Some(a) if !(a.is_finite() && a >= 0.0) => {
-                return Err(SceneError::new(
-                    format!("{key}.attenuation"),
-                    "must be a finite number ≥ 0 (dB per unit length)",
-                ));
+        let (db, per_wavelength) = match m.attenuation {
+            None => (0.0, None),
+            Some(AttenuationSpec::DbPerLength(a)) => (
+                attenuation_value(format!("{key}.attenuation"), a, "dB per unit length")?,
+                None,
+            ),
+            Some(AttenuationSpec::DbPerWavelength(a)) => {
+                let at = format!("{key}.attenuation.db_per_wavelength");
+                let a = attenuation_value(at.clone(), a, "dB per wavelength")?;
+                let Some(f) = frequency else {
+                    return Err(SceneError::new(
+                        format!("{key}.attenuation"),
+                        "is given per wavelength, which needs the frequency: give \
+                         `amplitudes.frequency` (Hz), or the attenuation in dB per unit length",
+                    ));
+                };
+                let (index, value) = match (m.index, m.speed) {
+                    (Some(n), _) => (true, n),
+                    (None, Some(c)) => (false, c),
+                    // The scene's validation has refused a medium without either.
+                    (None, None) => (false, f64::NAN),
+                };
+                (per_unit_length(|| at, a, f, index, value)?, Some(a))
             }
-            Some(a) => a,
-            None => 0.0,
-        });
+        };
+        out.attenuation.push(db);
+        out.attenuation_per_wavelength.push(per_wavelength);
     }
     Ok(out)
 }
@@ -295,21 +443,14 @@ pub(super) fn validate(
     sources: &[Point],
     needs_regions: bool,
 ) -> Result<Option<Amplitudes>, SceneError> {
-    let media = media_amplitudes(spec)?;
+    let frequency = match &spec.amplitudes {
+        Some(a) => frequency_of(a)?,
+        None => None,
+    };
+    let media = media_amplitudes(spec, frequency)?;
     let reflection = reflections(spec, spec.amplitudes.is_some(), needs_regions)?;
     let Some(a) = &spec.amplitudes else {
         return Ok(None);
-    };
-    let frequency = match a.frequency {
-        Some(f) => Some(positive("amplitudes.frequency".into(), f)?),
-        None if a.source == SourceModel::Line => {
-            return Err(SceneError::new(
-                "amplitudes.frequency",
-                "missing: a line source's amplitude depends on the frequency (give it in Hz, \
-                 with the scene's time unit s)",
-            ));
-        }
-        None => None,
     };
     let waves = media.waves;
     for (k, &p) in sources.iter().enumerate() {
@@ -323,7 +464,21 @@ pub(super) fn validate(
         waves,
         density: media.density,
         attenuation: media.attenuation,
+        attenuation_per_wavelength: media.attenuation_per_wavelength,
         attenuates,
         reflection,
     }))
+}
+
+/// The section's frequency, checked: needed for a line source.
+fn frequency_of(a: &AmplitudesSpec) -> Result<Option<f64>, SceneError> {
+    match a.frequency {
+        Some(f) => Ok(Some(positive("amplitudes.frequency".into(), f)?)),
+        None if a.source == SourceModel::Line => Err(SceneError::new(
+            "amplitudes.frequency",
+            "missing: a line source's amplitude depends on the frequency (give it in Hz, \
+             with the scene's time unit s)",
+        )),
+        None => Ok(None),
+    }
 }

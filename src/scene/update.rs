@@ -2,6 +2,7 @@
 //! interface's vertices, a medium's speed. Each is validated as the scene document is (the
 //! same checks, the same keys and messages), and a refused edit leaves the scene as it was.
 
+use super::amplitudes::per_unit_length;
 use super::{
     Bvh, Interface, Point, Polyline, Scene, SceneError, SegmentRef, at_off_interfaces,
     check_region_range, crossings, index_segments, interface_polyline, one_kind_of_medium, point,
@@ -223,7 +224,8 @@ impl Scene {
 
     /// Gives medium `medium` (an index into [`media`](Self::media); see
     /// [`medium_index`](Self::medium_index)) the speed `speed`, checked as
-    /// `media.NAME.speed` of a scene document.
+    /// `media.NAME.speed` of a scene document. An attenuation the document gives per
+    /// wavelength follows the speed (`a·f/c` dB per unit length).
     ///
     /// # Errors
     /// `media` for an index out of range, or the problem with the speed; the scene is then
@@ -259,6 +261,17 @@ impl Scene {
                 "slowness (1 / speed) is not a finite positive number",
             ));
         }
+        // An attenuation given per wavelength, in dB per unit length at the new speed.
+        let per_length = match &self.amplitudes {
+            Some(a) => match (a.attenuation_per_wavelength[medium], a.frequency) {
+                (Some(per), Some(f)) => {
+                    let key = || format!("media.{}.{what}", m.name);
+                    Some(per_unit_length(key, per, f, index, value)?)
+                }
+                _ => None,
+            },
+            None => None,
+        };
         // The document's check of kinds, on the media as they would be.
         let was = m.index;
         m.index = index;
@@ -267,6 +280,10 @@ impl Scene {
             return Err(e);
         }
         self.media[medium].slowness = slowness;
+        if let (Some(db), Some(a)) = (per_length, &mut self.amplitudes) {
+            a.attenuation[medium] = db;
+            a.attenuates = a.attenuation.iter().any(|&db| db > 0.0);
+        }
         self.document
             .set_medium_value(&self.media[medium].name, index, value);
         Ok(())
