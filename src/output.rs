@@ -1141,11 +1141,7 @@ fn write_rays_and_arrivals<W: Write>(
                     media: (!r.media.is_empty()).then(|| r.media.iter().copied()),
                     reason: r.reason,
                     every: None,
-                    values: Entry {
-                        timed: r.status.has_time(),
-                        amplitude: r.amplitude.as_ref(),
-                        gradient: None,
-                    },
+                    values: Entry::of_ray(r),
                 }
             },
         ),
@@ -1176,11 +1172,7 @@ fn write_rays_and_arrivals<W: Write>(
                     media: batch.media(i),
                     reason: r.reason,
                     every: None,
-                    values: Entry {
-                        timed: has,
-                        amplitude: batch.amplitude(i),
-                        gradient: None,
-                    },
+                    values: Entry::of_batch(batch, i),
                 }
             },
         ),
@@ -1212,11 +1204,7 @@ fn write_rays_and_arrivals<W: Write>(
                             kink: e.kink,
                             complete: e.complete,
                         }),
-                        values: Entry {
-                            timed: e.record.status.has_time(),
-                            amplitude: e.amplitude,
-                            gradient: None,
-                        },
+                        values: Entry::of_stationary(e),
                     }
                 },
             )
@@ -1248,11 +1236,10 @@ fn arrivals_npy_header(n: usize, schema: &Schema, context: &Context<'_>) -> Vec<
 }
 
 /// What the quantities of a search arrival are read from, with its gradient `gradient`.
-fn arrival_values<'a>(s: &'a SearchArrival, gradient: Option<&'a Gradient>) -> Entry<'a> {
+fn arrival_values<'a>(s: &SearchArrival, gradient: Option<&'a Gradient>) -> Entry<'a> {
     Entry {
-        timed: true,
-        amplitude: s.arrival.amplitude.as_ref(),
         gradient,
+        ..Entry::of_search(s)
     }
 }
 

@@ -16,8 +16,13 @@ use num_complex::Complex64;
 
 use super::{AMPLITUDE_NOT_COMPUTED, Names, csv_field, float, json_string};
 use crate::amplitude::{Amplitude, NoAmplitude};
+use crate::batch::Batch;
 use crate::derivatives::Gradient;
-use crate::scene::Scene;
+use crate::geom::Point;
+use crate::scene::{Scene, Step};
+use crate::search::SearchArrival;
+use crate::stationary::StationaryEntry;
+use crate::trace::{Arrival, Ray, RayRecord, Status, Tracer, Workspace};
 
 /// How a column holds one entry's value.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -98,17 +103,95 @@ pub enum Cell {
 }
 
 /// What the quantities of one entry (a ray, a stationary path, a search arrival) are read
-/// from: each quantity's value where it was computed.
+/// from: each quantity's value where it was computed. Made by its constructors from each
+/// kind of result (and by [`Entry::computed`] and [`Entry::solved`] for a ray just solved),
+/// the one place that reads a quantity off the results.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Entry<'a> {
     /// Whether the entry has a time (a quantity is written only for timed entries in JSON,
     /// and its CSV cells are empty without).
     pub timed: bool,
     /// Its amplitude, when computed.
-    pub amplitude: Option<&'a Amplitude>,
+    pub amplitude: Option<Amplitude>,
     /// Its time's gradient, when computed (the writer computes it; the Python package has
     /// `Tracer.gradients` for it).
     pub gradient: Option<&'a Gradient>,
+}
+
+impl Entry<'static> {
+    /// The quantities of a ray.
+    pub fn of_ray(ray: &Ray) -> Self {
+        Entry {
+            timed: ray.status.has_time(),
+            amplitude: ray.amplitude,
+            gradient: None,
+        }
+    }
+
+    /// The quantities of ray `i` of a batch.
+    pub fn of_batch(batch: &Batch, i: usize) -> Self {
+        Entry {
+            timed: batch.record(i).status.has_time(),
+            amplitude: batch.amplitude(i).copied(),
+            gradient: None,
+        }
+    }
+
+    /// The quantities of a stationary path.
+    pub fn of_arrival(arrival: &Arrival) -> Self {
+        Entry {
+            timed: arrival.status.has_time(),
+            amplitude: arrival.amplitude,
+            gradient: None,
+        }
+    }
+
+    /// The quantities of an entry of every stationary path (a stationary path, or a triple
+    /// without one).
+    pub fn of_stationary(entry: &StationaryEntry<'_>) -> Self {
+        Entry {
+            timed: entry.record.status.has_time(),
+            amplitude: entry.amplitude.copied(),
+            gradient: None,
+        }
+    }
+
+    /// The quantities of a search arrival (every one has a time).
+    pub fn of_search(arrival: &SearchArrival) -> Self {
+        Entry {
+            timed: true,
+            amplitude: arrival.arrival.amplitude,
+            gradient: None,
+        }
+    }
+
+    /// The quantities `tracer`'s scene asks for of a ray of `steps` that ended with
+    /// `status` at `points` through the leg media `media` (`&[]` where unknown), computed
+    /// from them: what a batch's sink writes beside each ray.
+    #[inline]
+    pub fn computed(
+        tracer: &Tracer,
+        steps: &[Step],
+        status: Status,
+        points: &[Point],
+        media: &[usize],
+    ) -> Self {
+        Entry {
+            timed: status.has_time(),
+            amplitude: tracer.amplitude_of(steps, status, points, media),
+            gradient: None,
+        }
+    }
+
+    /// The quantities `tracer`'s scene asks for of the ray of path `path` last solved in
+    /// `ws`, which ended as `record`.
+    pub fn solved(tracer: &Tracer, path: usize, record: &RayRecord, ws: &Workspace) -> Self {
+        Entry {
+            timed: record.status.has_time(),
+            amplitude: tracer.amplitude(path, record, ws),
+            gradient: None,
+        }
+    }
 }
 
 /// What a writer knows besides the entry: the scene, its names, the most steps of a record.
@@ -406,7 +489,7 @@ impl Quantity for AmplitudeQuantity {
 
     fn cells(&self, entry: &Entry<'_>, each: &mut dyn FnMut(Cell)) {
         let (a, why) = match entry.amplitude {
-            Some(a) => (*a, a.reason.map_or(Why::Value, Why::Because)),
+            Some(a) => (a, a.reason.map_or(Why::Value, Why::Because)),
             None => (
                 Amplitude::none(NoAmplitude::UnknownMedia),
                 if entry.timed {
