@@ -178,7 +178,7 @@ impl QuantityArrays {
             let Some(first) = group.first() else {
                 continue;
             };
-            if !state.get_item(first.name)?.is_some_and(|v| !v.is_none()) {
+            if state.get_item(first.name)?.is_none_or(|v| v.is_none()) {
                 continue;
             }
             for column in group {

@@ -557,3 +557,129 @@ impl Quantity for GradientQuantity {
         32 * scene.media().len() + 96 * 2 * steps.unwrap_or(0)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Entries of every kind a quantity meets: without a time, timed without a computed
+    /// value, with a value, and with a reason.
+    fn entries() -> Vec<Entry<'static>> {
+        let value = Amplitude {
+            value: Complex64::new(0.25, -0.5),
+            spreading: 0.5,
+            coefficient: Complex64::new(0.5, -1.0),
+            attenuation_db: 0.0,
+            reason: None,
+        };
+        let none = Amplitude::none(NoAmplitude::Caustic);
+        let mut out = Vec::new();
+        for timed in [false, true] {
+            for amplitude in [None, Some(value), Some(none)] {
+                out.push(Entry {
+                    timed,
+                    amplitude,
+                    gradient: None,
+                });
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn every_quantity_gives_one_cell_of_its_type_per_column() {
+        for q in QUANTITIES {
+            for entry in entries() {
+                let mut types = Vec::new();
+                q.cells(&entry, &mut |cell| {
+                    types.push(match cell {
+                        Cell::Float(_) => ColumnType::Float,
+                        Cell::Complex(_) => ColumnType::Complex,
+                        Cell::Why(_) => ColumnType::Why,
+                    });
+                });
+                let want: Vec<ColumnType> = q.columns().iter().map(|c| c.ty).collect();
+                assert_eq!(types, want, "{:?}", q.columns());
+            }
+        }
+    }
+
+    #[test]
+    fn column_names_are_unique_and_not_an_entrys_own_fields() {
+        let own = [
+            "source",
+            "receiver",
+            "path",
+            "path_name",
+            "status",
+            "time",
+            "points",
+            "media",
+            "iterations",
+            "residual",
+            "reason",
+            "arrival",
+            "kink",
+            "complete",
+            "steps",
+        ];
+        // (A quantity's CSV columns are its plain columns, or its own.)
+        let mut names: Vec<&str> = QUANTITIES.iter().flat_map(|q| q.csv_header()).collect();
+        let n = names.len();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), n, "{names:?}");
+        assert!(names.iter().all(|n| !own.contains(n)), "{names:?}");
+    }
+
+    #[test]
+    fn plain_columns_write_each_format_from_their_cells() {
+        // The amplitude's fields, written by hand from the same numbers.
+        let q = AmplitudeQuantity;
+        let scene = Scene::from_spec(&crate::demo::air_water(2, 2)).unwrap();
+        let names = Names::new(&scene);
+        let context = Context {
+            scene: &scene,
+            names: &names,
+            steps: 1,
+        };
+        let [_, _, _, _, value, none] = entries()[..] else {
+            panic!("six entries")
+        };
+        let mut json = Vec::new();
+        q.json(&mut json, &context, &value);
+        assert_eq!(
+            String::from_utf8(json).unwrap(),
+            ",\"amplitude\":[0.25,-0.5],\"spreading\":0.5,\"coefficient\":[0.5,-1.0],\
+             \"attenuation_db\":0.0"
+        );
+        let mut csv = Vec::new();
+        q.csv(&mut csv, &context, &none);
+        let mut want = b",,,,,".to_vec();
+        csv_field(&mut want, &NoAmplitude::Caustic.to_string());
+        assert_eq!(csv, want);
+        let mut npy = Vec::new();
+        q.npy(&mut npy, &context, &value);
+        let mut want = Vec::new();
+        for v in [0.25, -0.5, 0.5, 0.5, -1.0, 0.0] {
+            want.extend_from_slice(&f64::to_le_bytes(v));
+        }
+        want.push(0);
+        assert_eq!(npy, want);
+        assert_eq!(
+            q.npy_descr(&context),
+            ", ('amplitude', '<f8', (2,)), ('spreading', '<f8'), ('coefficient', '<f8', (2,)), \
+             ('attenuation_db', '<f8'), ('amplitude_reason', '|u1')"
+        );
+        // A timed entry without a computed amplitude: its code and words.
+        let [_, _, _, not_computed, _, _] = entries()[..] else {
+            panic!("six entries")
+        };
+        let mut npy = Vec::new();
+        q.npy(&mut npy, &context, &not_computed);
+        assert_eq!(npy.last(), Some(&AMPLITUDE_NOT_COMPUTED));
+        let mut csv = Vec::new();
+        q.csv(&mut csv, &context, &not_computed);
+        assert!(String::from_utf8(csv).unwrap().ends_with(NOT_COMPUTED_TEXT));
+    }
+}
