@@ -176,6 +176,12 @@ pub mod lookup {
     pub use crate::regions::{LocateHint, Regions, Sides};
 }
 
+/// The column schema of the quantities that follow a ray's or an arrival's own fields (the
+/// gradient, the amplitude): what the writers and the Python package iterate over.
+pub mod columns {
+    pub use crate::output::columns::{Cell, Column, ColumnType, Entry, Schema, Why};
+}
+
 /// The `.npy` format's fixed codes (the status and kink codes, the index marking a leg medium
 /// that was not found, the padding of an arrival's steps) and the name tables that give its
 /// indices their names ([`write_names`](npy::write_names), the `--names` sidecar).

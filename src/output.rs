@@ -12,7 +12,9 @@ use std::io::{self, Write};
 
 use rayon::prelude::*;
 
-use crate::amplitude::{Amplitude, NoAmplitude};
+pub(crate) mod columns;
+
+use self::columns::{Context, Entry, Schema};
 use crate::batch::Batch;
 use crate::derivatives::Gradient;
 use crate::geom::Point;
@@ -35,7 +37,7 @@ pub enum Format {
     /// listed at [`write()`]). A scene that asks for amplitudes adds to every timed entry
     /// (ray, stationary path or arrival) `amplitude` and `coefficient` (`[re, im]`),
     /// `spreading` and `attenuation_db` (`null` where there is no number), and
-    /// `amplitude_reason` where `amplitude` is `null` ([`Amplitude`]).
+    /// `amplitude_reason` where `amplitude` is `null` ([`Amplitude`](crate::Amplitude)).
     #[default]
     Json,
     /// One ray object per line (the same objects as in `Json`), then one line per search
@@ -136,21 +138,13 @@ fn status_code(status: Status) -> u8 {
 #[derive(Clone, Copy, Debug)]
 struct NpyShape {
     k: usize,
-    /// With the gradient fields (`"derivatives": true`): the scene's media.
-    gradient_media: Option<usize>,
-    /// With the amplitude fields (`"amplitudes"`).
-    amplitudes: bool,
 }
 
 impl NpyShape {
     /// The shape for the scene's paths.
     fn of(scene: &Scene) -> NpyShape {
         let k = scene.paths().iter().map(|p| p.steps.len()).max();
-        NpyShape {
-            k: k.unwrap_or(0),
-            gradient_media: scene.solver().derivatives.then_some(scene.media().len()),
-            amplitudes: scene.amplitudes().is_some(),
-        }
+        NpyShape { k: k.unwrap_or(0) }
     }
 
     fn points(self) -> usize {
@@ -224,8 +218,14 @@ pub fn write_f64_array<W: Write>(shape: &[usize], data: &[f64], mut out: W) -> i
 }
 
 /// The `.npy` header of `n` ray records of `shape`, with the stationary-all fields when
-/// `layout` has them.
-fn npy_header(n: usize, shape: NpyShape, layout: Layout) -> Vec<u8> {
+/// `layout` has them and the fields of the quantities of `schema`.
+fn npy_header(
+    n: usize,
+    shape: NpyShape,
+    layout: Layout,
+    schema: &Schema,
+    context: &Context<'_>,
+) -> Vec<u8> {
     let mut descr = format!(
         "('source', '<u4'), ('receiver', '<u4'), ('path', '<u4'), \
          ('status', '|u1'), ('iterations', '<u4'), ('time', '<f8'), ('residual', '<f8'), \
@@ -236,127 +236,13 @@ fn npy_header(n: usize, shape: NpyShape, layout: Layout) -> Vec<u8> {
     if layout == Layout::Stationary {
         descr.push_str(", ('arrival', '<u4'), ('kink', '|u1'), ('complete', '|u1')");
     }
-    if let Some(media) = shape.gradient_media {
-        descr.push_str(&gradient_npy_descr(media, 2 * shape.k));
-    }
-    if shape.amplitudes {
-        descr.push_str(AMPLITUDE_NPY_DESCR);
-    }
+    descr.push_str(&schema.npy_descr(context));
     npy_header_of(n, &descr)
-}
-
-/// The `.npy` fields of an amplitude (after the others).
-const AMPLITUDE_NPY_DESCR: &str = ", ('amplitude', '<f8', (2,)), ('spreading', '<f8'), \
-     ('coefficient', '<f8', (2,)), ('attenuation_db', '<f8'), ('amplitude_reason', '|u1')";
-
-/// The amplitude fields of a `.npy` record: NaN where there is no value, and the reason's
-/// code ([`NoAmplitude::code`]; 0 with a value or without a time, [`AMPLITUDE_NOT_COMPUTED`] for a
-/// timed ray whose amplitude was not computed).
-fn amplitude_npy(buf: &mut Vec<u8>, timed: bool, amplitude: Option<&Amplitude>) {
-    let nan = f64::NAN;
-    let (values, code) = match amplitude {
-        Some(a) => (
-            [
-                a.value.re,
-                a.value.im,
-                a.spreading,
-                a.coefficient.re,
-                a.coefficient.im,
-                a.attenuation_db,
-            ],
-            a.reason.map_or(0, NoAmplitude::code),
-        ),
-        None => ([nan; 6], if timed { AMPLITUDE_NOT_COMPUTED } else { 0 }),
-    };
-    for v in values {
-        buf.extend_from_slice(&v.to_le_bytes());
-    }
-    buf.push(code);
 }
 
 /// The `.npy` `amplitude_reason` of a timed ray whose amplitude was not computed (rays traced
 /// without the scene's `amplitudes`).
 pub const AMPLITUDE_NOT_COMPUTED: u8 = u8::MAX;
-
-/// The reason of a timed ray without a computed amplitude, in JSON and CSV.
-const NOT_COMPUTED_TEXT: &str = "not computed (the ray was traced without amplitudes)";
-
-/// The amplitude fields of a JSON object (each after a comma): `amplitude`, `spreading`,
-/// `coefficient`, `attenuation_db` (`null` where there is no number), and `amplitude_reason`
-/// where there is no value.
-fn amplitude_json(buf: &mut Vec<u8>, amplitude: Option<&Amplitude>) {
-    let complex = |buf: &mut Vec<u8>, c: num_complex::Complex64| {
-        if !(c.re.is_finite() && c.im.is_finite()) {
-            buf.extend_from_slice(b"null");
-            return;
-        }
-        buf.push(b'[');
-        float(buf, c.re);
-        buf.push(b',');
-        float(buf, c.im);
-        buf.push(b']');
-    };
-    let a = amplitude
-        .copied()
-        .unwrap_or(Amplitude::none(NoAmplitude::UnknownMedia));
-    buf.extend_from_slice(b",\"amplitude\":");
-    complex(buf, a.value);
-    buf.extend_from_slice(b",\"spreading\":");
-    float(buf, a.spreading);
-    buf.extend_from_slice(b",\"coefficient\":");
-    complex(buf, a.coefficient);
-    buf.extend_from_slice(b",\"attenuation_db\":");
-    float(buf, a.attenuation_db);
-    if amplitude.is_none_or(|a| a.reason.is_some()) {
-        buf.extend_from_slice(b",\"amplitude_reason\":");
-        buf.extend_from_slice(&json_string(&amplitude_reason(amplitude)));
-    }
-}
-
-/// The reason a timed ray's amplitude has no value, in words.
-fn amplitude_reason(amplitude: Option<&Amplitude>) -> String {
-    match amplitude.and_then(|a| a.reason) {
-        Some(r) => r.to_string(),
-        None => NOT_COMPUTED_TEXT.to_string(),
-    }
-}
-
-/// The five amplitude columns of a CSV line (each after a comma): `amplitude` and
-/// `coefficient` as `re im`, `spreading`, `attenuation_db`, `amplitude_reason`; all empty
-/// without a time, each number empty where there is none.
-fn amplitude_csv(buf: &mut Vec<u8>, timed: bool, amplitude: Option<&Amplitude>) {
-    if !timed {
-        buf.extend_from_slice(b",,,,,");
-        return;
-    }
-    let number = |buf: &mut Vec<u8>, v: f64| {
-        if v.is_finite() {
-            float(buf, v);
-        }
-    };
-    let complex = |buf: &mut Vec<u8>, c: num_complex::Complex64| {
-        if c.re.is_finite() && c.im.is_finite() {
-            float(buf, c.re);
-            buf.push(b' ');
-            float(buf, c.im);
-        }
-    };
-    let a = amplitude
-        .copied()
-        .unwrap_or(Amplitude::none(NoAmplitude::UnknownMedia));
-    buf.push(b',');
-    complex(buf, a.value);
-    buf.push(b',');
-    number(buf, a.spreading);
-    buf.push(b',');
-    complex(buf, a.coefficient);
-    buf.push(b',');
-    number(buf, a.attenuation_db);
-    buf.push(b',');
-    if amplitude.is_none_or(|a| a.reason.is_some()) {
-        csv_field(buf, &amplitude_reason(amplitude));
-    }
-}
 
 /// The `.npy` fields of a gradient of `media` media and `slots` vertices (after others).
 fn gradient_npy_descr(media: usize, slots: usize) -> String {
@@ -403,8 +289,9 @@ fn points_media_npy(
 fn ray_npy<M: Iterator<Item = usize>>(
     buf: &mut Vec<u8>,
     shape: NpyShape,
+    schema: &Schema,
+    context: &Context<'_>,
     r: View<'_, M>,
-    gradient: Option<&Gradient>,
 ) {
     for v in [r.source, r.receiver, r.path] {
         buf.extend_from_slice(&(v as u32).to_le_bytes());
@@ -420,12 +307,7 @@ fn ray_npy<M: Iterator<Item = usize>>(
         buf.push(kink_code(e.kink));
         buf.push(u8::from(e.complete));
     }
-    if let Some(media) = shape.gradient_media {
-        gradient_npy(buf, media, 2 * shape.k, gradient);
-    }
-    if shape.amplitudes {
-        amplitude_npy(buf, r.time.is_some(), r.amplitude);
-    }
+    schema.npy(buf, context, &r.values);
 }
 
 /// The gradient fields of a `.npy` record: NaN and [`NO_INTERFACE`] where there is none, the
@@ -499,8 +381,8 @@ struct View<'a, M: Iterator<Item = usize>> {
     reason: Option<Reason>,
     /// Present exactly in [`Layout::Stationary`].
     every: Option<EveryFields>,
-    /// Its amplitude, when computed.
-    amplitude: Option<&'a Amplitude>,
+    /// What its quantities are read from (the gradient set by the writer).
+    values: Entry<'a>,
 }
 
 /// The medium, path and interface names as each format writes them, made once per document.
@@ -515,8 +397,6 @@ struct Names {
     media_csv: Option<Vec<Vec<u8>>>,
     /// Escaped JSON strings of the interface names.
     interfaces: Vec<Vec<u8>>,
-    /// Whether the scene asks for amplitudes (and so the amplitude fields are written).
-    amplitudes: bool,
 }
 
 /// `s` as a JSON string.
@@ -594,7 +474,6 @@ impl Names {
             paths_csv,
             media_csv,
             interfaces,
-            amplitudes: scene.amplitudes().is_some(),
         }
     }
 }
@@ -641,11 +520,11 @@ fn media_json(buf: &mut Vec<u8>, names: &Names, media: impl Iterator<Item = usiz
 
 fn ray_json<M: Iterator<Item = usize>>(
     buf: &mut Vec<u8>,
-    scene: &Scene,
-    names: &Names,
+    schema: &Schema,
+    context: &Context<'_>,
     r: View<'_, M>,
-    gradient: Option<&Gradient>,
 ) {
+    let (scene, names) = (context.scene, context.names);
     buf.extend_from_slice(b"{\"source\":");
     int(buf, r.source);
     buf.extend_from_slice(b",\"receiver\":");
@@ -674,12 +553,7 @@ fn ray_json<M: Iterator<Item = usize>>(
         buf.extend_from_slice(b",\"points\":");
         points_json(buf, r.points);
     }
-    if let Some(g) = gradient {
-        gradient_json(buf, names, g);
-    }
-    if names.amplitudes && r.time.is_some() {
-        amplitude_json(buf, r.amplitude);
-    }
+    schema.json(buf, context, &r.values);
     buf.extend_from_slice(b",\"iterations\":");
     int(buf, r.iterations);
     if r.residual.is_finite() {
@@ -827,11 +701,11 @@ fn media_csv(buf: &mut Vec<u8>, scene: &Scene, names: &Names, media: impl Iterat
 
 fn ray_csv<M: Iterator<Item = usize>>(
     buf: &mut Vec<u8>,
-    scene: &Scene,
-    names: &Names,
+    schema: &Schema,
+    context: &Context<'_>,
     r: View<'_, M>,
-    gradient: Option<Option<&Gradient>>,
 ) {
+    let (scene, names) = (context.scene, context.names);
     int(buf, r.source);
     buf.push(b',');
     int(buf, r.receiver);
@@ -875,12 +749,7 @@ fn ray_csv<M: Iterator<Item = usize>>(
         buf.push(b',');
         buf.extend_from_slice(if e.complete { b"true" } else { b"false" });
     }
-    if let Some(g) = gradient {
-        gradient_csv(buf, g);
-    }
-    if names.amplitudes {
-        amplitude_csv(buf, r.time.is_some(), r.amplitude);
-    }
+    schema.csv(buf, context, &r.values);
     buf.push(b'\n');
 }
 
@@ -892,26 +761,11 @@ const CSV_HEADER: &[u8] =
 const CSV_HEADER_STATIONARY: &[u8] = b"source,receiver,path,status,time,iterations,residual,\
 points,path_name,media,reason,arrival,kink,complete\n";
 
-/// The gradient columns that follow the others in [`Format::Csv`] with `"derivatives": true`.
-const CSV_GRADIENT_COLUMNS: &[u8] =
-    b",gradient_source,gradient_receiver,gradient_slowness,gradient_vertices";
-
-/// The amplitude columns that follow the others (and the gradient's) in [`Format::Csv`] with
-/// `"amplitudes"`.
-const CSV_AMPLITUDE_COLUMNS: &[u8] =
-    b",amplitude,spreading,coefficient,attenuation_db,amplitude_reason";
-
-/// Writes the CSV header line `header` of `scene`, with the gradient columns when it asks
-/// for derivatives and the amplitude columns when it asks for amplitudes.
-fn csv_header<W: Write>(out: &mut W, header: &[u8], scene: &Scene) -> io::Result<()> {
+/// Writes the CSV header line `header`, then the columns of the quantities of `schema`.
+fn csv_header<W: Write>(out: &mut W, header: &[u8], schema: &Schema) -> io::Result<()> {
     let columns = header.strip_suffix(b"\n").unwrap_or(header);
     out.write_all(columns)?;
-    if scene.solver().derivatives {
-        out.write_all(CSV_GRADIENT_COLUMNS)?;
-    }
-    if scene.amplitudes().is_some() {
-        out.write_all(CSV_AMPLITUDE_COLUMNS)?;
-    }
+    schema.csv_header(out)?;
     out.write_all(b"\n")
 }
 
@@ -936,8 +790,9 @@ struct Window {
 impl Window {
     /// The window for `scene`'s rays: [`WINDOW`] rays, or as many as fit in [`WINDOW_BYTES`]
     /// by a bound on one ray's text. A name can take six bytes a character in JSON (`\u00xx`),
-    /// and a ray names its path, each leg's medium and, in a reason, an interface.
-    fn of(scene: &Scene, derivatives: bool) -> Window {
+    /// and a ray names its path, each leg's medium and, in a reason, an interface; the
+    /// quantities of `schema` add their own bound.
+    fn of(scene: &Scene, schema: &Schema) -> Window {
         let longest = |names: &mut dyn Iterator<Item = usize>| names.max().unwrap_or(0);
         let medium = longest(&mut scene.media().iter().map(|m| m.name.len()));
         let path = longest(
@@ -949,10 +804,11 @@ impl Window {
         let interface = longest(&mut scene.interfaces().iter().map(|i| i.name.len()));
         let steps = longest(&mut scene.paths().iter().map(|p| p.steps.len()));
         let (points, legs) = (steps + 2, steps + 1);
-        let mut bytes = 512 + 64 * points + legs * (6 * medium + 8) + 6 * (path + interface);
-        if derivatives {
-            bytes += 32 * scene.media().len() + 96 * 2 * steps;
-        }
+        let bytes = 512
+            + 64 * points
+            + legs * (6 * medium + 8)
+            + 6 * (path + interface)
+            + schema.text_bytes(scene);
         let rays = (WINDOW_BYTES / bytes).clamp(1, WINDOW);
         Window {
             rays,
@@ -989,17 +845,23 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
     }
     let names = Names::new(scene);
     let shape = NpyShape::of(scene);
+    let schema = Schema::of(scene);
+    let context = Context {
+        scene,
+        names: &names,
+        steps: shape.k,
+    };
     let derivatives = scene.solver().derivatives;
-    let window = Window::of(scene, derivatives);
+    let window = Window::of(scene, &schema);
     match format {
-        Format::Npy => out.write_all(&npy_header(n, shape, layout))?,
+        Format::Npy => out.write_all(&npy_header(n, shape, layout, &schema, &context))?,
         Format::Json => out.write_all(b"{\"rays\":[")?,
         Format::Csv => {
             let header = match layout {
                 Layout::Rays => CSV_HEADER,
                 Layout::Stationary => CSV_HEADER_STATIONARY,
             };
-            csv_header(&mut out, header, scene)?;
+            csv_header(&mut out, header, &schema)?;
         }
         Format::Jsonl => {}
     }
@@ -1018,20 +880,21 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
                     _ => false,
                 }
             };
-            let g = has_gradient.then_some(&gradient);
+            let mut r = view(i);
+            r.values.gradient = has_gradient.then_some(&gradient);
             match format {
                 Format::Json => {
                     if i > 0 {
                         buf.push(b',');
                     }
-                    ray_json(buf, scene, &names, view(i), g);
+                    ray_json(buf, &schema, &context, r);
                 }
                 Format::Jsonl => {
-                    ray_json(buf, scene, &names, view(i), g);
+                    ray_json(buf, &schema, &context, r);
                     buf.push(b'\n');
                 }
-                Format::Csv => ray_csv(buf, scene, &names, view(i), derivatives.then_some(g)),
-                Format::Npy => ray_npy(buf, shape, view(i), g),
+                Format::Csv => ray_csv(buf, &schema, &context, r),
+                Format::Npy => ray_npy(buf, shape, &schema, &context, r),
             }
         }
     };
@@ -1068,11 +931,11 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
         (Format::Json, None) => out.write_all(b"]}\n")?,
         (Format::Json, Some(arrivals)) => {
             out.write_all(b"],\"arrivals\":[")?;
-            arrival_lines(scene, &names, arrivals, format, &mut out)?;
+            arrival_lines(scene, &names, &schema, arrivals, format, &mut out)?;
             out.write_all(b"]}\n")?;
         }
         (Format::Jsonl, Some(arrivals)) => {
-            arrival_lines(scene, &names, arrivals, format, &mut out)?;
+            arrival_lines(scene, &names, &schema, arrivals, format, &mut out)?;
         }
         _ => {}
     }
@@ -1278,7 +1141,7 @@ fn write_rays_and_arrivals<W: Write>(
                     media: (!r.media.is_empty()).then(|| r.media.iter().copied()),
                     reason: r.reason,
                     every: None,
-                    amplitude: r.amplitude.as_ref(),
+                    values: Entry::of_ray(r),
                 }
             },
         ),
@@ -1309,7 +1172,7 @@ fn write_rays_and_arrivals<W: Write>(
                     media: batch.media(i),
                     reason: r.reason,
                     every: None,
-                    amplitude: batch.amplitude(i),
+                    values: Entry::of_batch(batch, i),
                 }
             },
         ),
@@ -1341,7 +1204,7 @@ fn write_rays_and_arrivals<W: Write>(
                             kink: e.kink,
                             complete: e.complete,
                         }),
-                        amplitude: e.amplitude,
+                        values: Entry::of_stationary(e),
                     }
                 },
             )
@@ -1356,10 +1219,10 @@ fn arrival_steps(scene: &Scene, arrivals: &[SearchArrival]) -> usize {
     most.max(scene.search().and_then(|s| s.max_steps).unwrap_or(0))
 }
 
-/// The `.npy` header of `n` arrival records of at most `k` steps, with the gradient fields of
-/// `shape` (its media) when the scene asks for derivatives and the amplitude fields when it
-/// asks for amplitudes.
-fn arrivals_npy_header(n: usize, k: usize, shape: NpyShape) -> Vec<u8> {
+/// The `.npy` header of `n` arrival records of at most `k` steps (the context's), with the
+/// fields of the quantities of `schema`.
+fn arrivals_npy_header(n: usize, schema: &Schema, context: &Context<'_>) -> Vec<u8> {
+    let k = context.steps;
     let mut descr = format!(
         "('source', '<u4'), ('receiver', '<u4'), ('steps', '<u4'), ('step_kind', '|u1', ({k},)), \
          ('step_interface', '<u4', ({k},)), ('status', '|u1'), ('kink', '|u1'), \
@@ -1368,17 +1231,27 @@ fn arrivals_npy_header(n: usize, k: usize, shape: NpyShape) -> Vec<u8> {
         k + 2,
         k + 1
     );
-    if let Some(media) = shape.gradient_media {
-        descr.push_str(&gradient_npy_descr(media, 2 * k));
-    }
-    if shape.amplitudes {
-        descr.push_str(AMPLITUDE_NPY_DESCR);
-    }
+    descr.push_str(&schema.npy_descr(context));
     npy_header_of(n, &descr)
 }
 
+/// What the quantities of a search arrival are read from, with its gradient `gradient`.
+fn arrival_values<'a>(s: &SearchArrival, gradient: Option<&'a Gradient>) -> Entry<'a> {
+    Entry {
+        gradient,
+        ..Entry::of_search(s)
+    }
+}
+
 /// One search arrival as a JSON object (`"kind": "arrival"` first when `marked`).
-fn arrival_json(buf: &mut Vec<u8>, scene: &Scene, names: &Names, s: &SearchArrival, marked: bool) {
+fn arrival_json(
+    buf: &mut Vec<u8>,
+    schema: &Schema,
+    context: &Context<'_>,
+    s: &SearchArrival,
+    marked: bool,
+) {
+    let (scene, names) = (context.scene, context.names);
     let a = &s.arrival;
     buf.extend_from_slice(if marked {
         b"{\"kind\":\"arrival\",\"source\":"
@@ -1419,12 +1292,8 @@ fn arrival_json(buf: &mut Vec<u8>, scene: &Scene, names: &Names, s: &SearchArriv
     float(buf, a.time);
     buf.extend_from_slice(b",\"points\":");
     points_json(buf, &a.points);
-    if let Some(g) = arrival_gradient(scene, s) {
-        gradient_json(buf, names, &g);
-    }
-    if names.amplitudes {
-        amplitude_json(buf, a.amplitude.as_ref());
-    }
+    let gradient = arrival_gradient(scene, s);
+    schema.json(buf, context, &arrival_values(s, gradient.as_ref()));
     buf.extend_from_slice(b",\"iterations\":");
     int(buf, a.iterations);
     if a.residual.is_finite() {
@@ -1452,7 +1321,8 @@ fn arrival_gradient(scene: &Scene, s: &SearchArrival) -> Option<Gradient> {
 }
 
 /// One search arrival as a CSV line.
-fn arrival_csv(buf: &mut Vec<u8>, scene: &Scene, names: &Names, s: &SearchArrival) {
+fn arrival_csv(buf: &mut Vec<u8>, schema: &Schema, context: &Context<'_>, s: &SearchArrival) {
+    let (scene, names) = (context.scene, context.names);
     let a = &s.arrival;
     int(buf, s.source);
     buf.push(b',');
@@ -1498,18 +1368,14 @@ fn arrival_csv(buf: &mut Vec<u8>, scene: &Scene, names: &Names, s: &SearchArriva
     }
     buf.push(b',');
     buf.extend_from_slice(if s.complete { b"true" } else { b"false" });
-    if scene.solver().derivatives {
-        gradient_csv(buf, arrival_gradient(scene, s).as_ref());
-    }
-    if names.amplitudes {
-        amplitude_csv(buf, true, a.amplitude.as_ref());
-    }
+    let gradient = arrival_gradient(scene, s);
+    schema.csv(buf, context, &arrival_values(s, gradient.as_ref()));
     buf.push(b'\n');
 }
 
-/// One search arrival as a `.npy` record of at most `k` steps (of `scene`, for the gradient
-/// fields when it asks for derivatives).
-fn arrival_npy(buf: &mut Vec<u8>, scene: &Scene, k: usize, s: &SearchArrival) {
+/// One search arrival as a `.npy` record of at most `k` steps (the context's).
+fn arrival_npy(buf: &mut Vec<u8>, schema: &Schema, context: &Context<'_>, s: &SearchArrival) {
+    let (scene, k) = (context.scene, context.steps);
     let a = &s.arrival;
     u32_le(buf, s.source);
     u32_le(buf, s.receiver);
@@ -1533,13 +1399,8 @@ fn arrival_npy(buf: &mut Vec<u8>, scene: &Scene, k: usize, s: &SearchArrival) {
     buf.extend_from_slice(&a.time.to_le_bytes());
     buf.extend_from_slice(&a.residual.to_le_bytes());
     points_media_npy(buf, &a.points, k + 2, Some(a.media.iter().copied()), k + 1);
-    if scene.solver().derivatives {
-        let g = arrival_gradient(scene, s);
-        gradient_npy(buf, scene.media().len(), 2 * k, g.as_ref());
-    }
-    if scene.amplitudes().is_some() {
-        amplitude_npy(buf, true, a.amplitude.as_ref());
-    }
+    let gradient = arrival_gradient(scene, s);
+    schema.npy(buf, context, &arrival_values(s, gradient.as_ref()));
 }
 
 /// Bytes gathered before they are handed to the writer.
@@ -1550,11 +1411,16 @@ const CHUNK: usize = 1 << 16;
 fn arrival_lines<W: Write>(
     scene: &Scene,
     names: &Names,
+    schema: &Schema,
     arrivals: &[SearchArrival],
     format: Format,
     out: &mut W,
 ) -> io::Result<()> {
-    let k = arrival_steps(scene, arrivals);
+    let context = Context {
+        scene,
+        names,
+        steps: arrival_steps(scene, arrivals),
+    };
     let mut buf = Vec::with_capacity(CHUNK + 1024);
     for (i, a) in arrivals.iter().enumerate() {
         match format {
@@ -1562,14 +1428,14 @@ fn arrival_lines<W: Write>(
                 if i > 0 {
                     buf.push(b',');
                 }
-                arrival_json(&mut buf, scene, names, a, false);
+                arrival_json(&mut buf, schema, &context, a, false);
             }
             Format::Jsonl => {
-                arrival_json(&mut buf, scene, names, a, true);
+                arrival_json(&mut buf, schema, &context, a, true);
                 buf.push(b'\n');
             }
-            Format::Csv => arrival_csv(&mut buf, scene, names, a),
-            Format::Npy => arrival_npy(&mut buf, scene, k, a),
+            Format::Csv => arrival_csv(&mut buf, schema, &context, a),
+            Format::Npy => arrival_npy(&mut buf, schema, &context, a),
         }
         if buf.len() >= CHUNK {
             out.write_all(&buf)?;
@@ -1591,17 +1457,21 @@ fn write_arrivals<W: Write>(
     mut out: W,
 ) -> io::Result<()> {
     let names = Names::new(scene);
+    let schema = Schema::of(scene);
     match format {
         Format::Json => out.write_all(b"{\"arrivals\":[")?,
         Format::Jsonl => {}
-        Format::Csv => csv_header(&mut out, ARRIVALS_CSV_HEADER, scene)?,
-        Format::Npy => out.write_all(&arrivals_npy_header(
-            arrivals.len(),
-            arrival_steps(scene, arrivals),
-            NpyShape::of(scene),
-        ))?,
+        Format::Csv => csv_header(&mut out, ARRIVALS_CSV_HEADER, &schema)?,
+        Format::Npy => {
+            let context = Context {
+                scene,
+                names: &names,
+                steps: arrival_steps(scene, arrivals),
+            };
+            out.write_all(&arrivals_npy_header(arrivals.len(), &schema, &context))?;
+        }
     }
-    arrival_lines(scene, &names, arrivals, format, &mut out)?;
+    arrival_lines(scene, &names, &schema, arrivals, format, &mut out)?;
     if format == Format::Json {
         out.write_all(b"]}\n")?;
     }
@@ -1636,13 +1506,7 @@ pub fn write_names<W: Write>(scene: &Scene, mut out: W) -> io::Result<()> {
         "interfaces": scene.interfaces().iter().map(|i| i.name.as_str()).collect::<Vec<_>>(),
         "no_medium": NO_MEDIUM,
     });
-    if scene.amplitudes().is_some() {
-        let reasons: Vec<Option<&str>> = std::iter::once(None)
-            .chain(NoAmplitude::CODES.iter().map(|r| Some(r.name())))
-            .collect();
-        doc["amplitude_reasons"] = serde_json::json!(reasons);
-        doc["amplitude_not_computed"] = serde_json::json!(AMPLITUDE_NOT_COMPUTED);
-    }
+    Schema::of(scene).names(&mut doc);
     serde_json::to_writer_pretty(&mut out, &doc)?;
     out.write_all(b"\n")?;
     out.flush()
@@ -1734,8 +1598,8 @@ mod tests {
             rays: WINDOW,
             piece: PIECE,
         };
-        assert_eq!(Window::of(&ordinary, false), full);
-        assert_eq!(Window::of(&ordinary, true), full);
+        assert_eq!(Window::of(&ordinary, &Schema::of(&ordinary)), full);
+        assert_eq!(Window::of(&ordinary, &Schema::every()), full);
         for len in [1 << 10, 32 << 10, 1 << 20] {
             let name = "\u{1}".repeat(len);
             let doc = serde_json::json!({
@@ -1745,7 +1609,7 @@ mod tests {
                 "paths": [{ "name": &name, "steps": [{ "reflect": &name }], "media": [&name, &name] }]
             });
             let scene = Scene::from_json(&doc.to_string()).unwrap();
-            let window = Window::of(&scene, false);
+            let window = Window::of(&scene, &Schema::of(&scene));
             assert!(window.rays < WINDOW && window.piece >= 1);
             let rays = Tracer::new(&scene).unwrap().trace_all();
             // One line per ray in JSON Lines and CSV (the JSON document holds the same

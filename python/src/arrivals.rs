@@ -3,7 +3,6 @@
 //! iteration and `to_dicts`, each dict made from the arrays when asked for.
 
 use eigenray::Point;
-use eigenray::amplitudes::Complex64;
 use eigenray::stationary::Kink;
 use numpy::ndarray::Dimension;
 use numpy::{
@@ -13,7 +12,7 @@ use pyo3::exceptions::{PyIndexError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PySlice};
 
-use crate::amplitude::{AmplitudeArrays, RayAmplitude, reason_words};
+use crate::columns::{QuantityArrays, dir_of, why_words};
 use crate::convert::{kink_name, points_array};
 use crate::rays::Reasons;
 
@@ -85,9 +84,10 @@ pub(crate) struct PyArrivals {
     pub(crate) reasons: Reasons,
     /// The kink of each `vertex` arrival: read through the `kink` getter.
     pub(crate) kinks: Vec<Option<Kink>>,
-    /// With `"amplitudes"`: each arrival's amplitude, read through the `amplitude`,
-    /// `spreading`, `coefficient` and `attenuation_db` getters (`None` without).
-    pub(crate) amplitudes: Option<AmplitudeArrays>,
+    /// The columns of the quantities the scene asks for (with `"amplitudes"`: `amplitude`,
+    /// `spreading`, `coefficient`, `attenuation_db`, `amplitude_reason`), read as attributes
+    /// (`None` for a quantity the scene does not ask for).
+    pub(crate) quantities: QuantityArrays,
 }
 
 #[pymethods]
@@ -104,44 +104,17 @@ impl PyArrivals {
         self.kinks.iter().map(|&k| kink_name(k)).collect()
     }
 
-    /// With `"amplitudes"`: the complex pressure (field) amplitude of each arrival for a unit
-    /// source, without the travel-time phase (complex128); NaN where it has none (see
-    /// `amplitude_reason`). `None` for a scene without `"amplitudes"`.
-    #[getter]
-    fn amplitude(&self, py: Python<'_>) -> Option<Py<PyArray1<Complex64>>> {
-        self.amplitudes.as_ref().map(|a| a.value.clone_ref(py))
+    /// A quantity's column (with `"amplitudes"`: `amplitude` and `coefficient`, complex128,
+    /// `spreading` and `attenuation_db`, float64, NaN where an arrival has none, and
+    /// `amplitude_reason`, why an arrival's amplitude has no value, the command-line tool's
+    /// words); `None` for a quantity the scene does not ask for.
+    fn __getattr__(&self, py: Python<'_>, name: &str) -> PyResult<Py<PyAny>> {
+        self.quantities
+            .attribute(py, "Arrivals", name, || why_words(&self.reasons.whys, name))
     }
 
-    /// With `"amplitudes"`: the geometric spreading factor of each arrival (float64, NaN
-    /// where it has none).
-    #[getter]
-    fn spreading(&self, py: Python<'_>) -> Option<Py<PyArray1<f64>>> {
-        self.amplitudes.as_ref().map(|a| a.spreading.clone_ref(py))
-    }
-
-    /// With `"amplitudes"`: the product of each arrival's reflection and transmission
-    /// coefficients (complex128, NaN where it has none).
-    #[getter]
-    fn coefficient(&self, py: Python<'_>) -> Option<Py<PyArray1<Complex64>>> {
-        self.amplitudes
-            .as_ref()
-            .map(|a| a.coefficient.clone_ref(py))
-    }
-
-    /// With `"amplitudes"`: the attenuation of the media along each arrival, dB (float64,
-    /// NaN where it has none).
-    #[getter]
-    fn attenuation_db(&self, py: Python<'_>) -> Option<Py<PyArray1<f64>>> {
-        self.amplitudes
-            .as_ref()
-            .map(|a| a.attenuation_db.clone_ref(py))
-    }
-
-    /// With `"amplitudes"`: why each arrival's amplitude has no value (`None` where it has
-    /// one), the command-line tool's `amplitude_reason`.
-    #[getter]
-    fn amplitude_reason(&self) -> Option<Vec<Option<String>>> {
-        self.reasons.amplitude.as_deref().map(reason_words)
+    fn __dir__(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        dir_of::<PyArrivals>(py)
     }
 
     /// Every arrival as a dict: the list `search` gave before it gave arrays.
@@ -244,17 +217,10 @@ impl PyArrivals {
         d.set_item("reason", self.reasons.word(i))?;
         d.set_item("kink", kink_name(self.kinks.get(i).copied().flatten()))?;
         d.set_item("complete", at(py, &self.complete, i)?)?;
-        if let Some(a) = &self.amplitudes {
-            let reasons = self.reasons.amplitude.as_deref().unwrap_or_default();
-            RayAmplitude {
-                amplitude: Some(at(py, &a.value, i)?),
-                spreading: Some(at(py, &a.spreading, i)?),
-                coefficient: Some(at(py, &a.coefficient, i)?),
-                attenuation_db: Some(at(py, &a.attenuation_db, i)?),
-                reason: reasons.get(i).copied().flatten().map(|r| r.to_string()),
-            }
-            .set_items(&d)?;
-        }
+        self.quantities.set_entry(py, &d, i, |name, i| {
+            let why = self.reasons.whys.iter().find(|w| w.column.name == name)?;
+            why.reasons.get(i).copied().flatten().map(|r| r.to_string())
+        })?;
         Ok(d)
     }
 }

@@ -9,7 +9,7 @@ use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 
 use crate::convert::interface_names;
-use crate::error::argument_error;
+use crate::error::{argument_error, check_memory};
 use crate::rays::PyRays;
 
 /// The derivatives of many rays' times as numpy arrays (see `Tracer.gradients`), row `i`
@@ -90,6 +90,23 @@ impl PyGradients {
         if !shapes_agree {
             return Err(argument_error(py, "rays", "arrays of different lengths"));
         }
+        let m = scene.media().len();
+        let slots = GradientArraysMut::slots(scene);
+        // The arrays it fills, and a copy of each input array that is not in standard layout
+        // (a broadcast `Rays` state holds many rows in little memory).
+        let copy = |standard: bool, bytes: usize| if standard { 0 } else { bytes as u64 };
+        let copies = copy(path.is_standard_layout(), 8 * n)
+            + copy(status.is_standard_layout(), n)
+            + copy(points.is_standard_layout(), 8 * points.len())
+            + copy(num_points.is_standard_layout(), 8 * n)
+            + copy(media.is_standard_layout(), 4 * media.len());
+        let per_ray = 8 * (4 + m as u64) + slots as u64 * (4 + 4 + 16);
+        check_memory(
+            &format!("gradients: {n} rays"),
+            (n as u64)
+                .checked_mul(per_ray)
+                .and_then(|b| b.checked_add(copies)),
+        )?;
         // (In the arrays' own memory unless a caller changed their strides.)
         let (path, status, points) = (
             path.as_standard_layout(),
@@ -106,8 +123,6 @@ impl PyGradients {
             num_points: flat(&num_points),
             media: flat(&media),
         };
-        let m = scene.media().len();
-        let slots = GradientArraysMut::slots(scene);
         // (Zeroed memory, written in the computation's parallel pass: every entry is written.)
         let mut source = vec![0.0; 2 * n];
         let mut receiver = vec![0.0; 2 * n];

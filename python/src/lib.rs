@@ -4,8 +4,8 @@
 //! validation and error messages) and the library's results to numpy arrays. The Python
 //! package (`python/eigenray/`) re-exports these classes and adds the plotting helper.
 
-mod amplitude;
 mod arrivals;
+mod columns;
 mod convert;
 mod error;
 mod gradient;

@@ -4,7 +4,7 @@
 use std::sync::MutexGuard;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use eigenray::amplitudes::Complex64;
+use eigenray::columns::Schema;
 use eigenray::{Reason, Scene};
 use numpy::{
     PyArrayMethods, PyReadwriteArray1, PyReadwriteArray2, PyReadwriteArray3, PyUntypedArrayMethods,
@@ -12,7 +12,7 @@ use numpy::{
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 
-use crate::amplitude::{AmplitudeArrays, AmplitudeRows};
+use crate::columns::{OutColumn, out_rows};
 use crate::convert::interface_names;
 use crate::error::argument_error;
 use crate::rays::{PyRays, Reasons, none_of};
@@ -49,20 +49,10 @@ pub(crate) struct OutArrays<'py, 'a> {
     /// The reasons of the earlier result while the batch writes new ones (all `None` first),
     /// put back if it does not finish.
     earlier: Option<Vec<Option<Reason>>>,
-    /// The amplitude arrays, when the scene asks for amplitudes.
-    amplitudes: Option<OutAmplitudes<'py>>,
-}
-
-/// The amplitude arrays of an earlier `Rays`, borrowed for writing in place.
-struct OutAmplitudes<'py> {
-    /// The complex amplitude of each ray.
-    value: PyReadwriteArray1<'py, Complex64>,
-    /// Its geometric spreading.
-    spreading: PyReadwriteArray1<'py, f64>,
-    /// The product of its coefficients.
-    coefficient: PyReadwriteArray1<'py, Complex64>,
-    /// Its attenuation, dB.
-    attenuation_db: PyReadwriteArray1<'py, f64>,
+    /// The schema of the scene's quantities.
+    schema: Schema,
+    /// The numpy columns of its quantities (a `Why` column's entries are in `reasons`).
+    quantities: Vec<OutColumn<'py>>,
 }
 
 impl<'py, 'a> OutArrays<'py, 'a> {
@@ -80,11 +70,19 @@ impl<'py, 'a> OutArrays<'py, 'a> {
         if out.arrival.is_some() || out.time.bind(py).len() != n {
             return Err(shape_error());
         }
-        if out.amplitudes.is_some() != scene.amplitudes().is_some() {
-            let message = if scene.amplitudes().is_some() {
-                "needs the Rays of an earlier trace() with amplitudes (the scene asks for them)"
+        let schema = Schema::of(scene);
+        let asked: Vec<&str> = schema.columns().map(|c| c.name).collect();
+        if out.quantities.names() != asked {
+            let message = if asked.is_empty() {
+                format!(
+                    "needs the Rays of an earlier trace() without {}",
+                    out.quantities.names().join(", ")
+                )
             } else {
-                "needs the Rays of an earlier trace() without amplitudes"
+                format!(
+                    "needs the Rays of an earlier trace() with {} (the scene asks for them)",
+                    asked.join(", ")
+                )
             };
             return Err(argument_error(py, "out", message));
         }
@@ -99,16 +97,12 @@ impl<'py, 'a> OutArrays<'py, 'a> {
                 PyRuntimeError::new_err("an earlier call failed while writing these rays")
             })
         };
-        let amplitudes = match &out.amplitudes {
-            Some(a) if !same_length(py, a, n) => return Err(shape_error()),
-            Some(a) => Some(OutAmplitudes {
-                value: a.value.bind(py).try_readwrite().map_err(busy)?,
-                spreading: a.spreading.bind(py).try_readwrite().map_err(busy)?,
-                coefficient: a.coefficient.bind(py).try_readwrite().map_err(busy)?,
-                attenuation_db: a.attenuation_db.bind(py).try_readwrite().map_err(busy)?,
-            }),
-            None => None,
-        };
+        if !out.quantities.all_of_length(py, n) {
+            return Err(shape_error());
+        }
+        let quantities = out.quantities.borrow(py, || {
+            argument_error(py, "out", "its arrays are in use or not writeable")
+        })?;
         Ok(OutArrays {
             width,
             source: out.source.bind(py).try_readwrite().map_err(busy)?,
@@ -124,13 +118,31 @@ impl<'py, 'a> OutArrays<'py, 'a> {
             reasons: reasons()?,
             any_reason: AtomicBool::new(false),
             earlier: None,
-            amplitudes,
+            schema,
+            quantities,
         })
     }
 
     /// Their rows.
     pub(crate) fn rows(&mut self, py: Python<'_>) -> PyResult<Rows<'_>> {
-        let contiguous = |_| argument_error(py, "out", "its arrays must stay contiguous");
+        let message = "its arrays must be C-contiguous (in row order, as trace() gave them)";
+        // (`as_slice_mut` takes Fortran order too: its rows would be written as C order's.)
+        let c_order = [
+            self.source.is_c_contiguous(),
+            self.receiver.is_c_contiguous(),
+            self.path.is_c_contiguous(),
+            self.status.is_c_contiguous(),
+            self.time.is_c_contiguous(),
+            self.points.is_c_contiguous(),
+            self.num_points.is_c_contiguous(),
+            self.media.is_c_contiguous(),
+            self.iterations.is_c_contiguous(),
+            self.residual.is_c_contiguous(),
+        ];
+        if c_order.contains(&false) {
+            return Err(argument_error(py, "out", message));
+        }
+        let contiguous = |_| argument_error(py, "out", message);
         let reasons = &mut *self.reasons;
         if reasons.any && self.earlier.is_none() {
             let n = reasons.codes.len();
@@ -139,16 +151,12 @@ impl<'py, 'a> OutArrays<'py, 'a> {
                 py.detach(|| none_of(n)),
             ));
         }
-        let amplitudes = match (&mut self.amplitudes, &mut reasons.amplitude) {
-            (Some(a), Some(reason)) => Some(AmplitudeRows {
-                value: a.value.as_slice_mut().map_err(contiguous)?,
-                spreading: a.spreading.as_slice_mut().map_err(contiguous)?,
-                coefficient: a.coefficient.as_slice_mut().map_err(contiguous)?,
-                attenuation_db: a.attenuation_db.as_slice_mut().map_err(contiguous)?,
-                reason,
-            }),
-            _ => None,
-        };
+        let quantities = out_rows(
+            &self.schema,
+            &mut self.quantities,
+            &mut reasons.whys,
+            || argument_error(py, "out", message),
+        )?;
         Ok(Rows {
             width: self.width,
             source: self.source.as_slice_mut().map_err(contiguous)?,
@@ -163,7 +171,7 @@ impl<'py, 'a> OutArrays<'py, 'a> {
             residual: self.residual.as_slice_mut().map_err(contiguous)?,
             reason: &mut reasons.codes,
             any_reason: &self.any_reason,
-            amplitudes,
+            quantities,
         })
     }
 
@@ -173,14 +181,6 @@ impl<'py, 'a> OutArrays<'py, 'a> {
         self.reasons.any = self.any_reason.load(Ordering::Relaxed);
         self.reasons.interfaces = interface_names(scene);
     }
-}
-
-/// Whether every amplitude array holds `n` rays.
-fn same_length(py: Python<'_>, a: &AmplitudeArrays, n: usize) -> bool {
-    a.value.bind(py).len() == n
-        && a.spreading.bind(py).len() == n
-        && a.coefficient.bind(py).len() == n
-        && a.attenuation_db.bind(py).len() == n
 }
 
 impl Drop for OutArrays<'_, '_> {

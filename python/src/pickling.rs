@@ -13,8 +13,9 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::amplitude::AmplitudeArrays;
+use crate::columns::QuantityArrays;
 use crate::convert::status_names;
+use crate::error::check_memory;
 use crate::rays_data::{PyRays, Reasons};
 
 /// The rules with a threshold, by their code in a pickled `Rays`.
@@ -143,6 +144,9 @@ fn dense<T: Copy>(
     if codes.dim() != (rows.len(), 3) {
         return Err(bad());
     }
+    // (A broadcast state holds many rows in little memory: these entries are allocated.)
+    let bytes = (n as u64).checked_mul(std::mem::size_of::<Option<T>>() as u64);
+    check_memory(&format!("Rays state: {n} rays"), bytes)?;
     let mut out = vec![None; n];
     for (row, code) in rows.iter().zip(codes.rows()) {
         let entry = usize::try_from(*row)
@@ -187,12 +191,7 @@ pub(crate) fn rays_state<'py>(py: Python<'py>, rays: &PyRays) -> PyResult<Bound<
     d.set_item("arrival", &rays.arrival)?;
     d.set_item("kink", &rays.kink)?;
     d.set_item("complete", &rays.complete)?;
-    if let Some(a) = &rays.amplitudes {
-        d.set_item("amplitude", &a.value)?;
-        d.set_item("spreading", &a.spreading)?;
-        d.set_item("coefficient", &a.coefficient)?;
-        d.set_item("attenuation_db", &a.attenuation_db)?;
-    }
+    rays.quantities.set_items(&d)?;
     // The GIL released while waiting, as the `reason` getter does: a `trace(out=...)` of
     // these rays in another thread holds the lock through its batch.
     let reasons = py.detach(|| {
@@ -201,17 +200,18 @@ pub(crate) fn rays_state<'py>(py: Python<'py>, rays: &PyRays) -> PyResult<Bound<
             reasons.interfaces.clone(),
             sparse(&reasons.codes, reason_code),
             reasons
-                .amplitude
-                .as_deref()
-                .map(|a| sparse(a, no_amplitude_code)),
+                .whys
+                .iter()
+                .map(|w| (w.column.name, sparse(&w.reasons, no_amplitude_code)))
+                .collect::<Vec<_>>(),
         ))
     });
-    let (interfaces, codes, amplitude) =
+    let (interfaces, codes, whys) =
         reasons.ok_or_else(|| PyValueError::new_err("the rays' reasons are poisoned"))?;
     d.set_item("interfaces", interfaces)?;
     set_sparse(&d, "reason", codes)?;
-    if let Some(amplitude) = amplitude {
-        set_sparse(&d, "amplitude_reason", amplitude)?;
+    for (name, why) in whys {
+        set_sparse(&d, name, why)?;
     }
     Ok(d)
 }
@@ -250,21 +250,12 @@ pub(crate) fn rays_of_state(state: &Bound<'_, PyDict>) -> PyResult<PyRays> {
     }
     let optional =
         |key: &str| -> PyResult<bool> { Ok(state.get_item(key)?.is_some_and(|v| !v.is_none())) };
-    let amplitudes = if optional("amplitude")? {
-        Some(AmplitudeArrays {
-            value: column(state, "amplitude", n)?,
-            spreading: column(state, "spreading", n)?,
-            coefficient: column(state, "coefficient", n)?,
-            attenuation_db: column(state, "attenuation_db", n)?,
-        })
-    } else {
-        None
-    };
-    let amplitude_reasons = if amplitudes.is_some() {
-        Some(dense(state, "amplitude_reason", n, no_amplitude_of)?)
-    } else {
-        None
-    };
+    let (quantities, whys) = QuantityArrays::of_state(
+        state,
+        |key| column(state, key, n),
+        |key| column(state, key, n),
+        |key| dense(state, key, n, no_amplitude_of),
+    )?;
     let codes = dense(state, "reason", n, reason_of)?;
     let any = codes.iter().any(Option::is_some);
     let stationary = optional("arrival")?;
@@ -293,7 +284,7 @@ pub(crate) fn rays_of_state(state: &Bound<'_, PyDict>) -> PyResult<PyRays> {
             codes,
             any,
             interfaces: item(state, "interfaces")?,
-            amplitude: amplitude_reasons,
+            whys,
         }),
         status_names: status_names(),
         path_names: item(state, "path_names")?,
@@ -305,7 +296,7 @@ pub(crate) fn rays_of_state(state: &Bound<'_, PyDict>) -> PyResult<PyRays> {
         complete: stationary
             .then(|| column(state, "complete", n))
             .transpose()?,
-        amplitudes,
+        quantities,
     })
 }
 

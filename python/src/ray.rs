@@ -1,52 +1,66 @@
 //! `Ray`: one ray (or one stationary path) as Python values.
 
-use eigenray::amplitudes::Complex64;
-use eigenray::{Amplitude, Arrival, Point, RayRecord, Scene};
+use eigenray::columns::Entry;
+use eigenray::{Arrival, Point, RayRecord, Scene};
 use numpy::PyArray2;
 use pyo3::prelude::*;
 
-use crate::amplitude::RayAmplitude;
+use crate::columns::{RayValues, dir_of};
 use crate::convert::{kink_name, medium_names, points_array};
 
 /// One ray: its status, time, points and leg media (and its amplitude, when the scene asks
 /// for amplitudes).
-#[pyclass(module = "eigenray", name = "Ray", frozen, get_all)]
+#[pyclass(module = "eigenray", name = "Ray", frozen)]
 pub(crate) struct PyRay {
     /// `converged`, `vertex`, `no_path`, `obstructed` or `not_converged`.
+    #[pyo3(get)]
     status: String,
     /// Travel time; NaN when the status has none.
+    #[pyo3(get)]
     time: f64,
     /// Source, interaction points and receiver, shape `(k + 2, 2)`; empty without a time.
+    #[pyo3(get)]
     points: Py<PyArray2<f64>>,
     /// Leg media's names, when known.
+    #[pyo3(get)]
     media: Vec<String>,
     /// Solver iterations.
+    #[pyo3(get)]
     iterations: usize,
     /// Final relative residual (NaN where the solver did not run).
+    #[pyo3(get)]
     residual: f64,
     /// Why it is not `converged` (`None` when it is).
+    #[pyo3(get)]
     reason: Option<String>,
     /// Among the stationary paths of its triple, its place by time (0: the first); `None`
     /// for a ray of `Tracer.solve`.
+    #[pyo3(get)]
     arrival: Option<usize>,
     /// On a `vertex` path of `stationary_paths`: `"minimum"` or `"maximum"`.
+    #[pyo3(get)]
     kink: Option<String>,
-    /// With `"amplitudes"`: the complex pressure (field) amplitude for a unit source, without
-    /// the travel-time phase; NaN where it has none (see `amplitude_reason`). `None` for a
-    /// scene without `"amplitudes"`, as the four below.
-    amplitude: Option<Complex64>,
-    /// With `"amplitudes"`: the geometric spreading factor.
-    spreading: Option<f64>,
-    /// With `"amplitudes"`: the product of the reflection and transmission coefficients.
-    coefficient: Option<Complex64>,
-    /// With `"amplitudes"`: the attenuation of the media along the path, dB.
-    attenuation_db: Option<f64>,
-    /// Why the amplitude has no value (`None` where it has one, or the ray has no time).
-    amplitude_reason: Option<String>,
+    /// The values of the quantities its scene asks for, read as attributes.
+    quantities: RayValues,
 }
 
 #[pymethods]
 impl PyRay {
+    /// A quantity's value (with `"amplitudes"`: `amplitude`, the complex pressure (field)
+    /// amplitude for a unit source without the travel-time phase, NaN where it has none;
+    /// `spreading`, the geometric spreading factor; `coefficient`, the product of the
+    /// reflection and transmission coefficients; `attenuation_db`, the attenuation of the
+    /// media along the path, dB; `amplitude_reason`, why the amplitude has no value, `None`
+    /// where it has one or the ray has no time); `None` for a quantity the scene does not ask
+    /// for.
+    fn __getattr__(&self, py: Python<'_>, name: &str) -> PyResult<Py<PyAny>> {
+        self.quantities.attribute(py, "Ray", name)
+    }
+
+    fn __dir__(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        dir_of::<PyRay>(py)
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "Ray(status={:?}, time={}, iterations={})",
@@ -64,9 +78,8 @@ impl PyRay {
         record: &RayRecord,
         points: &[Point],
         media: &[usize],
-        amplitude: Option<&Amplitude>,
+        entry: &Entry<'_>,
     ) -> PyRay {
-        let a = RayAmplitude::new(scene.amplitudes().is_some(), amplitude);
         PyRay {
             status: record.status.as_str().to_string(),
             time: record.time,
@@ -77,17 +90,13 @@ impl PyRay {
             reason: record.reason.map(|r| r.describe(scene)),
             arrival: None,
             kink: None,
-            amplitude: a.amplitude,
-            spreading: a.spreading,
-            coefficient: a.coefficient,
-            attenuation_db: a.attenuation_db,
-            amplitude_reason: a.reason,
+            quantities: RayValues::new(scene, entry),
         }
     }
 
     /// Stationary path `index` of a triple, `a` (of `Tracer.stationary_paths`).
     pub(crate) fn from_arrival(py: Python<'_>, scene: &Scene, index: usize, a: &Arrival) -> PyRay {
-        let amp = RayAmplitude::new(scene.amplitudes().is_some(), a.amplitude.as_ref());
+        let entry = Entry::of_arrival(a);
         PyRay {
             status: a.status.as_str().to_string(),
             time: a.time,
@@ -98,11 +107,7 @@ impl PyRay {
             reason: a.reason.map(|r| r.describe(scene)),
             arrival: Some(index),
             kink: kink_name(a.kink),
-            amplitude: amp.amplitude,
-            spreading: amp.spreading,
-            coefficient: amp.coefficient,
-            attenuation_db: amp.attenuation_db,
-            amplitude_reason: amp.reason,
+            quantities: RayValues::new(scene, &entry),
         }
     }
 }

@@ -1,13 +1,13 @@
 //! `Rays`: every ray of a scene (or every stationary path) as numpy arrays, and the reasons of
 //! those that are not `converged`.
 
-use eigenray::amplitudes::Complex64;
-use numpy::{PyArray1, PyUntypedArrayMethods};
+use numpy::PyUntypedArrayMethods;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyType};
 
-use crate::amplitude::reason_words;
+use crate::columns::{dir_of, why_words};
 use crate::pickling;
+
 pub(crate) use crate::rays_data::{PyRays, Reasons, none_of};
 
 #[pymethods]
@@ -20,49 +20,22 @@ impl PyRays {
         py.detach(|| self.reasons.lock().map(|r| r.words()).unwrap_or_default())
     }
 
-    /// With `"amplitudes"`: the complex pressure (field) amplitude of each ray for a unit
-    /// source, without the travel-time phase (complex128); NaN where it has none (a ray
-    /// without a time, a `vertex` path: see `amplitude_reason`). `None` for a scene without
-    /// `"amplitudes"`.
-    #[getter]
-    fn amplitude(&self, py: Python<'_>) -> Option<Py<PyArray1<Complex64>>> {
-        self.amplitudes.as_ref().map(|a| a.value.clone_ref(py))
-    }
-
-    /// With `"amplitudes"`: the geometric spreading factor of each ray (float64, NaN where
-    /// the ray has none).
-    #[getter]
-    fn spreading(&self, py: Python<'_>) -> Option<Py<PyArray1<f64>>> {
-        self.amplitudes.as_ref().map(|a| a.spreading.clone_ref(py))
-    }
-
-    /// With `"amplitudes"`: the product of each ray's reflection and transmission
-    /// coefficients (complex128, NaN where the ray has none).
-    #[getter]
-    fn coefficient(&self, py: Python<'_>) -> Option<Py<PyArray1<Complex64>>> {
-        self.amplitudes
-            .as_ref()
-            .map(|a| a.coefficient.clone_ref(py))
-    }
-
-    /// With `"amplitudes"`: the attenuation of the media along each ray, dB (float64, NaN
-    /// where the ray has none).
-    #[getter]
-    fn attenuation_db(&self, py: Python<'_>) -> Option<Py<PyArray1<f64>>> {
-        self.amplitudes
-            .as_ref()
-            .map(|a| a.attenuation_db.clone_ref(py))
-    }
-
-    /// With `"amplitudes"`: why each timed ray's amplitude has no value (`None` where it has
-    /// one, and for a ray without a time), the command-line tool's `amplitude_reason`.
-    #[getter]
-    fn amplitude_reason(&self, py: Python<'_>) -> Option<Vec<Option<String>>> {
-        self.amplitudes.as_ref()?;
-        py.detach(|| {
-            let reasons = self.reasons.lock().ok()?;
-            reasons.amplitude.as_deref().map(reason_words)
+    /// A quantity's column (with `"amplitudes"`: `amplitude` and `coefficient`, complex128,
+    /// `spreading` and `attenuation_db`, float64, NaN where a ray has none, and
+    /// `amplitude_reason`, why a timed ray's amplitude has no value, the command-line tool's
+    /// words); `None` for a quantity the scene does not ask for.
+    fn __getattr__(&self, py: Python<'_>, name: &str) -> PyResult<Py<PyAny>> {
+        self.quantities.attribute(py, "Rays", name, || {
+            // The GIL released while waiting, as the `reason` getter does.
+            py.detach(|| {
+                let reasons = self.reasons.lock().ok()?;
+                why_words(&reasons.whys, name)
+            })
         })
+    }
+
+    fn __dir__(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        dir_of::<PyRays>(py)
     }
 
     /// Pickling (`multiprocessing`, joblib, Dask): the arrays, the names and the reasons;

@@ -5,12 +5,11 @@
 use std::sync::Mutex;
 
 use eigenray::Reason;
-use eigenray::amplitudes::NoAmplitude;
 use numpy::{PyArray1, PyArray2, PyArray3};
 use pyo3::prelude::*;
 use rayon::iter::ParallelExtend;
 
-use crate::amplitude::AmplitudeArrays;
+use crate::columns::{QuantityArrays, WhyColumn};
 
 /// Every ray of a scene as numpy arrays, in ray order (source-major, then receiver, then
 /// path). Rays without a time have `time` NaN and NaN points.
@@ -70,9 +69,10 @@ pub(crate) struct PyRays {
     /// From `trace_stationary`: whether the triple's search was complete.
     #[pyo3(get)]
     pub(crate) complete: Option<Py<PyArray1<bool>>>,
-    /// With `"amplitudes"`: each ray's amplitude, read through the `amplitude`,
-    /// `spreading`, `coefficient` and `attenuation_db` getters (`None` without).
-    pub(crate) amplitudes: Option<AmplitudeArrays>,
+    /// The columns of the quantities the scene asks for (with `"amplitudes"`: `amplitude`,
+    /// `spreading`, `coefficient`, `attenuation_db`, `amplitude_reason`), read as attributes
+    /// (`None` for a quantity the scene does not ask for).
+    pub(crate) quantities: QuantityArrays,
 }
 
 /// Why each ray of a `Rays` is not `converged`, as the library's reasons (written by the
@@ -85,9 +85,9 @@ pub(crate) struct Reasons {
     pub(crate) any: bool,
     /// The scene's interface names, by index.
     pub(crate) interfaces: Vec<String>,
-    /// With `"amplitudes"`: why each ray's amplitude has no value (one per ray; `None` where
-    /// it has one or the ray has no time).
-    pub(crate) amplitude: Option<Vec<Option<NoAmplitude>>>,
+    /// The quantities' reasons (with `"amplitudes"`, why each ray's amplitude has no value:
+    /// one per ray, `None` where it has one or the ray has no time).
+    pub(crate) whys: Vec<WhyColumn>,
 }
 
 impl Reasons {

@@ -3,9 +3,10 @@
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use eigenray::{Amplitude, Point, RayRecord, Reason, Scene};
+use eigenray::columns::Entry;
+use eigenray::{Point, RayRecord, Reason, Scene};
 
-use crate::amplitude::AmplitudeRows;
+use crate::columns::QuantityRows;
 use crate::convert::status_code;
 
 /// Rows of a `Table`: one slice per column, all of the same rows.
@@ -36,8 +37,8 @@ pub(crate) struct Rows<'a> {
     pub(crate) reason: &'a mut [Option<Reason>],
     /// Set when a reason is written.
     pub(crate) any_reason: &'a AtomicBool,
-    /// The amplitude columns, when the scene asks for amplitudes.
-    pub(crate) amplitudes: Option<AmplitudeRows<'a>>,
+    /// The columns of the quantities the scene asks for (`None` when it asks for none).
+    pub(crate) quantities: Option<QuantityRows<'a>>,
 }
 
 /// Rows written by one task of a parallel fill.
@@ -81,7 +82,7 @@ impl Rows<'_> {
         let (residual, residual_b) = self.residual.split_at_mut(k);
         let (reason, reason_b) = self.reason.split_at_mut(k);
         let any_reason = self.any_reason;
-        let (amplitudes, amplitudes_b) = match self.amplitudes.map(|a| a.split_at(k)) {
+        let (quantities, quantities_b) = match self.quantities.map(|a| a.split_at(k)) {
             Some((a, b)) => (Some(a), Some(b)),
             None => (None, None),
         };
@@ -100,7 +101,7 @@ impl Rows<'_> {
                 residual,
                 reason,
                 any_reason,
-                amplitudes,
+                quantities,
             },
             Rows {
                 width: w,
@@ -116,7 +117,7 @@ impl Rows<'_> {
                 residual: residual_b,
                 reason: reason_b,
                 any_reason,
-                amplitudes: amplitudes_b,
+                quantities: quantities_b,
             },
         )
     }
@@ -190,18 +191,17 @@ impl Rows<'_> {
         }
     }
 
-    /// Whether the rows have amplitude columns (the scene asks for amplitudes).
+    /// Whether the rows have the columns of a quantity (the scene asks for one).
     #[inline(always)]
-    pub(crate) fn has_amplitudes(&self) -> bool {
-        self.amplitudes.is_some()
+    pub(crate) fn has_quantities(&self) -> bool {
+        self.quantities.is_some()
     }
 
-    /// The amplitude of row `i` (`None` for a ray without a time), when the rows have
-    /// amplitude columns.
+    /// The quantities of row `i`, when the rows have their columns.
     #[inline]
-    pub(crate) fn write_amplitude(&mut self, i: usize, amplitude: Option<&Amplitude>) {
-        if let Some(columns) = &mut self.amplitudes {
-            columns.write(i, amplitude);
+    pub(crate) fn write_quantities(&mut self, i: usize, entry: &Entry<'_>) {
+        if let Some(columns) = &mut self.quantities {
+            columns.write(i, entry);
         }
     }
 

@@ -2,6 +2,7 @@
 //! own, and its arrivals written there into the columns of an `Arrivals` (no Python object per
 //! arrival).
 
+use eigenray::columns::{Entry, Schema};
 use eigenray::options::Stop;
 use eigenray::search::SearchLimits;
 use eigenray::stationary::Kink;
@@ -10,8 +11,8 @@ use numpy::IntoPyArray;
 use numpy::ndarray::{Array2, Array3};
 use pyo3::prelude::*;
 
-use crate::amplitude::AmplitudeColumns;
 use crate::arrivals::{NO_STEP, PyArrivals, STEP_KIND_NAMES};
+use crate::columns::QuantityColumns;
 use crate::convert::{interface_names, status_code, status_names};
 use crate::error::{argument_error, check_memory};
 use crate::interrupt::interruptible;
@@ -23,11 +24,11 @@ use crate::rays::Reasons;
 pub(crate) fn search_arrivals(py: Python<'_>, tracer: &Tracer) -> PyResult<PyArrivals> {
     let stop = Stop::new();
     let limits = SearchLimits::default();
-    let amplitudes = tracer.scene().amplitudes().is_some();
+    let schema = Schema::of(tracer.scene());
     let search = || {
         tracer
             .search_with(&limits, &|_| {}, Some(&stop))
-            .map(|report| ArrivalTable::of(report.arrivals, amplitudes))
+            .map(|report| ArrivalTable::of(report.arrivals, schema))
     };
     let table = interruptible(py, &stop, search, || {})?
         .map_err(|e| argument_error(py, "search", e.to_string()))??;
@@ -67,14 +68,14 @@ struct ArrivalTable {
     step_kind: Vec<u8>,
     /// `steps + 1` leg media an arrival, −1 past its own legs.
     media: Vec<i64>,
-    /// The amplitude columns, when the scene asks for amplitudes.
-    amplitudes: Option<AmplitudeColumns>,
+    /// The columns of the quantities the scene asks for.
+    quantities: QuantityColumns,
 }
 
 impl ArrivalTable {
     /// The bytes of the columns of `n` arrivals of at most `steps` steps (`None`: more than
     /// can be addressed).
-    fn bytes(n: usize, steps: usize, amplitudes: bool) -> Option<u64> {
+    fn bytes(n: usize, steps: usize, schema: &Schema) -> Option<u64> {
         let steps = steps as u64;
         let codes = std::mem::size_of::<Option<Reason>>() + std::mem::size_of::<Option<Kink>>();
         // Indices, time, order, status, complete, iterations, residual, reason and kink.
@@ -85,22 +86,18 @@ impl ArrivalTable {
             .checked_mul(16)?
             .checked_add(steps.checked_mul(9)?)?
             .checked_add(steps.checked_add(1)?.checked_mul(8)?)?;
-        let amplitude = if amplitudes {
-            AmplitudeColumns::BYTES_PER_RAY
-        } else {
-            0
-        };
-        (n as u64).checked_mul(row.checked_add(tables)?.checked_add(amplitude)?)
+        let quantities = QuantityColumns::bytes_per_ray(schema);
+        (n as u64).checked_mul(row.checked_add(tables)?.checked_add(quantities)?)
     }
 
-    /// The columns of `arrivals` (with amplitude columns when `amplitudes`), each arrival
-    /// freed once written; `MemoryError` when they would not fit.
-    fn of(arrivals: Vec<SearchArrival>, amplitudes: bool) -> PyResult<ArrivalTable> {
+    /// The columns of `arrivals` (with the columns of the quantities of `schema`), each
+    /// arrival freed once written; `MemoryError` when they would not fit.
+    fn of(arrivals: Vec<SearchArrival>, schema: Schema) -> PyResult<ArrivalTable> {
         let n = arrivals.len();
         let steps = arrivals.iter().map(|a| a.steps.len()).max().unwrap_or(0);
         check_memory(
             &format!("search: {n} arrivals of up to {steps} steps"),
-            ArrivalTable::bytes(n, steps, amplitudes),
+            ArrivalTable::bytes(n, steps, &schema),
         )?;
         let mut table = ArrivalTable {
             steps,
@@ -124,7 +121,7 @@ impl ArrivalTable {
             step_interface: vec![-1; n * steps],
             step_kind: vec![NO_STEP; n * steps],
             media: vec![-1; n * (steps + 1)],
-            amplitudes: amplitudes.then(|| AmplitudeColumns::new(n)),
+            quantities: QuantityColumns::new(schema, n),
         };
         for (i, a) in arrivals.into_iter().enumerate() {
             table.write_row(i, &a);
@@ -152,21 +149,15 @@ impl ArrivalTable {
         for (leg, &m) in legs.iter_mut().zip(&a.arrival.media) {
             *leg = m as i64;
         }
-        if let Some(columns) = &mut self.amplitudes {
-            columns.rows().write(i, a.arrival.amplitude.as_ref());
+        if let Some(mut rows) = self.quantities.rows() {
+            rows.write(i, &Entry::of_search(a));
         }
     }
 
     /// The columns as the `Arrivals` of `scene`.
     fn finish(self, py: Python<'_>, scene: &Scene) -> PyArrivals {
         let (n, steps) = (self.time.len(), self.steps);
-        let (amplitudes, amplitude_reasons) = match self.amplitudes {
-            Some(columns) => {
-                let (arrays, reasons) = columns.finish(py);
-                (Some(arrays), Some(reasons))
-            }
-            None => (None, None),
-        };
+        let (quantities, whys) = self.quantities.finish(py);
         let interfaces = interface_names(scene);
         let table = |columns: usize, values: Vec<_>| {
             Array2::from_shape_vec((n, columns), values).expect("columns entries a row")
@@ -198,10 +189,10 @@ impl ArrivalTable {
                 any: self.reason.iter().any(Option::is_some),
                 codes: self.reason,
                 interfaces,
-                amplitude: amplitude_reasons,
+                whys,
             },
             kinks: self.kink,
-            amplitudes,
+            quantities,
         }
     }
 }

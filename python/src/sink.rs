@@ -1,6 +1,7 @@
 //! The rows of a `Rays` as a batch's sink: each worker writes a ray's row right after solving
-//! it, and with amplitude columns the ray's amplitude too.
+//! it, and with the columns of quantities (the amplitude) the ray's quantities too.
 
+use eigenray::columns::Entry;
 use eigenray::{
     Point, RayRecord, Scene, Tracer,
     sink::{BatchSink, RaySlot},
@@ -30,9 +31,9 @@ impl<'a> RowSink<'a> {
         }
     }
 
-    /// Whether its rows have amplitude columns.
-    pub(crate) fn has_amplitudes(&self) -> bool {
-        self.rows.has_amplitudes()
+    /// Whether its rows have the columns of a quantity.
+    pub(crate) fn has_quantities(&self) -> bool {
+        self.rows.has_quantities()
     }
 
     /// The row of the ray at `at`.
@@ -94,27 +95,28 @@ impl BatchSink for RowSink<'_> {
     }
 }
 
-/// [`RowSink`] for rows with amplitude columns: the worker that writes a ray's row computes its
-/// amplitude from the points and leg media it writes (`Tracer::amplitude_of`, the function a
-/// `Batch` calls after its solve: the same numbers, without a second pass). A sink of its own,
-/// so that a batch without amplitudes runs the plain sink's code, unchanged.
-pub(crate) struct AmplitudeSink<'a> {
+/// [`RowSink`] for rows with the columns of quantities: the worker that writes a ray's row
+/// computes its quantities from the points and leg media it writes (the amplitude:
+/// `Tracer::amplitude_of`, the function a `Batch` calls after its solve: the same numbers,
+/// without a second pass). A sink of its own, so that a batch without quantities runs the
+/// plain sink's code, unchanged.
+pub(crate) struct QuantitySink<'a> {
     /// The rays' tracer.
     tracer: &'a Tracer,
-    /// The rows, with amplitude columns.
+    /// The rows, with the columns of quantities.
     rows: RowSink<'a>,
 }
 
-impl<'a> AmplitudeSink<'a> {
-    /// The sink of `rows` (with amplitude columns), the rays of `tracer`.
+impl<'a> QuantitySink<'a> {
+    /// The sink of `rows` (with the columns of quantities), the rays of `tracer`.
     pub(crate) fn new(tracer: &'a Tracer, rows: RowSink<'a>) -> Self {
-        AmplitudeSink { tracer, rows }
+        QuantitySink { tracer, rows }
     }
 
-    /// The amplitude of the ray of path `path` in row `row`, from its record, points and leg
+    /// The quantities of the ray of path `path` in row `row`, from its record, points and leg
     /// media (`&[]` where unknown).
     #[inline(always)]
-    fn amplitude(
+    fn quantities(
         &mut self,
         row: usize,
         path: usize,
@@ -123,14 +125,12 @@ impl<'a> AmplitudeSink<'a> {
         media: &[usize],
     ) {
         let steps = &self.rows.scene.paths()[path].steps;
-        let a = self
-            .tracer
-            .amplitude_of(steps, record.status, points, media);
-        self.rows.rows.write_amplitude(row, a.as_ref());
+        let entry = Entry::computed(self.tracer, steps, record.status, points, media);
+        self.rows.rows.write_quantities(row, &entry);
     }
 }
 
-impl BatchSink for AmplitudeSink<'_> {
+impl BatchSink for QuantitySink<'_> {
     fn blocks(&self) -> usize {
         self.rows.blocks()
     }
@@ -139,8 +139,8 @@ impl BatchSink for AmplitudeSink<'_> {
         let (a, b) = self.rows.split_at(blocks);
         let tracer = self.tracer;
         (
-            AmplitudeSink { tracer, rows: a },
-            AmplitudeSink { tracer, rows: b },
+            QuantitySink { tracer, rows: a },
+            QuantitySink { tracer, rows: b },
         )
     }
 
@@ -148,7 +148,7 @@ impl BatchSink for AmplitudeSink<'_> {
     fn write(&mut self, at: RaySlot, record: &RayRecord, points: &[Point], media: &[usize]) {
         self.rows.write(at, record, points, media);
         let known = self.rows.known(at.path, media).unwrap_or(&[]);
-        self.amplitude(self.rows.row(at), at.path, record, points, known);
+        self.quantities(self.rows.row(at), at.path, record, points, known);
     }
 
     #[inline(always)]
@@ -160,6 +160,6 @@ impl BatchSink for AmplitudeSink<'_> {
         media: [usize; 2],
     ) {
         self.rows.write_one(at, record, points, media);
-        self.amplitude(self.rows.row(at), at.path, record, points, &media);
+        self.quantities(self.rows.row(at), at.path, record, points, &media);
     }
 }

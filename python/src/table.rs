@@ -5,13 +5,14 @@
 use std::sync::Mutex;
 use std::sync::atomic::AtomicBool;
 
+use eigenray::columns::{Entry, Schema};
 use eigenray::options::Stop;
 use eigenray::{Point, Reason, Scene, StationaryRays, Tracer, Workspace};
 use numpy::IntoPyArray;
 use numpy::ndarray::{Array2, Array3};
 use pyo3::prelude::*;
 
-use crate::amplitude::AmplitudeColumns;
+use crate::columns::QuantityColumns;
 use crate::convert::{interface_names, kink_name, status_names};
 use crate::rays::{PyRays, Reasons, none_of};
 use crate::rows::{Rows, fill_parallel};
@@ -47,8 +48,8 @@ pub(crate) struct Table {
     any_reason: AtomicBool,
     /// The columns of every stationary path's entries, for `trace_stationary`.
     stationary: Option<StationaryColumns>,
-    /// The amplitude columns, when the scene asks for amplitudes.
-    amplitudes: Option<AmplitudeColumns>,
+    /// The columns of the quantities the scene asks for.
+    quantities: QuantityColumns,
 }
 
 /// The columns of every stationary path's entries (see [`stationary_table`]).
@@ -64,15 +65,14 @@ struct StationaryColumns {
 impl Table {
     /// The bytes of the arrays of `rays` rays of `width` points each, and of the batch's
     /// copy of them when it solves in a spatial order (`sorted`): what `new` and the batch
-    /// allocate (`None`: more than can be addressed).
-    pub(crate) fn bytes(rays: usize, width: usize, sorted: bool, amplitudes: bool) -> Option<u64> {
+    /// allocate (`None`: more than can be addressed), with the columns of the quantities of
+    /// `schema`.
+    pub(crate) fn bytes(rays: usize, width: usize, sorted: bool, schema: &Schema) -> Option<u64> {
         let (rays, width) = (rays as u64, width as u64);
         // Indices, status, time, iterations, residual, the reason; the points and media.
         let row = 8 * 3 + 1 + 8 + 8 + 4 + 8 + std::mem::size_of::<Option<Reason>>() as u64;
-        let mut per_ray = row + width.checked_mul(16)? + (width - 1) * 4;
-        if amplitudes {
-            per_ray += AmplitudeColumns::BYTES_PER_RAY;
-        }
+        let per_ray =
+            row + width.checked_mul(16)? + (width - 1) * 4 + QuantityColumns::bytes_per_ray(schema);
         // The batch's copy: a record, the points and the media of each ray.
         let copy = if sorted {
             48 + width * 16 + width * 4
@@ -82,9 +82,9 @@ impl Table {
         rays.checked_mul(per_ray + copy)
     }
 
-    /// The arrays of `rays` rays of `width` points each, with amplitude columns when
-    /// `amplitudes` (the scene asks for amplitudes).
-    pub(crate) fn new(rays: usize, width: usize, amplitudes: bool) -> Table {
+    /// The arrays of `rays` rays of `width` points each, with the columns of the quantities
+    /// of `schema` (those the scene asks for).
+    pub(crate) fn new(rays: usize, width: usize, schema: Schema) -> Table {
         Table {
             width,
             source: vec![0; rays],
@@ -100,7 +100,7 @@ impl Table {
             reason: none_of(rays),
             any_reason: AtomicBool::new(false),
             stationary: None,
-            amplitudes: amplitudes.then(|| AmplitudeColumns::new(rays)),
+            quantities: QuantityColumns::new(schema, rays),
         }
     }
 
@@ -120,7 +120,7 @@ impl Table {
             residual: &mut self.residual,
             reason: &mut self.reason,
             any_reason: &self.any_reason,
-            amplitudes: self.amplitudes.as_mut().map(AmplitudeColumns::rows),
+            quantities: self.quantities.rows(),
         }
     }
 
@@ -135,13 +135,7 @@ impl Table {
             ),
             None => (None, None, None),
         };
-        let (amplitudes, amplitude_reasons) = match self.amplitudes {
-            Some(columns) => {
-                let (arrays, reasons) = columns.finish(py);
-                (Some(arrays), Some(reasons))
-            }
-            None => (None, None),
-        };
+        let (quantities, whys) = self.quantities.finish(py);
         PyRays {
             source: self.source.into_pyarray(py).unbind(),
             receiver: self.receiver.into_pyarray(py).unbind(),
@@ -163,7 +157,7 @@ impl Table {
                 codes: self.reason,
                 any: self.any_reason.into_inner(),
                 interfaces: interface_names(scene),
-                amplitude: amplitude_reasons,
+                whys,
             }),
             status_names: status_names(),
             path_names: scene.paths().iter().map(|p| p.name.clone()).collect(),
@@ -171,7 +165,7 @@ impl Table {
             arrival,
             kink,
             complete,
-            amplitudes,
+            quantities,
         }
     }
 }
@@ -180,7 +174,7 @@ impl Table {
 /// per stationary path, and one `no_path` or `not_converged` per triple that has none).
 pub(crate) fn stationary_table(scene: &Scene, rays: &StationaryRays) -> Table {
     let n = rays.entries();
-    let mut table = Table::new(n, width(scene), scene.amplitudes().is_some());
+    let mut table = Table::new(n, width(scene), Schema::of(scene));
     let mut columns = StationaryColumns {
         arrival: Vec::with_capacity(n),
         kink: Vec::with_capacity(n),
@@ -191,7 +185,7 @@ pub(crate) fn stationary_table(scene: &Scene, rays: &StationaryRays) -> Table {
         let triple = [e.source, e.receiver, e.path];
         let media = e.media.map(|m| m.iter().copied());
         rows.write(row, scene, triple, &e.record, e.points, media);
-        rows.write_amplitude(row, e.amplitude);
+        rows.write_quantities(row, &Entry::of_stationary(&e));
         columns.arrival.push(e.arrival as i64);
         columns.kink.push(kink_name(e.kink));
         columns.complete.push(e.complete);
@@ -210,7 +204,7 @@ pub(crate) fn pairs_table(
     stop: &Stop,
 ) -> Table {
     let scene = tracer.scene();
-    let mut table = Table::new(sources.len(), width(scene), scene.amplitudes().is_some());
+    let mut table = Table::new(sources.len(), width(scene), Schema::of(scene));
     fill_parallel(table.rows(), 0, &Workspace::new, &|ws, first, rows| {
         // Once stopped, the rest is skipped (the caller raises).
         if stop.requested() {
@@ -222,9 +216,8 @@ pub(crate) fn pairs_table(
                 let record = tracer.solve(sources[i], receivers[i], path, ws);
                 let media = Some(ws.media().iter().copied());
                 rows.write(row, scene, [i, i, path], &record, ws.points(), media);
-                if rows.has_amplitudes() {
-                    let amplitude = tracer.amplitude(path, &record, ws);
-                    rows.write_amplitude(row, amplitude.as_ref());
+                if rows.has_quantities() {
+                    rows.write_quantities(row, &Entry::solved(tracer, path, &record, ws));
                 }
             }
         });

@@ -3,6 +3,7 @@
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use eigenray::columns::Schema;
 use eigenray::options::Stop;
 use eigenray::{
     BatchOptions, Tracer,
@@ -15,7 +16,7 @@ use crate::interrupt::interruptible;
 use crate::out_arrays::OutArrays;
 use crate::progress::{Progress, Reports};
 use crate::rays::PyRays;
-use crate::sink::{AmplitudeSink, RowSink};
+use crate::sink::{QuantitySink, RowSink};
 use crate::table::{Table, width};
 
 /// Every ray of `tracer` as `Rays` (see `Tracer.trace`): into the arrays of `out` (the `Rays`
@@ -42,10 +43,10 @@ pub(crate) fn trace_rays(
             Ok(out.unbind())
         }
         None => {
-            let amplitudes = scene.amplitudes().is_some();
-            let bytes = Table::bytes(n, w, warm_start, amplitudes);
+            let schema = Schema::of(scene);
+            let bytes = Table::bytes(n, w, warm_start, &schema);
             check_memory(&format!("trace: {n} rays"), bytes)?;
-            let mut table = py.detach(|| Table::new(n, w, amplitudes));
+            let mut table = py.detach(|| Table::new(n, w, schema));
             let sink = RowSink::new(scene, table.rows());
             let progress = Progress::new(py, progress, n)?;
             trace_rows(py, tracer, scratch, warm_start, progress, sink)??;
@@ -54,8 +55,8 @@ pub(crate) fn trace_rays(
     }
 }
 
-/// [`trace_into`] the rows of `sink`, with their amplitudes when they have amplitude columns
-/// (the one choice of the batch: a batch without amplitudes runs the plain sink).
+/// [`trace_into`] the rows of `sink`, with their quantities when they have their columns
+/// (the one choice of the batch: a batch without quantities runs the plain sink).
 fn trace_rows(
     py: Python<'_>,
     tracer: &Tracer,
@@ -64,8 +65,8 @@ fn trace_rows(
     progress: Option<Progress<'_>>,
     sink: RowSink<'_>,
 ) -> PyResult<PyResult<()>> {
-    if sink.has_amplitudes() {
-        let sink = AmplitudeSink::new(tracer, sink);
+    if sink.has_quantities() {
+        let sink = QuantitySink::new(tracer, sink);
         trace_into(py, tracer, scratch, warm_start, progress, sink)
     } else {
         trace_into(py, tracer, scratch, warm_start, progress, sink)

@@ -5,6 +5,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, PoisonError, RwLock, RwLockReadGuard, RwLockWriteGuard, TryLockError};
 
 use eigenray::amplitudes::Complex64;
+use eigenray::columns::{Entry, Schema};
 use eigenray::options::Stop;
 use eigenray::{
     Arrival, Gradient, Point, PointSensitivities, Scene, SceneError, Tracer, Workspace,
@@ -211,7 +212,7 @@ impl PyTracer {
         let total = scene.num_rays();
         check_memory(
             &format!("trace_stationary: {total} rays"),
-            Table::bytes(total, width(scene), false, scene.amplitudes().is_some()),
+            Table::bytes(total, width(scene), false, &Schema::of(scene)),
         )?;
         let progress = Progress::new(py, progress, total)?;
         let done = AtomicUsize::new(0);
@@ -246,14 +247,14 @@ impl PyTracer {
         let (source, receiver, path) = ray_arguments(py, scene, source, receiver, path)?;
         scratch(&self.workspace, |ws| {
             let record = tracer.solve(source, receiver, path, ws);
-            let amplitude = tracer.amplitude(path, &record, ws);
+            let entry = Entry::solved(&tracer, path, &record, ws);
             Ok(PyRay::from_record(
                 py,
                 scene,
                 &record,
                 ws.points(),
                 ws.media(),
-                amplitude.as_ref(),
+                &entry,
             ))
         })
     }
@@ -383,9 +384,8 @@ impl PyTracer {
         let scene = tracer.scene();
         let path = path_index(py, scene, path)?;
         // Each pair: its two points, and its ray's row of the table.
-        let per_row = 32
-            + Table::bytes(1, width(scene), false, scene.amplitudes().is_some())
-                .unwrap_or(u64::MAX);
+        let per_row =
+            32 + Table::bytes(1, width(scene), false, &Schema::of(scene)).unwrap_or(u64::MAX);
         let sources = points_arg(py, "sources", sources, per_row)?;
         let receivers = points_arg(py, "receivers", receivers, 16)?;
         if sources.len() != receivers.len() {

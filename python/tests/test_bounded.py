@@ -315,3 +315,19 @@ def test_every_stationary_path_reports_its_progress():
     assert len(rays.time) >= 4
     with pytest.raises(TypeError, match="progress"):
         tracer.trace_stationary(progress=5)
+
+
+def test_gradients_of_a_hundred_million_broadcast_rays_are_a_memory_error():
+    # Issue 39: a `Rays` state of one ray broadcast to 10^8 rows (little memory) made
+    # `gradients()` abort the interpreter while allocating its arrays.
+    setup = SMALL + """
+_, (state,) = tracer.trace().__reduce__()
+n = 10**8
+big = {k: np.broadcast_to(v, (n,) + v.shape[1:])
+       if isinstance(v, np.ndarray) and v.ndim >= 1 and len(v) == 1 else v
+       for k, v in state.items()}
+rays = eigenray.Rays._from_state(big)
+assert len(rays) == n
+"""
+    out = capped(setup, "tracer.gradients(rays)", "MemoryError")
+    assert out.startswith("RAISED MemoryError gradients: 100000000 rays"), out

@@ -196,3 +196,31 @@ def test_a_tl_map_in_receiver_blocks_on_worker_processes_is_bit_for_bit():
         tl = np.concatenate(list(parts), axis=1)
     assert tl.dtype == whole.dtype
     assert np.array_equal(tl, whole)
+
+
+def test_rays_of_a_fortran_ordered_state_are_refused_as_out_and_left_as_they_were():
+    # Issue 39: a `Rays` read from a state whose `points` are in Fortran order served as the
+    # `out` of `trace` and had its rows written in C order (zeros in row 0).
+    tracer = eigenray.Tracer(eigenray.Scene(PATHS))
+    rays = tracer.trace()
+    _, (state,) = rays.__reduce__()
+    fortran = eigenray.Rays._from_state(dict(state, points=np.asfortranarray(state["points"])))
+    assert not fortran.points.flags.c_contiguous
+    before = {k: np.copy(v) if isinstance(v, np.ndarray) else v
+              for k, v in attributes(fortran).items()}
+    with pytest.raises(eigenray.EigenrayError, match="C-contiguous") as caught:
+        tracer.trace(out=fortran)
+    assert caught.value.key == "out"
+    after = attributes(fortran)
+    for name, want in before.items():
+        if isinstance(want, np.ndarray):
+            assert np.array_equal(after[name], want, equal_nan=want.dtype.kind in "fc"), name
+        else:
+            assert after[name] == want, name
+    # Read in any order, its points are the rays' own: their gradients are the same.
+    assert np.array_equal(
+        tracer.gradients(fortran).vertex_d, tracer.gradients(rays).vertex_d, equal_nan=True
+    )
+    # The same state in C order is written in place, as the fresh rays.
+    again = eigenray.Rays._from_state(dict(state, points=np.ascontiguousarray(state["points"])))
+    assert_same_rays(tracer.trace(out=again), rays)
