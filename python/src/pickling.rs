@@ -304,38 +304,79 @@ pub(crate) fn rays_of_state(state: &Bound<'_, PyDict>) -> PyResult<PyRays> {
 mod tests {
     use super::*;
 
+    /// Every reason, each index its own nonzero number (so that an index read back as 0, or
+    /// as another field, shows).
+    const REASONS: [Reason; 13] = [
+        Reason::LeavesEnd { step: 3 },
+        Reason::WrongSide { step: 1 },
+        Reason::AtVertex { step: 7 },
+        Reason::Crosses {
+            leg: 2,
+            interface: 5,
+        },
+        Reason::NoMedium { leg: 4 },
+        Reason::MediaUnsettled,
+        Reason::Coincident { step: 6 },
+        Reason::IterationLimit,
+        Reason::BeyondEnd { step: 8 },
+        Reason::NoStationaryPath,
+        Reason::SearchLimit,
+        Reason::Undecided {
+            rule: Threshold::Side,
+        },
+        Reason::AtEnd { step: 9 },
+    ];
+
+    /// Every reason reads back from its code as itself, every rule of `Undecided` too; the
+    /// kinds are 1 to 13, one a reason (13 is `AtEnd`); 0 and 14 are no reason.
     #[test]
     fn every_reason_reads_back() {
-        let reasons = [
-            Reason::LeavesEnd { step: 3 },
-            Reason::WrongSide { step: 1 },
-            Reason::AtVertex { step: 7 },
-            Reason::Crosses {
-                leg: 2,
-                interface: 5,
-            },
-            Reason::NoMedium { leg: 4 },
-            Reason::MediaUnsettled,
-            Reason::Coincident { step: 6 },
-            Reason::AtEnd { step: 2 },
-            Reason::IterationLimit,
-            Reason::BeyondEnd { step: 8 },
-            Reason::NoStationaryPath,
-            Reason::SearchLimit,
-        ]
-        .into_iter()
-        .chain(THRESHOLDS.map(|rule| Reason::Undecided { rule }));
+        let reasons = REASONS
+            .into_iter()
+            .chain(THRESHOLDS.map(|rule| Reason::Undecided { rule }));
         for r in reasons {
             assert_eq!(reason_of(reason_code(r)), Some(r));
         }
-        for (k, r) in NoAmplitude::CODES.into_iter().enumerate() {
-            let r = match r {
-                NoAmplitude::Grazing { .. } => NoAmplitude::Grazing { step: k },
-                other => other,
-            };
-            assert_eq!(no_amplitude_of(no_amplitude_code(r)), Some(r));
+        let mut kinds: Vec<u64> = REASONS.iter().map(|&r| reason_code(r)[0]).collect();
+        kinds.sort_unstable();
+        assert_eq!(kinds, (1..=13).collect::<Vec<u64>>());
+        assert_eq!(reason_of([13, 4, 0]), Some(Reason::AtEnd { step: 4 }));
+        assert_eq!(reason_of([0, 0, 0]), None);
+        assert_eq!(reason_of([14, 0, 0]), None);
+        assert_eq!(reason_of([12, THRESHOLDS.len() as u64, 0]), None);
+    }
+
+    /// Every reason for no amplitude reads back from its code as itself, its step or leg
+    /// index included (each a different nonzero number: a converted reflection at step 3
+    /// comes back at step 3); its kind is its place in `NoAmplitude::CODES`, plus 1; 0 and
+    /// one past the table are no reason.
+    #[test]
+    fn every_reason_for_no_amplitude_reads_back() {
+        let reasons = [
+            NoAmplitude::Vertex,
+            NoAmplitude::Obstructed,
+            NoAmplitude::ConvertedReflection { step: 3 },
+            NoAmplitude::NoMediumAcross { step: 5 },
+            NoAmplitude::Grazing { step: 7 },
+            NoAmplitude::VanishedLeg { leg: 2 },
+            NoAmplitude::Caustic,
+            NoAmplitude::OnAxis,
+            NoAmplitude::SourceOffAxis,
+            NoAmplitude::UnknownMedia,
+        ];
+        assert_eq!(reasons.len(), NoAmplitude::CODES.len());
+        for (k, r) in reasons.into_iter().enumerate() {
+            let code = no_amplitude_code(r);
+            assert_eq!(code[0], k as u64 + 1, "{r:?}");
+            assert_eq!(NoAmplitude::CODES[k].name(), r.name());
+            assert_eq!(no_amplitude_of(code), Some(r));
         }
-        assert_eq!(reason_of([13, 0, 0]), None);
+        assert_eq!(
+            no_amplitude_of([3, 11, 0]),
+            Some(NoAmplitude::ConvertedReflection { step: 11 })
+        );
         assert_eq!(no_amplitude_of([0, 0, 0]), None);
+        let past = NoAmplitude::CODES.len() as u64 + 1;
+        assert_eq!(no_amplitude_of([past, 0, 0]), None);
     }
 }

@@ -1618,3 +1618,6 @@ mod tests {
     /// Random rooms the comparison runs on.
     const ROOMS: usize = 80;
 }
+
+#[cfg(test)]
+mod time_bound_tests;
