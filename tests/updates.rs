@@ -49,7 +49,7 @@ fn random_update(spec: &SceneSpec, rng: &mut SplitMix64) -> Update {
             .values()
             .flat_map(|i| i.points.iter().copied())
             .chain(spec.sources.iter().copied())
-            .chain(spec.receivers.iter().copied())
+            .chain(spec.receivers.list().unwrap().iter().copied())
             .collect();
         let lo = all
             .iter()
@@ -89,7 +89,7 @@ fn random_update(spec: &SceneSpec, rng: &mut SplitMix64) -> Update {
             Update::Source(k, awkward(&mut f, p))
         }
         1 | 2 => {
-            let k = pick(f(), spec.receivers.len());
+            let k = pick(f(), spec.receivers.list().unwrap().len());
             let p = anywhere(&mut f);
             Update::Receiver(k, awkward(&mut f, p))
         }
@@ -136,7 +136,7 @@ fn edited(spec: &SceneSpec, update: &Update) -> SceneSpec {
     let xy = |p: &Point| [p.x, p.y];
     match update {
         Update::Source(k, p) => spec.sources[*k] = xy(p),
-        Update::Receiver(k, p) => spec.receivers[*k] = xy(p),
+        Update::Receiver(k, p) => spec.receivers.points_mut()[*k] = xy(p),
         Update::Interface(name, pts) => {
             spec.interfaces.get_mut(name).unwrap().points = pts.iter().map(xy).collect();
         }

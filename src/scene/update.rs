@@ -62,6 +62,7 @@ impl Scene {
                 &self.segments,
                 &self.segment_bvh,
                 self.domain,
+                self.axisymmetric(),
                 source,
                 p,
             )?;
@@ -91,6 +92,7 @@ impl Scene {
             self.receivers[receiver] = old;
             return Err(e);
         }
+        self.document.forget_receiver_grid();
         Ok(())
     }
 
@@ -119,6 +121,7 @@ impl Scene {
             self.receivers = old;
             return Err(e);
         }
+        self.document.forget_receiver_grid();
         Ok(())
     }
 
@@ -198,6 +201,7 @@ impl Scene {
                         &self.segments,
                         &self.segment_bvh,
                         self.domain,
+                        self.axisymmetric(),
                         k,
                         p,
                     )

@@ -85,7 +85,7 @@ impl Tracer {
             &search,
             scratch,
             &mut |p: MirrorPath<'_>| {
-                if !control.listed.take(1) {
+                if !control.listed.take(p.walls.len()) {
                     return false;
                 }
                 arrivals.push(beam_arrival(walls, source, medium, p));
