@@ -318,11 +318,17 @@ mod tests {
         };
         assert_eq!(scene.receiver_grid(), Some(grid));
         round_trip(&scene, "grid");
-        assert!(scene.to_json().contains(r#""receivers":{"grid":{"x":[100.0,5000.0,197.0],"y":[-1.0,-99.0,50.0]}}"#));
+        assert!(
+            scene.to_json().contains(
+                r#""receivers":{"grid":{"x":[100.0,5000.0,197.0],"y":[-1.0,-99.0,50.0]}}"#
+            )
+        );
         scene.set_receiver(7, Point::new(1.0, -2.0)).unwrap();
         assert_eq!(scene.receiver_grid(), None);
         round_trip(&scene, "grid after set_receiver");
-        assert!(matches!(scene.to_spec().receivers, ReceiversSpec::Points(ref p) if p.len() == 197 * 50));
+        assert!(
+            matches!(scene.to_spec().receivers, ReceiversSpec::Points(ref p) if p.len() == 197 * 50)
+        );
     }
 
     /// After each edit the scene writes the document of the edited scene.

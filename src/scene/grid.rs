@@ -157,7 +157,8 @@ impl ReceiverGridSpec {
     /// `(nx, ny)`: the receivers along x and along y, when both counts are whole numbers
     /// that fit a `usize` (not checked further: [`points`](Self::points) validates).
     pub fn shape(&self) -> Option<(usize, usize)> {
-        let count = |c: f64| (c >= 1.0 && c.fract() == 0.0 && c <= u32::MAX as f64).then_some(c as usize);
+        let count =
+            |c: f64| (c >= 1.0 && c.fract() == 0.0 && c <= u32::MAX as f64).then_some(c as usize);
         Some((count(self.x[2])?, count(self.y[2])?))
     }
 
@@ -240,7 +241,14 @@ mod tests {
         let xy: Vec<[f64; 2]> = points.iter().map(|p| [p.x, p.y]).collect();
         assert_eq!(
             xy,
-            [[0.0, -1.0], [0.0, -2.0], [0.5, -1.0], [0.5, -2.0], [1.0, -1.0], [1.0, -2.0]]
+            [
+                [0.0, -1.0],
+                [0.0, -2.0],
+                [0.5, -1.0],
+                [0.5, -2.0],
+                [1.0, -1.0],
+                [1.0, -2.0]
+            ]
         );
         let xs = |first: f64, last: f64, count: f64| -> Vec<f64> {
             let g = grid([first, last, count], [0.0, 0.0, 1.0]);
@@ -261,8 +269,14 @@ mod tests {
             (grid([0.0, 1.0, 0.0], [0.0, 1.0, 2.0]), "receivers.grid.x"),
             (grid([0.0, 1.0, 2.0], [0.0, 1.0, 1.5]), "receivers.grid.y"),
             (grid([0.0, 1.0, 2.0], [0.0, 1.0, -3.0]), "receivers.grid.y"),
-            (grid([0.0, 1e300, 2.0], [0.0, 1.0, 2.0]), "receivers.grid.x[1]"),
-            (grid([0.0, 1.0, 2.0], [f64::NAN, 1.0, 2.0]), "receivers.grid.y[0]"),
+            (
+                grid([0.0, 1e300, 2.0], [0.0, 1.0, 2.0]),
+                "receivers.grid.x[1]",
+            ),
+            (
+                grid([0.0, 1.0, 2.0], [f64::NAN, 1.0, 2.0]),
+                "receivers.grid.y[0]",
+            ),
             (grid([0.0, 1.0, 4e9], [0.0, 1.0, 4e9]), "receivers.grid"),
         ] {
             let e = ReceiversSpec::Grid { grid: g }.validate().unwrap_err();
@@ -280,7 +294,12 @@ mod tests {
             let spec: ReceiversSpec = serde_json::from_str(text).unwrap();
             assert_eq!(serde_json::to_string(&spec).unwrap(), text);
         }
-        for bad in [r#"{"grid":{"x":[0,1,2]}}"#, r#"{"grid":{"x":[0,1,2],"y":[0,1,2],"z":[0,1,2]}}"#, r#"{"points":[]}"#, "3"] {
+        for bad in [
+            r#"{"grid":{"x":[0,1,2]}}"#,
+            r#"{"grid":{"x":[0,1,2],"y":[0,1,2],"z":[0,1,2]}}"#,
+            r#"{"points":[]}"#,
+            "3",
+        ] {
             assert!(serde_json::from_str::<ReceiversSpec>(bad).is_err(), "{bad}");
         }
     }

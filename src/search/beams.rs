@@ -80,6 +80,11 @@ impl Tracer {
             slowness: scene.media()[medium].slowness,
             obstructed: options.obstructed,
             max_beams: control.limits.beams,
+            // The tree serves every receiver of its source: `solver.max_work` for each.
+            max_work: scene
+                .solver()
+                .max_work
+                .saturating_mul(scene.receivers().len().max(1) as u64),
         };
         let stats = walls.arrivals(
             &search,

@@ -16,8 +16,10 @@
 //!   their complete searches.
 //!
 //! Limits count the work actually done ([`SearchLimits`], and the scene's `solver.max_work`
-//! per pair's walk): a source's tree that reaches its limit of beams, a pair's walk that
-//! spends its budget, or a search that reaches its limit of arrivals stops there, and every arrival of the pairs it leaves short says
+//! per pair's walk and, for each of its receivers, per source's tree): a source's tree that
+//! reaches its limit of beams or of work, a pair's walk that spends its budget, or a search
+//! whose arrivals reach their limit (in number, or in the memory they hold with their points,
+//! over the whole search) stops there, and every arrival of the pairs it leaves short says
 //! `complete: false`. A search is refused up front only where its table of pairs cannot be
 //! allocated ([`SearchError::TooLarge`]).
 
@@ -89,7 +91,8 @@ pub const PAIR_BYTES: usize = std::mem::size_of::<PairRecord>();
 /// The limits of a search's work: what it does before it stops and says `complete: false`
 /// on the pairs it leaves short. With the scene's `solver.max_work` (the budget of each
 /// pair's walk over sequences with refractions, in the complete search's work units, one
-/// more per sequence visited), the one place a budget plugs in.
+/// more per sequence visited; and of each source's beam tree, that much for each of its
+/// receivers), the one place a budget plugs in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SearchLimits {
     /// Beams per source's tree.
@@ -129,6 +132,10 @@ pub struct SearchReport {
     pub beams: u64,
     /// Paths the trees validated (receivers in a beam and within the time bound).
     pub leaves: u64,
+    /// Work the trees did, over all sources, in the units of `solver.max_work` (one per
+    /// child wall tried, one per segment an occlusion test weighs, one per leg validated):
+    /// each source's tree stops at `solver.max_work` for each of its receivers.
+    pub tree_work: u64,
     /// Work the walks did over all pairs: sequences visited plus the work units of their
     /// complete searches (as `solver.max_work` counts them).
     pub work: u64,
@@ -337,6 +344,7 @@ impl Tracer {
         for (source, tree) in trees.into_iter().enumerate() {
             report.beams += tree.stats.beams;
             report.leaves += tree.stats.leaves;
+            report.tree_work += tree.stats.work;
             if tree.stats.stopped {
                 for p in &mut pairs[source * nr..(source + 1) * nr] {
                     p.complete = false;
