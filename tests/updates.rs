@@ -354,12 +354,14 @@ fn moving_every_receiver_gives_a_fresh_tracers_rays() {
         for (scale, shift) in [(0.5, 0.0), (1.3, 0.25), (1.0, -0.2), (1.0, 0.0)] {
             let moved: Vec<[f64; 2]> = spec
                 .receivers
+                .list()
+                .unwrap()
                 .iter()
                 .map(|p| [p[0] * scale + shift, p[1] * scale - shift])
                 .collect();
             let points: Vec<Point> = moved.iter().map(|p| Point::new(p[0], p[1])).collect();
             tracer.set_receivers(&points).unwrap();
-            spec.receivers = moved;
+            spec.receivers = moved.into();
             assert_eq!(
                 results(&tracer, true),
                 results(&fresh(&spec).unwrap(), true)
