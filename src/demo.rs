@@ -84,7 +84,7 @@ pub fn air_water(receivers: usize, seed: u64) -> SceneSpec {
         },
     );
     spec.sources = vec![[0.0, 1.0]];
-    spec.receivers = jittered_grid(receivers, [0.0, 1.0], [-1.0, -0.2], seed);
+    spec.receivers = jittered_grid(receivers, [0.0, 1.0], [-1.0, -0.2], seed).into();
     spec.paths = vec![PathSpec {
         name: Some("transmitted".into()),
         steps: vec![StepSpec::Refract("surface".into())],
@@ -179,7 +179,8 @@ pub fn layer_stack(n_layers: usize, receivers: usize) -> SceneSpec {
     spec.receivers = linspace(-0.3 * n as f64, 0.9 * n as f64, receivers)
         .into_iter()
         .map(|x| [x, y])
-        .collect();
+        .collect::<Vec<_>>()
+        .into();
     spec.paths = vec![PathSpec {
         name: Some("down".into()),
         steps: (0..n).map(|i| StepSpec::Refract(interface(i))).collect(),
@@ -214,7 +215,7 @@ pub fn dipping_stack(n_layers: usize, receivers: usize) -> SceneSpec {
         let slope = 0.9 * i as f64 / x1;
         iface.points = vec![[x0, y + slope * x0], [x1, y + slope * x1]];
     }
-    for r in &mut spec.receivers {
+    for r in spec.receivers.points_mut() {
         r[1] = -1.1 * n_layers as f64 - 0.5;
     }
     spec.description = Some(format!(
@@ -321,7 +322,8 @@ pub fn sea_floor(segments: usize, receivers: usize) -> SceneSpec {
     spec.receivers = linspace(0.1, 6.0, receivers)
         .into_iter()
         .map(|x| [x, -0.01])
-        .collect();
+        .collect::<Vec<_>>()
+        .into();
     spec.paths = vec![PathSpec {
         name: Some("bottom".into()),
         steps: vec![StepSpec::Reflect("floor".into())],

@@ -101,8 +101,8 @@ pub use trace::{Arrival, InitialGuess, Ray, RayRecord, Reason, Status, Tracer, W
 pub mod spec {
     pub use crate::scene::{
         AmplitudesSpec, AttenuationSpec, ImpulseResponseSpec, InterfaceSpec, MediumSpec, PathSpec,
-        Polarization, ReflectionSpec, SceneSpec, SearchSpec, SolverSpec, SourceModel,
-        StationaryMode, StepSpec,
+        Polarization, ReceiverGridSpec, ReceiversSpec, ReflectionSpec, SceneSpec, SearchSpec,
+        SolverSpec, SourceModel, StationaryMode, StepSpec,
     };
 }
 
@@ -160,7 +160,7 @@ pub mod limits {
         MAX_STATIONARY_STEPS, MAX_WORK_LIMIT, MIN_COORDINATE, REGION_RANGE_BITS,
     };
     pub use crate::scene::{DEFAULT_TAPS, MAX_RATE, MAX_SAMPLES, MAX_TAPS};
-    pub use crate::search::{MAX_SEARCH_ARRIVALS, MAX_SEARCH_BEAMS};
+    pub use crate::search::{MAX_SEARCH_ARRIVALS, MAX_SEARCH_BEAMS, MAX_SEARCH_MEMORY};
 }
 
 /// The geometry beneath a scene: polylines and their queries, boxes, and the robust

@@ -218,7 +218,7 @@ impl Regions {
             }
         }
         for (k, &p) in scene.sources().iter().enumerate() {
-            self.check_source(k, p)?;
+            self.check_source(scene, k, p)?;
         }
         let divides: Vec<bool> = (0..scene.interfaces().len())
             .map(|i| {
@@ -254,8 +254,8 @@ impl Regions {
 
     /// Refuses source `k` at `p` when no medium fills its region (part of the checks of
     /// [`build`](Self::build); alone when a source moves).
-    pub(crate) fn check_source(&self, k: usize, p: Point) -> Result<(), SceneError> {
-        if self.medium_at(p).is_none() {
+    pub(crate) fn check_source(&self, scene: &Scene, k: usize, p: Point) -> Result<(), SceneError> {
+        if self.source_medium(scene, p).is_none() {
             return Err(SceneError::new(
                 format!("sources[{k}]"),
                 "lies in a region that no medium fills (no `at` point claims it and there is \
@@ -436,6 +436,31 @@ impl Regions {
     /// lies exactly on a boundary between two regions (see [`region_at`](Self::region_at)).
     pub fn medium_at(&self, p: Point) -> Option<usize> {
         self.region_at(p).and_then(|r| self.region_medium(r))
+    }
+
+    /// The medium of a source of `scene` at `p`: that of the region holding it, or, for a
+    /// source on the axis of an `axisymmetric` scene where the axis is the `domain`'s left
+    /// edge, that of the region on the edge's right (the format's rule).
+    pub(crate) fn source_medium(&self, scene: &Scene, p: Point) -> Option<usize> {
+        if !scene.source_on_axis_edge(p) {
+            return self.medium_at(p);
+        }
+        let q = self.scale.query(p)?;
+        let region = match self.cdt.locate(q) {
+            PositionInTriangulation::OnEdge(e) => {
+                let e = self.cdt.directed_edge(e);
+                // The face on a directed edge's left; an upward edge has its left toward −x.
+                let up = e.to().position().y > e.from().position().y;
+                let face = if up { e.rev().face() } else { e.face() };
+                self.region_of(face.fix())
+            }
+            PositionInTriangulation::OnFace(f) => self.face_region[f.index()],
+            _ => NONE,
+        };
+        if region == NONE {
+            return None;
+        }
+        self.medium_of_region(region)
     }
 
     /// [`medium_at`](Self::medium_at) with a per-caller search hint (see [`LocateHint`]).

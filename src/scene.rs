@@ -13,6 +13,7 @@ mod amplitudes;
 mod builder;
 mod crossings;
 mod document;
+mod grid;
 mod impulse;
 mod names;
 mod update;
@@ -22,6 +23,7 @@ pub use amplitudes::{
     ReflectionSpec, SourceModel, Waves,
 };
 pub use builder::SceneBuilder;
+pub use grid::{ReceiverGridSpec, ReceiversSpec};
 pub use impulse::{
     DEFAULT_TAPS, ImpulseResponseOptions, ImpulseResponseSpec, MAX_RATE, MAX_SAMPLES, MAX_TAPS,
 };
@@ -157,8 +159,10 @@ pub struct SceneSpec {
     pub interfaces: BTreeMap<String, InterfaceSpec>,
     /// Source points.
     pub sources: Vec<[f64; 2]>,
-    /// Receiver points.
-    pub receivers: Vec<[f64; 2]>,
+    /// Receivers: a list of points, or a grid of them (`{"grid": {"x": [first, last,
+    /// count], "y": [first, last, count]}}`).
+    #[serde(default)]
+    pub receivers: ReceiversSpec,
     /// Paths: sequences of interactions (none when the scene only asks for a `search`).
     #[serde(default)]
     pub paths: Vec<PathSpec>,
@@ -1048,12 +1052,17 @@ impl Scene {
             at_point_in_place(m, &interfaces, &segments, &segment_bvh, domain)?;
         }
         let sources = points_of("sources", &spec.sources)?;
-        let receivers = points_of("receivers", &spec.receivers)?;
+        let receivers = spec.receivers.validate()?;
 
-        let needs_regions = spec.paths.iter().any(|p| p.media.is_none()) || spec.search.is_some();
+        let needs_regions = spec.paths.iter().any(|p| p.media.is_none())
+            || spec.search.is_some()
+            || media_reflections_look_up(spec);
         if needs_regions {
+            let axis = spec
+                .amplitudes
+                .is_some_and(|a| a.source == SourceModel::Axisymmetric);
             for (k, &p) in sources.iter().enumerate() {
-                source_in_a_region(&interfaces, &segments, &segment_bvh, domain, k, p)?;
+                source_in_a_region(&interfaces, &segments, &segment_bvh, domain, axis, k, p)?;
             }
         }
         let paths = paths_of(&spec.paths, &interfaces, &media)?;
@@ -1209,10 +1218,29 @@ impl Scene {
         }
         Ok(())
     }
-    /// Whether some path needs region lookup (gives no `media`), or the scene asks for a
-    /// `search` (whose media come from the regions).
+    /// Whether some path needs region lookup (gives no `media`), the scene asks for a
+    /// `search` (whose media come from the regions), or its amplitudes' `"media"`
+    /// reflections take the medium across an interface from the regions it declares
+    /// (`background`, an `at` or a `domain`).
     pub fn needs_regions(&self) -> bool {
-        self.paths.iter().any(|p| p.media.is_none()) || self.search.is_some()
+        let media_reflections = self.amplitudes.as_ref().is_some_and(|a| {
+            a.reflection.contains(&Reflection::Media)
+                && (self.background.is_some()
+                    || self.domain.is_some()
+                    || self.media.iter().any(|m| m.at.is_some()))
+        });
+        self.paths.iter().any(|p| p.media.is_none()) || self.search.is_some() || media_reflections
+    }
+    /// Whether a source at `p` lies on the axis of an axisymmetric scene where the axis is
+    /// the `domain`'s left edge: it is then in the medium on the axis' right.
+    pub(crate) fn source_on_axis_edge(&self, p: Point) -> bool {
+        on_axis_edge(self.domain, self.axisymmetric(), p)
+    }
+    /// Whether the scene's amplitudes are those of an `axisymmetric` source.
+    fn axisymmetric(&self) -> bool {
+        self.amplitudes
+            .as_ref()
+            .is_some_and(|a| a.source == SourceModel::Axisymmetric)
     }
     /// Bounding box of everything in the scene (interfaces, sources, receivers, `at` points,
     /// domain).
@@ -1606,13 +1634,40 @@ fn check_region_range(points: impl Iterator<Item = Point> + Clone) -> Result<(),
     Ok(())
 }
 
+/// Whether the scene document's `"media"` reflections take the medium across an interface
+/// from region lookup: it asks for amplitudes, some interface reflects by `"media"`, and it
+/// declares regions (`background`, an `at` or a `domain`). Without regions such a scene is
+/// refused at `interfaces.NAME.reflection`.
+fn media_reflections_look_up(spec: &SceneSpec) -> bool {
+    let declares_regions = spec.background.is_some()
+        || spec.domain.is_some()
+        || spec.media.values().any(|m| m.at.is_some());
+    spec.amplitudes.is_some()
+        && declares_regions
+        && spec
+            .interfaces
+            .values()
+            .any(|i| i.reflection == Some(ReflectionSpec::Media))
+}
+
+/// Whether `p` lies on the axis x = 0 of an `axisymmetric` scene (`axisymmetric`) where that
+/// axis is the left edge of the `domain`, strictly between its corners.
+fn on_axis_edge(domain: Option<Aabb>, axisymmetric: bool, p: Point) -> bool {
+    domain.is_some_and(|d| {
+        axisymmetric && p.x == 0.0 && d.min.x == 0.0 && p.y > d.min.y && p.y < d.max.y
+    })
+}
+
 /// A source of a scene that needs region lookup must lie strictly inside a region: not on an
-/// interface, nor on the domain's edge.
+/// interface, nor on the domain's edge, except on the axis of an `axisymmetric` scene
+/// (`axisymmetric`), which may be the domain's left edge: the source is then in the medium on
+/// its right.
 fn source_in_a_region(
     interfaces: &[Interface],
     segments: &[SegmentRef],
     bvh: &Bvh,
     domain: Option<Aabb>,
+    axisymmetric: bool,
     k: usize,
     p: Point,
 ) -> Result<(), SceneError> {
@@ -1629,7 +1684,7 @@ fn source_in_a_region(
     }
     if let Some(d) = domain {
         let inside = p.x > d.min.x && p.x < d.max.x && p.y > d.min.y && p.y < d.max.y;
-        if d.contains(p) && !inside {
+        if d.contains(p) && !inside && !on_axis_edge(domain, axisymmetric, p) {
             return Err(SceneError::new(
                 key,
                 "lies exactly on the edge of the domain, so it has no medium: move it off the \

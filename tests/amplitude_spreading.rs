@@ -306,7 +306,7 @@ fn a_polygon_room() {
     ))
     .unwrap();
     let mut spec = SceneSpec::from_json(&text).unwrap();
-    spec.receivers.truncate(6);
+    spec.receivers.points_mut().truncate(6);
     let room = with_amplitudes(spec, SourceModel::Point);
     let e = check_point_scene(&room);
     report("a hexagonal room, reflections of orders 0 to 2", &e);

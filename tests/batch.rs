@@ -15,9 +15,10 @@ fn scene(spec: &eigenray::SceneSpec) -> Scene {
 /// `spec` with its receivers in a random order (a Fisher-Yates shuffle seeded by `seed`).
 fn shuffled(mut spec: eigenray::SceneSpec, seed: u64) -> eigenray::SceneSpec {
     let mut rng = SplitMix64(seed);
-    for i in (1..spec.receivers.len()).rev() {
+    let receivers = spec.receivers.points_mut();
+    for i in (1..receivers.len()).rev() {
         let j = (rng.next_u64() % (i as u64 + 1)) as usize;
-        spec.receivers.swap(i, j);
+        receivers.swap(i, j);
     }
     spec
 }
@@ -349,6 +350,7 @@ fn a_reused_batch_gives_the_same_rays() {
     let mut beyond = demo::air_water(300, 4);
     beyond
         .receivers
+        .points_mut()
         .extend([[3.0, -1.0], [4.0, -0.5], [5.0, -0.3]]);
     let mut reused = eigenray::Batch::default();
     let mut timeless = 0;
@@ -535,6 +537,7 @@ fn a_sink_gets_the_rays_of_the_batch_bit_for_bit() {
     let mut beyond = demo::air_water(300, 4);
     beyond
         .receivers
+        .points_mut()
         .extend([[3.0, -1.0], [4.0, -0.5], [5.0, -0.3]]);
     let scenes = [
         scene(&demo::air_water(1000, 2)),

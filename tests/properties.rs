@@ -400,7 +400,7 @@ fn build(raw: &RawScene) -> SceneSpec {
         RawPoint::Anywhere(..) | RawPoint::OnVertex(..) => default,
     };
     spec.sources = raw.sources.iter().map(place).collect();
-    spec.receivers = raw.receivers.iter().map(place).collect();
+    spec.receivers = raw.receivers.iter().map(place).collect::<Vec<_>>().into();
     let from = slot_of(&raw.sources[0], 0);
     let to = slot_of(&raw.receivers[0], nlines);
 

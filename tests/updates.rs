@@ -49,7 +49,7 @@ fn random_update(spec: &SceneSpec, rng: &mut SplitMix64) -> Update {
             .values()
             .flat_map(|i| i.points.iter().copied())
             .chain(spec.sources.iter().copied())
-            .chain(spec.receivers.iter().copied())
+            .chain(spec.receivers.list().unwrap().iter().copied())
             .collect();
         let lo = all
             .iter()
@@ -89,7 +89,7 @@ fn random_update(spec: &SceneSpec, rng: &mut SplitMix64) -> Update {
             Update::Source(k, awkward(&mut f, p))
         }
         1 | 2 => {
-            let k = pick(f(), spec.receivers.len());
+            let k = pick(f(), spec.receivers.list().unwrap().len());
             let p = anywhere(&mut f);
             Update::Receiver(k, awkward(&mut f, p))
         }
@@ -136,7 +136,7 @@ fn edited(spec: &SceneSpec, update: &Update) -> SceneSpec {
     let xy = |p: &Point| [p.x, p.y];
     match update {
         Update::Source(k, p) => spec.sources[*k] = xy(p),
-        Update::Receiver(k, p) => spec.receivers[*k] = xy(p),
+        Update::Receiver(k, p) => spec.receivers.points_mut()[*k] = xy(p),
         Update::Interface(name, pts) => {
             spec.interfaces.get_mut(name).unwrap().points = pts.iter().map(xy).collect();
         }
@@ -354,12 +354,14 @@ fn moving_every_receiver_gives_a_fresh_tracers_rays() {
         for (scale, shift) in [(0.5, 0.0), (1.3, 0.25), (1.0, -0.2), (1.0, 0.0)] {
             let moved: Vec<[f64; 2]> = spec
                 .receivers
+                .list()
+                .unwrap()
                 .iter()
                 .map(|p| [p[0] * scale + shift, p[1] * scale - shift])
                 .collect();
             let points: Vec<Point> = moved.iter().map(|p| Point::new(p[0], p[1])).collect();
             tracer.set_receivers(&points).unwrap();
-            spec.receivers = moved;
+            spec.receivers = moved.into();
             assert_eq!(
                 results(&tracer, true),
                 results(&fresh(&spec).unwrap(), true)

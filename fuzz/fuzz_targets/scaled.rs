@@ -7,6 +7,7 @@
 use arbitrary::Arbitrary;
 use eigenray::limits::{MAX_COORDINATE, MIN_COORDINATE};
 use eigenray::{Scene, SceneSpec, SolverOptions, Tracer};
+use eigenray::spec::ReceiversSpec;
 use libfuzzer_sys::fuzz_target;
 
 mod spec_gen;
@@ -34,7 +35,10 @@ fn scaled(spec: &SceneSpec, f: f64) -> SceneSpec {
     s.interfaces
         .values_mut()
         .for_each(|i| i.points.iter_mut().for_each(p));
-    s.sources.iter_mut().chain(&mut s.receivers).for_each(p);
+    s.sources
+        .iter_mut()
+        .chain(s.receivers.points_mut())
+        .for_each(p);
     s
 }
 
@@ -45,7 +49,13 @@ fn in_range(spec: &SceneSpec) -> bool {
     spec.media.values().all(|m| m.at.as_ref().is_none_or(p))
         && spec.domain.as_ref().is_none_or(|[a, b]| p(a) && p(b))
         && spec.interfaces.values().all(|i| i.points.iter().all(p))
-        && spec.sources.iter().chain(&spec.receivers).all(p)
+        && spec.sources.iter().all(p)
+        && match &spec.receivers {
+            ReceiversSpec::Points(list) => list.iter().all(p),
+            ReceiversSpec::Grid { grid } => {
+                p(&[grid.x[0], grid.y[0]]) && p(&[grid.x[1], grid.y[1]])
+            }
+        }
 }
 
 fuzz_target!(|data: Scaled| {

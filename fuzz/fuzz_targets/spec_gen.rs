@@ -4,7 +4,8 @@
 use std::collections::BTreeMap;
 
 use arbitrary::Arbitrary;
-use eigenray::{InterfaceSpec, MediumSpec, PathSpec, SceneSpec, StepSpec, spec::SolverSpec};
+use eigenray::spec::{ReceiversSpec, SolverSpec};
+use eigenray::{InterfaceSpec, MediumSpec, PathSpec, SceneSpec, StepSpec};
 
 /// One coordinate: on a coarse grid (many exact coincidences), a fine grid, or any f64.
 #[derive(Arbitrary, Debug, Clone, Copy)]
@@ -145,7 +146,13 @@ pub fn build(input: &Input) -> SceneSpec {
         domain: input.domain.as_ref().map(|(a, b)| [pt(a), pt(b)]),
         interfaces,
         sources: input.sources.iter().take(3).map(pt).collect(),
-        receivers: input.receivers.iter().take(3).map(pt).collect(),
+        receivers: input
+            .receivers
+            .iter()
+            .take(3)
+            .map(pt)
+            .collect::<Vec<_>>()
+            .into(),
         paths,
         solver: (input.max_iterations.is_some() || input.tolerance.is_some()).then(|| SolverSpec {
             max_iterations: input.max_iterations.map(u64::from),
@@ -165,6 +172,10 @@ pub fn all_finite(spec: &SceneSpec) -> bool {
     spec.media.values().all(|m| m.at.as_ref().is_none_or(p))
         && spec.domain.as_ref().is_none_or(|[a, b]| p(a) && p(b))
         && spec.interfaces.values().all(|i| i.points.iter().all(p))
-        && spec.sources.iter().chain(&spec.receivers).all(p)
+        && spec.sources.iter().all(p)
+        && match &spec.receivers {
+            ReceiversSpec::Points(list) => list.iter().all(p),
+            ReceiversSpec::Grid { grid } => grid.x.iter().chain(&grid.y).all(|v| v.is_finite()),
+        }
 }
 

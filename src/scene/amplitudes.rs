@@ -421,8 +421,10 @@ fn reflections(
                 return Err(SceneError::new(
                     key,
                     "\"media\" takes the medium across the interface from region lookup, which \
-                     this scene does not have (every path gives its `media` and there is no \
-                     `search`): give the law as a coefficient, or let a path look its media up",
+                     this scene does not have (every path gives its `media`, there is no \
+                     `search`, and no `background`, `at` or `domain` declares regions): give \
+                     the law as a coefficient, or declare the regions (a `background`, or an \
+                     `at` point per medium)",
                 ));
             }
             ReflectionSpec::Media => Reflection::Media,

@@ -195,7 +195,7 @@ impl SceneBuilder {
 
     /// One more receiver.
     pub fn receiver(mut self, point: impl Into<[f64; 2]>) -> SceneBuilder {
-        self.spec.receivers.push(point.into());
+        self.spec.receivers.points_mut().push(point.into());
         self
     }
 
@@ -206,6 +206,7 @@ impl SceneBuilder {
     ) -> SceneBuilder {
         self.spec
             .receivers
+            .points_mut()
             .extend(points.into_iter().map(Into::into));
         self
     }

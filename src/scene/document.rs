@@ -3,7 +3,9 @@
 //! coefficient, a duration into samples) is kept as the document gave it, so that the
 //! document reads back to the same scene, bit for bit.
 
-use super::{InterfaceSpec, Scene, SceneSpec, SolverOptions, SolverSpec};
+use super::{
+    InterfaceSpec, ReceiverGridSpec, ReceiversSpec, Scene, SceneSpec, SolverOptions, SolverSpec,
+};
 
 /// The scene document without what the validated scene holds exactly and its edits change
 /// (the sources, the receivers, the interfaces' points, the solver settings): every other key
@@ -22,7 +24,7 @@ impl Document {
             domain,
             interfaces,
             sources: _,
-            receivers: _,
+            receivers,
             paths,
             solver: _,
             search,
@@ -47,13 +49,31 @@ impl Document {
             domain: *domain,
             interfaces,
             sources: Vec::new(),
-            receivers: Vec::new(),
+            // A grid as given (a list is the scene's own points).
+            receivers: match receivers {
+                ReceiversSpec::Grid { grid } => ReceiversSpec::Grid { grid: *grid },
+                ReceiversSpec::Points(_) => ReceiversSpec::default(),
+            },
             paths: paths.clone(),
             solver: None,
             search: search.clone(),
             amplitudes: *amplitudes,
             impulse_response: *impulse_response,
         })
+    }
+
+    /// The receivers' grid as given, if the document gave one and no edit has moved a
+    /// receiver since.
+    pub(super) fn receiver_grid(&self) -> Option<ReceiverGridSpec> {
+        match self.0.receivers {
+            ReceiversSpec::Grid { grid } => Some(grid),
+            ReceiversSpec::Points(_) => None,
+        }
+    }
+
+    /// A receiver moved: the document lists the receivers' points from now on.
+    pub(super) fn forget_receiver_grid(&mut self) {
+        self.0.receivers = ReceiversSpec::default();
     }
 
     /// Medium `name` now has the refractive index `value` (when `index`) or the speed `value`.
@@ -111,7 +131,7 @@ impl Scene {
     /// scene.set_receiver(0, Point::new(0.1, -0.3)).unwrap();
     /// scene.set_medium_speed(0, 1480.0).unwrap();
     /// let spec = scene.to_spec();
-    /// assert_eq!(spec.receivers, [[0.1, -0.3]]);
+    /// assert_eq!(spec.receivers, vec![[0.1, -0.3]].into());
     /// assert_eq!(spec.media["water"].speed, Some(1480.0));
     /// let again = Scene::from_spec(&spec).unwrap();
     /// assert_eq!(again.media(), scene.media());
@@ -120,7 +140,9 @@ impl Scene {
         let xy = |p: &crate::geom::Point| [p.x, p.y];
         let mut spec = self.document.0.clone();
         spec.sources = self.sources.iter().map(xy).collect();
-        spec.receivers = self.receivers.iter().map(xy).collect();
+        if self.document.receiver_grid().is_none() {
+            spec.receivers = ReceiversSpec::Points(self.receivers.iter().map(xy).collect());
+        }
         for i in &self.interfaces {
             if let Some(shape) = spec.interfaces.get_mut(&i.name) {
                 shape.points = i.polyline.vertices().iter().map(xy).collect();
@@ -128,6 +150,13 @@ impl Scene {
         }
         spec.solver = solver_spec(self.solver);
         spec
+    }
+
+    /// The receivers' grid as the document gave it (`"receivers": {"grid": ...}`), while no
+    /// edit has moved a receiver; [`receivers`](Self::receivers) holds its points, receiver
+    /// `ix · ny + iy` at `(x[ix], y[iy])`.
+    pub fn receiver_grid(&self) -> Option<ReceiverGridSpec> {
+        self.document.receiver_grid()
     }
 
     /// The scene as a JSON document ([`to_spec`](Self::to_spec), written compactly): one that
@@ -254,7 +283,10 @@ mod tests {
         let spec = scene.to_spec();
         assert_eq!(spec.media["water"].speed, Some(speed));
         assert_eq!(spec.description.as_deref(), Some("kept"));
-        assert_eq!(spec.receivers[1][0].to_bits(), (-0.0f64).to_bits());
+        let ReceiversSpec::Points(receivers) = &spec.receivers else {
+            panic!("a list of receivers written as a grid")
+        };
+        assert_eq!(receivers[1][0].to_bits(), (-0.0f64).to_bits());
         let ir = spec.impulse_response.unwrap();
         assert_eq!((ir.duration, ir.taps), (0.12345, Some(41)));
         let solver = spec.solver.unwrap();
@@ -262,6 +294,40 @@ mod tests {
         assert_eq!(
             (solver.max_iterations, solver.max_work),
             (None, Some(12345))
+        );
+    }
+
+    /// A receiver grid is written as given, and read back to the same receivers; once a
+    /// receiver moves, the document lists the receivers instead.
+    #[test]
+    fn a_receiver_grid_is_kept_until_a_receiver_moves() {
+        let json = r#"{
+            "media": { "water": { "speed": 1500 } },
+            "interfaces": { "surface": { "points": [[-10, 0], [6000, 0]] } },
+            "sources": [[0, -5]],
+            "receivers": { "grid": { "x": [100, 5000, 197], "y": [-1, -99, 50] } },
+            "paths": [{ "steps": [{ "reflect": "surface" }], "media": ["water", "water"] }]
+        }"#;
+        let mut scene = Scene::from_json(json).unwrap();
+        assert_eq!(scene.receivers().len(), 197 * 50);
+        assert_eq!(scene.receivers()[50], Point::new(125.0, -1.0));
+        assert_eq!(scene.receivers()[197 * 50 - 1], Point::new(5000.0, -99.0));
+        let grid = ReceiverGridSpec {
+            x: [100.0, 5000.0, 197.0],
+            y: [-1.0, -99.0, 50.0],
+        };
+        assert_eq!(scene.receiver_grid(), Some(grid));
+        round_trip(&scene, "grid");
+        assert!(
+            scene.to_json().contains(
+                r#""receivers":{"grid":{"x":[100.0,5000.0,197.0],"y":[-1.0,-99.0,50.0]}}"#
+            )
+        );
+        scene.set_receiver(7, Point::new(1.0, -2.0)).unwrap();
+        assert_eq!(scene.receiver_grid(), None);
+        round_trip(&scene, "grid after set_receiver");
+        assert!(
+            matches!(scene.to_spec().receivers, ReceiversSpec::Points(ref p) if p.len() == 197 * 50)
         );
     }
 

@@ -63,6 +63,7 @@ impl Scene {
                 &self.segments,
                 &self.segment_bvh,
                 self.domain,
+                self.axisymmetric(),
                 source,
                 p,
             )?;
@@ -92,6 +93,7 @@ impl Scene {
             self.receivers[receiver] = old;
             return Err(e);
         }
+        self.document.forget_receiver_grid();
         Ok(())
     }
 
@@ -120,6 +122,7 @@ impl Scene {
             self.receivers = old;
             return Err(e);
         }
+        self.document.forget_receiver_grid();
         Ok(())
     }
 
@@ -199,6 +202,7 @@ impl Scene {
                         &self.segments,
                         &self.segment_bvh,
                         self.domain,
+                        self.axisymmetric(),
                         k,
                         p,
                     )

@@ -80,12 +80,17 @@ impl Tracer {
             slowness: scene.media()[medium].slowness,
             obstructed: options.obstructed,
             max_beams: control.limits.beams,
+            // The tree serves every receiver of its source: `solver.max_work` for each.
+            max_work: scene
+                .solver()
+                .max_work
+                .saturating_mul(scene.receivers().len().max(1) as u64),
         };
         let stats = walls.arrivals(
             &search,
             scratch,
             &mut |p: MirrorPath<'_>| {
-                if !control.listed.take(1) {
+                if !control.listed.take(p.walls.len()) {
                     return false;
                 }
                 arrivals.push(beam_arrival(walls, source, medium, p));

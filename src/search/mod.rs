@@ -18,8 +18,10 @@
 //!   their complete searches.
 //!
 //! Limits count the work actually done ([`SearchLimits`], and the scene's `solver.max_work`
-//! per pair's walk): a source's tree that reaches its limit of beams, a pair's walk that
-//! spends its budget, or a search that reaches its limit of arrivals stops there, and every arrival of the pairs it leaves short says
+//! per pair's walk and, for each of its receivers, per source's tree): a source's tree that
+//! reaches its limit of beams or of work, a pair's walk that spends its budget, or a search
+//! whose arrivals reach their limit (in number, or in the memory they hold with their points,
+//! over the whole search) stops there, and every arrival of the pairs it leaves short says
 //! `complete: false`. A search is refused up front only where its table of pairs cannot be
 //! allocated ([`SearchError::TooLarge`]).
 
@@ -61,6 +63,25 @@ pub const MAX_SEARCH_BEAMS: u64 = 1 << 28;
 /// Arrivals a search may list before it stops: a few gigabytes of results.
 pub const MAX_SEARCH_ARRIVALS: u64 = 1 << 24;
 
+/// Bytes a search's arrivals may take at most ([`SearchLimits::memory`]), whatever memory the
+/// machine has: 16 GiB.
+pub const MAX_SEARCH_MEMORY: u64 = 1 << 34;
+
+/// Bytes a search's arrivals may take where the memory available is not known: 2 GiB.
+const UNKNOWN_MEMORY_SEARCH: u64 = 1 << 31;
+
+/// The bytes one listed arrival of `steps` steps holds, as [`SearchLimits::memory`] counts
+/// them: its record (thrice: the list it is gathered into grows by doubling, and the lists of
+/// sources and pairs are joined into one), its points, steps, segments, arclengths and leg
+/// media, and each of its five lists' allocation.
+pub fn arrival_bytes(steps: usize) -> u64 {
+    let steps = steps as u64;
+    let record = 3 * std::mem::size_of::<SearchArrival>() as u64 + 5 * 16;
+    let per_step = (std::mem::size_of::<Step>() + 2 * std::mem::size_of::<usize>() + 8) as u64;
+    let point = std::mem::size_of::<crate::geom::Point>() as u64;
+    record + (steps + 2) * point + steps * per_step + 8
+}
+
 /// Tuples (and assignments solved) of the complete search of one sequence between one pair,
 /// beyond which that search gives up and its pair says `complete: false`.
 const SEARCH_TUPLES: usize = 1 << 20;
@@ -73,21 +94,34 @@ pub const PAIR_BYTES: usize = std::mem::size_of::<PairRecord>();
 /// The limits of a search's work: what it does before it stops and says `complete: false`
 /// on the pairs it leaves short. With the scene's `solver.max_work` (the budget of each
 /// pair's walk over sequences with refractions, in the complete search's work units, one
-/// more per sequence visited), the one place a budget plugs in.
+/// more per sequence visited; and of each source's beam tree, that much for each of its
+/// receivers), the one place a budget plugs in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SearchLimits {
     /// Beams per source's tree.
     pub beams: u64,
     /// Arrivals over the whole search.
     pub arrivals: u64,
+    /// Bytes the arrivals listed over the whole search (every source and pair) may hold,
+    /// each counted with its points ([`arrival_bytes`]): a search of long paths stops here
+    /// long before [`arrivals`](Self::arrivals).
+    pub memory: u64,
 }
 
 impl Default for SearchLimits {
-    /// [`MAX_SEARCH_BEAMS`], [`MAX_SEARCH_ARRIVALS`].
+    /// [`MAX_SEARCH_BEAMS`], [`MAX_SEARCH_ARRIVALS`], and a quarter of the memory available
+    /// ([`available_memory`](crate::limits::available_memory): what the machine has free,
+    /// or less under an address-space limit) for the arrivals, at most
+    /// [`MAX_SEARCH_MEMORY`]: the rest is left to what the caller makes of them (written
+    /// text, arrays, responses).
     fn default() -> SearchLimits {
+        let memory = crate::control::available_memory()
+            .map_or(UNKNOWN_MEMORY_SEARCH, |have| have / 4)
+            .min(MAX_SEARCH_MEMORY);
         SearchLimits {
             beams: MAX_SEARCH_BEAMS,
             arrivals: MAX_SEARCH_ARRIVALS,
+            memory,
         }
     }
 }
@@ -101,6 +135,10 @@ pub struct SearchReport {
     pub beams: u64,
     /// Paths the trees validated (receivers in a beam and within the time bound).
     pub leaves: u64,
+    /// Work the trees did, over all sources, in the units of `solver.max_work` (one per
+    /// child wall tried, one per segment an occlusion test weighs, one per leg validated):
+    /// each source's tree stops at `solver.max_work` for each of its receivers.
+    pub tree_work: u64,
     /// Work the walks did over all pairs: sequences visited plus the work units of their
     /// complete searches (as `solver.max_work` counts them).
     pub work: u64,
@@ -171,18 +209,34 @@ struct PairRecord {
     complete: bool,
 }
 
-/// The arrivals listed so far over the whole search, against its limit.
+/// The arrivals listed so far over the whole search, and the bytes they hold, against their
+/// limits.
 struct ArrivalCount {
     count: AtomicU64,
     limit: u64,
+    bytes: AtomicU64,
+    memory: u64,
 }
 
 impl ArrivalCount {
-    /// Takes `n` more arrivals; `false` (and nothing taken) when that passes the limit.
-    fn take(&self, n: u64) -> bool {
-        let before = self.count.fetch_add(n, Ordering::Relaxed);
-        if before.saturating_add(n) > self.limit {
-            self.count.fetch_sub(n, Ordering::Relaxed);
+    fn new(limits: &SearchLimits) -> ArrivalCount {
+        ArrivalCount {
+            count: AtomicU64::new(0),
+            limit: limits.arrivals,
+            bytes: AtomicU64::new(0),
+            memory: limits.memory,
+        }
+    }
+
+    /// Takes one more arrival of `steps` steps; `false` (and nothing taken) when that passes
+    /// the limit of arrivals or of memory.
+    fn take(&self, steps: usize) -> bool {
+        let bytes = arrival_bytes(steps);
+        let before = self.count.fetch_add(1, Ordering::Relaxed);
+        let held = self.bytes.fetch_add(bytes, Ordering::Relaxed);
+        if before >= self.limit || held.saturating_add(bytes) > self.memory {
+            self.count.fetch_sub(1, Ordering::Relaxed);
+            self.bytes.fetch_sub(bytes, Ordering::Relaxed);
             return false;
         }
         true
@@ -279,10 +333,7 @@ impl Tracer {
         let mut pairs: Vec<PairRecord> = Vec::new();
         pairs.try_reserve_exact(count).map_err(|_| too_large())?;
         pairs.resize(count, PairRecord { complete: true });
-        let listed = ArrivalCount {
-            count: AtomicU64::new(0),
-            limit: limits.arrivals,
-        };
+        let listed = ArrivalCount::new(limits);
         let mut report = SearchReport::default();
         let control = Control {
             limits,
@@ -296,6 +347,7 @@ impl Tracer {
         for (source, tree) in trees.into_iter().enumerate() {
             report.beams += tree.stats.beams;
             report.leaves += tree.stats.leaves;
+            report.tree_work += tree.stats.work;
             if tree.stats.stopped {
                 for p in &mut pairs[source * nr..(source + 1) * nr] {
                     p.complete = false;

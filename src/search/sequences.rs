@@ -432,7 +432,7 @@ impl PairState<'_> {
             if !kept || a.time > options.time_limit() {
                 continue;
             }
-            if !walk.listed.take(1) {
+            if !walk.listed.take(self.steps.len()) {
                 self.stopped = true;
                 return;
             }

@@ -200,6 +200,9 @@ pub(crate) struct MirrorSearch<'a> {
     pub obstructed: bool,
     /// Beams visited before the search stops.
     pub max_beams: u64,
+    /// Work (in the units of `solver.max_work`: one per child wall tried, one per segment an
+    /// occlusion test weighs, one per leg of a path validated) before the search stops.
+    pub max_work: u64,
 }
 
 impl MirrorSearch<'_> {
@@ -236,6 +239,8 @@ pub(crate) struct MirrorStats {
     pub beams: u64,
     /// Paths validated (receivers in a node's beam and within the time bound).
     pub leaves: u64,
+    /// Work done, as [`MirrorSearch::max_work`] counts it.
+    pub work: u64,
     /// Whether the search stopped before the end of its tree: at `max_beams`, where its
     /// `found` said so, or at [`MAX_SEARCH_STEPS`] deep with more allowed.
     pub stopped: bool,
@@ -519,8 +524,13 @@ impl MirrorWalls {
                 continue;
             }
             let node = *top;
+            stats.work += 1;
+            if stats.work > search.max_work {
+                stats.stopped = true;
+                break;
+            }
             let occlusion = (!search.obstructed).then_some(&mut *shadows);
-            let Some(child) = self.child(&node, w, &bounds, occlusion) else {
+            let Some(child) = self.child(&node, w, &bounds, occlusion, &mut stats.work) else {
                 continue;
             };
             stats.beams += 1;
@@ -567,7 +577,7 @@ impl MirrorWalls {
 
     /// The child of `node` through wall `w`, if part of the wall lies in the node's beam (and,
     /// with `occlusion`, is not hidden from it) and a path through that part may arrive in
-    /// time.
+    /// time; the occlusion test's work is added to `work`.
     #[inline]
     fn child(
         &self,
@@ -575,6 +585,7 @@ impl MirrorWalls {
         w: usize,
         bounds: &Bounds,
         occlusion: Option<&mut Vec<[f64; 2]>>,
+        work: &mut u64,
     ) -> Option<Node> {
         let wall = &self.walls[w];
         let delta = bounds.delta;
@@ -603,6 +614,7 @@ impl MirrorWalls {
                 n: wall.n,
             };
             let m = OCCLUSION_MARGIN * delta;
+            *work += self.occluders.work();
             range = self
                 .occluders
                 .unhidden(&window, &target, range, m, shadows)?;
@@ -693,6 +705,7 @@ impl Validation<'_, '_> {
                 continue;
             }
             stats.leaves += 1;
+            stats.work += stack.len() as u64;
             let Some((length, reason)) = self.path(stack, receiver) else {
                 continue;
             };
@@ -866,6 +879,7 @@ mod tests {
             slowness,
             obstructed,
             max_beams: u64::MAX,
+            max_work: u64::MAX,
         };
         let stats = mirrors.arrivals(
             &search,

@@ -242,7 +242,11 @@ impl Tracer {
             None
         };
         let source_media = match &regions {
-            Some(r) => scene.sources().iter().map(|&p| r.medium_at(p)).collect(),
+            Some(r) => scene
+                .sources()
+                .iter()
+                .map(|&p| r.source_medium(&scene, p))
+                .collect(),
             None => Vec::new(),
         };
         let opts = scene.solver();
@@ -396,7 +400,10 @@ impl Tracer {
         ws: &mut Workspace,
     ) -> RayRecord {
         self.assert_solvable(source, receiver, path, "Tracer::solve");
-        let src_medium = self.regions.as_ref().and_then(|r| r.medium_at(source));
+        let src_medium = self
+            .regions
+            .as_ref()
+            .and_then(|r| r.source_medium(&self.scene, source));
         let record = self.solve_planned(source, src_medium, receiver, path, Start::Default, ws);
         ws.forget_points_without_time(&record);
         record
@@ -425,7 +432,10 @@ impl Tracer {
             self.scene.paths()[path].steps.len(),
             "one parameter per step"
         );
-        let src_medium = self.regions.as_ref().and_then(|r| r.medium_at(source));
+        let src_medium = self
+            .regions
+            .as_ref()
+            .and_then(|r| r.source_medium(&self.scene, source));
         let start = Start::Given(guess);
         let record = self.solve_planned(source, src_medium, receiver, path, start, ws);
         ws.forget_points_without_time(&record);

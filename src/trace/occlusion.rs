@@ -56,6 +56,14 @@ pub(crate) struct Occluders {
     joints: Vec<[bool; 2]>,
 }
 
+impl Occluders {
+    /// The work of one [`unhidden`](Self::unhidden), in the units of `solver.max_work`: one
+    /// per segment it weighs.
+    pub(crate) fn work(&self) -> u64 {
+        self.segments.len() as u64
+    }
+}
+
 /// Where a node's legs start: on rays from its image, beyond a line.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Window {

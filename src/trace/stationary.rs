@@ -120,7 +120,9 @@ impl Tracer {
         if given {
             return None;
         }
-        self.regions.as_ref().and_then(|r| r.medium_at(source))
+        self.regions
+            .as_ref()
+            .and_then(|r| r.source_medium(&self.scene, source))
     }
 
     /// Every stationary path of `sequence` into `out` (emptied first), ordered by time: with

@@ -61,12 +61,12 @@ impl Tracer {
         let Some(old) = old else { return Ok(()) };
         let p = self.scene.sources()[source];
         if let Some(regions) = &self.regions {
-            if let Err(e) = regions.check_source(source, p) {
+            if let Err(e) = regions.check_source(&self.scene, source, p) {
                 // The old position was accepted before: it is again.
                 let _ = Arc::make_mut(&mut self.scene).set_source(source, old);
                 return Err(e);
             }
-            self.source_media[source] = regions.medium_at(p);
+            self.source_media[source] = regions.source_medium(&self.scene, p);
         }
         self.refresh_ends(0, old, p);
         Ok(())
@@ -144,7 +144,7 @@ impl Tracer {
                         .scene
                         .sources()
                         .iter()
-                        .map(|&p| regions.medium_at(p))
+                        .map(|&p| regions.source_medium(&self.scene, p))
                         .collect();
                     self.regions = Some(regions);
                 }

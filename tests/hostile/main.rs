@@ -10,6 +10,7 @@
 mod budgets;
 mod proofs;
 mod round2;
+mod round3;
 
 use std::io::Read;
 use std::path::{Path, PathBuf};

@@ -511,7 +511,8 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         ));
     }
     let text = read_scene_text(&args.scene)?;
-    let scene = Scene::from_json(&text).map_err(Failure::scene)?;
+    // Shared with the tracer, not copied: a scene of millions of segments is held once.
+    let scene = std::sync::Arc::new(Scene::from_json(&text).map_err(Failure::scene)?);
     // The document is no longer needed: its memory goes back before the rays take theirs.
     drop(text);
     if args.arrivals.is_some() && scene.search().is_none() {
@@ -547,7 +548,7 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         &scene,
     )?;
     check_output_files(args)?;
-    let tracer = Tracer::new(&scene).map_err(Failure::scene)?;
+    let tracer = Tracer::new(std::sync::Arc::clone(&scene)).map_err(Failure::scene)?;
     let solved = match scene.solver().stationary {
         StationaryMode::One => Solved::Batch(trace(&tracer, !args.no_warm_start)?),
         StationaryMode::All => Solved::Stationary(trace_stationary(&tracer)?),

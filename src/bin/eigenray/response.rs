@@ -1,6 +1,7 @@
 //! `eigenray solve --ir FILE`: the scene's impulse responses, as `.npy` or `.wav`.
 
 use std::fs;
+use std::io::{BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
 
 use eigenray::amplitudes::Complex64;
@@ -90,17 +91,24 @@ impl IrOutput {
                 r.len()
             ))
         })?;
-        let mut file = Vec::new();
-        match self.format {
+        // Straight into the file, a buffer at a time: the responses are the one copy held
+        // (what the check before the solve counts). A file left short by an error goes.
+        let file = fs::File::create(&self.path).map_err(|e| write_failure(&self.path, &e))?;
+        let mut out = BufWriter::new(file);
+        let written = match self.format {
             IrFormat::Npy => {
                 let shape = [r.sources(), r.receivers(), r.samples()];
-                npy::write_f64_array(&shape, &data, &mut file)
-                    .map_err(|e| write_failure(&self.path, &e))?;
+                npy::write_f64_array(&shape, &data, &mut out)
+                    .map_err(|e| write_failure(&self.path, &e))
             }
-            IrFormat::Wav => write_wav(r, &data, &mut file)
-                .map_err(|e| Failure::Output(format!("{}: {e}", self.path.display())))?,
+            IrFormat::Wav => write_wav(r, &data, &mut out)
+                .map_err(|e| Failure::Output(format!("{}: {e}", self.path.display()))),
         }
-        fs::write(&self.path, file).map_err(|e| write_failure(&self.path, &e))
+        .and_then(|()| out.flush().map_err(|e| write_failure(&self.path, &e)));
+        if written.is_err() {
+            let _ = fs::remove_file(&self.path);
+        }
+        written
     }
 }
 
@@ -126,7 +134,11 @@ fn wav_fits(r: &ImpulseResponses) -> Result<(), Failure> {
 
 /// Writes the responses as a WAV file of 32-bit float samples, one channel per (source,
 /// receiver), source-major, interleaved as WAV is.
-fn write_wav(r: &ImpulseResponses, data: &[f64], out: &mut Vec<u8>) -> hound::Result<()> {
+fn write_wav<W: Write + Seek>(
+    r: &ImpulseResponses,
+    data: &[f64],
+    out: &mut W,
+) -> hound::Result<()> {
     let channels = r.sources() * r.receivers();
     let spec = hound::WavSpec {
         channels: channels as u16,
@@ -134,7 +146,7 @@ fn write_wav(r: &ImpulseResponses, data: &[f64], out: &mut Vec<u8>) -> hound::Re
         bits_per_sample: 32,
         sample_format: hound::SampleFormat::Float,
     };
-    let mut writer = hound::WavWriter::new(std::io::Cursor::new(out), spec)?;
+    let mut writer = hound::WavWriter::new(out, spec)?;
     let samples = r.samples();
     for n in 0..samples {
         for c in 0..channels {
