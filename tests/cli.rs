@@ -827,22 +827,22 @@ fn the_format_page_shows_its_stationary_output() {
     );
 }
 
-/// The README's every-stationary-path scene gives the CSV it shows.
+/// The tour's every-stationary-path scene gives the CSV it shows.
 #[test]
-fn the_readme_valley_gives_its_output() {
+fn the_guide_valley_gives_its_output() {
     document_example_gives_its_output(
-        "README.md",
+        "docs/guide.md",
         "## Every stationary path of a sequence",
         "valley.json",
         "csv",
     );
 }
 
-/// The README's search scene gives the arrivals it shows.
+/// The tour's search scene gives the arrivals it shows.
 #[test]
-fn the_readme_square_room_gives_its_arrivals() {
+fn the_guide_square_room_gives_its_arrivals() {
     document_example_gives_its_output(
-        "README.md",
+        "docs/guide.md",
         "## Automatic sequences: `search`",
         "square.json",
         "jsonl",
