@@ -292,6 +292,7 @@ fn ray_npy<M: Iterator<Item = usize>>(
     schema: &Schema,
     context: &Context<'_>,
     r: View<'_, M>,
+    entry: Option<&Entry<'_>>,
 ) {
     for v in [r.source, r.receiver, r.path] {
         buf.extend_from_slice(&(v as u32).to_le_bytes());
@@ -307,7 +308,9 @@ fn ray_npy<M: Iterator<Item = usize>>(
         buf.push(kink_code(e.kink));
         buf.push(u8::from(e.complete));
     }
-    schema.npy(buf, context, &r.values);
+    if let Some(entry) = entry {
+        schema.npy(buf, context, entry);
+    }
 }
 
 /// The gradient fields of a `.npy` record: NaN and [`NO_INTERFACE`] where there is none, the
@@ -381,8 +384,32 @@ struct View<'a, M: Iterator<Item = usize>> {
     reason: Option<Reason>,
     /// Present exactly in [`Layout::Stationary`].
     every: Option<EveryFields>,
-    /// What its quantities are read from (the gradient set by the writer).
-    values: Entry<'a>,
+    /// The result its quantities are read from ([`Source::entry`], made only when the
+    /// scene asks for a quantity).
+    values: Source<'a>,
+}
+
+/// The result a ray of a document is, for reading its quantities ([`Entry`]).
+#[derive(Clone, Copy)]
+enum Source<'a> {
+    /// An owned ray.
+    Ray(&'a Ray),
+    /// Ray `i` of a batch.
+    Batch(&'a Batch, usize),
+    /// An entry of every stationary path.
+    Stationary(&'a crate::stationary::StationaryEntry<'a>),
+}
+
+impl Source<'_> {
+    /// What its quantities are read from, with the gradient `gradient`.
+    fn entry<'g>(self, gradient: Option<&'g Gradient>) -> Entry<'g> {
+        let entry = match self {
+            Source::Ray(r) => Entry::of_ray(r),
+            Source::Batch(b, i) => Entry::of_batch(b, i),
+            Source::Stationary(e) => Entry::of_stationary(e),
+        };
+        Entry { gradient, ..entry }
+    }
 }
 
 /// The medium, path and interface names as each format writes them, made once per document.
@@ -523,6 +550,7 @@ fn ray_json<M: Iterator<Item = usize>>(
     schema: &Schema,
     context: &Context<'_>,
     r: View<'_, M>,
+    entry: Option<&Entry<'_>>,
 ) {
     let (scene, names) = (context.scene, context.names);
     buf.extend_from_slice(b"{\"source\":");
@@ -553,7 +581,9 @@ fn ray_json<M: Iterator<Item = usize>>(
         buf.extend_from_slice(b",\"points\":");
         points_json(buf, r.points);
     }
-    schema.json(buf, context, &r.values);
+    if let Some(entry) = entry {
+        schema.json(buf, context, entry);
+    }
     buf.extend_from_slice(b",\"iterations\":");
     int(buf, r.iterations);
     if r.residual.is_finite() {
@@ -704,6 +734,7 @@ fn ray_csv<M: Iterator<Item = usize>>(
     schema: &Schema,
     context: &Context<'_>,
     r: View<'_, M>,
+    entry: Option<&Entry<'_>>,
 ) {
     let (scene, names) = (context.scene, context.names);
     int(buf, r.source);
@@ -749,7 +780,9 @@ fn ray_csv<M: Iterator<Item = usize>>(
         buf.push(b',');
         buf.extend_from_slice(if e.complete { b"true" } else { b"false" });
     }
-    schema.csv(buf, context, &r.values);
+    if let Some(entry) = entry {
+        schema.csv(buf, context, entry);
+    }
     buf.push(b'\n');
 }
 
@@ -880,21 +913,24 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
                     _ => false,
                 }
             };
-            let mut r = view(i);
-            r.values.gradient = has_gradient.then_some(&gradient);
+            let r = view(i);
+            // (Made only for a scene that asks for a quantity.)
+            let entry =
+                (!schema.is_empty()).then(|| r.values.entry(has_gradient.then_some(&gradient)));
+            let entry = entry.as_ref();
             match format {
                 Format::Json => {
                     if i > 0 {
                         buf.push(b',');
                     }
-                    ray_json(buf, &schema, &context, r);
+                    ray_json(buf, &schema, &context, r, entry);
                 }
                 Format::Jsonl => {
-                    ray_json(buf, &schema, &context, r);
+                    ray_json(buf, &schema, &context, r, entry);
                     buf.push(b'\n');
                 }
-                Format::Csv => ray_csv(buf, &schema, &context, r),
-                Format::Npy => ray_npy(buf, shape, &schema, &context, r),
+                Format::Csv => ray_csv(buf, &schema, &context, r, entry),
+                Format::Npy => ray_npy(buf, shape, &schema, &context, r, entry),
             }
         }
     };
@@ -1141,7 +1177,7 @@ fn write_rays_and_arrivals<W: Write>(
                     media: (!r.media.is_empty()).then(|| r.media.iter().copied()),
                     reason: r.reason,
                     every: None,
-                    values: Entry::of_ray(r),
+                    values: Source::Ray(r),
                 }
             },
         ),
@@ -1172,7 +1208,7 @@ fn write_rays_and_arrivals<W: Write>(
                     media: batch.media(i),
                     reason: r.reason,
                     every: None,
-                    values: Entry::of_batch(batch, i),
+                    values: Source::Batch(batch, i),
                 }
             },
         ),
@@ -1204,7 +1240,7 @@ fn write_rays_and_arrivals<W: Write>(
                             kink: e.kink,
                             complete: e.complete,
                         }),
-                        values: Entry::of_stationary(e),
+                        values: Source::Stationary(e),
                     }
                 },
             )
