@@ -1161,18 +1161,30 @@ mod tests {
 
     #[test]
     fn csv_and_npy_need_a_file_for_the_arrivals() {
-        let scene = Scene::from_json(SEARCH).unwrap();
-        let solved = Solved::Stationary(StationaryRays::default());
-        let arrivals = [arrival(&scene)];
+        // Refused before the solve: the arrivals would share the rays' one table.
         for format in ["csv", "npy"] {
             let args = solve_args(&["scene.json", "--format", format]);
-            match write_outputs(&args, &scene, &solved, Some(&arrivals)) {
-                Err(Failure::Input(m)) => {
-                    assert!(m.starts_with(&format!("--format {format}: ")), "{m}");
-                    assert!(m.contains("--arrivals FILE"), "{m}");
-                }
-                other => panic!("{other:?}"),
-            }
+            assert!(
+                Destinations::of(&args).share_one_table(args.format),
+                "{format}"
+            );
+            let args = solve_args(&["scene.json", "--format", format, "--arrivals", "a"]);
+            assert!(
+                !Destinations::of(&args).share_one_table(args.format),
+                "{format}"
+            );
+            let args = solve_args(&["scene.json", "--format", format, "--ir", "h.npy"]);
+            assert!(
+                !Destinations::of(&args).share_one_table(args.format),
+                "{format}"
+            );
+        }
+        for format in ["json", "jsonl"] {
+            let args = solve_args(&["scene.json", "--format", format]);
+            assert!(
+                !Destinations::of(&args).share_one_table(args.format),
+                "{format}"
+            );
         }
     }
 
