@@ -160,8 +160,7 @@ pub struct SceneSpec {
     /// Source points.
     pub sources: Vec<[f64; 2]>,
     /// Receivers: a list of points, or a grid of them (`{"grid": {"x": [first, last,
-    /// count], "y": [first, last, count]}}`).
-    #[serde(default)]
+    /// count], "y": [first, last, count]}}`). Required, as before grids.
     pub receivers: ReceiversSpec,
     /// Paths: sequences of interactions (none when the scene only asks for a `search`).
     #[serde(default)]
