@@ -155,7 +155,7 @@ impl GridAxis {
 
 impl ReceiverGridSpec {
     /// `(nx, ny)`: the receivers along x and along y, when both counts are whole numbers
-    /// that fit a `usize` (not checked further: [`points`](Self::points) validates).
+    /// that fit a `usize` (not checked further: its expansion into points validates).
     pub fn shape(&self) -> Option<(usize, usize)> {
         let count =
             |c: f64| (c >= 1.0 && c.fract() == 0.0 && c <= u32::MAX as f64).then_some(c as usize);
