@@ -320,14 +320,7 @@ fn order_colour_bar(s: &mut String, colours: &OrderColours) {
             continue;
         }
         let y = TOP + block * (v - lo as f64 + 0.5);
-        let _ = writeln!(
-            s,
-            r##"<path d="M{:.1},{y:.2}h5" stroke="#444"/><text x="{:.1}" y="{:.2}">{}</text>"##,
-            x + 18.0,
-            x + 26.0,
-            y + 4.0,
-            esc(&label)
-        );
+        bar_tick(s, x, y, &label);
     }
     let (tx, ty) = (x + 60.0, TOP + PLOT_H / 2.0);
     let _ = writeln!(
@@ -623,14 +616,7 @@ fn draw_colour_bar(s: &mut String, lo: f64, hi: f64) {
     let _ = writeln!(s, r##"<g font-size="11" fill="#222">"##);
     for (v, label) in axis_ticks(lo, hi, 8.0) {
         let y = TOP + (v - lo) / (hi - lo) * PLOT_H;
-        let _ = writeln!(
-            s,
-            r##"<path d="M{:.1},{y:.2}h5" stroke="#444"/><text x="{:.1}" y="{:.2}">{}</text>"##,
-            x + 18.0,
-            x + 26.0,
-            y + 4.0,
-            esc(&label)
-        );
+        bar_tick(s, x, y, &label);
     }
     let (tx, ty) = (x + 72.0, TOP + PLOT_H / 2.0);
     let _ = writeln!(
@@ -645,6 +631,18 @@ fn distinct(values: impl Iterator<Item = f64>) -> Vec<f64> {
     v.sort_by(f64::total_cmp);
     v.dedup();
     v
+}
+
+/// One tick of a colour bar whose left edge is at `x`: a mark at height `y` and its label.
+fn bar_tick(s: &mut String, x: f64, y: f64, label: &str) {
+    let _ = writeln!(
+        s,
+        r##"<path d="M{:.1},{y:.2}h5" stroke="#444"/><text x="{:.1}" y="{:.2}">{}</text>"##,
+        x + 18.0,
+        x + 26.0,
+        y + 4.0,
+        esc(label)
+    );
 }
 
 #[cfg(test)]
