@@ -45,7 +45,7 @@
 //! margin, the child's beam is the whole plane (no pruning below it).
 
 use crate::geom::{Aabb, Point, Vec2, orient};
-use crate::scene::{MAX_SEARCH_STEPS, Scene, SegmentRef, StepKind};
+use crate::scene::{Scene, SegmentRef, StepKind};
 
 use super::classify::{END_MARGIN, leg_sides, sides_suit};
 use super::occlusion::{OCCLUSION_MARGIN, Occluders, Target, Window};
@@ -56,8 +56,12 @@ use super::{Reason, Status};
 /// (and it grows with the deepest level a search allows).
 const BEAM_MARGIN: f64 = 1e-11;
 
-/// Beams between two calls of a search's progress.
+/// Beams a tree asks its run for at a time (its `progress`).
 pub(crate) const PROGRESS_BEAMS: u64 = 1 << 14;
+
+/// Wall tries (children tested, made or not) between two polls of a tree's run for a stop
+/// request: a node of many walls may try thousands before its next beam.
+const POLL_TRIES: u32 = 1 << 12;
 
 /// One wall: segment `p → q` of an interface.
 #[derive(Clone, Copy, Debug)]
@@ -187,8 +191,10 @@ pub(crate) struct MirrorSearch<'a> {
     pub source: Point,
     /// The receivers.
     pub receivers: &'a [Point],
-    /// The most reflections of a path (at most [`MAX_SEARCH_STEPS`] are walked).
+    /// The most reflections of a path (at most `max_depth` are walked).
     pub max_steps: usize,
+    /// The most reflections walked whatever `max_steps` ([`Limits::depth`](crate::options::Limits)).
+    pub max_depth: usize,
     /// The latest time listed (infinite: no bound).
     pub max_time: f64,
     /// The slowness of every leg (time = slowness × length).
@@ -225,7 +231,7 @@ pub(crate) struct MirrorStats {
     /// Paths validated (receivers in a node's beam and within the time bound).
     pub leaves: u64,
     /// Whether the search stopped before the end of its tree: at `max_beams`, where its
-    /// `found` said so, or at [`MAX_SEARCH_STEPS`] deep with more allowed.
+    /// `found` said so, where its `progress` said so, or at `max_depth` deep with more allowed.
     pub stopped: bool,
 }
 
@@ -446,8 +452,9 @@ impl MirrorWalls {
     /// (unless `obstructed`, which lists obstructed paths too, with [`Status::Obstructed`] and
     /// [`Reason::Crosses`]) no leg crossing an interface of the scene strictly between its
     /// ends (the classifier's test). Sequence 0 is the direct ray. `found` returns `false` to
-    /// stop the search; `progress` hears of every [`PROGRESS_BEAMS`] beams, and returns `false`
-    /// to stop it (a stop request).
+    /// stop the search; `progress` is asked for every [`PROGRESS_BEAMS`] beams before they
+    /// are visited (and polled with 0 every [`POLL_TRIES`] walls tried), and returns `false`
+    /// to stop it (a stop request, a budget spent).
     pub(crate) fn arrivals(
         &self,
         search: &MirrorSearch<'_>,
@@ -456,7 +463,8 @@ impl MirrorWalls {
         progress: &mut impl FnMut(u64) -> bool,
     ) -> MirrorStats {
         let mut stats = MirrorStats::default();
-        let max_steps = search.max_steps.min(MAX_SEARCH_STEPS);
+        let max_steps = search.max_steps.min(search.max_depth);
+        let (mut granted, mut tries) = (0u64, 0u32);
         let bounds = self.bounds(search, max_steps);
         let MirrorScratch {
             stack,
@@ -506,15 +514,24 @@ impl MirrorWalls {
             if w == top.wall {
                 continue;
             }
+            tries = tries.wrapping_add(1);
+            if tries % POLL_TRIES == 0 && !progress(0) {
+                stats.stopped = true;
+                break;
+            }
             let node = *top;
             let occlusion = (!search.obstructed).then_some(&mut *shadows);
             let Some(child) = self.child(&node, w, &bounds, occlusion) else {
                 continue;
             };
             stats.beams += 1;
-            if stats.beams % PROGRESS_BEAMS == 0 && !progress(PROGRESS_BEAMS) {
-                stats.stopped = true;
-                break;
+            if stats.beams > granted {
+                if !progress(PROGRESS_BEAMS) {
+                    stats.beams -= 1;
+                    stats.stopped = true;
+                    break;
+                }
+                granted += PROGRESS_BEAMS;
             }
             if stats.beams > search.max_beams {
                 stats.beams -= 1;
@@ -528,7 +545,6 @@ impl MirrorWalls {
                 break;
             }
         }
-        progress(stats.beams % PROGRESS_BEAMS);
         stats
     }
 
@@ -854,6 +870,7 @@ mod tests {
             slowness,
             obstructed,
             max_beams: u64::MAX,
+            max_depth: crate::scene::MAX_SEARCH_STEPS,
         };
         let stats = mirrors.arrivals(
             &search,
@@ -1128,7 +1145,13 @@ mod tests {
             for (r, &receiver) in scene.receivers().iter().enumerate() {
                 for (p, path) in scene.paths().iter().enumerate() {
                     let search = tracer
-                        .stationary_paths(source, receiver, p, &mut out)
+                        .stationary_paths(
+                            source,
+                            receiver,
+                            p,
+                            &crate::options::Run::new(),
+                            &mut out,
+                        )
                         .unwrap();
                     let walls: Vec<usize> = path.steps.iter().map(|s| s.interface).collect();
                     let mut found: Vec<Found> = out
@@ -1500,7 +1523,13 @@ mod tests {
         let mut arrivals = Vec::new();
         for (r, &receiver) in receivers.iter().enumerate() {
             tracer
-                .stationary_paths(source, receiver, 0, &mut arrivals)
+                .stationary_paths(
+                    source,
+                    receiver,
+                    0,
+                    &crate::options::Run::new(),
+                    &mut arrivals,
+                )
                 .unwrap();
             assert_eq!(
                 arrivals.len(),

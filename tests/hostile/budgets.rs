@@ -4,7 +4,7 @@
 
 use std::time::{Duration, Instant};
 
-use eigenray::options::Stop;
+use eigenray::options::Run;
 use eigenray::{Scene, Tracer};
 use serde_json::{Value, json};
 
@@ -172,14 +172,14 @@ fn a_stop_ends_a_library_call_soon() {
     // Several seconds of work a triple without the stop.
     doc["solver"] = json!({ "stationary": "all", "max_work": 1u64 << 28 });
     let tracer = Tracer::new(Scene::from_json(&doc.to_string()).unwrap()).unwrap();
-    let stop = Stop::new();
+    let run = Run::new();
     let (asked, done) = std::thread::scope(|s| {
         let asker = s.spawn(|| {
             std::thread::sleep(Duration::from_millis(200));
-            stop.request();
+            run.request_stop();
             Instant::now()
         });
-        let rays = tracer.trace_stationary_with(&|_| {}, Some(&stop)).unwrap();
+        let rays = tracer.trace_stationary(&run).unwrap();
         let done = Instant::now();
         assert!(rays.triples.iter().all(|t| !t.complete));
         (asker.join().unwrap(), done)
@@ -188,7 +188,7 @@ fn a_stop_ends_a_library_call_soon() {
     assert!(late < Duration::from_millis(500), "{late:?}");
     // Already requested: nothing is searched.
     let start = Instant::now();
-    let rays = tracer.trace_stationary_with(&|_| {}, Some(&stop)).unwrap();
+    let rays = tracer.trace_stationary(&run).unwrap();
     assert!(start.elapsed() < Duration::from_millis(200));
     assert!(
         rays.triples
