@@ -16,7 +16,15 @@ use std::io::Read;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, LazyLock};
 
-use crate::scene::{FALLBACK_MAX_WORK, MAX_SEARCH_STEPS};
+/// The work budget of the default mode's search of one ray, where its start leads to no
+/// path (at most `solver.max_work`): 2^18 units, about 10 ms of one core, so that a batch
+/// of many rays stays bounded; beyond it the ray is `not_converged` (`search_limit`). The
+/// default of [`Limits::fallback_work`].
+pub const FALLBACK_MAX_WORK: u64 = 1 << 18;
+
+/// The largest `search.max_steps`: the depth of the beam tree (its stack holds one node per
+/// step). The default of [`Limits::depth`].
+pub const MAX_SEARCH_STEPS: usize = 1 << 16;
 
 /// Beams one source's tree of a `search` may visit before it stops (its pairs then say
 /// `complete: false`): the default of [`Limits::beams`]. At the tree's pace (tens of millions
@@ -80,11 +88,11 @@ pub struct Limits {
     /// ([`MAX_WALK_TUPLES`]).
     pub walk_tuples: usize,
     /// Work of the search of a ray whose start finds no path, in the default mode
-    /// ([`FALLBACK_MAX_WORK`](crate::limits::FALLBACK_MAX_WORK), or `solver.max_work` when
+    /// ([`FALLBACK_MAX_WORK`], or `solver.max_work` when
     /// that is less).
     pub fallback_work: u64,
     /// Reflections a search's beam tree walks at most when `max_time` alone bounds it
-    /// ([`MAX_SEARCH_STEPS`](crate::limits::MAX_SEARCH_STEPS)).
+    /// ([`MAX_SEARCH_STEPS`]).
     pub depth: usize,
 }
 

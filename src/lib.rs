@@ -154,13 +154,13 @@ pub mod path_problem {
 /// The limits a scene is validated against, and the solver's defaults.
 pub mod limits {
     pub use crate::control::{
-        MAX_INPUT_BYTES, MAX_SEARCH_ARRIVALS, MAX_SEARCH_BEAMS, MAX_WALK_TUPLES, available_memory,
-        fits_in_memory, read_limited,
+        FALLBACK_MAX_WORK, MAX_INPUT_BYTES, MAX_SEARCH_ARRIVALS, MAX_SEARCH_BEAMS,
+        MAX_SEARCH_STEPS, MAX_WALK_TUPLES, available_memory, fits_in_memory, read_limited,
     };
     pub use crate::scene::{
-        DEFAULT_MAX_ITERATIONS, DEFAULT_MAX_WORK, DEFAULT_TOLERANCE, FALLBACK_MAX_WORK,
-        MAX_COORDINATE, MAX_ITERATIONS_LIMIT, MAX_SEARCH_STEPS, MAX_SPEED_RATIO,
-        MAX_STATIONARY_STEPS, MAX_WORK_LIMIT, MIN_COORDINATE, REGION_RANGE_BITS,
+        DEFAULT_MAX_ITERATIONS, DEFAULT_MAX_WORK, DEFAULT_TOLERANCE, MAX_COORDINATE,
+        MAX_ITERATIONS_LIMIT, MAX_SPEED_RATIO, MAX_STATIONARY_STEPS, MAX_WORK_LIMIT,
+        MIN_COORDINATE, REGION_RANGE_BITS,
     };
     pub use crate::scene::{DEFAULT_TAPS, MAX_RATE, MAX_SAMPLES, MAX_TAPS};
 }
