@@ -51,11 +51,7 @@ fn compare_in_units(scene: &Scene, warm_start: bool, chunk: usize) -> (u64, u64)
     let tracer = Tracer::new(scene).expect("tracer");
     let batch = tracer
         .trace_batch(
-            &BatchOptions {
-                warm_start,
-                chunk,
-                ..BatchOptions::default()
-            },
+            &BatchOptions { warm_start, chunk },
             &eigenray::options::Run::new(),
         )
         .unwrap();
@@ -590,11 +586,7 @@ fn a_sink_gets_the_rays_of_the_batch_bit_for_bit() {
     for (k, sc) in scenes.iter().enumerate() {
         let tracer = Tracer::new(sc).expect("tracer");
         for (warm_start, chunk) in [(true, 256), (true, 37), (false, 256)] {
-            let opts = BatchOptions {
-                warm_start,
-                chunk,
-                ..BatchOptions::default()
-            };
+            let opts = BatchOptions { warm_start, chunk };
             let batch = tracer
                 .trace_batch(&opts, &eigenray::options::Run::new())
                 .unwrap();

@@ -59,7 +59,6 @@ fn bit_exact(scene: &Scene, kernels: Kernels) -> Vec<Status> {
         let opts = BatchOptions {
             warm_start,
             chunk: 16,
-            ..BatchOptions::default()
         };
         let (ba, bb) = (
             fast.trace_batch(&opts, &eigenray::options::Run::new())

@@ -120,7 +120,7 @@ fn assert_part_of(short: &SearchReport, full: &SearchReport) {
             .iter()
             .filter(|x| pair(x))
             .all(|x| x.complete)
-            && short.arrivals.iter().any(|x| pair(x));
+            && short.arrivals.iter().any(pair);
         if complete {
             assert!(short.arrivals.iter().any(|b| same(a, b)), "{a:?} missing");
         }
