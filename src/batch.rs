@@ -725,7 +725,9 @@ impl Tracer {
         if reserved.is_err() {
             return Err(self.too_large(1 + usize::from(spatial)));
         }
-        self.solve_batch_into(opts, run, batch);
+        // The order decided once (its test scans the receivers).
+        let order = self.order_of(spatial);
+        self.solve_batch_into(opts, run, &order, batch);
         self.batch_amplitudes(batch, run);
         Ok(())
     }
@@ -762,8 +764,9 @@ impl Tracer {
         )
     }
 
-    /// [`trace_batch_into`](Self::trace_batch_into)'s solve of every ray.
-    fn solve_batch_into(&self, opts: &BatchOptions, run: &Run, batch: &mut Batch) {
+    /// [`trace_batch_into`](Self::trace_batch_into)'s solve of every ray, the receivers of
+    /// each source in `order`.
+    fn solve_batch_into(&self, opts: &BatchOptions, run: &Run, order: &[usize], batch: &mut Batch) {
         let scene = self.scene();
         let (nr, np) = (scene.receivers().len(), scene.paths().len());
         let [point_offsets, media_offsets, param_offsets] = offsets(scene);
@@ -779,7 +782,6 @@ impl Tracer {
             batch.media.clear();
             return;
         }
-        let order = self.solve_order(opts);
         let identity = order.iter().enumerate().all(|(i, &r)| i == r);
 
         // Solve in (source, spatial position) block order. Every element is written by the
@@ -803,7 +805,7 @@ impl Tracer {
         self.solve_units(
             opts,
             run,
-            &order,
+            order,
             &param_offsets,
             sized_out(records, points, media, blocks, layout),
         );
@@ -820,7 +822,7 @@ impl Tracer {
             Point::new(f64::NAN, f64::NAN),
         );
         sized(&mut batch.media, blocks * media_block, NO_MEDIUM);
-        let from = solved_block(&order, nr);
+        let from = solved_block(order, nr);
         batch
             .records
             .par_chunks_mut(np)
@@ -938,8 +940,13 @@ impl Tracer {
     /// warm starts are on and the receivers' own order is not coherent, else their own
     /// (sorting and putting the rays back would cost more than the warm starts save).
     fn solve_order(&self, opts: &BatchOptions) -> Vec<usize> {
+        self.order_of(self.solves_spatially(opts))
+    }
+
+    /// A Morton order of the receivers when `spatial`, else their own.
+    fn order_of(&self, spatial: bool) -> Vec<usize> {
         let scene = self.scene();
-        if self.solves_spatially(opts) {
+        if spatial {
             spatial_order(scene.receivers())
         } else {
             (0..scene.receivers().len()).collect()
