@@ -111,13 +111,25 @@ fn batch(c: &mut Criterion) {
             .expect("thread pool");
         let name = format!("{threads}_thread{}", if threads == 1 { "" } else { "s" });
         group.bench_function(&name, |b| {
-            b.iter(|| pool.install(|| black_box(tracer.trace_batch(&BatchOptions::default()))))
+            b.iter(|| {
+                pool.install(|| {
+                    black_box(
+                        tracer
+                            .trace_batch(&BatchOptions::default(), &eigenray::options::Run::new())
+                            .unwrap(),
+                    )
+                })
+            })
         });
         // Into one reused batch (a layout tool tracing every change again).
         let mut reused = eigenray::Batch::default();
         group.bench_function(format!("{name}_reused"), |b| {
             b.iter(|| {
-                pool.install(|| tracer.trace_batch_into(&BatchOptions::default(), &mut reused));
+                let run = eigenray::options::Run::new();
+                pool.install(|| {
+                    tracer.trace_batch_into(&BatchOptions::default(), &run, &mut reused)
+                })
+                .expect("allocated before");
                 black_box(reused.len())
             })
         });

@@ -19,7 +19,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let tracer = Tracer::new(&scene)?;
 
     let start = std::time::Instant::now();
-    let batch = tracer.trace_batch(&BatchOptions::default());
+    let batch = tracer
+        .trace_batch(&BatchOptions::default(), &eigenray::options::Run::new())
+        .unwrap();
     let solved = start.elapsed();
 
     let rays = dir.join("rays.npy");

@@ -18,11 +18,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let tracer = Tracer::new(&scene)?;
     let options = BatchOptions::default();
     let mut batch = Batch::default();
-    tracer.try_trace_batch_into(&options, &mut batch)?;
+    let run = eigenray::options::Run::new();
+    tracer.trace_batch_into(&options, &run, &mut batch)?;
     let mut seconds: Vec<f64> = (0..repetitions.max(1))
         .map(|_| {
             let start = Instant::now();
-            tracer.trace_batch_into(&options, &mut batch);
+            tracer
+                .trace_batch_into(&options, &run, &mut batch)
+                .expect("allocated by the first batch");
             start.elapsed().as_secs_f64()
         })
         .collect();

@@ -582,7 +582,11 @@ fn batch_section() -> io::Result<String> {
         let mut last = None;
         let t = three_runs(|| {
             drop(last.take());
-            last = Some(pool.install(|| tracer.trace_batch(&opts)));
+            last = Some(pool.install(|| {
+                tracer
+                    .trace_batch(&opts, &eigenray::options::Run::new())
+                    .unwrap()
+            }));
         });
         let b = last.expect("a batch");
         eprintln!(
@@ -642,7 +646,9 @@ fn batch_section() -> io::Result<String> {
     for threads in [2, 1] {
         let pool = pool(threads);
         let t = three_runs(|| {
-            pool.install(|| tracer.trace_batch_into(&BatchOptions::default(), &mut reused));
+            let run = eigenray::options::Run::new();
+            pool.install(|| tracer.trace_batch_into(&BatchOptions::default(), &run, &mut reused))
+                .expect("allocated before");
         });
         eprintln!(
             "  trace_batch_into a reused batch, {threads} thread(s): {}",

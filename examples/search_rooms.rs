@@ -77,13 +77,26 @@ fn main() {
             let text = std::fs::read_to_string(path).expect("the room's scene");
             let scene = Scene::from_json(&text).expect("a valid scene");
             let tracer = Tracer::new(&scene).expect("a tracer");
-            let found = tracer.search().expect("the scene's search");
+            let found = tracer
+                .search(&eigenray::options::Run::new())
+                .expect("the scene's search")
+                .arrivals;
             let search_ms = time_ms(repetitions, || {
-                black_box(tracer.search().expect("the scene's search"));
+                black_box(
+                    tracer
+                        .search(&eigenray::options::Run::new())
+                        .expect("the scene's search")
+                        .arrivals,
+                );
             });
             let new_and_search_ms = time_ms(repetitions, || {
                 let tracer = Tracer::new(black_box(&scene)).expect("a tracer");
-                black_box(tracer.search().expect("the scene's search"));
+                black_box(
+                    tracer
+                        .search(&eigenray::options::Run::new())
+                        .expect("the scene's search")
+                        .arrivals,
+                );
             });
             let mut line = format!(
                 "{{\"room\": \"{name}\", \"sources\": {}, \"receivers\": {}, \"arrivals\": {}, \

@@ -63,13 +63,25 @@ fn measure(spec: &SceneSpec) -> Row {
     let mut out: Vec<Arrival> = Vec::new();
     // Builds the hierarchy (once per interface), outside the timing.
     tracer
-        .stationary_paths(source, receivers[0], 0, &mut out)
+        .stationary_paths(
+            source,
+            receivers[0],
+            0,
+            &eigenray::options::Run::new(),
+            &mut out,
+        )
         .expect("media given");
     let (mut arrivals, mut converged, mut vertex, mut obstructed) = (0, 0, 0, 0);
     let (mut tuples, mut solves) = (0, 0);
     for &receiver in receivers {
         let search = tracer
-            .stationary_paths(source, receiver, 0, &mut out)
+            .stationary_paths(
+                source,
+                receiver,
+                0,
+                &eigenray::options::Run::new(),
+                &mut out,
+            )
             .expect("media given");
         assert!(search.complete);
         arrivals += out.len();
@@ -84,7 +96,13 @@ fn measure(spec: &SceneSpec) -> Row {
     let timing = time_per_call(RUNS, MIN_RUN, || {
         for &receiver in receivers {
             tracer
-                .stationary_paths(source, receiver, 0, &mut out)
+                .stationary_paths(
+                    source,
+                    receiver,
+                    0,
+                    &eigenray::options::Run::new(),
+                    &mut out,
+                )
                 .expect("media given");
         }
     });

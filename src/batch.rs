@@ -4,16 +4,19 @@ use rayon::iter::plumbing::{Consumer, Producer, ProducerCallback, UnindexedConsu
 use rayon::prelude::*;
 
 use crate::amplitude::Amplitude;
-use crate::control::{Stop, within};
+use crate::control::{Progress, Run};
 use crate::geom::Point;
 use crate::scene::{RayTriple, SceneError};
-use crate::trace::{ChainLink, ChainRays, Ray, RayRecord, Status, Tracer, WarmStarts, Workspace};
+use crate::trace::{
+    ChainLink, ChainRays, Ray, RayRecord, Reason, Status, Tracer, WarmStarts, Workspace,
+};
 
 mod amplitudes;
 
-/// How to run a batch.
-#[derive(Clone, Copy)]
-pub struct BatchOptions<'a> {
+/// How to run a batch (what stops it and who hears of its progress: its
+/// [`Run`](crate::options::Run)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BatchOptions {
     /// Solve receivers in a spatial order (a Morton curve over their positions) and start each
     /// ray from the previous receiver's converged solution of the same path when that receiver
     /// is near (closer than a quarter of the source–receiver distance) instead of the default
@@ -31,21 +34,13 @@ pub struct BatchOptions<'a> {
     pub warm_start: bool,
     /// Receivers per work unit (one workspace and one warm-start chain per unit).
     pub chunk: usize,
-    /// Called from the worker threads with the number of rays each finished unit solved.
-    pub progress: Option<&'a (dyn Fn(usize) + Sync)>,
-    /// A request to stop (from another thread): once made, the work units not yet begun are
-    /// skipped (their rays are not written) and the complete searches of the rays being
-    /// solved stop; the caller that made it discards the batch.
-    pub stop: Option<&'a Stop>,
 }
 
-impl Default for BatchOptions<'_> {
+impl Default for BatchOptions {
     fn default() -> Self {
         BatchOptions {
             warm_start: true,
             chunk: 256,
-            progress: None,
-            stop: None,
         }
     }
 }
@@ -55,9 +50,10 @@ impl Default for BatchOptions<'_> {
 /// (and leg media) of all paths.
 ///
 /// ```
-/// use eigenray::{BatchOptions, Scene, Status, Tracer};
+/// use eigenray::{BatchOptions, Scene, Status, Tracer, options::Run};
 /// let scene = Scene::from_spec(&eigenray::demo::air_water(100, 7)).unwrap();
-/// let batch = Tracer::new(&scene).unwrap().trace_batch(&BatchOptions::default());
+/// let tracer = Tracer::new(&scene).unwrap();
+/// let batch = tracer.trace_batch(&BatchOptions::default(), &Run::new()).unwrap();
 /// assert_eq!(batch.len(), 100);
 /// assert!((0..batch.len()).all(|i| batch.record(i).status == Status::Converged));
 /// assert_eq!(batch.points(0).len(), 3); // source, interaction, receiver
@@ -174,7 +170,7 @@ impl ExactSizeIterator for BatchRays<'_> {}
 ///
 /// ```
 /// use eigenray::sink::{BatchScratch, BatchSink, RaySlot};
-/// use eigenray::{BatchOptions, Point, RayRecord, Scene, Tracer};
+/// use eigenray::{BatchOptions, Point, RayRecord, Scene, Tracer, options::Run};
 ///
 /// /// Times only, into a slice of one time per ray (one path here).
 /// struct Times<'a>(&'a mut [f64]);
@@ -197,9 +193,10 @@ impl ExactSizeIterator for BatchRays<'_> {}
 /// let mut times = vec![0.0; 1000];
 /// let mut scratch = BatchScratch::default();
 /// tracer
-///     .trace_batch_to(&BatchOptions::default(), Times(&mut times), &mut scratch)
+///     .trace_batch_to(&BatchOptions::default(), &Run::new(), Times(&mut times), &mut scratch)
 ///     .unwrap();
-/// let batch = tracer.trace_batch(&BatchOptions::default());
+/// let run = eigenray::options::Run::new();
+/// let batch = tracer.trace_batch(&BatchOptions::default(), &run).unwrap();
 /// assert!((0..1000).all(|i| times[i].to_bits() == batch.record(i).time.to_bits()));
 /// ```
 pub trait BatchSink: Send + Sized {
@@ -665,34 +662,55 @@ fn spatial_order(points: &[Point]) -> Vec<usize> {
 }
 
 impl Tracer {
-    /// [`trace_batch`](Self::trace_batch), with an error instead of an abort when the
-    /// batch's arrays cannot be allocated (a scene of more rays than the machine can hold):
-    /// the memory is reserved before any ray is solved.
+    /// Solves every ray of the scene in parallel (rayon, one workspace per work unit), with
+    /// the same results as solving them one by one (up to the start each ray is solved from
+    /// when `warm_start` is on), in ray order. The memory is reserved before any ray is
+    /// solved: a batch of more rays than the machine can hold is an error, not an abort.
+    ///
+    /// Each work unit's rays are items (and units of work) of `run`, asked for before the
+    /// unit is solved; the searches of rays whose start finds no path run with it too. Once
+    /// `run` stops (a stop request, a spent budget), the units not yet begun are not solved:
+    /// their rays are `not_converged` with [`Reason::SearchLimit`](crate::Reason).
     ///
     /// ```
-    /// use eigenray::{BatchOptions, Scene, Tracer};
+    /// use eigenray::{BatchOptions, Scene, Tracer, options::Run};
     /// let scene = Scene::from_spec(&eigenray::demo::air_water(100, 7)).unwrap();
-    /// let batch = Tracer::new(&scene).unwrap().try_trace_batch(&BatchOptions::default()).unwrap();
+    /// let tracer = Tracer::new(&scene).unwrap();
+    /// let batch = tracer.trace_batch(&BatchOptions::default(), &Run::new()).unwrap();
     /// assert_eq!(batch.len(), 100);
     /// ```
     ///
     /// # Errors
     /// `paths` (the batch's size: sources × receivers × paths), saying how many bytes it
     /// needs.
-    pub fn try_trace_batch(&self, opts: &BatchOptions) -> Result<Batch, SceneError> {
+    pub fn trace_batch(&self, opts: &BatchOptions, run: &Run) -> Result<Batch, SceneError> {
         let mut batch = Batch::default();
-        self.try_trace_batch_into(opts, &mut batch)?;
+        self.trace_batch_into(opts, run, &mut batch)?;
         Ok(batch)
     }
 
-    /// [`trace_batch_into`](Self::trace_batch_into), with an error instead of an abort when
-    /// the batch's arrays cannot be allocated (see [`try_trace_batch`](Self::try_trace_batch)).
+    /// [`trace_batch`](Self::trace_batch) into an existing batch, reusing its memory: a tool
+    /// that traces every layout change again keeps one `Batch` and pays for its hundreds of
+    /// megabytes (page faults, first writes) only once. The results are the same as those of
+    /// `trace_batch`.
+    ///
+    /// ```
+    /// use eigenray::{Batch, BatchOptions, Scene, Tracer, options::Run};
+    /// let mut batch = Batch::default();
+    /// for receivers in [100, 200] {
+    ///     let scene = Scene::from_spec(&eigenray::demo::air_water(receivers, 7)).unwrap();
+    ///     let tracer = Tracer::new(&scene).unwrap();
+    ///     tracer.trace_batch_into(&BatchOptions::default(), &Run::new(), &mut batch).unwrap();
+    ///     assert_eq!(batch.len(), receivers);
+    /// }
+    /// ```
     ///
     /// # Errors
-    /// As [`try_trace_batch`](Self::try_trace_batch).
-    pub fn try_trace_batch_into(
+    /// As [`trace_batch`](Self::trace_batch).
+    pub fn trace_batch_into(
         &self,
         opts: &BatchOptions,
+        run: &Run,
         batch: &mut Batch,
     ) -> Result<(), SceneError> {
         let spatial = self.solves_spatially(opts);
@@ -707,7 +725,10 @@ impl Tracer {
         if reserved.is_err() {
             return Err(self.too_large(1 + usize::from(spatial)));
         }
-        self.trace_batch_into(opts, batch);
+        // The order decided once (its test scans the receivers).
+        let order = self.order_of(spatial);
+        self.solve_batch_into(opts, run, &order, batch);
+        self.batch_amplitudes(batch, run);
         Ok(())
     }
 
@@ -743,40 +764,9 @@ impl Tracer {
         )
     }
 
-    /// Solves every ray of the scene in parallel (rayon, one workspace per work unit), with
-    /// the same results as solving them one by one (up to the start each ray is solved from
-    /// when `warm_start` is on), in ray order.
-    ///
-    /// # Panics
-    /// Aborts when its arrays cannot be allocated (as every allocation in Rust does);
-    /// [`try_trace_batch`](Self::try_trace_batch) returns an error instead.
-    pub fn trace_batch(&self, opts: &BatchOptions) -> Batch {
-        let mut batch = Batch::default();
-        self.trace_batch_into(opts, &mut batch);
-        batch
-    }
-
-    /// [`trace_batch`](Self::trace_batch) into an existing batch, reusing its memory: a tool
-    /// that traces every layout change again keeps one `Batch` and pays for its hundreds of
-    /// megabytes (page faults, first writes) only once. The results are the same as those of
-    /// `trace_batch`.
-    ///
-    /// ```
-    /// use eigenray::{Batch, BatchOptions, Scene, Tracer};
-    /// let mut batch = Batch::default();
-    /// for receivers in [100, 200] {
-    ///     let scene = Scene::from_spec(&eigenray::demo::air_water(receivers, 7)).unwrap();
-    ///     Tracer::new(&scene).unwrap().trace_batch_into(&BatchOptions::default(), &mut batch);
-    ///     assert_eq!(batch.len(), receivers);
-    /// }
-    /// ```
-    pub fn trace_batch_into(&self, opts: &BatchOptions, batch: &mut Batch) {
-        self.solve_batch_into(opts, batch);
-        self.batch_amplitudes(batch);
-    }
-
-    /// [`trace_batch_into`](Self::trace_batch_into)'s solve of every ray.
-    fn solve_batch_into(&self, opts: &BatchOptions, batch: &mut Batch) {
+    /// [`trace_batch_into`](Self::trace_batch_into)'s solve of every ray, the receivers of
+    /// each source in `order`.
+    fn solve_batch_into(&self, opts: &BatchOptions, run: &Run, order: &[usize], batch: &mut Batch) {
         let scene = self.scene();
         let (nr, np) = (scene.receivers().len(), scene.paths().len());
         let [point_offsets, media_offsets, param_offsets] = offsets(scene);
@@ -792,7 +782,6 @@ impl Tracer {
             batch.media.clear();
             return;
         }
-        let order = self.solve_order(opts);
         let identity = order.iter().enumerate().all(|(i, &r)| i == r);
 
         // Solve in (source, spatial position) block order. Every element is written by the
@@ -815,7 +804,8 @@ impl Tracer {
         };
         self.solve_units(
             opts,
-            &order,
+            run,
+            order,
             &param_offsets,
             sized_out(records, points, media, blocks, layout),
         );
@@ -832,7 +822,7 @@ impl Tracer {
             Point::new(f64::NAN, f64::NAN),
         );
         sized(&mut batch.media, blocks * media_block, NO_MEDIUM);
-        let from = solved_block(&order, nr);
+        let from = solved_block(order, nr);
         batch
             .records
             .par_chunks_mut(np)
@@ -860,7 +850,7 @@ impl Tracer {
         batch.spatial = Some(spatial);
     }
 
-    /// [`trace_batch_into`](Self::trace_batch_into) into a [`BatchSink`] of every ray of the
+    /// [`trace_batch`](Self::trace_batch) into a [`BatchSink`] of every ray of the
     /// scene: each ray is written into `sink` by the worker that solves it, right after
     /// solving it, with the same results as [`trace_batch`](Self::trace_batch) (bit for bit).
     /// A front end fills its own arrays this way in the batch's parallel pass, without a
@@ -870,7 +860,7 @@ impl Tracer {
     /// (no paths, sources or receivers) writes nothing.
     ///
     /// # Errors
-    /// As [`try_trace_batch`](Self::try_trace_batch), when `scratch` cannot be allocated;
+    /// As [`trace_batch`](Self::trace_batch), when `scratch` cannot be allocated;
     /// nothing has been written to the sink then.
     ///
     /// # Panics
@@ -879,6 +869,7 @@ impl Tracer {
     pub fn trace_batch_to<S: BatchSink>(
         &self,
         opts: &BatchOptions,
+        run: &Run,
         sink: S,
         scratch: &mut BatchScratch,
     ) -> Result<(), SceneError> {
@@ -896,7 +887,7 @@ impl Tracer {
         let [point_offsets, media_offsets, param_offsets] = offsets(scene);
         let order = self.solve_order(opts);
         if order.iter().enumerate().all(|(i, &r)| i == r) {
-            self.solve_units(opts, &order, &param_offsets, sink);
+            self.solve_units(opts, run, &order, &param_offsets, sink);
             return Ok(());
         }
         let (records, points, media) = &mut scratch.arrays;
@@ -911,7 +902,7 @@ impl Tracer {
             mo: &media_offsets,
         };
         let out = sized_out(records, points, media, blocks, layout);
-        self.solve_units(opts, &order, &param_offsets, out);
+        self.solve_units(opts, run, &order, &param_offsets, out);
         // Back from spatial order to ray order, the sink's parts in parallel.
         let (records, points, media) = &scratch.arrays;
         let from = solved_block(&order, nr);
@@ -949,8 +940,13 @@ impl Tracer {
     /// warm starts are on and the receivers' own order is not coherent, else their own
     /// (sorting and putting the rays back would cost more than the warm starts save).
     fn solve_order(&self, opts: &BatchOptions) -> Vec<usize> {
+        self.order_of(self.solves_spatially(opts))
+    }
+
+    /// A Morton order of the receivers when `spatial`, else their own.
+    fn order_of(&self, spatial: bool) -> Vec<usize> {
         let scene = self.scene();
-        if self.solves_spatially(opts) {
+        if spatial {
             spatial_order(scene.receivers())
         } else {
             (0..scene.receivers().len()).collect()
@@ -959,10 +955,12 @@ impl Tracer {
 
     /// Solves every ray into `sink` in (source, `order`) block order, in parallel: one work
     /// unit per `opts.chunk` blocks (one part of the sink), one workspace and warm-start state
-    /// per rayon job.
+    /// per rayon job. A unit that `run` does not let through writes its rays as
+    /// `not_converged` with [`Reason::SearchLimit`].
     fn solve_units<S: BatchSink>(
         &self,
         opts: &BatchOptions,
+        run: &Run,
         order: &[usize],
         param_offsets: &[usize],
         sink: S,
@@ -972,11 +970,25 @@ impl Tracer {
         let chunk = opts.chunk.max(1);
         Parts::new(sink, chunk).enumerate().for_each_init(
             || (Workspace::new(), WarmStarts::new(param_offsets[np], np)),
-            |(ws, warm), (unit, out)| {
-                if opts.stop.is_some_and(Stop::requested) {
+            |(ws, warm), (unit, mut out)| {
+                let n = out.blocks();
+                if !run.keep_going(Progress::items((n * np) as u64)) {
+                    let first = unit * chunk;
+                    for b in 0..n {
+                        let block = first + b;
+                        let (source, receiver) = (block / nr, order[block % nr]);
+                        for path in 0..np {
+                            let slot = RaySlot {
+                                block: b,
+                                source,
+                                receiver,
+                                path,
+                            };
+                            out.write(slot, &NOT_SOLVED, &[], &[]);
+                        }
+                    }
                     return;
                 }
-                let n = out.blocks();
                 let mut unit = Unit {
                     first: unit * chunk,
                     n,
@@ -985,27 +997,34 @@ impl Tracer {
                     warm_start: opts.warm_start,
                     out,
                 };
-                // Path by path: each path's rays form one chain of warm starts.
-                for p in 0..np {
-                    let params = param_offsets[p]..param_offsets[p + 1];
-                    let mut rays = UnitChain {
-                        scene,
-                        unit: &mut unit,
-                        path: p,
-                        have: false,
-                        last: Point::default(),
-                    };
-                    within(opts.stop, || {
-                        self.solve_chain(p, params, &mut rays, warm, ws)
-                    });
-                }
-                if let Some(progress) = opts.progress {
-                    progress(n * np);
-                }
+                // Path by path: each path's rays form one chain of warm starts (their searches
+                // where a start finds no path run with `run`).
+                run.within(|| {
+                    for p in 0..np {
+                        let params = param_offsets[p]..param_offsets[p + 1];
+                        let mut rays = UnitChain {
+                            scene,
+                            unit: &mut unit,
+                            path: p,
+                            have: false,
+                            last: Point::default(),
+                        };
+                        self.solve_chain(p, params, &mut rays, warm, ws);
+                    }
+                });
             },
         );
     }
 }
+
+/// The record of a ray that a stopped batch did not solve.
+const NOT_SOLVED: RayRecord = RayRecord {
+    status: Status::NotConverged,
+    time: f64::NAN,
+    iterations: 0,
+    residual: f64::NAN,
+    reason: Some(Reason::SearchLimit),
+};
 
 /// Reserves room in a batch's arrays for every ray of `scene`.
 fn reserve(

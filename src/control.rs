@@ -1,89 +1,307 @@
-//! What bounds a long call from outside its scene: a request to stop it ([`Stop`]), and the
-//! memory and input size it may take ([`available_memory`], [`MAX_INPUT_BYTES`],
-//! [`read_limited`]).
+//! What bounds a long call from outside its scene: its [`Run`] (a request to stop it, a
+//! budget of work, the limits of its parts, and who hears of its progress), and the memory
+//! and input size it may take ([`available_memory`], [`MAX_INPUT_BYTES`], [`read_limited`]).
 //!
-//! A stop request reaches the work through one seam: a long call (a batch, every stationary
-//! path, a search) runs each of its parallel jobs [`within`] its `Stop`, and the one place
-//! where work is spent checks it: the complete search's budget test (`Search::over_budget`,
-//! per tuple, bound and solve, with the `Stop` it took from [`current`]), which the default
-//! mode's fallback, every stationary path and the search all go through; the parallel loops
-//! also skip the jobs they have not begun once asked. So a call stops within one tuple of any
-//! search, and one work unit of fast rays.
+//! Every long call takes a `&Run` (a batch, every stationary path, one triple's stationary
+//! paths, the search's beam trees and walks, the echoes of a scene, an impulse response's
+//! rendering, a pressure's sum), and checks it through one seam, [`Run::keep_going`], before
+//! each piece of its work: a work unit of a batch's rays, a block of a beam tree's beams, a
+//! sequence of a walk, a tuple or solve of a complete search, an echo of a response. The
+//! single-ray calls that take no `Run` ([`Tracer::solve`](crate::Tracer::solve) and its
+//! kin, whose search where the start finds no path is bounded by
+//! [`Limits::fallback_work`]) use the run their thread is [`within`](Run::within), if any.
 
 use std::cell::RefCell;
 use std::io::Read;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, LazyLock};
 
-/// A request to stop a long call, shared between the caller and the call's workers: the
-/// caller (another thread, a signal handler's poll) calls [`request`](Stop::request); the
-/// call returns soon after, its remaining work skipped (its results are then incomplete:
-/// the caller that asked to stop should discard them).
+/// The work budget of the default mode's search of one ray, where its start leads to no
+/// path (at most `solver.max_work`): 2^18 units, about 10 ms of one core, so that a batch
+/// of many rays stays bounded; beyond it the ray is `not_converged` (`search_limit`). The
+/// default of [`Limits::fallback_work`].
+pub const FALLBACK_MAX_WORK: u64 = 1 << 18;
+
+/// The largest `search.max_steps`: the depth of the beam tree (its stack holds one node per
+/// step). The default of [`Limits::depth`].
+pub const MAX_SEARCH_STEPS: usize = 1 << 16;
+
+/// Beams one source's tree of a `search` may visit before it stops (its pairs then say
+/// `complete: false`): the default of [`Limits::beams`]. At the tree's pace (tens of millions
+/// of beams a second on one core) a few seconds.
+pub const MAX_SEARCH_BEAMS: u64 = 1 << 28;
+
+/// Arrivals a `search` may list before it stops (a few gigabytes of results): the default of
+/// [`Limits::arrivals`].
+pub const MAX_SEARCH_ARRIVALS: u64 = 1 << 24;
+
+/// Tuples (and assignments solved) of the complete search of one sequence between one pair
+/// of a `search`'s walk, beyond which it gives up and its pair says `complete: false`: the
+/// default of [`Limits::walk_tuples`].
+pub const MAX_WALK_TUPLES: usize = 1 << 20;
+
+/// Bytes a `search`'s arrivals may hold at most ([`Limits::memory`]), whatever memory the
+/// machine has: 16 GiB.
+pub const MAX_SEARCH_MEMORY: u64 = 1 << 34;
+
+/// Bytes a search's arrivals may hold where the memory available is not known: 2 GiB.
+const UNKNOWN_MEMORY_SEARCH: u64 = 1 << 31;
+
+/// Work done or about to be done, as a long call tells its [`Run`]
+/// ([`keep_going`](Run::keep_going)) and the run its progress callback.
+///
+/// A unit of `work` is what the budget ([`Limits::work`]) counts: a ray solved by a batch, a
+/// beam of a search's tree, a sequence visited by a search's walk, a work unit of a complete
+/// search (a tuple of `k` points or a Newton step of an assignment of `k` points counts
+/// `k + 1`, as `solver.max_work` counts them), a tap of an echo rendered into an impulse
+/// response, an echo summed into a pressure. `items` count what a call's caller counts in
+/// its progress bar: the rays of a batch, the triples of every stationary path, the pairs of
+/// a search's walk, the echoes of a response.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Progress {
+    /// Units of work.
+    pub work: u64,
+    /// Items begun.
+    pub items: u64,
+}
+
+impl Progress {
+    /// `work` units and no item.
+    pub const fn work(work: u64) -> Progress {
+        Progress { work, items: 0 }
+    }
+
+    /// `items` items of one unit each.
+    pub const fn items(items: u64) -> Progress {
+        Progress { work: items, items }
+    }
+}
+
+/// What a long call may do: its budget over the whole call, and the limits of its parts
+/// (each part that reaches its limit stops there and says it is not complete). The defaults
+/// are the library's own limits; the scene's `solver.max_work` bounds each complete search
+/// besides.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Limits {
+    /// Units of work over the whole call (see [`Progress`]); none by default (`u64::MAX`).
+    /// A call that reaches it stops as a stop request stops it, its remaining work skipped
+    /// and its results marked incomplete where they can say so.
+    pub work: u64,
+    /// Beams one source's tree of a search visits ([`MAX_SEARCH_BEAMS`]).
+    pub beams: u64,
+    /// Arrivals a search lists ([`MAX_SEARCH_ARRIVALS`]).
+    pub arrivals: u64,
+    /// Bytes the arrivals listed over a whole search (every source and pair) may hold, each
+    /// counted with its points (`search::arrival_bytes`): a search of long paths stops here
+    /// long before [`arrivals`](Self::arrivals). By default a quarter of the memory available
+    /// ([`available_memory`]: what the machine has free, or less under an address-space
+    /// limit), at most [`MAX_SEARCH_MEMORY`]: the rest is left to what the caller makes of
+    /// the arrivals (written text, arrays, responses).
+    pub memory: u64,
+    /// Tuples (and assignments solved) of one complete search within a search's walk
+    /// ([`MAX_WALK_TUPLES`]).
+    pub walk_tuples: usize,
+    /// Work of the search of a ray whose start finds no path, in the default mode
+    /// ([`FALLBACK_MAX_WORK`], or `solver.max_work` when
+    /// that is less).
+    pub fallback_work: u64,
+    /// Reflections a search's beam tree walks at most when `max_time` alone bounds it
+    /// ([`MAX_SEARCH_STEPS`]).
+    pub depth: usize,
+}
+
+impl Default for Limits {
+    fn default() -> Limits {
+        Limits {
+            work: u64::MAX,
+            beams: MAX_SEARCH_BEAMS,
+            arrivals: MAX_SEARCH_ARRIVALS,
+            memory: available_memory()
+                .map_or(UNKNOWN_MEMORY_SEARCH, |have| have / 4)
+                .min(MAX_SEARCH_MEMORY),
+            walk_tuples: MAX_WALK_TUPLES,
+            fallback_work: FALLBACK_MAX_WORK,
+            depth: MAX_SEARCH_STEPS,
+        }
+    }
+}
+
+/// The control of one long call: a request to stop it (from another thread: a signal
+/// handler's poll, a user interface), its [`Limits`] and budget, and a callback that hears of
+/// its progress from the worker threads. Clones share the stop request and the work spent,
+/// so a clone given to another thread stops the call.
+///
+/// A call that was stopped (asked to, or out of budget: [`stopped`](Run::stopped)) returns
+/// soon after, its remaining work skipped; what it returns then says so where it can
+/// (`complete: false` on a search's pairs and a stationary path's triples, rays a batch did
+/// not write).
 ///
 /// ```
-/// use eigenray::options::Stop;
-/// let stop = Stop::new();
-/// let seen_by_workers = stop.clone();
-/// assert!(!seen_by_workers.requested());
-/// stop.request();
-/// assert!(seen_by_workers.requested());
+/// use eigenray::options::{Progress, Run};
+/// use std::sync::atomic::{AtomicU64, Ordering};
+/// use std::sync::Arc;
+/// let heard = Arc::new(AtomicU64::new(0));
+/// let counter = heard.clone();
+/// let run = Run::new()
+///     .budget(10)
+///     .on_progress(move |p: Progress| { counter.fetch_add(p.work, Ordering::Relaxed); });
+/// assert!(run.keep_going(Progress::work(6)));
+/// assert!(!run.keep_going(Progress::work(6))); // 12 > 10: refused, and the run stops
+/// assert!(run.stopped() && !run.stop_requested());
+/// assert_eq!((run.spent(), heard.load(Ordering::Relaxed)), (6, 6));
+///
+/// let run = Run::new();
+/// let seen_by_workers = run.clone();
+/// run.request_stop();
+/// assert!(!seen_by_workers.keep_going(Progress::default()));
 /// ```
-#[derive(Clone, Debug, Default)]
-pub struct Stop(Arc<AtomicBool>);
+#[derive(Clone, Default)]
+pub struct Run {
+    /// What the call may do.
+    pub limits: Limits,
+    progress: Option<Arc<dyn Fn(Progress) + Send + Sync>>,
+    shared: Arc<Shared>,
+}
 
-impl Stop {
-    /// A request not yet made.
-    pub fn new() -> Stop {
-        Stop::default()
+/// What clones of a [`Run`] share.
+#[derive(Debug, Default)]
+struct Shared {
+    /// A stop was requested.
+    requested: AtomicBool,
+    /// The budget refused work.
+    exhausted: AtomicBool,
+    /// Units of work spent.
+    spent: AtomicU64,
+    /// Items begun.
+    items: AtomicU64,
+}
+
+impl std::fmt::Debug for Run {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Run")
+            .field("limits", &self.limits)
+            .field("progress", &self.progress.is_some())
+            .field("shared", &self.shared)
+            .finish()
+    }
+}
+
+/// The run of the calls made without one: the default limits, never stopped.
+static UNBOUNDED: LazyLock<Run> = LazyLock::new(Run::default);
+
+impl Run {
+    /// A run with the default [`Limits`], no budget and no progress callback.
+    pub fn new() -> Run {
+        Run::default()
     }
 
-    /// Asks every call that runs with this `Stop` (or a clone) to stop.
-    pub fn request(&self) {
-        self.0.store(true, Ordering::Relaxed);
+    /// A run that stops after `work` units of work ([`Limits::work`]).
+    #[must_use]
+    pub fn budget(mut self, work: u64) -> Run {
+        self.limits.work = work;
+        self
     }
 
-    /// Whether a stop was asked for.
-    pub fn requested(&self) -> bool {
-        self.0.load(Ordering::Relaxed)
+    /// A run whose progress `f` hears of, from the worker threads, each time a call checks it
+    /// ([`keep_going`](Run::keep_going)) with work that it lets it do.
+    #[must_use]
+    pub fn on_progress(mut self, f: impl Fn(Progress) + Send + Sync + 'static) -> Run {
+        self.progress = Some(Arc::new(f));
+        self
     }
 
-    /// Runs `f` with this `Stop` as the stop request of the library calls it makes on this
-    /// thread (a ray's search where its start finds no path, every stationary path of one
-    /// triple): they stop soon after it is requested. The calls that work in parallel take
-    /// their `Stop` as an argument instead ([`BatchOptions::stop`](crate::BatchOptions),
-    /// [`Tracer::trace_stationary_with`](crate::Tracer::trace_stationary_with),
-    /// [`Tracer::search_with`](crate::Tracer::search_with)).
-    pub fn run<R>(&self, f: impl FnOnce() -> R) -> R {
-        within(Some(self), f)
+    /// The run of the calls made without one (the default limits, never stopped).
+    pub(crate) fn unbounded() -> &'static Run {
+        &UNBOUNDED
+    }
+
+    /// Asks every call that runs with this run (or a clone) to stop.
+    pub fn request_stop(&self) {
+        self.shared.requested.store(true, Ordering::Relaxed);
+    }
+
+    /// Whether a stop was asked for ([`request_stop`](Run::request_stop)).
+    pub fn stop_requested(&self) -> bool {
+        self.shared.requested.load(Ordering::Relaxed)
+    }
+
+    /// Whether the run stopped its calls: a stop was asked for, or the budget refused work.
+    pub fn stopped(&self) -> bool {
+        self.stop_requested() || self.shared.exhausted.load(Ordering::Relaxed)
+    }
+
+    /// Units of work spent so far (counted only where the run has a budget or a progress
+    /// callback).
+    pub fn spent(&self) -> u64 {
+        self.shared.spent.load(Ordering::Relaxed)
+    }
+
+    /// Items begun so far (rays, triples, pairs, echoes: see [`Progress`]), for a caller
+    /// that polls the progress from another thread instead of hearing of it.
+    pub fn items(&self) -> u64 {
+        self.shared.items.load(Ordering::Relaxed)
+    }
+
+    /// The one test of a long call's control, before each piece of its work: whether it may
+    /// do `next` (and then it is counted, and the progress callback hears of it). `false` once
+    /// the run is stopped, or when `next.work` would take the work spent beyond the budget
+    /// (the run is then stopped: nothing more is let through).
+    #[inline]
+    pub fn keep_going(&self, next: Progress) -> bool {
+        if self.stopped() {
+            return false;
+        }
+        if self.limits.work != u64::MAX || self.progress.is_some() {
+            let spent = self.shared.spent.fetch_add(next.work, Ordering::Relaxed);
+            if spent.saturating_add(next.work) > self.limits.work {
+                self.shared.spent.fetch_sub(next.work, Ordering::Relaxed);
+                self.shared.exhausted.store(true, Ordering::Relaxed);
+                return false;
+            }
+        }
+        if next.items > 0 {
+            self.shared.items.fetch_add(next.items, Ordering::Relaxed);
+        }
+        if let Some(progress) = &self.progress {
+            progress(next);
+        }
+        true
+    }
+
+    /// Runs `f` with this run as the run of the single-ray calls it makes on this thread
+    /// ([`Tracer::solve`](crate::Tracer::solve), [`Tracer::trace`](crate::Tracer::trace) and
+    /// their kin, whose search where the start finds no path then stops with it), then puts
+    /// back the run that was there, also when `f` panics. Nested calls see their own run
+    /// only; other threads never see it.
+    pub fn within<R>(&self, f: impl FnOnce() -> R) -> R {
+        /// Puts the previous run back when dropped (after `f`, or while a panic unwinds).
+        struct Restore(Option<Run>);
+        impl Drop for Restore {
+            fn drop(&mut self) {
+                let before = self.0.take();
+                CURRENT.with(|c| *c.borrow_mut() = before);
+            }
+        }
+        let before = CURRENT.with(|c| c.replace(Some(self.clone())));
+        let _restore = Restore(before);
+        f()
     }
 }
 
 thread_local! {
-    /// The `Stop` of the job this thread runs, if it has one.
-    static CURRENT: RefCell<Option<Stop>> = const { RefCell::new(None) };
+    /// The run this thread's single-ray calls use ([`Run::within`]), if any.
+    static CURRENT: RefCell<Option<Run>> = const { RefCell::new(None) };
 }
 
-/// Runs `f` on this thread with `stop` as the stop request of its work ([`stop_requested`]),
-/// then puts back what was there.
-pub(crate) fn within<R>(stop: Option<&Stop>, f: impl FnOnce() -> R) -> R {
-    let Some(stop) = stop else { return f() };
-    let before = CURRENT.with(|c| c.replace(Some(stop.clone())));
-    let out = f();
-    CURRENT.with(|c| *c.borrow_mut() = before);
-    out
+/// Calls `f` with the run of this thread's single-ray calls ([`Run::within`]; without one,
+/// the unbounded run).
+pub(crate) fn with_current<R>(f: impl FnOnce(&Run) -> R) -> R {
+    // A clone (no allocation), so that `f` may itself run something `within` a run.
+    match CURRENT.with(|c| c.borrow().clone()) {
+        Some(run) => f(&run),
+        None => f(Run::unbounded()),
+    }
 }
-
-/// The `Stop` of the job this thread runs (see [`within`]), for a search to keep.
-pub(crate) fn current() -> Option<Stop> {
-    CURRENT.with(|c| c.borrow().clone())
-}
-
-/// Whether the job this thread runs was asked to stop.
-#[cfg(test)]
-pub(crate) fn stop_requested() -> bool {
-    CURRENT.with(|c| c.borrow().as_ref().is_some_and(Stop::requested))
-}
-
 /// The largest scene text read (256 MiB): the command-line tool and the Python package stop
 /// reading beyond it.
 pub const MAX_INPUT_BYTES: u64 = 256 << 20;
@@ -134,22 +352,59 @@ pub fn fits_in_memory(bytes: u64) -> bool {
 mod tests {
     use super::*;
 
-    /// A job sees its own `Stop`, nested jobs theirs, and a thread without one sees none.
+    /// Whether this thread's single-ray calls would stop.
+    fn stop_requested() -> bool {
+        with_current(Run::stopped)
+    }
+
+    /// A job sees its own run, nested jobs theirs, a thread without one the unbounded run,
+    /// and a run set for a call does not outlive it, also when the call panics.
     #[test]
-    fn a_job_sees_its_own_stop() {
-        assert!(!stop_requested() && current().is_none());
-        let (a, b) = (Stop::new(), Stop::new());
-        a.request();
-        within(Some(&a), || {
+    fn a_job_sees_its_own_run_and_no_other() {
+        assert!(!stop_requested());
+        let (a, b) = (Run::new(), Run::new());
+        a.request_stop();
+        a.within(|| {
             assert!(stop_requested());
-            within(Some(&b), || assert!(!stop_requested()));
+            b.within(|| assert!(!stop_requested()));
             assert!(stop_requested());
-            within(None, || assert!(stop_requested()));
             std::thread::spawn(|| assert!(!stop_requested()))
                 .join()
                 .unwrap();
         });
         assert!(!stop_requested());
+        let call = std::panic::AssertUnwindSafe(|| a.within(|| panic!("a failing call")));
+        let panicked = std::panic::catch_unwind(call);
+        assert!(panicked.is_err());
+        assert!(!stop_requested(), "the stop of a call that panicked leaked");
+        b.within(|| {
+            let call = std::panic::AssertUnwindSafe(|| a.within(|| panic!("a failing inner call")));
+            let _ = std::panic::catch_unwind(call);
+            assert!(
+                !stop_requested(),
+                "an inner call's stop leaked to the outer call"
+            );
+        });
+    }
+
+    /// A budget lets work through up to its units exactly, refuses the piece that would pass
+    /// it, and stops the run; a stop request refuses everything, counted or not.
+    #[test]
+    fn a_budget_lets_through_at_most_its_units() {
+        let run = Run::new().budget(10);
+        assert!((0..10).all(|_| run.keep_going(Progress::work(1))));
+        assert!(!run.stopped() && run.spent() == 10);
+        assert!(!run.keep_going(Progress::work(1)));
+        assert!(run.stopped() && !run.stop_requested());
+        assert!(
+            !run.keep_going(Progress::work(0)),
+            "a stopped run lets nothing through"
+        );
+        assert_eq!(run.spent(), 10);
+        let run = Run::new();
+        assert!(run.keep_going(Progress::work(u64::MAX)));
+        run.clone().request_stop();
+        assert!(!run.keep_going(Progress::default()) && run.stop_requested());
     }
 
     /// A short input is read whole (an endless one is tested through the command line and

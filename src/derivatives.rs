@@ -1163,7 +1163,8 @@ impl Tracer {
 /// use eigenray::{BatchOptions, Scene, Tracer};
 /// let scene = Scene::from_spec(&eigenray::demo::air_water(100, 7)).unwrap();
 /// let tracer = Tracer::new(&scene).unwrap();
-/// let batch = tracer.trace_batch(&BatchOptions::default());
+/// let run = eigenray::options::Run::new();
+/// let batch = tracer.trace_batch(&BatchOptions::default(), &run).unwrap();
 /// let mut gradients = BatchGradients::default();
 /// gradients.compute(&scene, &batch, &|_ray| true);
 /// assert_eq!(gradients.len(), 100);
@@ -1846,7 +1847,8 @@ mod tests {
         for scene in scenes() {
             let batch = Tracer::new(&scene)
                 .unwrap()
-                .trace_batch(&BatchOptions::default());
+                .trace_batch(&BatchOptions::default(), &crate::options::Run::new())
+                .unwrap();
             gradients.compute(&scene, &batch, &|_| true);
             let flat = FlatRays::of(&scene, &batch);
             let arrays = Arrays::of(&scene, &flat.rows());
@@ -1867,7 +1869,8 @@ mod tests {
         let scene = Scene::from_spec(&demo::layer_stack(3, 6)).unwrap();
         let batch = Tracer::new(&scene)
             .unwrap()
-            .trace_batch(&BatchOptions::default());
+            .trace_batch(&BatchOptions::default(), &crate::options::Run::new())
+            .unwrap();
         let mut flat = FlatRays::of(&scene, &batch);
         let legs = flat.width - 1;
         flat.media[legs + 1] = -1; // ray 1: a leg medium unknown

@@ -122,9 +122,11 @@ pub mod amplitudes {
 }
 
 /// What a [`Tracer`] can be told besides its scene: the solver's options, the start of each
-/// ray, and which kernels it may use (for comparing the kernels with the general solve).
+/// ray, which kernels it may use (for comparing the kernels with the general solve), and the
+/// control of each long call ([`Run`](options::Run): its stop request, budget, limits and
+/// progress).
 pub mod options {
-    pub use crate::control::Stop;
+    pub use crate::control::{Limits, Progress, Run};
     pub use crate::scene::SolverOptions;
     pub use crate::trace::{InitialGuess, Kernels};
 }
@@ -153,14 +155,17 @@ pub mod path_problem {
 
 /// The limits a scene is validated against, and the solver's defaults.
 pub mod limits {
-    pub use crate::control::{MAX_INPUT_BYTES, available_memory, fits_in_memory, read_limited};
+    pub use crate::control::{
+        FALLBACK_MAX_WORK, MAX_INPUT_BYTES, MAX_SEARCH_ARRIVALS, MAX_SEARCH_BEAMS,
+        MAX_SEARCH_MEMORY, MAX_SEARCH_STEPS, MAX_WALK_TUPLES, available_memory, fits_in_memory,
+        read_limited,
+    };
     pub use crate::scene::{
-        DEFAULT_MAX_ITERATIONS, DEFAULT_MAX_WORK, DEFAULT_TOLERANCE, FALLBACK_MAX_WORK,
-        MAX_ATTENUATION, MAX_COORDINATE, MAX_ITERATIONS_LIMIT, MAX_SEARCH_STEPS, MAX_SPEED_RATIO,
-        MAX_STATIONARY_STEPS, MAX_WORK_LIMIT, MIN_COORDINATE, REGION_RANGE_BITS,
+        DEFAULT_MAX_ITERATIONS, DEFAULT_MAX_WORK, DEFAULT_TOLERANCE, MAX_ATTENUATION,
+        MAX_COORDINATE, MAX_ITERATIONS_LIMIT, MAX_SPEED_RATIO, MAX_STATIONARY_STEPS,
+        MAX_WORK_LIMIT, MIN_COORDINATE, REGION_RANGE_BITS,
     };
     pub use crate::scene::{DEFAULT_TAPS, MAX_RATE, MAX_SAMPLES, MAX_TAPS};
-    pub use crate::search::{MAX_SEARCH_ARRIVALS, MAX_SEARCH_BEAMS, MAX_SEARCH_MEMORY};
 }
 
 /// The geometry beneath a scene: polylines and their queries, boxes, and the robust

@@ -1588,7 +1588,8 @@ mod tests {
         let scene = Scene::from_spec(&demo::air_water(n, 3)).unwrap();
         let batch = Tracer::new(&scene)
             .unwrap()
-            .trace_batch(&BatchOptions::default());
+            .trace_batch(&BatchOptions::default(), &crate::options::Run::new())
+            .unwrap();
         let write = |format| {
             let mut out = Vec::new();
             write(&scene, &batch, format, &mut out).unwrap();
@@ -1671,7 +1672,8 @@ mod tests {
         let scene = Scene::from_json(&std::fs::read_to_string(path).unwrap()).unwrap();
         let batch = Tracer::new(&scene)
             .unwrap()
-            .trace_batch(&BatchOptions::default());
+            .trace_batch(&BatchOptions::default(), &crate::options::Run::new())
+            .unwrap();
         let mut out = Vec::new();
         write(&scene, &batch, Format::Npy, &mut out).unwrap();
         assert_eq!(&out[..8], b"\x93NUMPY\x01\x00");

@@ -41,10 +41,7 @@ pub const MAX_ITERATIONS_LIMIT: usize = 100_000;
 pub const DEFAULT_MAX_WORK: u64 = 1 << 25;
 /// Largest `solver.max_work` accepted: 2^40 units, about ten hours of one core per search.
 pub const MAX_WORK_LIMIT: u64 = 1 << 40;
-/// The work budget of the default mode's search of one ray, where its start leads to no
-/// path (at most `solver.max_work`): 2^18 units, about 10 ms of one core, so that a batch
-/// of many rays stays bounded; beyond it the ray is `not_converged` (`search_limit`).
-pub const FALLBACK_MAX_WORK: u64 = 1 << 18;
+pub(crate) use crate::control::MAX_SEARCH_STEPS;
 
 /// An invalid scene: the key that holds the first problem, and what is wrong with it.
 ///
@@ -463,8 +460,9 @@ pub struct SolverOptions {
     /// The work budget of each complete search: of each triple's with `"stationary": "all"`
     /// ([`Tracer::stationary_paths`](crate::Tracer::stationary_paths)), of each source–receiver
     /// pair's over all its sequences in a `search`, and of the default mode's search of a ray
-    /// whose start leads to no path (there at most [`FALLBACK_MAX_WORK`]). A search that spends
-    /// it stops and says so (`complete: false`, or `not_converged` with the reason
+    /// whose start leads to no path (there at most
+    /// [`FALLBACK_MAX_WORK`](crate::limits::FALLBACK_MAX_WORK)). A search that spends it
+    /// stops and says so (`complete: false`, or `not_converged` with the reason
     /// `search_limit`). Units: points moved by Newton steps or weighed in bounds (about 35 ns
     /// each); default [`DEFAULT_MAX_WORK`], at most [`MAX_WORK_LIMIT`].
     pub max_work: u64,
@@ -669,10 +667,6 @@ fn positive(key: String, v: f64) -> Result<f64, SceneError> {
 /// edge-held arrivals) a `search` lists. Reflections alone go through the beam tree, up to
 /// [`MAX_SEARCH_STEPS`].
 pub const MAX_STATIONARY_STEPS: usize = 12;
-
-/// The largest `search.max_steps`: the depth of the beam tree (its stack holds one node per
-/// step).
-pub const MAX_SEARCH_STEPS: usize = 1 << 16;
 
 /// The validated `search` section.
 fn search_options(

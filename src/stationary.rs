@@ -5,7 +5,7 @@
 use rayon::prelude::*;
 
 use crate::amplitude::Amplitude;
-use crate::control::{Stop, within};
+use crate::control::{Progress, Run};
 use crate::geom::Point;
 use crate::scene::{MAX_STATIONARY_STEPS, Scene};
 pub use crate::trace::{Arrival, Kink, SearchOutcome, StationaryError, Threshold};
@@ -179,9 +179,14 @@ impl Tracer {
     /// [`Tracer::stationary_paths`] finds them for one triple, solved in parallel (rayon), in
     /// ray order. This is what a scene with `"solver": {"stationary": "all"}` asks for.
     ///
+    /// Each triple is one item of `run` (each search's work its units, as
+    /// [`Tracer::stationary_paths`] counts them); once `run` stops (a stop request, a spent
+    /// budget), the triples not yet searched are left empty and not complete, and the
+    /// searches under way end, not complete.
+    ///
     /// ```
     /// use eigenray::stationary::Kink;
-    /// use eigenray::{Scene, Status, Tracer};
+    /// use eigenray::{Scene, Status, Tracer, options::Run};
     /// // A mirror bent into a valley: a specular point on each slope, and the bottom, where
     /// // the time has a maximum-type kink.
     /// let scene = Scene::from_json(r#"{
@@ -191,7 +196,7 @@ impl Tracer {
     ///     "paths": [{ "steps": [{ "reflect": "valley" }], "media": ["air", "air"] }],
     ///     "solver": { "stationary": "all" }
     /// }"#).unwrap();
-    /// let rays = Tracer::new(&scene).unwrap().trace_stationary().unwrap();
+    /// let rays = Tracer::new(&scene).unwrap().trace_stationary(&Run::new()).unwrap();
     /// assert_eq!(rays.triples.len(), 2);
     /// let valley = &rays.triples[0];
     /// assert!(valley.complete);
@@ -207,33 +212,7 @@ impl Tracer {
     /// [`StationaryError::TooManySteps`] for the first path of more than
     /// [`MAX_STATIONARY_STEPS`](crate::limits::MAX_STATIONARY_STEPS) steps, before any search
     /// runs.
-    pub fn trace_stationary(&self) -> Result<StationaryRays, StationaryError> {
-        self.trace_stationary_with_progress(&|_| {})
-    }
-
-    /// [`Tracer::trace_stationary`], calling `progress` from the worker threads with the number
-    /// of triples each finished piece of work searched.
-    ///
-    /// # Errors
-    /// As [`Tracer::trace_stationary`].
-    pub fn trace_stationary_with_progress(
-        &self,
-        progress: &(dyn Fn(usize) + Sync),
-    ) -> Result<StationaryRays, StationaryError> {
-        self.trace_stationary_with(progress, None)
-    }
-
-    /// [`Tracer::trace_stationary_with_progress`] that stops when `stop` is requested (from
-    /// another thread): the triples not yet searched are left empty and incomplete, and the
-    /// searches under way stop (the caller that asked discards the result).
-    ///
-    /// # Errors
-    /// As [`Tracer::trace_stationary`].
-    pub fn trace_stationary_with(
-        &self,
-        progress: &(dyn Fn(usize) + Sync),
-        stop: Option<&Stop>,
-    ) -> Result<StationaryRays, StationaryError> {
+    pub fn trace_stationary(&self, run: &Run) -> Result<StationaryRays, StationaryError> {
         let scene = self.scene();
         for (path, p) in scene.paths().iter().enumerate() {
             if p.steps.len() > MAX_STATIONARY_STEPS {
@@ -251,21 +230,20 @@ impl Tracer {
                 let receiver = (ray / paths) % receivers;
                 let source = ray / paths / receivers;
                 let mut arrivals = Vec::new();
-                let search = within(stop, || {
-                    if stop.is_some_and(Stop::requested) {
-                        return Ok(SearchOutcome {
-                            complete: false,
-                            ..SearchOutcome::new()
-                        });
-                    }
+                let search = if run.keep_going(Progress { work: 0, items: 1 }) {
                     self.stationary_paths(
                         scene.sources()[source],
                         scene.receivers()[receiver],
                         path,
+                        run,
                         &mut arrivals,
-                    )
-                })?;
-                progress(1);
+                    )?
+                } else {
+                    SearchOutcome {
+                        complete: false,
+                        ..SearchOutcome::new()
+                    }
+                };
                 Ok(TripleArrivals {
                     source,
                     receiver,
@@ -300,7 +278,8 @@ mod tests {
         )
         .unwrap();
         let tracer = Tracer::new(&scene).unwrap();
-        let rays = tracer.trace_stationary().unwrap();
+        let run = Run::new();
+        let rays = tracer.trace_stationary(&run).unwrap();
         assert_eq!(rays.triples.len(), 12);
         let mut one = Vec::new();
         for (i, t) in rays.triples.iter().enumerate() {
@@ -310,6 +289,7 @@ mod tests {
                     scene.sources()[t.source],
                     scene.receivers()[t.receiver],
                     t.path,
+                    &run,
                     &mut one,
                 )
                 .unwrap();
@@ -343,7 +323,10 @@ mod tests {
         }"#,
         )
         .unwrap();
-        let rays = Tracer::new(&scene).unwrap().trace_stationary().unwrap();
+        let rays = Tracer::new(&scene)
+            .unwrap()
+            .trace_stationary(&Run::new())
+            .unwrap();
         let mut out = Vec::new();
         crate::write(&scene, &rays, crate::Format::Jsonl, &mut out).unwrap();
         let lines: Vec<serde_json::Value> = (out.split(|&b| b == b'\n'))
@@ -402,7 +385,10 @@ mod tests {
         }}"#
         ))
         .unwrap();
-        let err = Tracer::new(&scene).unwrap().trace_stationary().unwrap_err();
+        let err = Tracer::new(&scene)
+            .unwrap()
+            .trace_stationary(&Run::new())
+            .unwrap_err();
         assert_eq!(
             err,
             StationaryError::TooManySteps {

@@ -107,9 +107,10 @@ fn batch_allocations(scene: &Scene, pool: &rayon::ThreadPool) -> u64 {
     let tracer = Tracer::new(scene).unwrap();
     let opts = eigenray::BatchOptions::default();
     let mut batch = eigenray::Batch::default();
-    pool.install(|| tracer.trace_batch_into(&opts, &mut batch));
+    let run = eigenray::options::Run::new();
+    pool.install(|| tracer.trace_batch_into(&opts, &run, &mut batch).unwrap());
     let info = allocation_counter::measure(|| {
-        pool.install(|| tracer.trace_batch_into(&opts, &mut batch));
+        pool.install(|| tracer.trace_batch_into(&opts, &run, &mut batch).unwrap());
     });
     info.count_total
 }

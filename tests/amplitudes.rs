@@ -195,7 +195,11 @@ fn image_sources(walls: &[([f64; 2], [f64; 2], f64)], source: [f64; 2], receiver
         source[0],
         source[1]
     ));
-    let arrivals = Tracer::new(&s).unwrap().search().unwrap();
+    let arrivals = Tracer::new(&s)
+        .unwrap()
+        .search(&eigenray::options::Run::new())
+        .unwrap()
+        .arrivals;
     assert!(arrivals.len() > 20);
     let mut worst: f64 = 0.0;
     for arr in &arrivals {
@@ -545,7 +549,9 @@ fn paths_without_a_ray_theory_amplitude_say_why() {
              "amplitudes": { "source": "point" } }"#,
     );
     let tracer = Tracer::new(&s).unwrap();
-    let rays = tracer.trace_stationary().unwrap();
+    let rays = tracer
+        .trace_stationary(&eigenray::options::Run::new())
+        .unwrap();
     let valley = &rays.triples[0].arrivals;
     assert_eq!(valley.len(), 3);
     for a in &valley[..2] {
@@ -587,22 +593,31 @@ fn every_way_of_tracing_gives_the_same_amplitudes() {
     let s = Scene::from_spec(&spec).unwrap();
     let tracer = Tracer::new(&s).unwrap();
     let one = tracer.trace_all();
-    let cold = tracer.trace_batch(&BatchOptions {
-        warm_start: false,
-        ..BatchOptions::default()
-    });
+    let cold = tracer
+        .trace_batch(
+            &BatchOptions {
+                warm_start: false,
+                ..BatchOptions::default()
+            },
+            &eigenray::options::Run::new(),
+        )
+        .unwrap();
     for (i, ray) in one.iter().enumerate() {
         assert_eq!(cold.amplitude(i), ray.amplitude.as_ref(), "ray {i}");
         assert_eq!(cold.ray(i).amplitude, ray.amplitude);
     }
     // Warm starts end at other points of the tolerance ball: the same to its worth.
-    let warm = tracer.trace_batch(&BatchOptions::default());
+    let warm = tracer
+        .trace_batch(&BatchOptions::default(), &eigenray::options::Run::new())
+        .unwrap();
     for (i, ray) in one.iter().enumerate() {
         let (a, b) = (warm.amplitude(i).unwrap(), ray.amplitude.unwrap());
         assert!(crel(a.value, b.value) < 1e-10, "ray {i}");
     }
     // Every stationary path and a scene without amplitudes.
-    let stationary = tracer.trace_stationary().unwrap();
+    let stationary = tracer
+        .trace_stationary(&eigenray::options::Run::new())
+        .unwrap();
     for (t, ray) in stationary.triples.iter().zip(&one) {
         let a = t.arrivals[0].amplitude.unwrap();
         assert!(crel(a.value, ray.amplitude.unwrap().value) < 1e-10);
@@ -612,7 +627,8 @@ fn every_way_of_tracing_gives_the_same_amplitudes() {
     assert!(tracer.trace_all().iter().all(|r| r.amplitude.is_none()));
     assert!(
         tracer
-            .trace_batch(&BatchOptions::default())
+            .trace_batch(&BatchOptions::default(), &eigenray::options::Run::new())
+            .unwrap()
             .amplitude(0)
             .is_none()
     );
@@ -837,7 +853,9 @@ fn every_format_writes_the_amplitudes() {
     let s = scene(OUTPUT_SCENE);
     let tracer = Tracer::new(&s).unwrap();
     let rays = tracer.trace_all();
-    let batch = tracer.trace_batch(&BatchOptions::default());
+    let batch = tracer
+        .trace_batch(&BatchOptions::default(), &eigenray::options::Run::new())
+        .unwrap();
     let written = |doc: eigenray::Document<'_>, format| {
         let mut out = Vec::new();
         write(&s, doc, format, &mut out).unwrap();
@@ -875,7 +893,10 @@ fn every_format_writes_the_amplitudes() {
     }
     assert!(reasons >= 2, "{reasons}");
     // JSON Lines: the same objects, then the search's arrivals with theirs.
-    let arrivals = tracer.search().unwrap();
+    let arrivals = tracer
+        .search(&eigenray::options::Run::new())
+        .unwrap()
+        .arrivals;
     let both = eigenray::Document::from(&rays).with_arrivals(&arrivals);
     let lines = String::from_utf8(written(both, Format::Jsonl)).unwrap();
     let marked: Vec<serde_json::Value> = lines

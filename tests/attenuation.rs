@@ -22,7 +22,10 @@ fn amplitudes(s: &Scene) -> Vec<Amplitude> {
         .filter_map(|r| r.amplitude)
         .collect();
     if s.search().is_some() {
-        let arrivals = tracer.search().unwrap();
+        let arrivals = tracer
+            .search(&eigenray::options::Run::new())
+            .unwrap()
+            .arrivals;
         out.extend(arrivals.iter().filter_map(|a| a.arrival.amplitude));
     }
     out

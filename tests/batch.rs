@@ -50,11 +50,12 @@ fn compare(scene: &Scene, warm_start: bool) -> (u64, u64) {
 /// [`compare`] with `chunk` receivers per work unit.
 fn compare_in_units(scene: &Scene, warm_start: bool, chunk: usize) -> (u64, u64) {
     let tracer = Tracer::new(scene).expect("tracer");
-    let batch = tracer.trace_batch(&BatchOptions {
-        warm_start,
-        chunk,
-        ..BatchOptions::default()
-    });
+    let batch = tracer
+        .trace_batch(
+            &BatchOptions { warm_start, chunk },
+            &eigenray::options::Run::new(),
+        )
+        .unwrap();
     assert_eq!(batch.len(), scene.num_rays());
     let mut ws = Workspace::new();
     let (mut single_iterations, mut batch_iterations) = (0, 0);
@@ -170,10 +171,15 @@ fn one_interaction_rays_of_a_batch_are_one_by_one_rays() {
     let tracer = Tracer::new(&sc).expect("tracer");
     let slowness = |p: usize| if p == 0 { [1.0, 1.0 / 0.6] } else { [1.0, 1.0] };
     for chunk in [7, 256] {
-        let batch = tracer.trace_batch(&BatchOptions {
-            chunk,
-            ..BatchOptions::default()
-        });
+        let batch = tracer
+            .trace_batch(
+                &BatchOptions {
+                    chunk,
+                    ..BatchOptions::default()
+                },
+                &eigenray::options::Run::new(),
+            )
+            .unwrap();
         let mut same = 0;
         for (i, one) in rays.iter().enumerate() {
             let got = batch.ray(i);
@@ -233,7 +239,9 @@ fn warm_starts_keep_the_rays_and_save_iterations() {
     // one-by-one solving.
     let sc = scene(&demo::air_water(3000, 5));
     let tracer = Tracer::new(&sc).expect("tracer");
-    let batch = tracer.trace_batch(&BatchOptions::default());
+    let batch = tracer
+        .trace_batch(&BatchOptions::default(), &eigenray::options::Run::new())
+        .unwrap();
     let mut ws = Workspace::new();
     for i in 0..sc.num_rays() {
         let RayTriple {
@@ -251,11 +259,18 @@ fn warm_starts_keep_the_rays_and_save_iterations() {
     let (single, warm) = compare(&sc, true);
     assert_eq!((single, warm), (0, 0), "flat layers: iterations");
     let tracer = Tracer::new(&sc).expect("tracer");
-    let warm_batch = tracer.trace_batch(&BatchOptions::default());
-    let cold_batch = tracer.trace_batch(&BatchOptions {
-        warm_start: false,
-        ..BatchOptions::default()
-    });
+    let warm_batch = tracer
+        .trace_batch(&BatchOptions::default(), &eigenray::options::Run::new())
+        .unwrap();
+    let cold_batch = tracer
+        .trace_batch(
+            &BatchOptions {
+                warm_start: false,
+                ..BatchOptions::default()
+            },
+            &eigenray::options::Run::new(),
+        )
+        .unwrap();
     for i in 0..sc.num_rays() {
         assert_eq!(
             bits(warm_batch.ray(i)),
@@ -289,11 +304,18 @@ fn warm_starts_follow_a_shuffled_receiver_order() {
     );
     let sc = scene(&spec);
     let tracer = Tracer::new(&sc).expect("tracer");
-    let batch = tracer.trace_batch(&BatchOptions::default());
-    let ordered = tracer.trace_batch(&BatchOptions {
-        warm_start: false,
-        ..BatchOptions::default()
-    });
+    let batch = tracer
+        .trace_batch(&BatchOptions::default(), &eigenray::options::Run::new())
+        .unwrap();
+    let ordered = tracer
+        .trace_batch(
+            &BatchOptions {
+                warm_start: false,
+                ..BatchOptions::default()
+            },
+            &eigenray::options::Run::new(),
+        )
+        .unwrap();
     for i in 0..batch.len() {
         assert_eq!(batch.record(i).status, ordered.record(i).status, "ray {i}");
     }
@@ -306,10 +328,15 @@ fn dense_receivers_need_fewer_newton_steps() {
     let sc = scene(&demo::sea_floor(5000, 40_000));
     let tracer = Tracer::new(&sc).expect("tracer");
     let per_ray = |warm_start| {
-        let b = tracer.trace_batch(&BatchOptions {
-            warm_start,
-            ..BatchOptions::default()
-        });
+        let b = tracer
+            .trace_batch(
+                &BatchOptions {
+                    warm_start,
+                    ..BatchOptions::default()
+                },
+                &eigenray::options::Run::new(),
+            )
+            .unwrap();
         b.total_iterations() as f64 / b.len() as f64
     };
     let (cold, warm) = (per_ray(false), per_ray(true));
@@ -363,8 +390,12 @@ fn a_reused_batch_gives_the_same_rays() {
         let sc = scene(&spec);
         let tracer = Tracer::new(&sc).expect("tracer");
         let opts = BatchOptions::default();
-        tracer.trace_batch_into(&opts, &mut reused);
-        let fresh = tracer.trace_batch(&opts);
+        tracer
+            .trace_batch_into(&opts, &eigenray::options::Run::new(), &mut reused)
+            .unwrap();
+        let fresh = tracer
+            .trace_batch(&opts, &eigenray::options::Run::new())
+            .unwrap();
         assert_eq!(reused.len(), fresh.len());
         timeless += (0..fresh.len())
             .filter(|&i| !fresh.record(i).status.has_time())
@@ -420,10 +451,15 @@ fn batches_keep_the_rays_where_warm_starts_fail() {
         "{converged} converged, {no_path} without a path"
     );
     for chunk in [16, 256] {
-        let batch = tracer.trace_batch(&BatchOptions {
-            chunk,
-            ..BatchOptions::default()
-        });
+        let batch = tracer
+            .trace_batch(
+                &BatchOptions {
+                    chunk,
+                    ..BatchOptions::default()
+                },
+                &eigenray::options::Run::new(),
+            )
+            .unwrap();
         // Rays that took more iterations than one by one were solved twice: their warm start
         // failed.
         let mut resolved = 0;
@@ -452,7 +488,8 @@ fn the_walk_over_a_batch_gives_each_rays_parts() {
         let scene = bench(name);
         let batch = Tracer::new(&scene)
             .unwrap()
-            .trace_batch(&BatchOptions::default());
+            .trace_batch(&BatchOptions::default(), &eigenray::options::Run::new())
+            .unwrap();
         let n = batch.len();
         for start in [0, 1, n / 3, n - 1, n] {
             let mut count = 0;
@@ -552,19 +589,17 @@ fn a_sink_gets_the_rays_of_the_batch_bit_for_bit() {
     for (k, sc) in scenes.iter().enumerate() {
         let tracer = Tracer::new(sc).expect("tracer");
         for (warm_start, chunk) in [(true, 256), (true, 37), (false, 256)] {
-            let opts = BatchOptions {
-                warm_start,
-                chunk,
-                ..BatchOptions::default()
-            };
-            let batch = tracer.trace_batch(&opts);
+            let opts = BatchOptions { warm_start, chunk };
+            let batch = tracer
+                .trace_batch(&opts, &eigenray::options::Run::new())
+                .unwrap();
             let mut rays = vec![(0, None); sc.num_rays()];
             let sink = Keep {
                 paths: sc.paths().len(),
                 rays: &mut rays,
             };
             tracer
-                .trace_batch_to(&opts, sink, &mut scratch)
+                .trace_batch_to(&opts, &eigenray::options::Run::new(), sink, &mut scratch)
                 .expect("room");
             for (i, (writes, got)) in rays.into_iter().enumerate() {
                 let at = format!("scene {k}, warm {warm_start}, chunk {chunk}, ray {i}");
@@ -613,7 +648,12 @@ fn a_sink_holds_every_ray_of_the_scene() {
         rays: &mut [],
     };
     tracer
-        .trace_batch_to(&BatchOptions::default(), sink, &mut scratch)
+        .trace_batch_to(
+            &BatchOptions::default(),
+            &eigenray::options::Run::new(),
+            sink,
+            &mut scratch,
+        )
         .expect("nothing to solve");
     let sc = scene(&demo::air_water(10, 1));
     let tracer = Tracer::new(&sc).expect("tracer");
@@ -623,7 +663,12 @@ fn a_sink_holds_every_ray_of_the_scene() {
             paths: 1,
             rays: &mut rays,
         };
-        tracer.trace_batch_to(&BatchOptions::default(), sink, &mut scratch)
+        tracer.trace_batch_to(
+            &BatchOptions::default(),
+            &eigenray::options::Run::new(),
+            sink,
+            &mut scratch,
+        )
     }));
     assert!(wrong.is_err(), "a sink of 9 rays for a scene of 10");
 }

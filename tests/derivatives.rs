@@ -543,7 +543,9 @@ fn bad_inputs_are_errors() {
 fn batch_gradients_are_the_rays_gradients() {
     let scene = Scene::from_spec(&eigenray::demo::layer_stack(4, 50)).unwrap();
     let tracer = Tracer::new(&scene).unwrap();
-    let batch = tracer.trace_batch(&BatchOptions::default());
+    let batch = tracer
+        .trace_batch(&BatchOptions::default(), &eigenray::options::Run::new())
+        .unwrap();
     let mut gradients = BatchGradients::default();
     gradients.compute(&scene, &batch, &|ray| ray % 3 != 1);
     let mut reused = Gradient::default();
@@ -662,7 +664,9 @@ fn outputs_carry_the_gradient() {
     }"#;
     let scene = Scene::from_json(text).unwrap();
     let tracer = Tracer::new(&scene).unwrap();
-    let batch = tracer.trace_batch(&BatchOptions::default());
+    let batch = tracer
+        .trace_batch(&BatchOptions::default(), &eigenray::options::Run::new())
+        .unwrap();
     let write = |format| {
         let mut out = Vec::new();
         write(&scene, &batch, format, &mut out).unwrap();
@@ -709,7 +713,10 @@ fn outputs_carry_the_gradient() {
         r#""derivatives": true, "stationary": "all""#,
     ))
     .unwrap();
-    let rays = Tracer::new(&all).unwrap().trace_stationary().unwrap();
+    let rays = Tracer::new(&all)
+        .unwrap()
+        .trace_stationary(&eigenray::options::Run::new())
+        .unwrap();
     let mut out = Vec::new();
     eigenray::write(&all, &rays, Format::Json, &mut out).unwrap();
     let doc: Value = serde_json::from_slice(&out).unwrap();
@@ -729,7 +736,11 @@ fn search_arrivals_carry_the_gradient_in_every_format() {
     doc["search"] = json!({ "max_steps": 2, "refract": false });
     doc["solver"] = json!({ "derivatives": true });
     let scene = Scene::from_json(&doc.to_string()).unwrap();
-    let arrivals = Tracer::new(&scene).unwrap().search().unwrap();
+    let arrivals = Tracer::new(&scene)
+        .unwrap()
+        .search(&eigenray::options::Run::new())
+        .unwrap()
+        .arrivals;
     assert!(arrivals.len() > 20, "{}", arrivals.len());
     let write = |format| {
         let mut out = Vec::new();
@@ -1168,7 +1179,13 @@ fn every_stationary_path_has_its_derivatives() {
         let tracer = Tracer::new(&scene).unwrap();
         let mut out = Vec::new();
         tracer
-            .stationary_paths(scene.sources()[0], scene.receivers()[0], path, &mut out)
+            .stationary_paths(
+                scene.sources()[0],
+                scene.receivers()[0],
+                path,
+                &eigenray::options::Run::new(),
+                &mut out,
+            )
             .unwrap();
         out
     };

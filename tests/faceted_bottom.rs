@@ -4,6 +4,7 @@
 //! checked against an independent enumeration by the image method over every facet of every
 //! bounce, and the held path against its time through the vertex.
 
+use eigenray::options::Run;
 use eigenray::{Point, Scene, Status, Tracer, amplitudes::NoAmplitude};
 use serde_json::json;
 
@@ -182,7 +183,11 @@ fn image_paths(s: P, r: P, bottom: &[P], max_steps: usize) -> Vec<ImagePath> {
 
 /// The search's `converged` arrivals as (sequence, time), sorted as [`image_paths`].
 fn converged(s: &Scene) -> Vec<(Vec<usize>, f64)> {
-    let arrivals = Tracer::new(s).unwrap().search().unwrap();
+    let arrivals = Tracer::new(s)
+        .unwrap()
+        .search(&Run::new())
+        .unwrap()
+        .arrivals;
     let mut out: Vec<(Vec<usize>, f64)> = arrivals
         .iter()
         .filter(|a| a.arrival.status == Status::Converged)
@@ -216,7 +221,11 @@ fn the_bounce_past_the_joint_is_held_at_the_vertex() {
     );
 
     let held = scene(&bottom, json!({ "max_steps": 1, "vertex": true }));
-    let arrivals = Tracer::new(&held).unwrap().search().unwrap();
+    let arrivals = Tracer::new(&held)
+        .unwrap()
+        .search(&Run::new())
+        .unwrap()
+        .arrivals;
     let bounces: Vec<_> = arrivals
         .iter()
         .filter(|a| a.steps.len() == 1 && a.steps[0].interface == BOTTOM)

@@ -59,9 +59,14 @@ fn bit_exact(scene: &Scene, kernels: Kernels) -> Vec<Status> {
         let opts = BatchOptions {
             warm_start,
             chunk: 16,
-            ..BatchOptions::default()
         };
-        let (ba, bb) = (fast.trace_batch(&opts), general.trace_batch(&opts));
+        let (ba, bb) = (
+            fast.trace_batch(&opts, &eigenray::options::Run::new())
+                .unwrap(),
+            general
+                .trace_batch(&opts, &eigenray::options::Run::new())
+                .unwrap(),
+        );
         for i in 0..ba.len() {
             assert_eq!(bits(&ba.ray(i)), bits(&bb.ray(i)), "batch ray {i}");
         }

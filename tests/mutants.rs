@@ -8,9 +8,9 @@
 
 use std::f64::consts::PI;
 
-use eigenray::options::Stop;
+use eigenray::options::{Progress, Run};
 use eigenray::response::{ImpulseResponses, echoes_of_scene};
-use eigenray::search::{SearchLimits, SearchProgress, SearchReport};
+use eigenray::search::SearchReport;
 use eigenray::{Scene, Status, Tracer};
 use serde_json::{Value, json};
 
@@ -20,10 +20,7 @@ fn scene(doc: &Value) -> Scene {
 
 /// The scene's search, without limits, progress or stop.
 fn search(scene: &Scene) -> SearchReport {
-    Tracer::new(scene)
-        .unwrap()
-        .search_with(&SearchLimits::default(), &|_| {}, None)
-        .unwrap()
+    Tracer::new(scene).unwrap().search(&Run::new()).unwrap()
 }
 
 /// The 81-tap Hann-windowed sinc pulse of amplitude `a` centred on sample `x`, added to
@@ -63,11 +60,11 @@ fn impulse_responses_are_laid_out_source_major() {
     });
     let scene = scene(&doc);
     let tracer = Tracer::new(&scene).unwrap();
-    let echoes = echoes_of_scene(&tracer).unwrap();
+    let echoes = echoes_of_scene(&tracer, &Run::new()).unwrap();
     assert_eq!(echoes.len(), 6, "one direct ray per pair");
     let options = scene.impulse_response().unwrap();
     let ir = ImpulseResponses::new(options, 2, 3);
-    let out = ir.try_render(echoes.iter().copied()).unwrap();
+    let out = ir.render(echoes.iter().copied(), &Run::new()).unwrap();
     let n = ir.samples();
     assert_eq!(out.len(), 2 * 3 * n);
     let mut blocks: Vec<Vec<f64>> = Vec::new();
@@ -254,28 +251,28 @@ fn the_beam_tree_stops_when_asked() {
     let scene = scene(&doc);
     let tracer = Tracer::new(&scene).unwrap();
     let receivers = scene.receivers().len();
-    let limits = SearchLimits::default();
 
-    let full = tracer.search_with(&limits, &|_| {}, None).unwrap();
+    let full = tracer.search(&Run::new()).unwrap();
     assert_eq!(full.incomplete_pairs, 0);
     assert!(full.beams > 4 << 14, "{} beams", full.beams);
 
-    let stop = Stop::new();
-    stop.request();
-    let before = tracer.search_with(&limits, &|_| {}, Some(&stop)).unwrap();
+    let stop = Run::new();
+    stop.request_stop();
+    let before = tracer.search(&stop).unwrap();
     assert_eq!(before.beams, 0);
     assert_eq!(before.incomplete_pairs, receivers);
     assert!(before.arrivals.is_empty());
 
-    let stop = Stop::new();
-    let reported = std::sync::atomic::AtomicU64::new(0);
-    let progress = |p: SearchProgress| {
-        if p.beams > 0 {
-            reported.fetch_add(p.beams, std::sync::atomic::Ordering::Relaxed);
-            stop.request();
+    let reported = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
+    let stop = Run::new();
+    let (heard, handle) = (reported.clone(), stop.clone());
+    let stop = stop.on_progress(move |p: Progress| {
+        if p.work > 0 {
+            heard.fetch_add(p.work, std::sync::atomic::Ordering::Relaxed);
+            handle.request_stop();
         }
-    };
-    let during = tracer.search_with(&limits, &progress, Some(&stop)).unwrap();
+    });
+    let during = tracer.search(&stop).unwrap();
     let told = reported.load(std::sync::atomic::Ordering::Relaxed);
     assert!(told > 0 && told <= 1 << 14, "{told} beams reported");
     assert!(during.beams <= told, "{} beams after {told}", during.beams);

@@ -34,7 +34,9 @@ fn scene() -> Scene {
 /// the same bytes.
 fn written(scene: &Scene, format: Format) -> Vec<u8> {
     let tracer = Tracer::new(scene).expect("tracer");
-    let batch = tracer.trace_batch(&BatchOptions::default());
+    let batch = tracer
+        .trace_batch(&BatchOptions::default(), &eigenray::options::Run::new())
+        .unwrap();
     let mut out = Vec::new();
     write(scene, &batch, format, &mut out).expect("write");
     let mut owned = Vec::new();
@@ -428,7 +430,7 @@ fn stationary_written(format: Format) -> (Scene, eigenray::StationaryRays, Vec<u
     let scene = Scene::from_json(EVERY).expect("valid scene");
     let rays = Tracer::new(&scene)
         .expect("tracer")
-        .trace_stationary()
+        .trace_stationary(&eigenray::options::Run::new())
         .expect("at most 12 steps");
     let mut out = Vec::new();
     write(&scene, &rays, format, &mut out).expect("write");
@@ -521,7 +523,10 @@ fn every_stationary_path_is_one_entry_with_its_arrival_kink_and_completeness() {
 #[test]
 fn an_incomplete_triple_says_so_on_every_entry_and_is_never_no_path() {
     let scene = Scene::from_json(EVERY).unwrap();
-    let mut st = Tracer::new(&scene).unwrap().trace_stationary().unwrap();
+    let mut st = Tracer::new(&scene)
+        .unwrap()
+        .trace_stationary(&eigenray::options::Run::new())
+        .unwrap();
     // As a search that reached its limit leaves them: the valley's triple with its first
     // arrival only, the roof's with none.
     st.triples[0].arrivals.truncate(1);
@@ -950,7 +955,10 @@ fn csv_names_are_safe_to_open_and_split() {
             assert!(!cell.starts_with(['=', '+', '@']), "{cell}");
         }
     }
-    let arrivals = tracer.search().unwrap();
+    let arrivals = tracer
+        .search(&eigenray::options::Run::new())
+        .unwrap()
+        .arrivals;
     let mut out = Vec::new();
     write(&scene, &arrivals, Format::Csv, &mut out).unwrap();
     let text = String::from_utf8(out).unwrap();

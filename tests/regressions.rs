@@ -266,10 +266,15 @@ fn no_medium_ray_has_the_same_media_one_by_one_and_in_a_batch() {
     assert_eq!(one.reason, Some(Reason::NoStationaryPath), "{one:?}");
     assert!(one.media.is_empty(), "{one:?}");
     for warm_start in [false, true] {
-        let batch = tracer.trace_batch(&BatchOptions {
-            warm_start,
-            ..BatchOptions::default()
-        });
+        let batch = tracer
+            .trace_batch(
+                &BatchOptions {
+                    warm_start,
+                    ..BatchOptions::default()
+                },
+                &eigenray::options::Run::new(),
+            )
+            .unwrap();
         let got = batch.ray(0);
         assert_eq!(
             (got.status, got.reason, &got.media),

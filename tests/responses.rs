@@ -84,14 +84,16 @@ fn the_rectangles_response_and_pressure_are_its_images() {
     let order = 4;
     let scene = Scene::from_json(&rectangle(order)).unwrap();
     let tracer = Tracer::new(&scene).unwrap();
-    let echoes = echoes_of_scene(&tracer).unwrap();
+    let echoes = echoes_of_scene(&tracer, &eigenray::options::Run::new()).unwrap();
     let images = rectangle_images(order);
     assert_eq!(echoes.len(), images.len(), "one echo per image");
 
     // The response against each image's pulse (amplitude 0.9^k / (4πd)) placed here.
     let options = scene.impulse_response().unwrap();
     let ir = ImpulseResponses::new(options, 1, 1);
-    let ours = ir.try_render(echoes.iter().copied()).unwrap();
+    let ours = ir
+        .render(echoes.iter().copied(), &eigenray::options::Run::new())
+        .unwrap();
     let mut want = vec![0.0; ir.samples()];
     for &(d, k) in &images {
         let a = 0.9f64.powi(k as i32) / (4.0 * PI * d);
@@ -117,7 +119,13 @@ fn the_rectangles_response_and_pressure_are_its_images() {
 
     // The coherent pressure at 500 Hz against the sum over images.
     let mut p = [Complex64::new(0.0, 0.0)];
-    pressure_into(echoes.iter().copied(), 500.0, 1, &mut p);
+    pressure_into(
+        echoes.iter().copied(),
+        500.0,
+        1,
+        &eigenray::options::Run::new(),
+        &mut p,
+    );
     let k = 2.0 * PI * 500.0 / 343.0;
     let want: Complex64 = images
         .iter()
@@ -175,7 +183,12 @@ fn the_cli_writes_the_responses_as_npy() {
     let parsed = Scene::from_json(&rectangle(3)).unwrap();
     let tracer = Tracer::new(&parsed).unwrap();
     let ir = ImpulseResponses::new(parsed.impulse_response().unwrap(), 1, 1);
-    let want = ir.try_render(echoes_of_scene(&tracer).unwrap()).unwrap();
+    let want = ir
+        .render(
+            echoes_of_scene(&tracer, &eigenray::options::Run::new()).unwrap(),
+            &eigenray::options::Run::new(),
+        )
+        .unwrap();
     assert_eq!(data, want);
 }
 

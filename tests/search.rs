@@ -3,8 +3,9 @@
 //! against `max_steps`; every search option; limits on the work and the refusal of what
 //! cannot fit in memory.
 
+use eigenray::options::Run;
 use eigenray::scene_parts::StepKind;
-use eigenray::search::{SearchArrival, SearchLimits};
+use eigenray::search::SearchArrival;
 use eigenray::{Scene, Status, Tracer};
 use serde_json::{Value, json};
 
@@ -29,8 +30,16 @@ fn rooms_image_tree_matches_the_sequence_search() {
         let rooms = Scene::from_json(&doc.to_string()).unwrap();
         doc["search"] = serde_json::json!({ "max_steps": 4 });
         let sequences = Scene::from_json(&doc.to_string()).unwrap();
-        let a = Tracer::new(&rooms).unwrap().search().unwrap();
-        let b = Tracer::new(&sequences).unwrap().search().unwrap();
+        let a = Tracer::new(&rooms)
+            .unwrap()
+            .search(&eigenray::options::Run::new())
+            .unwrap()
+            .arrivals;
+        let b = Tracer::new(&sequences)
+            .unwrap()
+            .search(&eigenray::options::Run::new())
+            .unwrap()
+            .arrivals;
         assert_eq!(a.len(), expected, "{name}");
         assert_eq!(a.len(), b.len(), "{name}");
         for (x, y) in a.iter().zip(&b) {
@@ -166,7 +175,11 @@ fn assert_same(a: &[SearchArrival], b: &[SearchArrival], what: &str) {
 }
 
 fn search(scene: &Scene) -> Vec<SearchArrival> {
-    Tracer::new(scene).unwrap().search().unwrap()
+    Tracer::new(scene)
+        .unwrap()
+        .search(&eigenray::options::Run::new())
+        .unwrap()
+        .arrivals
 }
 
 /// Nine listeners spread over the comb room.
@@ -388,7 +401,11 @@ fn reflect_and_refract_choose_the_steps() {
     };
     let run = |search: Value| {
         let scene = Scene::from_json(&doc(search).to_string()).unwrap();
-        Tracer::new(&scene).unwrap().search().unwrap()
+        Tracer::new(&scene)
+            .unwrap()
+            .search(&eigenray::options::Run::new())
+            .unwrap()
+            .arrivals
     };
     let reflect = run(json!({ "max_steps": 2, "refract": false }));
     let refract = run(json!({ "max_steps": 2, "reflect": false }));
@@ -422,8 +439,9 @@ fn reflect_and_refract_choose_the_steps() {
         });
         Tracer::new(Scene::from_json(&d.to_string()).unwrap())
             .unwrap()
-            .search()
+            .search(&eigenray::options::Run::new())
             .unwrap()
+            .arrivals
     };
     let with = room(json!({ "max_steps": 4 }));
     let without = room(json!({ "max_steps": 4, "refract": false }));
@@ -447,18 +465,14 @@ fn a_work_limit_gives_incomplete_pairs() {
         json!({ "max_steps": 12 }),
     );
     let tracer = Tracer::new(&scene).unwrap();
-    let full = tracer
-        .search_with(&SearchLimits::default(), &|_| {}, None)
-        .unwrap();
+    let full = tracer.search(&Run::new()).unwrap();
     assert_eq!(full.incomplete_pairs, 0);
     assert!(full.beams > 1000);
-    let limits = SearchLimits {
-        beams: full.beams / 10,
-        ..SearchLimits::default()
-    };
-    let short = tracer.search_with(&limits, &|_| {}, None).unwrap();
+    let mut run = Run::new();
+    run.limits.beams = full.beams / 10;
+    let short = tracer.search(&run).unwrap();
     assert_eq!(short.incomplete_pairs, 9);
-    assert!(short.beams <= limits.beams);
+    assert!(short.beams <= run.limits.beams);
     assert!(short.arrivals.iter().all(|a| !a.complete));
     assert!(short.arrivals.len() < full.arrivals.len());
     for a in &short.arrivals {
@@ -466,11 +480,9 @@ fn a_work_limit_gives_incomplete_pairs() {
         b.complete = true;
         assert!(full.arrivals.iter().any(|c| same(&b, c)));
     }
-    let limits = SearchLimits {
-        arrivals: 5,
-        ..SearchLimits::default()
-    };
-    let few = tracer.search_with(&limits, &|_| {}, None).unwrap();
+    let mut run = Run::new();
+    run.limits.arrivals = 5;
+    let few = tracer.search(&run).unwrap();
     assert!(few.arrivals.len() <= 5 && few.incomplete_pairs > 0);
 }
 
@@ -528,7 +540,11 @@ fn the_cli_writes_the_arrivals() {
     let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let written = doc["arrivals"].as_array().unwrap();
     let scene = Scene::from_json(&fixture("hexagon").to_string()).unwrap();
-    let found = Tracer::new(&scene).unwrap().search().unwrap();
+    let found = Tracer::new(&scene)
+        .unwrap()
+        .search(&eigenray::options::Run::new())
+        .unwrap()
+        .arrivals;
     assert_eq!(written.len(), found.len());
     let slowness = scene.media()[0].slowness;
     for (w, f) in written.iter().zip(&found) {

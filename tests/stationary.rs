@@ -616,6 +616,7 @@ fn engine(case: &Case) -> Vec<Arrival> {
             Point::new(case.source[0], case.source[1]),
             Point::new(case.receiver[0], case.receiver[1]),
             0,
+            &eigenray::options::Run::new(),
             &mut out,
         )
         .unwrap();
@@ -1028,13 +1029,15 @@ fn bad_paths_are_refused() {
     let (s, r) = (scene.sources()[0], scene.receivers()[0]);
     let stale = || {
         let mut out = Vec::new();
-        tracer.stationary_paths(s, r, 0, &mut out).unwrap();
+        tracer
+            .stationary_paths(s, r, 0, &eigenray::options::Run::new(), &mut out)
+            .unwrap();
         assert_eq!(out.len(), 1);
         out
     };
     let mut out = stale();
     assert_eq!(
-        tracer.stationary_paths(s, r, 1, &mut out),
+        tracer.stationary_paths(s, r, 1, &eigenray::options::Run::new(), &mut out),
         Err(StationaryError::NoSuchPath { path: 1 })
     );
     assert!(out.is_empty());
@@ -1053,9 +1056,13 @@ fn bad_paths_are_refused() {
     .unwrap();
     let mut out = stale();
     assert_eq!(
-        Tracer::new(&long)
-            .unwrap()
-            .stationary_paths(s, r, 0, &mut out),
+        Tracer::new(&long).unwrap().stationary_paths(
+            s,
+            r,
+            0,
+            &eigenray::options::Run::new(),
+            &mut out
+        ),
         Err(StationaryError::TooManySteps { path: 0, steps: 13 })
     );
     assert!(out.is_empty());
@@ -1289,7 +1296,9 @@ fn media_from_regions_match_brute_force() {
         let tracer = Tracer::new(&scene).unwrap();
         let mut got = Vec::new();
         let (s, r) = (scene.sources()[0], scene.receivers()[0]);
-        let search = tracer.stationary_paths(s, r, 0, &mut got).unwrap();
+        let search = tracer
+            .stationary_paths(s, r, 0, &eigenray::options::Run::new(), &mut got)
+            .unwrap();
         assert!(search.complete);
         got.retain(|a| a.status == Status::Converged);
         let same = want.len() == got.len()
@@ -1345,7 +1354,13 @@ fn sea_floor_search_visits_few_tuples() {
         let (mut visited, mut solves) = (0, 0);
         for &receiver in scene.receivers() {
             let search = tracer
-                .stationary_paths(scene.sources()[0], receiver, 0, &mut out)
+                .stationary_paths(
+                    scene.sources()[0],
+                    receiver,
+                    0,
+                    &eigenray::options::Run::new(),
+                    &mut out,
+                )
                 .unwrap();
             assert!(search.complete);
             assert_eq!(out.len(), 1, "{out:?}");
@@ -1388,7 +1403,13 @@ fn round_lens_search_stays_small() {
         let tracer = Tracer::new(&scene).unwrap();
         let mut out = Vec::new();
         let search = tracer
-            .stationary_paths(Point::new(-2.0, 0.3), Point::new(1.0, 0.0), 0, &mut out)
+            .stationary_paths(
+                Point::new(-2.0, 0.3),
+                Point::new(1.0, 0.0),
+                0,
+                &eigenray::options::Run::new(),
+                &mut out,
+            )
             .unwrap();
         assert!(search.complete && !out.is_empty(), "{out:?}");
         // Every arrival passes through the glass: its first leg enters near the source side.

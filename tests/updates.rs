@@ -16,12 +16,18 @@ fn results(tracer: &Tracer, thorough: bool) -> String {
     let mut out = format!("{:?}", tracer.trace_all());
     out += &format!(
         "{:?}",
-        tracer.trace_batch(&BatchOptions::default()).to_rays()
+        tracer
+            .trace_batch(&BatchOptions::default(), &eigenray::options::Run::new())
+            .unwrap()
+            .to_rays()
     );
     if thorough {
-        out += &format!("{:?}", tracer.trace_stationary());
+        out += &format!(
+            "{:?}",
+            tracer.trace_stationary(&eigenray::options::Run::new())
+        );
         if tracer.scene().search().is_some() {
-            out += &format!("{:?}", tracer.search());
+            out += &format!("{:?}", tracer.search(&eigenray::options::Run::new()));
         }
     }
     out

@@ -45,11 +45,13 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     for warm_start in [true, false] {
-        let batch = tracer.trace_batch(&BatchOptions {
+        let options = BatchOptions {
             warm_start,
             chunk: 3,
-            ..BatchOptions::default()
-        });
+        };
+        let Ok(batch) = tracer.trace_batch(&options, &eigenray::options::Run::new()) else {
+            return;
+        };
         assert_eq!(batch.len(), size.rays);
         for format in [Format::Json, Format::Jsonl, Format::Csv, Format::Npy] {
             let mut out = Vec::new();

@@ -82,7 +82,7 @@ pub fn trace_and_check(mut scene: Scene) {
     // Every stationary path and the search, where the scene asks: bounded by their work
     // budgets (`solver.max_work`), so within the input's CPU budget too.
     if scene.solver().stationary == eigenray::spec::StationaryMode::All
-        && let Ok(all) = tracer.trace_stationary()
+        && let Ok(all) = tracer.trace_stationary(&eigenray::options::Run::new())
     {
         for t in &all.triples {
             for a in &t.arrivals {
@@ -91,9 +91,9 @@ pub fn trace_and_check(mut scene: Scene) {
         }
     }
     if scene.search().is_some()
-        && let Ok(arrivals) = tracer.search()
+        && let Ok(report) = tracer.search(&eigenray::options::Run::new())
     {
-        for a in &arrivals {
+        for a in &report.arrivals {
             assert!(a.arrival.time.is_finite() && a.arrival.time >= 0.0, "{a:?}");
         }
     }

@@ -1,5 +1,6 @@
 //! Where a long batch reports its progress: a tqdm bar or the caller's callable.
 
+use eigenray::options::Run;
 use pyo3::exceptions::{PyRuntimeError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::PyBool;
@@ -73,12 +74,12 @@ impl<'py> Progress<'py> {
     }
 }
 
-/// The reports of one call that runs on a thread of its own: its workers count what they
-/// finish into `done`, and the calling thread [`poll`](Self::poll)s it (at most one report a
+/// The reports of one call that runs on a thread of its own: its workers count the items they
+/// begin in its `Run`, and the calling thread [`poll`](Self::poll)s it (at most one report a
 /// poll, none after one failed), then [`finish`](Self::finish)es.
 pub(crate) struct Reports<'a, 'py> {
     progress: Option<&'a Progress<'py>>,
-    done: &'a std::sync::atomic::AtomicUsize,
+    run: &'a Run,
     total: usize,
     shown: usize,
     reported: PyResult<()>,
@@ -88,12 +89,12 @@ impl<'a, 'py> Reports<'a, 'py> {
     /// The reports of a call over `total` items to `progress` (none without one).
     pub(crate) fn new(
         progress: Option<&'a Progress<'py>>,
-        done: &'a std::sync::atomic::AtomicUsize,
+        run: &'a Run,
         total: usize,
     ) -> Reports<'a, 'py> {
         Reports {
             progress,
-            done,
+            run,
             total,
             shown: 0,
             reported: Ok(()),
@@ -102,7 +103,9 @@ impl<'a, 'py> Reports<'a, 'py> {
 
     /// Reports what was done since the last report, if anything was.
     pub(crate) fn poll(&mut self) {
-        let now = self.done.load(std::sync::atomic::Ordering::Relaxed);
+        let now = usize::try_from(self.run.items())
+            .unwrap_or(usize::MAX)
+            .min(self.total);
         if let Some(progress) = self.progress
             && self.reported.is_ok()
             && now > self.shown

@@ -2,9 +2,9 @@
 //! at each receiver, from every echo of the scene, as numpy arrays.
 
 use eigenray::amplitudes::Complex64;
-use eigenray::options::Stop;
+use eigenray::options::Run;
 use eigenray::response::{
-    Echo, ImpulseResponses, echoes_of_scene_with, pressure_into, transmission_loss,
+    Echo, ImpulseResponses, echoes_of_scene, pressure_into, transmission_loss,
 };
 use eigenray::scene_parts::ImpulseResponseOptions;
 use eigenray::spec::ImpulseResponseSpec;
@@ -29,14 +29,9 @@ fn scene_echoes(py: Python<'_>, tracer: &Tracer) -> PyResult<Vec<Echo>> {
              (or another source model)",
         ));
     }
-    let stop = Stop::new();
-    interruptible(
-        py,
-        &stop,
-        || echoes_of_scene_with(tracer, Some(&stop)),
-        || {},
-    )?
-    .map_err(|e| argument_error(py, "scene", e.to_string()))
+    let run = Run::new();
+    interruptible(py, &run, || echoes_of_scene(tracer, &run), || {})?
+        .map_err(|e| argument_error(py, "scene", e.to_string()))
 }
 
 /// The response settings: the arguments where given (`rate` and `duration` together), else
@@ -86,12 +81,15 @@ pub(crate) fn impulse_response<'py>(
     let (s, r) = (scene.sources().len(), scene.receivers().len());
     let responses = ImpulseResponses::new(&options, s, r);
     let echoes = scene_echoes(py, tracer)?;
-    let data = py.detach(|| responses.try_render(echoes)).map_err(|_| {
-        PyMemoryError::new_err(format!(
-            "impulse responses of {s} sources × {r} receivers × {} samples",
-            options.samples
-        ))
-    })?;
+    // Rendered on a thread of its own too: Ctrl-C stops it between echoes.
+    let run = Run::new();
+    let data =
+        interruptible(py, &run, || responses.render(echoes, &run), || {})?.map_err(|_| {
+            PyMemoryError::new_err(format!(
+                "impulse responses of {s} sources × {r} receivers × {} samples",
+                options.samples
+            ))
+        })?;
     let array = Array3::from_shape_vec((s, r, options.samples), data)
         .expect("the responses fill their shape");
     Ok(array.into_pyarray(py))
@@ -127,7 +125,13 @@ fn pressures(
     let echoes = scene_echoes(py, tracer)?;
     let mut p = vec![Complex64::new(0.0, 0.0); s * r];
     if s > 0 {
-        pressure_into(echoes, f, s, &mut p);
+        let run = Run::new();
+        interruptible(
+            py,
+            &run,
+            || pressure_into(echoes, f, s, &run, &mut p),
+            || {},
+        )?;
     }
     Ok(Array2::from_shape_vec((s, r), p).expect("one pressure a pair"))
 }

@@ -3,8 +3,7 @@
 //! arrival).
 
 use eigenray::columns::{Entry, Schema};
-use eigenray::options::Stop;
-use eigenray::search::SearchLimits;
+use eigenray::options::Run;
 use eigenray::stationary::Kink;
 use eigenray::{Reason, Scene, SearchArrival, Tracer, scene_parts::StepKind};
 use numpy::IntoPyArray;
@@ -22,16 +21,24 @@ use crate::rays::Reasons;
 /// written into arrays with the GIL released, on a thread of its own (Ctrl-C stops the
 /// search); `MemoryError` when the arrays would not fit.
 pub(crate) fn search_arrivals(py: Python<'_>, tracer: &Tracer) -> PyResult<PyArrivals> {
-    let stop = Stop::new();
-    let limits = SearchLimits::default();
+    let run = Run::new();
     let schema = Schema::of(tracer.scene());
     let search = || {
-        tracer
-            .search_with(&limits, &|_| {}, Some(&stop))
-            .map(|report| ArrivalTable::of(report.arrivals, schema))
+        tracer.search(&run).map(|report| {
+            if run.stop_requested() {
+                // Interrupted: the caller raises, the arrivals are not wanted.
+                return Ok(None);
+            }
+            ArrivalTable::of(report.arrivals, schema).map(Some)
+        })
     };
-    let table = interruptible(py, &stop, search, || {})?
+    let table = interruptible(py, &run, search, || {})?
         .map_err(|e| argument_error(py, "search", e.to_string()))??;
+    let Some(table) = table else {
+        return Err(pyo3::exceptions::PyRuntimeError::new_err(
+            "the search was stopped",
+        ));
+    };
     Ok(table.finish(py, tracer.scene()))
 }
 

@@ -6,7 +6,7 @@ use std::sync::Mutex;
 use std::sync::atomic::AtomicBool;
 
 use eigenray::columns::{Entry, Schema};
-use eigenray::options::Stop;
+use eigenray::options::{Progress, Run};
 use eigenray::{Point, Reason, Scene, StationaryRays, Tracer, Workspace};
 use numpy::IntoPyArray;
 use numpy::ndarray::{Array2, Array3};
@@ -201,16 +201,17 @@ pub(crate) fn pairs_table(
     sources: &[Point],
     receivers: &[Point],
     path: usize,
-    stop: &Stop,
+    run: &Run,
 ) -> Table {
     let scene = tracer.scene();
     let mut table = Table::new(sources.len(), width(scene), Schema::of(scene));
     fill_parallel(table.rows(), 0, &Workspace::new, &|ws, first, rows| {
         // Once stopped, the rest is skipped (the caller raises).
-        if stop.requested() {
+        let n = rows.time.len() as u64;
+        if !run.keep_going(Progress::items(n)) {
             return;
         }
-        stop.run(|| {
+        run.within(|| {
             for row in 0..rows.time.len() {
                 let i = first + row;
                 let record = tracer.solve(sources[i], receivers[i], path, ws);

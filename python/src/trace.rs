@@ -1,10 +1,8 @@
 //! `Tracer.trace`: the batch of every ray, written into numpy's arrays by its own workers,
 //! with progress reported from the calling thread, which Ctrl-C interrupts.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
-
 use eigenray::columns::Schema;
-use eigenray::options::Stop;
+use eigenray::options::Run;
 use eigenray::{
     BatchOptions, Tracer,
     sink::{BatchScratch, BatchSink},
@@ -86,22 +84,16 @@ fn trace_into<S: BatchSink>(
     sink: S,
 ) -> PyResult<PyResult<()>> {
     let total = tracer.scene().num_rays();
-    let done = AtomicUsize::new(0);
-    let count = |n: usize| {
-        done.fetch_add(n, Ordering::Relaxed);
-    };
-    let stop = Stop::new();
+    let run = Run::new();
     let opts = BatchOptions {
         warm_start,
-        progress: progress.as_ref().map(|_| &count as &(dyn Fn(usize) + Sync)),
-        stop: Some(&stop),
         ..BatchOptions::default()
     };
-    let mut reports = Reports::new(progress.as_ref(), &done, total);
+    let mut reports = Reports::new(progress.as_ref(), &run, total);
     let solved = interruptible(
         py,
-        &stop,
-        || tracer.trace_batch_to(&opts, sink, scratch),
+        &run,
+        || tracer.trace_batch_to(&opts, &run, sink, scratch),
         || reports.poll(),
     )?;
     solved.map_err(|e| scene_error(py, &e))?;

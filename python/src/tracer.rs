@@ -1,12 +1,11 @@
 //! `Tracer`: a prepared scene and everything asked of it, each call converting its arguments,
 //! calling the library and converting the result (the work is in the other modules).
 
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, PoisonError, RwLock, RwLockReadGuard, RwLockWriteGuard, TryLockError};
 
 use eigenray::amplitudes::Complex64;
 use eigenray::columns::{Entry, Schema};
-use eigenray::options::Stop;
+use eigenray::options::Run;
 use eigenray::{
     Arrival, Gradient, Point, PointSensitivities, Scene, SceneError, Tracer, Workspace,
     sink::BatchScratch,
@@ -215,16 +214,12 @@ impl PyTracer {
             Table::bytes(total, width(scene), false, &Schema::of(scene)),
         )?;
         let progress = Progress::new(py, progress, total)?;
-        let done = AtomicUsize::new(0);
-        let count = |n: usize| {
-            done.fetch_add(n, Ordering::Relaxed);
-        };
-        let stop = Stop::new();
-        let mut reports = Reports::new(progress.as_ref(), &done, total);
+        let run = Run::new();
+        let mut reports = Reports::new(progress.as_ref(), &run, total);
         let rays = interruptible(
             py,
-            &stop,
-            || tracer.trace_stationary_with(&count, Some(&stop)),
+            &run,
+            || tracer.trace_stationary(&run),
             || reports.poll(),
         )?
         .map_err(|e| scene_error(py, &e.into()))?;
@@ -405,11 +400,11 @@ impl PyTracer {
                 scene_error(py, &SceneError::new(key, e.message))
             })?;
         }
-        let stop = Stop::new();
+        let run = Run::new();
         let table = interruptible(
             py,
-            &stop,
-            || pairs_table(&tracer, &sources, &receivers, path, &stop),
+            &run,
+            || pairs_table(&tracer, &sources, &receivers, path, &run),
             || {},
         )?;
         Ok(table.finish(py, scene))
@@ -431,11 +426,11 @@ impl PyTracer {
         let scene = tracer.scene();
         let (source, receiver, path) = ray_arguments(py, scene, source, receiver, path)?;
         scratch(&self.arrivals, |out| {
-            let stop = Stop::new();
+            let run = Run::new();
             let search = interruptible(
                 py,
-                &stop,
-                || stop.run(|| tracer.stationary_paths(source, receiver, path, out)),
+                &run,
+                || tracer.stationary_paths(source, receiver, path, &run, out),
                 || {},
             )?
             .map_err(|e| scene_error(py, &e.into()))?;

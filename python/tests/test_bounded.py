@@ -95,6 +95,17 @@ tracer = eigenray.Tracer(eigenray.Scene({
 }))
 """
 
+# A rectangular room's 10^4 echoes (found in milliseconds), each a pulse of 10,001 taps: the
+# rendering alone takes seconds.
+LONG_RENDER = """
+tracer = eigenray.Tracer(eigenray.Scene({
+    "media": {"air": {"speed": 343.0, "at": [1.0, 1.0]}},
+    "interfaces": {"room": {"points": [[0, 0], [6, 0], [6, 4], [0, 4]], "closed": True}},
+    "sources": [[1.0, 1.0]], "receivers": [[0.5 + 0.1 * i, 2.5] for i in range(50)],
+    "search": {"max_time": 0.12}, "amplitudes": {"source": "point"},
+}))
+"""
+
 
 # How long the interrupted child may take to end: a net for a stop that does not work (one
 # that works ends the child within a fraction of a second), never a check of speed.
@@ -142,9 +153,10 @@ def interrupt(setup, call):
         (LATE_ROOM, "tracer.search()"),
         (LATE_ROOM, "tracer.impulse_response(rate=8000, duration=0.15)"),
         (LATE_ROOM, "tracer.transmission_loss(frequency=500)"),
+        (LONG_RENDER, "tracer.impulse_response(rate=8000, duration=2.0, taps=10001)"),
     ],
     ids=["trace", "trace-progress", "trace_stationary", "stationary_paths", "search", "solve_pairs",
-         "search-beams", "impulse_response", "transmission_loss"],
+         "search-beams", "impulse_response", "transmission_loss", "rendering"],
 )
 def test_ctrl_c_raises_keyboard_interrupt(setup, call):
     # Without the signal each call would go on for many seconds and end with FINISHED (or

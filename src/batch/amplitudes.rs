@@ -6,6 +6,7 @@ use rayon::prelude::*;
 
 use super::{Batch, sized};
 use crate::amplitude::{Amplitude, NoAmplitude};
+use crate::control::Run;
 use crate::trace::Tracer;
 
 /// Rays per parallel piece.
@@ -16,14 +17,14 @@ impl Batch {
     /// (see [`Tracer::amplitude_of`]).
     ///
     /// ```
-    /// use eigenray::{BatchOptions, Scene, Tracer};
+    /// use eigenray::{BatchOptions, Scene, Tracer, options::Run};
     /// let mut spec = eigenray::demo::air_water(100, 7);
     /// spec.amplitudes = Some(eigenray::spec::AmplitudesSpec::new(
     ///     eigenray::spec::SourceModel::Point,
     /// ));
     /// let scene = Scene::from_spec(&spec).unwrap();
     /// let tracer = Tracer::new(&scene).unwrap();
-    /// let batch = tracer.trace_batch(&BatchOptions::default());
+    /// let batch = tracer.trace_batch(&BatchOptions::default(), &Run::new()).unwrap();
     /// let one = tracer.trace_all();
     /// assert!(batch.amplitude(0).unwrap().spreading > 0.0);
     /// assert_eq!(batch.amplitude(0), one[0].amplitude.as_ref());
@@ -36,8 +37,10 @@ impl Batch {
 
 impl Tracer {
     /// Gives every timed ray of `batch` its amplitude when the scene asks for amplitudes (and
-    /// empties the batch's amplitudes when it does not).
-    pub(super) fn batch_amplitudes(&self, batch: &mut Batch) {
+    /// empties the batch's amplitudes when it does not). A stop requested of `run` skips the
+    /// pieces not begun (the caller that asked discards the batch); a spent budget does not:
+    /// the rays solved keep their amplitudes.
+    pub(super) fn batch_amplitudes(&self, batch: &mut Batch, run: &Run) {
         let scene = self.scene();
         if scene.amplitudes().is_none() {
             batch.amplitudes.clear();
@@ -51,6 +54,9 @@ impl Tracer {
             .par_chunks_mut(PIECE)
             .enumerate()
             .for_each_init(Vec::new, |legs, (p, out)| {
+                if run.stop_requested() {
+                    return;
+                }
                 let start = p * PIECE;
                 let rays = batch_ref.rays(start..start + out.len());
                 for (slot, ray) in out.iter_mut().zip(rays) {

@@ -4,11 +4,11 @@ use std::fmt;
 
 use num_complex::Complex64;
 
-use crate::control::Stop;
+use crate::control::Run;
 use crate::output::RaySet;
 use crate::scene::SceneError;
 use crate::scene::StationaryMode;
-use crate::search::{SearchArrival, SearchError, SearchLimits};
+use crate::search::{SearchArrival, SearchError};
 use crate::trace::{Arrival, StationaryError, Status, Tracer};
 use crate::{Amplitude, BatchOptions, Ray};
 
@@ -109,42 +109,30 @@ impl std::error::Error for EchoError {}
 
 /// Every echo of `tracer`'s scene, as `eigenray solve` finds them: the rays of its `paths`
 /// (one per triple, or every stationary path with `"stationary": "all"`), then the arrivals
-/// of its `search`.
+/// of its `search`. The batch, the every-stationary-path search and the `search` run with
+/// `run`; once it stops, they stop (their results say so: see each), and the caller that
+/// asked to stop discards the (short) result.
 ///
 /// # Errors
 /// A refused every-stationary-path search or `search`, or a batch too large to allocate.
-pub fn echoes_of_scene(tracer: &Tracer) -> Result<Vec<Echo>, EchoError> {
-    echoes_of_scene_with(tracer, None)
-}
-
-/// [`echoes_of_scene`] that stops soon after `stop` is requested (from another thread): the
-/// batch, the every-stationary-path search and the `search` it runs take it, and the caller
-/// that asked discards the (short) result.
-///
-/// # Errors
-/// As [`echoes_of_scene`].
-pub fn echoes_of_scene_with(tracer: &Tracer, stop: Option<&Stop>) -> Result<Vec<Echo>, EchoError> {
+pub fn echoes_of_scene(tracer: &Tracer, run: &Run) -> Result<Vec<Echo>, EchoError> {
     let scene = tracer.scene();
     let mut echoes: Vec<Echo> = match scene.solver().stationary {
         StationaryMode::One => {
-            let opts = BatchOptions {
-                stop,
-                ..BatchOptions::default()
-            };
-            let batch = tracer.try_trace_batch(&opts).map_err(EchoError::Batch)?;
+            let batch = tracer
+                .trace_batch(&BatchOptions::default(), run)
+                .map_err(EchoError::Batch)?;
             echoes_of_rays(RaySet::Batch(&batch)).collect()
         }
         StationaryMode::All => {
             let all = tracer
-                .trace_stationary_with(&|_| {}, stop)
+                .trace_stationary(run)
                 .map_err(EchoError::Stationary)?;
             echoes_of_rays(RaySet::Stationary(&all)).collect()
         }
     };
     if scene.search().is_some() {
-        let report = tracer
-            .search_with(&SearchLimits::default(), &|_| {}, stop)
-            .map_err(EchoError::Search)?;
+        let report = tracer.search(run).map_err(EchoError::Search)?;
         echoes.extend(echoes_of_arrivals(&report.arrivals));
     }
     Ok(echoes)

@@ -3,6 +3,7 @@
 use std::collections::TryReserveError;
 
 use super::{Echo, FractionalDelay};
+use crate::control::{Progress, Run};
 use crate::scene::ImpulseResponseOptions;
 
 /// The layout and pulse of a set of impulse responses, one per (source, receiver): it
@@ -13,6 +14,7 @@ use crate::scene::ImpulseResponseOptions;
 ///
 /// ```
 /// use eigenray::amplitudes::Complex64;
+/// use eigenray::options::Run;
 /// use eigenray::response::{Echo, ImpulseResponses};
 /// use eigenray::spec::ImpulseResponseSpec;
 /// use eigenray::scene_parts::ImpulseResponseOptions;
@@ -23,7 +25,7 @@ use crate::scene::ImpulseResponseOptions;
 /// let a = Complex64::new(0.5, 0.0);
 /// let echo = Echo { source: 0, receiver: 1, time: 0.02, amplitude: a, order: 0 };
 /// let mut out = vec![0.0; ir.len()];
-/// ir.render_into([echo], &mut out);
+/// ir.render_into([echo], &Run::new(), &mut out);
 /// assert_eq!(ir.response(&out, 0, 1)[20], 0.5); // on a whole sample: that sample alone
 /// assert!(ir.response(&out, 0, 0).iter().all(|&v| v == 0.0));
 /// ```
@@ -101,17 +103,28 @@ impl ImpulseResponses {
     /// of its (source, receiver); the rest is 0. Echoes of other sources or receivers, and
     /// parts of pulses outside the responses, are left out. Allocates nothing.
     ///
+    /// Each echo is an item of `run`, and its pulse's taps units of its work, asked for
+    /// before it is added: once `run` stops (a stop request, a spent budget) the echoes left
+    /// are not rendered.
+    ///
     /// # Panics
     /// If `out` does not hold [`len`](Self::len) numbers.
-    pub fn render_into(&self, echoes: impl IntoIterator<Item = Echo>, out: &mut [f64]) {
+    pub fn render_into(&self, echoes: impl IntoIterator<Item = Echo>, run: &Run, out: &mut [f64]) {
         assert_eq!(
             out.len(),
             self.len(),
             "impulse-response buffer of the wrong size"
         );
         out.fill(0.0);
+        let taps = self.pulse.taps() as u64;
         for e in echoes {
             if e.source < self.sources && e.receiver < self.receivers {
+                if !run.keep_going(Progress {
+                    work: taps,
+                    items: 1,
+                }) {
+                    return;
+                }
                 let start = (e.source * self.receivers + e.receiver) * self.samples;
                 let response = &mut out[start..start + self.samples];
                 self.pulse.add(response, e.time * self.rate, e.amplitude);
@@ -123,15 +136,16 @@ impl ImpulseResponses {
     ///
     /// # Errors
     /// When the buffer cannot be allocated (or its size overflows).
-    pub fn try_render(
+    pub fn render(
         &self,
         echoes: impl IntoIterator<Item = Echo>,
+        run: &Run,
     ) -> Result<Vec<f64>, TryReserveError> {
         let mut out = Vec::new();
         // An overflowing size asks for more than any allocator gives.
         out.try_reserve_exact(self.checked_len().unwrap_or(usize::MAX))?;
         out.resize(self.len(), 0.0);
-        self.render_into(echoes, &mut out);
+        self.render_into(echoes, run, &mut out);
         Ok(out)
     }
 
@@ -187,7 +201,7 @@ mod tests {
             },
         ];
         let mut out = vec![f64::NAN; ir.len()];
-        ir.render_into(echoes, &mut out);
+        ir.render_into(echoes, &Run::new(), &mut out);
         let r12 = ir.response(&out, 1, 2);
         assert_eq!(r12[25], 2.0);
         assert_eq!(r12.iter().filter(|v| **v != 0.0).count(), 1);
@@ -211,7 +225,7 @@ mod tests {
                 order: 0,
             })
             .collect();
-        let out = ir.try_render(echoes.iter().copied()).unwrap();
+        let out = ir.render(echoes.iter().copied(), &Run::new()).unwrap();
         let mut sum = vec![0.0; 400];
         for e in &echoes {
             let mut one = vec![0.0; 400];
@@ -230,6 +244,6 @@ mod tests {
     fn an_impossible_buffer_is_an_error() {
         let ir = ImpulseResponses::new(&options(1.0, 1 << 32, 1), usize::MAX / 2, 3);
         assert_eq!(ir.checked_len(), None);
-        assert!(ir.try_render([]).is_err());
+        assert!(ir.render([], &Run::new()).is_err());
     }
 }

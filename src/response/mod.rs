@@ -12,9 +12,7 @@ mod impulse;
 mod pressure;
 mod pulse;
 
-pub use echoes::{
-    Echo, EchoError, echoes_of_arrivals, echoes_of_rays, echoes_of_scene, echoes_of_scene_with,
-};
+pub use echoes::{Echo, EchoError, echoes_of_arrivals, echoes_of_rays, echoes_of_scene};
 pub use impulse::ImpulseResponses;
 pub use pressure::{pressure_into, transmission_loss};
 pub use pulse::FractionalDelay;

@@ -5,11 +5,15 @@ use std::f64::consts::PI;
 use num_complex::Complex64;
 
 use super::Echo;
+use crate::control::{Progress, Run};
 
 /// Sums `echoes` coherently at `frequency` into `out`, one complex pressure per (source,
 /// receiver), source-major (`out[s · receivers + r]`): `p = Σ a · e^(iωT)` with `ω = 2πf`,
 /// the time factor `e^(−iωt)` of the amplitudes. Echoes of other sources or receivers are
 /// left out. Allocates nothing.
+///
+/// Each echo is an item and a unit of work of `run`, asked for before it is summed: once
+/// `run` stops (a stop request, a spent budget) the echoes left are not summed.
 ///
 /// The phase is taken from the fractional part of `f · T`, so it keeps its precision at
 /// large `f · T`.
@@ -21,6 +25,7 @@ pub fn pressure_into(
     echoes: impl IntoIterator<Item = Echo>,
     frequency: f64,
     sources: usize,
+    run: &Run,
     out: &mut [Complex64],
 ) {
     assert!(
@@ -31,6 +36,9 @@ pub fn pressure_into(
     out.fill(Complex64::new(0.0, 0.0));
     for e in echoes {
         if e.source < sources && e.receiver < receivers {
+            if !run.keep_going(Progress::items(1)) {
+                return;
+            }
             let cycles = (frequency * e.time).fract();
             let phase = Complex64::from_polar(1.0, 2.0 * PI * cycles);
             out[e.source * receivers + e.receiver] += e.amplitude * phase;
@@ -73,7 +81,7 @@ mod tests {
             echoes.push(echo(i, r2 / c, Complex64::new(-1.0 / (4.0 * PI * r2), 0.0)));
         }
         let mut p = vec![Complex64::new(0.0, 0.0); ranges.len()];
-        pressure_into(echoes, f, 1, &mut p);
+        pressure_into(echoes, f, 1, &Run::new(), &mut p);
         for (i, &x) in ranges.iter().enumerate() {
             let r1 = (x * x + (zr - zs) * (zr - zs)).sqrt();
             let r2 = (x * x + (zr + zs) * (zr + zs)).sqrt();
@@ -125,7 +133,7 @@ mod tests {
                 order: 0,
             },
         ];
-        pressure_into(echoes, 100.0, 2, &mut p);
+        pressure_into(echoes, 100.0, 2, &Run::new(), &mut p);
         assert_eq!(p[3], Complex64::new(1.0, 0.0));
         assert_eq!(p[..3], [Complex64::new(0.0, 0.0); 3]);
     }

@@ -11,7 +11,8 @@ use crate::trace::{
     Arrival, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls, Tracer,
 };
 
-use super::{Control, SearchArrival, SearchProgress};
+use super::{Control, SearchArrival};
+use crate::control::Progress;
 
 /// What one source's tree gives: its arrivals and what it did.
 pub(super) struct SourceTree {
@@ -55,7 +56,7 @@ impl Tracer {
         let scene = self.scene();
         let s = scene.sources()[source];
         let mut arrivals = Vec::new();
-        if control.stopped() {
+        if !control.run.keep_going(Progress::default()) {
             return SourceTree {
                 arrivals,
                 stats: MirrorStats {
@@ -79,7 +80,8 @@ impl Tracer {
             max_time: options.time_limit(),
             slowness: scene.media()[medium].slowness,
             obstructed: options.obstructed,
-            max_beams: control.limits.beams,
+            max_beams: control.run.limits.beams,
+            max_depth: control.run.limits.depth,
             // The tree serves every receiver of its source: `solver.max_work` for each.
             max_work: scene
                 .solver()
@@ -96,13 +98,7 @@ impl Tracer {
                 arrivals.push(beam_arrival(walls, source, medium, p));
                 true
             },
-            &mut |beams| {
-                (control.progress)(SearchProgress {
-                    beams,
-                    ..SearchProgress::default()
-                });
-                !control.stopped()
-            },
+            &mut |beams| control.run.keep_going(Progress::work(beams)),
         );
         SourceTree { arrivals, stats }
     }

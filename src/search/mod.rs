@@ -17,11 +17,12 @@
 //!   pruned where no medium or no time allows a path. It counts sequences and the work of
 //!   their complete searches.
 //!
-//! Limits count the work actually done ([`SearchLimits`], and the scene's `solver.max_work`
-//! per pair's walk and, for each of its receivers, per source's tree): a source's tree that
-//! reaches its limit of beams or of work, a pair's walk that spends its budget, or a search
-//! whose arrivals reach their limit (in number, or in the memory they hold with their points,
-//! over the whole search) stops there, and every arrival of the pairs it leaves short says
+//! Limits count the work actually done (the [`Run`]'s [`Limits`](crate::options::Limits), and
+//! the scene's `solver.max_work` per pair's walk and, for each of its receivers, per source's
+//! tree): a source's tree that reaches its limit of beams or of work, a pair's walk that
+//! spends its budget, or a search whose arrivals reach their limit (in number, or in the
+//! memory they hold with their points, over the whole search) stops there, and every arrival
+//! of the pairs it leaves short says
 //! `complete: false`. A search is refused up front only where its table of pairs cannot be
 //! allocated ([`SearchError::TooLarge`]).
 
@@ -34,7 +35,7 @@ use rayon::prelude::*;
 use std::fmt;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::control::Stop;
+use crate::control::Run;
 pub use crate::scene::SearchOptions;
 use crate::scene::{Step, StepKind};
 use crate::trace::{Arrival, Status, Tracer};
@@ -56,24 +57,11 @@ pub struct SearchArrival {
     pub complete: bool,
 }
 
-/// Beams one source's tree may visit before it stops (its pairs then say `complete: false`).
-/// At the tree's pace (tens of millions of beams a second on one core) a few seconds.
-pub const MAX_SEARCH_BEAMS: u64 = 1 << 28;
-
-/// Arrivals a search may list before it stops: a few gigabytes of results.
-pub const MAX_SEARCH_ARRIVALS: u64 = 1 << 24;
-
-/// Bytes a search's arrivals may take at most ([`SearchLimits::memory`]), whatever memory the
-/// machine has: 16 GiB.
-pub const MAX_SEARCH_MEMORY: u64 = 1 << 34;
-
-/// Bytes a search's arrivals may take where the memory available is not known: 2 GiB.
-const UNKNOWN_MEMORY_SEARCH: u64 = 1 << 31;
-
-/// The bytes one listed arrival of `steps` steps holds, as [`SearchLimits::memory`] counts
-/// them: its record (thrice: the list it is gathered into grows by doubling, and the lists of
-/// sources and pairs are joined into one), its points, steps, segments, arclengths and leg
-/// media, and each of its five lists' allocation.
+/// The bytes one listed arrival of `steps` steps holds, as a search counts them against
+/// [`Limits::memory`](crate::options::Limits::memory): its record (thrice: the list it is
+/// gathered into grows by doubling, and the lists of sources and pairs are joined into one),
+/// its points, steps, segments, arclengths and leg media, and each of its five lists'
+/// allocation.
 pub fn arrival_bytes(steps: usize) -> u64 {
     let steps = steps as u64;
     let record = 3 * std::mem::size_of::<SearchArrival>() as u64 + 5 * 16;
@@ -82,49 +70,10 @@ pub fn arrival_bytes(steps: usize) -> u64 {
     record + (steps + 2) * point + steps * per_step + 8
 }
 
-/// Tuples (and assignments solved) of the complete search of one sequence between one pair,
-/// beyond which that search gives up and its pair says `complete: false`.
-const SEARCH_TUPLES: usize = 1 << 20;
-
 /// Bytes the search holds per (source, receiver) pair whatever it finds: the pair's record
 /// (its arrivals' count and whether it is complete). A search whose table of pairs cannot be
 /// allocated is refused before it starts.
 pub const PAIR_BYTES: usize = std::mem::size_of::<PairRecord>();
-
-/// The limits of a search's work: what it does before it stops and says `complete: false`
-/// on the pairs it leaves short. With the scene's `solver.max_work` (the budget of each
-/// pair's walk over sequences with refractions, in the complete search's work units, one
-/// more per sequence visited; and of each source's beam tree, that much for each of its
-/// receivers), the one place a budget plugs in.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct SearchLimits {
-    /// Beams per source's tree.
-    pub beams: u64,
-    /// Arrivals over the whole search.
-    pub arrivals: u64,
-    /// Bytes the arrivals listed over the whole search (every source and pair) may hold,
-    /// each counted with its points ([`arrival_bytes`]): a search of long paths stops here
-    /// long before [`arrivals`](Self::arrivals).
-    pub memory: u64,
-}
-
-impl Default for SearchLimits {
-    /// [`MAX_SEARCH_BEAMS`], [`MAX_SEARCH_ARRIVALS`], and a quarter of the memory available
-    /// ([`available_memory`](crate::limits::available_memory): what the machine has free,
-    /// or less under an address-space limit) for the arrivals, at most
-    /// [`MAX_SEARCH_MEMORY`]: the rest is left to what the caller makes of them (written
-    /// text, arrays, responses).
-    fn default() -> SearchLimits {
-        let memory = crate::control::available_memory()
-            .map_or(UNKNOWN_MEMORY_SEARCH, |have| have / 4)
-            .min(MAX_SEARCH_MEMORY);
-        SearchLimits {
-            beams: MAX_SEARCH_BEAMS,
-            arrivals: MAX_SEARCH_ARRIVALS,
-            memory,
-        }
-    }
-}
 
 /// Everything a search found and did.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -144,16 +93,6 @@ pub struct SearchReport {
     pub work: u64,
     /// Pairs whose search stopped at a limit (their arrivals say `complete: false`).
     pub incomplete_pairs: usize,
-}
-
-/// Work a search has done since its last report, as
-/// [`search_with`](Tracer::search_with) tells it (from the worker threads).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct SearchProgress {
-    /// Beams visited.
-    pub beams: u64,
-    /// Pairs whose walk over sequences is finished.
-    pub pairs: usize,
 }
 
 /// Why a scene's `search` cannot run.
@@ -185,21 +124,12 @@ impl fmt::Display for SearchError {
 
 impl std::error::Error for SearchError {}
 
-/// What every part of one search shares: its limits, its count of arrivals, its progress
-/// and its stop request.
+/// What every part of one search shares: its run (limits, budget, progress, stop request)
+/// and its count of arrivals.
 #[derive(Clone, Copy)]
 struct Control<'a> {
-    limits: &'a SearchLimits,
+    run: &'a Run,
     listed: &'a ArrivalCount,
-    progress: &'a (dyn Fn(SearchProgress) + Sync),
-    stop: Option<&'a Stop>,
-}
-
-impl Control<'_> {
-    /// Whether the search was asked to stop.
-    fn stopped(&self) -> bool {
-        self.stop.is_some_and(Stop::requested)
-    }
 }
 
 /// What the search keeps per pair.
@@ -219,7 +149,7 @@ struct ArrivalCount {
 }
 
 impl ArrivalCount {
-    fn new(limits: &SearchLimits) -> ArrivalCount {
+    fn new(limits: &crate::options::Limits) -> ArrivalCount {
         ArrivalCount {
             count: AtomicU64::new(0),
             limit: limits.arrivals,
@@ -248,11 +178,19 @@ impl Tracer {
     /// (or every arrival up to `max_time`, or within both bounds) through the allowed
     /// interfaces and kinds, with its leg media from the regions, for every (source,
     /// receiver) pair. Listed: every `converged` arrival (and `obstructed` ones, and `vertex`
-    /// ones, when the search asks), ordered by source, receiver and time. See
-    /// [`search_with`](Self::search_with) for how, for its limits and for what else it tells.
+    /// ones, when the search asks), ordered by source, receiver and time, with everything
+    /// the search did ([`SearchReport`]).
+    ///
+    /// The search runs within `run`'s limits (beams per source's tree, arrivals, the budget of
+    /// the whole call: [`Limits`](crate::options::Limits)) and each pair's walk within the
+    /// scene's `solver.max_work`; `run` hears of the work as it is done, from the worker
+    /// threads (beams, and each pair's walk as one item). When a stop is requested (from
+    /// another thread), the trees and walks under way stop and those not begun are skipped:
+    /// every pair then says `complete: false` (and the arrivals have no amplitudes: the caller
+    /// that asked discards them).
     ///
     /// ```
-    /// use eigenray::{Scene, Tracer};
+    /// use eigenray::{Scene, Tracer, options::Run};
     /// // A square room, each wall its own interface: the direct ray and one reflection off
     /// // each wall.
     /// let scene = Scene::from_json(r#"{
@@ -263,24 +201,10 @@ impl Tracer {
     ///     "sources": [[0.3, 0.4]], "receivers": [[0.7, 0.5]],
     ///     "search": { "max_steps": 1, "refract": false }
     /// }"#).unwrap();
-    /// let arrivals = Tracer::new(&scene).unwrap().search().unwrap();
+    /// let arrivals = Tracer::new(&scene).unwrap().search(&Run::new()).unwrap().arrivals;
     /// assert_eq!(arrivals.len(), 5);
     /// assert!(arrivals[0].steps.is_empty()); // the direct ray comes first
     /// ```
-    ///
-    /// # Errors
-    /// As [`search_with`](Self::search_with).
-    pub fn search(&self) -> Result<Vec<SearchArrival>, SearchError> {
-        Ok(self
-            .search_with(&SearchLimits::default(), &|_| {}, None)?
-            .arrivals)
-    }
-
-    /// [`search`](Self::search) within `limits` (and each pair's walk within the scene's
-    /// `solver.max_work`), with everything the search did ([`SearchReport`]); `progress` hears
-    /// of the work as it is done, from the worker threads. When `stop` is requested (from
-    /// another thread), the trees and walks under way stop and those not begun are skipped:
-    /// the result is then short (the caller that asked discards it).
     ///
     /// Reflect-only sequences go through the beam tree, one per source in parallel, shared by
     /// its receivers: each segment of each reflecting interface is a wall, each node an image
@@ -292,7 +216,7 @@ impl Tracer {
     /// `complete: false` on every arrival.
     ///
     /// ```
-    /// use eigenray::{Scene, Tracer, search::SearchLimits};
+    /// use eigenray::{Scene, Tracer, options::Run};
     /// // The same square room as one closed polyline, every arrival up to time 3.
     /// let scene = Scene::from_json(r#"{
     ///     "media": { "air": { "speed": 1.0, "at": [0.5, 0.5] } },
@@ -302,7 +226,7 @@ impl Tracer {
     ///     "search": { "max_time": 3 }
     /// }"#).unwrap();
     /// let tracer = Tracer::new(&scene).unwrap();
-    /// let report = tracer.search_with(&SearchLimits::default(), &|_| {}, None).unwrap();
+    /// let report = tracer.search(&Run::new()).unwrap();
     /// assert_eq!(report.incomplete_pairs, 0);
     /// assert!(report.arrivals.iter().all(|a| a.arrival.time <= 3.0 && a.complete));
     /// assert!(report.arrivals.iter().any(|a| a.steps.len() >= 4));
@@ -311,12 +235,7 @@ impl Tracer {
     /// # Errors
     /// [`SearchError::NoSearch`] without a `search` section; [`SearchError::TooLarge`] when
     /// the table of pairs alone cannot be allocated.
-    pub fn search_with(
-        &self,
-        limits: &SearchLimits,
-        progress: &(dyn Fn(SearchProgress) + Sync),
-        stop: Option<&Stop>,
-    ) -> Result<SearchReport, SearchError> {
+    pub fn search(&self, run: &Run) -> Result<SearchReport, SearchError> {
         let scene = self.scene();
         let options = scene.search().ok_or(SearchError::NoSearch)?;
         let (ns, nr) = (scene.sources().len(), scene.receivers().len());
@@ -333,13 +252,11 @@ impl Tracer {
         let mut pairs: Vec<PairRecord> = Vec::new();
         pairs.try_reserve_exact(count).map_err(|_| too_large())?;
         pairs.resize(count, PairRecord { complete: true });
-        let listed = ArrivalCount::new(limits);
+        let listed = ArrivalCount::new(&run.limits);
         let mut report = SearchReport::default();
         let control = Control {
-            limits,
+            run,
             listed: &listed,
-            progress,
-            stop,
         };
         let trees = self.beam_trees(options, &control);
         let walks = self.walks(options, &control);
@@ -360,10 +277,18 @@ impl Tracer {
             pairs[pair].complete &= walk.complete;
             arrivals.extend(walk.arrivals);
         }
+        if run.stop_requested() {
+            // Asked to stop: the result is discarded, every pair is short.
+            pairs.iter_mut().for_each(|p| p.complete = false);
+        }
         for a in &mut arrivals {
             a.complete = pairs[a.source * nr + a.receiver].complete;
         }
         report.incomplete_pairs = pairs.iter().filter(|p| !p.complete).count();
+        if run.stop_requested() {
+            report.arrivals = arrivals;
+            return Ok(report);
+        }
         sort_arrivals(&mut arrivals);
         if scene.amplitudes().is_some() {
             arrivals.par_iter_mut().for_each(|s| {

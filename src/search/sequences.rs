@@ -35,14 +35,14 @@
 
 use rayon::prelude::*;
 
-use crate::control::within;
+use crate::control::{Progress, Run};
 use crate::geom::{Aabb, Point};
 use crate::leg::{LegModel, Uniform};
 use crate::scene::{MAX_STATIONARY_STEPS, SearchOptions, Step, StepKind};
 use crate::trace::{Arrival, SearchBudget, Sequence, Status, Tracer};
 
 use super::strategy::{Claim, Shape, Strategy, walk_may_extend};
-use super::{ArrivalCount, Control, SEARCH_TUPLES, SearchArrival, SearchProgress};
+use super::{ArrivalCount, Control, SearchArrival};
 
 /// A set of media as bits (media beyond 128 are not told apart: [`MediaSets`] then keeps
 /// every set full).
@@ -152,6 +152,8 @@ struct Walk<'a> {
     max_work: u64,
     /// The arrivals listed over the whole search.
     listed: &'a ArrivalCount,
+    /// The search's run: each sequence visited is a unit of its work.
+    run: &'a Run,
 }
 
 /// One pair's walk: its arrivals and what it did.
@@ -200,7 +202,7 @@ impl Tracer {
         control: &Control<'_>,
     ) -> Vec<(usize, PairWalk)> {
         let scene = self.scene();
-        let walk = Walk::new(self, options, control.listed);
+        let walk = Walk::new(self, options, control.listed, control.run);
         let nr = scene.receivers().len();
         let media: Vec<Option<usize>> = scene
             .sources()
@@ -215,20 +217,16 @@ impl Tracer {
             .map(|pair| {
                 let (source, receiver) = (pair / nr, pair % nr);
                 let medium = media[source].expect("a pair that needs the walk has a medium");
-                let found = if control.stopped() {
+                let begun = control.run.keep_going(Progress { work: 0, items: 1 });
+                let found = if begun {
+                    walk.pair(source, receiver, medium)
+                } else {
                     PairWalk {
                         arrivals: Vec::new(),
                         complete: false,
                         work: 0,
                     }
-                } else {
-                    // The complete searches take the stop request from their thread.
-                    within(control.stop, || walk.pair(source, receiver, medium))
                 };
-                (control.progress)(SearchProgress {
-                    pairs: 1,
-                    ..SearchProgress::default()
-                });
                 (pair, found)
             })
             .collect()
@@ -236,7 +234,12 @@ impl Tracer {
 }
 
 impl<'a> Walk<'a> {
-    fn new(tracer: &'a Tracer, options: &'a SearchOptions, listed: &'a ArrivalCount) -> Walk<'a> {
+    fn new(
+        tracer: &'a Tracer,
+        options: &'a SearchOptions,
+        listed: &'a ArrivalCount,
+        run: &'a Run,
+    ) -> Walk<'a> {
         let scene = tracer.scene();
         let mut choices = Vec::new();
         for &interface in &options.interfaces {
@@ -279,6 +282,7 @@ impl<'a> Walk<'a> {
             depth: options.step_limit().min(MAX_STATIONARY_STEPS),
             max_work: scene.solver().max_work,
             listed,
+            run,
         }
     }
 
@@ -373,7 +377,7 @@ impl PairState<'_> {
             self.search(claim);
         }
         self.out.work += 1;
-        if self.out.work > walk.max_work {
+        if self.out.work > walk.max_work || !walk.run.keep_going(Progress::work(1)) {
             self.stopped = true;
         }
         if self.stopped || k == walk.options.step_limit() {
@@ -410,7 +414,7 @@ impl PairState<'_> {
         };
         let left = walk.max_work.saturating_sub(self.out.work);
         let budget = SearchBudget {
-            tuples: SEARCH_TUPLES,
+            tuples: walk.run.limits.walk_tuples,
             work: usize::try_from(left).unwrap_or(usize::MAX),
         };
         let outcome = walk.tracer.stationary_of(
@@ -420,6 +424,7 @@ impl PairState<'_> {
             Some(self.medium),
             self.r,
             budget,
+            walk.run,
             &mut self.found,
         );
         self.out.work += outcome.work as u64;

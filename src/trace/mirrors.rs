@@ -47,7 +47,7 @@
 
 use crate::geom::{Aabb, Point, Vec2, orient};
 use crate::leg::Uniform;
-use crate::scene::{MAX_SEARCH_STEPS, Scene, SegmentRef, StepKind};
+use crate::scene::{Scene, SegmentRef, StepKind};
 
 use super::classify::{END_MARGIN, leg_sides, sides_suit};
 use super::occlusion::{OCCLUSION_MARGIN, Occluders, Target, Window};
@@ -58,8 +58,12 @@ use super::{Reason, Status};
 /// (and it grows with the deepest level a search allows).
 const BEAM_MARGIN: f64 = 1e-11;
 
-/// Beams between two calls of a search's progress.
+/// Beams a tree asks its run for at a time (its `progress`).
 pub(crate) const PROGRESS_BEAMS: u64 = 1 << 14;
+
+/// Wall tries (children tested, made or not) between two polls of a tree's run for a stop
+/// request: a node of many walls may try thousands before its next beam.
+const POLL_TRIES: u32 = 1 << 12;
 
 /// One wall: segment `p → q` of an interface.
 #[derive(Clone, Copy, Debug)]
@@ -189,8 +193,10 @@ pub(crate) struct MirrorSearch<'a> {
     pub source: Point,
     /// The receivers.
     pub receivers: &'a [Point],
-    /// The most reflections of a path (at most [`MAX_SEARCH_STEPS`] are walked).
+    /// The most reflections of a path (at most `max_depth` are walked).
     pub max_steps: usize,
+    /// The most reflections walked whatever `max_steps` ([`Limits::depth`](crate::options::Limits)).
+    pub max_depth: usize,
     /// The latest time listed (infinite: no bound).
     pub max_time: f64,
     /// The slowness of every leg (time = slowness × length).
@@ -242,7 +248,7 @@ pub(crate) struct MirrorStats {
     /// Work done, as [`MirrorSearch::max_work`] counts it.
     pub work: u64,
     /// Whether the search stopped before the end of its tree: at `max_beams`, where its
-    /// `found` said so, or at [`MAX_SEARCH_STEPS`] deep with more allowed.
+    /// `found` said so, where its `progress` said so, or at `max_depth` deep with more allowed.
     pub stopped: bool,
 }
 
@@ -463,8 +469,9 @@ impl MirrorWalls {
     /// (unless `obstructed`, which lists obstructed paths too, with [`Status::Obstructed`] and
     /// [`Reason::Crosses`]) no leg crossing an interface of the scene strictly between its
     /// ends (the classifier's test). Sequence 0 is the direct ray. `found` returns `false` to
-    /// stop the search; `progress` hears of every [`PROGRESS_BEAMS`] beams, and returns `false`
-    /// to stop it (a stop request).
+    /// stop the search; `progress` is asked for every [`PROGRESS_BEAMS`] beams before they
+    /// are visited (and polled with 0 every [`POLL_TRIES`] walls tried), and returns `false`
+    /// to stop it (a stop request, a budget spent).
     pub(crate) fn arrivals(
         &self,
         search: &MirrorSearch<'_>,
@@ -473,7 +480,8 @@ impl MirrorWalls {
         progress: &mut impl FnMut(u64) -> bool,
     ) -> MirrorStats {
         let mut stats = MirrorStats::default();
-        let max_steps = search.max_steps.min(MAX_SEARCH_STEPS);
+        let max_steps = search.max_steps.min(search.max_depth);
+        let (mut granted, mut tries) = (0u64, 0u32);
         let bounds = self.bounds(search, max_steps);
         let MirrorScratch {
             stack,
@@ -523,6 +531,11 @@ impl MirrorWalls {
             if w == top.wall {
                 continue;
             }
+            tries = tries.wrapping_add(1);
+            if tries % POLL_TRIES == 0 && !progress(0) {
+                stats.stopped = true;
+                break;
+            }
             let node = *top;
             stats.work += 1;
             if stats.work > search.max_work {
@@ -534,9 +547,13 @@ impl MirrorWalls {
                 continue;
             };
             stats.beams += 1;
-            if stats.beams % PROGRESS_BEAMS == 0 && !progress(PROGRESS_BEAMS) {
-                stats.stopped = true;
-                break;
+            if stats.beams > granted {
+                if !progress(PROGRESS_BEAMS) {
+                    stats.beams -= 1;
+                    stats.stopped = true;
+                    break;
+                }
+                granted += PROGRESS_BEAMS;
             }
             if stats.beams > search.max_beams {
                 stats.beams -= 1;
@@ -550,7 +567,6 @@ impl MirrorWalls {
                 break;
             }
         }
-        progress(stats.beams % PROGRESS_BEAMS);
         stats
     }
 
@@ -880,6 +896,7 @@ mod tests {
             obstructed,
             max_beams: u64::MAX,
             max_work: u64::MAX,
+            max_depth: crate::scene::MAX_SEARCH_STEPS,
         };
         let stats = mirrors.arrivals(
             &search,
@@ -1154,7 +1171,13 @@ mod tests {
             for (r, &receiver) in scene.receivers().iter().enumerate() {
                 for (p, path) in scene.paths().iter().enumerate() {
                     let search = tracer
-                        .stationary_paths(source, receiver, p, &mut out)
+                        .stationary_paths(
+                            source,
+                            receiver,
+                            p,
+                            &crate::options::Run::new(),
+                            &mut out,
+                        )
                         .unwrap();
                     let walls: Vec<usize> = path.steps.iter().map(|s| s.interface).collect();
                     let mut found: Vec<Found> = out
@@ -1526,7 +1549,13 @@ mod tests {
         let mut arrivals = Vec::new();
         for (r, &receiver) in receivers.iter().enumerate() {
             tracer
-                .stationary_paths(source, receiver, 0, &mut arrivals)
+                .stationary_paths(
+                    source,
+                    receiver,
+                    0,
+                    &crate::options::Run::new(),
+                    &mut arrivals,
+                )
                 .unwrap();
             assert_eq!(
                 arrivals.len(),

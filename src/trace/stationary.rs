@@ -9,9 +9,10 @@
 
 use std::cell::Cell;
 
+use crate::control::{self, Run};
 use crate::geom::Point;
 use crate::regions::Regions;
-use crate::scene::{FALLBACK_MAX_WORK, MAX_STATIONARY_STEPS, StepKind};
+use crate::scene::{MAX_STATIONARY_STEPS, StepKind};
 
 use super::classify::Sequence;
 use super::complete::{self, Arrival, Hierarchy, SearchBudget, SequenceSearch};
@@ -19,7 +20,8 @@ use super::{RayRecord, Reason, SearchOutcome, StationaryError, Status, Tracer, W
 
 /// Tuples (and assignments solved) the default mode's search of one ray visits at most,
 /// beyond which it answers `not_converged` (`Reason::SearchLimit`); its work is bounded by
-/// [`FALLBACK_MAX_WORK`] (about 10 ms of one core), or `solver.max_work` when that is less.
+/// the run's [`Limits::fallback_work`](crate::options::Limits) (about 10 ms of one core), or
+/// `solver.max_work` when that is less.
 const FALLBACK_TUPLES: usize = 1 << 14;
 
 thread_local! {
@@ -43,9 +45,13 @@ impl Tracer {
     /// hierarchy (`O(M)`); a later one visits about `log M` nodes per arrival and interface
     /// (measured on a digitised sea floor: 24 tuples per ray at M = 1e3, 40 at 1e5).
     ///
+    /// The search runs with `run` ([`Run::keep_going`] before each tuple and solve, a unit of
+    /// work per point moved and weighed): a stop request or a spent budget ends it, not
+    /// [`complete`](SearchOutcome::complete).
+    ///
     /// ```
     /// use eigenray::stationary::Kink;
-    /// use eigenray::{Point, Scene, Status, Tracer};
+    /// use eigenray::{Point, Scene, Status, Tracer, options::Run};
     /// // A mirror bent into a valley, seen from above: a specular point on each slope, and
     /// // the bottom, where the time has a maximum-type kink.
     /// let scene = Scene::from_json(r#"{
@@ -57,7 +63,7 @@ impl Tracer {
     /// let tracer = Tracer::new(&scene).unwrap();
     /// let mut arrivals = Vec::new();
     /// let search = tracer
-    ///     .stationary_paths(Point::new(-0.5, 2.0), Point::new(0.5, 2.0), 0, &mut arrivals)
+    ///     .stationary_paths(Point::new(-0.5, 2.0), Point::new(0.5, 2.0), 0, &Run::new(), &mut arrivals)
     ///     .unwrap();
     /// assert!(search.complete);
     /// let statuses: Vec<Status> = arrivals.iter().map(|a| a.status).collect();
@@ -79,6 +85,7 @@ impl Tracer {
         source: Point,
         receiver: Point,
         path: usize,
+        run: &Run,
         out: &mut Vec<Arrival>,
     ) -> Result<SearchOutcome, StationaryError> {
         out.clear();
@@ -100,6 +107,7 @@ impl Tracer {
             source_medium,
             receiver,
             self.search_budget(),
+            run,
             out,
         );
         self.arrival_amplitudes(&spec.steps, out);
@@ -141,6 +149,7 @@ impl Tracer {
         source_medium: Option<usize>,
         receiver: Point,
         budget: SearchBudget,
+        run: &Run,
         out: &mut Vec<Arrival>,
     ) -> SearchOutcome {
         complete::recycle(out);
@@ -167,6 +176,7 @@ impl Tracer {
             source,
             receiver,
             budget,
+            run,
         };
         match (media, self.regions.as_ref(), source_medium) {
             (Some(media), _, _) => {
@@ -289,18 +299,22 @@ impl Tracer {
             };
         }
         let mut arrivals = FALLBACK.take();
-        let stats = self.stationary_of(
-            Sequence::of(&self.scene, path),
-            spec.media.as_deref(),
-            source,
-            if given { None } else { source_medium },
-            receiver,
-            SearchBudget {
-                tuples: FALLBACK_TUPLES,
-                work: work_units(self.scene.solver().max_work.min(FALLBACK_MAX_WORK)),
-            },
-            &mut arrivals,
-        );
+        // A single ray's search: it runs with the run of its thread (`Run::within`).
+        let stats = control::with_current(|run| {
+            self.stationary_of(
+                Sequence::of(&self.scene, path),
+                spec.media.as_deref(),
+                source,
+                if given { None } else { source_medium },
+                receiver,
+                SearchBudget {
+                    tuples: FALLBACK_TUPLES,
+                    work: work_units(self.scene.solver().max_work.min(run.limits.fallback_work)),
+                },
+                run,
+                &mut arrivals,
+            )
+        });
         let best = arrivals
             .iter()
             .find(|a| a.status != Status::Obstructed)

@@ -1,6 +1,6 @@
 //! Bounded, interruptible work: every complete search has a work budget (`solver.max_work`),
 //! the default mode's fallback a small one a ray; long runs show their progress on a
-//! terminal; a `Stop` ends a library call that its budget would not end for hours.
+//! terminal; a stop request (`Run::request_stop`) ends a library call that its budget would not end for hours.
 //!
 //! No test here reads a clock to pass or fail: each bounds the work (the budgets, counted in
 //! units of work) and checks what the bound promises (`complete: false`, the limit named as
@@ -11,7 +11,7 @@
 use std::sync::{Arc, mpsc};
 use std::time::Duration;
 
-use eigenray::options::Stop;
+use eigenray::options::Run;
 use eigenray::{Scene, Tracer};
 use serde_json::{Value, json};
 
@@ -168,23 +168,23 @@ fn long_runs_show_progress_on_a_terminal() {
 /// exit).
 fn stationary_under(
     tracer: &Arc<Tracer>,
-    stop: &Stop,
+    stop: &Run,
     request_after: Option<Duration>,
 ) -> Option<eigenray::StationaryRays> {
     let (sender, answer) = mpsc::channel();
     let (tracer, worker_stop) = (Arc::clone(tracer), stop.clone());
     std::thread::spawn(move || {
-        let rays = tracer.trace_stationary_with(&|_| {}, Some(&worker_stop));
+        let rays = tracer.trace_stationary(&worker_stop);
         let _ = sender.send(rays.expect("every stationary path"));
     });
     if let Some(wait) = request_after {
         std::thread::sleep(wait);
-        stop.request();
+        stop.request_stop();
     }
     answer.recv_timeout(STOP_WATCHDOG).ok()
 }
 
-/// A `Stop` requested from another thread ends every stationary path of the walls, whose
+/// A stop requested (`Run::request_stop`) from another thread ends every stationary path of the walls, whose
 /// budget (2^40 units: hours of work a triple) would not end it: the call returns at all, and
 /// every triple says `complete: false`. Requested before a call, it ends the call before any
 /// search: no arrival at all.
@@ -197,7 +197,7 @@ fn a_stop_ends_a_library_call_its_budget_would_not_end() {
     );
     doc["solver"] = json!({ "stationary": "all", "max_work": 1u64 << 40 });
     let tracer = Arc::new(Tracer::new(Scene::from_json(&doc.to_string()).unwrap()).unwrap());
-    let stop = Stop::new();
+    let stop = Run::new();
     // Into the search (200 ms: when does not matter, the request is checked throughout).
     let rays = stationary_under(&tracer, &stop, Some(Duration::from_millis(200)))
         .expect("the stop ends the call");

@@ -272,7 +272,10 @@ fn library_batch_too_big_for_memory_is_an_error() {
     let s = scene(&hundred_billion_rays()).expect("valid");
     let tracer = Tracer::new(&s).expect("tracer");
     let e = tracer
-        .try_trace_batch(&eigenray::BatchOptions::default())
+        .trace_batch(
+            &eigenray::BatchOptions::default(),
+            &eigenray::options::Run::new(),
+        )
         .expect_err("terabytes");
     assert_eq!(e.key, "paths");
     assert!(

@@ -65,7 +65,9 @@ fn library(scene: &Value) -> (eigenray::RayRecord, Vec<eigenray::Arrival>, bool)
     let (s, r) = (scene.sources()[0], scene.receivers()[0]);
     let ray = tracer.solve(s, r, 0, &mut Workspace::new());
     let mut arrivals = Vec::new();
-    let search = tracer.stationary_paths(s, r, 0, &mut arrivals).unwrap();
+    let search = tracer
+        .stationary_paths(s, r, 0, &eigenray::options::Run::new(), &mut arrivals)
+        .unwrap();
     (ray, arrivals, search.complete)
 }
 
@@ -232,11 +234,15 @@ fn a_receiver_on_an_interface_is_reached_once() {
     let ray = tracer.solve(s, r, 1, &mut Workspace::new());
     assert_eq!(ray.reason, Some(Reason::AtEnd { step: 0 }), "{ray:?}");
     let mut arrivals = Vec::new();
-    let search = tracer.stationary_paths(s, r, 1, &mut arrivals).unwrap();
+    let search = tracer
+        .stationary_paths(s, r, 1, &eigenray::options::Run::new(), &mut arrivals)
+        .unwrap();
     assert!(arrivals.is_empty() && search.complete);
     // Just above the mirror the two legs' collapse is a threshold's decision.
     let above = Point::new(3.0, 1e-13);
-    let search = tracer.stationary_paths(s, above, 1, &mut arrivals).unwrap();
+    let search = tracer
+        .stationary_paths(s, above, 1, &eigenray::options::Run::new(), &mut arrivals)
+        .unwrap();
     assert!(search.complete || search.undecided == Some(Threshold::VanishedLeg));
     if search.complete {
         assert_eq!(arrivals.len(), 1, "{arrivals:?}");

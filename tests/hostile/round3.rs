@@ -6,7 +6,8 @@
 //! edge). Memory cases run the command-line tool under an address-space cap; none asserts a
 //! time.
 
-use eigenray::search::{SearchLimits, arrival_bytes};
+use eigenray::options::{Limits, Run};
+use eigenray::search::arrival_bytes;
 use eigenray::{Point, Scene, Status, Tracer, Workspace};
 use serde_json::{Value, json};
 
@@ -57,11 +58,12 @@ fn close_walls_list_exact_arrivals_within_the_memory_limit() {
     let scene = Scene::from_json(&close_walls(json!({ "max_time": 1e6 })).to_string()).unwrap();
     let tracer = Tracer::new(scene).unwrap();
     let memory = 4 << 20;
-    let limits = SearchLimits {
+    let mut run = Run::new();
+    run.limits = Limits {
         memory,
-        ..SearchLimits::default()
+        ..Limits::default()
     };
-    let report = tracer.search_with(&limits, &|_| {}, None).unwrap();
+    let report = tracer.search(&run).unwrap();
     assert_eq!(report.incomplete_pairs, 1);
     let arrivals = &report.arrivals;
     assert!(arrivals.len() > 100, "{}", arrivals.len());
@@ -112,9 +114,7 @@ fn a_zigzag_beam_tree_stays_inside_max_work() {
             json!({ "max_work": max_work }),
         );
         let tracer = Tracer::new(scene).unwrap();
-        let report = tracer
-            .search_with(&SearchLimits::default(), &|_| {}, None)
-            .unwrap();
+        let report = tracer.search(&Run::new()).unwrap();
         assert_eq!(report.incomplete_pairs, 1);
         assert!(report.arrivals.iter().all(|a| !a.complete));
         let slack = 1000;
@@ -133,7 +133,7 @@ fn a_beam_tree_stopped_by_its_budget_lists_only_true_arrivals() {
     let search = json!({ "max_steps": 6, "refract": false });
     let full = Tracer::new(zigzag(search.clone(), json!({})))
         .unwrap()
-        .search_with(&SearchLimits::default(), &|_| {}, None)
+        .search(&Run::new())
         .unwrap();
     assert_eq!(full.incomplete_pairs, 0);
     assert!(full.arrivals.len() > 5, "{}", full.arrivals.len());
@@ -142,7 +142,7 @@ fn a_beam_tree_stopped_by_its_budget_lists_only_true_arrivals() {
         json!({ "max_work": full.tree_work / 3 }),
     ))
     .unwrap()
-    .search_with(&SearchLimits::default(), &|_| {}, None)
+    .search(&Run::new())
     .unwrap();
     assert_eq!(cut.incomplete_pairs, 1);
     assert!(cut.arrivals.len() < full.arrivals.len());
@@ -156,7 +156,7 @@ fn a_beam_tree_stopped_by_its_budget_lists_only_true_arrivals() {
     }
     let roomy = Tracer::new(zigzag(search, json!({ "max_work": full.tree_work })))
         .unwrap()
-        .search_with(&SearchLimits::default(), &|_| {}, None)
+        .search(&Run::new())
         .unwrap();
     // (`residual` is NaN for the tree's paths: compared field by field.)
     let key = |r: &eigenray::search::SearchReport| -> Vec<_> {
@@ -282,7 +282,11 @@ fn an_axisymmetric_source_on_the_domains_edge_is_in_the_medium_on_its_right() {
     };
     let arrivals = |left: f64| {
         let scene = Scene::from_json(&doc(left).to_string()).unwrap_or_else(|e| panic!("{e}"));
-        Tracer::new(scene).unwrap().search().unwrap()
+        Tracer::new(scene)
+            .unwrap()
+            .search(&Run::new())
+            .unwrap()
+            .arrivals
     };
     let on_axis = arrivals(0.0);
     let beyond = arrivals(-10.0);

@@ -18,6 +18,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use eigenray::{
     Batch, BatchOptions, RaySet, Scene, SceneError, SearchArrival, StationaryRays, Status, Tracer,
     limits::{MAX_INPUT_BYTES, available_memory, read_limited},
+    options::Run,
     spec::StationaryMode,
 };
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -717,18 +718,21 @@ fn search(tracer: &Tracer) -> Result<Vec<SearchArrival>, Failure> {
             have as f64 / 1e9
         )));
     }
-    let bar = Progress::new(None, "beams");
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    let progress = |p: eigenray::search::SearchProgress| {
-        bar.inc(p.beams as usize);
-        let pairs = done.fetch_add(p.pairs, std::sync::atomic::Ordering::Relaxed) + p.pairs;
-        if p.pairs > 0 {
-            bar.message(format!(", {pairs} pairs searched for refractions"));
+    // Beams on the bar's count (the trees' work, as the run hears of it), pairs in its
+    // message.
+    let bar = Bar::new(None, "units of work");
+    let shown = bar.bar.clone();
+    let done = std::sync::atomic::AtomicU64::new(0);
+    let run = Run::new().on_progress(move |p: eigenray::options::Progress| {
+        shown.inc(p.work);
+        if p.items > 0 {
+            let pairs = done.fetch_add(p.items, std::sync::atomic::Ordering::Relaxed) + p.items;
+            shown.set_message(format!(", {pairs} pairs searched for refractions"));
         }
-    };
+    });
     let started = Instant::now();
     let report = tracer
-        .search_with(&eigenray::search::SearchLimits::default(), &progress, None)
+        .search(&run)
         .map_err(|e| Failure::Input(format!("search: {e}")))?;
     bar.finish();
     let n = report.arrivals.len();
@@ -806,10 +810,9 @@ fn unreached_pairs(scene: &Scene, arrivals: &[SearchArrival]) -> String {
 /// error when it is a terminal and the run is long; a path beyond the search's step limit is
 /// refused with its key.
 fn trace_stationary(tracer: &Tracer) -> Result<StationaryRays, Failure> {
-    let bar = Progress::new(Some(tracer.scene().num_rays()), "rays searched");
-    let progress = |done: usize| bar.inc(done);
+    let bar = Bar::new(Some(tracer.scene().num_rays()), "rays searched");
     let rays = tracer
-        .trace_stationary_with_progress(&progress)
+        .trace_stationary(&bar.run())
         .map_err(|e| Failure::scene(e.into()));
     bar.finish();
     rays
@@ -818,16 +821,16 @@ fn trace_stationary(tracer: &Tracer) -> Result<StationaryRays, Failure> {
 /// Solves every ray; a progress bar on standard error when it is a terminal and the run is
 /// long.
 fn trace(tracer: &Tracer, warm_start: bool) -> Result<Batch, Failure> {
-    let bar = Progress::new(Some(tracer.scene().num_rays()), "rays");
-    let progress = |done: usize| bar.inc(done);
+    let bar = Bar::new(Some(tracer.scene().num_rays()), "rays");
     let opts = BatchOptions {
         warm_start,
-        progress: Some(&progress),
         ..BatchOptions::default()
     };
     // Where the memory check could not tell (no `MemAvailable`, or other processes took it
     // meanwhile), the allocation itself fails with a message instead of an abort.
-    let batch = tracer.try_trace_batch(&opts).map_err(Failure::scene);
+    let batch = tracer
+        .trace_batch(&opts, &bar.run())
+        .map_err(Failure::scene);
     bar.finish();
     batch
 }
@@ -839,16 +842,16 @@ const PROGRESS_AFTER: Duration = Duration::from_millis(500);
 /// spinner where they are not counted), with the time spent and left, redrawn a few times a
 /// second. Nothing is drawn unless standard error is a terminal, nor before the run has gone
 /// on for [`PROGRESS_AFTER`] (a quick run leaves no trace).
-struct Progress {
+struct Bar {
     /// The bar, hidden until shown.
     bar: ProgressBar,
     /// Set when the run is over: the thread that shows the bar stops waiting.
     done: std::sync::Arc<std::sync::atomic::AtomicBool>,
 }
 
-impl Progress {
+impl Bar {
     /// The progress of a run over `total` rays (`None`: not counted), described by `what`.
-    fn new(total: Option<usize>, what: &str) -> Progress {
+    fn new(total: Option<usize>, what: &str) -> Bar {
         let bar = match total {
             Some(n) => ProgressBar::with_draw_target(Some(n as u64), ProgressDrawTarget::hidden()),
             None => ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden()),
@@ -879,17 +882,17 @@ impl Progress {
                 }
             });
         }
-        Progress { bar, done }
+        Bar { bar, done }
     }
 
-    /// `n` more rays (or what the run counts) done.
-    fn inc(&self, n: usize) {
-        self.bar.inc(n as u64);
-    }
-
-    /// What else the run tells, after its count.
-    fn message(&self, text: String) {
-        self.bar.set_message(text);
+    /// A library run whose items (rays, triples, echoes) advance the bar.
+    fn run(&self) -> Run {
+        let shown = self.bar.clone();
+        Run::new().on_progress(move |p: eigenray::options::Progress| {
+            if p.items > 0 {
+                shown.inc(p.items);
+            }
+        })
     }
 
     /// The run is over: the bar, if shown, is cleared.

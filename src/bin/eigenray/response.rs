@@ -82,10 +82,14 @@ impl IrOutput {
         })
     }
 
-    /// Renders the responses of `echoes` and writes them to the file.
+    /// Renders the responses of `echoes` (a progress bar over them on a terminal) and writes
+    /// them to the file.
     pub(super) fn write(&self, echoes: &[Echo]) -> Result<(), Failure> {
         let r = &self.responses;
-        let data = r.try_render(echoes.iter().copied()).map_err(|_| {
+        let bar = super::Bar::new(Some(echoes.len()), "echoes rendered");
+        let data = r.render(echoes.iter().copied(), &bar.run());
+        bar.finish();
+        let data = data.map_err(|_| {
             Failure::Input(format!(
                 "impulse_response: {} numbers could not be allocated",
                 r.len()
@@ -256,6 +260,7 @@ impl Charts {
                 echoes.iter().copied(),
                 *frequency,
                 scene.sources().len(),
+                &eigenray::options::Run::new(),
                 &mut p,
             );
             let row = &p[self.source * receivers..(self.source + 1) * receivers];

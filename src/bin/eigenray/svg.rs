@@ -206,7 +206,8 @@ mod tests {
         let scene = Scene::from_json(json).expect("valid scene");
         let batch = Tracer::new(&scene)
             .expect("tracer")
-            .trace_batch(&BatchOptions::default());
+            .trace_batch(&BatchOptions::default(), &eigenray::options::Run::new())
+            .unwrap();
         scene_svg(&scene, RaySet::Batch(&batch), &[], "test", colouring)
     }
 
@@ -315,7 +316,8 @@ mod tests {
         let scene = Scene::from_spec(&eigenray::demo::air_water(20_000, 1)).unwrap();
         let batch = Tracer::new(&scene)
             .unwrap()
-            .trace_batch(&BatchOptions::default());
+            .trace_batch(&BatchOptions::default(), &eigenray::options::Run::new())
+            .unwrap();
         let svg = scene_svg(&scene, RaySet::Batch(&batch), &[], "demo", Colouring::Time);
         let (elements, texts) = parse(&svg);
         let drawn = elements.iter().filter(|(n, _)| n == "polyline").count() - 1;
@@ -525,7 +527,8 @@ mod tests {
         let scene = Scene::from_json(ROOM).unwrap();
         let batch = Tracer::new(&scene)
             .unwrap()
-            .trace_batch(&BatchOptions::default());
+            .trace_batch(&BatchOptions::default(), &eigenray::options::Run::new())
+            .unwrap();
         let arrivals = [
             search_arrival(
                 &scene,

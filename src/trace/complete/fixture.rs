@@ -51,6 +51,7 @@ impl Fixture {
             .collect();
         let media = self.scene.paths()[path].media.as_deref();
         f(SequenceSearch {
+            run: crate::control::Run::unbounded(),
             scene: &self.scene,
             classifier: &self.classifier,
             hierarchies: &hierarchies,

@@ -72,7 +72,7 @@ pub(crate) use hierarchy::Hierarchy;
 pub(crate) use listing::{finish, recycle, retain};
 pub use result::{Arrival, Kink, SearchOutcome, StationaryError};
 
-use crate::control::{self, Stop};
+use crate::control::{Progress, Run};
 use crate::geom::Point;
 use crate::problem::ProblemRef;
 use crate::scene::{MAX_STATIONARY_STEPS, Scene};
@@ -130,6 +130,8 @@ pub(crate) struct SequenceSearch<'a> {
     pub receiver: Point,
     /// What the search may do before it gives up (incomplete).
     pub budget: SearchBudget,
+    /// The run of the call the search is part of: its stop request, budget and progress.
+    pub run: &'a Run,
 }
 
 /// The search's scratch and settings for one triple.
@@ -161,20 +163,21 @@ struct Search<'a> {
     /// How many times the present solve moved a point off a vertex that a held point shares
     /// ([`move_off`](Search::move_off)).
     moved_off: usize,
-    /// The stop request of the job that runs the search ([`crate::control`]).
-    stop: Option<Stop>,
+    /// The run of the call the search is part of ([`crate::control`]).
+    run: &'a Run,
 }
 
 impl Search<'_> {
     /// Counts `work` and tells whether the search must end here: its budget of tuples (and
     /// solves) or of work is spent, or its job was asked to stop. The search is then not
-    /// complete. The one test of a search's limits.
+    /// complete. The one test of a search's limits, and of its run's
+    /// ([`Run::keep_going`]).
     fn over_budget(&mut self, work: usize) -> bool {
         self.stats.work += work;
         let spent = self.stats.tuples > self.budget.tuples
             || self.stats.solves > self.budget.tuples
             || self.stats.work > self.budget.work;
-        let over = spent || self.stop.as_ref().is_some_and(Stop::requested);
+        let over = spent || !self.run.keep_going(Progress::work(work as u64));
         if over {
             self.stats.complete = false;
         }
@@ -222,7 +225,7 @@ fn searching(input: SequenceSearch<'_>, f: impl FnOnce(&mut Search<'_>)) -> Sear
         pinned: 0,
         smoothed: false,
         moved_off: 0,
-        stop: control::current(),
+        run: input.run,
     };
     f(&mut search);
     let done = search.stats;

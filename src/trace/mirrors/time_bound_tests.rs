@@ -30,6 +30,7 @@ fn floor_tree(receivers: &[Point], max_time: f64) -> (MirrorStats, f64) {
         obstructed: false,
         max_beams: u64::MAX,
         max_work: u64::MAX,
+        max_depth: crate::scene::MAX_SEARCH_STEPS,
     };
     let margin = 4.0 * walls.bounds(&search, 1).delta;
     let stats = walls.arrivals(
