@@ -102,7 +102,8 @@ pub mod spec {
     pub use crate::scene::{
         AmplitudesSpec, AttenuationSpec, ImpulseResponseSpec, InterfaceSpec, MediumSpec, PathSpec,
         Polarization, ReceiverGridSpec, ReceiversSpec, ReflectionSpec, SceneSpec, SearchSpec,
-        SolverSpec, SourceModel, StationaryMode, StepSpec,
+        SolverSpec, SourceModel, StationaryMode, StepSpec, TransmissionLossMode,
+        TransmissionLossSpec,
     };
 }
 
