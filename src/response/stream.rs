@@ -86,21 +86,12 @@ pub fn echoes_of_scene_into(
     if scene.search().is_some() {
         let without = std::sync::atomic::AtomicU64::new(0);
         let report = tracer
-            .search_into(
-                run,
-                &|a: StreamedArrival| match a.amplitude.filter(|a| a.has_value()) {
-                    Some(amp) if a.status == Status::Converged => sink(Echo {
-                        source: a.source,
-                        receiver: a.receiver,
-                        time: a.time,
-                        amplitude: amp.value,
-                        order: a.steps,
-                    }),
-                    _ => {
-                        without.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    }
-                },
-            )
+            .search_into(run, &|a: StreamedArrival| match Echo::of_streamed(&a) {
+                Some(e) => sink(e),
+                None => {
+                    without.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                }
+            })
             .map_err(EchoError::Search)?;
         let without = without.into_inner();
         summed.without_amplitude += without;

@@ -58,6 +58,20 @@ pub struct SearchArrival {
     pub complete: bool,
 }
 
+impl SearchArrival {
+    /// The arrival as a streaming search hands it on (its points left out).
+    pub fn streamed(&self) -> StreamedArrival {
+        StreamedArrival {
+            source: self.source,
+            receiver: self.receiver,
+            steps: self.steps.len(),
+            status: self.arrival.status,
+            time: self.arrival.time,
+            amplitude: self.arrival.amplitude,
+        }
+    }
+}
+
 /// One arrival as a streaming search ([`Tracer::search_into`]) hands it on, the moment it
 /// is found: between which pair, when, how strongly. Its points are not kept.
 #[derive(Clone, Copy, Debug)]
