@@ -203,7 +203,7 @@ pub fn intensity_of_scene_into(
 /// use eigenray::spec::TransmissionLossMode;
 /// // Free field: 20 log10(r) dB at r = 10 and 100 from a point source.
 /// let scene = Scene::from_json(r#"{
-///     "media": { "w": { "speed": 1500 } },
+///     "media": { "w": { "speed": 1500 } }, "background": "w",
 ///     "sources": [[0, 0]], "receivers": [[10, 0], [0, 100]],
 ///     "search": { "max_steps": 0 },
 ///     "amplitudes": { "source": "point", "frequency": 100 }
