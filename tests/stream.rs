@@ -381,3 +381,50 @@ fn a_streamed_response_holds_no_arrival() {
     let sum: f64 = images.iter().map(|&(_, a)| a).sum();
     assert!((p[0] - want).norm() <= 1e-12 * sum);
 }
+
+/// The times of the arrivals `search_into` streams with `run`, sorted, and its report.
+fn streamed_times(tracer: &Tracer, run: &Run) -> (Vec<f64>, eigenray::search::StreamReport) {
+    let times = std::sync::Mutex::new(Vec::new());
+    let report = tracer
+        .search_into(run, &|a| times.lock().unwrap().push(a.time))
+        .unwrap();
+    let mut times = times.into_inner().unwrap();
+    times.sort_by(f64::total_cmp);
+    (times, report)
+}
+
+#[test]
+fn a_streamed_search_honours_its_run() {
+    let scene = room(0.1, json!([[4.5, 2.7], [3.8, 1.0]]), 0.08, 500.0);
+    let tracer = Tracer::new(&scene).unwrap();
+    let (all, report) = streamed_times(&tracer, &Run::new());
+    let mut listed: Vec<f64> = (tracer.search(&Run::new()).unwrap().arrivals.iter())
+        .map(|a| a.arrival.time)
+        .collect();
+    listed.sort_by(f64::total_cmp);
+    assert_eq!(all, listed);
+    assert_eq!(
+        (report.arrivals, report.incomplete_pairs),
+        (listed.len() as u64, 0)
+    );
+    // A stop requested before: nothing streamed, every pair short.
+    let stopped = Run::new();
+    stopped.request_stop();
+    let (none, report) = streamed_times(&tracer, &stopped);
+    assert!(none.is_empty());
+    assert_eq!(report.incomplete_pairs, 2);
+    // A budget: a part of the arrivals, each one of the unbounded call's, pairs short.
+    let (some, report) = streamed_times(&tracer, &Run::new().budget(40));
+    assert!(some.len() < all.len() && report.incomplete_pairs > 0);
+    assert!(some.iter().all(|t| all.contains(t)));
+    // `max_time`: exactly the unbounded arrivals up to that time.
+    let early = room(0.1, json!([[4.5, 2.7], [3.8, 1.0]]), 0.05, 500.0);
+    let (first, _) = streamed_times(&Tracer::new(&early).unwrap(), &Run::new());
+    let want: Vec<f64> = all.iter().copied().filter(|&t| t <= 0.05).collect();
+    assert_eq!(first, want);
+    // A response stopped before does not sum.
+    let mut p = [Complex64::new(0.0, 0.0); 2];
+    let summed = pressure_of_scene_into(&tracer, 500.0, &stopped, &mut p).unwrap();
+    assert_eq!(summed.echoes, 0);
+    assert_eq!(p, [Complex64::new(0.0, 0.0); 2]);
+}
