@@ -5,8 +5,8 @@
 use rayon::prelude::*;
 
 use crate::amplitude::Amplitude;
-use crate::control::{Progress, Run};
 use crate::geom::Point;
+use crate::options::{Progress, Run};
 use crate::scene::{MAX_STATIONARY_STEPS, Scene};
 pub use crate::trace::{Arrival, Kink, SearchOutcome, StationaryError, Threshold};
 use crate::trace::{RayRecord, Reason, Status, Tracer};
@@ -210,7 +210,7 @@ impl Tracer {
     ///
     /// # Errors
     /// [`StationaryError::TooManySteps`] for the first path of more than
-    /// [`MAX_STATIONARY_STEPS`](crate::limits::MAX_STATIONARY_STEPS) steps, before any search
+    /// [`MAX_STATIONARY_STEPS`] steps, before any search
     /// runs.
     pub fn trace_stationary(&self, run: &Run) -> Result<StationaryRays, StationaryError> {
         let scene = self.scene();

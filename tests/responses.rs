@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::process::Command;
 
 use eigenray::response::{ImpulseResponses, echoes_of_scene, pressure_into, transmission_loss};
-use eigenray::{Scene, Tracer, amplitudes::Complex64};
+use eigenray::{Scene, Tracer, amplitude::Complex64};
 
 const BIN: &str = env!("CARGO_BIN_EXE_eigenray");
 

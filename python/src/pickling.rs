@@ -5,7 +5,7 @@
 use std::sync::Mutex;
 
 use eigenray::Reason;
-use eigenray::amplitudes::NoAmplitude;
+use eigenray::amplitude::NoAmplitude;
 use eigenray::stationary::Threshold;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};

@@ -1,13 +1,13 @@
 //! `Tracer.impulse_response`, `Tracer.pressure` and `Tracer.transmission_loss`: what arrives
 //! at each receiver, from every echo of the scene, as numpy arrays.
 
-use eigenray::amplitudes::Complex64;
+use eigenray::amplitude::Complex64;
 use eigenray::options::Run;
 use eigenray::response::{
     Echo, ImpulseResponses, echoes_of_scene, pressure_into, transmission_loss,
 };
-use eigenray::scene_parts::ImpulseResponseOptions;
-use eigenray::spec::ImpulseResponseSpec;
+use eigenray::scene::ImpulseResponseOptions;
+use eigenray::scene::ImpulseResponseSpec;
 use eigenray::{Scene, Tracer};
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyArray2, PyArray3};

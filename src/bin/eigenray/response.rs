@@ -4,9 +4,10 @@ use std::fs;
 use std::io::{BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
 
-use eigenray::amplitudes::Complex64;
+use eigenray::Scene;
+use eigenray::amplitude::Complex64;
+use eigenray::output::write_f64_array;
 use eigenray::response::{Echo, ImpulseResponses, pressure_into, transmission_loss};
-use eigenray::{Scene, npy};
 
 use super::{Failure, available_memory, write_failure};
 
@@ -102,8 +103,7 @@ impl IrOutput {
         let written = match self.format {
             IrFormat::Npy => {
                 let shape = [r.sources(), r.receivers(), r.samples()];
-                npy::write_f64_array(&shape, &data, &mut out)
-                    .map_err(|e| write_failure(&self.path, &e))
+                write_f64_array(&shape, &data, &mut out).map_err(|e| write_failure(&self.path, &e))
             }
             IrFormat::Wav => write_wav(r, &data, &mut out)
                 .map_err(|e| Failure::Output(format!("{}: {e}", self.path.display()))),
