@@ -1087,7 +1087,7 @@ impl<'a> From<&'a Vec<SearchArrival>> for Document<'a> {
 ///   steps of an arrival, when more).
 ///
 /// ```
-/// use eigenray::{Format, Scene, Tracer, write};
+/// use eigenray::{Format, Scene, Tracer, options::Run, write};
 /// let scene = Scene::from_json(r#"{
 ///     "media": { "air": { "speed": 1.0 } },
 ///     "interfaces": { "valley": { "points": [[-3, 0], [0, -2], [3, 0]] } },
@@ -1095,7 +1095,7 @@ impl<'a> From<&'a Vec<SearchArrival>> for Document<'a> {
 ///     "paths": [{ "steps": [{ "reflect": "valley" }], "media": ["air", "air"] }],
 ///     "solver": { "stationary": "all" }
 /// }"#).unwrap();
-/// let rays = Tracer::new(&scene).unwrap().trace_stationary().unwrap();
+/// let rays = Tracer::new(&scene).unwrap().trace_stationary(&Run::new()).unwrap();
 /// let mut out = Vec::new();
 /// write(&scene, &rays, Format::Jsonl, &mut out).unwrap();
 /// let lines: Vec<serde_json::Value> = out
