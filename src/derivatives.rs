@@ -1339,7 +1339,7 @@ pub struct GradientRows<'a> {
     /// Status code of each ray (`n` entries): an index into `status_of_code`.
     pub statuses: &'a [u8],
     /// The status of each code (the `.npy` output's codes:
-    /// [`output::STATUS_CODES`](crate::output::STATUS_CODES)).
+    /// `output::STATUS_CODES`).
     pub status_of_code: &'a [Status],
     /// Points a row holds (`width − 1` legs).
     pub width: usize,

@@ -8,7 +8,7 @@ use crate::amplitude::Amplitude;
 use crate::geom::Point;
 use crate::options::{Progress, Run};
 use crate::scene::{MAX_STATIONARY_STEPS, Scene};
-pub use crate::trace::{Arrival, Kink, SearchOutcome, StationaryError, Threshold};
+use crate::trace::{Arrival, Kink, SearchOutcome, StationaryError, Threshold};
 use crate::trace::{RayRecord, Reason, Status, Tracer};
 
 /// Every stationary path of one (source, receiver, path) triple.
@@ -185,7 +185,7 @@ impl Tracer {
     /// searches under way end, not complete.
     ///
     /// ```
-    /// use eigenray::stationary::Kink;
+    /// use eigenray::trace::Kink;
     /// use eigenray::{Scene, Status, Tracer, options::Run};
     /// // A mirror bent into a valley: a specular point on each slope, and the bottom, where
     /// // the time has a maximum-type kink.

@@ -281,6 +281,27 @@ fn every_public_module_is_a_file() {
     );
 }
 
+/// One path per type: no module re-exports another module's items (`pub use crate::…`); only
+/// the crate root's vocabulary gives a type a second path.
+#[test]
+fn no_module_re_exports_another_modules_items() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut all = Vec::new();
+    files(&src, &mut all);
+    let mut found = Vec::new();
+    for path in all {
+        if path == src.join("lib.rs") || path.starts_with(src.join("bin")) {
+            continue;
+        }
+        for (i, line) in code(&path).lines().enumerate() {
+            if line.trim_start().starts_with("pub use crate::") {
+                found.push(format!("{}:{}", path.display(), i + 1));
+            }
+        }
+    }
+    assert!(found.is_empty(), "re-exports: {found:?}");
+}
+
 /// The longest a function in `src/` may be, from its `fn` line to its closing brace.
 const MAX_FUNCTION_LINES: usize = 150;
 

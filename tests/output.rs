@@ -4,7 +4,7 @@
 use eigenray::scene::{Step, StepKind};
 use eigenray::{
     Arrival, BatchOptions, Format, Point, Reason, Scene, SearchArrival, Status, Tracer,
-    output::write_names, stationary::Kink, write,
+    output::write_names, trace::Kink, write,
 };
 use serde_json::Value;
 

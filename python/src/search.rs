@@ -4,7 +4,7 @@
 
 use eigenray::options::Run;
 use eigenray::output::columns::{Entry, Schema};
-use eigenray::stationary::Kink;
+use eigenray::trace::Kink;
 use eigenray::{Reason, Scene, SearchArrival, Tracer, scene::StepKind};
 use numpy::IntoPyArray;
 use numpy::ndarray::{Array2, Array3};

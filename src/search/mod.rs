@@ -36,7 +36,7 @@ use std::fmt;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::options::Run;
-pub use crate::scene::SearchOptions;
+use crate::scene::SearchOptions;
 use crate::scene::{Step, StepKind};
 use crate::trace::{Arrival, Status, Tracer};
 

@@ -50,7 +50,7 @@ impl Tracer {
     /// [`complete`](SearchOutcome::complete).
     ///
     /// ```
-    /// use eigenray::stationary::Kink;
+    /// use eigenray::trace::Kink;
     /// use eigenray::{Point, Scene, Status, Tracer, options::Run};
     /// // A mirror bent into a valley, seen from above: a specular point on each slope, and
     /// // the bottom, where the time has a maximum-type kink.
