@@ -143,7 +143,7 @@ fn batch(c: &mut Criterion) {
 #[cfg(feature = "argmin")]
 fn versus_argmin(c: &mut Criterion) {
     use eigenray::argmin_bridge::{solve_bfgs, solve_gauss_newton};
-    use eigenray::{InitialGuess, SolverOptions, path_problem::PathProblem};
+    use eigenray::{InitialGuess, SolverOptions, problem::PathProblem};
 
     const TOL: f64 = 1e-12;
     for (name, spec) in [

@@ -14,7 +14,7 @@
 use std::hint::black_box;
 use std::time::Instant;
 
-use eigenray::spec::{AmplitudesSpec, SourceModel};
+use eigenray::scene::{AmplitudesSpec, SourceModel};
 use eigenray::{Scene, SceneSpec, Tracer, Workspace, demo};
 
 /// The cases: name and scene (without amplitudes).

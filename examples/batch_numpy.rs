@@ -9,7 +9,7 @@ use std::fs::File;
 use std::io::BufWriter;
 use std::path::PathBuf;
 
-use eigenray::{BatchOptions, Format, Scene, Tracer, npy::write_names, write};
+use eigenray::{BatchOptions, Format, Scene, Tracer, output::write_names, write};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dir = std::env::args_os()

@@ -33,7 +33,7 @@ mod report {
     use eigenray::argmin_bridge::{solve_bfgs, solve_gauss_newton, solve_lbfgs};
     use eigenray::{
         InitialGuess, Point, RayRecord, Scene, SolverOptions, Tracer, Workspace, demo,
-        path_problem::PathProblem,
+        problem::PathProblem,
     };
 
     use super::plot::{Marker, Plot, Scale, Series};

@@ -107,7 +107,7 @@ struct SegRow {
 /// (see `Tracer`): the crossings of the line through `target` perpendicular to
 /// `source → receiver`, nearest to `target` (the same query through the public API).
 fn perpendicular_crossing(
-    line: &eigenray::geometry::Polyline,
+    line: &eigenray::polyline::Polyline,
     source: eigenray::Point,
     receiver: eigenray::Point,
     target: eigenray::Point,

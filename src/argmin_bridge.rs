@@ -65,7 +65,7 @@ use crate::problem::PathProblem;
 /// use argmin::core::{CostFunction, Executor, Gradient, State};
 /// use argmin::solver::gaussnewton::GaussNewton;
 /// use eigenray::argmin_bridge::ArgminPath;
-/// use eigenray::path_problem::PathProblem;
+/// use eigenray::problem::PathProblem;
 /// use eigenray::Scene;
 /// use nalgebra::DVector;
 ///

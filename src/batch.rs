@@ -4,8 +4,8 @@ use rayon::iter::plumbing::{Consumer, Producer, ProducerCallback, UnindexedConsu
 use rayon::prelude::*;
 
 use crate::amplitude::Amplitude;
-use crate::control::{Progress, Run};
 use crate::geom::Point;
+use crate::options::{Progress, Run};
 use crate::scene::{RayTriple, SceneError};
 use crate::trace::{
     ChainLink, ChainRays, Ray, RayRecord, Reason, Status, Tracer, WarmStarts, Workspace,
@@ -14,7 +14,7 @@ use crate::trace::{
 mod amplitudes;
 
 /// How to run a batch (what stops it and who hears of its progress: its
-/// [`Run`](crate::options::Run)).
+/// [`Run`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BatchOptions {
     /// Solve receivers in a spatial order (a Morton curve over their positions) and start each

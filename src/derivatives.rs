@@ -1159,7 +1159,7 @@ impl Tracer {
 /// A ray without a time, or not asked for, has NaN gradients and no vertices.
 ///
 /// ```
-/// use eigenray::gradients::BatchGradients;
+/// use eigenray::derivatives::BatchGradients;
 /// use eigenray::{BatchOptions, Scene, Tracer};
 /// let scene = Scene::from_spec(&eigenray::demo::air_water(100, 7)).unwrap();
 /// let tracer = Tracer::new(&scene).unwrap();
@@ -1339,7 +1339,7 @@ pub struct GradientRows<'a> {
     /// Status code of each ray (`n` entries): an index into `status_of_code`.
     pub statuses: &'a [u8],
     /// The status of each code (the `.npy` output's codes:
-    /// [`npy::STATUS_CODES`](crate::npy::STATUS_CODES)).
+    /// `output::STATUS_CODES`).
     pub status_of_code: &'a [Status],
     /// Points a row holds (`width − 1` legs).
     pub width: usize,

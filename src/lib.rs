@@ -32,7 +32,7 @@
 //! 6. **Derivatives**: [`Tracer::gradient`] gives the derivatives of a solved ray's time with
 //!    respect to its source, receiver, each medium's slowness and the vertices it touches
 //!    ([`Gradient`]); [`PointSensitivities`] how its points move;
-//!    [`BatchGradients`](gradients::BatchGradients) both for a whole batch.
+//!    [`BatchGradients`](derivatives::BatchGradients) both for a whole batch.
 //! 7. **Amplitudes**: a scene with `"amplitudes"` ([`SceneBuilder::amplitudes`]) gives every
 //!    timed ray and arrival its [`Amplitude`] (spreading, reflection and transmission
 //!    coefficients, attenuation); [`Tracer::amplitude_of`] computes one for any solved path.
@@ -59,30 +59,32 @@
 //!
 //! The modules and how they depend on each other: `ARCHITECTURE.md`.
 
-mod amplitude;
-mod batch;
+// Each public module is the file of its name (`src/NAME.rs` or `src/NAME/mod.rs`): the one
+// path of what it defines. `ARCHITECTURE.md` lists them in the order they depend on each other.
+pub mod amplitude;
+pub mod batch;
 mod bvh;
-mod control;
 pub mod demo;
-mod derivatives;
-mod geom;
+pub mod derivatives;
+pub mod geom;
 mod leg;
-mod output;
-mod polyline;
-mod problem;
-mod regions;
+pub mod options;
+pub mod output;
+pub mod polyline;
+pub mod problem;
+pub mod regions;
 pub mod response;
-mod scene;
+pub mod scene;
 pub mod search;
 mod solver;
 pub mod stationary;
-mod trace;
+pub mod trace;
 
 #[cfg(feature = "argmin")]
 pub mod argmin_bridge;
 
-// The vocabulary: what a user of the README names. Everything else that is public lives in a
-// module named for its concept, below. `tests/architecture.rs` keeps this list at 30 or fewer.
+// The vocabulary: what a user of the README names, also reachable at its module's path.
+// `tests/architecture.rs` keeps this list at 30 or fewer.
 pub use amplitude::Amplitude;
 pub use batch::{Batch, BatchOptions};
 pub use derivatives::{Gradient, PointSensitivities};
@@ -95,108 +97,6 @@ pub use scene::{
 pub use search::SearchArrival;
 pub use stationary::StationaryRays;
 pub use trace::{Arrival, InitialGuess, Ray, RayRecord, Reason, Status, Tracer, Workspace};
-
-/// The scene document's parts as plain data ([`SceneSpec`] and the specs of its keys), for
-/// scenes written in code or read with serde.
-pub mod spec {
-    pub use crate::scene::{
-        AmplitudesSpec, AttenuationSpec, ImpulseResponseSpec, InterfaceSpec, MediumSpec, PathSpec,
-        Polarization, ReceiverGridSpec, ReceiversSpec, ReflectionSpec, SceneSpec, SearchSpec,
-        SolverSpec, SourceModel, StationaryMode, StepSpec, TransmissionLossMode,
-        TransmissionLossSpec,
-    };
-}
-
-/// The parts of a validated [`Scene`], as its accessors give them: media, interfaces, paths
-/// and their steps, segments, the search's options, and the sizes of a batch.
-pub mod scene_parts {
-    pub use crate::scene::{
-        Amplitudes, BatchSize, ImpulseResponseOptions, Interface, Medium, Path, RayTriple,
-        Reflection, SearchOptions, SegmentRef, Step, StepKind, Waves,
-    };
-}
-
-/// Amplitudes ([`Amplitude`]): why a timed ray may have none, and the complex numbers they
-/// are written in.
-pub mod amplitudes {
-    pub use crate::amplitude::{Complex64, NoAmplitude};
-}
-
-/// What a [`Tracer`] can be told besides its scene: the solver's options, the start of each
-/// ray, which kernels it may use (for comparing the kernels with the general solve), and the
-/// control of each long call ([`Run`](options::Run): its stop request, budget, limits and
-/// progress).
-pub mod options {
-    pub use crate::control::{Limits, Progress, Run};
-    pub use crate::scene::SolverOptions;
-    pub use crate::trace::{InitialGuess, Kernels};
-}
-
-/// Writing a batch into arrays of your own ([`Tracer::trace_batch_to`]): the sink each worker
-/// writes a ray into right after solving it, where a ray goes, and the scratch a sink reuses.
-pub mod sink {
-    pub use crate::batch::{BatchRay, BatchRays, BatchScratch, BatchSink, RaySlot};
-}
-
-/// Derivatives of a ray's time ([`Gradient`]) and of its points ([`PointSensitivities`]), per
-/// ray and for a whole batch ([`BatchGradients`](gradients::BatchGradients)).
-pub mod gradients {
-    pub use crate::derivatives::{
-        Axis, BatchGradientArrays, BatchGradients, DerivativeError, Gradient, GradientArraysMut,
-        GradientRows, Parameter, PointSensitivities, VertexGradient,
-    };
-}
-
-/// The path problem of one ray on its own: travel time, residual and tridiagonal Hessian at
-/// any parameters ([`PathProblem`](path_problem::PathProblem)), for cross-checks with other
-/// solvers.
-pub mod path_problem {
-    pub use crate::problem::{PathProblem, Tridiagonal};
-}
-
-/// The limits a scene is validated against, and the solver's defaults.
-pub mod limits {
-    pub use crate::control::{
-        FALLBACK_MAX_WORK, MAX_INPUT_BYTES, MAX_SEARCH_ARRIVALS, MAX_SEARCH_BEAMS,
-        MAX_SEARCH_MEMORY, MAX_SEARCH_STEPS, MAX_WALK_TUPLES, available_memory, fits_in_memory,
-        read_limited,
-    };
-    pub use crate::scene::{
-        DEFAULT_MAX_ITERATIONS, DEFAULT_MAX_WORK, DEFAULT_TOLERANCE, MAX_ATTENUATION,
-        MAX_COORDINATE, MAX_ITERATIONS_LIMIT, MAX_SPEED_RATIO, MAX_STATIONARY_STEPS,
-        MAX_WORK_LIMIT, MIN_COORDINATE, REGION_RANGE_BITS,
-    };
-    pub use crate::scene::{DEFAULT_TAPS, MAX_RATE, MAX_SAMPLES, MAX_TAPS};
-}
-
-/// The geometry beneath a scene: polylines and their queries, boxes, and the robust
-/// orientation and segment-contact tests the validation uses.
-pub mod geometry {
-    pub use crate::geom::{Aabb, Segment, SegmentContact, orient, segment_contact};
-    pub use crate::polyline::{Nearest, Polyline, PolylineError};
-}
-
-/// Region lookup: the regions the interfaces cut the plane into, and the medium of each
-/// ([`Tracer::regions`]).
-pub mod lookup {
-    pub use crate::regions::{LocateHint, Regions, Sides};
-}
-
-/// The column schema of the quantities that follow a ray's or an arrival's own fields (the
-/// gradient, the amplitude): what the writers and the Python package iterate over.
-pub mod columns {
-    pub use crate::output::columns::{Cell, Column, ColumnType, Entry, Schema, Why};
-}
-
-/// The `.npy` format's fixed codes (the status and kink codes, the index marking a leg medium
-/// that was not found, the padding of an arrival's steps) and the name tables that give its
-/// indices their names ([`write_names`](npy::write_names), the `--names` sidecar).
-pub mod npy {
-    pub use crate::output::{
-        AMPLITUDE_NOT_COMPUTED, KINK_CODES, NO_INTERFACE, NO_MEDIUM, NO_STEP_KIND, STATUS_CODES,
-        write_f64_array, write_names,
-    };
-}
 
 /// The README's examples, compiled and run as doctests.
 #[cfg(doctest)]

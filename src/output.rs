@@ -12,7 +12,7 @@ use std::io::{self, Write};
 
 use rayon::prelude::*;
 
-pub(crate) mod columns;
+pub mod columns;
 
 use self::columns::{Context, Entry, Schema};
 use crate::batch::Batch;
@@ -78,7 +78,7 @@ pub enum Format {
     /// fields follow (after the gradient's): `amplitude` and `coefficient` (`<f8`, shape
     /// `(2,)`), `spreading` and `attenuation_db` (`<f8`, NaN where there is none) and
     /// `amplitude_reason` (`u1`: 0 with a value or without a time, else
-    /// [`NoAmplitude::code`](crate::amplitudes::NoAmplitude::code), or
+    /// [`NoAmplitude::code`](crate::amplitude::NoAmplitude::code), or
     /// [`AMPLITUDE_NOT_COMPUTED`]).
     Npy,
 }
@@ -182,7 +182,7 @@ fn npy_header_with(dict: &str) -> Vec<u8> {
 ///
 /// ```
 /// let mut out = Vec::new();
-/// eigenray::npy::write_f64_array(&[2, 3], &[0.0, 1.0, 2.0, 3.0, 4.0, 5.0], &mut out).unwrap();
+/// eigenray::output::write_f64_array(&[2, 3], &[0.0, 1.0, 2.0, 3.0, 4.0, 5.0], &mut out).unwrap();
 /// assert_eq!(&out[..6], b"\x93NUMPY");
 /// assert_eq!(out.len() % 16, 0); // a 64-byte header (its length a multiple of 64), 48 bytes
 /// ```
@@ -1087,7 +1087,7 @@ impl<'a> From<&'a Vec<SearchArrival>> for Document<'a> {
 ///   steps of an arrival, when more).
 ///
 /// ```
-/// use eigenray::{Format, Scene, Tracer, write};
+/// use eigenray::{Format, Scene, Tracer, options::Run, write};
 /// let scene = Scene::from_json(r#"{
 ///     "media": { "air": { "speed": 1.0 } },
 ///     "interfaces": { "valley": { "points": [[-3, 0], [0, -2], [3, 0]] } },
@@ -1095,7 +1095,7 @@ impl<'a> From<&'a Vec<SearchArrival>> for Document<'a> {
 ///     "paths": [{ "steps": [{ "reflect": "valley" }], "media": ["air", "air"] }],
 ///     "solver": { "stationary": "all" }
 /// }"#).unwrap();
-/// let rays = Tracer::new(&scene).unwrap().trace_stationary().unwrap();
+/// let rays = Tracer::new(&scene).unwrap().trace_stationary(&Run::new()).unwrap();
 /// let mut out = Vec::new();
 /// write(&scene, &rays, Format::Jsonl, &mut out).unwrap();
 /// let lines: Vec<serde_json::Value> = out
@@ -1529,7 +1529,7 @@ fn write_arrivals<W: Write>(
 /// written for a leg whose medium is not known. `interfaces` lists the interface names in
 /// the order of [`Scene::interfaces`]. A scene that asks for amplitudes adds
 /// `amplitude_reasons`, the names of the `amplitude_reason` codes (`null` for 0, a value or
-/// no time; see [`NoAmplitude::CODES`](crate::amplitudes::NoAmplitude::CODES)), and
+/// no time; see [`NoAmplitude::CODES`](crate::amplitude::NoAmplitude::CODES)), and
 /// `amplitude_not_computed`, the code of a timed ray traced without them.
 ///
 /// # Errors

@@ -71,7 +71,7 @@ pub struct Nearest {
 ///
 /// ```
 /// use eigenray::Point;
-/// use eigenray::geometry::Polyline;
+/// use eigenray::polyline::Polyline;
 /// let p = Polyline::new(vec![Point::new(0.0, 0.0), Point::new(3.0, 0.0), Point::new(3.0, 4.0)], false).unwrap();
 /// assert_eq!(p.length(), 7.0);
 /// assert_eq!(p.segment_at(4.0), 1);

@@ -11,10 +11,10 @@
 //! ```
 //!
 //! (0-based in the code: point `i` sits between leg `i` and leg `i + 1`.) Every term is a
-//! leg's, through the leg model (`leg.rs`): `T` the sum of [`Leg::time`], `rᵢ` the arriving
-//! minus the departing slowness vector ([`Leg::arrival`], [`Leg::departure`]) along `tᵢ`, and
-//! the Hessian's entries the legs' blocks ([`Leg::end_block`], [`Leg::start_block`],
-//! [`Leg::coupling`]); the formulas above are the uniform medium's. Each leg adds the
+//! leg's, through the leg model (`leg.rs`): `T` the sum of `Leg::time`, `rᵢ` the arriving
+//! minus the departing slowness vector (`Leg::arrival`, `Leg::departure`) along `tᵢ`, and
+//! the Hessian's entries the legs' blocks (`Leg::end_block`, `Leg::start_block`,
+//! `Leg::coupling`); the formulas above are the uniform medium's. Each leg adds the
 //! rank-one matrix `(w/ℓ) g gᵀ` with `g = (−u × tᵢ, u × tᵢ₊₁)`, so on fixed segments `T` is
 //! convex and `H` positive semi-definite. The bracketed curvature term is zero on a straight
 //! segment; the solver adds an estimate of it only while points travel across the vertices
@@ -640,7 +640,7 @@ pub(crate) fn min_num(a: f64, b: f64) -> f64 {
 /// other solvers (the argmin bridge).
 ///
 /// ```
-/// use eigenray::path_problem::PathProblem;
+/// use eigenray::problem::PathProblem;
 /// use eigenray::Scene;
 /// let scene = Scene::from_json(r#"{
 ///     "media": { "a": { "speed": 1.0 }, "b": { "speed": 0.5 } },

@@ -43,7 +43,7 @@ pub const MAX_ITERATIONS_LIMIT: usize = 100_000;
 pub const DEFAULT_MAX_WORK: u64 = 1 << 25;
 /// Largest `solver.max_work` accepted: 2^40 units, about ten hours of one core per search.
 pub const MAX_WORK_LIMIT: u64 = 1 << 40;
-pub(crate) use crate::control::MAX_SEARCH_STEPS;
+pub(crate) use crate::options::MAX_SEARCH_STEPS;
 
 /// An invalid scene: the key that holds the first problem, and what is wrong with it.
 ///
@@ -466,7 +466,7 @@ pub struct SolverOptions {
     /// ([`Tracer::stationary_paths`](crate::Tracer::stationary_paths)), of each source–receiver
     /// pair's over all its sequences in a `search`, and of the default mode's search of a ray
     /// whose start leads to no path (there at most
-    /// [`FALLBACK_MAX_WORK`](crate::limits::FALLBACK_MAX_WORK)). A search that spends it
+    /// [`FALLBACK_MAX_WORK`](crate::options::FALLBACK_MAX_WORK)). A search that spends it
     /// stops and says so (`complete: false`, or `not_converged` with the reason
     /// `search_limit`). Units: points moved by Newton steps or weighed in bounds (about 35 ns
     /// each); default [`DEFAULT_MAX_WORK`], at most [`MAX_WORK_LIMIT`].

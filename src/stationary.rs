@@ -5,10 +5,10 @@
 use rayon::prelude::*;
 
 use crate::amplitude::Amplitude;
-use crate::control::{Progress, Run};
 use crate::geom::Point;
+use crate::options::{Progress, Run};
 use crate::scene::{MAX_STATIONARY_STEPS, Scene};
-pub use crate::trace::{Arrival, Kink, SearchOutcome, StationaryError, Threshold};
+use crate::trace::{Arrival, Kink, SearchOutcome, StationaryError, Threshold};
 use crate::trace::{RayRecord, Reason, Status, Tracer};
 
 /// Every stationary path of one (source, receiver, path) triple.
@@ -185,7 +185,7 @@ impl Tracer {
     /// searches under way end, not complete.
     ///
     /// ```
-    /// use eigenray::stationary::Kink;
+    /// use eigenray::trace::Kink;
     /// use eigenray::{Scene, Status, Tracer, options::Run};
     /// // A mirror bent into a valley: a specular point on each slope, and the bottom, where
     /// // the time has a maximum-type kink.
@@ -210,7 +210,7 @@ impl Tracer {
     ///
     /// # Errors
     /// [`StationaryError::TooManySteps`] for the first path of more than
-    /// [`MAX_STATIONARY_STEPS`](crate::limits::MAX_STATIONARY_STEPS) steps, before any search
+    /// [`MAX_STATIONARY_STEPS`] steps, before any search
     /// runs.
     pub fn trace_stationary(&self, run: &Run) -> Result<StationaryRays, StationaryError> {
         let scene = self.scene();

@@ -165,7 +165,7 @@ fn amplitude_allocations(scene: &Scene) -> u64 {
 
 #[test]
 fn amplitudes_allocate_nothing() {
-    let point = eigenray::spec::AmplitudesSpec::new(eigenray::spec::SourceModel::Point);
+    let point = eigenray::scene::AmplitudesSpec::new(eigenray::scene::SourceModel::Point);
     for mut spec in [
         demo::air_water(200, 3),
         demo::layer_stack(10, 50),

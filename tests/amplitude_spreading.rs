@@ -7,9 +7,9 @@
 
 use std::f64::consts::PI;
 
-use eigenray::amplitudes::{Complex64, NoAmplitude};
-use eigenray::scene_parts::{Step, StepKind};
-use eigenray::spec::{AmplitudesSpec, SourceModel};
+use eigenray::amplitude::{Complex64, NoAmplitude};
+use eigenray::scene::{AmplitudesSpec, SourceModel};
+use eigenray::scene::{Step, StepKind};
 use eigenray::{Point, Scene, SceneSpec, Status, Tracer, Vec2, Workspace};
 
 fn unit(v: Vec2) -> Vec2 {

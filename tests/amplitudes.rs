@@ -7,7 +7,7 @@
 
 use std::f64::consts::PI;
 
-use eigenray::amplitudes::{Complex64, NoAmplitude};
+use eigenray::amplitude::{Complex64, NoAmplitude};
 use eigenray::{Amplitude, BatchOptions, Point, Scene, Status, Tracer, Workspace};
 
 /// `|a − b| / |b|`.
@@ -587,8 +587,8 @@ fn paths_without_a_ray_theory_amplitude_say_why() {
 #[test]
 fn every_way_of_tracing_gives_the_same_amplitudes() {
     let mut spec = eigenray::demo::dipping_stack(6, 60);
-    spec.amplitudes = Some(eigenray::spec::AmplitudesSpec::new(
-        eigenray::spec::SourceModel::Point,
+    spec.amplitudes = Some(eigenray::scene::AmplitudesSpec::new(
+        eigenray::scene::SourceModel::Point,
     ));
     let s = Scene::from_spec(&spec).unwrap();
     let tracer = Tracer::new(&s).unwrap();
@@ -783,7 +783,7 @@ fn amplitude_keys_are_validated_with_their_keys() {
 
 #[test]
 fn the_builder_writes_the_amplitude_keys() {
-    use eigenray::spec::{AmplitudesSpec, Polarization, ReflectionSpec, SourceModel};
+    use eigenray::scene::{AmplitudesSpec, Polarization, ReflectionSpec, SourceModel};
     use eigenray::{InterfaceSpec, MediumSpec, PathSpec, StepSpec};
     let built = Scene::builder()
         .medium(
@@ -819,13 +819,10 @@ fn the_builder_writes_the_amplitude_keys() {
     assert_eq!(text(built.spec()), text(&read));
     let s = built.build().unwrap();
     let a = s.amplitudes().unwrap();
-    assert_eq!(
-        a.reflection[0],
-        eigenray::scene_parts::Reflection::Fixed(-1.0)
-    );
+    assert_eq!(a.reflection[0], eigenray::scene::Reflection::Fixed(-1.0));
     assert_eq!(
         a.reflection[1],
-        eigenray::scene_parts::Reflection::Fixed((1.0f64 - 0.3).sqrt())
+        eigenray::scene::Reflection::Fixed((1.0f64 - 0.3).sqrt())
     );
     let ray = &Tracer::new(&s).unwrap().trace_all()[0];
     assert!(amplitude(ray).coefficient.re < 0.0);
@@ -972,7 +969,7 @@ fn every_format_writes_the_amplitudes() {
     }
     // The names table lists the reasons' codes.
     let mut names = Vec::new();
-    eigenray::npy::write_names(&s, &mut names).unwrap();
+    eigenray::output::write_names(&s, &mut names).unwrap();
     let names: serde_json::Value = serde_json::from_slice(&names).unwrap();
     assert!(names["amplitude_reasons"][0].is_null());
     assert_eq!(names["amplitude_reasons"][1], "vertex");

@@ -6,7 +6,7 @@ use std::path::Path;
 
 /// The modules in order: each may use only those before it.
 const ORDER: &[&str] = &[
-    "control",
+    "options",
     "geom",
     "bvh",
     "polyline",
@@ -241,6 +241,65 @@ fn the_crate_root_holds_at_most_thirty_names() {
     // The counter itself: grouped and single `pub use` lines, and items defined at the root.
     let sample = "pub use a::{B, C};\npub use d::E;\npub fn f() {}\npub mod m { pub use x::Y; }";
     assert_eq!(root_names(sample), ["B", "C", "E", "f"]);
+}
+
+/// The modules `lib` declares public, each as (name, whether its body is inline `{ … }`).
+fn public_modules(lib: &str) -> Vec<(String, bool)> {
+    lib.lines()
+        .filter_map(|l| l.trim_start().strip_prefix("pub mod "))
+        .map(|rest| {
+            let name: String = rest
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect();
+            (name, !rest.trim_end().ends_with(';'))
+        })
+        .collect()
+}
+
+/// Every public module is a file: `eigenray::NAME::Item` is found in `src/NAME.rs` or
+/// `src/NAME/mod.rs`, never in a module written inline in `lib.rs` to relabel other modules'
+/// items.
+#[test]
+fn every_public_module_is_a_file() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let lib = std::fs::read_to_string(root.join("lib.rs")).unwrap();
+    let modules = public_modules(&lib);
+    assert!(modules.iter().any(|(m, _)| m == "scene") && modules.len() >= 10);
+    for (name, inline) in &modules {
+        assert!(!inline, "`pub mod {name}` is written inline in lib.rs");
+        assert!(
+            root.join(format!("{name}.rs")).is_file() || root.join(name).join("mod.rs").is_file(),
+            "`pub mod {name}` has no file"
+        );
+    }
+    // The reader itself.
+    let sample = "pub mod a;\n    pub mod b {\n    pub use x::Y;\n}\nmod c;";
+    assert_eq!(
+        public_modules(sample),
+        [("a".to_string(), false), ("b".to_string(), true)]
+    );
+}
+
+/// One path per type: no module re-exports another module's items (`pub use crate::…`); only
+/// the crate root's vocabulary gives a type a second path.
+#[test]
+fn no_module_re_exports_another_modules_items() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut all = Vec::new();
+    files(&src, &mut all);
+    let mut found = Vec::new();
+    for path in all {
+        if path == src.join("lib.rs") || path.starts_with(src.join("bin")) {
+            continue;
+        }
+        for (i, line) in code(&path).lines().enumerate() {
+            if line.trim_start().starts_with("pub use crate::") {
+                found.push(format!("{}:{}", path.display(), i + 1));
+            }
+        }
+    }
+    assert!(found.is_empty(), "re-exports: {found:?}");
 }
 
 /// The longest a function in `src/` may be, from its `fn` line to its closing brace.

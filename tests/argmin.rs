@@ -6,9 +6,7 @@ use argmin::core::{CostFunction, Gradient, Hessian, Jacobian, Operator};
 use eigenray::argmin_bridge::{
     ArgminOutcome, ArgminPath, solve_bfgs, solve_gauss_newton, solve_lbfgs, solve_newton,
 };
-use eigenray::{
-    Point, Ray, Scene, SolverOptions, Status, Tracer, Workspace, path_problem::PathProblem,
-};
+use eigenray::{Point, Ray, Scene, SolverOptions, Status, Tracer, Workspace, problem::PathProblem};
 use nalgebra::DVector;
 
 /// Relative residual tolerance given to every argmin solver (eigenray's default).

@@ -6,7 +6,7 @@
 
 use std::f64::consts::PI;
 
-use eigenray::amplitudes::Complex64;
+use eigenray::amplitude::Complex64;
 use eigenray::{Amplitude, Point, Scene, Status, Tracer};
 
 fn scene(json: &str) -> Scene {

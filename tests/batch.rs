@@ -1,7 +1,7 @@
 //! Batches: the same rays as one-by-one solving, in ray order, and warm starts that save
 //! iterations.
 
-use eigenray::scene_parts::RayTriple;
+use eigenray::scene::RayTriple;
 use eigenray::{BatchOptions, Scene, Status, Tracer, Workspace, demo};
 
 #[path = "support/rng.rs"]
@@ -515,7 +515,7 @@ fn the_walk_over_a_batch_gives_each_rays_parts() {
     }
 }
 
-/// Each ray as a [`eigenray::sink::BatchSink`] receives it: indices, record, points (with a time)
+/// Each ray as a [`eigenray::batch::BatchSink`] receives it: indices, record, points (with a time)
 /// and leg media.
 type Written = (
     [usize; 3],
@@ -530,7 +530,7 @@ struct Keep<'a> {
     rays: &'a mut [(usize, Option<Written>)],
 }
 
-impl eigenray::sink::BatchSink for Keep<'_> {
+impl eigenray::batch::BatchSink for Keep<'_> {
     fn blocks(&self) -> usize {
         self.rays.len() / self.paths
     }
@@ -543,7 +543,7 @@ impl eigenray::sink::BatchSink for Keep<'_> {
 
     fn write(
         &mut self,
-        at: eigenray::sink::RaySlot,
+        at: eigenray::batch::RaySlot,
         record: &eigenray::RayRecord,
         points: &[eigenray::Point],
         media: &[usize],
@@ -585,7 +585,7 @@ fn a_sink_gets_the_rays_of_the_batch_bit_for_bit() {
         scene(&beyond),
         bench("room2d"),
     ];
-    let mut scratch = eigenray::sink::BatchScratch::default();
+    let mut scratch = eigenray::batch::BatchScratch::default();
     for (k, sc) in scenes.iter().enumerate() {
         let tracer = Tracer::new(sc).expect("tracer");
         for (warm_start, chunk) in [(true, 256), (true, 37), (false, 256)] {
@@ -642,7 +642,7 @@ fn a_sink_holds_every_ray_of_the_scene() {
     spec.paths.clear();
     let sc = scene(&spec);
     let tracer = Tracer::new(&sc).expect("tracer");
-    let mut scratch = eigenray::sink::BatchScratch::default();
+    let mut scratch = eigenray::batch::BatchScratch::default();
     let sink = Keep {
         paths: 1,
         rays: &mut [],

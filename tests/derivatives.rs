@@ -8,7 +8,7 @@
 
 use eigenray::{
     BatchOptions, Gradient, Point, PointSensitivities, Scene, Status, Tracer, Vec2, Workspace,
-    gradients::{Axis, BatchGradients, Parameter},
+    derivatives::{Axis, BatchGradients, Parameter},
 };
 use serde_json::{Value, json};
 
@@ -504,11 +504,11 @@ fn bad_inputs_are_errors() {
     assert_eq!(rec.status, Status::NoPath);
     assert_eq!(
         tracer.gradient(0, &ws).unwrap_err(),
-        eigenray::gradients::DerivativeError::NoTime
+        eigenray::derivatives::DerivativeError::NoTime
     );
     assert!(matches!(
         tracer.gradient(3, &ws).unwrap_err(),
-        eigenray::gradients::DerivativeError::UnknownPath { path: 3 }
+        eigenray::derivatives::DerivativeError::UnknownPath { path: 3 }
     ));
     let off = [
         Point::new(0.0, 1.0),
@@ -518,7 +518,7 @@ fn bad_inputs_are_errors() {
     let steps = &scene.paths()[0].steps;
     assert_eq!(
         Gradient::of_points(&scene, steps, &off, &[0, 0]).unwrap_err(),
-        eigenray::gradients::DerivativeError::OffInterface { step: 0 }
+        eigenray::derivatives::DerivativeError::OffInterface { step: 0 }
     );
     let on = [
         Point::new(0.0, 1.0),
@@ -527,11 +527,11 @@ fn bad_inputs_are_errors() {
     ];
     assert_eq!(
         Gradient::of_points(&scene, steps, &on, &[0]).unwrap_err(),
-        eigenray::gradients::DerivativeError::Media
+        eigenray::derivatives::DerivativeError::Media
     );
     assert_eq!(
         Gradient::of_points(&scene, steps, &on[..2], &[0, 0]).unwrap_err(),
-        eigenray::gradients::DerivativeError::PointCount {
+        eigenray::derivatives::DerivativeError::PointCount {
             points: 2,
             expected: 3
         }
@@ -920,11 +920,11 @@ enum Place {
     Held { vertex: usize },
 }
 
-fn place_of(line: &eigenray::geometry::Polyline, p: Point) -> Place {
+fn place_of(line: &eigenray::polyline::Polyline, p: Point) -> Place {
     let v = line.vertices();
     let mut best = (f64::INFINITY, Place::Held { vertex: 0 });
     for j in 0..line.num_segments() {
-        let eigenray::geometry::Segment { start: a, end: b } = line.segment(j);
+        let eigenray::geom::Segment { start: a, end: b } = line.segment(j);
         let e = b - a;
         let t = ((p - a).dot(e) / e.dot(e)).clamp(0.0, 1.0);
         let q = a + e * t;

@@ -5,7 +5,7 @@
 //! bounce, and the held path against its time through the vertex.
 
 use eigenray::options::Run;
-use eigenray::{Point, Scene, Status, Tracer, amplitudes::NoAmplitude};
+use eigenray::{Point, Scene, Status, Tracer, amplitude::NoAmplitude};
 use serde_json::json;
 
 /// Sound speed of the water.

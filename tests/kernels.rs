@@ -4,8 +4,7 @@
 //! kernel ([`Kernels::All`]) gives the same statuses and times within 1e-12.
 
 use eigenray::{
-    BatchOptions, InitialGuess, Ray, Reason, Scene, Status, Tracer, Workspace, demo,
-    options::Kernels,
+    BatchOptions, InitialGuess, Ray, Reason, Scene, Status, Tracer, Workspace, demo, trace::Kernels,
 };
 use serde_json::json;
 

@@ -1,10 +1,10 @@
 //! The output formats read back: every field of JSON, JSON Lines, CSV and `.npy` (with its name
 //! tables) against the JSON document and against values worked out by hand.
 
-use eigenray::scene_parts::{Step, StepKind};
+use eigenray::scene::{Step, StepKind};
 use eigenray::{
     Arrival, BatchOptions, Format, Point, Reason, Scene, SearchArrival, Status, Tracer,
-    npy::write_names, stationary::Kink, write,
+    output::write_names, trace::Kink, write,
 };
 use serde_json::Value;
 
@@ -624,7 +624,7 @@ fn npy_of_every_stationary_path_appends_arrival_kink_and_complete() {
         };
         assert_eq!(rec[93], kink, "{r}");
         assert_eq!(
-            eigenray::npy::KINK_CODES[usize::from(rec[93])].map(|k| k.as_str()),
+            eigenray::output::KINK_CODES[usize::from(rec[93])].map(|k| k.as_str()),
             r["kink"].as_str()
         );
         assert_eq!(rec[94], 1);

@@ -18,12 +18,12 @@
 //! different search. Plausible paths are named `q0`, `q1`, … in a failing scene, random ones
 //! `p0`, `p1`, …
 
-use eigenray::geometry::{Segment, orient};
-use eigenray::limits::DEFAULT_MAX_ITERATIONS;
-use eigenray::scene_parts::StepKind;
+use eigenray::geom::{Segment, orient};
+use eigenray::scene::DEFAULT_MAX_ITERATIONS;
+use eigenray::scene::StepKind;
 use eigenray::{
     InterfaceSpec, MediumSpec, PathSpec, Point, Ray, Scene, SceneSpec, Status, StepSpec, Tracer,
-    Workspace, spec::SolverSpec,
+    Workspace, scene::SolverSpec,
 };
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
@@ -488,7 +488,7 @@ fn build(raw: &RawScene) -> SceneSpec {
 /// polyline (the generator's are graphs over x) whether `p` is above it, for a closed one
 /// whether `p` is inside. `None` for a point beyond an open polyline's x-range or within
 /// `margin` of the curve.
-fn side_of(line: &eigenray::geometry::Polyline, p: Point, margin: f64) -> Option<bool> {
+fn side_of(line: &eigenray::polyline::Polyline, p: Point, margin: f64) -> Option<bool> {
     let v = line.vertices();
     let n = line.num_segments();
     let near = (0..n).any(|j| {

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::process::Command;
 
 use eigenray::response::{ImpulseResponses, echoes_of_scene, pressure_into, transmission_loss};
-use eigenray::{Scene, Tracer, amplitudes::Complex64};
+use eigenray::{Scene, Tracer, amplitude::Complex64};
 
 const BIN: &str = env!("CARGO_BIN_EXE_eigenray");
 
@@ -252,8 +252,8 @@ fn the_cli_writes_the_transmission_loss_as_npy() {
                 let r1 = (x * x + (y + 25.0) * (y + 25.0)).sqrt();
                 let r2 = (x * x + (y - 25.0) * (y - 25.0)).sqrt();
                 let want = if mode == "coherent" {
-                    let p = eigenray::amplitudes::Complex64::from_polar(1.0 / r1, k * r1)
-                        - eigenray::amplitudes::Complex64::from_polar(1.0 / r2, k * r2);
+                    let p = eigenray::amplitude::Complex64::from_polar(1.0 / r1, k * r1)
+                        - eigenray::amplitude::Complex64::from_polar(1.0 / r2, k * r2);
                     -20.0 * p.norm().log10()
                 } else {
                     -10.0 * (1.0 / (r1 * r1) + 1.0 / (r2 * r2)).log10()

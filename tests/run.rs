@@ -9,13 +9,13 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use eigenray::amplitudes::Complex64;
+use eigenray::amplitude::Complex64;
+use eigenray::batch::{BatchScratch, BatchSink, RaySlot};
 use eigenray::options::{Progress, Run};
 use eigenray::response::{Echo, ImpulseResponses, echoes_of_scene, pressure_into};
-use eigenray::scene_parts::ImpulseResponseOptions;
+use eigenray::scene::ImpulseResponseOptions;
+use eigenray::scene::ImpulseResponseSpec;
 use eigenray::search::{SearchArrival, SearchReport};
-use eigenray::sink::{BatchScratch, BatchSink, RaySlot};
-use eigenray::spec::ImpulseResponseSpec;
 use eigenray::{BatchOptions, Point, RayRecord, Reason, Scene, Status, Tracer};
 use serde_json::{Value, json};
 
@@ -376,7 +376,7 @@ fn the_walk_honours_its_run() {
     let refracted = |a: &SearchArrival| {
         a.steps
             .iter()
-            .any(|s| s.kind == eigenray::scene_parts::StepKind::Refract)
+            .any(|s| s.kind == eigenray::scene::StepKind::Refract)
     };
     assert!(full.arrivals.iter().filter(|a| refracted(a)).count() > 4);
 

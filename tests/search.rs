@@ -4,7 +4,7 @@
 //! cannot fit in memory.
 
 use eigenray::options::Run;
-use eigenray::scene_parts::StepKind;
+use eigenray::scene::StepKind;
 use eigenray::search::SearchArrival;
 use eigenray::{Scene, Status, Tracer};
 use serde_json::{Value, json};

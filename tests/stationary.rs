@@ -5,7 +5,7 @@
 
 use eigenray::{
     Arrival, Point, Reason, Scene, Status, Tracer, Workspace,
-    stationary::{Kink, StationaryError},
+    trace::{Kink, StationaryError},
 };
 
 #[path = "support/rng.rs"]

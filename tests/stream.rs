@@ -7,13 +7,13 @@
 
 use std::f64::consts::PI;
 
-use eigenray::amplitudes::Complex64;
+use eigenray::amplitude::Complex64;
 use eigenray::options::Run;
 use eigenray::response::{
     FractionalDelay, ImpulseResponses, echoes_of_scene, echoes_of_scene_into, incoherent_loss,
     pressure_into, pressure_of_scene_into, transmission_loss, transmission_loss_of_scene_into,
 };
-use eigenray::spec::TransmissionLossMode;
+use eigenray::scene::TransmissionLossMode;
 use eigenray::{Scene, Tracer};
 use serde_json::{Value, json};
 

@@ -81,7 +81,7 @@ pub fn trace_and_check(mut scene: Scene) {
     }
     // Every stationary path and the search, where the scene asks: bounded by their work
     // budgets (`solver.max_work`), so within the input's CPU budget too.
-    if scene.solver().stationary == eigenray::spec::StationaryMode::All
+    if scene.solver().stationary == eigenray::scene::StationaryMode::All
         && let Ok(all) = tracer.trace_stationary(&eigenray::options::Run::new())
     {
         for t in &all.triples {

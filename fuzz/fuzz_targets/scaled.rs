@@ -5,9 +5,9 @@
 #![no_main]
 
 use arbitrary::Arbitrary;
-use eigenray::limits::{MAX_COORDINATE, MIN_COORDINATE};
+use eigenray::scene::{MAX_COORDINATE, MIN_COORDINATE};
 use eigenray::{Scene, SceneSpec, SolverOptions, Tracer};
-use eigenray::spec::ReceiversSpec;
+use eigenray::scene::ReceiversSpec;
 use libfuzzer_sys::fuzz_target;
 
 mod spec_gen;

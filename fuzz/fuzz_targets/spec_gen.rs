@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 
 use arbitrary::Arbitrary;
-use eigenray::spec::{ReceiversSpec, SolverSpec};
+use eigenray::scene::{ReceiversSpec, SolverSpec};
 use eigenray::{InterfaceSpec, MediumSpec, PathSpec, SceneSpec, StepSpec};
 
 /// One coordinate: on a coarse grid (many exact coincidences), a fine grid, or any f64.

@@ -3,7 +3,7 @@
 //! iteration and `to_dicts`, each dict made from the arrays when asked for.
 
 use eigenray::Point;
-use eigenray::stationary::Kink;
+use eigenray::trace::Kink;
 use numpy::ndarray::Dimension;
 use numpy::{
     Element, NpyIndex, PyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods,

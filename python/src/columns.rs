@@ -1,13 +1,13 @@
 //! The quantities' columns in Python, from the library's column schema
-//! (`eigenray::columns::Schema`; a scene with `"amplitudes"` has `amplitude`, `spreading`,
+//! (`eigenray::output::columns::Schema`; a scene with `"amplitudes"` has `amplitude`, `spreading`,
 //! `coefficient`, `attenuation_db` and `amplitude_reason`): the columns of a `Rays` or an
 //! `Arrivals` while they are filled, their rows, their numpy arrays, the attributes that read
 //! them, a `Ray`'s values and an arrival dict's keys. Every part iterates over the schema's
 //! columns, so that a new quantity of the library reaches Python without a line here. A
 //! missing value is NaN, never 0.
 
-use eigenray::amplitudes::{Complex64, NoAmplitude};
-use eigenray::columns::{Cell, Column, ColumnType, Entry, Schema};
+use eigenray::amplitude::{Complex64, NoAmplitude};
+use eigenray::output::columns::{Cell, Column, ColumnType, Entry, Schema};
 use numpy::{
     Element, IntoPyArray, PyArray1, PyArrayMethods, PyReadwriteArray1, PyUntypedArrayMethods,
 };

@@ -1,7 +1,7 @@
 //! Conversions between Python values and the library's types: points and point arrays from
 //! array-likes, indices from names, and the names and codes of statuses, media and kinks.
 
-use eigenray::{Point, Scene, Status, npy::STATUS_CODES, stationary::Kink};
+use eigenray::{Point, Scene, Status, output::STATUS_CODES, trace::Kink};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2};
 use pyo3::exceptions::{PyIndexError, PyKeyError, PyMemoryError, PyTypeError};

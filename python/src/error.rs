@@ -1,7 +1,7 @@
 //! The package's errors: `EigenrayError`, from the library's scene errors and from arguments.
 
 use eigenray::SceneError;
-use eigenray::limits::available_memory;
+use eigenray::options::available_memory;
 use pyo3::exceptions::{PyMemoryError, PyValueError};
 use pyo3::prelude::*;
 

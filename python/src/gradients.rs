@@ -1,8 +1,8 @@
 //! `Gradients`: the derivatives of many rays' times as numpy arrays, computed by the library
 //! from the arrays of a `Rays`.
 
-use eigenray::gradients::{GradientArraysMut, GradientRows};
-use eigenray::{Scene, npy::STATUS_CODES};
+use eigenray::derivatives::{GradientArraysMut, GradientRows};
+use eigenray::{Scene, output::STATUS_CODES};
 use numpy::ndarray::{Array2, Array3, ArrayBase, Data, Dimension};
 use numpy::{IntoPyArray, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::PyRuntimeError;

@@ -4,7 +4,7 @@
 use std::sync::MutexGuard;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use eigenray::columns::Schema;
+use eigenray::output::columns::Schema;
 use eigenray::{Reason, Scene};
 use numpy::{
     PyArrayMethods, PyReadwriteArray1, PyReadwriteArray2, PyReadwriteArray3, PyUntypedArrayMethods,

@@ -5,8 +5,8 @@
 use std::sync::Mutex;
 
 use eigenray::Reason;
-use eigenray::amplitudes::NoAmplitude;
-use eigenray::stationary::Threshold;
+use eigenray::amplitude::NoAmplitude;
+use eigenray::trace::Threshold;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;

@@ -1,6 +1,6 @@
 //! `Ray`: one ray (or one stationary path) as Python values.
 
-use eigenray::columns::Entry;
+use eigenray::output::columns::Entry;
 use eigenray::{Arrival, Point, RayRecord, Scene};
 use numpy::PyArray2;
 use pyo3::prelude::*;

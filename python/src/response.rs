@@ -1,14 +1,13 @@
 //! `Tracer.impulse_response`, `Tracer.pressure` and `Tracer.transmission_loss`: what arrives
 //! at each receiver, from every echo of the scene, as numpy arrays.
 
-use eigenray::amplitudes::Complex64;
+use eigenray::amplitude::Complex64;
 use eigenray::options::Run;
 use eigenray::response::{
     Echo, EchoError, ImpulseResponses, Summed, echoes_of_scene, pressure_of_scene_into,
     transmission_loss_of_scene_into,
 };
-use eigenray::scene_parts::ImpulseResponseOptions;
-use eigenray::spec::{ImpulseResponseSpec, TransmissionLossMode};
+use eigenray::scene::{ImpulseResponseOptions, ImpulseResponseSpec, TransmissionLossMode};
 use eigenray::{Scene, Tracer};
 use numpy::ndarray::{Array1, ArrayD, IxDyn};
 use numpy::{IntoPyArray, PyArrayDyn};

@@ -3,7 +3,7 @@
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use eigenray::columns::Entry;
+use eigenray::output::columns::Entry;
 use eigenray::{Point, RayRecord, Reason, Scene};
 
 use crate::columns::QuantityRows;

@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use eigenray::Scene;
-use eigenray::limits::{MAX_INPUT_BYTES, read_limited};
+use eigenray::options::{MAX_INPUT_BYTES, read_limited};
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::exceptions::PyIOError;
 use pyo3::prelude::*;

@@ -2,10 +2,10 @@
 //! own, and its arrivals written there into the columns of an `Arrivals` (no Python object per
 //! arrival).
 
-use eigenray::columns::{Entry, Schema};
 use eigenray::options::Run;
-use eigenray::stationary::Kink;
-use eigenray::{Reason, Scene, SearchArrival, Tracer, scene_parts::StepKind};
+use eigenray::output::columns::{Entry, Schema};
+use eigenray::trace::Kink;
+use eigenray::{Reason, Scene, SearchArrival, Tracer, scene::StepKind};
 use numpy::IntoPyArray;
 use numpy::ndarray::{Array2, Array3};
 use pyo3::prelude::*;

@@ -2,7 +2,7 @@
 
 use eigenray::{
     PointSensitivities, RayRecord, Scene,
-    gradients::{Axis, Parameter},
+    derivatives::{Axis, Parameter},
 };
 use numpy::ndarray::Array3;
 use numpy::{IntoPyArray, PyArray3};

@@ -1,10 +1,10 @@
 //! The rows of a `Rays` as a batch's sink: each worker writes a ray's row right after solving
 //! it, and with the columns of quantities (the amplitude) the ray's quantities too.
 
-use eigenray::columns::Entry;
+use eigenray::output::columns::Entry;
 use eigenray::{
     Point, RayRecord, Scene, Tracer,
-    sink::{BatchSink, RaySlot},
+    batch::{BatchSink, RaySlot},
 };
 
 use crate::rows::Rows;

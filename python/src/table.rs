@@ -5,8 +5,8 @@
 use std::sync::Mutex;
 use std::sync::atomic::AtomicBool;
 
-use eigenray::columns::{Entry, Schema};
 use eigenray::options::{Progress, Run};
+use eigenray::output::columns::{Entry, Schema};
 use eigenray::{Point, Reason, Scene, StationaryRays, Tracer, Workspace};
 use numpy::IntoPyArray;
 use numpy::ndarray::{Array2, Array3};

@@ -1,11 +1,11 @@
 //! `Tracer.trace`: the batch of every ray, written into numpy's arrays by its own workers,
 //! with progress reported from the calling thread, which Ctrl-C interrupts.
 
-use eigenray::columns::Schema;
 use eigenray::options::Run;
+use eigenray::output::columns::Schema;
 use eigenray::{
     BatchOptions, Tracer,
-    sink::{BatchScratch, BatchSink},
+    batch::{BatchScratch, BatchSink},
 };
 use pyo3::prelude::*;
 

@@ -3,12 +3,12 @@
 
 use std::sync::{Arc, Mutex, PoisonError, RwLock, RwLockReadGuard, RwLockWriteGuard, TryLockError};
 
-use eigenray::amplitudes::Complex64;
-use eigenray::columns::{Entry, Schema};
+use eigenray::amplitude::Complex64;
 use eigenray::options::Run;
+use eigenray::output::columns::{Entry, Schema};
 use eigenray::{
     Arrival, Gradient, Point, PointSensitivities, Scene, SceneError, Tracer, Workspace,
-    sink::BatchScratch,
+    batch::BatchScratch,
 };
 use numpy::PyArrayDyn;
 use pyo3::exceptions::{PyIndexError, PyKeyError, PyRuntimeError};

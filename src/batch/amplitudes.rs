@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use super::{Batch, sized};
 use crate::amplitude::{Amplitude, NoAmplitude};
-use crate::control::Run;
+use crate::options::Run;
 use crate::trace::Tracer;
 
 /// Rays per parallel piece.
@@ -19,8 +19,8 @@ impl Batch {
     /// ```
     /// use eigenray::{BatchOptions, Scene, Tracer, options::Run};
     /// let mut spec = eigenray::demo::air_water(100, 7);
-    /// spec.amplitudes = Some(eigenray::spec::AmplitudesSpec::new(
-    ///     eigenray::spec::SourceModel::Point,
+    /// spec.amplitudes = Some(eigenray::scene::AmplitudesSpec::new(
+    ///     eigenray::scene::SourceModel::Point,
     /// ));
     /// let scene = Scene::from_spec(&spec).unwrap();
     /// let tracer = Tracer::new(&scene).unwrap();

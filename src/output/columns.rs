@@ -3,10 +3,10 @@
 //! columns (name and type), and what they hold for an entry. The writers of [`super`]
 //! (JSON, JSON Lines, CSV, `.npy` and the names sidecar) and the Python package (its arrays,
 //! its batch sink, its dicts and its pickles) iterate over the [`Schema`]: a new per-ray
-//! quantity is one [`Quantity`] here, one field of [`Entry`], and the code that computes it.
+//! quantity is one `Quantity` here, one field of [`Entry`], and the code that computes it.
 //!
 //! A quantity of plain columns ([`ColumnType`]: one number, one complex number, or why it
-//! has no value) needs only [`Quantity::columns`] and [`Quantity::cells`]: its JSON fields,
+//! has no value) needs only `Quantity::columns` and `Quantity::cells`: its JSON fields,
 //! CSV cells, `.npy` fields and numpy columns follow from them. A quantity of another shape
 //! (the gradient: one number per medium, a list of vertices) writes each format itself.
 

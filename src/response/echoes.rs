@@ -4,7 +4,7 @@ use std::fmt;
 
 use num_complex::Complex64;
 
-use crate::control::Run;
+use crate::options::Run;
 use crate::output::RaySet;
 use crate::scene::SceneError;
 use crate::scene::StationaryMode;

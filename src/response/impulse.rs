@@ -3,7 +3,7 @@
 use std::collections::TryReserveError;
 
 use super::{Echo, FractionalDelay};
-use crate::control::{Progress, Run};
+use crate::options::{Progress, Run};
 use crate::scene::ImpulseResponseOptions;
 
 /// The layout and pulse of a set of impulse responses, one per (source, receiver): it
@@ -13,11 +13,11 @@ use crate::scene::ImpulseResponseOptions;
 /// samples]` array.
 ///
 /// ```
-/// use eigenray::amplitudes::Complex64;
+/// use eigenray::amplitude::Complex64;
 /// use eigenray::options::Run;
 /// use eigenray::response::{Echo, ImpulseResponses};
-/// use eigenray::spec::ImpulseResponseSpec;
-/// use eigenray::scene_parts::ImpulseResponseOptions;
+/// use eigenray::scene::ImpulseResponseSpec;
+/// use eigenray::scene::ImpulseResponseOptions;
 ///
 /// let spec = ImpulseResponseSpec::new(1000.0, 0.05); // 50 samples
 /// let options = ImpulseResponseOptions::of_spec("impulse_response", &spec).unwrap();

@@ -5,7 +5,7 @@ use std::f64::consts::PI;
 use num_complex::Complex64;
 
 use super::Echo;
-use crate::control::{Progress, Run};
+use crate::options::{Progress, Run};
 
 /// Sums `echoes` coherently at `frequency` into `out`, one complex pressure per (source,
 /// receiver), source-major (`out[s · receivers + r]`): `p = Σ a · e^(iωT)` with `ω = 2πf`,

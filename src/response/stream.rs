@@ -8,7 +8,7 @@ use std::sync::Mutex;
 use num_complex::Complex64;
 
 use super::{Echo, EchoError, ImpulseResponses, echoes_of_rays, transmission_loss};
-use crate::control::{Progress, Run};
+use crate::options::{Progress, Run};
 use crate::output::RaySet;
 use crate::scene::{StationaryMode, TransmissionLossMode};
 use crate::search::StreamedArrival;
@@ -200,7 +200,7 @@ pub fn intensity_of_scene_into(
 /// ```
 /// use eigenray::{Scene, Tracer, options::Run};
 /// use eigenray::response::transmission_loss_of_scene_into;
-/// use eigenray::spec::TransmissionLossMode;
+/// use eigenray::scene::TransmissionLossMode;
 /// // Free field: 20 log10(r) dB at r = 10 and 100 from a point source.
 /// let scene = Scene::from_json(r#"{
 ///     "media": { "w": { "speed": 1500 } }, "background": "w",

@@ -67,8 +67,8 @@ impl ImpulseResponseOptions {
     /// as the scene key is (`key` names them in errors).
     ///
     /// # Errors
-    /// A rate that is not a finite number in (0, [`MAX_RATE`](crate::limits::MAX_RATE)], no samples or more than
-    /// [`MAX_SAMPLES`](crate::limits::MAX_SAMPLES), or a tap count that is even or outside 1 ..= [`MAX_TAPS`](crate::limits::MAX_TAPS).
+    /// A rate that is not a finite number in (0, [`MAX_RATE`](crate::scene::MAX_RATE)], no samples or more than
+    /// [`MAX_SAMPLES`](crate::scene::MAX_SAMPLES), or a tap count that is even or outside 1 ..= [`MAX_TAPS`](crate::scene::MAX_TAPS).
     pub fn new(
         key: &str,
         rate: f64,

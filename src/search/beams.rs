@@ -12,7 +12,7 @@ use crate::trace::{
 };
 
 use super::{Control, SearchArrival, StreamedArrival};
-use crate::control::Progress;
+use crate::options::Progress;
 
 /// What one source's tree gives: its arrivals and what it did.
 pub(super) struct SourceTree {

@@ -13,7 +13,7 @@
 //! - **The walk over sequences** (`sequences.rs`): sequences with refractions, and with
 //!   `vertex` the edge-held arrivals of reflect-only ones through polylines with vertices,
 //!   each searched completely per pair (as [`Tracer::stationary_paths`] does, at most
-//!   [`MAX_STATIONARY_STEPS`](crate::limits::MAX_STATIONARY_STEPS) steps), every prefix
+//!   [`MAX_STATIONARY_STEPS`](crate::scene::MAX_STATIONARY_STEPS) steps), every prefix
 //!   pruned where no medium or no time allows a path. It counts sequences and the work of
 //!   their complete searches.
 //!
@@ -36,8 +36,8 @@ use std::fmt;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::Amplitude;
-use crate::control::Run;
-pub use crate::scene::SearchOptions;
+use crate::options::Run;
+use crate::scene::SearchOptions;
 use crate::scene::{Step, StepKind};
 use crate::trace::{Arrival, Status, Tracer};
 

@@ -35,9 +35,9 @@
 
 use rayon::prelude::*;
 
-use crate::control::{Progress, Run};
 use crate::geom::{Aabb, Point};
 use crate::leg::{LegModel, Uniform};
+use crate::options::{Progress, Run};
 use crate::scene::{MAX_STATIONARY_STEPS, SearchOptions, Step, StepKind};
 use crate::trace::{Arrival, SearchBudget, Sequence, Status, Tracer};
 

@@ -59,8 +59,8 @@ impl Tracer {
     /// ```
     /// use eigenray::{Scene, Tracer, Workspace};
     /// let mut spec = eigenray::demo::air_water(10, 7);
-    /// spec.amplitudes = Some(eigenray::spec::AmplitudesSpec::new(
-    ///     eigenray::spec::SourceModel::Point,
+    /// spec.amplitudes = Some(eigenray::scene::AmplitudesSpec::new(
+    ///     eigenray::scene::SourceModel::Point,
     /// ));
     /// let scene = Scene::from_spec(&spec).unwrap();
     /// let tracer = Tracer::new(&scene).unwrap();

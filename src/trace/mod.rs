@@ -2,8 +2,8 @@
 //! classification of the result.
 //!
 //! A ray of path `p` goes through `Tracer::solve_planned`, which dispatches on the path's
-//! [`PathPlan`] (built once in [`Tracer::new`]): a kernel for a common case (`one_step`,
-//! `flat`, `stack`) or the general solve ([`Tracer::solve_general`]): the start (`start`,
+//! `PathPlan` (built once in [`Tracer::new`]): a kernel for a common case (`one_step`,
+//! `flat`, `stack`) or the general solve (`Tracer::solve_general`): the start (`start`,
 //! `straight`), the Newton solve (`crate::solver`), the media lookup and the classification
 //! (`classify`). Every kernel ends in the same classifier. A batch's chain of rays of one path
 //! goes through `Tracer::solve_chain` (`chain`), which reads the plan once per chain: the
@@ -317,7 +317,7 @@ impl Tracer {
     /// example, to compare a kernel's rays with it.
     ///
     /// ```
-    /// use eigenray::options::Kernels;
+    /// use eigenray::trace::Kernels;
     /// use eigenray::{Scene, Tracer};
     /// let scene = Scene::from_spec(&eigenray::demo::layer_stack(8, 20)).unwrap();
     /// let fast = Tracer::new(&scene).unwrap().trace_all();
@@ -390,7 +390,7 @@ impl Tracer {
     /// `ws` ([`Workspace::points`]); nothing is allocated once `ws` has grown.
     ///
     /// # Panics
-    /// If a point is not finite or lies beyond ±[`MAX_COORDINATE`](crate::limits::MAX_COORDINATE),
+    /// If a point is not finite or lies beyond ±[`MAX_COORDINATE`],
     /// or `path` is not an index into [`Scene::paths`]: [`Scene::check_solve`] tells beforehand.
     pub fn solve(
         &self,

@@ -118,7 +118,7 @@ pub enum Reason {
     /// showed that a leg would reach its mirror from behind, so that no path exists.
     NoStationaryPath,
     /// The search for the sequence's stationary paths reached a limit (more steps than
-    /// [`MAX_STATIONARY_STEPS`](crate::limits::MAX_STATIONARY_STEPS), its limit of tuples or
+    /// [`MAX_STATIONARY_STEPS`](crate::scene::MAX_STATIONARY_STEPS), its limit of tuples or
     /// of work) before it could rule out a path.
     SearchLimit,
     /// A search of the sequence found no stationary path, but a rule with a threshold, not

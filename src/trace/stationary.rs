@@ -9,8 +9,8 @@
 
 use std::cell::Cell;
 
-use crate::control::{self, Run};
 use crate::geom::Point;
+use crate::options::{self, Run};
 use crate::regions::Regions;
 use crate::scene::{MAX_STATIONARY_STEPS, StepKind};
 
@@ -41,7 +41,7 @@ impl Tracer {
     /// the solver's tolerance. A path without `media` takes them from the regions: each
     /// sequence of media that its interfaces allow is searched, and a path is kept where the
     /// lookup at its points gives the media it was solved with. The path may have at most
-    /// [`MAX_STATIONARY_STEPS`](crate::limits::MAX_STATIONARY_STEPS) steps. The first call on an interface builds its
+    /// [`MAX_STATIONARY_STEPS`] steps. The first call on an interface builds its
     /// hierarchy (`O(M)`); a later one visits about `log M` nodes per arrival and interface
     /// (measured on a digitised sea floor: 24 tuples per ray at M = 1e3, 40 at 1e5).
     ///
@@ -50,7 +50,7 @@ impl Tracer {
     /// [`complete`](SearchOutcome::complete).
     ///
     /// ```
-    /// use eigenray::stationary::Kink;
+    /// use eigenray::trace::Kink;
     /// use eigenray::{Point, Scene, Status, Tracer, options::Run};
     /// // A mirror bent into a valley, seen from above: a specular point on each slope, and
     /// // the bottom, where the time has a maximum-type kink.
@@ -75,10 +75,10 @@ impl Tracer {
     ///
     /// # Errors
     /// A path index out of range, or one of more than
-    /// [`MAX_STATIONARY_STEPS`](crate::limits::MAX_STATIONARY_STEPS) steps.
+    /// [`MAX_STATIONARY_STEPS`] steps.
     ///
     /// # Panics
-    /// If a point is not finite or lies beyond ±[`MAX_COORDINATE`](crate::limits::MAX_COORDINATE)
+    /// If a point is not finite or lies beyond ±[`MAX_COORDINATE`](crate::scene::MAX_COORDINATE)
     /// ([`Scene::check_solve`](crate::Scene::check_solve) tells beforehand).
     pub fn stationary_paths(
         &self,
@@ -300,7 +300,7 @@ impl Tracer {
         }
         let mut arrivals = FALLBACK.take();
         // A single ray's search: it runs with the run of its thread (`Run::within`).
-        let stats = control::with_current(|run| {
+        let stats = options::with_current(|run| {
             self.stationary_of(
                 Sequence::of(&self.scene, path),
                 spec.media.as_deref(),

@@ -18,8 +18,9 @@ use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
-use eigenray::geometry::{Polyline, SegmentContact, segment_contact};
-use eigenray::limits::MAX_ITERATIONS_LIMIT;
+use eigenray::geom::{SegmentContact, segment_contact};
+use eigenray::polyline::Polyline;
+use eigenray::scene::MAX_ITERATIONS_LIMIT;
 use eigenray::{Point, Scene, SceneSpec, SolverOptions, Status, Tracer, Workspace};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};

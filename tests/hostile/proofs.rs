@@ -3,7 +3,7 @@
 //! threshold, a reflection exactly at an open end) are found, or reported `not_converged`
 //! with the rule that decided, in both modes, through the library and the command line.
 
-use eigenray::stationary::Threshold;
+use eigenray::trace::Threshold;
 use eigenray::{Point, Reason, Scene, Status, Tracer, Workspace};
 use serde_json::{Value, json};
 

@@ -1,6 +1,6 @@
 //! `PathProblem` derivatives against central finite differences of its own time and gradient.
 
-use eigenray::{Scene, path_problem::PathProblem};
+use eigenray::{Scene, problem::PathProblem};
 use serde_json::json;
 
 use crate::common::*;

@@ -17,7 +17,7 @@
 
 use std::time::{Duration, Instant};
 
-use eigenray::{Ray, Reason, Scene, Status, Tracer, Workspace, path_problem::PathProblem, write};
+use eigenray::{Ray, Reason, Scene, Status, Tracer, Workspace, problem::PathProblem, write};
 use serde_json::{Map, Value, json};
 
 #[path = "../support/rng.rs"]

@@ -3,7 +3,8 @@
 //! fuzz targets through `#[path]`).
 
 use eigenray::Point;
-use eigenray::geometry::{Polyline, Segment};
+use eigenray::geom::Segment;
+use eigenray::polyline::Polyline;
 
 /// Distance from `p` to segment `a–b` (computed on coordinates scaled to the segment, so that
 /// tiny and huge scenes neither underflow nor overflow).

@@ -17,10 +17,10 @@ use std::time::{Duration, Instant};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use eigenray::{
     Batch, BatchOptions, RaySet, Scene, SceneError, SearchArrival, StationaryRays, Status, Tracer,
-    limits::{MAX_INPUT_BYTES, available_memory, read_limited},
     options::Run,
+    options::{MAX_INPUT_BYTES, available_memory, read_limited},
     response::Echo,
-    spec::StationaryMode,
+    scene::StationaryMode,
 };
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
@@ -705,7 +705,7 @@ fn write_outputs(
     } = to;
     if let Some(path) = &args.names {
         let mut names = Vec::new();
-        eigenray::npy::write_names(scene, &mut names).map_err(|e| write_failure(path, &e))?;
+        eigenray::output::write_names(scene, &mut names).map_err(|e| write_failure(path, &e))?;
         fs::write(path, names).map_err(|e| write_failure(path, &e))?;
     }
     if let Some(path) = &args.svg {
@@ -1098,14 +1098,14 @@ fn batch_summary(batch: &Batch) -> String {
 fn status_summary(head: String, statuses: impl Iterator<Item = Status>) -> String {
     let mut counts = [0usize; 5];
     for status in statuses {
-        if let Some(i) = eigenray::npy::STATUS_CODES
+        if let Some(i) = eigenray::output::STATUS_CODES
             .iter()
             .position(|&s| s == status)
         {
             counts[i] += 1;
         }
     }
-    let parts: Vec<String> = eigenray::npy::STATUS_CODES
+    let parts: Vec<String> = eigenray::output::STATUS_CODES
         .iter()
         .zip(counts)
         .filter(|(_, n)| *n > 0)
@@ -1246,8 +1246,8 @@ mod tests {
         SearchArrival {
             source: 0,
             receiver: 0,
-            steps: vec![eigenray::scene_parts::Step {
-                kind: eigenray::scene_parts::StepKind::Reflect,
+            steps: vec![eigenray::scene::Step {
+                kind: eigenray::scene::StepKind::Reflect,
                 interface: 0,
             }],
             arrival: eigenray::Arrival {

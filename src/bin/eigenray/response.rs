@@ -7,13 +7,14 @@ use std::fs;
 use std::io::{BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
 
-use eigenray::amplitudes::Complex64;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use eigenray::Scene;
+use eigenray::amplitude::Complex64;
+use eigenray::output::write_f64_array;
 use eigenray::response::{Echo, ImpulseResponses, incoherent_loss, transmission_loss};
-use eigenray::spec::TransmissionLossMode;
-use eigenray::{Scene, npy};
+use eigenray::scene::TransmissionLossMode;
 
 use super::{Failure, available_memory, write_failure};
 
@@ -99,8 +100,7 @@ impl IrOutput {
         let written = match self.format {
             IrFormat::Npy => {
                 let shape = [r.sources(), r.receivers(), r.samples()];
-                npy::write_f64_array(&shape, data, &mut out)
-                    .map_err(|e| write_failure(&self.path, &e))
+                write_f64_array(&shape, data, &mut out).map_err(|e| write_failure(&self.path, &e))
             }
             IrFormat::Wav => write_wav(r, data, &mut out)
                 .map_err(|e| Failure::Output(format!("{}: {e}", self.path.display()))),
@@ -327,7 +327,7 @@ impl TlOutput {
     fn write(&self, tl: &[f64]) -> Result<(), Failure> {
         let file = fs::File::create(&self.path).map_err(|e| write_failure(&self.path, &e))?;
         let mut out = BufWriter::new(file);
-        let written = npy::write_f64_array(&self.shape, tl, &mut out)
+        let written = write_f64_array(&self.shape, tl, &mut out)
             .and_then(|()| out.flush())
             .map_err(|e| write_failure(&self.path, &e));
         if written.is_err() {

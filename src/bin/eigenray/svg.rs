@@ -199,7 +199,7 @@ mod tests {
     use super::labels::{boxes_overlap, text_box};
     use super::legend::MAX_LEGEND_LINES;
     use super::*;
-    use eigenray::scene_parts::{Step, StepKind};
+    use eigenray::scene::{Step, StepKind};
     use eigenray::{BatchOptions, Point, Status, Tracer};
 
     fn picture(json: &str, colouring: Colouring) -> String {

@@ -51,7 +51,7 @@ impl Fixture {
             .collect();
         let media = self.scene.paths()[path].media.as_deref();
         f(SequenceSearch {
-            run: crate::control::Run::unbounded(),
+            run: crate::options::Run::unbounded(),
             scene: &self.scene,
             classifier: &self.classifier,
             hierarchies: &hierarchies,

@@ -72,8 +72,8 @@ pub(crate) use hierarchy::Hierarchy;
 pub(crate) use listing::{finish, recycle, retain};
 pub use result::{Arrival, Kink, SearchOutcome, StationaryError};
 
-use crate::control::{Progress, Run};
 use crate::geom::Point;
+use crate::options::{Progress, Run};
 use crate::problem::ProblemRef;
 use crate::scene::{MAX_STATIONARY_STEPS, Scene};
 
@@ -163,7 +163,7 @@ struct Search<'a> {
     /// How many times the present solve moved a point off a vertex that a held point shares
     /// ([`move_off`](Search::move_off)).
     moved_off: usize,
-    /// The run of the call the search is part of ([`crate::control`]).
+    /// The run of the call the search is part of ([`crate::options`]).
     run: &'a Run,
 }
 

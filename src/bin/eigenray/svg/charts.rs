@@ -648,7 +648,7 @@ fn bar_tick(s: &mut String, x: f64, y: f64, label: &str) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use eigenray::amplitudes::Complex64;
+    use eigenray::amplitude::Complex64;
 
     fn echo(time: f64, amplitude: f64, order: usize) -> Echo {
         let amplitude = Complex64::new(amplitude, 0.0);

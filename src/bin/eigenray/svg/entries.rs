@@ -1,7 +1,7 @@
 //! What a picture draws: its entries (the rays, every stationary path of each, a search's
 //! arrivals) as items, and past [`MAX_RAYS`] an evenly spread sample of them.
 
-use eigenray::scene_parts::Step;
+use eigenray::scene::Step;
 use eigenray::{Point, RaySet, Scene, SearchArrival, Status};
 
 use super::MAX_RAYS;

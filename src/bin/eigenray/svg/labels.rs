@@ -193,7 +193,7 @@ impl MediumRoom<'_> {
 /// whichever of a few places along it covers the fewest ray segments and no label in `taken`.
 fn interface_label_spot(
     view: &View,
-    i: &eigenray::scene_parts::Interface,
+    i: &eigenray::scene::Interface,
     rays: &[PixelSegment],
     taken: &[LabelBox],
 ) -> (f64, f64) {

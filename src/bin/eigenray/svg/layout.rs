@@ -4,7 +4,7 @@
 
 use std::fmt::Write as _;
 
-use eigenray::geometry::Aabb;
+use eigenray::geom::Aabb;
 use eigenray::{Point, Scene};
 
 use super::colour::Colouring;

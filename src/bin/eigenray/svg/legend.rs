@@ -2,7 +2,7 @@
 //! sequence drawn, in the scene's words, with its colour and count) and each item's line.
 
 use eigenray::Scene;
-use eigenray::scene_parts::{Step, StepKind};
+use eigenray::scene::{Step, StepKind};
 
 use super::colouring::Colouring;
 use super::entries::Item;
