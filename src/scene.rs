@@ -16,6 +16,7 @@ mod document;
 mod grid;
 mod impulse;
 mod names;
+mod transmission;
 mod update;
 
 pub use amplitudes::{
@@ -27,6 +28,7 @@ pub use grid::{ReceiverGridSpec, ReceiversSpec};
 pub use impulse::{
     DEFAULT_TAPS, ImpulseResponseOptions, ImpulseResponseSpec, MAX_RATE, MAX_SAMPLES, MAX_TAPS,
 };
+pub use transmission::{TransmissionLossMode, TransmissionLossSpec};
 
 /// Default relative tolerance on the stationarity residual.
 pub const DEFAULT_TOLERANCE: f64 = 1e-12;
@@ -174,6 +176,9 @@ pub struct SceneSpec {
     /// Impulse responses: one per (source, receiver), from every timed arrival's amplitude.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub impulse_response: Option<ImpulseResponseSpec>,
+    /// Transmission loss: how `--tl` sums the arrivals at each receiver.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transmission_loss: Option<TransmissionLossSpec>,
 }
 
 /// A JSON object of names: like a `BTreeMap`, but a name given twice is an error (serde's
@@ -551,6 +556,7 @@ pub struct Scene {
     batch_size: BatchSize,
     amplitudes: Option<Amplitudes>,
     impulse_response: Option<ImpulseResponseOptions>,
+    transmission_loss: Option<TransmissionLossMode>,
     /// The document's keys as given, for [`Scene::to_spec`].
     document: document::Document,
 }
@@ -1066,6 +1072,7 @@ impl Scene {
         };
         let amplitudes = amplitudes::validate(spec, &sources, needs_regions)?;
         let impulse_response = impulse::validate(spec)?;
+        let transmission_loss = transmission::validate(spec)?;
         let batch_size = batch_size(sources.len(), receivers.len(), &paths)?;
         if needs_regions {
             check_region_range(scene_points(
@@ -1094,6 +1101,7 @@ impl Scene {
             batch_size,
             amplitudes,
             impulse_response,
+            transmission_loss,
             document: document::Document::of(spec),
         })
     }
@@ -1102,6 +1110,12 @@ impl Scene {
     /// (`"impulse_response"`).
     pub fn impulse_response(&self) -> Option<&ImpulseResponseOptions> {
         self.impulse_response.as_ref()
+    }
+
+    /// How the scene's transmission loss sums its arrivals, when it gives a
+    /// `"transmission_loss"` section (without one, `--tl` sums them coherently).
+    pub fn transmission_loss(&self) -> Option<TransmissionLossMode> {
+        self.transmission_loss
     }
 
     /// The media, in name order.

@@ -1156,6 +1156,7 @@ fn unwritable_outputs_are_refused_before_anything_is_written() {
     let written = TempFile::path_only("other.svg");
     for (option, name) in [
         ("--ir", "ir.npy"),
+        ("--tl", "tl.npy"),
         ("--echogram", "e.svg"),
         ("--tl-map", "tl.svg"),
         ("--rays", "rays.json"),

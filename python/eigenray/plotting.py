@@ -296,7 +296,7 @@ def echogram(echoes, source=0, receiver=0, *, ax=None, range_db=60.0, from_zero=
 def tl_map(receivers, tl, *, ax=None, range_db=60.0, title=None, scene=None, source=0,
            x_axis=None, y_axis=None):
     """Draws a transmission-loss map: `tl` (dB, one per receiver, as a row of
-    `Tracer.transmission_loss()`) at the `receivers` (an (n, 2) array), as an image when they
+    `Tracer.transmission_loss()`, or a grid scene's `[nx, ny]` of it) at the `receivers` (an (n, 2) array), as an image when they
     form a grid (every pair of their distinct x and y) and as dots otherwise, over `range_db`
     from the lowest loss, loud bright, with a colour bar. Receivers nothing reaches (inf) are
     grey. With `scene`, its interfaces are drawn over the map, the bottom (below the first open
@@ -306,7 +306,8 @@ def tl_map(receivers, tl, *, ax=None, range_db=60.0, title=None, scene=None, sou
     import matplotlib.pyplot as plt
 
     receivers = np.asarray(receivers, dtype=float)
-    tl = np.asarray(tl, dtype=float)
+    # A grid scene's loss in the grid's shape, flattened in the receivers' order.
+    tl = np.asarray(tl, dtype=float).reshape(-1)
     if ax is None:
         _, ax = plt.subplots(figsize=(8, 4.5), layout="constrained")
     finite = np.isfinite(tl)

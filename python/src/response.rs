@@ -4,13 +4,13 @@
 use eigenray::amplitude::Complex64;
 use eigenray::options::Run;
 use eigenray::response::{
-    Echo, ImpulseResponses, echoes_of_scene, pressure_into, transmission_loss,
+    Echo, EchoError, ImpulseResponses, Summed, echoes_of_scene, pressure_of_scene_into,
+    transmission_loss_of_scene_into,
 };
-use eigenray::scene::ImpulseResponseOptions;
-use eigenray::scene::ImpulseResponseSpec;
+use eigenray::scene::{ImpulseResponseOptions, ImpulseResponseSpec, TransmissionLossMode};
 use eigenray::{Scene, Tracer};
-use numpy::ndarray::{Array1, Array2, Array3};
-use numpy::{IntoPyArray, PyArray2, PyArray3};
+use numpy::ndarray::{Array1, ArrayD, IxDyn};
+use numpy::{IntoPyArray, PyArrayDyn};
 use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -21,14 +21,7 @@ use crate::interrupt::interruptible;
 /// Every echo of the scene (its paths' rays and its search's arrivals), found with the GIL
 /// released; refused, naming `amplitudes`, for a scene that does not ask for them.
 fn scene_echoes(py: Python<'_>, tracer: &Tracer) -> PyResult<Vec<Echo>> {
-    if tracer.scene().amplitudes().is_none() {
-        return Err(argument_error(
-            py,
-            "amplitudes",
-            "the scene does not ask for amplitudes: add \"amplitudes\": {\"source\": \"point\"} \
-             (or another source model)",
-        ));
-    }
+    needs_amplitudes(py, tracer.scene())?;
     let run = Run::new();
     interruptible(py, &run, || echoes_of_scene(tracer, &run), || {})?
         .map_err(|e| argument_error(py, "scene", e.to_string()))
@@ -75,24 +68,69 @@ pub(crate) fn impulse_response<'py>(
     rate: Option<f64>,
     duration: Option<f64>,
     taps: Option<usize>,
-) -> PyResult<Bound<'py, PyArray3<f64>>> {
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let scene = tracer.scene();
     let options = response_options(py, scene, rate, duration, taps)?;
     let (s, r) = (scene.sources().len(), scene.receivers().len());
     let responses = ImpulseResponses::new(&options, s, r);
-    let echoes = scene_echoes(py, tracer)?;
-    // Rendered on a thread of its own too: Ctrl-C stops it between echoes.
+    needs_amplitudes(py, scene)?;
+    let too_large = || {
+        PyMemoryError::new_err(format!(
+            "impulse responses of {s} sources × {r} receivers × {} samples",
+            options.samples
+        ))
+    };
+    let mut data =
+        buffer(responses.checked_len().ok_or_else(too_large)?, 0.0).ok_or_else(too_large)?;
+    // Every echo rendered as the search finds it, on a thread of its own: Ctrl-C stops it.
     let run = Run::new();
-    let data =
-        interruptible(py, &run, || responses.render(echoes, &run), || {})?.map_err(|_| {
-            PyMemoryError::new_err(format!(
-                "impulse responses of {s} sources × {r} receivers × {} samples",
-                options.samples
-            ))
-        })?;
-    let array = Array3::from_shape_vec((s, r, options.samples), data)
-        .expect("the responses fill their shape");
+    let summed = interruptible(
+        py,
+        &run,
+        || responses.render_scene_into(tracer, &run, &mut data),
+        || {},
+    )?;
+    summed_or_error(py, summed)?;
+    let mut shape = grid_shape(scene);
+    shape.push(options.samples);
+    let array =
+        ArrayD::from_shape_vec(IxDyn(&shape), data).expect("the responses fill their shape");
     Ok(array.into_pyarray(py))
+}
+
+/// `[sources, receivers]`, or `[sources, nx, ny]` for a scene whose receivers are a grid.
+fn grid_shape(scene: &Scene) -> Vec<usize> {
+    let (s, r) = (scene.sources().len(), scene.receivers().len());
+    match scene.receiver_grid().and_then(|g| g.shape()) {
+        Some((nx, ny)) if nx * ny == r => vec![s, nx, ny],
+        _ => vec![s, r],
+    }
+}
+
+/// A buffer of `n` copies of `zero`, or `None` where it cannot be allocated.
+fn buffer<T: Clone>(n: usize, zero: T) -> Option<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).ok()?;
+    v.resize(n, zero);
+    Some(v)
+}
+
+/// Refuses, naming `amplitudes`, a scene that does not ask for them.
+fn needs_amplitudes(py: Python<'_>, scene: &Scene) -> PyResult<()> {
+    if scene.amplitudes().is_none() {
+        return Err(argument_error(
+            py,
+            "amplitudes",
+            "the scene does not ask for amplitudes: add \"amplitudes\": {\"source\": \"point\"} \
+             (or another source model)",
+        ));
+    }
+    Ok(())
+}
+
+/// A streamed response's result, its error named as the scene's.
+fn summed_or_error(py: Python<'_>, summed: Result<Summed, EchoError>) -> PyResult<Summed> {
+    summed.map_err(|e| argument_error(py, "scene", e.to_string()))
 }
 
 /// The frequency: the argument, else the scene's `amplitudes.frequency`.
@@ -113,46 +151,68 @@ fn frequency_of(py: Python<'_>, scene: &Scene, frequency: Option<f64>) -> PyResu
     }
 }
 
-/// The pressures of `Tracer.pressure`, `[sources, receivers]`.
-fn pressures(
-    py: Python<'_>,
-    tracer: &Tracer,
-    frequency: Option<f64>,
-) -> PyResult<Array2<Complex64>> {
-    let scene = tracer.scene();
-    let f = frequency_of(py, scene, frequency)?;
-    let (s, r) = (scene.sources().len(), scene.receivers().len());
-    let echoes = scene_echoes(py, tracer)?;
-    let mut p = vec![Complex64::new(0.0, 0.0); s * r];
-    if s > 0 {
-        let run = Run::new();
-        interruptible(
-            py,
-            &run,
-            || pressure_into(echoes, f, s, &run, &mut p),
-            || {},
-        )?;
-    }
-    Ok(Array2::from_shape_vec((s, r), p).expect("one pressure a pair"))
-}
-
-/// See `Tracer.pressure`.
+/// See `Tracer.pressure`: every echo summed as the search finds it.
 pub(crate) fn pressure<'py>(
     py: Python<'py>,
     tracer: &Tracer,
     frequency: Option<f64>,
-) -> PyResult<Bound<'py, PyArray2<Complex64>>> {
-    Ok(pressures(py, tracer, frequency)?.into_pyarray(py))
+) -> PyResult<Bound<'py, PyArrayDyn<Complex64>>> {
+    let scene = tracer.scene();
+    needs_amplitudes(py, scene)?;
+    let f = frequency_of(py, scene, frequency)?;
+    let n = scene.sources().len() * scene.receivers().len();
+    let mut p = buffer(n, Complex64::new(0.0, 0.0))
+        .ok_or_else(|| PyMemoryError::new_err(format!("pressures of {n} pairs")))?;
+    let run = Run::new();
+    let summed = interruptible(
+        py,
+        &run,
+        || pressure_of_scene_into(tracer, f, &run, &mut p),
+        || {},
+    )?;
+    summed_or_error(py, summed)?;
+    let array = ArrayD::from_shape_vec(IxDyn(&grid_shape(scene)), p).expect("one a pair");
+    Ok(array.into_pyarray(py))
 }
 
-/// See `Tracer.transmission_loss`.
+/// The mode of `Tracer.transmission_loss`: the argument, else the scene's, else coherent.
+fn mode_of(py: Python<'_>, scene: &Scene, mode: Option<&str>) -> PyResult<TransmissionLossMode> {
+    match mode {
+        None => Ok(scene.transmission_loss().unwrap_or_default()),
+        Some("coherent") => Ok(TransmissionLossMode::Coherent),
+        Some("incoherent") => Ok(TransmissionLossMode::Incoherent),
+        Some(other) => Err(argument_error(
+            py,
+            "mode",
+            format!("must be \"coherent\" or \"incoherent\", not {other:?}"),
+        )),
+    }
+}
+
+/// See `Tracer.transmission_loss`: every echo summed as the search finds it.
 pub(crate) fn transmission_loss_db<'py>(
     py: Python<'py>,
     tracer: &Tracer,
     frequency: Option<f64>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let tl = pressures(py, tracer, frequency)?.mapv(transmission_loss);
-    Ok(tl.into_pyarray(py))
+    mode: Option<&str>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let scene = tracer.scene();
+    needs_amplitudes(py, scene)?;
+    let f = frequency_of(py, scene, frequency)?;
+    let mode = mode_of(py, scene, mode)?;
+    let n = scene.sources().len() * scene.receivers().len();
+    let mut tl = buffer(n, 0.0)
+        .ok_or_else(|| PyMemoryError::new_err(format!("transmission loss of {n} pairs")))?;
+    let run = Run::new();
+    let summed = interruptible(
+        py,
+        &run,
+        || transmission_loss_of_scene_into(tracer, f, mode, &run, &mut tl),
+        || {},
+    )?;
+    summed_or_error(py, summed)?;
+    let array = ArrayD::from_shape_vec(IxDyn(&grid_shape(scene)), tl).expect("one a pair");
+    Ok(array.into_pyarray(py))
 }
 
 /// See `Tracer.echoes`.

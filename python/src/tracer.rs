@@ -10,7 +10,7 @@ use eigenray::{
     Arrival, Gradient, Point, PointSensitivities, Scene, SceneError, Tracer, Workspace,
     batch::BatchScratch,
 };
-use numpy::{PyArray2, PyArray3};
+use numpy::PyArrayDyn;
 use pyo3::exceptions::{PyIndexError, PyKeyError, PyRuntimeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyType};
@@ -549,7 +549,8 @@ impl PyTracer {
     /// samples]` (sample `n` at time `n / rate`): every `converged` ray and search arrival
     /// with an amplitude placed as a Hann-windowed sinc pulse of `taps` samples (default 81,
     /// as pyroomacoustics) centred on its time, scaled by its amplitude (its imaginary part
-    /// by the pulse's Hilbert pair). `rate` and `duration` default to the scene's
+    /// by the pulse's Hilbert pair), rendered as the search finds it (`[sources, nx, ny,
+    /// samples]` for a receiver grid). `rate` and `duration` default to the scene's
     /// `impulse_response`. Needs `amplitudes`.
     #[pyo3(signature = (rate=None, duration=None, taps=None))]
     fn impulse_response<'py>(
@@ -558,32 +559,37 @@ impl PyTracer {
         rate: Option<f64>,
         duration: Option<f64>,
         taps: Option<usize>,
-    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         response::impulse_response(py, &self.read(), rate, duration, taps)
     }
 
     /// The coherent pressure of every (source, receiver) at `frequency` (default: the
-    /// scene's `amplitudes.frequency`), complex128 `[sources, receivers]`: the sum over
-    /// echoes of `amplitude · e^(iωT)`. Needs `amplitudes`.
+    /// scene's `amplitudes.frequency`), complex128 `[sources, receivers]` (`[sources, nx,
+    /// ny]` for a receiver grid): the sum over echoes of `amplitude · e^(iωT)`, each added as
+    /// the search finds it. Needs `amplitudes`.
     #[pyo3(signature = (frequency=None))]
     fn pressure<'py>(
         &self,
         py: Python<'py>,
         frequency: Option<f64>,
-    ) -> PyResult<Bound<'py, PyArray2<Complex64>>> {
+    ) -> PyResult<Bound<'py, PyArrayDyn<Complex64>>> {
         response::pressure(py, &self.read(), frequency)
     }
 
-    /// The transmission loss `−20 log10(|p| · 4π)` in dB of every (source, receiver) at
-    /// `frequency` (see `pressure`), float64 `[sources, receivers]`; `inf` where nothing
-    /// arrives.
-    #[pyo3(signature = (frequency=None))]
+    /// The transmission loss in dB of every (source, receiver) at `frequency` (see
+    /// `pressure`), float64 `[sources, receivers]` (`[sources, nx, ny]` for a receiver
+    /// grid); `inf` where nothing arrives. `mode`: `"coherent"` (`−20 log10(|p| · 4π)`) or
+    /// `"incoherent"` (`−10 log10(16π² Σ |a|²)`), default the scene's
+    /// `transmission_loss.mode`, else coherent. The echoes are summed as the search finds
+    /// them: none is kept. Ctrl-C stops it.
+    #[pyo3(signature = (frequency=None, mode=None))]
     fn transmission_loss<'py>(
         &self,
         py: Python<'py>,
         frequency: Option<f64>,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        response::transmission_loss_db(py, &self.read(), frequency)
+        mode: Option<&str>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        response::transmission_loss_db(py, &self.read(), frequency, mode)
     }
 }
 

@@ -8,7 +8,7 @@ use crate::options::Run;
 use crate::output::RaySet;
 use crate::scene::SceneError;
 use crate::scene::StationaryMode;
-use crate::search::{SearchArrival, SearchError};
+use crate::search::{SearchArrival, SearchError, StreamedArrival};
 use crate::trace::{Arrival, StationaryError, Status, Tracer};
 use crate::{Amplitude, BatchOptions, Ray};
 
@@ -48,6 +48,14 @@ impl Echo {
             amplitude: a.value,
             order: points.saturating_sub(2),
         })
+    }
+
+    /// The echo of an arrival a streaming search found ([`Tracer::search_into`]): only a
+    /// `converged` one with an amplitude value is one.
+    pub fn of_streamed(a: &StreamedArrival) -> Option<Echo> {
+        let amplitude = a.amplitude.as_ref();
+        let pair = (a.source, a.receiver);
+        Echo::of(pair, a.status, a.time, amplitude, a.steps + 2)
     }
 
     fn of_ray(r: &Ray) -> Option<Echo> {

@@ -30,6 +30,7 @@ impl Document {
             search,
             amplitudes,
             impulse_response,
+            transmission_loss,
         } = spec;
         let interfaces = interfaces
             .iter()
@@ -59,6 +60,7 @@ impl Document {
             search: search.clone(),
             amplitudes: *amplitudes,
             impulse_response: *impulse_response,
+            transmission_loss: *transmission_loss,
         })
     }
 

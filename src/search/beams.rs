@@ -11,7 +11,7 @@ use crate::trace::{
     Arrival, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls, Tracer,
 };
 
-use super::{Control, SearchArrival};
+use super::{Control, SearchArrival, StreamedArrival};
 use crate::options::Progress;
 
 /// What one source's tree gives: its arrivals and what it did.
@@ -88,18 +88,34 @@ impl Tracer {
                 .max_work
                 .saturating_mul(scene.receivers().len().max(1) as u64),
         };
-        let stats = walls.arrivals(
-            &search,
-            scratch,
-            &mut |p: MirrorPath<'_>| {
-                if !control.listed.take(p.walls.len()) {
-                    return false;
-                }
-                arrivals.push(beam_arrival(walls, source, medium, p));
-                true
-            },
-            &mut |beams| control.run.keep_going(Progress::work(beams)),
-        );
+        let progress = &mut |beams| control.run.keep_going(Progress::work(beams));
+        let stats = if let Some(sink) = control.sink {
+            // Streamed: each path's amplitude from its points, in buffers reused path to path.
+            let mut path = StreamScratch::default();
+            walls.arrivals(
+                &search,
+                scratch,
+                &mut |p: MirrorPath<'_>| {
+                    control.listed.stream();
+                    sink(path.arrival(self, walls, source, medium, p));
+                    true
+                },
+                progress,
+            )
+        } else {
+            walls.arrivals(
+                &search,
+                scratch,
+                &mut |p: MirrorPath<'_>| {
+                    if !control.listed.take(p.walls.len()) {
+                        return false;
+                    }
+                    arrivals.push(beam_arrival(walls, source, medium, p));
+                    true
+                },
+                progress,
+            )
+        };
         SourceTree { arrivals, stats }
     }
 }
@@ -144,5 +160,55 @@ fn beam_arrival(
             amplitude: None,
         },
         complete: true,
+    }
+}
+
+/// The steps, segments and leg media of one streamed path of the beam tree, reused path to
+/// path.
+#[derive(Default)]
+struct StreamScratch {
+    steps: Vec<Step>,
+    segments: Vec<usize>,
+    media: Vec<usize>,
+}
+
+impl StreamScratch {
+    /// A path of the beam tree as the sink sees it, with the amplitude
+    /// [`Tracer::search`] gives its [`SearchArrival`] (the same steps, segments and media).
+    fn arrival(
+        &mut self,
+        tracer: &Tracer,
+        walls: &MirrorWalls,
+        source: usize,
+        medium: usize,
+        p: MirrorPath<'_>,
+    ) -> StreamedArrival {
+        let k = p.walls.len();
+        let amplitude = if tracer.scene().amplitudes().is_some() {
+            self.steps.clear();
+            self.segments.clear();
+            for &w in p.walls {
+                let place = walls.place(w);
+                self.steps.push(Step {
+                    kind: StepKind::Reflect,
+                    interface: place.interface,
+                });
+                self.segments.push(place.segment);
+            }
+            self.media.clear();
+            self.media.resize(k + 1, medium);
+            let segments = Some(&self.segments[..]);
+            tracer.amplitude_with(&self.steps, p.status, p.points, &self.media, segments)
+        } else {
+            None
+        };
+        StreamedArrival {
+            source,
+            receiver: p.receiver,
+            steps: k,
+            status: p.status,
+            time: p.time,
+            amplitude,
+        }
     }
 }

@@ -35,6 +35,7 @@ use rayon::prelude::*;
 use std::fmt;
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use crate::Amplitude;
 use crate::options::Run;
 use crate::scene::SearchOptions;
 use crate::scene::{Step, StepKind};
@@ -55,6 +56,57 @@ pub struct SearchArrival {
     /// Whether the search of its pair was complete: `false` where it stopped at a limit
     /// (its list may then be short).
     pub complete: bool,
+}
+
+impl SearchArrival {
+    /// The arrival as a streaming search hands it on (its points left out).
+    pub fn streamed(&self) -> StreamedArrival {
+        StreamedArrival {
+            source: self.source,
+            receiver: self.receiver,
+            steps: self.steps.len(),
+            status: self.arrival.status,
+            time: self.arrival.time,
+            amplitude: self.arrival.amplitude,
+        }
+    }
+}
+
+/// One arrival as a streaming search ([`Tracer::search_into`]) hands it on, the moment it
+/// is found: between which pair, when, how strongly. Its points are not kept.
+#[derive(Clone, Copy, Debug)]
+pub struct StreamedArrival {
+    /// Source index.
+    pub source: usize,
+    /// Receiver index.
+    pub receiver: usize,
+    /// Steps of its sequence (0: the direct ray).
+    pub steps: usize,
+    /// `converged`, or (when the search lists them) `obstructed` or `vertex`.
+    pub status: Status,
+    /// Travel time.
+    pub time: f64,
+    /// Its amplitude, when the scene asks for amplitudes (as [`Tracer::amplitude_of`] gives
+    /// it, bit for bit the one [`Tracer::search`] lists).
+    pub amplitude: Option<Amplitude>,
+}
+
+/// What a streaming search ([`Tracer::search_into`]) did: [`SearchReport`] without the
+/// arrivals, which went to the caller's sink.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StreamReport {
+    /// Arrivals handed to the sink.
+    pub arrivals: u64,
+    /// Beams the trees visited (as [`SearchReport::beams`]).
+    pub beams: u64,
+    /// Paths the trees validated (as [`SearchReport::leaves`]).
+    pub leaves: u64,
+    /// Work the trees did (as [`SearchReport::tree_work`]).
+    pub tree_work: u64,
+    /// Work the walks did (as [`SearchReport::work`]).
+    pub work: u64,
+    /// Pairs whose search stopped at a limit (some of their arrivals may be missing).
+    pub incomplete_pairs: usize,
 }
 
 /// The bytes one listed arrival of `steps` steps holds, as a search counts them against
@@ -130,6 +182,9 @@ impl std::error::Error for SearchError {}
 struct Control<'a> {
     run: &'a Run,
     listed: &'a ArrivalCount,
+    /// Where each arrival goes the moment it is found ([`Tracer::search_into`]); `None`:
+    /// the arrivals are listed with their points ([`Tracer::search`]).
+    sink: Option<&'a (dyn Fn(StreamedArrival) + Sync)>,
 }
 
 /// What the search keeps per pair.
@@ -161,7 +216,17 @@ impl ArrivalCount {
     /// Takes one more arrival of `steps` steps; `false` (and nothing taken) when that passes
     /// the limit of arrivals or of memory.
     fn take(&self, steps: usize) -> bool {
-        let bytes = arrival_bytes(steps);
+        self.take_bytes(arrival_bytes(steps))
+    }
+
+    /// Counts one more streamed arrival, which holds nothing: no limit.
+    fn stream(&self) {
+        self.count.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// Takes one more arrival that holds `bytes`; `false` (and nothing taken) when that
+    /// passes the limit of arrivals or of memory.
+    fn take_bytes(&self, bytes: u64) -> bool {
         let before = self.count.fetch_add(1, Ordering::Relaxed);
         let held = self.bytes.fetch_add(bytes, Ordering::Relaxed);
         if before >= self.limit || held.saturating_add(bytes) > self.memory {
@@ -238,6 +303,97 @@ impl Tracer {
     pub fn search(&self, run: &Run) -> Result<SearchReport, SearchError> {
         let scene = self.scene();
         let options = scene.search().ok_or(SearchError::NoSearch)?;
+        let nr = scene.receivers().len();
+        let mut pairs = self.pair_table()?;
+        let listed = ArrivalCount::new(&run.limits);
+        let control = Control {
+            run,
+            listed: &listed,
+            sink: None,
+        };
+        let (mut report, mut arrivals) = self.strategies(options, &control, &mut pairs);
+        for a in &mut arrivals {
+            a.complete = pairs[a.source * nr + a.receiver].complete;
+        }
+        if run.stop_requested() {
+            report.arrivals = arrivals;
+            return Ok(report);
+        }
+        sort_arrivals(&mut arrivals);
+        if scene.amplitudes().is_some() {
+            arrivals.par_iter_mut().for_each(|s| {
+                self.arrival_amplitudes(&s.steps, std::slice::from_mut(&mut s.arrival))
+            });
+        }
+        report.arrivals = arrivals;
+        Ok(report)
+    }
+
+    /// The scene's `search` as [`search`](Self::search) runs it, each arrival handed to `sink`
+    /// the moment it is found instead of listed: nothing of an arrival is kept, so the
+    /// memory is the search's working set (the trees' stacks, one walk's sequence per
+    /// thread) whatever the number of arrivals. The arrivals are those
+    /// [`search`](Self::search) lists, with the same times and (bit for bit) amplitudes, in
+    /// the order found, not by time: a tree's arrivals reach `sink` from the thread of its
+    /// source, a walk's from the thread of its pair, every tree's before any walk's, so that
+    /// the arrivals of one pair come in one fixed order. Streamed arrivals count against
+    /// neither the run's limit of arrivals nor its memory (they hold none); the run, its
+    /// budget, its limit of beams and `solver.max_work` bound the search as they bound
+    /// [`search`](Self::search).
+    ///
+    /// ```
+    /// use std::sync::Mutex;
+    /// use eigenray::{Scene, Tracer, options::Run};
+    /// let scene = Scene::from_json(r#"{
+    ///     "media": { "air": { "speed": 1.0, "at": [0.5, 0.5] } },
+    ///     "interfaces": {
+    ///         "room": { "points": [[0, 0], [1, 0], [1, 1], [0, 1]], "closed": true } },
+    ///     "sources": [[0.3, 0.4]], "receivers": [[0.7, 0.5]],
+    ///     "search": { "max_time": 3 }
+    /// }"#).unwrap();
+    /// let tracer = Tracer::new(&scene).unwrap();
+    /// let last = Mutex::new(0.0f64);
+    /// let report = tracer
+    ///     .search_into(&Run::new(), &|a| {
+    ///         let mut last = last.lock().unwrap();
+    ///         *last = last.max(a.time);
+    ///     })
+    ///     .unwrap();
+    /// let listed = tracer.search(&Run::new()).unwrap().arrivals;
+    /// assert_eq!(report.arrivals, listed.len() as u64);
+    /// assert_eq!(*last.lock().unwrap(), listed.iter().map(|a| a.arrival.time).fold(0.0, f64::max));
+    /// ```
+    ///
+    /// # Errors
+    /// As [`search`](Self::search).
+    pub fn search_into(
+        &self,
+        run: &Run,
+        sink: &(dyn Fn(StreamedArrival) + Sync),
+    ) -> Result<StreamReport, SearchError> {
+        let scene = self.scene();
+        let options = scene.search().ok_or(SearchError::NoSearch)?;
+        let mut pairs = self.pair_table()?;
+        let listed = ArrivalCount::new(&run.limits);
+        let control = Control {
+            run,
+            listed: &listed,
+            sink: Some(sink),
+        };
+        let (report, _) = self.strategies(options, &control, &mut pairs);
+        Ok(StreamReport {
+            arrivals: listed.count.load(Ordering::Relaxed),
+            beams: report.beams,
+            leaves: report.leaves,
+            tree_work: report.tree_work,
+            work: report.work,
+            incomplete_pairs: report.incomplete_pairs,
+        })
+    }
+
+    /// The table of (source, receiver) pairs, each complete until a strategy says not.
+    fn pair_table(&self) -> Result<Vec<PairRecord>, SearchError> {
+        let scene = self.scene();
         let (ns, nr) = (scene.sources().len(), scene.receivers().len());
         let too_large = || SearchError::TooLarge {
             pairs: ns as u128 * nr as u128,
@@ -252,14 +408,21 @@ impl Tracer {
         let mut pairs: Vec<PairRecord> = Vec::new();
         pairs.try_reserve_exact(count).map_err(|_| too_large())?;
         pairs.resize(count, PairRecord { complete: true });
-        let listed = ArrivalCount::new(&run.limits);
+        Ok(pairs)
+    }
+
+    /// Both strategies, the trees then the walks: what they did, each pair's completeness
+    /// in `pairs`, and the arrivals they listed (none when `control` streams them).
+    fn strategies(
+        &self,
+        options: &SearchOptions,
+        control: &Control<'_>,
+        pairs: &mut [PairRecord],
+    ) -> (SearchReport, Vec<SearchArrival>) {
+        let nr = self.scene().receivers().len();
         let mut report = SearchReport::default();
-        let control = Control {
-            run,
-            listed: &listed,
-        };
-        let trees = self.beam_trees(options, &control);
-        let walks = self.walks(options, &control);
+        let trees = self.beam_trees(options, control);
+        let walks = self.walks(options, control);
         let mut arrivals = Vec::new();
         for (source, tree) in trees.into_iter().enumerate() {
             report.beams += tree.stats.beams;
@@ -277,26 +440,12 @@ impl Tracer {
             pairs[pair].complete &= walk.complete;
             arrivals.extend(walk.arrivals);
         }
-        if run.stop_requested() {
+        if control.run.stop_requested() {
             // Asked to stop: the result is discarded, every pair is short.
             pairs.iter_mut().for_each(|p| p.complete = false);
         }
-        for a in &mut arrivals {
-            a.complete = pairs[a.source * nr + a.receiver].complete;
-        }
         report.incomplete_pairs = pairs.iter().filter(|p| !p.complete).count();
-        if run.stop_requested() {
-            report.arrivals = arrivals;
-            return Ok(report);
-        }
-        sort_arrivals(&mut arrivals);
-        if scene.amplitudes().is_some() {
-            arrivals.par_iter_mut().for_each(|s| {
-                self.arrival_amplitudes(&s.steps, std::slice::from_mut(&mut s.arrival))
-            });
-        }
-        report.arrivals = arrivals;
-        Ok(report)
+        (report, arrivals)
     }
 
     /// Whether an arrival of this status is listed.

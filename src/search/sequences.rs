@@ -42,7 +42,7 @@ use crate::scene::{MAX_STATIONARY_STEPS, SearchOptions, Step, StepKind};
 use crate::trace::{Arrival, SearchBudget, Sequence, Status, Tracer};
 
 use super::strategy::{Claim, Shape, Strategy, walk_may_extend};
-use super::{ArrivalCount, Control, SearchArrival};
+use super::{ArrivalCount, Control, SearchArrival, StreamedArrival};
 
 /// A set of media as bits (media beyond 128 are not told apart: [`MediaSets`] then keeps
 /// every set full).
@@ -154,6 +154,8 @@ struct Walk<'a> {
     listed: &'a ArrivalCount,
     /// The search's run: each sequence visited is a unit of its work.
     run: &'a Run,
+    /// Where each arrival goes when the search streams them.
+    sink: Option<&'a (dyn Fn(StreamedArrival) + Sync)>,
 }
 
 /// One pair's walk: its arrivals and what it did.
@@ -202,7 +204,8 @@ impl Tracer {
         control: &Control<'_>,
     ) -> Vec<(usize, PairWalk)> {
         let scene = self.scene();
-        let walk = Walk::new(self, options, control.listed, control.run);
+        let mut walk = Walk::new(self, options, control.listed, control.run);
+        walk.sink = control.sink;
         let nr = scene.receivers().len();
         let media: Vec<Option<usize>> = scene
             .sources()
@@ -283,6 +286,7 @@ impl<'a> Walk<'a> {
             max_work: scene.solver().max_work,
             listed,
             run,
+            sink: None,
         }
     }
 
@@ -435,6 +439,21 @@ impl PairState<'_> {
                 status => claim.specular && Tracer::listed(status, options),
             };
             if !kept || a.time > options.time_limit() {
+                continue;
+            }
+            if let Some(sink) = walk.sink {
+                walk.listed.stream();
+                let mut a = a;
+                walk.tracer
+                    .arrival_amplitudes(&self.steps, std::slice::from_mut(&mut a));
+                sink(StreamedArrival {
+                    source: self.source,
+                    receiver: self.receiver,
+                    steps: self.steps.len(),
+                    status: a.status,
+                    time: a.time,
+                    amplitude: a.amplitude,
+                });
                 continue;
             }
             if !walk.listed.take(self.steps.len()) {

@@ -19,6 +19,7 @@ use eigenray::{
     Batch, BatchOptions, RaySet, Scene, SceneError, SearchArrival, StationaryRays, Status, Tracer,
     options::Run,
     options::{MAX_INPUT_BYTES, available_memory, read_limited},
+    response::Echo,
     scene::StationaryMode,
 };
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -102,6 +103,14 @@ struct SolveArgs {
     /// `--arrivals -` asks for it, and a summary goes to standard error.
     #[arg(long, value_name = "PATH")]
     ir: Option<PathBuf>,
+    /// Write the transmission loss of every (source, receiver) to this `.npy` file: float64 dB,
+    /// `[sources, receivers]` (`[sources, nx, ny]` for a receiver grid), at
+    /// `amplitudes.frequency`, summed as `"transmission_loss": {"mode": ...}` says
+    /// (`coherent` by default, or `incoherent`); +inf where nothing arrives. The arrivals
+    /// are summed as the search finds them (not listed, unless written). A response output,
+    /// as `--ir`.
+    #[arg(long, value_name = "PATH")]
+    tl: Option<PathBuf>,
     /// Draw the echogram of one source at one receiver (`--source`, `--receiver`) to this SVG
     /// file: each arrival as a stem at its time, up to its level in dB, coloured by its
     /// number of interactions; the time axis starts just before the first arrival. Needs
@@ -332,6 +341,24 @@ impl Solved {
         }
     }
 
+    /// Hands every echo of the rays to `add`, and counts the timed rays without an
+    /// amplitude value.
+    fn echoes(&self, add: &mut dyn FnMut(Echo)) -> u64 {
+        let without = |status: Status, a: Option<&eigenray::Amplitude>| {
+            status.has_time() && !a.is_some_and(eigenray::Amplitude::has_value)
+        };
+        eigenray::response::echoes_of_rays(self.rays()).for_each(add);
+        match self {
+            Solved::Batch(b) => (0..b.len())
+                .filter(|&i| without(b.record(i).status, b.amplitude(i)))
+                .count() as u64,
+            Solved::Stationary(st) => (st.triples.iter())
+                .flat_map(|t| &t.arrivals)
+                .filter(|a| without(a.status, a.amplitude.as_ref()))
+                .count() as u64,
+        }
+    }
+
     /// Whether there is no ray (a scene without `paths`).
     fn is_empty(&self) -> bool {
         match self {
@@ -356,6 +383,7 @@ struct OutputFile<'a> {
 fn response_outputs(args: &SolveArgs) -> Vec<OutputFile<'_>> {
     [
         ("--ir", &args.ir),
+        ("--tl", &args.tl),
         ("--echogram", &args.echogram),
         ("--tl-map", &args.tl_map),
     ]
@@ -548,32 +576,60 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         style,
         &scene,
     )?;
+    let tl = match &args.tl {
+        Some(path) => Some(response::TlOutput::check(path, &scene)?),
+        None => None,
+    };
     check_output_files(args)?;
+    let sums = response::Sums::new(&scene, ir.as_ref(), tl.as_ref(), charts.as_ref())?;
     let tracer = Tracer::new(std::sync::Arc::clone(&scene)).map_err(Failure::scene)?;
     let solved = match scene.solver().stationary {
         StationaryMode::One => Solved::Batch(trace(&tracer, !args.no_warm_start)?),
         StationaryMode::All => Solved::Stationary(trace_stationary(&tracer)?),
     };
-    let arrivals = match scene.search() {
-        Some(_) => Some(search(&tracer)?),
-        None => None,
+    if let Some(sums) = &sums {
+        let without = solved.echoes(&mut |e| sums.add(e));
+        (0..without).for_each(|_| sums.skip());
+    }
+    // The search's arrivals are listed only where written (or drawn); otherwise they go
+    // straight into the responses.
+    let listed = *to.of_arrivals() != Destination::Nowhere || args.svg.is_some();
+    let (arrivals, streamed) = match (scene.search(), &sums) {
+        (Some(_), Some(sums)) if !listed => (None, Some(search_streamed(&tracer, sums)?)),
+        (Some(_), _) => (Some(search(&tracer)?), None),
+        (None, _) => (None, None),
     };
-    if ir.is_some() || charts.is_some() {
-        let from_rays = eigenray::response::echoes_of_rays(solved.rays());
-        let from_arrivals =
-            eigenray::response::echoes_of_arrivals(arrivals.as_deref().unwrap_or_default());
-        let echoes: Vec<_> = from_rays.chain(from_arrivals).collect();
-        if let Some(ir) = ir {
-            ir.write(&echoes)?;
+    if let (Some(sums), Some(arrivals)) = (&sums, &arrivals) {
+        for a in arrivals {
+            match Echo::of_streamed(&a.streamed()) {
+                Some(e) => sums.add(e),
+                None if a.arrival.status.has_time() => sums.skip(),
+                None => {}
+            }
         }
-        if let Some(charts) = charts {
-            charts.write(&scene, &echoes)?;
-        }
+    }
+    let summed = sums.as_ref().map(|s| {
+        (
+            s.echoes.load(std::sync::atomic::Ordering::Relaxed),
+            s.without_amplitude
+                .load(std::sync::atomic::Ordering::Relaxed),
+        )
+    });
+    if let Some(sums) = sums {
+        sums.write(&scene)?;
     }
     write_outputs(args, &scene, &solved, arrivals.as_deref())?;
     let responses = response_outputs(args);
     if !responses.is_empty() {
-        let line = response_summary(&responses, &solved, arrivals.as_deref(), args);
+        let mut line = response_summary(&responses, &solved, arrivals.as_deref(), streamed, args);
+        if let Some((echoes, without)) = summed {
+            let _ = write!(
+                line,
+                "; {echoes} echoes summed, {without} timed {} without an amplitude (adding \
+                 nothing)",
+                if without == 1 { "path" } else { "paths" }
+            );
+        }
         let _ = writeln!(io::stderr().lock(), "{line}");
     }
     Ok(())
@@ -593,23 +649,28 @@ fn response_summary(
     responses: &[OutputFile<'_>],
     solved: &Solved,
     arrivals: Option<&[SearchArrival]>,
+    streamed: Option<u64>,
     args: &SolveArgs,
 ) -> String {
     let written: Vec<String> = responses
         .iter()
         .map(|f| format!("{} {}", f.option, f.path.display()))
         .collect();
-    let mut line = format!(
-        "solve: {}; wrote {}",
-        solved_summary(solved, arrivals),
-        written.join(", ")
-    );
+    let mut summary = solved_summary(solved, arrivals);
+    if let Some(n) = streamed {
+        let _ = write!(
+            summary,
+            "; {n} search {} (summed as found)",
+            if n == 1 { "arrival" } else { "arrivals" }
+        );
+    }
+    let mut line = format!("solve: {summary}; wrote {}", written.join(", "));
     let to = Destinations::of(args);
     let mut unwritten = Vec::new();
     if to.rays == Destination::Nowhere && !solved.is_empty() {
         unwritten.push(("the rays", "--rays -"));
     }
-    if arrivals.is_some() && *to.of_arrivals() == Destination::Nowhere {
+    if (arrivals.is_some() || streamed.is_some()) && *to.of_arrivals() == Destination::Nowhere {
         unwritten.push(("the arrivals", "--arrivals -"));
     }
     if !unwritten.is_empty() {
@@ -765,6 +826,54 @@ fn search(tracer: &Tracer) -> Result<Vec<SearchArrival>, Failure> {
     let _ = write!(line, "; {}", unreached_pairs(scene, &report.arrivals));
     eprintln!("{line}");
     Ok(report.arrivals)
+}
+
+/// The scene's `search` streamed into the response outputs' `sums` (no arrival listed), with
+/// the spinner of [`search`] and its summary line: the arrivals summed, beams, the bounds and
+/// the pairs a limit left short. The number of arrivals.
+fn search_streamed(tracer: &Tracer, sums: &response::Sums<'_>) -> Result<u64, Failure> {
+    let scene = tracer.scene();
+    let options = scene.search().expect("a scene with a search section");
+    let bar = Bar::new(None, "units of work");
+    let shown = bar.bar.clone();
+    let run = Run::new().on_progress(move |p: eigenray::options::Progress| shown.inc(p.work));
+    let started = Instant::now();
+    let report = tracer
+        .search_into(&run, &|a| match Echo::of_streamed(&a) {
+            Some(e) => sums.add(e),
+            None => sums.skip(),
+        })
+        .map_err(|e| Failure::Input(format!("search: {e}")))?;
+    bar.finish();
+    let n = report.arrivals;
+    let mut line = format!(
+        "search: {n} {} summed as found in {:.3} s, {} beams",
+        if n == 1 { "arrival" } else { "arrivals" },
+        started.elapsed().as_secs_f64(),
+        report.beams
+    );
+    if report.work > 0 {
+        let _ = write!(
+            line,
+            ", {} units of work on refracting sequences",
+            report.work
+        );
+    }
+    match (options.max_steps, options.max_time) {
+        (Some(k), Some(t)) => _ = write!(line, "; up to {k} steps and time {t}"),
+        (Some(k), None) => _ = write!(line, "; up to {k} steps"),
+        (None, Some(t)) => _ = write!(line, "; up to time {t}"),
+        (None, None) => {}
+    }
+    if report.incomplete_pairs > 0 {
+        let _ = write!(
+            line,
+            "; {} pairs stopped at a limit (their sums may miss arrivals)",
+            report.incomplete_pairs
+        );
+    }
+    eprintln!("{line}");
+    Ok(n)
 }
 
 /// Pairs named in the search's summary line, at most.

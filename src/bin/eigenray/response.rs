@@ -1,13 +1,20 @@
-//! `eigenray solve --ir FILE`: the scene's impulse responses, as `.npy` or `.wav`.
+//! The response outputs of `eigenray solve`: `--ir FILE` (the scene's impulse responses, as
+//! `.npy` or `.wav`), `--tl FILE.npy` (the transmission loss), and the charts of
+//! `--echogram` and `--tl-map`. Each echo goes into every output asked for the moment it is
+//! found ([`Sums`]): the search's arrivals are not listed unless written.
 
 use std::fs;
 use std::io::{BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
 
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use eigenray::Scene;
 use eigenray::amplitude::Complex64;
 use eigenray::output::write_f64_array;
-use eigenray::response::{Echo, ImpulseResponses, pressure_into, transmission_loss};
+use eigenray::response::{Echo, ImpulseResponses, incoherent_loss, transmission_loss};
+use eigenray::scene::TransmissionLossMode;
 
 use super::{Failure, available_memory, write_failure};
 
@@ -83,19 +90,9 @@ impl IrOutput {
         })
     }
 
-    /// Renders the responses of `echoes` (a progress bar over them on a terminal) and writes
-    /// them to the file.
-    pub(super) fn write(&self, echoes: &[Echo]) -> Result<(), Failure> {
+    /// Writes the rendered responses `data` to the file.
+    fn write(&self, data: &[f64]) -> Result<(), Failure> {
         let r = &self.responses;
-        let bar = super::Bar::new(Some(echoes.len()), "echoes rendered");
-        let data = r.render(echoes.iter().copied(), &bar.run());
-        bar.finish();
-        let data = data.map_err(|_| {
-            Failure::Input(format!(
-                "impulse_response: {} numbers could not be allocated",
-                r.len()
-            ))
-        })?;
         // Straight into the file, a buffer at a time: the responses are the one copy held
         // (what the check before the solve counts). A file left short by an error goes.
         let file = fs::File::create(&self.path).map_err(|e| write_failure(&self.path, &e))?;
@@ -103,9 +100,9 @@ impl IrOutput {
         let written = match self.format {
             IrFormat::Npy => {
                 let shape = [r.sources(), r.receivers(), r.samples()];
-                write_f64_array(&shape, &data, &mut out).map_err(|e| write_failure(&self.path, &e))
+                write_f64_array(&shape, data, &mut out).map_err(|e| write_failure(&self.path, &e))
             }
-            IrFormat::Wav => write_wav(r, &data, &mut out)
+            IrFormat::Wav => write_wav(r, data, &mut out)
                 .map_err(|e| Failure::Output(format!("{}: {e}", self.path.display()))),
         }
         .and_then(|()| out.flush().map_err(|e| write_failure(&self.path, &e)));
@@ -237,13 +234,10 @@ impl Charts {
         }))
     }
 
-    /// Draws the charts of `echoes` (every echo of the scene) and writes them.
-    pub(super) fn write(&self, scene: &Scene, echoes: &[Echo]) -> Result<(), Failure> {
+    /// Draws the charts (the echoes of the echogram's pair, the pressures of every pair
+    /// for the map) and writes them.
+    fn write(&self, scene: &Scene, mut pair: Vec<Echo>, p: &[Complex64]) -> Result<(), Failure> {
         if let Some(path) = &self.echogram {
-            let mut pair: Vec<Echo> = (echoes.iter())
-                .filter(|e| e.source == self.source && e.receiver == self.receiver)
-                .copied()
-                .collect();
             pair.sort_by(|a, b| a.time.total_cmp(&b.time));
             let title = format!(
                 "Echogram: source {} at receiver {}",
@@ -255,14 +249,6 @@ impl Charts {
         }
         if let Some((path, frequency)) = &self.tl_map {
             let receivers = scene.receivers().len();
-            let mut p = vec![Complex64::new(0.0, 0.0); scene.sources().len() * receivers];
-            pressure_into(
-                echoes.iter().copied(),
-                *frequency,
-                scene.sources().len(),
-                &eigenray::options::Run::new(),
-                &mut p,
-            );
             let row = &p[self.source * receivers..(self.source + 1) * receivers];
             let tl: Vec<f64> = row.iter().map(|&p| transmission_loss(p)).collect();
             let title = format!("Transmission loss from source {}", self.source);
@@ -275,6 +261,219 @@ impl Charts {
                 axes: &self.style.axes,
             });
             fs::write(path, svg).map_err(|e| write_failure(path, &e))?;
+        }
+        Ok(())
+    }
+}
+
+/// `--tl FILE.npy`: the transmission loss of every (source, receiver), checked before the
+/// solve.
+pub(super) struct TlOutput {
+    path: PathBuf,
+    mode: TransmissionLossMode,
+    frequency: f64,
+    /// `[sources, receivers]`, or `[sources, nx, ny]` for a grid.
+    shape: Vec<usize>,
+}
+
+impl TlOutput {
+    /// The output of `--tl path` for `scene`: refused (naming `--tl` or the scene's key)
+    /// without `amplitudes.frequency`, for a file that is not `.npy`, or where the loss and
+    /// its sums do not fit in the memory available.
+    pub(super) fn check(path: &Path, scene: &Scene) -> Result<TlOutput, Failure> {
+        let Some(frequency) = scene.amplitudes().and_then(|a| a.frequency) else {
+            return Err(Failure::Input(
+                "--tl: the loss is at `amplitudes.frequency`, which the scene does not give \
+                 (add \"amplitudes\": {\"source\": \"point\", \"frequency\": 100})"
+                    .into(),
+            ));
+        };
+        let npy = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("npy"));
+        if !npy {
+            return Err(Failure::Input(
+                "--tl: the file's name must end in .npy (float64 dB)".into(),
+            ));
+        }
+        let (s, r) = (scene.sources().len(), scene.receivers().len());
+        // The loss (8 bytes) and the complex sums it is made of (16 bytes), per pair.
+        let bytes = s.checked_mul(r).and_then(|n| n.checked_mul(24));
+        let fits = match (bytes, available_memory()) {
+            (None, _) => false,
+            (Some(b), Some(h)) => b as u64 <= h,
+            (Some(_), None) => true,
+        };
+        if !fits {
+            return Err(Failure::Input(format!(
+                "--tl: {s} sources × {r} receivers need more than the memory available: split \
+                 the receivers"
+            )));
+        }
+        let shape = match scene.receiver_grid().and_then(|g| g.shape()) {
+            Some((nx, ny)) if nx * ny == r => vec![s, nx, ny],
+            _ => vec![s, r],
+        };
+        Ok(TlOutput {
+            path: path.to_path_buf(),
+            mode: scene.transmission_loss().unwrap_or_default(),
+            frequency,
+            shape,
+        })
+    }
+
+    /// Writes the loss `tl` to the file.
+    fn write(&self, tl: &[f64]) -> Result<(), Failure> {
+        let file = fs::File::create(&self.path).map_err(|e| write_failure(&self.path, &e))?;
+        let mut out = BufWriter::new(file);
+        let written = write_f64_array(&self.shape, tl, &mut out)
+            .and_then(|()| out.flush())
+            .map_err(|e| write_failure(&self.path, &e));
+        if written.is_err() {
+            let _ = fs::remove_file(&self.path);
+        }
+        written
+    }
+}
+
+/// Every response output's sums, filled echo by echo (from the search's threads, each
+/// output behind its lock): the impulse responses, the coherent pressures (`--tl` coherent
+/// and `--tl-map`), the intensities (`--tl` incoherent) and the echoes of the echogram's
+/// pair. Nothing else of an echo is kept.
+pub(super) struct Sums<'a> {
+    ir: Option<(&'a IrOutput, Mutex<Vec<f64>>)>,
+    tl: Option<&'a TlOutput>,
+    charts: Option<&'a Charts>,
+    pressure: Option<(f64, Mutex<Vec<Complex64>>)>,
+    intensity: Option<Mutex<Vec<f64>>>,
+    pair: Mutex<Vec<Echo>>,
+    receivers: usize,
+    /// Echoes summed.
+    pub(super) echoes: AtomicU64,
+    /// Timed arrivals and rays without an amplitude value: they add nothing.
+    pub(super) without_amplitude: AtomicU64,
+}
+
+/// A buffer of `n` numbers, or the failure that names what could not be allocated.
+fn buffer<T: Clone>(n: usize, zero: T, what: &str) -> Result<Vec<T>, Failure> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n)
+        .map_err(|_| Failure::Input(format!("{what}: {n} numbers could not be allocated")))?;
+    v.resize(n, zero);
+    Ok(v)
+}
+
+impl<'a> Sums<'a> {
+    /// The sums of the outputs asked for (`None` when none is), allocated before the solve.
+    pub(super) fn new(
+        scene: &Scene,
+        ir: Option<&'a IrOutput>,
+        tl: Option<&'a TlOutput>,
+        charts: Option<&'a Charts>,
+    ) -> Result<Option<Sums<'a>>, Failure> {
+        if ir.is_none() && tl.is_none() && charts.is_none() {
+            return Ok(None);
+        }
+        let pairs = scene.sources().len() * scene.receivers().len();
+        let ir = match ir {
+            Some(o) => Some((
+                o,
+                Mutex::new(buffer(o.responses.len(), 0.0, "impulse_response")?),
+            )),
+            None => None,
+        };
+        let coherent = tl.filter(|t| t.mode == TransmissionLossMode::Coherent);
+        let map = charts.and_then(|c| c.tl_map.as_ref().map(|(_, f)| *f));
+        let pressure = match coherent.map(|t| t.frequency).or(map) {
+            Some(f) => Some((
+                f,
+                Mutex::new(buffer(pairs, Complex64::new(0.0, 0.0), "--tl")?),
+            )),
+            None => None,
+        };
+        let intensity = match tl.filter(|t| t.mode == TransmissionLossMode::Incoherent) {
+            Some(_) => Some(Mutex::new(buffer(pairs, 0.0, "--tl")?)),
+            None => None,
+        };
+        Ok(Some(Sums {
+            ir,
+            tl,
+            charts,
+            pressure,
+            intensity,
+            pair: Mutex::new(Vec::new()),
+            receivers: scene.receivers().len(),
+            echoes: AtomicU64::new(0),
+            without_amplitude: AtomicU64::new(0),
+        }))
+    }
+
+    /// Adds `e` to every output.
+    pub(super) fn add(&self, e: Echo) {
+        fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+            m.lock().unwrap_or_else(|e| e.into_inner())
+        }
+        self.echoes.fetch_add(1, Ordering::Relaxed);
+        let k = e.source * self.receivers + e.receiver;
+        if let Some((o, data)) = &self.ir {
+            let r = &o.responses;
+            let start = k * r.samples();
+            let mut data = lock(data);
+            r.pulse().add(
+                &mut data[start..start + r.samples()],
+                e.time * r.rate(),
+                e.amplitude,
+            );
+        }
+        if let Some((f, p)) = &self.pressure {
+            let phase =
+                Complex64::from_polar(1.0, 2.0 * std::f64::consts::PI * (f * e.time).fract());
+            lock(p)[k] += e.amplitude * phase;
+        }
+        if let Some(i) = &self.intensity {
+            lock(i)[k] += e.amplitude.norm_sqr();
+        }
+        if let Some(c) = self.charts
+            && c.echogram.is_some()
+            && (e.source, e.receiver) == (c.source, c.receiver)
+        {
+            lock(&self.pair).push(e);
+        }
+    }
+
+    /// Counts a timed arrival or ray without an amplitude value.
+    pub(super) fn skip(&self) {
+        self.without_amplitude.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// Writes every output.
+    pub(super) fn write(self, scene: &Scene) -> Result<(), Failure> {
+        let Sums {
+            ir,
+            tl,
+            charts,
+            pressure,
+            intensity,
+            pair,
+            ..
+        } = self;
+        let inner = |m: Mutex<Vec<f64>>| m.into_inner().unwrap_or_else(|e| e.into_inner());
+        if let Some((o, data)) = ir {
+            o.write(&inner(data))?;
+        }
+        let pressure = pressure.map(|(_, p)| p.into_inner().unwrap_or_else(|e| e.into_inner()));
+        if let Some(t) = tl {
+            let loss: Vec<f64> = match (&pressure, intensity) {
+                (_, Some(i)) => inner(i).into_iter().map(incoherent_loss).collect(),
+                (Some(p), None) => p.iter().map(|&p| transmission_loss(p)).collect(),
+                (None, None) => unreachable!("--tl sums one or the other"),
+            };
+            t.write(&loss)?;
+        }
+        if let Some(c) = charts {
+            let pair = pair.into_inner().unwrap_or_else(|e| e.into_inner());
+            c.write(scene, pair, pressure.as_deref().unwrap_or_default())?;
         }
         Ok(())
     }
