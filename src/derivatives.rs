@@ -706,7 +706,7 @@ pub enum Parameter {
 /// those of [`Workspace::points`] (source, interactions, receiver).
 ///
 /// ```
-/// use eigenray::gradients::{Axis, Parameter};
+/// use eigenray::derivatives::{Axis, Parameter};
 /// use eigenray::{PointSensitivities, Scene, Tracer, Workspace};
 /// let scene = Scene::from_json(r#"{
 ///     "media": { "air": { "speed": 1.0 } },
