@@ -116,9 +116,10 @@ pub mod scene_parts {
 }
 
 /// Amplitudes ([`Amplitude`]): why a timed ray may have none, and the complex numbers they
-/// are written in.
+/// are written in; the uniform wedge coefficient of diffracted paths and its Fresnel integral.
 pub mod amplitudes {
-    pub use crate::amplitude::{Complex64, NoAmplitude};
+    pub use crate::amplitude::diffraction::{Faces, fresnel_tail, transition, wedge_coefficient};
+    pub use crate::amplitude::{Complex64, DiffractionCase, NoAmplitude};
 }
 
 /// What a [`Tracer`] can be told besides its scene: the solver's options, the start of each

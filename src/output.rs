@@ -1305,6 +1305,7 @@ fn arrival_json(
         buf.extend_from_slice(match step.kind {
             StepKind::Reflect => b"{\"reflect\":",
             StepKind::Refract => b"{\"refract\":",
+            StepKind::Diffract { .. } => b"{\"diffract\":",
         });
         buf.extend_from_slice(
             names
@@ -1368,10 +1369,7 @@ fn arrival_csv(buf: &mut Vec<u8>, schema: &Schema, context: &Context<'_>, s: &Se
         .steps
         .iter()
         .map(|step| {
-            let kind = match step.kind {
-                StepKind::Reflect => "reflect",
-                StepKind::Refract => "refract",
-            };
+            let kind = step.kind.as_str();
             let name = scene
                 .interfaces()
                 .get(step.interface)
@@ -1420,6 +1418,7 @@ fn arrival_npy(buf: &mut Vec<u8>, schema: &Schema, context: &Context<'_>, s: &Se
         buf.push(s.steps.get(j).map_or(NO_STEP_KIND, |step| match step.kind {
             StepKind::Reflect => 0,
             StepKind::Refract => 1,
+            StepKind::Diffract { .. } => 2,
         }));
     }
     for j in 0..k {

@@ -143,6 +143,7 @@ impl ArrivalTable {
             *kind = match step.kind {
                 StepKind::Reflect => 0,
                 StepKind::Refract => 1,
+                StepKind::Diffract { .. } => 2,
             };
         }
         let legs = &mut self.media[i * (w - 1)..(i + 1) * (w - 1)];

@@ -220,6 +220,7 @@ mod tests {
                         .filter(|s| match s.kind {
                             StepKind::Reflect => reflect,
                             StepKind::Refract => refract,
+                            StepKind::Diffract { .. } => false,
                         })
                         .collect();
                     let vertex_ahead = vertex
