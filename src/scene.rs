@@ -410,8 +410,8 @@ pub struct SearchSpec {
     /// Whether `vertex` (edge-held) arrivals are listed too (default false).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vertex: Option<bool>,
-    /// Also list edge-diffracted arrivals (`diffract` steps). Not searched yet: a scene
-    /// that asks is refused, naming this key.
+    /// Also list edge-diffracted arrivals (`diffract` steps): first order, every vertex that
+    /// both ends see (a diffraction counts as a step for `max_steps`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub diffraction: Option<bool>,
 }
@@ -433,6 +433,9 @@ pub struct SearchOptions {
     pub obstructed: bool,
     /// Whether `vertex` (edge-held) arrivals are listed too.
     pub vertex: bool,
+    /// Whether diffracted arrivals (`diffract` steps) are listed too: every vertex of the
+    /// allowed interfaces that both ends see, once per pair (first order).
+    pub diffraction: bool,
 }
 
 impl SearchOptions {
@@ -761,13 +764,6 @@ fn search_options(
     spec: &SearchSpec,
     interfaces: &[Interface],
 ) -> Result<SearchOptions, SceneError> {
-    if spec.diffraction == Some(true) {
-        return Err(SceneError::new(
-            "search.diffraction",
-            "the search does not list diffracted arrivals yet: give the diffracted paths as \
-             `paths` with `{\"diffract\": NAME, \"vertex\": k}` steps",
-        ));
-    }
     if spec.max_steps.is_none() && spec.max_time.is_none() {
         return Err(SceneError::new(
             "search",
@@ -826,6 +822,7 @@ fn search_options(
         refract,
         obstructed: spec.obstructed.unwrap_or(false),
         vertex: spec.vertex.unwrap_or(false),
+        diffraction: spec.diffraction.unwrap_or(false),
     })
 }
 

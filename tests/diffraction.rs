@@ -143,11 +143,6 @@ fn diffract_steps_are_validated_and_written_back() {
         r#", "solver": { "derivatives": true }"#,
     );
     assert!(e.contains("solver.derivatives"), "{e}");
-    let e = bad(
-        r#"{ "reflect": "wall" }"#,
-        r#", "search": { "max_steps": 1, "diffraction": true }"#,
-    );
-    assert!(e.contains("search.diffraction"), "{e}");
 
     // The step reads back as written.
     let spec = SceneSpec::from_json(SCREEN).unwrap();
@@ -433,4 +428,152 @@ fn unsupported_vertices_have_no_amplitude_and_say_why() {
     );
     assert_eq!(case(r#""rigid""#, ""), why(DiffractionCase::NoFrequency));
     assert_eq!(case(r#""rigid""#, r#", "frequency": 500"#), None);
+}
+
+/// Whether segment `a–b` crosses segment `p–q` at a point strictly inside both (a brute-force
+/// test of its own, in plain arithmetic; touching at an end is no crossing).
+fn crosses(a: [f64; 2], b: [f64; 2], p: [f64; 2], q: [f64; 2]) -> bool {
+    let cross = |o: [f64; 2], u: [f64; 2], v: [f64; 2]| {
+        (u[0] - o[0]) * (v[1] - o[1]) - (u[1] - o[1]) * (v[0] - o[0])
+    };
+    let (d1, d2) = (cross(p, q, a), cross(p, q, b));
+    let (d3, d4) = (cross(a, b, p), cross(a, b, q));
+    let eps = 1e-12;
+    ((d1 > eps && d2 < -eps) || (d1 < -eps && d2 > eps))
+        && ((d3 > eps && d4 < -eps) || (d3 < -eps && d4 > eps))
+}
+
+/// An L-shaped room: the search with `"diffraction": true` lists, for every pair, exactly the
+/// vertices that both ends see (a brute force over the walls), each once, with the time of its
+/// two straight legs; the edge-held `vertex` arrivals of the same paths are not listed again;
+/// `max_time` bounds them.
+#[test]
+fn search_lists_every_vertex_both_ends_see() {
+    let room = [
+        [0.0, 0.0],
+        [4.0, 0.0],
+        [4.0, 2.0],
+        [2.0, 2.0],
+        [2.0, 4.0],
+        [0.0, 4.0],
+    ];
+    let mut rng = rng::SplitMix64(7);
+    let mut inside = |n: usize| -> Vec<[f64; 2]> {
+        let mut pts = Vec::new();
+        while pts.len() < n {
+            let p = [0.1 + 3.8 * rng.next_f64(), 0.1 + 3.8 * rng.next_f64()];
+            if p[0] < 1.9 || p[1] < 1.9 {
+                pts.push(p);
+            }
+        }
+        pts
+    };
+    let (sources, receivers) = (inside(3), inside(12));
+    let list = |pts: &[[f64; 2]]| {
+        pts.iter()
+            .map(|p| format!("[{:e}, {:e}]", p[0], p[1]))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let json = |max_time: &str| {
+        format!(
+            r#"{{ "media": {{ "air": {{ "speed": 1, "at": [1, 1] }} }},
+                 "interfaces": {{ "room": {{ "points": [[0, 0], [4, 0], [4, 2], [2, 2], [2, 4], [0, 4]],
+                                            "closed": true }} }},
+                 "sources": [{}], "receivers": [{}],
+                 "search": {{ "max_steps": 1, "diffraction": true, "vertex": true {max_time} }},
+                 "amplitudes": {{ "source": "point", "frequency": 1000 }} }}"#,
+            list(&sources),
+            list(&receivers)
+        )
+    };
+    let arrivals = Tracer::new(scene(&json(""))).unwrap().search().unwrap();
+    let sees = |a: [f64; 2], v: usize| {
+        (0..room.len()).all(|j| !crosses(a, room[v], room[j], room[(j + 1) % room.len()]))
+    };
+    let mut listed = 0;
+    for (si, &s) in sources.iter().enumerate() {
+        for (ri, &r) in receivers.iter().enumerate() {
+            let pair: Vec<_> = arrivals
+                .iter()
+                .filter(|a| a.source == si && a.receiver == ri)
+                .collect();
+            for v in 0..room.len() {
+                let want = sees(s, v) && sees(r, v);
+                let found: Vec<_> = pair
+                    .iter()
+                    .filter(|a| a.steps.len() == 1 && a.steps[0].kind.vertex() == Some(v))
+                    .collect();
+                assert_eq!(found.len(), usize::from(want), "pair {si} {ri} vertex {v}");
+                if let Some(a) = found.first() {
+                    let t = dist(s, room[v]) + dist(room[v], r);
+                    assert!((a.arrival.time - t).abs() <= 1e-14 * t);
+                    assert_eq!(a.arrival.status, Status::Converged);
+                    assert!(a.complete);
+                    assert!(a.arrival.amplitude.unwrap().has_value());
+                    listed += 1;
+                }
+            }
+            // No edge-held arrival of a one-reflection sequence on a listed vertex.
+            for a in pair.iter().filter(|a| a.arrival.status == Status::Vertex) {
+                assert!(a.steps.len() > 1, "{a:?}");
+            }
+        }
+    }
+    eprintln!("{listed} first-order diffracted arrivals, each vertex both ends see");
+    assert!(listed > 36);
+    // A time bound drops exactly the later ones.
+    let bound = 4.0;
+    let timed = Tracer::new(scene(&json(&format!(r#", "max_time": {bound}"#))))
+        .unwrap()
+        .search()
+        .unwrap();
+    let diffracted = |list: &[eigenray::SearchArrival], t: f64| {
+        list.iter()
+            .filter(|a| a.steps.iter().any(|s| s.kind.vertex().is_some()))
+            .filter(|a| a.arrival.time <= t)
+            .count()
+    };
+    assert_eq!(
+        diffracted(&timed, f64::INFINITY),
+        diffracted(&arrivals, bound)
+    );
+}
+
+/// The transmission loss (from a scene's `search` with `"diffraction": true`, through the
+/// responses' echoes) has no jump across a corner's shadow edge; without diffraction it
+/// jumps by several dB.
+#[test]
+fn transmission_loss_has_no_jump_at_a_shadow_edge() {
+    use eigenray::response::{echoes_of_scene, pressure_into, transmission_loss};
+    let tl = |diffraction: bool| {
+        // A building's corner (270° outside, rigid), the source at 60° from its top face.
+        let (phi0, r0, r) = (PI / 3.0, 30.0, 40.0);
+        let boundary = PI + phi0;
+        let receivers: Vec<String> = [boundary - 1e-9, boundary + 1e-9]
+            .iter()
+            .map(|a| format!("[{:e}, {:e}]", r * a.cos(), r * a.sin()))
+            .collect();
+        let json = format!(
+            r#"{{ "media": {{ "air": {{ "speed": 343 }} }}, "background": "air",
+                 "interfaces": {{ "corner": {{ "points": [[500, 0], [0, 0], [0, -500]] }} }},
+                 "sources": [[{:e}, {:e}]], "receivers": [{}],
+                 "search": {{ "max_steps": 1, "diffraction": {diffraction} }},
+                 "amplitudes": {{ "source": "point", "frequency": 250 }} }}"#,
+            r0 * phi0.cos(),
+            r0 * phi0.sin(),
+            receivers.join(", ")
+        );
+        let tracer = Tracer::new(scene(&json)).unwrap();
+        let echoes = echoes_of_scene(&tracer).unwrap();
+        let mut p = [Complex64::new(0.0, 0.0); 2];
+        pressure_into(echoes, 250.0, 1, &mut p);
+        [transmission_loss(p[0]), transmission_loss(p[1])]
+    };
+    let [lit, dark] = tl(true);
+    eprintln!("TL across the shadow edge, with diffraction: {lit:.9} dB, {dark:.9} dB");
+    assert!((lit - dark).abs() < 1e-5, "{lit} {dark}");
+    let [lit, dark] = tl(false);
+    eprintln!("without: {lit:.3} dB, {dark:.3} dB");
+    assert!(!dark.is_finite() || dark - lit > 3.0, "{lit} {dark}");
 }

@@ -26,6 +26,7 @@
 //! allocated ([`SearchError::TooLarge`]).
 
 mod beams;
+mod diffraction;
 mod sequences;
 mod strategy;
 
@@ -360,6 +361,14 @@ impl Tracer {
             pairs[pair].complete &= walk.complete;
             arrivals.extend(walk.arrivals);
         }
+        if options.diffraction {
+            for (pair, walk) in self.diffraction_pairs(options, &control) {
+                report.work += walk.work;
+                pairs[pair].complete &= walk.complete;
+                arrivals.extend(walk.arrivals);
+            }
+            diffraction::drop_listed_twice(self, &mut arrivals);
+        }
         for a in &mut arrivals {
             a.complete = pairs[a.source * nr + a.receiver].complete;
         }
@@ -385,8 +394,9 @@ impl Tracer {
 /// Orders arrivals by pair and time; ties (none but equal times) by the number of steps, the
 /// sequence and the segments, for a fixed order.
 fn sort_arrivals(arrivals: &mut [SearchArrival]) {
-    fn key(s: &[Step]) -> impl Iterator<Item = (usize, bool)> + '_ {
-        s.iter().map(|t| (t.interface, t.kind == StepKind::Refract))
+    fn key(s: &[Step]) -> impl Iterator<Item = (usize, bool, Option<usize>)> + '_ {
+        s.iter()
+            .map(|t| (t.interface, t.kind == StepKind::Refract, t.kind.vertex()))
     }
     arrivals.par_sort_unstable_by(|a, b| {
         (a.source, a.receiver)

@@ -132,6 +132,7 @@ mod tests {
             refract: true,
             obstructed: true,
             vertex,
+            diffraction: false,
         }
     }
 

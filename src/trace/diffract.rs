@@ -38,11 +38,24 @@ impl Tracer {
         budget: SearchBudget,
         out: &mut Vec<Arrival>,
     ) -> (SearchOutcome, Option<Reason>) {
+        let spec = &self.scene.paths()[path];
+        let (steps, given) = (&spec.steps, spec.media.as_deref());
+        self.diffracted_sequence(steps, given, source, receiver, budget, out)
+    }
+
+    /// [`diffracted_paths`](Self::diffracted_paths) of any sequence `steps` with `diffract`
+    /// steps (the leg media `given`, or looked up): what the search's diffraction calls.
+    pub(crate) fn diffracted_sequence(
+        &self,
+        steps: &[Step],
+        given: Option<&[usize]>,
+        source: Point,
+        receiver: Point,
+        budget: SearchBudget,
+        out: &mut Vec<Arrival>,
+    ) -> (SearchOutcome, Option<Reason>) {
         out.clear();
         let scene = &*self.scene;
-        let spec = &scene.paths()[path];
-        let steps = &spec.steps;
-        let given = spec.media.as_deref();
         let cuts: Vec<usize> = (0..steps.len())
             .filter(|&i| steps[i].kind.vertex().is_some())
             .collect();
