@@ -1313,6 +1313,10 @@ fn arrival_json(
                 .get(step.interface)
                 .map_or(b"\"?\"", Vec::as_slice),
         );
+        if let Some(v) = step.kind.vertex() {
+            buf.extend_from_slice(b",\"vertex\":");
+            int(buf, v);
+        }
         buf.push(b'}');
     }
     buf.extend_from_slice(b"],\"media\":");
@@ -1374,7 +1378,10 @@ fn arrival_csv(buf: &mut Vec<u8>, schema: &Schema, context: &Context<'_>, s: &Se
                 .interfaces()
                 .get(step.interface)
                 .map_or("?", |i| i.name.as_str());
-            format!("{kind}:{}", csv_list_item(name))
+            match step.kind.vertex() {
+                Some(v) => format!("{kind}:{}@{v}", csv_list_item(name)),
+                None => format!("{kind}:{}", csv_list_item(name)),
+            }
         })
         .collect();
     csv_field(buf, &steps.join(";"));
