@@ -498,7 +498,7 @@ fn search_lists_every_vertex_both_ends_see() {
                 .iter()
                 .filter(|a| a.source == si && a.receiver == ri)
                 .collect();
-            for v in 0..room.len() {
+            for (v, &corner) in room.iter().enumerate() {
                 let want = sees(s, v) && sees(r, v);
                 let found: Vec<_> = pair
                     .iter()
@@ -506,7 +506,7 @@ fn search_lists_every_vertex_both_ends_see() {
                     .collect();
                 assert_eq!(found.len(), usize::from(want), "pair {si} {ri} vertex {v}");
                 if let Some(a) = found.first() {
-                    let t = dist(s, room[v]) + dist(room[v], r);
+                    let t = dist(s, corner) + dist(corner, r);
                     assert!((a.arrival.time - t).abs() <= 1e-14 * t);
                     assert_eq!(a.arrival.status, Status::Converged);
                     assert!(a.complete);

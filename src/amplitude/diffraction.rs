@@ -234,8 +234,8 @@ pub fn wedge_coefficient(
 /// no coefficient.
 fn faces_of(settings: &Amplitudes, interface: usize) -> Result<Faces, DiffractionCase> {
     match settings.reflection[interface] {
-        Reflection::Fixed(r) if r == 1.0 => Ok(Faces::Rigid),
-        Reflection::Fixed(r) if r == -1.0 => Ok(Faces::PressureRelease),
+        Reflection::Fixed(1.0) => Ok(Faces::Rigid),
+        Reflection::Fixed(-1.0) => Ok(Faces::PressureRelease),
         Reflection::Fixed(_) => Err(DiffractionCase::AbsorbingFace),
         Reflection::Media => Err(DiffractionCase::PenetrableFace),
     }
