@@ -174,8 +174,22 @@ pub fn fresnel_tail(a: f64) -> Complex64 {
 }
 
 /// The UTD transition function for `e^(−iωt)`: `F(X) = −2i √X e^(−iX) ∫_√X^∞ e^(iτ²) dτ`
-/// (`X ≥ 0`; 1 far from the boundaries, `√(πX) e^(−iπ/4)` near them).
+/// (`X ≥ 0`; 1 far from the boundaries, `√(πX) e^(−iπ/4)` near them). From `X = 50` on, its
+/// asymptotic series `Σ (2n − 1)!! (−i/2X)ⁿ`, whose terms fall below 1e-17 before they grow
+/// there (most receivers lie far from the boundaries: no continued fraction for them).
 pub fn transition(x: f64) -> Complex64 {
+    if x >= 50.0 {
+        let step = Complex64::new(0.0, -0.5 / x);
+        let (mut sum, mut term) = (Complex64::new(1.0, 0.0), Complex64::new(1.0, 0.0));
+        for n in 1..60 {
+            term *= step * f64::from(2 * n - 1);
+            sum += term;
+            if term.norm() < 1e-17 {
+                break;
+            }
+        }
+        return sum;
+    }
     let a = x.max(0.0).sqrt();
     Complex64::new(0.0, -2.0 * a) * Complex64::from_polar(1.0, -x) * fresnel_tail(a)
 }
@@ -419,6 +433,14 @@ mod tests {
         let cs = (whole - fresnel_tail(u * FRAC_PI_2.sqrt())) / FRAC_PI_2.sqrt();
         assert!((cs.re - 0.779_893_400_376_822_8).abs() < 1e-14, "{cs}");
         assert!((cs.im - 0.438_259_147_390_354_8).abs() < 1e-14, "{cs}");
+        // The asymptotic series against the integral, on both sides of X = 50.
+        for x in [40.0f64, 49.9, 50.0, 64.0, 150.0, 900.0] {
+            let a: f64 = x.sqrt();
+            let direct = Complex64::new(0.0, -2.0 * a)
+                * Complex64::from_polar(1.0, -x)
+                * tail_by_quadrature(a);
+            assert!((transition(x) - direct).norm() < 1e-12, "{x}");
+        }
         // Far out: F(X) → 1 − i/(2X).
         let x = 1e4;
         assert!((transition(x) - Complex64::new(1.0, -0.5 / x)).norm() < 1e-7);

@@ -12,9 +12,9 @@
 
 use crate::amplitude::diffraction::Wedge;
 use crate::geom::Point;
-use crate::scene::Step;
+use crate::scene::{SegmentRef, Step};
 
-use super::classify::Sequence;
+use super::classify::{END_MARGIN, Sequence};
 use super::complete::{Arrival, Kink, SearchBudget};
 use super::{RayRecord, Reason, SearchOutcome, Status, Tracer, Workspace};
 
@@ -95,6 +95,10 @@ impl Tracer {
                         };
                         let found = if given.is_none() && medium.is_none() {
                             // No medium where the piece starts: no path.
+                            SearchOutcome::new()
+                        } else if piece_steps.is_empty() {
+                            let m = media.map_or(medium, |m| m.first().copied());
+                            self.direct_piece(from, to, m, given.is_none(), &mut pieces);
                             SearchOutcome::new()
                         } else {
                             self.stationary_of(
@@ -194,6 +198,55 @@ impl Tracer {
             residual: a.residual,
             reason: a.reason,
         }
+    }
+}
+
+impl Tracer {
+    /// The one arrival of a piece without steps (a straight leg from `from` to `to` in medium
+    /// `medium`), as the complete search of the direct path gives it: `converged`, or
+    /// `obstructed` where the leg crosses an interface; none where the leg vanishes or, with
+    /// the media looked up (`lookup`), where its middle lies in another medium.
+    fn direct_piece(
+        &self,
+        from: Point,
+        to: Point,
+        medium: Option<usize>,
+        lookup: bool,
+        out: &mut Vec<Arrival>,
+    ) {
+        out.clear();
+        let Some(m) = medium else { return };
+        let length = (to - from).length();
+        if length == 0.0 {
+            return;
+        }
+        let scene = &*self.scene;
+        let crossing = scene.first_crossing(from, to, END_MARGIN, [SegmentRef::NONE; 2]);
+        if lookup
+            && crossing.is_none()
+            && let Some(regions) = self.regions.as_ref()
+            && regions.medium_at(from.lerp(to, 0.5)) != Some(m)
+        {
+            return;
+        }
+        let (status, reason) = match crossing {
+            Some(r) => (
+                Status::Obstructed,
+                Some(Reason::Crosses {
+                    leg: 0,
+                    interface: r.interface as usize,
+                }),
+            ),
+            None => (Status::Converged, None),
+        };
+        out.push(Arrival {
+            status,
+            time: length * scene.media()[m].slowness,
+            points: vec![from, to],
+            media: vec![m],
+            reason,
+            ..empty_arrival()
+        });
     }
 }
 
