@@ -265,42 +265,89 @@ pub struct PathSpec {
     pub media: Option<Vec<String>>,
 }
 
-/// One interaction: `{"reflect": NAME}` or `{"refract": NAME}`.
+/// One interaction: `{"reflect": NAME}`, `{"refract": NAME}` or
+/// `{"diffract": NAME, "vertex": k}`.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase", try_from = "StepDocument")]
+#[serde(try_from = "StepDocument", into = "StepDocument")]
 pub enum StepSpec {
     /// Reflection off the named interface.
     Reflect(String),
     /// Refraction through the named interface.
     Refract(String),
+    /// Diffraction at vertex `vertex` (an index into its polyline's points) of the named
+    /// interface: the path's point there is the vertex itself.
+    Diffract {
+        /// The interface.
+        interface: String,
+        /// The vertex's index in the interface's `points`.
+        vertex: u64,
+    },
 }
 
 /// A step as the document writes it, before the check that it names exactly one kind: the
 /// form serde reads, so that a step with both keys or neither gets a message of its own.
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(
     deny_unknown_fields,
-    expecting = "a step, {\"reflect\": NAME} or {\"refract\": NAME}"
+    expecting = "a step, {\"reflect\": NAME}, {\"refract\": NAME} or {\"diffract\": NAME, \"vertex\": k}"
 )]
 struct StepDocument {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     reflect: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     refract: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    diffract: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    vertex: Option<u64>,
 }
 
 impl TryFrom<StepDocument> for StepSpec {
     type Error = String;
 
     fn try_from(step: StepDocument) -> Result<StepSpec, String> {
-        match (step.reflect, step.refract) {
-            (Some(name), None) => Ok(StepSpec::Reflect(name)),
-            (None, Some(name)) => Ok(StepSpec::Refract(name)),
-            (Some(_), Some(_)) => Err("a step is one interaction: give `reflect` or `refract` \
-                 (`{\"reflect\": NAME}`), not both; write two steps for two interactions"
+        match (step.reflect, step.refract, step.diffract, step.vertex) {
+            (Some(name), None, None, None) => Ok(StepSpec::Reflect(name)),
+            (None, Some(name), None, None) => Ok(StepSpec::Refract(name)),
+            (None, None, Some(interface), Some(vertex)) => {
+                Ok(StepSpec::Diffract { interface, vertex })
+            }
+            (None, None, Some(_), None) => Err("a `diffract` step needs its `vertex` \
+                 (`{\"diffract\": NAME, \"vertex\": k}`, k the index in the interface's points)"
                 .into()),
-            (None, None) => {
-                Err("a step needs `reflect` or `refract` (`{\"reflect\": NAME}`)".into())
+            (_, _, None, Some(_)) => Err(
+                "`vertex` belongs to a `diffract` step (`{\"diffract\": NAME, \"vertex\": k}`)"
+                    .into(),
+            ),
+            (None, None, None, None) => Err("a step needs `reflect`, `refract` or `diffract` \
+                 (`{\"reflect\": NAME}`)"
+                .into()),
+            _ => Err(
+                "a step is one interaction: give one of `reflect`, `refract` or `diffract` \
+                 (`{\"reflect\": NAME}`), not several; write two steps for two interactions"
+                    .into(),
+            ),
+        }
+    }
+}
+
+impl From<StepSpec> for StepDocument {
+    fn from(step: StepSpec) -> StepDocument {
+        let mut doc = StepDocument {
+            reflect: None,
+            refract: None,
+            diffract: None,
+            vertex: None,
+        };
+        match step {
+            StepSpec::Reflect(name) => doc.reflect = Some(name),
+            StepSpec::Refract(name) => doc.refract = Some(name),
+            StepSpec::Diffract { interface, vertex } => {
+                doc.diffract = Some(interface);
+                doc.vertex = Some(vertex);
             }
         }
+        doc
     }
 }
 
@@ -365,6 +412,10 @@ pub struct SearchSpec {
     /// Whether `vertex` (edge-held) arrivals are listed too (default false).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vertex: Option<bool>,
+    /// Also list edge-diffracted arrivals (`diffract` steps): first order, every vertex that
+    /// both ends see (a diffraction counts as a step for `max_steps`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diffraction: Option<bool>,
 }
 
 /// The search settings of a validated scene (see [`SearchSpec`]).
@@ -384,6 +435,9 @@ pub struct SearchOptions {
     pub obstructed: bool,
     /// Whether `vertex` (edge-held) arrivals are listed too.
     pub vertex: bool,
+    /// Whether diffracted arrivals (`diffract` steps) are listed too: every vertex of the
+    /// allowed interfaces that both ends see, once per pair (first order).
+    pub diffraction: bool,
 }
 
 impl SearchOptions {
@@ -422,13 +476,37 @@ pub struct Interface {
     pub polyline: Polyline,
 }
 
-/// Reflection or refraction.
+/// Reflection, refraction or diffraction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum StepKind {
     /// Both legs on the same side of the interface.
     Reflect,
     /// The legs on opposite sides.
     Refract,
+    /// The point held at a vertex of the interface (an edge-diffracted path): no unknown.
+    Diffract {
+        /// The vertex's index in the interface's polyline points.
+        vertex: u32,
+    },
+}
+
+impl StepKind {
+    /// Its key in the scene's notation: `reflect`, `refract` or `diffract`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            StepKind::Reflect => "reflect",
+            StepKind::Refract => "refract",
+            StepKind::Diffract { .. } => "diffract",
+        }
+    }
+
+    /// The vertex of a diffraction.
+    pub fn vertex(self) -> Option<usize> {
+        match self {
+            StepKind::Diffract { vertex } => Some(vertex as usize),
+            _ => None,
+        }
+    }
 }
 
 /// One interaction of a validated path.
@@ -449,6 +527,13 @@ pub struct Path {
     pub steps: Vec<Step>,
     /// Medium index of every leg, when the path gives them.
     pub media: Option<Vec<usize>>,
+}
+
+impl Path {
+    /// Whether a step of the path is a diffraction.
+    pub fn diffracts(&self) -> bool {
+        self.steps.iter().any(|s| s.kind.vertex().is_some())
+    }
 }
 
 /// Solver settings of a validated scene.
@@ -737,6 +822,7 @@ fn search_options(
         refract,
         obstructed: spec.obstructed.unwrap_or(false),
         vertex: spec.vertex.unwrap_or(false),
+        diffraction: spec.diffraction.unwrap_or(false),
     })
 }
 
@@ -934,6 +1020,10 @@ fn path_of(
         let (kind, name, which) = match s {
             StepSpec::Reflect(n) => (StepKind::Reflect, n, "reflect"),
             StepSpec::Refract(n) => (StepKind::Refract, n, "refract"),
+            // The vertex is checked once the interface is known.
+            StepSpec::Diffract { interface, .. } => {
+                (StepKind::Diffract { vertex: 0 }, interface, "diffract")
+            }
         };
         let interface = by_name(interfaces, |i| &i.name, name).ok_or_else(|| {
             SceneError::new(
@@ -945,6 +1035,25 @@ fn path_of(
                 ),
             )
         })?;
+        let kind = match s {
+            StepSpec::Diffract { vertex, .. } => {
+                let line = &interfaces[interface].polyline;
+                let n = line.vertices().len();
+                match u32::try_from(*vertex) {
+                    Ok(v) if (v as usize) < n => StepKind::Diffract { vertex: v },
+                    _ => {
+                        return Err(SceneError::new(
+                            format!("{key}.steps[{j}].vertex"),
+                            format!(
+                                "interface `{name}` has vertices 0 to {}, not {vertex}",
+                                n - 1
+                            ),
+                        ));
+                    }
+                }
+            }
+            _ => kind,
+        };
         steps.push(Step { kind, interface });
     }
     let media = match &p.media {
@@ -1066,6 +1175,17 @@ impl Scene {
         }
         let paths = paths_of(&spec.paths, &interfaces, &media)?;
         let solver = solver_of(spec.solver.as_ref())?;
+        if solver.derivatives
+            && let Some(k) = paths.iter().position(Path::diffracts)
+        {
+            return Err(SceneError::new(
+                "solver.derivatives",
+                format!(
+                    "derivatives of diffracted paths are not available (paths[{k}] has a \
+                     `diffract` step)"
+                ),
+            ));
+        }
         let search = match &spec.search {
             Some(s) => Some(search_options(s, &interfaces)?),
             None => None,

@@ -128,6 +128,8 @@ fn coefficient(cx: Context<'_>, x: &Interaction<'_>) -> Result<Complex64, NoAmpl
         }
         // A converted wave: its coefficient is not modelled.
         StepKind::Reflect if x.m_in != x.m => Complex64::new(1.0, 0.0),
+        // Pieces between vertices are walked on their own (`amplitude::diffraction`).
+        StepKind::Diffract { .. } => return Err(NoAmplitude::UnknownMedia),
         StepKind::Reflect => match cx.settings.reflection[x.step.interface] {
             Reflection::Fixed(r) => Complex64::new(r, 0.0),
             Reflection::Media => {
@@ -287,15 +289,66 @@ fn spreading_scaled(num: f64, den: f64, out: f64, scale: f64) -> f64 {
 /// Whether `x` is a positive finite number, in one integer comparison of its bits (the
 /// positive finite doubles are the bit patterns 1 to `0x7fef_ffff_ffff_ffff`).
 #[inline(always)]
-fn positive_finite(x: f64) -> bool {
+pub(crate) fn positive_finite(x: f64) -> bool {
     x.to_bits().wrapping_sub(1) < f64::MAX.to_bits()
+}
+
+/// What the amplitude of a diffracted path takes from each of its pieces (the specular paths
+/// between its source, its vertices and its receiver): [`walk`]'s gatherings.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PieceWalk {
+    /// The product of the piece's coefficients.
+    pub coefficient: Complex64,
+    /// Its in-plane tube factor `Π (cos θ₂ / cos θ₁) / W` (`1 / ℓ` for one straight leg).
+    pub tube: f64,
+    /// `w₀ Σ ℓⱼ / wⱼ` over its legs, `w₀` its first leg's slowness.
+    pub out_of_plane: f64,
+    /// Its attenuation (dB).
+    pub attenuation_db: f64,
+    /// Its first leg's length and slowness.
+    pub l0: f64,
+    pub w0: f64,
+}
+
+/// The pass over one piece of a diffracted path: a specular path from `path.points[0]` (the
+/// source or a vertex) to its last point, as [`of_path`] walks a whole path.
+pub(crate) fn walk_piece(
+    scene: &Scene,
+    settings: &Amplitudes,
+    regions: Option<&Regions>,
+    path: PathGeometry<'_>,
+) -> Result<PieceWalk, NoAmplitude> {
+    let k = path.steps.len();
+    if path.points.len() != k + 2 || path.media.len() != k + 1 {
+        return Err(NoAmplitude::UnknownMedia);
+    }
+    let cx = Context {
+        scene,
+        settings,
+        regions,
+    };
+    let w = walk(cx, path)?;
+    if let Some(step) = w.converted {
+        return Err(NoAmplitude::ConvertedReflection { step });
+    }
+    Ok(PieceWalk {
+        coefficient: w.coefficient,
+        tube: w.tube_num / w.tube_den,
+        out_of_plane: w.out_of_plane,
+        attenuation_db: w.attenuation_db,
+        l0: w.l0,
+        w0: w.w0,
+    })
 }
 
 /// The out-of-plane width of an axisymmetric scene, `|x_R| / |t₀ₓ|` with `t₀` the first leg's
 /// direction (`ℓ₀` its length); `None` for a path along the axis (the point source's width is
 /// the limit there).
 #[inline(never)]
-fn out_of_plane_axisymmetric(points: &[Point], l0: f64) -> Result<Option<f64>, NoAmplitude> {
+pub(crate) fn out_of_plane_axisymmetric(
+    points: &[Point],
+    l0: f64,
+) -> Result<Option<f64>, NoAmplitude> {
     if points[0].x != 0.0 {
         return Err(NoAmplitude::SourceOffAxis);
     }

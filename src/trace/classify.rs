@@ -611,6 +611,8 @@ pub(crate) fn sides_suit(kind: StepKind, a: f64, b: f64) -> bool {
     match kind {
         StepKind::Reflect => (a > 0.0 && b > 0.0) || (a < 0.0 && b < 0.0),
         StepKind::Refract => (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0),
+        // A diffraction's legs leave its vertex into any direction of the wedge's outside.
+        StepKind::Diffract { .. } => true,
     }
 }
 

@@ -24,6 +24,7 @@ mod amplitude;
 mod chain;
 mod classify;
 mod complete;
+mod diffract;
 mod flat;
 mod mirrors;
 mod occlusion;
@@ -586,6 +587,9 @@ impl Tracer {
         start: Start,
         ws: &mut Workspace,
     ) -> RayRecord {
+        if plan.diffracted() {
+            return self.solve_diffracted(source, receiver, path, ws);
+        }
         let cx = self.context();
         if let (Start::Default, Some(sp)) = (start, plan.stack())
             && let Some(ray) = sp.solve_stack(&cx, path, source, receiver, ws)

@@ -99,6 +99,12 @@ impl Tracer {
             return Err(StationaryError::TooManySteps { path, steps });
         }
         self.assert_solvable(source, receiver, path, "Tracer::stationary_paths");
+        if self.plan_of(path).diffracted() {
+            let (search, _) =
+                self.diffracted_paths(path, source, receiver, self.search_budget(), out);
+            self.arrival_amplitudes(&spec.steps, out);
+            return Ok(search);
+        }
         let source_medium = self.source_medium(spec.media.is_some(), source);
         let search = self.stationary_of(
             Sequence::of(&self.scene, path),
@@ -217,7 +223,8 @@ impl Tracer {
         };
         let here = legs.media[i];
         match step.kind {
-            StepKind::Reflect => {
+            // A diffraction keeps the medium too (a wedge of rigid or soft faces).
+            StepKind::Reflect | StepKind::Diffract { .. } => {
                 legs.push(here);
                 self.search_media(base, legs, out, stats);
                 legs.len -= 1;
@@ -284,7 +291,8 @@ impl Tracer {
             record.reason,
             Some(Reason::BeyondEnd { .. } | Reason::NoStationaryPath | Reason::NoMedium { leg: 0 })
         );
-        if proof || self.newton.max_iterations == 0 {
+        // A diffracted path's pieces were searched completely already.
+        if proof || self.newton.max_iterations == 0 || self.plan_of(path).diffracted() {
             return record;
         }
         let spec = &self.scene.paths()[path];
@@ -390,7 +398,7 @@ fn media_hold(regions: &Regions, search: &SequenceSearch<'_>, a: &Arrival) -> bo
     search.sequence.steps.iter().enumerate().all(|(i, step)| {
         let after = a.media[i + 1];
         match step.kind {
-            StepKind::Reflect => after == a.media[i],
+            StepKind::Reflect | StepKind::Diffract { .. } => after == a.media[i],
             StepKind::Refract => {
                 let (seg, s) = (a.segments[i], a.parameters[i]);
                 regions.medium_across(step.interface, seg, s, a.points[i]) == Some(after)
