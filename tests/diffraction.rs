@@ -67,7 +67,9 @@ fn a_diffraction_holds_its_point_on_the_vertex_exactly() {
         }
     }
     // Every stationary path: the same, once each.
-    let all = tracer.trace_stationary().unwrap();
+    let all = tracer
+        .trace_stationary(&eigenray::options::Run::new())
+        .unwrap();
     for t in &all.triples {
         assert!(t.complete);
         assert_eq!(t.arrivals.len(), 1, "{t:?}");
@@ -158,7 +160,7 @@ fn diffract_steps_are_validated_and_written_back() {
 // ---------------------------------------------------------------------------------------
 // The UTD amplitude.
 
-use eigenray::amplitudes::Complex64;
+use eigenray::amplitude::Complex64;
 use std::f64::consts::{PI, TAU};
 
 /// `∫_a^∞ e^(iτ²) dτ` (any real `a`) by Simpson's rule along `τ = |a| + t e^(iπ/4)`, where
@@ -269,7 +271,9 @@ fn wedge_scene_at(
 /// (k = 1: ω = 1 with speed 1).
 fn total_field(scene: &Scene) -> Vec<Complex64> {
     let tracer = Tracer::new(scene).unwrap();
-    let all = tracer.trace_stationary().unwrap();
+    let all = tracer
+        .trace_stationary(&eigenray::options::Run::new())
+        .unwrap();
     let mut p = vec![Complex64::new(0.0, 0.0); scene.receivers().len()];
     for t in &all.triples {
         assert!(t.complete);
@@ -400,7 +404,7 @@ fn total_field_is_continuous_across_shadow_and_reflection_boundaries() {
 /// Vertices without a wedge coefficient keep a `null` amplitude with a reason naming the case.
 #[test]
 fn unsupported_vertices_have_no_amplitude_and_say_why() {
-    use eigenray::amplitudes::{DiffractionCase, NoAmplitude};
+    use eigenray::amplitude::{DiffractionCase, NoAmplitude};
     let case = |law: &str, frequency: &str| {
         let json = format!(
             r#"{{ "media": {{ "air": {{ "speed": 343 }}, "wall": {{ "speed": 3000, "at": [0.5, -5] }} }},
@@ -487,7 +491,11 @@ fn search_lists_every_vertex_both_ends_see() {
             list(&receivers)
         )
     };
-    let arrivals = Tracer::new(scene(&json(""))).unwrap().search().unwrap();
+    let arrivals = Tracer::new(scene(&json("")))
+        .unwrap()
+        .search(&eigenray::options::Run::new())
+        .unwrap()
+        .arrivals;
     let sees = |a: [f64; 2], v: usize| {
         (0..room.len()).all(|j| !crosses(a, room[v], room[j], room[(j + 1) % room.len()]))
     };
@@ -526,8 +534,9 @@ fn search_lists_every_vertex_both_ends_see() {
     let bound = 4.0;
     let timed = Tracer::new(scene(&json(&format!(r#", "max_time": {bound}"#))))
         .unwrap()
-        .search()
-        .unwrap();
+        .search(&eigenray::options::Run::new())
+        .unwrap()
+        .arrivals;
     let diffracted = |list: &[eigenray::SearchArrival], t: f64| {
         list.iter()
             .filter(|a| a.steps.iter().any(|s| s.kind.vertex().is_some()))
@@ -565,9 +574,9 @@ fn transmission_loss_has_no_jump_at_a_shadow_edge() {
             receivers.join(", ")
         );
         let tracer = Tracer::new(scene(&json)).unwrap();
-        let echoes = echoes_of_scene(&tracer).unwrap();
+        let echoes = echoes_of_scene(&tracer, &eigenray::options::Run::new()).unwrap();
         let mut p = [Complex64::new(0.0, 0.0); 2];
-        pressure_into(echoes, 250.0, 1, &mut p);
+        pressure_into(echoes, 250.0, 1, &eigenray::options::Run::new(), &mut p);
         [transmission_loss(p[0]), transmission_loss(p[1])]
     };
     let [lit, dark] = tl(true);

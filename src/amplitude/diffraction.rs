@@ -4,7 +4,7 @@
 //! `e^(jωt)` form).
 //!
 //! A diffracted path is its pieces (the specular paths between the source, its vertices and
-//! its receiver), each walked as a path of its own ([`walk_piece`]); its amplitude is the
+//! its receiver), each walked as a path of its own (`walk_piece`); its amplitude is the
 //! incident amplitude at the first vertex × the wedge coefficient `D` × the spreading from the
 //! vertex, piece after piece:
 //!
@@ -13,7 +13,7 @@
 //! - out of the plane (`point`, `axisymmetric`) the width runs on from the source through the
 //!   vertices as through a specular path (`Y`, the whole path's), which gives
 //!   `√(r₀ / (r (r + r₀)))` for one diffraction of a direct wave;
-//! - the spreading is then that of [`finish`](super::ray)'s form with the tube `Π Gⱼ`, and
+//! - the spreading is then that of `ray::finish`'s form with the tube `Π Gⱼ`, and
 //!   the coefficient the product of the pieces' coefficients and of each vertex's `D` (which
 //!   carries the units `length^½`).
 //!

@@ -22,7 +22,7 @@
 //! ring of azimuths at range `x_R` over the cone of take-off directions).
 
 mod coefficients;
-pub(crate) mod diffraction;
+pub mod diffraction;
 mod ray;
 
 pub use num_complex::Complex64;

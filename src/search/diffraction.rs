@@ -11,13 +11,13 @@
 
 use rayon::prelude::*;
 
-use crate::control::within;
 use crate::geom::Point;
+use crate::options::Progress;
 use crate::scene::{SearchOptions, Step, StepKind};
 use crate::trace::{Arrival, Status, Tracer};
 
 use super::sequences::PairWalk;
-use super::{Control, SearchArrival, SearchProgress};
+use super::{Control, SearchArrival};
 
 /// The bound's relative margin against round-off.
 const TIME_MARGIN: f64 = 1e-9;
@@ -56,18 +56,17 @@ impl Tracer {
             .into_par_iter()
             .map(|pair| {
                 let (source, receiver) = (pair / nr, pair % nr);
-                let found = if control.stopped() {
+                let found = if control.run.keep_going(Progress { work: 0, items: 1 }) {
+                    control.run.within(|| {
+                        self.diffracted_pair(options, control, &vertices, least, source, receiver)
+                    })
+                } else {
                     PairWalk {
                         arrivals: Vec::new(),
                         complete: false,
                         work: 0,
                     }
-                } else {
-                    within(control.stop, || {
-                        self.diffracted_pair(options, control, &vertices, least, source, receiver)
-                    })
                 };
-                (control.progress)(SearchProgress::default());
                 (pair, found)
             })
             .collect()
@@ -93,7 +92,7 @@ impl Tracer {
         };
         let mut found: Vec<Arrival> = Vec::new();
         for &(step, v) in vertices {
-            if control.stopped() {
+            if !control.run.keep_going(Progress::work(1)) {
                 walk.complete = false;
                 break;
             }

@@ -101,15 +101,18 @@ impl Tracer {
                             self.direct_piece(from, to, m, given.is_none(), &mut pieces);
                             SearchOutcome::new()
                         } else {
-                            self.stationary_of(
-                                sequence,
-                                media,
-                                from,
-                                medium,
-                                to,
-                                budget,
-                                &mut pieces,
-                            )
+                            crate::options::with_current(|run| {
+                                self.stationary_of(
+                                    sequence,
+                                    media,
+                                    from,
+                                    medium,
+                                    to,
+                                    budget,
+                                    run,
+                                    &mut pieces,
+                                )
+                            })
                         };
                         stats.add(found);
                         searched.push((medium, std::mem::take(&mut pieces)));
