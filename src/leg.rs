@@ -351,6 +351,413 @@ fn box_gap(a: Aabb, b: Aabb) -> f64 {
     dx.hypot(dy)
 }
 
+/// A medium whose speed is linear in position, `c(p) = speed + gradient · p` (`p` relative
+/// to the origin of the leg's ends): its legs are circular arcs (`design/curved-rays.md`).
+///
+/// Every formula below is written in `y = g ℓ / (2 √(c_a c_b))` (`g = |gradient|`), with no
+/// division by `g`: at a gradient of zero they are the straight leg's (to rounding), and near
+/// it they lose no digits (the textbook `acosh(1 + 2y²) / g` gives 0 at `g = 1e-9`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Linear {
+    /// The speed at the origin.
+    pub speed: f64,
+    /// The speed's gradient (speed per length).
+    pub gradient: Vec2,
+    /// The least speed where the medium is used (the scene's extent): the residual bounds'
+    /// greatest slowness.
+    pub least_speed: f64,
+}
+
+/// A circular arc in a [`Linear`] medium, evaluated from its two ends.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct ArcLeg {
+    /// The travel time.
+    pub time: f64,
+    /// The speed at the start and at the end.
+    pub speeds: [f64; 2],
+    /// The chord `b − a`.
+    pub chord: Vec2,
+    /// The chord's length.
+    pub len: f64,
+    /// The medium's gradient.
+    pub gradient: Vec2,
+    /// `T′ A = 1 / (ℓ √(c_a c_b) √(1 + y²))` (the factor of the first derivatives).
+    first: f64,
+    /// `−T″ A² = (1 + 2y²) / (ℓ³ √(c_a c_b) (1 + y²)^{3/2})`.
+    second: f64,
+    /// `−∇_a T`.
+    departure: Vec2,
+    /// `∇_b T`.
+    arrival: Vec2,
+}
+
+/// `asinh(y) / y` for `y ≥ 0`, without loss near 0 (its series below 1e-3).
+#[inline]
+pub(crate) fn asinh_over(y: f64) -> f64 {
+    if y < 1e-3 {
+        let y2 = y * y;
+        1.0 - y2 * (1.0 / 6.0 - y2 * (3.0 / 40.0 - y2 * (5.0 / 112.0)))
+    } else {
+        y.asinh() / y
+    }
+}
+
+/// `asin(z) / z` for `0 ≤ z ≤ 1`, without loss near 0.
+#[inline]
+fn asin_over(z: f64) -> f64 {
+    if z < 1e-3 {
+        let z2 = z * z;
+        1.0 + z2 * (1.0 / 6.0 + z2 * (3.0 / 40.0 + z2 * (5.0 / 112.0)))
+    } else {
+        z.min(1.0).asin() / z
+    }
+}
+
+/// `sin(x) / x`, without loss near 0.
+#[inline]
+fn sinc(x: f64) -> f64 {
+    if x.abs() < 1e-3 {
+        let x2 = x * x;
+        1.0 - x2 / 6.0 * (1.0 - x2 / 20.0)
+    } else {
+        x.sin() / x
+    }
+}
+
+impl Linear {
+    /// The speed at `p` (relative to the origin).
+    #[inline]
+    pub fn speed_at(self, p: Vec2) -> f64 {
+        self.speed + self.gradient.dot(p)
+    }
+
+    /// The same medium with its positions relative to `origin` (given relative to the old
+    /// origin).
+    #[inline]
+    pub fn shifted(self, origin: Vec2) -> Linear {
+        Linear {
+            speed: self.speed_at(origin),
+            ..self
+        }
+    }
+
+    /// The greatest speed over the corners of `b` (the greatest over the box: the speed is
+    /// linear).
+    fn greatest_speed(self, b: Aabb) -> f64 {
+        let c = |x: f64, y: f64| self.speed_at(Vec2::new(x, y));
+        c(b.min.x, b.min.y)
+            .max(c(b.max.x, b.min.y))
+            .max(c(b.min.x, b.max.y))
+            .max(c(b.max.x, b.max.y))
+    }
+
+    /// The least time of a leg of chord length at least `len` between ends of speeds at most
+    /// `ca`, `cb` (the time grows with the chord and falls with the speeds at the ends).
+    fn least_time_between(self, len: f64, ca: f64, cb: f64) -> f64 {
+        if !(ca > 0.0 && cb > 0.0) {
+            return 0.0;
+        }
+        let root = (ca * cb).sqrt();
+        let y = self.gradient.length() * len / (2.0 * root);
+        (len / root * asinh_over(y)).max(0.0)
+    }
+}
+
+impl LegModel for Linear {
+    type Leg = ArcLeg;
+
+    #[inline]
+    fn leg(self, a: Vec2, b: Vec2) -> ArcLeg {
+        let (ca, cb) = (self.speed_at(a), self.speed_at(b));
+        let d = b - a;
+        let len = length(d);
+        let g = self.gradient;
+        if !(len > 0.0) {
+            return ArcLeg {
+                speeds: [ca, cb],
+                gradient: g,
+                ..ArcLeg::default()
+            };
+        }
+        let cacb = ca * cb;
+        let root = cacb.sqrt();
+        let y2 = g.dot(g) * len * len / (4.0 * cacb);
+        let y = y2.sqrt();
+        let time = len / root * asinh_over(y);
+        let s = (1.0 + y2).sqrt();
+        let first = 1.0 / (len * root * s);
+        let second = (1.0 + 2.0 * y2) / (len * len * len * root * s * s * s);
+        let l2 = len * len;
+        ArcLeg {
+            time,
+            speeds: [ca, cb],
+            chord: d,
+            len,
+            gradient: g,
+            first,
+            second,
+            departure: (d + g * (l2 / (2.0 * ca))) * first,
+            arrival: (d - g * (l2 / (2.0 * cb))) * first,
+        }
+    }
+
+    #[inline]
+    fn valid_leg(self, a: Point, b: Point) -> Option<ArcLeg> {
+        let leg = self.leg(a.to_vec2(), b.to_vec2());
+        let [ca, cb] = leg.speeds;
+        (leg.len > 0.0 && leg.len.is_finite() && ca > 0.0 && cb > 0.0 && leg.time.is_finite())
+            .then_some(leg)
+    }
+
+    fn least_time(self, from: Aabb, to: Aabb) -> f64 {
+        let (ca, cb) = (self.greatest_speed(from), self.greatest_speed(to));
+        self.least_time_between(box_gap(from, to), ca, cb)
+    }
+
+    fn least_time_to(self, from: Aabb, to: Point) -> f64 {
+        let (ca, cb) = (self.greatest_speed(from), self.speed_at(to.to_vec2()));
+        self.least_time_between(from.distance_sq(to).sqrt(), ca, cb)
+    }
+
+    fn along_at_ends(self, _chord_along: [f64; 2]) -> [f64; 2] {
+        // An arc's ends turn away from its chord: only the slowness's size bounds them.
+        let w = self.greatest_slowness();
+        [-w, w]
+    }
+
+    fn greatest_slowness(self) -> f64 {
+        1.0 / self.least_speed
+    }
+}
+
+impl ArcLeg {
+    /// `v_a = −d − ℓ² G / (2 c_a)` and `v_b = d − ℓ² G / (2 c_b)`: `∇X / A` at the ends.
+    #[inline]
+    fn v(&self) -> [Vec2; 2] {
+        let l2 = self.len * self.len;
+        let [ca, cb] = self.speeds;
+        [
+            (self.chord + self.gradient * (l2 / (2.0 * ca))) * -1.0,
+            self.chord - self.gradient * (l2 / (2.0 * cb)),
+        ]
+    }
+
+    /// The arc's signed curvature (positive: it turns left), `−(G · n⊥) / c` at its start.
+    #[inline]
+    pub fn curvature(&self) -> f64 {
+        let d0 = self.direction_at_start();
+        -self.gradient.dot(d0.perp()) / self.speeds[0]
+    }
+
+    /// The arc's length.
+    pub fn arc_length(&self) -> f64 {
+        let z = 0.5 * self.len * self.curvature().abs();
+        self.len * asin_over(z)
+    }
+
+    /// The point at arc length `s` from the start, relative to the start.
+    pub fn offset_at(&self, s: f64) -> Vec2 {
+        let d0 = self.direction_at_start();
+        let k = self.curvature();
+        let half = sinc(0.5 * k * s);
+        d0 * (s * sinc(k * s)) + d0.perp() * (0.5 * k * s * s * half * half)
+    }
+}
+
+impl Leg for ArcLeg {
+    #[inline]
+    fn time(&self) -> f64 {
+        self.time
+    }
+    #[inline]
+    fn arrival(&self) -> Vec2 {
+        self.arrival
+    }
+    #[inline]
+    fn departure(&self) -> Vec2 {
+        self.departure
+    }
+    #[inline]
+    fn direction_at_end(&self) -> Vec2 {
+        self.arrival * self.speeds[1]
+    }
+    #[inline]
+    fn direction_at_start(&self) -> Vec2 {
+        self.departure * self.speeds[0]
+    }
+    fn end_block(&self, t: Vec2) -> f64 {
+        let [_, vb] = self.v();
+        let [_, cb] = self.speeds;
+        let (dt, gt) = (self.chord.dot(t), self.gradient.dot(t));
+        let m = t.dot(t) - 2.0 * dt * gt / cb + self.len * self.len * gt * gt / (cb * cb);
+        -self.second * vb.dot(t) * vb.dot(t) + self.first * m
+    }
+    fn start_block(&self, t: Vec2) -> f64 {
+        let [va, _] = self.v();
+        let [ca, _] = self.speeds;
+        let (dt, gt) = (self.chord.dot(t), self.gradient.dot(t));
+        let m = t.dot(t) + 2.0 * dt * gt / ca + self.len * self.len * gt * gt / (ca * ca);
+        -self.second * va.dot(t) * va.dot(t) + self.first * m
+    }
+    fn coupling(&self, ta: Vec2, tb: Vec2) -> f64 {
+        let [va, vb] = self.v();
+        let [ca, cb] = self.speeds;
+        let (d, g) = (self.chord, self.gradient);
+        let m = -ta.dot(tb) - d.dot(tb) * g.dot(ta) / ca
+            + g.dot(tb) * d.dot(ta) / cb
+            + self.len * self.len * g.dot(ta) * g.dot(tb) / (2.0 * ca * cb);
+        -self.second * va.dot(ta) * vb.dot(tb) + self.first * m
+    }
+    fn out_of_plane_width(&self, source_slowness: f64) -> f64 {
+        // ∫ c ds = ℓ c(arc's middle) = ℓ c(chord's middle) / cos(half the turn), and
+        // sin(half the turn) = ℓ κ / 2 (κ the curvature).
+        let [ca, cb] = self.speeds;
+        let z = 0.5 * self.len * self.curvature();
+        let cos = (1.0 - z * z).max(0.0).sqrt();
+        source_slowness * self.len * 0.5 * (ca + cb) / cos
+    }
+}
+
+/// The model of one leg's medium when a path may hold curved legs: [`Uniform`] or
+/// [`Linear`], chosen per leg (a path through a medium with a gradient).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum LegMedium {
+    /// A uniform medium.
+    Uniform(Uniform),
+    /// A medium whose speed is linear in position.
+    Linear(Linear),
+}
+
+/// A leg of a [`LegMedium`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum AnyLeg {
+    /// A straight leg.
+    Straight(StraightLeg),
+    /// A circular arc.
+    Arc(ArcLeg),
+}
+
+impl AnyLeg {
+    /// The chord's length.
+    #[inline]
+    pub fn len(&self) -> f64 {
+        match self {
+            AnyLeg::Straight(l) => l.len,
+            AnyLeg::Arc(l) => l.len,
+        }
+    }
+
+    /// The unit direction of the chord (zero for a leg of zero length).
+    #[inline]
+    pub fn chord_direction(&self) -> Vec2 {
+        match self {
+            AnyLeg::Straight(l) => l.u,
+            AnyLeg::Arc(l) if l.len > 0.0 => l.chord * (1.0 / l.len),
+            AnyLeg::Arc(_) => Vec2::default(),
+        }
+    }
+
+    /// The arc, if the leg is one.
+    #[inline]
+    pub fn arc(&self) -> Option<&ArcLeg> {
+        match self {
+            AnyLeg::Arc(l) => Some(l),
+            AnyLeg::Straight(_) => None,
+        }
+    }
+}
+
+macro_rules! either {
+    ($self:expr, $l:ident => $e:expr) => {
+        match $self {
+            AnyLeg::Straight($l) => $e,
+            AnyLeg::Arc($l) => $e,
+        }
+    };
+}
+
+impl Leg for AnyLeg {
+    #[inline]
+    fn time(&self) -> f64 {
+        either!(self, l => l.time())
+    }
+    #[inline]
+    fn arrival(&self) -> Vec2 {
+        either!(self, l => l.arrival())
+    }
+    #[inline]
+    fn departure(&self) -> Vec2 {
+        either!(self, l => l.departure())
+    }
+    #[inline]
+    fn direction_at_end(&self) -> Vec2 {
+        either!(self, l => l.direction_at_end())
+    }
+    #[inline]
+    fn direction_at_start(&self) -> Vec2 {
+        either!(self, l => l.direction_at_start())
+    }
+    #[inline]
+    fn end_block(&self, t: Vec2) -> f64 {
+        either!(self, l => l.end_block(t))
+    }
+    #[inline]
+    fn start_block(&self, t: Vec2) -> f64 {
+        either!(self, l => l.start_block(t))
+    }
+    #[inline]
+    fn coupling(&self, ta: Vec2, tb: Vec2) -> f64 {
+        either!(self, l => l.coupling(ta, tb))
+    }
+    #[inline]
+    fn out_of_plane_width(&self, source_slowness: f64) -> f64 {
+        either!(self, l => l.out_of_plane_width(source_slowness))
+    }
+}
+
+impl LegModel for LegMedium {
+    type Leg = AnyLeg;
+
+    #[inline]
+    fn leg(self, a: Vec2, b: Vec2) -> AnyLeg {
+        match self {
+            LegMedium::Uniform(m) => AnyLeg::Straight(m.leg(a, b)),
+            LegMedium::Linear(m) => AnyLeg::Arc(m.leg(a, b)),
+        }
+    }
+    #[inline]
+    fn valid_leg(self, a: Point, b: Point) -> Option<AnyLeg> {
+        match self {
+            LegMedium::Uniform(m) => m.valid_leg(a, b).map(AnyLeg::Straight),
+            LegMedium::Linear(m) => m.valid_leg(a, b).map(AnyLeg::Arc),
+        }
+    }
+    fn least_time(self, from: Aabb, to: Aabb) -> f64 {
+        match self {
+            LegMedium::Uniform(m) => m.least_time(from, to),
+            LegMedium::Linear(m) => m.least_time(from, to),
+        }
+    }
+    fn least_time_to(self, from: Aabb, to: Point) -> f64 {
+        match self {
+            LegMedium::Uniform(m) => m.least_time_to(from, to),
+            LegMedium::Linear(m) => m.least_time_to(from, to),
+        }
+    }
+    fn along_at_ends(self, chord_along: [f64; 2]) -> [f64; 2] {
+        match self {
+            LegMedium::Uniform(m) => m.along_at_ends(chord_along),
+            LegMedium::Linear(m) => m.along_at_ends(chord_along),
+        }
+    }
+    fn greatest_slowness(self) -> f64 {
+        match self {
+            LegMedium::Uniform(m) => m.greatest_slowness(),
+            LegMedium::Linear(m) => m.greatest_slowness(),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

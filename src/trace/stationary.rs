@@ -274,7 +274,9 @@ impl Tracer {
             record.reason,
             Some(Reason::BeyondEnd { .. } | Reason::NoStationaryPath | Reason::NoMedium { leg: 0 })
         );
-        if proof || self.newton.max_iterations == 0 {
+        // Curved legs: the complete search is the straight leg's (convex leaf problems), so the
+        // solve's own answer stands.
+        if proof || self.newton.max_iterations == 0 || self.scene().curved() {
             return record;
         }
         let spec = &self.scene.paths()[path];
