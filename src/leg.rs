@@ -955,4 +955,248 @@ mod tests {
             );
         }
     }
+
+    /// The arc leg of a medium `c = c0 + G · p` from `a` to `b`.
+    fn arc(c0: f64, g: [f64; 2], a: [f64; 2], b: [f64; 2]) -> ArcLeg {
+        let m = Linear {
+            speed: c0,
+            gradient: Vec2::new(g[0], g[1]),
+            least_speed: 1.0,
+        };
+        m.leg(Vec2::new(a[0], a[1]), Vec2::new(b[0], b[1]))
+    }
+
+    /// The ray equations `dx/ds = c p`, `dp/ds = −∇c / c²` of a medium `c = c0 + G · x`,
+    /// integrated by RK4 from `x` along the unit direction `d` over the arc length `s` in `n`
+    /// steps: the end point, the time and `∫ c ds` (trapezoids on the steps). An oracle
+    /// independent of the closed forms.
+    fn shoot(c0: f64, g: Vec2, x: Vec2, d: Vec2, s: f64, n: usize) -> (Vec2, f64, f64) {
+        // State: position, slowness vector, time, ∫ c ds.
+        type State = (Vec2, Vec2, f64, f64);
+        let c = |x: Vec2| c0 + g.dot(x);
+        let f = |(x, p, _, _): State| {
+            let cx = c(x);
+            (p * cx, g * (-1.0 / (cx * cx)), 1.0 / cx, cx)
+        };
+        let step = |a: State, k: State, h: f64| {
+            (a.0 + k.0 * h, a.1 + k.1 * h, a.2 + k.2 * h, a.3 + k.3 * h)
+        };
+        let h = s / n as f64;
+        let mut y: State = (x, d * (1.0 / c(x)), 0.0, 0.0);
+        for _ in 0..n {
+            let k1 = f(y);
+            let k2 = f(step(y, k1, h / 2.0));
+            let k3 = f(step(y, k2, h / 2.0));
+            let k4 = f(step(y, k3, h));
+            y = step(
+                step(step(step(y, k1, h / 6.0), k2, h / 3.0), k3, h / 3.0),
+                k4,
+                h / 6.0,
+            );
+        }
+        (y.0, y.2, y.3)
+    }
+
+    /// The design note's leg times (its §3 table, checked there against quadrature and a ray
+    /// integration), to 1e-14.
+    #[test]
+    fn arc_times_match_the_design_note() {
+        let cases = [
+            (
+                1500.0,
+                [0.0, 0.017],
+                [0.0, 100.0],
+                [5000.0, 300.0],
+                3.328012692238152,
+            ),
+            (
+                1500.0,
+                [0.0, 0.017],
+                [0.0, 100.0],
+                [20000.0, 100.0],
+                13.289955753698131,
+            ),
+            (
+                2000.0,
+                [0.3, 0.8],
+                [0.0, 0.0],
+                [3000.0, -1000.0],
+                1.448755408206392,
+            ),
+            (
+                340.0,
+                [0.0, -0.5],
+                [0.0, 0.0],
+                [30.0, 5.0],
+                0.089775546767277,
+            ),
+        ];
+        for (c0, g, a, b, t) in cases {
+            let leg = arc(c0, g, a, b);
+            assert!((leg.time() - t).abs() <= 1e-14 * t, "{} {t}", leg.time());
+            // The eikonal equation at both ends: c |∇T| = 1.
+            let [ca, cb] = leg.speeds;
+            assert!((leg.arrival().length() * cb - 1.0).abs() < 1e-14);
+            assert!((leg.departure().length() * ca - 1.0).abs() < 1e-14);
+        }
+    }
+
+    /// An RK4 integration of the ray equations from the start along the leg's departure
+    /// direction, over the leg's arc length, lands on its end (to 1e-9 of the chord), takes
+    /// its time (1e-10) and its `∫ c ds` (1e-9), and arrives along its arrival direction; the
+    /// arc's points ([`ArcLeg::offset_at`]) lie on the integrated ray.
+    #[test]
+    fn arcs_are_rays() {
+        let mut rng = SplitMix64(0xa4c);
+        let mut checked = 0;
+        for _ in 0..40 {
+            let c0 = 300.0 + 2000.0 * rng.next_f64();
+            let g = unit(7.0 * rng.next_f64()) * (1.5 * rng.next_f64());
+            let (a, b) = (point(&mut rng) * 200.0, point(&mut rng) * 200.0);
+            let m = Linear {
+                speed: c0,
+                gradient: g,
+                least_speed: 1.0,
+            };
+            let leg = m.leg(a, b);
+            if leg.len < 10.0 || leg.speeds[0] < 100.0 || leg.speeds[1] < 100.0 {
+                continue;
+            }
+            let s = leg.arc_length();
+            let (end, time, width) = shoot(c0, g, a, leg.direction_at_start(), s, 4000);
+            assert!(
+                (end - b).length() < 1e-9 * leg.len,
+                "{:?} {b:?} {:?} {c0} {g:?} {a:?} k={} s={}",
+                end,
+                leg.speeds,
+                leg.curvature(),
+                s
+            );
+            assert!(
+                (time - leg.time()).abs() < 1e-10 * leg.time(),
+                "{time} {} {:?} {c0} {g:?} {a:?} {b:?}",
+                leg.time(),
+                leg.speeds
+            );
+            let w0 = 1.0 / leg.speeds[0];
+            let closed = leg.out_of_plane_width(w0) / w0;
+            assert!((width - closed).abs() < 1e-9 * closed, "{width} {closed}");
+            let (mid, _, _) = shoot(c0, g, a, leg.direction_at_start(), 0.3 * s, 1000);
+            assert!((a + leg.offset_at(0.3 * s) - mid).length() < 1e-9 * leg.len);
+            // Where it arrives: the direction the ray has at its end.
+            let (near, _, _) = shoot(c0, g, a, leg.direction_at_start(), s - 1e-3, 4000);
+            let d = (end - near) * (1.0 / (end - near).length());
+            assert!((d - leg.direction_at_end()).length() < 1e-6);
+            checked += 1;
+        }
+        assert!(checked >= 10, "{checked}");
+    }
+
+    /// The arc's gradient and Hessian blocks against central finite differences of its
+    /// time, on random legs, gradients (down to zero) and directions.
+    #[test]
+    fn arc_derivatives_match_finite_differences() {
+        let mut rng = SplitMix64(0xd1ff);
+        let mut checked = 0;
+        for n in 0..400 {
+            let c0 = 2.0 + 3.0 * rng.next_f64();
+            let size = [0.0, 1e-12, 1e-6, 0.05, 0.2][n % 5];
+            let g = unit(7.0 * rng.next_f64()) * size;
+            let m = Linear {
+                speed: c0,
+                gradient: g,
+                least_speed: 1.0,
+            };
+            let (a, b) = (point(&mut rng), point(&mut rng));
+            let leg = m.leg(a, b);
+            if leg.len < 1.0 || leg.speeds[0] < 0.5 || leg.speeds[1] < 0.5 {
+                continue;
+            }
+            let (ta, tb) = (unit(7.0 * rng.next_f64()), unit(7.0 * rng.next_f64()));
+            let t = |da: f64, db: f64| m.leg(a + ta * da, b + tb * db).time();
+            let h = 1e-5;
+            let d_end = (t(0.0, h) - t(0.0, -h)) / (2.0 * h);
+            let d_start = (t(h, 0.0) - t(-h, 0.0)) / (2.0 * h);
+            let w = 1.0 / c0;
+            assert!((leg.arrival().dot(tb) - d_end).abs() < 1e-8 * w, "{d_end}");
+            assert!((-leg.departure().dot(ta) - d_start).abs() < 1e-8 * w);
+            let h2 = 1e-3;
+            let dd_end = (t(0.0, h2) - 2.0 * t(0.0, 0.0) + t(0.0, -h2)) / (h2 * h2);
+            let dd_start = (t(h2, 0.0) - 2.0 * t(0.0, 0.0) + t(-h2, 0.0)) / (h2 * h2);
+            let dd_mixed = (t(h2, h2) - t(h2, -h2) - t(-h2, h2) + t(-h2, -h2)) / (4.0 * h2 * h2);
+            let scale = w / leg.len;
+            assert!(
+                (leg.end_block(tb) - dd_end).abs() < 1e-5 * scale,
+                "{dd_end}"
+            );
+            assert!((leg.start_block(ta) - dd_start).abs() < 1e-5 * scale);
+            assert!((leg.coupling(ta, tb) - dd_mixed).abs() < 1e-5 * scale);
+            checked += 1;
+        }
+        assert!(checked > 150, "{checked}");
+    }
+
+    /// Near-zero gradients give the straight leg's numbers to rounding (no `1/g`): at
+    /// `g = 1e-9` the textbook `acosh(1 + 2y²) / g` gives 0.
+    #[test]
+    fn tiny_gradients_are_straight() {
+        let (a, b) = (Vec2::new(0.0, 100.0), Vec2::new(5000.0, 300.0));
+        let straight = Uniform::new(1.0 / 1500.0).leg(a, b);
+        for g in [1e-9, 1e-12, 1e-15] {
+            let m = Linear {
+                speed: 1500.0,
+                gradient: Vec2::new(0.0, g / 1000.0),
+                least_speed: 1.0,
+            };
+            let leg = m.leg(a, b);
+            let rel = |x: f64, y: f64| (x - y).abs() / y.abs().max(1e-300);
+            assert!(rel(leg.time(), straight.time()) < 1e-9, "{g}");
+            assert!((leg.arrival() - straight.arrival()).length() < 1e-9 / 1500.0);
+            let t = Vec2::new(0.6, 0.8);
+            assert!(rel(leg.end_block(t), straight.end_block(t)) < 1e-9);
+            assert!(rel(leg.coupling(t, t), straight.coupling(t, t)) < 1e-9);
+            assert!(
+                rel(
+                    leg.out_of_plane_width(1.0),
+                    straight.out_of_plane_width(1.0)
+                ) < 1e-9
+            );
+        }
+        let textbook = (1.0f64 + 2.0 * (1e-9f64 * 5004.0 / 3000.0).powi(2)).acosh() / 1e-9;
+        assert_eq!(textbook, 0.0);
+    }
+
+    /// The lower bounds hold for arcs between random points of random boxes.
+    #[test]
+    fn arc_least_time_bounds_every_leg() {
+        let mut rng = SplitMix64(0xb0c6);
+        for _ in 0..300 {
+            let corner = |rng: &mut SplitMix64| {
+                let (p, q) = (point(rng), point(rng));
+                Aabb::from_points(p.to_point(), (p + (q - p) * 0.3).to_point())
+            };
+            let (from, to) = (corner(&mut rng), corner(&mut rng));
+            let m = Linear {
+                speed: 4.0,
+                gradient: unit(7.0 * rng.next_f64()) * 0.3,
+                least_speed: 1.0,
+            };
+            let bound = m.least_time(from, to);
+            let at = |b: Aabb, rng: &mut SplitMix64| {
+                Point::new(
+                    b.min.x + rng.next_f64() * (b.max.x - b.min.x),
+                    b.min.y + rng.next_f64() * (b.max.y - b.min.y),
+                )
+            };
+            for _ in 0..20 {
+                let (a, b) = (at(from, &mut rng), at(to, &mut rng));
+                let leg = m.leg(a.to_vec2(), b.to_vec2());
+                assert!(leg.time() >= bound * (1.0 - 1e-12));
+                assert!(leg.time() >= m.least_time_to(from, b) * (1.0 - 1e-12));
+                for p in [leg.arrival(), leg.departure()] {
+                    assert!(p.length() <= m.greatest_slowness());
+                }
+            }
+        }
+    }
 }

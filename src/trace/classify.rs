@@ -321,8 +321,19 @@ pub(crate) fn lookup_media(
         let line = &scene.interfaces()[step.interface].polyline;
         let here = line.point_on(nw.seg[i], nw.s[i]);
         if step.kind == StepKind::Refract {
+            // The side the leg arrives from: its start's, or, for an arc (whose start may lie
+            // on the interface where it turns beneath it), a point just back along its
+            // arriving direction.
+            let from = if scene.curved() {
+                let leg = scene.media()[m]
+                    .leg_model(source)
+                    .leg(prev - source, here - source);
+                here - leg.direction_at_end() * (1e-3 * leg.len())
+            } else {
+                prev
+            };
             m = regions
-                .medium_across(step.interface, nw.seg[i], nw.s[i], prev)
+                .medium_across(step.interface, nw.seg[i], nw.s[i], from)
                 .ok_or(Reason::NoMedium { leg: i + 1 })?;
         }
         media.push(m);
