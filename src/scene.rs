@@ -575,6 +575,8 @@ impl SegmentRef {
 #[derive(Clone, Debug)]
 pub struct Scene {
     media: Vec<Medium>,
+    /// Whether a medium's speed has a gradient ([`Scene::curved`]).
+    curved: bool,
     background: Option<usize>,
     domain: Option<Aabb>,
     interfaces: Vec<Interface>,
@@ -1253,6 +1255,7 @@ impl Scene {
         let segment_ends = segment_ends(&interfaces, &segments);
         Ok(Scene {
             media,
+            curved,
             background,
             domain,
             interfaces,
@@ -1282,8 +1285,9 @@ impl Scene {
         &self.media
     }
     /// Whether a medium's speed has a gradient (some legs are circular arcs).
+    #[inline]
     pub fn curved(&self) -> bool {
-        self.media.iter().any(|m| m.gradient.is_some())
+        self.curved
     }
     /// Index of the medium with this name.
     pub fn medium_index(&self, name: &str) -> Option<usize> {

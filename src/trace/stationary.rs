@@ -87,6 +87,9 @@ impl Tracer {
             .paths()
             .get(path)
             .ok_or(StationaryError::NoSuchPath { path })?;
+        if self.scene.curved() {
+            return Err(StationaryError::CurvedLegs);
+        }
         let steps = spec.steps.len();
         if steps > MAX_STATIONARY_STEPS {
             return Err(StationaryError::TooManySteps { path, steps });
