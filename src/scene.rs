@@ -909,19 +909,16 @@ pub(crate) fn speeds_stay_positive(
 }
 
 /// Refuses, in a scene with a medium whose speed has a gradient (curved legs), what curved
-/// legs do not reach yet: the search for every stationary path, the automatic search,
-/// amplitudes and derivatives. Each of those assumes straight legs (convex leaf problems,
-/// the image method, the straight-leg spreading), so it is refused rather than wrong.
+/// legs do not reach yet: the automatic search, amplitudes and derivatives. Each of those
+/// assumes straight legs (the image method and the complete search, the straight-leg
+/// spreading), so it is refused rather than wrong.
 ///
 /// # Errors
-/// `solver.stationary`, `search`, `amplitudes` or `solver.derivatives`.
+/// `search`, `amplitudes` or `solver.derivatives`.
 fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
     let why = "is not available yet with curved legs (a medium with a `gradient`); prescribed \
-               paths solve with `\"stationary\": \"one\"`";
+               paths solve, with `\"stationary\"` `\"one\"` or `\"all\"`";
     if let Some(s) = &spec.solver {
-        if s.stationary == Some(StationaryMode::All) {
-            return Err(SceneError::new("solver.stationary", format!("`all` {why}")));
-        }
         if s.derivatives == Some(true) {
             return Err(SceneError::new(
                 "solver.derivatives",

@@ -235,9 +235,6 @@ impl Tracer {
         stop: Option<&Stop>,
     ) -> Result<StationaryRays, StationaryError> {
         let scene = self.scene();
-        if scene.curved() {
-            return Err(StationaryError::CurvedLegs);
-        }
         for (path, p) in scene.paths().iter().enumerate() {
             if p.steps.len() > MAX_STATIONARY_STEPS {
                 return Err(StationaryError::TooManySteps {

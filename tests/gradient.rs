@@ -7,7 +7,7 @@
 use std::process::Command;
 
 use eigenray::path_problem::PathProblem;
-use eigenray::{Point, Scene, Status, Tracer, Workspace};
+use eigenray::{Arrival, Point, Scene, Status, Tracer, Workspace};
 
 /// The design note's caustic example (§5, check 4) with y up: water (1500 m/s) above
 /// y = −200, below it c = 1500 + 0.1 (−200 − y); source and receiver at y = 0, 10 km apart.
@@ -260,7 +260,7 @@ fn a_tiny_gradient_is_the_uniform_medium() {
 
 /// Bad gradients are refused naming the key: a speed reaching 0 in the domain, a gradient
 /// on an `index` medium, a gradient that is not two finite numbers, and what curved legs do
-/// not support yet (`stationary: all`, `search`, `amplitudes`, `derivatives`). The
+/// not support yet (`search`, `amplitudes`, `derivatives`). The
 /// command-line tool exits with status 2 naming the key.
 #[test]
 fn bad_gradients_are_refused_naming_the_key() {
@@ -288,13 +288,6 @@ fn bad_gradients_are_refused_naming_the_key() {
         (
             with(r#""a": { "speed": 1500, "gradient": [0] }"#, ""),
             "media",
-        ),
-        (
-            with(
-                r#""a": { "speed": 1500, "gradient": [0, 0.1] }"#,
-                r#", "solver": { "stationary": "all" }"#,
-            ),
-            "solver.stationary",
         ),
         (
             with(
@@ -347,5 +340,48 @@ fn bad_gradients_are_refused_naming_the_key() {
         .unwrap();
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stdout).contains("6.6725264461"));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Every stationary path of the caustic example's sequence through the tracer
+/// (`stationary_paths`, and `"stationary": "all"` from the command line): the two eigenrays
+/// of the brute force above, ordered by time, for both paths (media given and looked up);
+/// the search through arcs says it is no proof (`complete` false).
+#[test]
+fn stationary_paths_lists_both_caustic_eigenrays() {
+    let scene = Scene::from_json(CAUSTIC).unwrap();
+    let tracer = Tracer::new(scene).unwrap();
+    let mut out: Vec<Arrival> = Vec::new();
+    for path in 0..2 {
+        let (s, r) = (Point::new(0.0, 0.0), Point::new(10000.0, 0.0));
+        let outcome = tracer.stationary_paths(s, r, path, &mut out).unwrap();
+        assert!(!outcome.complete);
+        let times: Vec<f64> = out.iter().map(|a| a.time).collect();
+        assert_eq!(times.len(), 2, "{times:?}");
+        assert!((times[0] - 6.628258089353).abs() < 1e-11, "{times:?}");
+        assert!((times[1] - 6.672526446116).abs() < 1e-11, "{times:?}");
+        assert!(out.iter().all(|a| a.status == Status::Converged));
+    }
+    let all = CAUSTIC.replace(
+        r#""sources""#,
+        r#""solver": { "stationary": "all" }, "sources""#,
+    );
+    let dir = std::env::temp_dir().join(format!("eigenray-all-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("all.json");
+    std::fs::write(&file, all).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_eigenray"))
+        .arg("solve")
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(text.matches("6.6282580893").count(), 2, "{text}");
+    assert_eq!(text.matches("6.6725264461").count(), 2, "{text}");
     std::fs::remove_dir_all(&dir).ok();
 }
