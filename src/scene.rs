@@ -909,12 +909,12 @@ pub(crate) fn speeds_stay_positive(
 }
 
 /// Refuses, in a scene with a medium whose speed has a gradient (curved legs), what curved
-/// legs do not reach yet: the automatic search, amplitudes and derivatives. Each of those
-/// assumes straight legs (the image method and the complete search, the straight-leg
-/// spreading), so it is refused rather than wrong.
+/// legs do not reach yet: the automatic search and derivatives. Each of those assumes
+/// straight legs (the image method and the complete search, the straight-leg derivatives),
+/// so it is refused rather than wrong.
 ///
 /// # Errors
-/// `search`, `amplitudes` or `solver.derivatives`.
+/// `search` or `solver.derivatives`.
 fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
     let why = "is not available yet with curved legs (a medium with a `gradient`); prescribed \
                paths solve, with `\"stationary\"` `\"one\"` or `\"all\"`";
@@ -930,12 +930,6 @@ fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
         return Err(SceneError::new(
             "search",
             format!("the automatic search {why}"),
-        ));
-    }
-    if spec.amplitudes.is_some() {
-        return Err(SceneError::new(
-            "amplitudes",
-            format!("the amplitude {why}"),
         ));
     }
     Ok(())

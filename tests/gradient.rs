@@ -260,7 +260,7 @@ fn a_tiny_gradient_is_the_uniform_medium() {
 
 /// Bad gradients are refused naming the key: a speed reaching 0 in the domain, a gradient
 /// on an `index` medium, a gradient that is not two finite numbers, and what curved legs do
-/// not support yet (`search`, `amplitudes`, `derivatives`). The
+/// not support yet (`search`, `derivatives`). The
 /// command-line tool exits with status 2 naming the key.
 #[test]
 fn bad_gradients_are_refused_naming_the_key() {
@@ -295,13 +295,6 @@ fn bad_gradients_are_refused_naming_the_key() {
                 r#", "search": {}"#,
             ),
             "search",
-        ),
-        (
-            with(
-                r#""a": { "speed": 1500, "gradient": [0, 0.1] }"#,
-                r#", "amplitudes": { "source": "point" }"#,
-            ),
-            "amplitudes",
         ),
         (
             with(
@@ -384,4 +377,96 @@ fn stationary_paths_lists_both_caustic_eigenrays() {
     assert_eq!(text.matches("6.6282580893").count(), 2, "{text}");
     assert_eq!(text.matches("6.6725264461").count(), 2, "{text}");
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The angle from the horizontal, down positive, of the arc from `a` to `b` in the medium
+/// `c = c0 + (0, gy) · p` at `p` (one of its ends), by circle geometry.
+fn dip(c0: f64, gy: f64, a: Point, b: Point, p: Point) -> f64 {
+    let t = circle_tangent(c0, [0.0, gy], a, b, p);
+    (-t[1]).atan2(t[0])
+}
+
+/// The spreading of a direct arc in the ocean gradient of the design note (c = 1500 + 0.017
+/// depth, source at 100 m, a receiver near 6 km of arc at 10° down) against the dynamic-ray
+/// closed form `J = |sin θ_r − sin θ₀| / (g ξ² c_s)` (`ξ = cos θ₀ / c_s`, the angles by circle
+/// geometry): the axisymmetric source's `√(c_r cos θ₀ / (c_s r J)) / (4π)` (BELLHOP's
+/// `|p|` over 4π) and the point source's `√(c_r / (c_s J ∫c ds / c_s)) / (4π)` with
+/// `∫ c ds = |sin θ_r − sin θ₀| / (g ξ²)`; and J near the note's 6030.8975 m/rad.
+#[test]
+fn arc_spreading_matches_the_dynamic_ray_closed_form() {
+    let json = |source: &str| {
+        format!(
+            r#"{{
+              "media": {{ "sea": {{ "speed": 1500, "gradient": [0, -0.017] }} }},
+              "domain": [[-10, -3000], [8000, 10]],
+              "sources": [[0, -100]], "receivers": [[5939.27, -943.56]],
+              "paths": [{{ "steps": [], "media": ["sea"] }}],
+              "amplitudes": {{ "source": "{source}" }}
+            }}"#
+        )
+    };
+    let (g, s, r) = (0.017, Point::new(0.0, -100.0), Point::new(5939.27, -943.56));
+    let (cs, cr) = (1500.0 + g * 100.0, 1500.0 + g * 943.56);
+    let (th0, thr) = (dip(1500.0, -g, s, r, s), dip(1500.0, -g, s, r, r));
+    let xi = th0.cos() / cs;
+    let q = (thr.sin() - th0.sin()).abs() / (g * xi * xi);
+    let j = q / cs;
+    assert!((j - 6030.8975).abs() < 1e-3 * j, "{j}");
+    assert!(
+        (th0.to_degrees() - 10.0).abs() < 1e-3,
+        "{}",
+        th0.to_degrees()
+    );
+    let quarter = 0.25 / std::f64::consts::PI;
+    let expected = [
+        (
+            "axisymmetric",
+            (cr * th0.cos() / (cs * r.x * j)).sqrt() * quarter,
+        ),
+        ("point", (cr / (cs * j * q / cs)).sqrt() * quarter),
+    ];
+    let mut ws = Workspace::new();
+    for (source, want) in expected {
+        let tracer = Tracer::new(Scene::from_json(&json(source)).unwrap()).unwrap();
+        let record = tracer.solve_indexed_from(0, 0, 0, None, &mut ws);
+        assert_eq!(record.status, Status::Converged);
+        let a = tracer.amplitude(0, &record, &ws).expect("an amplitude");
+        assert!(a.reason.is_none(), "{a:?}");
+        assert!(
+            (a.spreading - want).abs() < 1e-9 * want,
+            "{source}: {} {want}",
+            a.spreading
+        );
+    }
+}
+
+/// The caustic example's amplitudes: the ray past the caustic (Morse index 1) has the
+/// phase −π/2 of one caustic, the other none; both have the same transmission coefficients'
+/// sign (real, positive: no critical angle), so their values' phases differ by π/2.
+#[test]
+fn a_caustic_turns_the_phase_by_a_quarter() {
+    let json = CAUSTIC.replace(
+        r#""sources""#,
+        r#""amplitudes": { "source": "point" }, "sources""#,
+    );
+    let tracer = Tracer::new(Scene::from_json(&json).unwrap()).unwrap();
+    let mut out: Vec<Arrival> = Vec::new();
+    let (s, r) = (Point::new(0.0, 0.0), Point::new(10000.0, 0.0));
+    tracer.stationary_paths(s, r, 0, &mut out).unwrap();
+    assert_eq!(out.len(), 2);
+    let phases: Vec<f64> = out
+        .iter()
+        .map(|a| a.amplitude.as_ref().expect("an amplitude").value.arg())
+        .collect();
+    // Ordered by time: index 0 first, then the ray past the caustic.
+    assert!(phases[0].abs() < 1e-12, "{phases:?}");
+    assert!(
+        (phases[1] + std::f64::consts::FRAC_PI_2).abs() < 1e-12,
+        "{phases:?}"
+    );
+    for a in &out {
+        let amp = a.amplitude.as_ref().unwrap();
+        assert!(amp.spreading > 0.0 && amp.spreading.is_finite());
+        assert!(amp.coefficient.norm() > 0.0);
+    }
 }

@@ -78,7 +78,6 @@ def test_the_cli_gives_the_same_times(tmp_path):
         (lambda s: s["media"]["rock"].update(gradient=[0, 1]), "media.rock.gradient"),
         (lambda s: s["media"]["rock"].update(gradient=[0, "x"]), "media"),
         (lambda s: s.update(search={}), "search"),
-        (lambda s: s.update(amplitudes={"source": "point"}), "amplitudes"),
     ],
 )
 def test_bad_gradients_are_refused_naming_the_key(change, key):
@@ -103,3 +102,12 @@ def test_what_curved_legs_do_not_support_yet_raises():
     tracer = eigenray.Tracer(eigenray.Scene(CAUSTIC))
     with pytest.raises(eigenray.EigenrayError, match="curved legs"):
         tracer.gradient((0, 0), (10000, 0), "given")
+
+
+def test_the_caustic_turns_the_phase_by_a_quarter():
+    scene = dict(CAUSTIC, amplitudes={"source": "point"})
+    tracer = eigenray.Tracer(eigenray.Scene(scene))
+    rays, _ = tracer.stationary_paths((0, 0), (10000, 0), "given")
+    phases = [math.atan2(r.amplitude.imag, r.amplitude.real) for r in rays]
+    assert abs(phases[0]) < 1e-12
+    assert abs(phases[1] + math.pi / 2) < 1e-12

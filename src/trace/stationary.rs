@@ -97,7 +97,9 @@ impl Tracer {
         }
         self.assert_solvable(source, receiver, path, "Tracer::stationary_paths");
         if self.scene.curved() {
-            return Ok(self.curved_stationary_paths(source, receiver, path, out));
+            let outcome = self.curved_stationary_paths(source, receiver, path, out);
+            self.arrival_amplitudes(&spec.steps, out);
+            return Ok(outcome);
         }
         let source_medium = self.source_medium(spec.media.is_some(), source);
         let search = self.stationary_of(
