@@ -472,7 +472,7 @@ impl LegModel for Linear {
         let d = b - a;
         let len = length(d);
         let g = self.gradient;
-        if !(len > 0.0) {
+        if len.is_nan() || len <= 0.0 {
             return ArcLeg {
                 speeds: [ca, cb],
                 gradient: g,
@@ -1014,7 +1014,7 @@ mod tests {
                 [0.0, 0.017],
                 [0.0, 100.0],
                 [20000.0, 100.0],
-                13.289955753698131,
+                13.289_955_753_698_13,
             ),
             (
                 2000.0,
