@@ -858,6 +858,9 @@ pub(crate) fn speeds_stay_positive(
     domain: Option<Aabb>,
 ) -> Result<(), SceneError> {
     if media.iter().all(|m| m.gradient.is_none()) {
+        for m in media.iter_mut() {
+            m.least_speed = 1.0 / m.slowness;
+        }
         return Ok(());
     }
     let extent = match domain {
