@@ -159,20 +159,12 @@ pub enum StationaryError {
         /// Its steps.
         steps: usize,
     },
-    /// The scene has a medium with a speed gradient: the search for every stationary path
-    /// holds for straight legs only (its leaf problems are convex there), so it is not
-    /// available yet with curved legs.
-    CurvedLegs,
 }
 
 impl fmt::Display for StationaryError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             StationaryError::NoSuchPath { path } => write!(f, "there is no path {path}"),
-            StationaryError::CurvedLegs => f.write_str(
-                "the search for every stationary path is not available yet with curved legs (a \
-                 medium with a `gradient`)",
-            ),
             StationaryError::TooManySteps { path, steps } => write!(
                 f,
                 "path {path} has {steps} steps: the search for every stationary path takes at \
