@@ -6,7 +6,8 @@ use std::fmt;
 use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::bvh::Bvh;
-use crate::geom::{Aabb, Point, Segment, SegmentContact, orient, segment_contact};
+use crate::geom::{Aabb, Point, Segment, SegmentContact, Vec2, orient, segment_contact};
+use crate::leg::{LegMedium, Linear, Uniform};
 use crate::polyline::{Polyline, PolylineError};
 
 mod amplitudes;
@@ -224,6 +225,10 @@ pub struct MediumSpec {
     /// Refractive index (> 0); time = index × length.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub index: Option<f64>,
+    /// With `speed`: the speed's gradient `[gx, gy]` (speed per length), so that the speed at
+    /// `p` is `speed + gradient · p`; rays in the medium are circular arcs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gradient: Option<[f64; 2]>,
     /// A point strictly inside the region this medium fills (inside the domain, when there is
     /// one). One point claims one region: two separate pieces of one material are two media.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -463,8 +468,40 @@ pub struct Medium {
     /// Whether it was given as a refractive index (optics), not a speed. A scene's media are
     /// all of one kind.
     pub index: bool,
+    /// The speed's gradient when the speed is linear in position (`c(p) = 1 / slowness +
+    /// gradient · p`: legs are circular arcs); `None` for a uniform medium (a gradient of
+    /// zero is one).
+    pub gradient: Option<Vec2>,
+    /// The least speed of the medium over the scene's extent (its `domain`, else the box of
+    /// its points): `1 / slowness` for a uniform medium.
+    pub least_speed: f64,
     /// A point inside its region, if given.
     pub at: Option<Point>,
+}
+
+impl Medium {
+    /// The model of legs through this medium, positions relative to `origin`.
+    pub(crate) fn leg_model(&self, origin: Point) -> LegMedium {
+        match self.gradient {
+            None => LegMedium::Uniform(Uniform::new(self.slowness)),
+            Some(gradient) => LegMedium::Linear(
+                Linear {
+                    speed: 1.0 / self.slowness,
+                    gradient,
+                    least_speed: self.least_speed,
+                }
+                .shifted(origin.to_vec2()),
+            ),
+        }
+    }
+
+    /// The speed at `p`.
+    pub fn speed_at(&self, p: Point) -> f64 {
+        match self.gradient {
+            None => 1.0 / self.slowness,
+            Some(g) => 1.0 / self.slowness + g.dot(p.to_vec2()),
+        }
+    }
 }
 
 /// A named interface of a validated scene.
@@ -626,6 +663,8 @@ impl SegmentRef {
 #[derive(Clone, Debug)]
 pub struct Scene {
     media: Vec<Medium>,
+    /// Whether a medium's speed has a gradient ([`Scene::curved`]).
+    curved: bool,
     background: Option<usize>,
     domain: Option<Aabb>,
     interfaces: Vec<Interface>,
@@ -861,15 +900,128 @@ fn media_of(spec: &SceneSpec) -> Result<Vec<Medium>, SceneError> {
             Some(p) => Some(point(&format!("{key}.at"), p)?),
             None => None,
         };
+        let gradient = match m.gradient {
+            Some(_) if m.index.is_some() => {
+                return Err(SceneError::new(
+                    format!("{key}.gradient"),
+                    "only a `speed` medium takes a gradient, not an `index` medium",
+                ));
+            }
+            Some([gx, gy]) => {
+                if !(gx.is_finite() && gy.is_finite()) {
+                    return Err(SceneError::new(
+                        format!("{key}.gradient"),
+                        "needs two finite numbers [gx, gy]",
+                    ));
+                }
+                (gx != 0.0 || gy != 0.0).then_some(Vec2::new(gx, gy))
+            }
+            None => None,
+        };
         media.push(Medium {
             name: name.clone(),
             slowness,
             index: m.index.is_some(),
+            gradient,
+            least_speed: 1.0 / slowness,
             at,
         });
     }
     one_kind_of_medium(&media)?;
     Ok(media)
+}
+
+/// Sets each medium's least speed over the scene's extent (the `domain`, else the box of
+/// `points`, the interfaces' vertices, sources and receivers) and refuses a medium with a
+/// gradient whose speed reaches 0 there: the speed is linear, so its least value is at a
+/// corner of the box.
+///
+/// # Errors
+/// `media.NAME.gradient` for the first medium whose speed reaches 0, naming the corner.
+pub(crate) fn speeds_stay_positive(
+    media: &mut [Medium],
+    points: impl Iterator<Item = Point>,
+    domain: Option<Aabb>,
+) -> Result<(), SceneError> {
+    if media.iter().all(|m| m.gradient.is_none()) {
+        for m in media.iter_mut() {
+            m.least_speed = 1.0 / m.slowness;
+        }
+        return Ok(());
+    }
+    let extent = match domain {
+        Some(d) => Some(d),
+        None => points.fold(None, |b: Option<Aabb>, p| {
+            let one = Aabb::from_points(p, p);
+            Some(b.map_or(one, |b| b.union(one)))
+        }),
+    };
+    let Some(extent) = extent else {
+        return Ok(());
+    };
+    for m in media.iter_mut() {
+        let Some(g) = m.gradient else {
+            m.least_speed = 1.0 / m.slowness;
+            continue;
+        };
+        let corners = [
+            extent.min,
+            Point::new(extent.max.x, extent.min.y),
+            Point::new(extent.min.x, extent.max.y),
+            extent.max,
+        ];
+        let speed = |p: Point| 1.0 / m.slowness + g.dot(p.to_vec2());
+        let least = corners
+            .into_iter()
+            .min_by(|a, b| speed(*a).total_cmp(&speed(*b)))
+            .unwrap_or(extent.min);
+        let c = speed(least);
+        if !(c > 0.0 && c.is_finite()) {
+            let within = if domain.is_some() {
+                "the domain"
+            } else {
+                "the box of the scene's points"
+            };
+            return Err(SceneError::new(
+                format!("media.{}.gradient", m.name),
+                format!(
+                    "the speed reaches {c} at ({}, {}), a corner of {within}: a medium's speed \
+                     must stay positive wherever it is used (a smaller gradient, a larger \
+                     speed, or a `domain` that keeps clear of it)",
+                    least.x, least.y
+                ),
+            ));
+        }
+        m.least_speed = c;
+    }
+    Ok(())
+}
+
+/// Refuses, in a scene with a medium whose speed has a gradient (curved legs), what curved
+/// legs do not reach yet: the automatic search and derivatives. Each of those assumes
+/// straight legs (the image method and the complete search, the straight-leg derivatives),
+/// so it is refused rather than wrong.
+///
+/// # Errors
+/// `search` or `solver.derivatives`.
+fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
+    let why = "is not available yet with curved legs (a medium with a `gradient`); prescribed \
+               paths solve, with `\"stationary\"` `\"one\"` or `\"all\"`";
+    if let Some(s) = &spec.solver {
+        if s.derivatives == Some(true) {
+            return Err(SceneError::new(
+                "solver.derivatives",
+                format!("`true` {why}"),
+            ));
+        }
+    }
+    if spec.search.is_some() {
+        return Err(SceneError::new(
+            "search",
+            format!("the automatic search {why}"),
+        ));
+    }
+    Ok(())
 }
 
 /// Refuses a scene that mixes `speed` media with `index` media: a speed gives time in length
@@ -1204,9 +1356,21 @@ impl Scene {
             ))?;
         }
 
+        let mut media = media;
+        speeds_stay_positive(
+            &mut media,
+            scene_points(&interfaces, &sources, &receivers, &[], domain),
+            domain,
+        )?;
+        let curved = media.iter().any(|m| m.gradient.is_some());
+        if curved {
+            curved_legs_supported(spec)?;
+        }
+
         let segment_ends = segment_ends(&interfaces, &segments);
         Ok(Scene {
             media,
+            curved,
             background,
             domain,
             interfaces,
@@ -1241,6 +1405,11 @@ impl Scene {
     /// The media, in name order.
     pub fn media(&self) -> &[Medium] {
         &self.media
+    }
+    /// Whether a medium's speed has a gradient (some legs are circular arcs).
+    #[inline]
+    pub fn curved(&self) -> bool {
+        self.curved
     }
     /// Index of the medium with this name.
     pub fn medium_index(&self, name: &str) -> Option<usize> {

@@ -88,6 +88,11 @@ impl PathPlan {
         if scene.paths()[path].diffracts() {
             return PathPlan::Diffracted;
         }
+        if scene.curved() {
+            // Curved legs: the general solve alone (the kernels, the image method and the
+            // start's proofs of no path are the straight leg's).
+            return PathPlan::General;
+        }
         let straight = StraightPath::of(scene, path);
         let ray_parameter = guess == InitialGuess::RayParameter;
         if kernels != Kernels::GeneralOnly
