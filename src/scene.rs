@@ -998,12 +998,13 @@ pub(crate) fn speeds_stay_positive(
 }
 
 /// Refuses, in a scene with a medium whose speed has a gradient (curved legs), what curved
-/// legs do not reach yet: the automatic search and derivatives. Each of those assumes
-/// straight legs (the image method and the complete search, the straight-leg derivatives),
+/// legs do not reach yet: the automatic search, derivatives and diffraction. Each of those
+/// assumes straight legs (the image method and the complete search, the straight-leg
+/// derivatives, the wedge's straight pieces),
 /// so it is refused rather than wrong.
 ///
 /// # Errors
-/// `search` or `solver.derivatives`.
+/// `search`, `solver.derivatives` or the first `diffract` step.
 fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
     let why = "is not available yet with curved legs (a medium with a `gradient`); prescribed \
                paths solve, with `\"stationary\"` `\"one\"` or `\"all\"`";
@@ -1020,6 +1021,18 @@ fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
             "search",
             format!("the automatic search {why}"),
         ));
+    }
+    for (k, path) in spec.paths.iter().enumerate() {
+        if let Some(j) = path
+            .steps
+            .iter()
+            .position(|s| matches!(s, StepSpec::Diffract { .. }))
+        {
+            return Err(SceneError::new(
+                format!("paths[{k}].steps[{j}]"),
+                format!("a `diffract` step {why}"),
+            ));
+        }
     }
     Ok(())
 }

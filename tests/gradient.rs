@@ -6,7 +6,7 @@
 
 use std::process::Command;
 
-use eigenray::path_problem::PathProblem;
+use eigenray::problem::PathProblem;
 use eigenray::{Arrival, Point, Scene, Status, Tracer, Workspace};
 
 /// The design note's caustic example (§5, check 4) with y up: water (1500 m/s) above
@@ -260,7 +260,7 @@ fn a_tiny_gradient_is_the_uniform_medium() {
 
 /// Bad gradients are refused naming the key: a speed reaching 0 in the domain, a gradient
 /// on an `index` medium, a gradient that is not two finite numbers, and what curved legs do
-/// not support yet (`search`, `derivatives`). The
+/// not support yet (`search`, `derivatives`, a `diffract` step). The
 /// command-line tool exits with status 2 naming the key.
 #[test]
 fn bad_gradients_are_refused_naming_the_key() {
@@ -304,6 +304,13 @@ fn bad_gradients_are_refused_naming_the_key() {
             "solver.derivatives",
         ),
     ];
+    // A diffracted path through a medium with a gradient: refused at its step.
+    let diffracted = with(r#""a": { "speed": 1500, "gradient": [0, 0.1] }"#, "").replace(
+        r#"{ "reflect": "flat" }"#,
+        r#"{ "diffract": "flat", "vertex": 0 }"#,
+    );
+    let err = Scene::from_json(&diffracted).expect_err("diffract");
+    assert_eq!(err.key, "paths[0].steps[0]", "{err}");
     for (text, key) in &cases {
         let err = Scene::from_json(text).expect_err(key);
         assert!(err.key.starts_with(key), "{key}: {err}");
@@ -347,7 +354,9 @@ fn stationary_paths_lists_both_caustic_eigenrays() {
     let mut out: Vec<Arrival> = Vec::new();
     for path in 0..2 {
         let (s, r) = (Point::new(0.0, 0.0), Point::new(10000.0, 0.0));
-        let outcome = tracer.stationary_paths(s, r, path, &mut out).unwrap();
+        let outcome = tracer
+            .stationary_paths(s, r, path, &eigenray::options::Run::new(), &mut out)
+            .unwrap();
         assert!(!outcome.complete);
         let times: Vec<f64> = out.iter().map(|a| a.time).collect();
         assert_eq!(times.len(), 2, "{times:?}");
@@ -452,7 +461,9 @@ fn a_caustic_turns_the_phase_by_a_quarter() {
     let tracer = Tracer::new(Scene::from_json(&json).unwrap()).unwrap();
     let mut out: Vec<Arrival> = Vec::new();
     let (s, r) = (Point::new(0.0, 0.0), Point::new(10000.0, 0.0));
-    tracer.stationary_paths(s, r, 0, &mut out).unwrap();
+    tracer
+        .stationary_paths(s, r, 0, &eigenray::options::Run::new(), &mut out)
+        .unwrap();
     assert_eq!(out.len(), 2);
     let phases: Vec<f64> = out
         .iter()

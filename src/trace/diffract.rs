@@ -92,6 +92,7 @@ impl Tracer {
                         let sequence = Sequence {
                             steps: piece_steps,
                             path: None,
+                            curved: &[],
                         };
                         let found = if given.is_none() && medium.is_none() {
                             // No medium where the piece starts: no path.
