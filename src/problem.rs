@@ -406,56 +406,14 @@ impl<'a> ProblemRef<'a> {
         let leg = |j: usize| leg_from(u, len, inv_len, j, w[j]);
         e.time = time;
         let vanish = vanish_threshold(total, self.coord());
-        let r = &mut e.r[..k];
-        let (mut phi, mut rmax, mut held, mut vanished) = (0.0, 0.0f64, 0, 0);
-        for i in 0..k {
-            let t = tan[i];
-            let ri = (leg(i).arrival() - leg(i + 1).departure()).dot(t);
-            r[i] = ri;
-            let rel = ri / (w[i] + w[i + 1]);
-            let p = pin(i);
-            let m = match p {
-                Pin::Free if leg_vanished(len, i, vanish) => {
-                    // The residual is undefined here; the solver judges the kink.
-                    vanished += 1;
-                    0.0
-                }
-                Pin::Free => {
-                    rmax = max_num(rmax, rel.abs());
-                    rel
-                }
-                Pin::Vertex | Pin::Kink => 0.0,
-                Pin::Start | Pin::End if leg_vanished(len, i, vanish) => 0.0,
-                Pin::Start => rel.min(0.0),
-                Pin::End => rel.max(0.0),
-            };
-            held += (p != Pin::Free) as usize;
-            phi += m * m;
-        }
-        e.phi = phi;
-        e.rmax = rmax;
-        e.held = held;
-        e.vanished = vanished;
-        e.vanish = vanish;
+        let merit = residuals(leg, w, tan, len, vanish, pin, &mut e.r[..k]);
+        (e.phi, e.rmax, e.held, e.vanished, e.vanish) =
+            (merit.phi, merit.rmax, merit.held, merit.vanished, vanish);
         if !hessian {
             return;
         }
         let (diag, off) = (&mut e.diag[..k], &mut e.off[..k.saturating_sub(1)]);
-        for i in 0..k {
-            let t = tan[i];
-            let (before, after) = (leg(i), leg(i + 1));
-            let mut h = before.end_block(t) + after.start_block(t);
-            if let Some(kappa) = &kappa {
-                let kappa = kappa(i);
-                if kappa != 0.0 {
-                    h += kappa * (before.arrival() - after.departure()).dot(t.perp());
-                }
-            }
-            diag[i] = h;
-            if i + 1 < k {
-                off[i] = after.coupling(t, tan[i + 1]);
-            }
-        }
+        hessian_blocks(leg, tan, kappa, diag, off);
     }
 
     /// [`derive`](Self::derive) for a path whose legs may be curved (each leg its model in
@@ -487,52 +445,112 @@ impl<'a> ProblemRef<'a> {
         }
         e.time = time;
         let vanish = vanish_threshold(total, self.coord());
-        let (mut phi, mut rmax, mut held, mut vanished) = (0.0, 0.0f64, 0, 0);
-        for i in 0..k {
-            let t = e.tan[i];
-            let ri = (leg(i).arrival() - leg(i + 1).departure()).dot(t);
-            e.r[i] = ri;
-            let rel = ri / (w[i] + w[i + 1]);
-            let p = pin(i);
-            let m = match p {
-                Pin::Free if leg_vanished(&e.len, i, vanish) => {
-                    vanished += 1;
-                    0.0
-                }
-                Pin::Free => {
-                    rmax = max_num(rmax, rel.abs());
-                    rel
-                }
-                Pin::Vertex | Pin::Kink => 0.0,
-                Pin::Start | Pin::End if leg_vanished(&e.len, i, vanish) => 0.0,
-                Pin::Start => rel.min(0.0),
-                Pin::End => rel.max(0.0),
-            };
-            held += (p != Pin::Free) as usize;
-            phi += m * m;
-        }
-        e.phi = phi;
-        e.rmax = rmax;
-        e.held = held;
-        e.vanished = vanished;
-        e.vanish = vanish;
+        let merit = residuals(
+            leg,
+            w,
+            &e.tan[..k],
+            &e.len[..k + 1],
+            vanish,
+            pin,
+            &mut e.r[..k],
+        );
+        (e.phi, e.rmax, e.held, e.vanished, e.vanish) =
+            (merit.phi, merit.rmax, merit.held, merit.vanished, vanish);
         if !hessian {
             return;
         }
-        for i in 0..k {
-            let t = e.tan[i];
-            let (before, after) = (leg(i), leg(i + 1));
-            let mut h = before.end_block(t) + after.start_block(t);
-            if let Some(kappa) = &kappa {
-                let kappa = kappa(i);
-                if kappa != 0.0 {
-                    h += kappa * (before.arrival() - after.departure()).dot(t.perp());
-                }
+        let (diag, off) = (&mut e.diag[..k], &mut e.off[..k.saturating_sub(1)]);
+        hessian_blocks(leg, &e.tan[..k], kappa, diag, off);
+    }
+}
+
+/// The merit's sums of one evaluation ([`residuals`]).
+#[derive(Clone, Copy, Debug)]
+struct Merit {
+    /// Sum of the squared (pinned) relative residuals.
+    phi: f64,
+    /// The largest relative residual of a free point.
+    rmax: f64,
+    /// Points held by their pin.
+    held: usize,
+    /// Free points next to a vanished leg.
+    vanished: usize,
+}
+
+/// The residual of every point into `r` and the merit's sums, from the legs (`leg(j)`, any
+/// leg model), the slownesses `w`, the tangents `tan`, the legs' lengths `len` (their chords')
+/// and each point's pin: what a path's evaluation shares whatever its legs.
+#[inline(always)]
+fn residuals<L: Leg>(
+    leg: impl Fn(usize) -> L,
+    w: &[f64],
+    tan: &[Vec2],
+    len: &[f64],
+    vanish: f64,
+    pin: impl Fn(usize) -> Pin,
+    r: &mut [f64],
+) -> Merit {
+    let k = r.len();
+    // Exact-length views: the loop then indexes without bounds checks.
+    let (w, tan, len) = (&w[..k + 1], &tan[..k], &len[..k + 1]);
+    let (mut phi, mut rmax, mut held, mut vanished) = (0.0, 0.0f64, 0, 0);
+    for i in 0..k {
+        let t = tan[i];
+        let ri = (leg(i).arrival() - leg(i + 1).departure()).dot(t);
+        r[i] = ri;
+        let rel = ri / (w[i] + w[i + 1]);
+        let p = pin(i);
+        let m = match p {
+            Pin::Free if leg_vanished(len, i, vanish) => {
+                // The residual is undefined here; the solver judges the kink.
+                vanished += 1;
+                0.0
             }
-            e.diag[i] = h;
-            if i + 1 < k {
-                e.off[i] = after.coupling(t, e.tan[i + 1]);
+            Pin::Free => {
+                rmax = max_num(rmax, rel.abs());
+                rel
             }
+            Pin::Vertex | Pin::Kink => 0.0,
+            Pin::Start | Pin::End if leg_vanished(len, i, vanish) => 0.0,
+            Pin::Start => rel.min(0.0),
+            Pin::End => rel.max(0.0),
+        };
+        held += (p != Pin::Free) as usize;
+        phi += m * m;
+    }
+    Merit {
+        phi,
+        rmax,
+        held,
+        vanished,
+    }
+}
+
+/// The Hessian's diagonal and off-diagonal from the legs (`leg(j)`, any leg model), the
+/// tangents and each point's curvature term (`kappa`).
+#[inline(always)]
+fn hessian_blocks<L: Leg>(
+    leg: impl Fn(usize) -> L,
+    tan: &[Vec2],
+    kappa: Option<impl Fn(usize) -> f64>,
+    diag: &mut [f64],
+    off: &mut [f64],
+) {
+    let k = diag.len();
+    let (tan, off) = (&tan[..k], &mut off[..k.saturating_sub(1)]);
+    for i in 0..k {
+        let t = tan[i];
+        let (before, after) = (leg(i), leg(i + 1));
+        let mut h = before.end_block(t) + after.start_block(t);
+        if let Some(kappa) = &kappa {
+            let kappa = kappa(i);
+            if kappa != 0.0 {
+                h += kappa * (before.arrival() - after.departure()).dot(t.perp());
+            }
+        }
+        diag[i] = h;
+        if i + 1 < k {
+            off[i] = after.coupling(t, tan[i + 1]);
         }
     }
 }

@@ -803,19 +803,7 @@ fn search(tracer: &Tracer) -> Result<Vec<SearchArrival>, Failure> {
         started.elapsed().as_secs_f64(),
         report.beams
     );
-    if report.work > 0 {
-        let _ = write!(
-            line,
-            ", {} units of work on refracting sequences",
-            report.work
-        );
-    }
-    match (options.max_steps, options.max_time) {
-        (Some(k), Some(t)) => _ = write!(line, "; up to {k} steps and time {t}"),
-        (Some(k), None) => _ = write!(line, "; up to {k} steps"),
-        (None, Some(t)) => _ = write!(line, "; up to time {t}"),
-        (None, None) => {}
-    }
+    search_bounds(&mut line, report.work, options);
     if report.incomplete_pairs > 0 {
         let _ = write!(
             line,
@@ -826,6 +814,20 @@ fn search(tracer: &Tracer) -> Result<Vec<SearchArrival>, Failure> {
     let _ = write!(line, "; {}", unreached_pairs(scene, &report.arrivals));
     eprintln!("{line}");
     Ok(report.arrivals)
+}
+
+/// The summary line's middle, shared by the listing and the streamed search: the walk's work
+/// on refracting sequences (when any) and the search's bounds.
+fn search_bounds(line: &mut String, work: u64, options: &eigenray::scene::SearchOptions) {
+    if work > 0 {
+        let _ = write!(line, ", {work} units of work on refracting sequences");
+    }
+    match (options.max_steps, options.max_time) {
+        (Some(k), Some(t)) => _ = write!(line, "; up to {k} steps and time {t}"),
+        (Some(k), None) => _ = write!(line, "; up to {k} steps"),
+        (None, Some(t)) => _ = write!(line, "; up to time {t}"),
+        (None, None) => {}
+    }
 }
 
 /// The scene's `search` streamed into the response outputs' `sums` (no arrival listed), with
@@ -852,19 +854,7 @@ fn search_streamed(tracer: &Tracer, sums: &response::Sums<'_>) -> Result<u64, Fa
         started.elapsed().as_secs_f64(),
         report.beams
     );
-    if report.work > 0 {
-        let _ = write!(
-            line,
-            ", {} units of work on refracting sequences",
-            report.work
-        );
-    }
-    match (options.max_steps, options.max_time) {
-        (Some(k), Some(t)) => _ = write!(line, "; up to {k} steps and time {t}"),
-        (Some(k), None) => _ = write!(line, "; up to {k} steps"),
-        (None, Some(t)) => _ = write!(line, "; up to time {t}"),
-        (None, None) => {}
-    }
+    search_bounds(&mut line, report.work, options);
     if report.incomplete_pairs > 0 {
         let _ = write!(
             line,
