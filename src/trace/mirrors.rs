@@ -34,7 +34,11 @@
 //! so the whole is at least `|I − p| + |p − r| ≥ |I − r|`; and it is at least `|I − p|`, `p`
 //! on the part of the wall the beam reaches. So a node whose image lies farther than
 //! `max_time / slowness` from the receivers' box, or from its wall's reachable part, is pruned
-//! with its whole subtree, as is a receiver farther than that from the image; the margin is
+//! with its whole subtree, as is a receiver farther than that from the image. Tighter, and
+//! what prunes the beams that reach no receiver in time: the rest after `p` is at least
+//! `dist(p, box)` long, so a node is pruned where the least `|I − p| + dist(p, box)` over `p`
+//! in the reachable part (a convex function along it, bounded from below by tangents,
+//! [`Bounds::late_through`]) exceeds `max_time / slowness`. The margin is
 //! the beam tests' (far more than the round-off of the distances), so a path whose computed
 //! time is within `max_time` is never pruned by rounding. Each path's own computed time then
 //! decides.
