@@ -90,7 +90,7 @@ fn a_receiver_is_left_out_exactly_beyond_the_margin() {
 #[test]
 fn the_bound_through_a_part_never_exceeds_the_shortest_way() {
     let mut rng = crate::demo::SplitMix64(39);
-    let mut coord = |rng: &mut crate::demo::SplitMix64| 20.0 * rng.next_f64() - 10.0;
+    let coord = |rng: &mut crate::demo::SplitMix64| 20.0 * rng.next_f64() - 10.0;
     let delta = 1e-12;
     let mut pruned = 0;
     for case in 0..2000 {
@@ -136,6 +136,21 @@ fn the_bound_through_a_part_never_exceeds_the_shortest_way() {
     assert!(pruned > 300, "{pruned}");
 }
 
+/// One arrival of a tree, its points and time as bits.
+#[derive(Debug, PartialEq)]
+struct Arrival {
+    receiver: usize,
+    walls: Vec<usize>,
+    points: Vec<(u64, u64)>,
+    time: u64,
+}
+
+/// A tree's arrivals, in the order found, and the beams it visited.
+struct Walked {
+    arrivals: Vec<Arrival>,
+    beams: u64,
+}
+
 /// Every arrival of `walls`' tree from `source` to `receivers` by `max_time` (speed 343),
 /// with or without the bound through the wall's part: each arrival's receiver, walls,
 /// points and time as bits, and the beams visited.
@@ -146,7 +161,7 @@ fn tree(
     receivers: &[Point],
     max_time: f64,
     through: bool,
-) -> (Vec<(usize, Vec<usize>, Vec<(u64, u64)>, u64)>, u64) {
+) -> Walked {
     let search = MirrorSearch {
         scene,
         source,
@@ -167,21 +182,25 @@ fn tree(
         &bounds,
         &mut MirrorScratch::default(),
         &mut |p: MirrorPath<'_>| {
-            out.push((
-                p.receiver,
-                p.walls.to_vec(),
-                p.points
+            out.push(Arrival {
+                receiver: p.receiver,
+                walls: p.walls.to_vec(),
+                points: p
+                    .points
                     .iter()
                     .map(|q| (q.x.to_bits(), q.y.to_bits()))
                     .collect(),
-                p.time.to_bits(),
-            ));
+                time: p.time.to_bits(),
+            });
             true
         },
         &mut |_| true,
     );
     assert!(!stats.stopped);
-    (out, stats.beams)
+    Walked {
+        arrivals: out,
+        beams: stats.beams,
+    }
 }
 
 /// The comb room (`examples/scenes/comb_room.json`, its two listeners and the nine of
@@ -234,10 +253,11 @@ fn the_bound_through_a_part_keeps_every_arrival() {
         let all: Vec<usize> = (0..scene.interfaces().len()).collect();
         let walls = MirrorWalls::new(scene, &all);
         let source = scene.sources()[0];
-        let (with, beams) = tree(scene, &walls, source, &receivers, max_time, true);
-        let (without, all_beams) = tree(scene, &walls, source, &receivers, max_time, false);
-        assert!(!with.is_empty(), "case {i}");
-        assert_eq!(with, without, "case {i}");
+        let with = tree(scene, &walls, source, &receivers, max_time, true);
+        let without = tree(scene, &walls, source, &receivers, max_time, false);
+        let (beams, all_beams) = (with.beams, without.beams);
+        assert!(!with.arrivals.is_empty(), "case {i}");
+        assert_eq!(with.arrivals, without.arrivals, "case {i}");
         assert!(beams <= all_beams, "case {i}: {beams} > {all_beams}");
         if fewer {
             assert!(beams < all_beams, "case {i}: {beams} ≥ {all_beams}");
