@@ -169,7 +169,7 @@ impl ExactSizeIterator for BatchRays<'_> {}
 /// [`write_one`](Self::write_one); which rays go through which is not part of the contract.
 ///
 /// ```
-/// use eigenray::sink::{BatchScratch, BatchSink, RaySlot};
+/// use eigenray::batch::{BatchScratch, BatchSink, RaySlot};
 /// use eigenray::{BatchOptions, Point, RayRecord, Scene, Tracer, options::Run};
 ///
 /// /// Times only, into a slice of one time per ray (one path here).

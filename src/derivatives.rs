@@ -118,6 +118,9 @@ pub enum DerivativeError {
     },
     /// The Hessian at the solution is singular (a caustic): the points do not move smoothly.
     Singular,
+    /// The scene has a medium with a speed gradient: derivatives through curved legs are not
+    /// available yet.
+    CurvedLegs,
 }
 
 impl std::fmt::Display for DerivativeError {
@@ -135,6 +138,10 @@ impl std::fmt::Display for DerivativeError {
             DerivativeError::OffInterface { step } => {
                 write!(f, "interaction point {step} does not lie on its interface")
             }
+            DerivativeError::CurvedLegs => f.write_str(
+                "derivatives through curved legs (a medium with a `gradient`) are not available \
+                 yet",
+            ),
             DerivativeError::Singular => f.write_str(
                 "the Hessian at the solution is singular (a caustic): the points do not move \
                  smoothly",
@@ -275,6 +282,9 @@ fn leg_unusual(d: Vec2) -> (Vec2, f64) {
 
 /// The steps of path `path`.
 fn path_steps(scene: &Scene, path: usize) -> Result<&[Step], DerivativeError> {
+    if scene.curved() {
+        return Err(DerivativeError::CurvedLegs);
+    }
     let spec = scene
         .paths()
         .get(path)
@@ -497,6 +507,9 @@ impl Gradient {
         mut media: impl Iterator<Item = usize>,
         segments: Option<&[usize]>,
     ) -> Result<(), DerivativeError> {
+        if scene.curved() {
+            return Err(DerivativeError::CurvedLegs);
+        }
         self.size_slowness(scene);
         // One interaction (the common ray): written out, without the general bookkeeping.
         if let ([step], &[p0, p1, p2]) = (steps, points) {
@@ -706,7 +719,7 @@ pub enum Parameter {
 /// those of [`Workspace::points`] (source, interactions, receiver).
 ///
 /// ```
-/// use eigenray::gradients::{Axis, Parameter};
+/// use eigenray::derivatives::{Axis, Parameter};
 /// use eigenray::{PointSensitivities, Scene, Tracer, Workspace};
 /// let scene = Scene::from_json(r#"{
 ///     "media": { "air": { "speed": 1.0 } },

@@ -351,6 +351,413 @@ fn box_gap(a: Aabb, b: Aabb) -> f64 {
     dx.hypot(dy)
 }
 
+/// A medium whose speed is linear in position, `c(p) = speed + gradient · p` (`p` relative
+/// to the origin of the leg's ends): its legs are circular arcs (`design/curved-rays.md`).
+///
+/// Every formula below is written in `y = g ℓ / (2 √(c_a c_b))` (`g = |gradient|`), with no
+/// division by `g`: at a gradient of zero they are the straight leg's (to rounding), and near
+/// it they lose no digits (the textbook `acosh(1 + 2y²) / g` gives 0 at `g = 1e-9`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Linear {
+    /// The speed at the origin.
+    pub speed: f64,
+    /// The speed's gradient (speed per length).
+    pub gradient: Vec2,
+    /// The least speed where the medium is used (the scene's extent): the residual bounds'
+    /// greatest slowness.
+    pub least_speed: f64,
+}
+
+/// A circular arc in a [`Linear`] medium, evaluated from its two ends.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct ArcLeg {
+    /// The travel time.
+    pub time: f64,
+    /// The speed at the start and at the end.
+    pub speeds: [f64; 2],
+    /// The chord `b − a`.
+    pub chord: Vec2,
+    /// The chord's length.
+    pub len: f64,
+    /// The medium's gradient.
+    pub gradient: Vec2,
+    /// `T′ A = 1 / (ℓ √(c_a c_b) √(1 + y²))` (the factor of the first derivatives).
+    first: f64,
+    /// `−T″ A² = (1 + 2y²) / (ℓ³ √(c_a c_b) (1 + y²)^{3/2})`.
+    second: f64,
+    /// `−∇_a T`.
+    departure: Vec2,
+    /// `∇_b T`.
+    arrival: Vec2,
+}
+
+/// `asinh(y) / y` for `y ≥ 0`, without loss near 0 (its series below 1e-3).
+#[inline]
+pub(crate) fn asinh_over(y: f64) -> f64 {
+    if y < 1e-3 {
+        let y2 = y * y;
+        1.0 - y2 * (1.0 / 6.0 - y2 * (3.0 / 40.0 - y2 * (5.0 / 112.0)))
+    } else {
+        y.asinh() / y
+    }
+}
+
+/// `asin(z) / z` for `0 ≤ z ≤ 1`, without loss near 0.
+#[inline]
+fn asin_over(z: f64) -> f64 {
+    if z < 1e-3 {
+        let z2 = z * z;
+        1.0 + z2 * (1.0 / 6.0 + z2 * (3.0 / 40.0 + z2 * (5.0 / 112.0)))
+    } else {
+        z.min(1.0).asin() / z
+    }
+}
+
+/// `sin(x) / x`, without loss near 0.
+#[inline]
+fn sinc(x: f64) -> f64 {
+    if x.abs() < 1e-3 {
+        let x2 = x * x;
+        1.0 - x2 / 6.0 * (1.0 - x2 / 20.0)
+    } else {
+        x.sin() / x
+    }
+}
+
+impl Linear {
+    /// The speed at `p` (relative to the origin).
+    #[inline]
+    pub fn speed_at(self, p: Vec2) -> f64 {
+        self.speed + self.gradient.dot(p)
+    }
+
+    /// The same medium with its positions relative to `origin` (given relative to the old
+    /// origin).
+    #[inline]
+    pub fn shifted(self, origin: Vec2) -> Linear {
+        Linear {
+            speed: self.speed_at(origin),
+            ..self
+        }
+    }
+
+    /// The greatest speed over the corners of `b` (the greatest over the box: the speed is
+    /// linear).
+    fn greatest_speed(self, b: Aabb) -> f64 {
+        let c = |x: f64, y: f64| self.speed_at(Vec2::new(x, y));
+        c(b.min.x, b.min.y)
+            .max(c(b.max.x, b.min.y))
+            .max(c(b.min.x, b.max.y))
+            .max(c(b.max.x, b.max.y))
+    }
+
+    /// The least time of a leg of chord length at least `len` between ends of speeds at most
+    /// `ca`, `cb` (the time grows with the chord and falls with the speeds at the ends).
+    fn least_time_between(self, len: f64, ca: f64, cb: f64) -> f64 {
+        if !(ca > 0.0 && cb > 0.0) {
+            return 0.0;
+        }
+        let root = (ca * cb).sqrt();
+        let y = self.gradient.length() * len / (2.0 * root);
+        (len / root * asinh_over(y)).max(0.0)
+    }
+}
+
+impl LegModel for Linear {
+    type Leg = ArcLeg;
+
+    #[inline]
+    fn leg(self, a: Vec2, b: Vec2) -> ArcLeg {
+        let (ca, cb) = (self.speed_at(a), self.speed_at(b));
+        let d = b - a;
+        let len = length(d);
+        let g = self.gradient;
+        if len.is_nan() || len <= 0.0 {
+            return ArcLeg {
+                speeds: [ca, cb],
+                gradient: g,
+                ..ArcLeg::default()
+            };
+        }
+        let cacb = ca * cb;
+        let root = cacb.sqrt();
+        let y2 = g.dot(g) * len * len / (4.0 * cacb);
+        let y = y2.sqrt();
+        let time = len / root * asinh_over(y);
+        let s = (1.0 + y2).sqrt();
+        let first = 1.0 / (len * root * s);
+        let second = (1.0 + 2.0 * y2) / (len * len * len * root * s * s * s);
+        let l2 = len * len;
+        ArcLeg {
+            time,
+            speeds: [ca, cb],
+            chord: d,
+            len,
+            gradient: g,
+            first,
+            second,
+            departure: (d + g * (l2 / (2.0 * ca))) * first,
+            arrival: (d - g * (l2 / (2.0 * cb))) * first,
+        }
+    }
+
+    #[inline]
+    fn valid_leg(self, a: Point, b: Point) -> Option<ArcLeg> {
+        let leg = self.leg(a.to_vec2(), b.to_vec2());
+        let [ca, cb] = leg.speeds;
+        (leg.len > 0.0 && leg.len.is_finite() && ca > 0.0 && cb > 0.0 && leg.time.is_finite())
+            .then_some(leg)
+    }
+
+    fn least_time(self, from: Aabb, to: Aabb) -> f64 {
+        let (ca, cb) = (self.greatest_speed(from), self.greatest_speed(to));
+        self.least_time_between(box_gap(from, to), ca, cb)
+    }
+
+    fn least_time_to(self, from: Aabb, to: Point) -> f64 {
+        let (ca, cb) = (self.greatest_speed(from), self.speed_at(to.to_vec2()));
+        self.least_time_between(from.distance_sq(to).sqrt(), ca, cb)
+    }
+
+    fn along_at_ends(self, _chord_along: [f64; 2]) -> [f64; 2] {
+        // An arc's ends turn away from its chord: only the slowness's size bounds them.
+        let w = self.greatest_slowness();
+        [-w, w]
+    }
+
+    fn greatest_slowness(self) -> f64 {
+        1.0 / self.least_speed
+    }
+}
+
+impl ArcLeg {
+    /// `v_a = −d − ℓ² G / (2 c_a)` and `v_b = d − ℓ² G / (2 c_b)`: `∇X / A` at the ends.
+    #[inline]
+    fn v(&self) -> [Vec2; 2] {
+        let l2 = self.len * self.len;
+        let [ca, cb] = self.speeds;
+        [
+            (self.chord + self.gradient * (l2 / (2.0 * ca))) * -1.0,
+            self.chord - self.gradient * (l2 / (2.0 * cb)),
+        ]
+    }
+
+    /// The arc's signed curvature (positive: it turns left), `−(G · n⊥) / c` at its start.
+    #[inline]
+    pub fn curvature(&self) -> f64 {
+        let d0 = self.direction_at_start();
+        -self.gradient.dot(d0.perp()) / self.speeds[0]
+    }
+
+    /// The arc's length.
+    pub fn arc_length(&self) -> f64 {
+        let z = 0.5 * self.len * self.curvature().abs();
+        self.len * asin_over(z)
+    }
+
+    /// The point at arc length `s` from the start, relative to the start.
+    pub fn offset_at(&self, s: f64) -> Vec2 {
+        let d0 = self.direction_at_start();
+        let k = self.curvature();
+        let half = sinc(0.5 * k * s);
+        d0 * (s * sinc(k * s)) + d0.perp() * (0.5 * k * s * s * half * half)
+    }
+}
+
+impl Leg for ArcLeg {
+    #[inline]
+    fn time(&self) -> f64 {
+        self.time
+    }
+    #[inline]
+    fn arrival(&self) -> Vec2 {
+        self.arrival
+    }
+    #[inline]
+    fn departure(&self) -> Vec2 {
+        self.departure
+    }
+    #[inline]
+    fn direction_at_end(&self) -> Vec2 {
+        self.arrival * self.speeds[1]
+    }
+    #[inline]
+    fn direction_at_start(&self) -> Vec2 {
+        self.departure * self.speeds[0]
+    }
+    fn end_block(&self, t: Vec2) -> f64 {
+        let [_, vb] = self.v();
+        let [_, cb] = self.speeds;
+        let (dt, gt) = (self.chord.dot(t), self.gradient.dot(t));
+        let m = t.dot(t) - 2.0 * dt * gt / cb + self.len * self.len * gt * gt / (cb * cb);
+        -self.second * vb.dot(t) * vb.dot(t) + self.first * m
+    }
+    fn start_block(&self, t: Vec2) -> f64 {
+        let [va, _] = self.v();
+        let [ca, _] = self.speeds;
+        let (dt, gt) = (self.chord.dot(t), self.gradient.dot(t));
+        let m = t.dot(t) + 2.0 * dt * gt / ca + self.len * self.len * gt * gt / (ca * ca);
+        -self.second * va.dot(t) * va.dot(t) + self.first * m
+    }
+    fn coupling(&self, ta: Vec2, tb: Vec2) -> f64 {
+        let [va, vb] = self.v();
+        let [ca, cb] = self.speeds;
+        let (d, g) = (self.chord, self.gradient);
+        let m = -ta.dot(tb) - d.dot(tb) * g.dot(ta) / ca
+            + g.dot(tb) * d.dot(ta) / cb
+            + self.len * self.len * g.dot(ta) * g.dot(tb) / (2.0 * ca * cb);
+        -self.second * va.dot(ta) * vb.dot(tb) + self.first * m
+    }
+    fn out_of_plane_width(&self, source_slowness: f64) -> f64 {
+        // ∫ c ds = ℓ c(arc's middle) = ℓ c(chord's middle) / cos(half the turn), and
+        // sin(half the turn) = ℓ κ / 2 (κ the curvature).
+        let [ca, cb] = self.speeds;
+        let z = 0.5 * self.len * self.curvature();
+        let cos = (1.0 - z * z).max(0.0).sqrt();
+        source_slowness * self.len * 0.5 * (ca + cb) / cos
+    }
+}
+
+/// The model of one leg's medium when a path may hold curved legs: [`Uniform`] or
+/// [`Linear`], chosen per leg (a path through a medium with a gradient).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum LegMedium {
+    /// A uniform medium.
+    Uniform(Uniform),
+    /// A medium whose speed is linear in position.
+    Linear(Linear),
+}
+
+/// A leg of a [`LegMedium`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum AnyLeg {
+    /// A straight leg.
+    Straight(StraightLeg),
+    /// A circular arc.
+    Arc(ArcLeg),
+}
+
+impl AnyLeg {
+    /// The chord's length.
+    #[inline]
+    pub fn len(&self) -> f64 {
+        match self {
+            AnyLeg::Straight(l) => l.len,
+            AnyLeg::Arc(l) => l.len,
+        }
+    }
+
+    /// The unit direction of the chord (zero for a leg of zero length).
+    #[inline]
+    pub fn chord_direction(&self) -> Vec2 {
+        match self {
+            AnyLeg::Straight(l) => l.u,
+            AnyLeg::Arc(l) if l.len > 0.0 => l.chord * (1.0 / l.len),
+            AnyLeg::Arc(_) => Vec2::default(),
+        }
+    }
+
+    /// The arc, if the leg is one.
+    #[inline]
+    pub fn arc(&self) -> Option<&ArcLeg> {
+        match self {
+            AnyLeg::Arc(l) => Some(l),
+            AnyLeg::Straight(_) => None,
+        }
+    }
+}
+
+macro_rules! either {
+    ($self:expr, $l:ident => $e:expr) => {
+        match $self {
+            AnyLeg::Straight($l) => $e,
+            AnyLeg::Arc($l) => $e,
+        }
+    };
+}
+
+impl Leg for AnyLeg {
+    #[inline]
+    fn time(&self) -> f64 {
+        either!(self, l => l.time())
+    }
+    #[inline]
+    fn arrival(&self) -> Vec2 {
+        either!(self, l => l.arrival())
+    }
+    #[inline]
+    fn departure(&self) -> Vec2 {
+        either!(self, l => l.departure())
+    }
+    #[inline]
+    fn direction_at_end(&self) -> Vec2 {
+        either!(self, l => l.direction_at_end())
+    }
+    #[inline]
+    fn direction_at_start(&self) -> Vec2 {
+        either!(self, l => l.direction_at_start())
+    }
+    #[inline]
+    fn end_block(&self, t: Vec2) -> f64 {
+        either!(self, l => l.end_block(t))
+    }
+    #[inline]
+    fn start_block(&self, t: Vec2) -> f64 {
+        either!(self, l => l.start_block(t))
+    }
+    #[inline]
+    fn coupling(&self, ta: Vec2, tb: Vec2) -> f64 {
+        either!(self, l => l.coupling(ta, tb))
+    }
+    #[inline]
+    fn out_of_plane_width(&self, source_slowness: f64) -> f64 {
+        either!(self, l => l.out_of_plane_width(source_slowness))
+    }
+}
+
+impl LegModel for LegMedium {
+    type Leg = AnyLeg;
+
+    #[inline]
+    fn leg(self, a: Vec2, b: Vec2) -> AnyLeg {
+        match self {
+            LegMedium::Uniform(m) => AnyLeg::Straight(m.leg(a, b)),
+            LegMedium::Linear(m) => AnyLeg::Arc(m.leg(a, b)),
+        }
+    }
+    #[inline]
+    fn valid_leg(self, a: Point, b: Point) -> Option<AnyLeg> {
+        match self {
+            LegMedium::Uniform(m) => m.valid_leg(a, b).map(AnyLeg::Straight),
+            LegMedium::Linear(m) => m.valid_leg(a, b).map(AnyLeg::Arc),
+        }
+    }
+    fn least_time(self, from: Aabb, to: Aabb) -> f64 {
+        match self {
+            LegMedium::Uniform(m) => m.least_time(from, to),
+            LegMedium::Linear(m) => m.least_time(from, to),
+        }
+    }
+    fn least_time_to(self, from: Aabb, to: Point) -> f64 {
+        match self {
+            LegMedium::Uniform(m) => m.least_time_to(from, to),
+            LegMedium::Linear(m) => m.least_time_to(from, to),
+        }
+    }
+    fn along_at_ends(self, chord_along: [f64; 2]) -> [f64; 2] {
+        match self {
+            LegMedium::Uniform(m) => m.along_at_ends(chord_along),
+            LegMedium::Linear(m) => m.along_at_ends(chord_along),
+        }
+    }
+    fn greatest_slowness(self) -> f64 {
+        match self {
+            LegMedium::Uniform(m) => m.greatest_slowness(),
+            LegMedium::Linear(m) => m.greatest_slowness(),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -546,6 +953,250 @@ mod tests {
                 "{} {bound}",
                 leg.time()
             );
+        }
+    }
+
+    /// The arc leg of a medium `c = c0 + G · p` from `a` to `b`.
+    fn arc(c0: f64, g: [f64; 2], a: [f64; 2], b: [f64; 2]) -> ArcLeg {
+        let m = Linear {
+            speed: c0,
+            gradient: Vec2::new(g[0], g[1]),
+            least_speed: 1.0,
+        };
+        m.leg(Vec2::new(a[0], a[1]), Vec2::new(b[0], b[1]))
+    }
+
+    /// The ray equations `dx/ds = c p`, `dp/ds = −∇c / c²` of a medium `c = c0 + G · x`,
+    /// integrated by RK4 from `x` along the unit direction `d` over the arc length `s` in `n`
+    /// steps: the end point, the time and `∫ c ds` (trapezoids on the steps). An oracle
+    /// independent of the closed forms.
+    fn shoot(c0: f64, g: Vec2, x: Vec2, d: Vec2, s: f64, n: usize) -> (Vec2, f64, f64) {
+        // State: position, slowness vector, time, ∫ c ds.
+        type State = (Vec2, Vec2, f64, f64);
+        let c = |x: Vec2| c0 + g.dot(x);
+        let f = |(x, p, _, _): State| {
+            let cx = c(x);
+            (p * cx, g * (-1.0 / (cx * cx)), 1.0 / cx, cx)
+        };
+        let step = |a: State, k: State, h: f64| {
+            (a.0 + k.0 * h, a.1 + k.1 * h, a.2 + k.2 * h, a.3 + k.3 * h)
+        };
+        let h = s / n as f64;
+        let mut y: State = (x, d * (1.0 / c(x)), 0.0, 0.0);
+        for _ in 0..n {
+            let k1 = f(y);
+            let k2 = f(step(y, k1, h / 2.0));
+            let k3 = f(step(y, k2, h / 2.0));
+            let k4 = f(step(y, k3, h));
+            y = step(
+                step(step(step(y, k1, h / 6.0), k2, h / 3.0), k3, h / 3.0),
+                k4,
+                h / 6.0,
+            );
+        }
+        (y.0, y.2, y.3)
+    }
+
+    /// The design note's leg times (its §3 table, checked there against quadrature and a ray
+    /// integration), to 1e-14.
+    #[test]
+    fn arc_times_match_the_design_note() {
+        let cases = [
+            (
+                1500.0,
+                [0.0, 0.017],
+                [0.0, 100.0],
+                [5000.0, 300.0],
+                3.328012692238152,
+            ),
+            (
+                1500.0,
+                [0.0, 0.017],
+                [0.0, 100.0],
+                [20000.0, 100.0],
+                13.289_955_753_698_13,
+            ),
+            (
+                2000.0,
+                [0.3, 0.8],
+                [0.0, 0.0],
+                [3000.0, -1000.0],
+                1.448755408206392,
+            ),
+            (
+                340.0,
+                [0.0, -0.5],
+                [0.0, 0.0],
+                [30.0, 5.0],
+                0.089775546767277,
+            ),
+        ];
+        for (c0, g, a, b, t) in cases {
+            let leg = arc(c0, g, a, b);
+            assert!((leg.time() - t).abs() <= 1e-14 * t, "{} {t}", leg.time());
+            // The eikonal equation at both ends: c |∇T| = 1.
+            let [ca, cb] = leg.speeds;
+            assert!((leg.arrival().length() * cb - 1.0).abs() < 1e-14);
+            assert!((leg.departure().length() * ca - 1.0).abs() < 1e-14);
+        }
+    }
+
+    /// An RK4 integration of the ray equations from the start along the leg's departure
+    /// direction, over the leg's arc length, lands on its end (to 1e-9 of the chord), takes
+    /// its time (1e-10) and its `∫ c ds` (1e-9), and arrives along its arrival direction; the
+    /// arc's points ([`ArcLeg::offset_at`]) lie on the integrated ray.
+    #[test]
+    fn arcs_are_rays() {
+        let mut rng = SplitMix64(0xa4c);
+        let mut checked = 0;
+        for _ in 0..40 {
+            let c0 = 300.0 + 2000.0 * rng.next_f64();
+            let g = unit(7.0 * rng.next_f64()) * (1.5 * rng.next_f64());
+            let (a, b) = (point(&mut rng) * 200.0, point(&mut rng) * 200.0);
+            let m = Linear {
+                speed: c0,
+                gradient: g,
+                least_speed: 1.0,
+            };
+            let leg = m.leg(a, b);
+            if leg.len < 10.0 || leg.speeds[0] < 100.0 || leg.speeds[1] < 100.0 {
+                continue;
+            }
+            let s = leg.arc_length();
+            let (end, time, width) = shoot(c0, g, a, leg.direction_at_start(), s, 4000);
+            assert!(
+                (end - b).length() < 1e-9 * leg.len,
+                "{:?} {b:?} {:?} {c0} {g:?} {a:?} k={} s={}",
+                end,
+                leg.speeds,
+                leg.curvature(),
+                s
+            );
+            assert!(
+                (time - leg.time()).abs() < 1e-10 * leg.time(),
+                "{time} {} {:?} {c0} {g:?} {a:?} {b:?}",
+                leg.time(),
+                leg.speeds
+            );
+            let w0 = 1.0 / leg.speeds[0];
+            let closed = leg.out_of_plane_width(w0) / w0;
+            assert!((width - closed).abs() < 1e-9 * closed, "{width} {closed}");
+            let (mid, _, _) = shoot(c0, g, a, leg.direction_at_start(), 0.3 * s, 1000);
+            assert!((a + leg.offset_at(0.3 * s) - mid).length() < 1e-9 * leg.len);
+            // Where it arrives: the direction the ray has at its end.
+            let (near, _, _) = shoot(c0, g, a, leg.direction_at_start(), s - 1e-3, 4000);
+            let d = (end - near) * (1.0 / (end - near).length());
+            assert!((d - leg.direction_at_end()).length() < 1e-6);
+            checked += 1;
+        }
+        assert!(checked >= 10, "{checked}");
+    }
+
+    /// The arc's gradient and Hessian blocks against central finite differences of its
+    /// time, on random legs, gradients (down to zero) and directions.
+    #[test]
+    fn arc_derivatives_match_finite_differences() {
+        let mut rng = SplitMix64(0xd1ff);
+        let mut checked = 0;
+        for n in 0..400 {
+            let c0 = 2.0 + 3.0 * rng.next_f64();
+            let size = [0.0, 1e-12, 1e-6, 0.05, 0.2][n % 5];
+            let g = unit(7.0 * rng.next_f64()) * size;
+            let m = Linear {
+                speed: c0,
+                gradient: g,
+                least_speed: 1.0,
+            };
+            let (a, b) = (point(&mut rng), point(&mut rng));
+            let leg = m.leg(a, b);
+            if leg.len < 1.0 || leg.speeds[0] < 0.5 || leg.speeds[1] < 0.5 {
+                continue;
+            }
+            let (ta, tb) = (unit(7.0 * rng.next_f64()), unit(7.0 * rng.next_f64()));
+            let t = |da: f64, db: f64| m.leg(a + ta * da, b + tb * db).time();
+            let h = 1e-5;
+            let d_end = (t(0.0, h) - t(0.0, -h)) / (2.0 * h);
+            let d_start = (t(h, 0.0) - t(-h, 0.0)) / (2.0 * h);
+            let w = 1.0 / c0;
+            assert!((leg.arrival().dot(tb) - d_end).abs() < 1e-8 * w, "{d_end}");
+            assert!((-leg.departure().dot(ta) - d_start).abs() < 1e-8 * w);
+            let h2 = 1e-3;
+            let dd_end = (t(0.0, h2) - 2.0 * t(0.0, 0.0) + t(0.0, -h2)) / (h2 * h2);
+            let dd_start = (t(h2, 0.0) - 2.0 * t(0.0, 0.0) + t(-h2, 0.0)) / (h2 * h2);
+            let dd_mixed = (t(h2, h2) - t(h2, -h2) - t(-h2, h2) + t(-h2, -h2)) / (4.0 * h2 * h2);
+            let scale = w / leg.len;
+            assert!(
+                (leg.end_block(tb) - dd_end).abs() < 1e-5 * scale,
+                "{dd_end}"
+            );
+            assert!((leg.start_block(ta) - dd_start).abs() < 1e-5 * scale);
+            assert!((leg.coupling(ta, tb) - dd_mixed).abs() < 1e-5 * scale);
+            checked += 1;
+        }
+        assert!(checked > 150, "{checked}");
+    }
+
+    /// Near-zero gradients give the straight leg's numbers to rounding (no `1/g`): at
+    /// `g = 1e-9` the textbook `acosh(1 + 2y²) / g` gives 0.
+    #[test]
+    fn tiny_gradients_are_straight() {
+        let (a, b) = (Vec2::new(0.0, 100.0), Vec2::new(5000.0, 300.0));
+        let straight = Uniform::new(1.0 / 1500.0).leg(a, b);
+        for g in [1e-9, 1e-12, 1e-15] {
+            let m = Linear {
+                speed: 1500.0,
+                gradient: Vec2::new(0.0, g / 1000.0),
+                least_speed: 1.0,
+            };
+            let leg = m.leg(a, b);
+            let rel = |x: f64, y: f64| (x - y).abs() / y.abs().max(1e-300);
+            assert!(rel(leg.time(), straight.time()) < 1e-9, "{g}");
+            assert!((leg.arrival() - straight.arrival()).length() < 1e-9 / 1500.0);
+            let t = Vec2::new(0.6, 0.8);
+            assert!(rel(leg.end_block(t), straight.end_block(t)) < 1e-9);
+            assert!(rel(leg.coupling(t, t), straight.coupling(t, t)) < 1e-9);
+            assert!(
+                rel(
+                    leg.out_of_plane_width(1.0),
+                    straight.out_of_plane_width(1.0)
+                ) < 1e-9
+            );
+        }
+        let textbook = (1.0f64 + 2.0 * (1e-9f64 * 5004.0 / 3000.0).powi(2)).acosh() / 1e-9;
+        assert_eq!(textbook, 0.0);
+    }
+
+    /// The lower bounds hold for arcs between random points of random boxes.
+    #[test]
+    fn arc_least_time_bounds_every_leg() {
+        let mut rng = SplitMix64(0xb0c6);
+        for _ in 0..300 {
+            let corner = |rng: &mut SplitMix64| {
+                let (p, q) = (point(rng), point(rng));
+                Aabb::from_points(p.to_point(), (p + (q - p) * 0.3).to_point())
+            };
+            let (from, to) = (corner(&mut rng), corner(&mut rng));
+            let m = Linear {
+                speed: 4.0,
+                gradient: unit(7.0 * rng.next_f64()) * 0.3,
+                least_speed: 1.0,
+            };
+            let bound = m.least_time(from, to);
+            let at = |b: Aabb, rng: &mut SplitMix64| {
+                Point::new(
+                    b.min.x + rng.next_f64() * (b.max.x - b.min.x),
+                    b.min.y + rng.next_f64() * (b.max.y - b.min.y),
+                )
+            };
+            for _ in 0..20 {
+                let (a, b) = (at(from, &mut rng), at(to, &mut rng));
+                let leg = m.leg(a.to_vec2(), b.to_vec2());
+                assert!(leg.time() >= bound * (1.0 - 1e-12));
+                assert!(leg.time() >= m.least_time_to(from, b) * (1.0 - 1e-12));
+                for p in [leg.arrival(), leg.departure()] {
+                    assert!(p.length() <= m.greatest_slowness());
+                }
+            }
         }
     }
 }

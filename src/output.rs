@@ -1305,6 +1305,7 @@ fn arrival_json(
         buf.extend_from_slice(match step.kind {
             StepKind::Reflect => b"{\"reflect\":",
             StepKind::Refract => b"{\"refract\":",
+            StepKind::Diffract { .. } => b"{\"diffract\":",
         });
         buf.extend_from_slice(
             names
@@ -1312,6 +1313,10 @@ fn arrival_json(
                 .get(step.interface)
                 .map_or(b"\"?\"", Vec::as_slice),
         );
+        if let Some(v) = step.kind.vertex() {
+            buf.extend_from_slice(b",\"vertex\":");
+            int(buf, v);
+        }
         buf.push(b'}');
     }
     buf.extend_from_slice(b"],\"media\":");
@@ -1368,15 +1373,15 @@ fn arrival_csv(buf: &mut Vec<u8>, schema: &Schema, context: &Context<'_>, s: &Se
         .steps
         .iter()
         .map(|step| {
-            let kind = match step.kind {
-                StepKind::Reflect => "reflect",
-                StepKind::Refract => "refract",
-            };
+            let kind = step.kind.as_str();
             let name = scene
                 .interfaces()
                 .get(step.interface)
                 .map_or("?", |i| i.name.as_str());
-            format!("{kind}:{}", csv_list_item(name))
+            match step.kind.vertex() {
+                Some(v) => format!("{kind}:{}@{v}", csv_list_item(name)),
+                None => format!("{kind}:{}", csv_list_item(name)),
+            }
         })
         .collect();
     csv_field(buf, &steps.join(";"));
@@ -1420,6 +1425,7 @@ fn arrival_npy(buf: &mut Vec<u8>, schema: &Schema, context: &Context<'_>, s: &Se
         buf.push(s.steps.get(j).map_or(NO_STEP_KIND, |step| match step.kind {
             StepKind::Reflect => 0,
             StepKind::Refract => 1,
+            StepKind::Diffract { .. } => 2,
         }));
     }
     for j in 0..k {

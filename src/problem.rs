@@ -22,7 +22,7 @@
 //! saddles that the segment-wise Hessian cannot see.
 
 use crate::geom::{Point, Segment, Vec2};
-use crate::leg::{Leg, LegModel, StraightLeg, Uniform};
+use crate::leg::{Leg, LegMedium, LegModel, StraightLeg, Uniform};
 use crate::polyline::Polyline;
 use crate::scene::{Scene, Step};
 
@@ -131,6 +131,10 @@ pub(crate) struct ProblemRef<'a> {
     pub scene: &'a Scene,
     pub steps: &'a [Step],
     pub slowness: &'a [f64],
+    /// Each leg's model, positions relative to the source, where a leg of the path may be
+    /// curved (a medium with a gradient); empty for a path of straight legs only (every leg
+    /// [`Uniform`] of its slowness, the common case, on its own code).
+    pub curved: &'a [LegMedium],
     pub source: Point,
     pub receiver: Point,
 }
@@ -215,6 +219,11 @@ impl<'a> ProblemRef<'a> {
     /// leg length is not a normal number below 1e300, it falls back to `evaluate_framed` (and
     /// `e.factored` is `false`).
     pub fn evaluate_passes(&self, s: &[f64], frames: &[Frame], e: &mut Eval, curvature: bool) {
+        if !self.curved.is_empty() {
+            self.evaluate_framed(s, frames, e, curvature);
+            e.factored = false;
+            return;
+        }
         let k = self.k();
         let (s, frames, w) = (&s[..k], &frames[..k], &self.slowness[..k + 1]);
         let (rel, u, len, inv_len) = (
@@ -369,6 +378,10 @@ impl<'a> ProblemRef<'a> {
         hessian: bool,
         kappa: Option<impl Fn(usize) -> f64>,
     ) {
+        if !self.curved.is_empty() {
+            self.derive_curved(e, pin, hessian, kappa);
+            return;
+        }
         let k = self.k();
         // Exact-length views: the loops below then index without bounds checks.
         let w = &self.slowness[..k + 1];
@@ -441,6 +454,84 @@ impl<'a> ProblemRef<'a> {
             diag[i] = h;
             if i + 1 < k {
                 off[i] = after.coupling(t, tan[i + 1]);
+            }
+        }
+    }
+
+    /// [`derive`](Self::derive) for a path whose legs may be curved (each leg its model in
+    /// `curved`): the same sums and rules, the legs from their models. The columns `u`,
+    /// `len`, `inv_len` hold each leg's chord (the solver's scales and the classifier's
+    /// tests of vanished legs and sides).
+    #[inline(never)]
+    fn derive_curved(
+        &self,
+        e: &mut Eval,
+        pin: impl Fn(usize) -> Pin,
+        hessian: bool,
+        kappa: Option<impl Fn(usize) -> f64>,
+    ) {
+        let k = self.k();
+        let w = &self.slowness[..k + 1];
+        let models = &self.curved[..k + 1];
+        let rel = &e.rel[..k + 2];
+        let leg = |j: usize| models[j].leg(rel[j], rel[j + 1]);
+        let (mut time, mut total) = (0.0, 0.0);
+        for j in 0..=k {
+            let l = leg(j);
+            let len = l.len();
+            e.len[j] = len;
+            e.inv_len[j] = if len > 0.0 { 1.0 / len } else { 0.0 };
+            e.u[j] = l.chord_direction();
+            time += l.time();
+            total += len;
+        }
+        e.time = time;
+        let vanish = vanish_threshold(total, self.coord());
+        let (mut phi, mut rmax, mut held, mut vanished) = (0.0, 0.0f64, 0, 0);
+        for i in 0..k {
+            let t = e.tan[i];
+            let ri = (leg(i).arrival() - leg(i + 1).departure()).dot(t);
+            e.r[i] = ri;
+            let rel = ri / (w[i] + w[i + 1]);
+            let p = pin(i);
+            let m = match p {
+                Pin::Free if leg_vanished(&e.len, i, vanish) => {
+                    vanished += 1;
+                    0.0
+                }
+                Pin::Free => {
+                    rmax = max_num(rmax, rel.abs());
+                    rel
+                }
+                Pin::Vertex | Pin::Kink => 0.0,
+                Pin::Start | Pin::End if leg_vanished(&e.len, i, vanish) => 0.0,
+                Pin::Start => rel.min(0.0),
+                Pin::End => rel.max(0.0),
+            };
+            held += (p != Pin::Free) as usize;
+            phi += m * m;
+        }
+        e.phi = phi;
+        e.rmax = rmax;
+        e.held = held;
+        e.vanished = vanished;
+        e.vanish = vanish;
+        if !hessian {
+            return;
+        }
+        for i in 0..k {
+            let t = e.tan[i];
+            let (before, after) = (leg(i), leg(i + 1));
+            let mut h = before.end_block(t) + after.start_block(t);
+            if let Some(kappa) = &kappa {
+                let kappa = kappa(i);
+                if kappa != 0.0 {
+                    h += kappa * (before.arrival() - after.departure()).dot(t.perp());
+                }
+            }
+            e.diag[i] = h;
+            if i + 1 < k {
+                e.off[i] = after.coupling(t, e.tan[i + 1]);
             }
         }
     }
@@ -658,6 +749,8 @@ pub struct PathProblem<'a> {
     scene: &'a Scene,
     path: usize,
     slowness: Vec<f64>,
+    /// The legs' models where a leg is curved (see [`ProblemRef::curved`]).
+    curved: Vec<LegMedium>,
     source: Point,
     receiver: Point,
 }
@@ -674,10 +767,17 @@ impl<'a> PathProblem<'a> {
     ) -> Option<PathProblem<'a>> {
         let media = scene.paths().get(path)?.media.as_ref()?;
         let slowness = media.iter().map(|&m| scene.media()[m].slowness).collect();
+        let curved = if scene.curved() {
+            let models = media.iter().map(|&m| scene.media()[m].leg_model(source));
+            models.collect()
+        } else {
+            Vec::new()
+        };
         Some(PathProblem {
             scene,
             path,
             slowness,
+            curved,
             source,
             receiver,
         })
@@ -703,6 +803,7 @@ impl<'a> PathProblem<'a> {
             scene,
             path,
             slowness,
+            curved: Vec::new(),
             source,
             receiver,
         }
@@ -726,6 +827,7 @@ impl<'a> PathProblem<'a> {
             scene: self.scene,
             steps: &self.scene.paths()[self.path].steps,
             slowness: &self.slowness,
+            curved: &self.curved,
             source: self.source,
             receiver: self.receiver,
         }

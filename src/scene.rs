@@ -6,7 +6,8 @@ use std::fmt;
 use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::bvh::Bvh;
-use crate::geom::{Aabb, Point, Segment, SegmentContact, orient, segment_contact};
+use crate::geom::{Aabb, Point, Segment, SegmentContact, Vec2, orient, segment_contact};
+use crate::leg::{LegMedium, Linear, Uniform};
 use crate::polyline::{Polyline, PolylineError};
 
 mod amplitudes;
@@ -224,6 +225,10 @@ pub struct MediumSpec {
     /// Refractive index (> 0); time = index × length.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub index: Option<f64>,
+    /// With `speed`: the speed's gradient `[gx, gy]` (speed per length), so that the speed at
+    /// `p` is `speed + gradient · p`; rays in the medium are circular arcs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gradient: Option<[f64; 2]>,
     /// A point strictly inside the region this medium fills (inside the domain, when there is
     /// one). One point claims one region: two separate pieces of one material are two media.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -265,42 +270,89 @@ pub struct PathSpec {
     pub media: Option<Vec<String>>,
 }
 
-/// One interaction: `{"reflect": NAME}` or `{"refract": NAME}`.
+/// One interaction: `{"reflect": NAME}`, `{"refract": NAME}` or
+/// `{"diffract": NAME, "vertex": k}`.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase", try_from = "StepDocument")]
+#[serde(try_from = "StepDocument", into = "StepDocument")]
 pub enum StepSpec {
     /// Reflection off the named interface.
     Reflect(String),
     /// Refraction through the named interface.
     Refract(String),
+    /// Diffraction at vertex `vertex` (an index into its polyline's points) of the named
+    /// interface: the path's point there is the vertex itself.
+    Diffract {
+        /// The interface.
+        interface: String,
+        /// The vertex's index in the interface's `points`.
+        vertex: u64,
+    },
 }
 
 /// A step as the document writes it, before the check that it names exactly one kind: the
 /// form serde reads, so that a step with both keys or neither gets a message of its own.
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(
     deny_unknown_fields,
-    expecting = "a step, {\"reflect\": NAME} or {\"refract\": NAME}"
+    expecting = "a step, {\"reflect\": NAME}, {\"refract\": NAME} or {\"diffract\": NAME, \"vertex\": k}"
 )]
 struct StepDocument {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     reflect: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     refract: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    diffract: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    vertex: Option<u64>,
 }
 
 impl TryFrom<StepDocument> for StepSpec {
     type Error = String;
 
     fn try_from(step: StepDocument) -> Result<StepSpec, String> {
-        match (step.reflect, step.refract) {
-            (Some(name), None) => Ok(StepSpec::Reflect(name)),
-            (None, Some(name)) => Ok(StepSpec::Refract(name)),
-            (Some(_), Some(_)) => Err("a step is one interaction: give `reflect` or `refract` \
-                 (`{\"reflect\": NAME}`), not both; write two steps for two interactions"
+        match (step.reflect, step.refract, step.diffract, step.vertex) {
+            (Some(name), None, None, None) => Ok(StepSpec::Reflect(name)),
+            (None, Some(name), None, None) => Ok(StepSpec::Refract(name)),
+            (None, None, Some(interface), Some(vertex)) => {
+                Ok(StepSpec::Diffract { interface, vertex })
+            }
+            (None, None, Some(_), None) => Err("a `diffract` step needs its `vertex` \
+                 (`{\"diffract\": NAME, \"vertex\": k}`, k the index in the interface's points)"
                 .into()),
-            (None, None) => {
-                Err("a step needs `reflect` or `refract` (`{\"reflect\": NAME}`)".into())
+            (_, _, None, Some(_)) => Err(
+                "`vertex` belongs to a `diffract` step (`{\"diffract\": NAME, \"vertex\": k}`)"
+                    .into(),
+            ),
+            (None, None, None, None) => Err("a step needs `reflect`, `refract` or `diffract` \
+                 (`{\"reflect\": NAME}`)"
+                .into()),
+            _ => Err(
+                "a step is one interaction: give one of `reflect`, `refract` or `diffract` \
+                 (`{\"reflect\": NAME}`), not several; write two steps for two interactions"
+                    .into(),
+            ),
+        }
+    }
+}
+
+impl From<StepSpec> for StepDocument {
+    fn from(step: StepSpec) -> StepDocument {
+        let mut doc = StepDocument {
+            reflect: None,
+            refract: None,
+            diffract: None,
+            vertex: None,
+        };
+        match step {
+            StepSpec::Reflect(name) => doc.reflect = Some(name),
+            StepSpec::Refract(name) => doc.refract = Some(name),
+            StepSpec::Diffract { interface, vertex } => {
+                doc.diffract = Some(interface);
+                doc.vertex = Some(vertex);
             }
         }
+        doc
     }
 }
 
@@ -365,6 +417,10 @@ pub struct SearchSpec {
     /// Whether `vertex` (edge-held) arrivals are listed too (default false).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vertex: Option<bool>,
+    /// Also list edge-diffracted arrivals (`diffract` steps): first order, every vertex that
+    /// both ends see (a diffraction counts as a step for `max_steps`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diffraction: Option<bool>,
 }
 
 /// The search settings of a validated scene (see [`SearchSpec`]).
@@ -384,6 +440,9 @@ pub struct SearchOptions {
     pub obstructed: bool,
     /// Whether `vertex` (edge-held) arrivals are listed too.
     pub vertex: bool,
+    /// Whether diffracted arrivals (`diffract` steps) are listed too: every vertex of the
+    /// allowed interfaces that both ends see, once per pair (first order).
+    pub diffraction: bool,
 }
 
 impl SearchOptions {
@@ -409,8 +468,40 @@ pub struct Medium {
     /// Whether it was given as a refractive index (optics), not a speed. A scene's media are
     /// all of one kind.
     pub index: bool,
+    /// The speed's gradient when the speed is linear in position (`c(p) = 1 / slowness +
+    /// gradient · p`: legs are circular arcs); `None` for a uniform medium (a gradient of
+    /// zero is one).
+    pub gradient: Option<Vec2>,
+    /// The least speed of the medium over the scene's extent (its `domain`, else the box of
+    /// its points): `1 / slowness` for a uniform medium.
+    pub least_speed: f64,
     /// A point inside its region, if given.
     pub at: Option<Point>,
+}
+
+impl Medium {
+    /// The model of legs through this medium, positions relative to `origin`.
+    pub(crate) fn leg_model(&self, origin: Point) -> LegMedium {
+        match self.gradient {
+            None => LegMedium::Uniform(Uniform::new(self.slowness)),
+            Some(gradient) => LegMedium::Linear(
+                Linear {
+                    speed: 1.0 / self.slowness,
+                    gradient,
+                    least_speed: self.least_speed,
+                }
+                .shifted(origin.to_vec2()),
+            ),
+        }
+    }
+
+    /// The speed at `p`.
+    pub fn speed_at(&self, p: Point) -> f64 {
+        match self.gradient {
+            None => 1.0 / self.slowness,
+            Some(g) => 1.0 / self.slowness + g.dot(p.to_vec2()),
+        }
+    }
 }
 
 /// A named interface of a validated scene.
@@ -422,13 +513,37 @@ pub struct Interface {
     pub polyline: Polyline,
 }
 
-/// Reflection or refraction.
+/// Reflection, refraction or diffraction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum StepKind {
     /// Both legs on the same side of the interface.
     Reflect,
     /// The legs on opposite sides.
     Refract,
+    /// The point held at a vertex of the interface (an edge-diffracted path): no unknown.
+    Diffract {
+        /// The vertex's index in the interface's polyline points.
+        vertex: u32,
+    },
+}
+
+impl StepKind {
+    /// Its key in the scene's notation: `reflect`, `refract` or `diffract`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            StepKind::Reflect => "reflect",
+            StepKind::Refract => "refract",
+            StepKind::Diffract { .. } => "diffract",
+        }
+    }
+
+    /// The vertex of a diffraction.
+    pub fn vertex(self) -> Option<usize> {
+        match self {
+            StepKind::Diffract { vertex } => Some(vertex as usize),
+            _ => None,
+        }
+    }
 }
 
 /// One interaction of a validated path.
@@ -449,6 +564,13 @@ pub struct Path {
     pub steps: Vec<Step>,
     /// Medium index of every leg, when the path gives them.
     pub media: Option<Vec<usize>>,
+}
+
+impl Path {
+    /// Whether a step of the path is a diffraction.
+    pub fn diffracts(&self) -> bool {
+        self.steps.iter().any(|s| s.kind.vertex().is_some())
+    }
 }
 
 /// Solver settings of a validated scene.
@@ -541,6 +663,8 @@ impl SegmentRef {
 #[derive(Clone, Debug)]
 pub struct Scene {
     media: Vec<Medium>,
+    /// Whether a medium's speed has a gradient ([`Scene::curved`]).
+    curved: bool,
     background: Option<usize>,
     domain: Option<Aabb>,
     interfaces: Vec<Interface>,
@@ -737,6 +861,7 @@ fn search_options(
         refract,
         obstructed: spec.obstructed.unwrap_or(false),
         vertex: spec.vertex.unwrap_or(false),
+        diffraction: spec.diffraction.unwrap_or(false),
     })
 }
 
@@ -775,15 +900,141 @@ fn media_of(spec: &SceneSpec) -> Result<Vec<Medium>, SceneError> {
             Some(p) => Some(point(&format!("{key}.at"), p)?),
             None => None,
         };
+        let gradient = match m.gradient {
+            Some(_) if m.index.is_some() => {
+                return Err(SceneError::new(
+                    format!("{key}.gradient"),
+                    "only a `speed` medium takes a gradient, not an `index` medium",
+                ));
+            }
+            Some([gx, gy]) => {
+                if !(gx.is_finite() && gy.is_finite()) {
+                    return Err(SceneError::new(
+                        format!("{key}.gradient"),
+                        "needs two finite numbers [gx, gy]",
+                    ));
+                }
+                (gx != 0.0 || gy != 0.0).then_some(Vec2::new(gx, gy))
+            }
+            None => None,
+        };
         media.push(Medium {
             name: name.clone(),
             slowness,
             index: m.index.is_some(),
+            gradient,
+            least_speed: 1.0 / slowness,
             at,
         });
     }
     one_kind_of_medium(&media)?;
     Ok(media)
+}
+
+/// Sets each medium's least speed over the scene's extent (the `domain`, else the box of
+/// `points`, the interfaces' vertices, sources and receivers) and refuses a medium with a
+/// gradient whose speed reaches 0 there: the speed is linear, so its least value is at a
+/// corner of the box.
+///
+/// # Errors
+/// `media.NAME.gradient` for the first medium whose speed reaches 0, naming the corner.
+pub(crate) fn speeds_stay_positive(
+    media: &mut [Medium],
+    points: impl Iterator<Item = Point>,
+    domain: Option<Aabb>,
+) -> Result<(), SceneError> {
+    if media.iter().all(|m| m.gradient.is_none()) {
+        for m in media.iter_mut() {
+            m.least_speed = 1.0 / m.slowness;
+        }
+        return Ok(());
+    }
+    let extent = match domain {
+        Some(d) => Some(d),
+        None => points.fold(None, |b: Option<Aabb>, p| {
+            let one = Aabb::from_points(p, p);
+            Some(b.map_or(one, |b| b.union(one)))
+        }),
+    };
+    let Some(extent) = extent else {
+        return Ok(());
+    };
+    for m in media.iter_mut() {
+        let Some(g) = m.gradient else {
+            m.least_speed = 1.0 / m.slowness;
+            continue;
+        };
+        let corners = [
+            extent.min,
+            Point::new(extent.max.x, extent.min.y),
+            Point::new(extent.min.x, extent.max.y),
+            extent.max,
+        ];
+        let speed = |p: Point| 1.0 / m.slowness + g.dot(p.to_vec2());
+        let least = corners
+            .into_iter()
+            .min_by(|a, b| speed(*a).total_cmp(&speed(*b)))
+            .unwrap_or(extent.min);
+        let c = speed(least);
+        if !(c > 0.0 && c.is_finite()) {
+            let within = if domain.is_some() {
+                "the domain"
+            } else {
+                "the box of the scene's points"
+            };
+            return Err(SceneError::new(
+                format!("media.{}.gradient", m.name),
+                format!(
+                    "the speed reaches {c} at ({}, {}), a corner of {within}: a medium's speed \
+                     must stay positive wherever it is used (a smaller gradient, a larger \
+                     speed, or a `domain` that keeps clear of it)",
+                    least.x, least.y
+                ),
+            ));
+        }
+        m.least_speed = c;
+    }
+    Ok(())
+}
+
+/// Refuses, in a scene with a medium whose speed has a gradient (curved legs), what curved
+/// legs do not reach yet: the automatic search, derivatives and diffraction. Each of those
+/// assumes straight legs (the image method and the complete search, the straight-leg
+/// derivatives, the wedge's straight pieces),
+/// so it is refused rather than wrong.
+///
+/// # Errors
+/// `search`, `solver.derivatives` or the first `diffract` step.
+fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
+    let why = "is not available yet with curved legs (a medium with a `gradient`); prescribed \
+               paths solve, with `\"stationary\"` `\"one\"` or `\"all\"`";
+    if let Some(s) = &spec.solver {
+        if s.derivatives == Some(true) {
+            return Err(SceneError::new(
+                "solver.derivatives",
+                format!("`true` {why}"),
+            ));
+        }
+    }
+    if spec.search.is_some() {
+        return Err(SceneError::new(
+            "search",
+            format!("the automatic search {why}"),
+        ));
+    }
+    for (k, path) in spec.paths.iter().enumerate() {
+        if let Some(j) = path
+            .steps
+            .iter()
+            .position(|s| matches!(s, StepSpec::Diffract { .. }))
+        {
+            return Err(SceneError::new(
+                format!("paths[{k}].steps[{j}]"),
+                format!("a `diffract` step {why}"),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Refuses a scene that mixes `speed` media with `index` media: a speed gives time in length
@@ -934,6 +1185,10 @@ fn path_of(
         let (kind, name, which) = match s {
             StepSpec::Reflect(n) => (StepKind::Reflect, n, "reflect"),
             StepSpec::Refract(n) => (StepKind::Refract, n, "refract"),
+            // The vertex is checked once the interface is known.
+            StepSpec::Diffract { interface, .. } => {
+                (StepKind::Diffract { vertex: 0 }, interface, "diffract")
+            }
         };
         let interface = by_name(interfaces, |i| &i.name, name).ok_or_else(|| {
             SceneError::new(
@@ -945,6 +1200,25 @@ fn path_of(
                 ),
             )
         })?;
+        let kind = match s {
+            StepSpec::Diffract { vertex, .. } => {
+                let line = &interfaces[interface].polyline;
+                let n = line.vertices().len();
+                match u32::try_from(*vertex) {
+                    Ok(v) if (v as usize) < n => StepKind::Diffract { vertex: v },
+                    _ => {
+                        return Err(SceneError::new(
+                            format!("{key}.steps[{j}].vertex"),
+                            format!(
+                                "interface `{name}` has vertices 0 to {}, not {vertex}",
+                                n - 1
+                            ),
+                        ));
+                    }
+                }
+            }
+            _ => kind,
+        };
         steps.push(Step { kind, interface });
     }
     let media = match &p.media {
@@ -1066,6 +1340,17 @@ impl Scene {
         }
         let paths = paths_of(&spec.paths, &interfaces, &media)?;
         let solver = solver_of(spec.solver.as_ref())?;
+        if solver.derivatives
+            && let Some(k) = paths.iter().position(Path::diffracts)
+        {
+            return Err(SceneError::new(
+                "solver.derivatives",
+                format!(
+                    "derivatives of diffracted paths are not available (paths[{k}] has a \
+                     `diffract` step)"
+                ),
+            ));
+        }
         let search = match &spec.search {
             Some(s) => Some(search_options(s, &interfaces)?),
             None => None,
@@ -1084,9 +1369,21 @@ impl Scene {
             ))?;
         }
 
+        let mut media = media;
+        speeds_stay_positive(
+            &mut media,
+            scene_points(&interfaces, &sources, &receivers, &[], domain),
+            domain,
+        )?;
+        let curved = media.iter().any(|m| m.gradient.is_some());
+        if curved {
+            curved_legs_supported(spec)?;
+        }
+
         let segment_ends = segment_ends(&interfaces, &segments);
         Ok(Scene {
             media,
+            curved,
             background,
             domain,
             interfaces,
@@ -1121,6 +1418,11 @@ impl Scene {
     /// The media, in name order.
     pub fn media(&self) -> &[Medium] {
         &self.media
+    }
+    /// Whether a medium's speed has a gradient (some legs are circular arcs).
+    #[inline]
+    pub fn curved(&self) -> bool {
+        self.curved
     }
     /// Index of the medium with this name.
     pub fn medium_index(&self, name: &str) -> Option<usize> {

@@ -116,6 +116,7 @@ fn out_of_plane_width(scene: &Scene, ray: &Solved) -> f64 {
         let side = match step.kind {
             StepKind::Refract => dn.signum(),
             StepKind::Reflect => -dn.signum(),
+            StepKind::Diffract { .. } => unreachable!("no diffraction in these scenes"),
         };
         let pn = side * (s2 * s2 - pt.dot(pt) - pz * pz).sqrt();
         d = (pt + n * pn) * (1.0 / s2);
@@ -396,6 +397,7 @@ fn a_layered_axisymmetric_waveguide_against_ray_tube_areas() {
                 (StepKind::Refract, _) => {
                     fluid(fluid_of(ray.media[i]), fluid_of(ray.media[i + 1]), cos1).1
                 }
+                (StepKind::Diffract { .. }, _) => unreachable!("no diffraction in this scene"),
             };
         }
         let want = coef * spreading;

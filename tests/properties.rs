@@ -651,6 +651,7 @@ fn check_ray(scene: &Scene, tracer: &Tracer, ray: &Ray) -> Result<(), String> {
                     let side = match step.kind {
                         StepKind::Reflect => sa * sb > 0.0,
                         StepKind::Refract => sa * sb < 0.0,
+                        StepKind::Diffract { .. } => true,
                     };
                     (snell, side)
                 };

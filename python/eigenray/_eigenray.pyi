@@ -156,15 +156,16 @@ class Arrivals:
     """The interface of each step, `(n, K)`: indices into `interface_names`, -1 past the
     arrival's own `order` steps."""
     step_kind: npt.NDArray[np.uint8]
-    """The kind of each step, `(n, K)`: 0 reflect, 1 refract (`step_kind_names[code]`), 255
-    past the arrival's own steps."""
+    """The kind of each step, `(n, K)`: 0 reflect, 1 refract, 2 diffract
+    (`step_kind_names[code]`), 255 past the arrival's own steps."""
     media: npt.NDArray[np.int64]
     """Leg media, `(n, K + 1)`: indices into `media_names`, -1 past the arrival's own
     `order + 1` legs."""
     status_names: list[str]
     """The status names, by code."""
     step_kind_names: list[str]
-    """`["reflect", "refract"]`: the step kinds, by code."""
+    """`["reflect", "refract"]` (and `"diffract"` when the search lists diffracted arrivals):
+    the step kinds, by code."""
     interface_names: list[str]
     """The scene's interface names, by index."""
     media_names: list[str]

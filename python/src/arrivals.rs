@@ -19,6 +19,9 @@ use crate::rays::Reasons;
 /// The names of the step kinds, by their code in `step_kind`.
 pub(crate) const STEP_KIND_NAMES: [&str; 2] = ["reflect", "refract"];
 
+/// [`STEP_KIND_NAMES`] of a scene whose search lists diffracted arrivals.
+pub(crate) const DIFFRACT_KIND_NAMES: [&str; 3] = ["reflect", "refract", "diffract"];
+
 /// The `step_kind` entry past an arrival's own steps.
 pub(crate) const NO_STEP: u8 = 255;
 
@@ -59,8 +62,8 @@ pub(crate) struct PyArrivals {
     /// arrival's own steps.
     #[pyo3(get)]
     pub(crate) step_interface: Py<PyArray2<i64>>,
-    /// The kind of each step, shape `(n, K)`, `uint8`: 0 reflect, 1 refract (indices into
-    /// `step_kind_names`), 255 past an arrival's own steps.
+    /// The kind of each step, shape `(n, K)`, `uint8`: 0 reflect, 1 refract, 2 diffract
+    /// (indices into `step_kind_names`), 255 past an arrival's own steps.
     #[pyo3(get)]
     pub(crate) step_kind: Py<PyArray2<u8>>,
     /// Leg media, shape `(n, K + 1)`: indices into `media_names`, −1 past an arrival's own
@@ -70,9 +73,13 @@ pub(crate) struct PyArrivals {
     /// The status names, by code.
     #[pyo3(get)]
     pub(crate) status_names: Vec<&'static str>,
-    /// The step kinds' names, by code: `["reflect", "refract"]`.
+    /// The step kinds' names, by code: `["reflect", "refract"]`, and `"diffract"` when the
+    /// search lists diffracted arrivals.
     #[pyo3(get)]
     pub(crate) step_kind_names: Vec<&'static str>,
+    /// Per interface, its vertices, when the search lists diffracted arrivals (a diffraction's
+    /// `vertex` in the dicts is the index of its point among them); else empty.
+    pub(crate) vertices: Vec<Vec<Point>>,
     /// The scene's interface names, by interface index.
     #[pyo3(get)]
     pub(crate) interface_names: Vec<String>,
@@ -188,9 +195,20 @@ impl PyArrivals {
             let interface = at(py, &self.step_interface, [i, j])?;
             let step = PyDict::new(py);
             step.set_item(
-                name(&STEP_KIND_NAMES, kind)?,
+                name(&DIFFRACT_KIND_NAMES, kind)?,
                 name(&self.interface_names, interface)?,
             )?;
+            if usize::from(kind) == 2 {
+                let p = Point::new(
+                    at(py, &self.points, [i, j + 1, 0])?,
+                    at(py, &self.points, [i, j + 1, 1])?,
+                );
+                let vertex = usize::try_from(interface)
+                    .ok()
+                    .and_then(|k| self.vertices.get(k))
+                    .and_then(|v| v.iter().position(|&q| q == p));
+                step.set_item("vertex", vertex)?;
+            }
             steps.append(step)?;
         }
         d.set_item("steps", steps)?;

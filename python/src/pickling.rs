@@ -5,7 +5,7 @@
 use std::sync::Mutex;
 
 use eigenray::Reason;
-use eigenray::amplitude::NoAmplitude;
+use eigenray::amplitude::{DiffractionCase, NoAmplitude};
 use eigenray::trace::Threshold;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
@@ -83,6 +83,10 @@ fn no_amplitude_code(r: NoAmplitude) -> [u64; 3] {
         | NoAmplitude::NoMediumAcross { step }
         | NoAmplitude::Grazing { step } => step,
         NoAmplitude::VanishedLeg { leg } => leg,
+        NoAmplitude::Diffraction { step, case } => {
+            let place = DiffractionCase::ALL.iter().position(|&c| c == case);
+            return [u64::from(r.code()), step as u64, place.unwrap_or(0) as u64];
+        }
         NoAmplitude::Vertex
         | NoAmplitude::Obstructed
         | NoAmplitude::Caustic
@@ -102,6 +106,10 @@ fn no_amplitude_of(code: [u64; 3]) -> Option<NoAmplitude> {
         NoAmplitude::NoMediumAcross { .. } => NoAmplitude::NoMediumAcross { step: i },
         NoAmplitude::Grazing { .. } => NoAmplitude::Grazing { step: i },
         NoAmplitude::VanishedLeg { .. } => NoAmplitude::VanishedLeg { leg: i },
+        NoAmplitude::Diffraction { .. } => NoAmplitude::Diffraction {
+            step: i,
+            case: *DiffractionCase::ALL.get(usize::try_from(code[2]).ok()?)?,
+        },
         other => other,
     })
 }
@@ -363,6 +371,10 @@ mod tests {
             NoAmplitude::OnAxis,
             NoAmplitude::SourceOffAxis,
             NoAmplitude::UnknownMedia,
+            NoAmplitude::Diffraction {
+                step: 4,
+                case: DiffractionCase::IntoWedge,
+            },
         ];
         assert_eq!(reasons.len(), NoAmplitude::CODES.len());
         for (k, r) in reasons.into_iter().enumerate() {

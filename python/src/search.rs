@@ -10,7 +10,7 @@ use numpy::IntoPyArray;
 use numpy::ndarray::{Array2, Array3};
 use pyo3::prelude::*;
 
-use crate::arrivals::{NO_STEP, PyArrivals, STEP_KIND_NAMES};
+use crate::arrivals::{DIFFRACT_KIND_NAMES, NO_STEP, PyArrivals, STEP_KIND_NAMES};
 use crate::columns::QuantityColumns;
 use crate::convert::{interface_names, status_code, status_names};
 use crate::error::{argument_error, check_memory};
@@ -150,6 +150,7 @@ impl ArrivalTable {
             *kind = match step.kind {
                 StepKind::Reflect => 0,
                 StepKind::Refract => 1,
+                StepKind::Diffract { .. } => 2,
             };
         }
         let legs = &mut self.media[i * (w - 1)..(i + 1) * (w - 1)];
@@ -166,6 +167,7 @@ impl ArrivalTable {
         let (n, steps) = (self.time.len(), self.steps);
         let (quantities, whys) = self.quantities.finish(py);
         let interfaces = interface_names(scene);
+        let diffraction = scene.search().is_some_and(|s| s.diffraction);
         let table = |columns: usize, values: Vec<_>| {
             Array2::from_shape_vec((n, columns), values).expect("columns entries a row")
         };
@@ -189,7 +191,17 @@ impl ArrivalTable {
                 .unbind(),
             media: table(steps + 1, self.media).into_pyarray(py).unbind(),
             status_names: status_names(),
-            step_kind_names: STEP_KIND_NAMES.to_vec(),
+            step_kind_names: if diffraction {
+                DIFFRACT_KIND_NAMES.to_vec()
+            } else {
+                STEP_KIND_NAMES.to_vec()
+            },
+            vertices: if diffraction {
+                let lines = scene.interfaces().iter();
+                lines.map(|i| i.polyline.vertices().to_vec()).collect()
+            } else {
+                Vec::new()
+            },
             interface_names: interfaces.clone(),
             media_names: scene.media().iter().map(|m| m.name.clone()).collect(),
             reasons: Reasons {

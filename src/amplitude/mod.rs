@@ -22,10 +22,12 @@
 //! ring of azimuths at range `x_R` over the cone of take-off directions).
 
 mod coefficients;
+pub mod diffraction;
 mod ray;
 
 pub use num_complex::Complex64;
 
+pub(crate) use diffraction::of_diffracted;
 pub(crate) use ray::{OnSegment, PathGeometry, of_one, of_path};
 
 /// The amplitude of one timed ray or arrival (the contract's `amplitude`, `spreading`,
@@ -124,12 +126,58 @@ pub enum NoAmplitude {
     SourceOffAxis,
     /// The leg media are not known, or not one per leg.
     UnknownMedia,
+    /// A `diffract` step whose vertex has no wedge coefficient here (see [`DiffractionCase`]).
+    Diffraction {
+        /// Index of the step.
+        step: usize,
+        /// Which case it is.
+        case: DiffractionCase,
+    },
+}
+
+/// Why a diffracted path's vertex has no UTD wedge coefficient.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum DiffractionCase {
+    /// The interface's law is `"media"`: a penetrable (refracting) interface's vertex, whose
+    /// coefficient needs the transmitted field inside the wedge.
+    PenetrableFace,
+    /// The interface's law absorbs (`absorption`, `coefficient`): an impedance wedge, whose
+    /// coefficient needs Maliuzhinets' functions.
+    AbsorbingFace,
+    /// The scene gives no `amplitudes.frequency`: the coefficient depends on the wavenumber.
+    NoFrequency,
+    /// A leg leaves the vertex into the wedge's inside.
+    IntoWedge,
+}
+
+impl DiffractionCase {
+    /// The cases in the order of their codes (0, 1, …).
+    pub const ALL: [DiffractionCase; 4] = [
+        DiffractionCase::PenetrableFace,
+        DiffractionCase::AbsorbingFace,
+        DiffractionCase::NoFrequency,
+        DiffractionCase::IntoWedge,
+    ];
+
+    /// Its words.
+    pub fn describe(self) -> &'static str {
+        match self {
+            DiffractionCase::PenetrableFace => {
+                "a penetrable (\"media\") interface's vertex: no coefficient for a refracting wedge"
+            }
+            DiffractionCase::AbsorbingFace => {
+                "an absorbing face's vertex: no coefficient for an impedance wedge"
+            }
+            DiffractionCase::NoFrequency => "no `amplitudes.frequency`: the coefficient needs one",
+            DiffractionCase::IntoWedge => "a leg leaves the vertex into the wedge",
+        }
+    }
 }
 
 impl NoAmplitude {
     /// The reasons in the order of their `.npy` `amplitude_reason` codes (1, 2, …; 0: none),
     /// with the step and leg indices 0.
-    pub const CODES: [NoAmplitude; 10] = [
+    pub const CODES: [NoAmplitude; 11] = [
         NoAmplitude::Vertex,
         NoAmplitude::Obstructed,
         NoAmplitude::ConvertedReflection { step: 0 },
@@ -140,11 +188,15 @@ impl NoAmplitude {
         NoAmplitude::OnAxis,
         NoAmplitude::SourceOffAxis,
         NoAmplitude::UnknownMedia,
+        NoAmplitude::Diffraction {
+            step: 0,
+            case: DiffractionCase::PenetrableFace,
+        },
     ];
 
     /// Its short name (the `.npy` names table): `vertex`, `obstructed`, `converted`,
     /// `no_medium_across`, `grazing`, `vanished_leg`, `caustic`, `on_axis`, `source_off_axis`,
-    /// `unknown_media`.
+    /// `unknown_media`, `diffraction`.
     pub fn name(self) -> &'static str {
         match self {
             NoAmplitude::Vertex => "vertex",
@@ -157,6 +209,7 @@ impl NoAmplitude {
             NoAmplitude::OnAxis => "on_axis",
             NoAmplitude::SourceOffAxis => "source_off_axis",
             NoAmplitude::UnknownMedia => "unknown_media",
+            NoAmplitude::Diffraction { .. } => "diffraction",
         }
     }
 
@@ -204,6 +257,9 @@ impl std::fmt::Display for NoAmplitude {
                 f.write_str("the source lies off the axis x = 0 of an axisymmetric scene")
             }
             NoAmplitude::UnknownMedia => f.write_str("the leg media are not known"),
+            NoAmplitude::Diffraction { step, case } => {
+                write!(f, "diffraction at step {step}: {}", case.describe())
+            }
         }
     }
 }

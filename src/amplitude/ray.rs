@@ -9,7 +9,7 @@ use num_complex::Complex64;
 use super::coefficients::{Weights, cos_across};
 use super::{Amplitude, NoAmplitude};
 use crate::geom::{Point, Vec2};
-use crate::leg::{Leg, LegModel, StraightLeg, Uniform};
+use crate::leg::{AnyLeg, Leg, LegModel, StraightLeg, Uniform};
 use crate::polyline::Polyline;
 use crate::regions::Regions;
 use crate::scene::{Amplitudes, Reflection, Scene, SourceModel, Step, StepKind};
@@ -128,6 +128,8 @@ fn coefficient(cx: Context<'_>, x: &Interaction<'_>) -> Result<Complex64, NoAmpl
         }
         // A converted wave: its coefficient is not modelled.
         StepKind::Reflect if x.m_in != x.m => Complex64::new(1.0, 0.0),
+        // Pieces between vertices are walked on their own (`amplitude::diffraction`).
+        StepKind::Diffract { .. } => return Err(NoAmplitude::UnknownMedia),
         StepKind::Reflect => match cx.settings.reflection[x.step.interface] {
             Reflection::Fixed(r) => Complex64::new(r, 0.0),
             Reflection::Media => {
@@ -160,6 +162,13 @@ pub(crate) fn of_path(
     };
     let k = path.steps.len();
     let walked = match (path.steps, path.points, path.media) {
+        _ if scene.curved() => {
+            if path.points.len() != k + 2 || path.media.len() != k + 1 {
+                Err(NoAmplitude::UnknownMedia)
+            } else {
+                walk_curved(cx, path)
+            }
+        }
         ([step], &[p0, p1, p2], &[m0, m1]) => {
             let line = &scene.interfaces()[step.interface].polyline;
             let seg = segment_of(line, p1, path.segments, 0);
@@ -206,6 +215,15 @@ pub(crate) fn of_one(
         settings,
         regions,
     };
+    if scene.curved() {
+        let path = PathGeometry {
+            steps: std::slice::from_ref(step),
+            points: &points,
+            media: &media,
+            segments: Some(std::slice::from_ref(&at.seg)),
+        };
+        return of_path(scene, settings, regions, path);
+    }
     match walk_one(cx, step, at, points, media) {
         Ok(walk) => finish(cx, &points, &walk),
         Err(reason) => Amplitude::none(reason),
@@ -287,15 +305,66 @@ fn spreading_scaled(num: f64, den: f64, out: f64, scale: f64) -> f64 {
 /// Whether `x` is a positive finite number, in one integer comparison of its bits (the
 /// positive finite doubles are the bit patterns 1 to `0x7fef_ffff_ffff_ffff`).
 #[inline(always)]
-fn positive_finite(x: f64) -> bool {
+pub(crate) fn positive_finite(x: f64) -> bool {
     x.to_bits().wrapping_sub(1) < f64::MAX.to_bits()
+}
+
+/// What the amplitude of a diffracted path takes from each of its pieces (the specular paths
+/// between its source, its vertices and its receiver): [`walk`]'s gatherings.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PieceWalk {
+    /// The product of the piece's coefficients.
+    pub coefficient: Complex64,
+    /// Its in-plane tube factor `Π (cos θ₂ / cos θ₁) / W` (`1 / ℓ` for one straight leg).
+    pub tube: f64,
+    /// `w₀ Σ ℓⱼ / wⱼ` over its legs, `w₀` its first leg's slowness.
+    pub out_of_plane: f64,
+    /// Its attenuation (dB).
+    pub attenuation_db: f64,
+    /// Its first leg's length and slowness.
+    pub l0: f64,
+    pub w0: f64,
+}
+
+/// The pass over one piece of a diffracted path: a specular path from `path.points[0]` (the
+/// source or a vertex) to its last point, as [`of_path`] walks a whole path.
+pub(crate) fn walk_piece(
+    scene: &Scene,
+    settings: &Amplitudes,
+    regions: Option<&Regions>,
+    path: PathGeometry<'_>,
+) -> Result<PieceWalk, NoAmplitude> {
+    let k = path.steps.len();
+    if path.points.len() != k + 2 || path.media.len() != k + 1 {
+        return Err(NoAmplitude::UnknownMedia);
+    }
+    let cx = Context {
+        scene,
+        settings,
+        regions,
+    };
+    let w = walk(cx, path)?;
+    if let Some(step) = w.converted {
+        return Err(NoAmplitude::ConvertedReflection { step });
+    }
+    Ok(PieceWalk {
+        coefficient: w.coefficient,
+        tube: w.tube_num / w.tube_den,
+        out_of_plane: w.out_of_plane,
+        attenuation_db: w.attenuation_db,
+        l0: w.l0,
+        w0: w.w0,
+    })
 }
 
 /// The out-of-plane width of an axisymmetric scene, `|x_R| / |t₀ₓ|` with `t₀` the first leg's
 /// direction (`ℓ₀` its length); `None` for a path along the axis (the point source's width is
 /// the limit there).
 #[inline(never)]
-fn out_of_plane_axisymmetric(points: &[Point], l0: f64) -> Result<Option<f64>, NoAmplitude> {
+pub(crate) fn out_of_plane_axisymmetric(
+    points: &[Point],
+    l0: f64,
+) -> Result<Option<f64>, NoAmplitude> {
     if points[0].x != 0.0 {
         return Err(NoAmplitude::SourceOffAxis);
     }
@@ -484,6 +553,140 @@ fn walk(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
         let x0 = beta * product / pivot;
         out.tube_num = cos_ratio * (first_cos * x0 * inv0).abs();
         out.tube_den = 1.0;
+    }
+    Ok(out)
+}
+
+/// [`walk`] for a path whose legs may be curved (a scene with a gradient medium): the same
+/// pass, each leg from its model ([`crate::leg::LegMedium`], relative to the source), with
+/// what a straight leg has in closed form taken from the leg's Hessian blocks:
+///
+/// - the receiver moved by one unit across its arriving direction `n_r` moves the last
+///   residual by `β = coupling(last leg, t_{k−1}, n_r)`; the sweep gives the first point's
+///   move `x₀`, and the source's departure turns by `c_s coupling(first leg, n_s, t₀) x₀`:
+///   `1 / W` (the direct ray: `c_s |coupling(n_s, n_r)|`; for a straight leg `1/ℓ`);
+/// - along each leg the speed changes, so the tube's energy flux adds `c_end / c_start`;
+/// - each negative pivot of the sweep is a caustic the tube has passed (the Morse index of
+///   the path's Hessian, `design/curved-rays.md` §5): its phase, `−π/2` each, multiplies
+///   the coefficient; a pivot within `1e-6` of its row's scale is too near a caustic for
+///   ray theory ([`NoAmplitude::Caustic`]);
+/// - the slownesses at an interaction, for its coefficient, are the local ones; the
+///   attenuation is per unit of arc length; the axisymmetric width takes the departure's
+///   direction (through `l0`, see [`out_of_plane_axisymmetric`]).
+fn walk_curved(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
+    let (points, legs) = (path.points, path.media);
+    let origin = points[0];
+    let media = cx.scene.media();
+    let model = |m: usize| media[m].leg_model(origin);
+    let leg_of = |j: usize, m: usize| {
+        model(m)
+            .valid_leg(
+                (points[j] - origin).to_point(),
+                (points[j + 1] - origin).to_point(),
+            )
+            .ok_or(NoAmplitude::VanishedLeg { leg: j })
+    };
+    let local = |m: usize, p: Point| 1.0 / media[m].speed_at(p);
+    let arc_length = |leg: &AnyLeg| leg.arc().map_or(leg.len(), |a| a.arc_length());
+    let w0 = local(legs[0], points[0]);
+    let first = leg_of(0, legs[0])?;
+    let attenuation = &cx.settings.attenuation;
+    let d0 = first.direction_at_start();
+    // The axisymmetric width |x_R| / |d₀ₓ| as `range · l0 / side`.
+    let side = (points[1].x - points[0].x).abs();
+    let l0 = if d0.x != 0.0 {
+        side / d0.x.abs()
+    } else {
+        first.len()
+    };
+    let mut out = Walk {
+        coefficient: Complex64::new(1.0, 0.0),
+        tube_num: 1.0,
+        tube_den: 1.0,
+        out_of_plane: first.out_of_plane_width(w0),
+        attenuation_db: attenuation[legs[0]] * arc_length(&first),
+        l0,
+        w0,
+        converted: None,
+    };
+    let mut flux = local(legs[0], points[0]) / local(legs[0], points[1]);
+    let mut cos_ratio = 1.0;
+    let mut caustics = 0u32;
+    let mut incoming = first;
+    let (mut pivot, mut product, mut prev) = (1.0, 1.0, Vec2::default());
+    let mut t0 = Vec2::default();
+    for (i, step) in path.steps.iter().enumerate() {
+        let (m_in, m) = (legs[i], legs[i + 1]);
+        let leg = leg_of(i + 1, m)?;
+        let here = points[i + 1];
+        let (w_in, w) = (local(m_in, here), local(m, here));
+        let line = &cx.scene.interfaces()[step.interface].polyline;
+        let seg = segment_of(line, here, path.segments, i);
+        let t = line.tangent(seg);
+        let n = t.perp();
+        let u_in = incoming.direction_at_end();
+        let (c1, c2) = (u_in.dot(n), leg.direction_at_start().dot(n));
+        let diag = incoming.end_block(t) + leg.start_block(t);
+        let (r, scale) = if i == 0 {
+            t0 = t;
+            (diag, diag.abs())
+        } else {
+            let off = incoming.coupling(prev, t);
+            product *= -off / pivot;
+            (
+                diag - off * off / pivot,
+                diag.abs() + (off * off / pivot).abs(),
+            )
+        };
+        if !(r.abs() > 1e-6 * scale && r.is_finite()) {
+            return Err(NoAmplitude::Caustic);
+        }
+        caustics += u32::from(r < 0.0);
+        (pivot, prev) = (r, t);
+        let x = Interaction {
+            i,
+            step,
+            seg,
+            from: points[i],
+            here,
+            leg_in: u_in,
+            len_in: 1.0,
+            t,
+            cos1: c1.abs(),
+            cos2: c2.abs(),
+            cos_scale: 1.0,
+            m_in,
+            m,
+            w_in,
+            w,
+        };
+        out.coefficient *= coefficient(cx, &x)?;
+        if changes_medium(&x) {
+            cos_ratio *= x.cos2 / x.cos1;
+            if step.kind == StepKind::Reflect {
+                out.converted.get_or_insert(i);
+            }
+        }
+        out.out_of_plane += leg.out_of_plane_width(w0);
+        out.attenuation_db += attenuation[m] * arc_length(&leg);
+        flux *= local(m, here) / local(m, points[i + 2]);
+        incoming = leg;
+    }
+    let n_s = d0.perp();
+    let n_r = incoming.direction_at_end().perp();
+    let inverse_width = if path.steps.is_empty() {
+        first.coupling(n_s, n_r).abs() / w0
+    } else {
+        let beta = incoming.coupling(prev, n_r);
+        let x0 = beta * product / pivot;
+        (first.coupling(n_s, t0) * x0).abs() / w0
+    };
+    // `flux` is Π c_start / c_end in slownesses: c_end / c_start.
+    out.tube_num = cos_ratio * flux * inverse_width;
+    out.tube_den = 1.0;
+    if caustics > 0 {
+        let phase = -std::f64::consts::FRAC_PI_2 * f64::from(caustics);
+        out.coefficient *= Complex64::from_polar(1.0, phase);
     }
     Ok(out)
 }

@@ -14,7 +14,7 @@ use crate::geom::Point;
 /// The `receivers` key of a scene document: a list of points, or a grid of them.
 ///
 /// ```
-/// use eigenray::spec::{ReceiverGridSpec, ReceiversSpec};
+/// use eigenray::scene::{ReceiverGridSpec, ReceiversSpec};
 /// let list: ReceiversSpec = serde_json::from_str("[[1, -1], [2, -1]]").unwrap();
 /// assert_eq!(list, ReceiversSpec::Points(vec![[1.0, -1.0], [2.0, -1.0]]));
 /// let grid: ReceiversSpec =

@@ -283,7 +283,22 @@ impl Scene {
             self.media[medium].index = was;
             return Err(e);
         }
+        if index && self.media[medium].gradient.is_some() {
+            self.media[medium].index = was;
+            return Err(SceneError::new(
+                format!("media.{}.gradient", self.media[medium].name),
+                "only a `speed` medium takes a gradient, not an `index` medium",
+            ));
+        }
+        let old = self.media[medium].slowness;
         self.media[medium].slowness = slowness;
+        let points =
+            super::scene_points(&self.interfaces, &self.sources, &self.receivers, &[], None);
+        if let Err(e) = super::speeds_stay_positive(&mut self.media, points, self.domain) {
+            self.media[medium].slowness = old;
+            self.media[medium].index = was;
+            return Err(e);
+        }
         if let (Some(db), Some(a)) = (per_length, &mut self.amplitudes) {
             a.attenuation[medium] = db;
             a.attenuates = a.attenuation.iter().any(|&db| db > 0.0);

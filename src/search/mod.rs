@@ -27,6 +27,7 @@
 //! allocated ([`SearchError::TooLarge`]).
 
 mod beams;
+mod diffraction;
 mod sequences;
 mod strategy;
 
@@ -440,6 +441,34 @@ impl Tracer {
             pairs[pair].complete &= walk.complete;
             arrivals.extend(walk.arrivals);
         }
+        if options.diffraction {
+            let mut diffracted = Vec::new();
+            for (pair, walk) in self.diffraction_pairs(options, control) {
+                report.work += walk.work;
+                pairs[pair].complete &= walk.complete;
+                diffracted.extend(walk.arrivals);
+            }
+            if let Some(sink) = control.sink {
+                // Streamed: each diffracted arrival goes to the sink with its amplitude (the
+                // edge-held `vertex` entries it repeats have none, so no response counts
+                // them twice).
+                for mut a in diffracted {
+                    control.listed.stream();
+                    self.arrival_amplitudes(&a.steps, std::slice::from_mut(&mut a.arrival));
+                    sink(StreamedArrival {
+                        source: a.source,
+                        receiver: a.receiver,
+                        steps: a.steps.len(),
+                        status: a.arrival.status,
+                        time: a.arrival.time,
+                        amplitude: a.arrival.amplitude,
+                    });
+                }
+            } else {
+                arrivals.extend(diffracted);
+                diffraction::drop_listed_twice(self, &mut arrivals);
+            }
+        }
         if control.run.stop_requested() {
             // Asked to stop: the result is discarded, every pair is short.
             pairs.iter_mut().for_each(|p| p.complete = false);
@@ -459,8 +488,9 @@ impl Tracer {
 /// Orders arrivals by pair and time; ties (none but equal times) by the number of steps, the
 /// sequence and the segments, for a fixed order.
 fn sort_arrivals(arrivals: &mut [SearchArrival]) {
-    fn key(s: &[Step]) -> impl Iterator<Item = (usize, bool)> + '_ {
-        s.iter().map(|t| (t.interface, t.kind == StepKind::Refract))
+    fn key(s: &[Step]) -> impl Iterator<Item = (usize, bool, Option<usize>)> + '_ {
+        s.iter()
+            .map(|t| (t.interface, t.kind == StepKind::Refract, t.kind.vertex()))
     }
     arrivals.par_sort_unstable_by(|a, b| {
         (a.source, a.receiver)

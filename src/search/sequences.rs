@@ -415,6 +415,7 @@ impl PairState<'_> {
         let sequence = Sequence {
             steps: &self.steps,
             path: None,
+            curved: &[],
         };
         let left = walk.max_work.saturating_sub(self.out.work);
         let budget = SearchBudget {

@@ -132,6 +132,7 @@ mod tests {
             refract: true,
             obstructed: true,
             vertex,
+            diffraction: false,
         }
     }
 
@@ -220,6 +221,7 @@ mod tests {
                         .filter(|s| match s.kind {
                             StepKind::Reflect => reflect,
                             StepKind::Refract => refract,
+                            StepKind::Diffract { .. } => false,
                         })
                         .collect();
                     let vertex_ahead = vertex

@@ -2,7 +2,9 @@
 //! solved ray or arrival its [`Amplitude`], called by one-by-one solving, batches, every
 //! stationary path and the search alike.
 
-use crate::amplitude::{Amplitude, NoAmplitude, OnSegment, PathGeometry, of_one, of_path};
+use crate::amplitude::{
+    Amplitude, NoAmplitude, OnSegment, PathGeometry, of_diffracted, of_one, of_path,
+};
 use crate::geom::Point;
 use crate::scene::Step;
 
@@ -129,6 +131,14 @@ impl Tracer {
             media,
             segments,
         };
+        if steps.iter().any(|s| s.kind.vertex().is_some()) {
+            return Some(of_diffracted(
+                &self.scene,
+                settings,
+                self.regions.as_ref(),
+                path,
+            ));
+        }
         Some(of_path(&self.scene, settings, self.regions.as_ref(), path))
     }
 

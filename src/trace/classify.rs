@@ -11,6 +11,7 @@
 //! fails.
 
 use crate::geom::{Aabb, Point, Segment, Vec2, orient, vertex_side};
+use crate::leg::{Leg, LegMedium, LegModel};
 use crate::problem::Pin;
 use crate::regions::Regions;
 use crate::scene::{Scene, SegmentRef, Step, StepKind};
@@ -131,10 +132,17 @@ impl Classifier {
         if k > 0 && ends[k] <= nw.eval.vanish {
             return no_path(Reason::AtEnd { step: k - 1 });
         }
-        if let Some(step) = wrong_side(scene, steps, nw) {
+        let curved = !of.curved.is_empty();
+        let wrong = if curved {
+            curved_wrong_side(scene, steps, nw, of.curved)
+        } else {
+            wrong_side(scene, steps, nw)
+        };
+        if let Some(step) = wrong {
             return no_path(Reason::WrongSide { step });
         }
         let crossing = match of.path {
+            _ if curved => arc_obstruction(scene, steps, points, &nw.seg[..k], of.curved),
             Some(path) => self.obstruction(scene, path, points, &nw.seg[..k]),
             None => self.obstruction_tested(scene, steps, None, points, &nw.seg[..k]),
         };
@@ -276,6 +284,9 @@ pub(crate) struct Sequence<'a> {
     pub steps: &'a [Step],
     /// The scene path they are, if they are one.
     pub path: Option<usize>,
+    /// The legs' models relative to the source where legs may be curved (empty: every leg
+    /// straight; see `ProblemRef::curved`).
+    pub curved: &'a [LegMedium],
 }
 
 impl<'a> Sequence<'a> {
@@ -284,6 +295,7 @@ impl<'a> Sequence<'a> {
         Sequence {
             steps: &scene.paths()[path].steps,
             path: Some(path),
+            curved: &[],
         }
     }
 }
@@ -309,8 +321,19 @@ pub(crate) fn lookup_media(
         let line = &scene.interfaces()[step.interface].polyline;
         let here = line.point_on(nw.seg[i], nw.s[i]);
         if step.kind == StepKind::Refract {
+            // The side the leg arrives from: its start's, or, for an arc (whose start may lie
+            // on the interface where it turns beneath it), a point just back along its
+            // arriving direction.
+            let from = if scene.curved() {
+                let leg = scene.media()[m]
+                    .leg_model(source)
+                    .leg(prev - source, here - source);
+                here - leg.direction_at_end() * (1e-3 * leg.len())
+            } else {
+                prev
+            };
             m = regions
-                .medium_across(step.interface, nw.seg[i], nw.s[i], prev)
+                .medium_across(step.interface, nw.seg[i], nw.s[i], from)
                 .ok_or(Reason::NoMedium { leg: i + 1 })?;
         }
         media.push(m);
@@ -318,6 +341,110 @@ pub(crate) fn lookup_media(
     }
     Ok(())
 }
+
+/// [`wrong_side`] for curved legs: each leg's side from its direction at the interaction
+/// (an arc's chord may run along the interface where the arc turns below it), within
+/// [`SIDE_MARGIN`] rad on neither side. A step next to a vanished leg is left to the tests of
+/// ends and coincident points.
+fn curved_wrong_side(
+    scene: &Scene,
+    steps: &[Step],
+    nw: &NewtonWorkspace,
+    curved: &[LegMedium],
+) -> Option<usize> {
+    let (k, e) = (steps.len(), &nw.eval);
+    let rel = &e.rel[..k + 2];
+    (0..k).find(|&i| {
+        let (before, after) = (
+            curved[i].leg(rel[i], rel[i + 1]),
+            curved[i + 1].leg(rel[i + 1], rel[i + 2]),
+        );
+        if before.len() <= e.vanish || after.len() <= e.vanish {
+            return false;
+        }
+        let n = scene.interfaces()[steps[i].interface]
+            .polyline
+            .normal(nw.seg[i]);
+        let side = |x: f64| if x.abs() <= SIDE_MARGIN { 0.0 } else { x };
+        let a = side(-n.dot(before.direction_at_end()));
+        let b = side(n.dot(after.direction_at_start()));
+        !sides_suit(steps[i].kind, a, b)
+    })
+}
+
+/// The first leg whose arc crosses an interface strictly between its ends, for legs that may
+/// be curved (`curved`, positions relative to the source `pts[0]`). A straight leg is tested
+/// as the classifier tests it; an arc as the polygon inscribed in it whose pieces each bulge
+/// from the arc by at most `1e-7` of the leg's chord (at most [`MAX_ARC_PIECES`] pieces):
+/// an interface that comes closer to the arc than that may be missed or found touching it.
+/// The first and last pieces leave out the segments the leg's ends lie on, as a straight leg
+/// does; the pieces between test every segment (an arc can dip below its own interface).
+fn arc_obstruction(
+    scene: &Scene,
+    steps: &[Step],
+    pts: &[Point],
+    seg: &[usize],
+    curved: &[LegMedium],
+) -> Option<Crossing> {
+    let k = seg.len();
+    let origin = pts[0];
+    let mut own_a = SegmentRef::NONE;
+    for leg in 0..=k {
+        let (a, b) = (pts[leg], pts[leg + 1]);
+        let own_b = if leg < k {
+            SegmentRef {
+                interface: steps[leg].interface as u32,
+                segment: seg[leg] as u32,
+            }
+        } else {
+            SegmentRef::NONE
+        };
+        if a != b {
+            let hit = match curved[leg].leg(a - origin, b - origin).arc() {
+                None => scene.first_crossing(a, b, END_MARGIN, [own_a, own_b]),
+                Some(arc) => {
+                    let arc_len = arc.arc_length();
+                    let bulge = 1e-7 * arc.len;
+                    let pieces = (arc_len * (arc.curvature().abs() / (8.0 * bulge)).sqrt()).ceil();
+                    let n = if pieces.is_finite() {
+                        (pieces as usize).clamp(1, MAX_ARC_PIECES)
+                    } else {
+                        1
+                    };
+                    let at = |j: usize| {
+                        if j == 0 {
+                            a
+                        } else if j == n {
+                            b
+                        } else {
+                            a + arc.offset_at(arc_len * j as f64 / n as f64)
+                        }
+                    };
+                    let margin = (END_MARGIN * n as f64).min(0.25);
+                    (0..n).find_map(|j| {
+                        let own = [
+                            if j == 0 { own_a } else { SegmentRef::NONE },
+                            if j + 1 == n { own_b } else { SegmentRef::NONE },
+                        ];
+                        let m = if j == 0 || j + 1 == n { margin } else { 0.0 };
+                        scene.first_crossing(at(j), at(j + 1), m, own)
+                    })
+                }
+            };
+            if let Some(r) = hit {
+                return Some(Crossing {
+                    leg,
+                    interface: r.interface as usize,
+                });
+            }
+        }
+        own_a = own_b;
+    }
+    None
+}
+
+/// The most pieces an arc is tested as ([`arc_obstruction`]).
+const MAX_ARC_PIECES: usize = 4096;
 
 /// The first step whose legs are not on the sides it demands, for points in any state (held
 /// on a vertex: the sum of the two segments' normals; next to a vanished leg: the other leg
@@ -611,6 +738,8 @@ pub(crate) fn sides_suit(kind: StepKind, a: f64, b: f64) -> bool {
     match kind {
         StepKind::Reflect => (a > 0.0 && b > 0.0) || (a < 0.0 && b < 0.0),
         StepKind::Refract => (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0),
+        // A diffraction's legs leave its vertex into any direction of the wedge's outside.
+        StepKind::Diffract { .. } => true,
     }
 }
 

@@ -24,6 +24,7 @@ mod amplitude;
 mod chain;
 mod classify;
 mod complete;
+mod diffract;
 mod flat;
 mod mirrors;
 mod occlusion;
@@ -123,6 +124,9 @@ pub struct Workspace {
 pub(crate) struct RayData {
     /// Leg slownesses.
     pub slowness: Vec<f64>,
+    /// Leg models relative to the source, in a scene with curved legs (else empty: see
+    /// [`ProblemRef::curved`]).
+    pub curved: Vec<crate::leg::LegMedium>,
     /// Leg media, and those of the last lookup while they settle.
     pub media: Vec<usize>,
     pub media_prev: Vec<usize>,
@@ -287,7 +291,9 @@ impl Tracer {
         self.plans = (0..scene.paths().len())
             .map(|p| PathPlan::of(scene, p, self.guess, self.kernels))
             .collect();
-        self.newton.fast_path = self.kernels != Kernels::GeneralOnly;
+        // Curved legs take the general code alone: the kernels and the fast path are the
+        // straight leg's.
+        self.newton.fast_path = self.kernels != Kernels::GeneralOnly && !scene.curved();
     }
 
     /// The same tracer with another refinement of the start of refraction paths.
@@ -586,6 +592,9 @@ impl Tracer {
         start: Start,
         ws: &mut Workspace,
     ) -> RayRecord {
+        if plan.diffracted() {
+            return self.solve_diffracted(source, receiver, path, ws);
+        }
         let cx = self.context();
         if let (Start::Default, Some(sp)) = (start, plan.stack())
             && let Some(ray) = sp.solve_stack(&cx, path, source, receiver, ws)
@@ -597,6 +606,7 @@ impl Tracer {
         let k = spec.steps.len();
         ws.resize(k);
         ws.ray.slowness.clear();
+        ws.ray.curved.clear();
         ws.ray.media.clear();
         ws.ray.points.clear();
         let mut beyond = None;
@@ -636,6 +646,7 @@ impl Tracer {
         ws.ray
             .slowness
             .extend(ws.ray.media.iter().map(|&m| scene.media()[m].slowness));
+        ws.ray.set_curved(scene, source);
         if let Start::Default = start {
             refraction_guess(scene, &spec.steps, source, receiver, self.guess, ws);
         }
@@ -647,6 +658,7 @@ impl Tracer {
                 scene,
                 steps: &spec.steps,
                 slowness: &ws.ray.slowness,
+                curved: &ws.ray.curved,
                 source,
                 receiver,
             };
@@ -677,10 +689,15 @@ impl Tracer {
             ws.ray
                 .slowness
                 .extend(ws.ray.media.iter().map(|&m| scene.media()[m].slowness));
+            ws.ray.set_curved(scene, source);
+        };
+        let sequence = Sequence {
+            curved: &ws.ray.curved,
+            ..Sequence::of(scene, path)
         };
         cx.classifier.classify(
             scene,
-            Sequence::of(scene, path),
+            sequence,
             source,
             receiver,
             &sol,
@@ -707,6 +724,21 @@ impl Tracer {
             &ws.newton,
             &mut ws.ray.media,
         )
+    }
+}
+
+impl RayData {
+    /// The leg models of the media in `media`, relative to `source`, when the scene has
+    /// curved legs (else none: every leg straight, on the uniform medium's own code).
+    fn set_curved(&mut self, scene: &Scene, source: Point) {
+        self.curved.clear();
+        if scene.curved() {
+            let models = self
+                .media
+                .iter()
+                .map(|&m| scene.media()[m].leg_model(source));
+            self.curved.extend(models);
+        }
     }
 }
 

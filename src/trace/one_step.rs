@@ -58,6 +58,7 @@ impl OneStepPath {
             scene,
             steps,
             slowness: &self.slowness,
+            curved: &[],
             source,
             receiver,
         };

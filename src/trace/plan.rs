@@ -50,6 +50,9 @@ pub(crate) enum PathPlan {
     /// One refraction at an interface of one segment, the media given: from the default
     /// start, the flat kernel (`trace::flat`); otherwise as `OneStep`.
     FlatRefraction(OneStepPath, FlatRefraction),
+    /// A path with `diffract` steps: each piece between its vertices searched on its own
+    /// (`trace::diffract`), from the general solve's entry.
+    Diffracted,
 }
 
 /// Which code solves a path's rays ([`PathPlan::kernel`]).
@@ -82,6 +85,14 @@ impl PathPlan {
         guess: InitialGuess,
         kernels: Kernels,
     ) -> PathPlan {
+        if scene.paths()[path].diffracts() {
+            return PathPlan::Diffracted;
+        }
+        if scene.curved() {
+            // Curved legs: the general solve alone (the kernels, the image method and the
+            // start's proofs of no path are the straight leg's).
+            return PathPlan::General;
+        }
         let straight = StraightPath::of(scene, path);
         let ray_parameter = guess == InitialGuess::RayParameter;
         if kernels != Kernels::GeneralOnly
@@ -166,7 +177,15 @@ impl PathPlan {
             PathPlan::OneStep(one) => one.images,
             PathPlan::Straight(sp) | PathPlan::Stack(sp) => sp.exact(ray_parameter),
             PathPlan::General => false,
+            // Its pieces are searched, not started.
+            PathPlan::Diffracted => true,
         }
+    }
+
+    /// Whether the path has `diffract` steps (`trace::diffract` solves its rays).
+    #[inline(always)]
+    pub(crate) fn diffracted(&self) -> bool {
+        matches!(self, PathPlan::Diffracted)
     }
 }
 

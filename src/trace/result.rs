@@ -440,10 +440,7 @@ impl Ray {
             .unwrap_or(&[])
             .iter()
             .map(|s| {
-                let kind = match s.kind {
-                    crate::scene::StepKind::Reflect => "reflect",
-                    crate::scene::StepKind::Refract => "refract",
-                };
+                let kind = s.kind.as_str();
                 let name = scene.interfaces().get(s.interface).map_or("?", |i| &i.name);
                 format!("{kind} `{}`", esc(name))
             })

@@ -56,6 +56,7 @@ impl StraightPath {
             scene,
             steps,
             slowness: &self.slowness,
+            curved: &[],
             source,
             receiver,
         };

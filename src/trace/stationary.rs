@@ -18,6 +18,10 @@ use super::classify::Sequence;
 use super::complete::{self, Arrival, Hierarchy, SearchBudget, SequenceSearch};
 use super::{RayRecord, Reason, SearchOutcome, StationaryError, Status, Tracer, Workspace};
 
+/// The number of starts of the search for every stationary path through curved legs
+/// ([`Tracer::stationary_paths`] in a scene with a gradient medium), over all its steps.
+pub(crate) const CURVED_STARTS: usize = 1024;
+
 /// Tuples (and assignments solved) the default mode's search of one ray visits at most,
 /// beyond which it answers `not_converged` (`Reason::SearchLimit`); its work is bounded by
 /// the run's [`Limits::fallback_work`](crate::options::Limits) (about 10 ms of one core), or
@@ -99,6 +103,17 @@ impl Tracer {
             return Err(StationaryError::TooManySteps { path, steps });
         }
         self.assert_solvable(source, receiver, path, "Tracer::stationary_paths");
+        if self.plan_of(path).diffracted() {
+            let (search, _) =
+                self.diffracted_paths(path, source, receiver, self.search_budget(), out);
+            self.arrival_amplitudes(&spec.steps, out);
+            return Ok(search);
+        }
+        if self.scene.curved() {
+            let outcome = self.curved_stationary_paths(source, receiver, path, out);
+            self.arrival_amplitudes(&spec.steps, out);
+            return Ok(outcome);
+        }
         let source_medium = self.source_medium(spec.media.is_some(), source);
         let search = self.stationary_of(
             Sequence::of(&self.scene, path),
@@ -112,6 +127,90 @@ impl Tracer {
         );
         self.arrival_amplitudes(&spec.steps, out);
         Ok(search)
+    }
+
+    /// [`stationary_paths`](Self::stationary_paths) in a scene with curved legs: Newton from
+    /// a grid of starts over the interfaces ([`CURVED_STARTS`] in all, the same number along
+    /// each step's polyline, at the middles of equal pieces of its length), each distinct
+    /// ray with a time kept (points within 1e-8 of the path's length are one ray), ordered
+    /// by time. The complete search's leaf problems are convex only for straight legs (with
+    /// arcs one sequence can have a minimum and a saddle on the same segments), so this
+    /// search is not a proof: its outcome is never `complete`, and a ray without an arrival
+    /// says `search_limit`, not `no_path`. A direct ray (no steps) has its one arc.
+    fn curved_stationary_paths(
+        &self,
+        source: Point,
+        receiver: Point,
+        path: usize,
+        out: &mut Vec<Arrival>,
+    ) -> SearchOutcome {
+        let spec = &self.scene.paths()[path];
+        let k = spec.steps.len();
+        let source_medium = self.source_medium(spec.media.is_some(), source);
+        let mut ws = Workspace::new();
+        let per_step = if k == 0 {
+            1
+        } else {
+            ((CURVED_STARTS as f64).powf(1.0 / k as f64).floor() as usize).clamp(2, 64)
+        };
+        let starts = per_step.pow(k as u32);
+        let mut outcome = SearchOutcome {
+            complete: k == 0,
+            ..SearchOutcome::new()
+        };
+        let mut guess = vec![0.0; k];
+        let mut index = vec![0usize; k];
+        for _ in 0..starts {
+            for (i, step) in spec.steps.iter().enumerate() {
+                let line = &self.scene.interfaces()[step.interface].polyline;
+                guess[i] = line.length() * (index[i] as f64 + 0.5) / per_step as f64;
+            }
+            // The next start: the indices count in base `per_step`.
+            for i in index.iter_mut() {
+                *i += 1;
+                if *i < per_step {
+                    break;
+                }
+                *i = 0;
+            }
+            let start = if k == 0 {
+                super::Start::Default
+            } else {
+                super::Start::Given(&guess)
+            };
+            let record = self.solve_planned(source, source_medium, receiver, path, start, &mut ws);
+            outcome.solves += 1;
+            outcome.work += record.iterations as usize;
+            if !record.status.has_time() {
+                continue;
+            }
+            let points = &ws.ray.points;
+            let length: f64 = points.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+            let same = |a: &Arrival| {
+                a.points
+                    .iter()
+                    .zip(points)
+                    .all(|(p, q)| (*p - *q).length() <= 1e-8 * length)
+            };
+            if out.iter().any(same) {
+                continue;
+            }
+            out.push(Arrival {
+                status: record.status,
+                time: record.time,
+                points: points.clone(),
+                parameters: ws.parameters().to_vec(),
+                segments: ws.newton.seg[..k].to_vec(),
+                media: ws.media().to_vec(),
+                iterations: record.iterations as usize,
+                reason: record.reason,
+                kink: None,
+                residual: record.residual,
+                amplitude: None,
+            });
+        }
+        out.sort_by(|a, b| a.time.total_cmp(&b.time));
+        outcome
     }
 
     /// The budget of one complete search with `"stationary": "all"` (and of one pair's in a
@@ -217,7 +316,8 @@ impl Tracer {
         };
         let here = legs.media[i];
         match step.kind {
-            StepKind::Reflect => {
+            // A diffraction keeps the medium too (a wedge of rigid or soft faces).
+            StepKind::Reflect | StepKind::Diffract { .. } => {
                 legs.push(here);
                 self.search_media(base, legs, out, stats);
                 legs.len -= 1;
@@ -284,7 +384,14 @@ impl Tracer {
             record.reason,
             Some(Reason::BeyondEnd { .. } | Reason::NoStationaryPath | Reason::NoMedium { leg: 0 })
         );
-        if proof || self.newton.max_iterations == 0 {
+        // A diffracted path's pieces were searched completely already. Curved legs: the
+        // complete search is the straight leg's (convex leaf problems), so the solve's own
+        // answer stands.
+        if proof
+            || self.newton.max_iterations == 0
+            || self.plan_of(path).diffracted()
+            || self.scene().curved()
+        {
             return record;
         }
         let spec = &self.scene.paths()[path];
@@ -390,7 +497,7 @@ fn media_hold(regions: &Regions, search: &SequenceSearch<'_>, a: &Arrival) -> bo
     search.sequence.steps.iter().enumerate().all(|(i, step)| {
         let after = a.media[i + 1];
         match step.kind {
-            StepKind::Reflect => after == a.media[i],
+            StepKind::Reflect | StepKind::Diffract { .. } => after == a.media[i],
             StepKind::Refract => {
                 let (seg, s) = (a.segments[i], a.parameters[i]);
                 regions.medium_across(step.interface, seg, s, a.points[i]) == Some(after)

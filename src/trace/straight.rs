@@ -263,6 +263,7 @@ impl StraightPath {
             && match self.kind {
                 StepKind::Reflect => true,
                 StepKind::Refract => self.parallel && self.lines.len() > 1,
+                StepKind::Diffract { .. } => false,
             }
     }
 

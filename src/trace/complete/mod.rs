@@ -211,6 +211,7 @@ fn searching(input: SequenceSearch<'_>, f: impl FnOnce(&mut Search<'_>)) -> Sear
             scene: input.scene,
             steps: input.sequence.steps,
             slowness: &slowness,
+            curved: &[],
             source: input.source,
             receiver: input.receiver,
         },

@@ -47,10 +47,7 @@ pub(super) fn sequence_label(scene: &Scene, steps: &[Step]) -> String {
     let words: Vec<String> = steps
         .iter()
         .map(|s| {
-            let kind = match s.kind {
-                StepKind::Reflect => "reflect",
-                StepKind::Refract => "refract",
-            };
+            let kind = s.kind.as_str();
             let name = scene
                 .interfaces()
                 .get(s.interface)
