@@ -34,7 +34,11 @@
 //! so the whole is at least `|I − p| + |p − r| ≥ |I − r|`; and it is at least `|I − p|`, `p`
 //! on the part of the wall the beam reaches. So a node whose image lies farther than
 //! `max_time / slowness` from the receivers' box, or from its wall's reachable part, is pruned
-//! with its whole subtree, as is a receiver farther than that from the image; the margin is
+//! with its whole subtree, as is a receiver farther than that from the image. Tighter, and
+//! what prunes the beams that reach no receiver in time: the rest after `p` is at least
+//! `dist(p, box)` long, so a node is pruned where the least `|I − p| + dist(p, box)` over `p`
+//! in the reachable part (a convex function along it, bounded from below by tangents,
+//! [`Bounds::late_through`]) exceeds `max_time / slowness`. The margin is
 //! the beam tests' (far more than the round-off of the distances), so a path whose computed
 //! time is within `max_time` is never pruned by rounding. Each path's own computed time then
 //! decides.
@@ -380,7 +384,14 @@ struct Bounds {
     receivers: Aabb,
     /// `max_time / slowness` (infinite: no bound).
     reach: f64,
+    /// Whether a node is also pruned by the shortest way from its image through its wall's
+    /// part to the receivers' box ([`Bounds::late_through`]); off only in tests, to show it
+    /// changes no arrival.
+    through: bool,
 }
+
+/// The most halvings [`Bounds::late_through`] makes of a wall's part.
+const THROUGH_STEPS: u32 = 24;
 
 impl Bounds {
     /// Whether every path at or below a node of image `image`, whose beam reaches its wall's
@@ -394,7 +405,92 @@ impl Bounds {
         if let Some((a, b)) = part {
             d = d.max(segment_distance(image, a, b));
         }
-        d - 4.0 * self.delta > self.reach
+        if d - 4.0 * self.delta > self.reach {
+            return true;
+        }
+        match part {
+            Some((a, b)) if self.through => self.late_through(image, a, b),
+            _ => false,
+        }
+    }
+
+    /// The length `|image − x| + dist(x, box)` of the shortest way from `image` through the
+    /// point `x = a + t (b − a)` to the receivers' box, and a subgradient of it in `t`.
+    #[inline(always)]
+    fn through_at(&self, image: Point, a: Point, e: Vec2, t: f64) -> (f64, f64) {
+        let x = a + e * t;
+        let u = x - image;
+        let c = Point::new(
+            x.x.clamp(self.receivers.min.x, self.receivers.max.x),
+            x.y.clamp(self.receivers.min.y, self.receivers.max.y),
+        );
+        let v = x - c;
+        let (du, dv) = (u.length(), v.length());
+        let mut g = 0.0;
+        if du > 0.0 {
+            g += e.dot(u) / du;
+        }
+        if dv > 0.0 {
+            g += e.dot(v) / dv;
+        }
+        (du + dv, g)
+    }
+
+    /// Whether every way from `image` through a point of `a–b` to the receivers' box is
+    /// certainly longer than the reach (by more than the margin, four beam margins): every
+    /// path below a node leaves its image along a straight (unfolded) leg to a point `x` of
+    /// its wall's part and then goes on at least `dist(x, box)` to its receiver.
+    ///
+    /// `f(t) = |image − x(t)| + dist(x(t), box)` is convex along the segment (a norm and the
+    /// distance to a convex set, of an affine point), so each tangent `f(s) + g(s) (t − s)`
+    /// (`g` a subgradient: the terms' unit vectors dotted with `b − a`, 0 where a term is
+    /// 0) lies below it everywhere. Bisecting on the sign of `g` keeps a bracket `lo < hi`
+    /// with `g(lo) < 0 < g(hi)`; the two tangents there meet at or below the minimum, and
+    /// the smaller of the two at any `t` is at most where they meet, so it bounds every
+    /// `f(t)` from below whatever the round-off of that `t`. Any sample within the reach
+    /// (plus the margin) ends the test: no pruning is possible.
+    #[inline]
+    fn late_through(&self, image: Point, a: Point, b: Point) -> bool {
+        let margin = 4.0 * self.delta;
+        let late = |f: f64| f - margin > self.reach;
+        let e = b - a;
+        let (f0, g0) = self.through_at(image, a, e, 0.0);
+        if !late(f0) {
+            return false;
+        }
+        if g0 >= 0.0 {
+            return true;
+        }
+        let (f1, g1) = self.through_at(image, a, e, 1.0);
+        if !late(f1) {
+            return false;
+        }
+        if g1 <= 0.0 {
+            return true;
+        }
+        let (mut lo, mut hi) = ((0.0, f0, g0), (1.0, f1, g1));
+        for _ in 0..THROUGH_STEPS {
+            let ((tl, fl, gl), (th, fh, gh)) = (lo, hi);
+            let t = (fl - fh - gl * tl + gh * th) / (gh - gl);
+            let below = (fl + gl * (t - tl)).min(fh + gh * (t - th));
+            if late(below) {
+                return true;
+            }
+            let tm = 0.5 * (tl + th);
+            let (fm, gm) = self.through_at(image, a, e, tm);
+            if !late(fm) {
+                return false;
+            }
+            if gm == 0.0 {
+                return true;
+            }
+            if gm > 0.0 {
+                hi = (tm, fm, gm);
+            } else {
+                lo = (tm, fm, gm);
+            }
+        }
+        false
     }
 }
 
@@ -479,10 +575,22 @@ impl MirrorWalls {
         found: &mut impl FnMut(MirrorPath<'_>) -> bool,
         progress: &mut impl FnMut(u64) -> bool,
     ) -> MirrorStats {
+        let bounds = self.bounds(search, search.max_steps.min(search.max_depth));
+        self.walk(search, &bounds, scratch, found, progress)
+    }
+
+    /// [`MirrorWalls::arrivals`] within `bounds`.
+    fn walk(
+        &self,
+        search: &MirrorSearch<'_>,
+        bounds: &Bounds,
+        scratch: &mut MirrorScratch,
+        found: &mut impl FnMut(MirrorPath<'_>) -> bool,
+        progress: &mut impl FnMut(u64) -> bool,
+    ) -> MirrorStats {
         let mut stats = MirrorStats::default();
         let max_steps = search.max_steps.min(search.max_depth);
         let (mut granted, mut tries) = (0u64, 0u32);
-        let bounds = self.bounds(search, max_steps);
         let MirrorScratch {
             stack,
             walls,
@@ -511,7 +619,7 @@ impl MirrorWalls {
             lens,
             far,
         };
-        if !validation.node(stack, walls, &bounds, found, &mut stats) {
+        if !validation.node(stack, walls, bounds, found, &mut stats) {
             stats.stopped = true;
             return stats;
         }
@@ -543,7 +651,7 @@ impl MirrorWalls {
                 break;
             }
             let occlusion = (!search.obstructed).then_some(&mut *shadows);
-            let Some(child) = self.child(&node, w, &bounds, occlusion, &mut stats.work) else {
+            let Some(child) = self.child(&node, w, bounds, occlusion, &mut stats.work) else {
                 continue;
             };
             stats.beams += 1;
@@ -562,7 +670,7 @@ impl MirrorWalls {
             }
             stack.push(child);
             walls.push(w);
-            if !validation.node(stack, walls, &bounds, found, &mut stats) {
+            if !validation.node(stack, walls, bounds, found, &mut stats) {
                 stats.stopped = true;
                 break;
             }
@@ -588,6 +696,7 @@ impl MirrorWalls {
             delta: BEAM_MARGIN * scale * levels,
             receivers: Aabb::around(search.receivers),
             reach,
+            through: true,
         }
     }
 
