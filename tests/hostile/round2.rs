@@ -112,7 +112,7 @@ fn a_step_of_both_kinds_is_named() {
     run.assert_refused("paths[0].steps[1]: a step is one interaction");
     assert!(!run.stderr.contains("invalid JSON"), "{}", run.stderr);
     let run = super::solve_file(&air_over_water(media, json!([{}])).to_string());
-    run.assert_refused("paths[0].steps[0]: a step needs `reflect` or `refract`");
+    run.assert_refused("paths[0].steps[0]: a step needs `reflect`, `refract` or `diffract`");
 }
 
 /// An unknown name of a megabyte is quoted cut short, saying how long it was: one short line.
