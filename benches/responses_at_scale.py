@@ -35,7 +35,7 @@ import sys
 import tempfile
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-SCENES = ROOT / "examples" / "scenes"
+SCENES = ROOT / "benches" / "scenes"
 NEW = ROOT / "target" / "release" / "eigenray"
 
 

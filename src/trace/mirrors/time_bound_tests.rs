@@ -205,7 +205,7 @@ fn tree(
 
 /// The comb room (`examples/scenes/comb_room.json`, its two listeners and the nine of
 /// `tests/search.rs`), an L-shaped room and the 6 × 4 m room of
-/// `examples/scenes/room_response.json` (ten listeners): the same arrivals, in the same
+/// `benches/scenes/room_response.json` (ten listeners): the same arrivals, in the same
 /// order, to the bit, with and without the bound through the wall's part (which only prunes
 /// subtrees whose every path is later than `max_time`), and on the comb room strictly fewer
 /// beams.
@@ -215,7 +215,7 @@ fn tree(
 fn the_bound_through_a_part_keeps_every_arrival() {
     let comb = Scene::from_json(include_str!("../../../examples/scenes/comb_room.json")).unwrap();
     let room =
-        Scene::from_json(include_str!("../../../examples/scenes/room_response.json")).unwrap();
+        Scene::from_json(include_str!("../../../benches/scenes/room_response.json")).unwrap();
     let l_shape = Scene::from_json(
         r#"{
         "media": { "air": { "speed": 343.0 } }, "background": "air",
