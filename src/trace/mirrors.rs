@@ -57,6 +57,9 @@ use super::classify::{END_MARGIN, leg_sides, sides_suit};
 use super::occlusion::{OCCLUSION_MARGIN, Occluders, Target, Window};
 use super::{Reason, Status};
 
+mod shoebox;
+use shoebox::Shoebox;
+
 /// The beam tests' margin, relative to the largest coordinate an image can have: each
 /// mirroring and clip adds a few ulps (about 1e-16) of it, so this covers thousands of levels
 /// (and it grows with the deepest level a search allows).
@@ -118,6 +121,9 @@ pub(crate) struct MirrorWalls {
     extent: f64,
     /// Every interface segment of the scene, for the occlusion of beams.
     occluders: Occluders,
+    /// The rectangle the walls form, when they are the scene's only segments
+    /// (`mirrors/shoebox.rs`: its arrivals from the image lattice).
+    shoebox: Option<Shoebox>,
 }
 
 /// Where a wall of [`MirrorWalls`] lies in the scene.
@@ -540,10 +546,12 @@ impl MirrorWalls {
             .iter()
             .flat_map(|w| [w.p, w.q])
             .fold(0.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
+        let shoebox = Shoebox::of(scene, &walls, extent);
         MirrorWalls {
             walls,
             extent,
             occluders: Occluders::new(scene),
+            shoebox,
         }
     }
 
@@ -569,6 +577,25 @@ impl MirrorWalls {
     /// are visited (and polled with 0 every [`POLL_TRIES`] walls tried), and returns `false`
     /// to stop it (a stop request, a budget spent).
     pub(crate) fn arrivals(
+        &self,
+        search: &MirrorSearch<'_>,
+        scratch: &mut MirrorScratch,
+        found: &mut impl FnMut(MirrorPath<'_>) -> bool,
+        progress: &mut impl FnMut(u64) -> bool,
+    ) -> MirrorStats {
+        let bounds = self.bounds(search, search.max_steps.min(search.max_depth));
+        if let Some(room) = &self.shoebox
+            && room.serves(search)
+        {
+            return self.room_arrivals(room, search, &bounds, scratch, found, progress);
+        }
+        self.walk(search, &bounds, scratch, found, progress)
+    }
+
+    /// [`MirrorWalls::arrivals`] through the beam tree, also in a rectangular room (the
+    /// reference of the lattice's tests).
+    #[cfg(test)]
+    pub(crate) fn tree_arrivals(
         &self,
         search: &MirrorSearch<'_>,
         scratch: &mut MirrorScratch,
@@ -618,6 +645,7 @@ impl MirrorWalls {
             rel,
             lens,
             far,
+            crossings: true,
         };
         if !validation.node(stack, walls, bounds, found, &mut stats) {
             stats.stopped = true;
@@ -804,6 +832,9 @@ struct Validation<'a, 's> {
     rel: &'a mut Vec<Vec2>,
     lens: &'a mut Vec<f64>,
     far: &'a mut Vec<Point>,
+    /// Whether each leg is tested for crossing an interface (the lattice of a rectangular
+    /// room leaves it out where no leg can cross one).
+    crossings: bool,
 }
 
 impl Validation<'_, '_> {
@@ -933,7 +964,8 @@ impl Validation<'_, '_> {
             };
             let (a, b) = (points[leg], points[leg + 1]);
             let line = [stack[leg].image, fars[leg]];
-            if a != b
+            if self.crossings
+                && a != b
                 && let Some(hit) =
                     self.search
                         .scene
