@@ -485,7 +485,7 @@ where
         if time > search.max_time {
             return true;
         }
-        (self.found)(MirrorPath {
+        let go = (self.found)(MirrorPath {
             receiver: r,
             walls: sequence_walls,
             points,
@@ -496,7 +496,12 @@ where
                 Status::Converged
             },
             reason,
-        })
+        });
+        if !go {
+            // The caller's stop (its limit of arrivals): the list is short.
+            self.stats.stopped = true;
+        }
+        go
     }
 }
 
@@ -772,6 +777,18 @@ mod tests {
         assert!(fs.stopped && fs.beams == 50, "{fs:?}");
         assert!(!f.is_empty() && f.len() < all.len());
         assert!(f.iter().all(|p| all.contains(p)));
+        // The caller stops at its third path: three listed, said stopped.
+        let mut three = 0;
+        let stats = walls.arrivals(
+            &search(&rect, source, &receivers, 9, f64::INFINITY, false),
+            &mut MirrorScratch::default(),
+            &mut |_: MirrorPath<'_>| {
+                three += 1;
+                three < 3
+            },
+            &mut |_| true,
+        );
+        assert!(stats.stopped && three == 3, "{stats:?}");
         // A stop requested at the first ask: nothing listed.
         let mut none = Vec::new();
         let stats = walls.arrivals(
