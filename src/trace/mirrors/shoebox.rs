@@ -45,6 +45,11 @@ const RECTANGLE_TOLERANCE: f64 = 1e-12;
 /// The most orders of near-tied crossings tried for one image.
 const MAX_ORDERS: usize = 64;
 
+/// Work (reflections of the paths validated) between two polls of the run for a stop
+/// request: an image of `k` reflections costs `k`, and a deep search's images cost thousands
+/// each, so a block of [`PROGRESS_BEAMS`] images alone would poll too seldom.
+const POLL_WORK: u64 = 1 << 16;
+
 /// A rectangle of four walls: its corner `c0`, its unit axes and side lengths, and which wall
 /// lies on which side.
 #[derive(Clone, Copy, Debug)]
@@ -213,6 +218,8 @@ struct Lister<'a, 'b, 's, F, P> {
     progress: &'b mut P,
     stats: MirrorStats,
     granted: u64,
+    /// The work done since the last poll of `progress`.
+    unpolled: u64,
 }
 
 impl MirrorWalls {
@@ -236,6 +243,7 @@ impl MirrorWalls {
             progress,
             stats: MirrorStats::default(),
             granted: 0,
+            unpolled: 0,
         };
         if bounds.late(search.source, None) {
             return lister.stats;
@@ -371,55 +379,57 @@ where
             return self.path(r, sequence, false, scratch);
         }
         // Every order of the near-tied crossings, each with the whole validation.
-        let mut orders = 0;
-        let mut prefix = Vec::with_capacity(xs.len() + ys.len());
-        self.orders(r, xs, ys, tie, &mut prefix, &mut orders, scratch)
+        self.orders(r, xs, ys, tie, scratch)
     }
 
     /// Every order of `xs` and `ys` that keeps each axis's order and puts a crossing first
-    /// only where it is not later than the other's next by more than `tie`, after `prefix`.
-    #[expect(clippy::too_many_arguments, reason = "one recursion's state")]
+    /// only where it is not later than the other axis's next by more than `tie`, depth first
+    /// (an explicit stack of the places where both could come first: paths are thousands of
+    /// reflections deep). `false` where the search stops.
     fn orders(
         &mut self,
         r: usize,
         xs: &[Crossing],
         ys: &[Crossing],
         tie: f64,
-        prefix: &mut Vec<usize>,
-        orders: &mut usize,
         scratch: &mut MirrorScratch,
     ) -> bool {
-        if xs.is_empty() && ys.is_empty() {
-            *orders += 1;
-            if *orders > MAX_ORDERS {
+        let mut prefix = Vec::with_capacity(xs.len() + ys.len());
+        // Where both could come first and the x crossing was taken: (a, b, prefix length).
+        let mut forks: Vec<(usize, usize, usize)> = Vec::new();
+        let (mut a, mut b) = (0, 0);
+        let mut orders = 0;
+        loop {
+            while a < xs.len() || b < ys.len() {
+                let x_first = a < xs.len() && (b == ys.len() || xs[a].t <= ys[b].t + tie);
+                let y_first = b < ys.len() && (a == xs.len() || ys[b].t <= xs[a].t + tie);
+                if x_first {
+                    if y_first {
+                        forks.push((a, b, prefix.len()));
+                    }
+                    prefix.push(xs[a].wall);
+                    a += 1;
+                } else {
+                    prefix.push(ys[b].wall);
+                    b += 1;
+                }
+            }
+            orders += 1;
+            if orders > MAX_ORDERS {
                 // Too many to try: say the list may be short.
                 self.stats.stopped = true;
                 return false;
             }
-            let sequence = std::mem::take(prefix);
-            let go = self.path(r, &sequence, true, scratch);
-            *prefix = sequence;
-            return go;
-        }
-        let x_first = !xs.is_empty() && (ys.is_empty() || xs[0].t <= ys[0].t + tie);
-        let y_first = !ys.is_empty() && (xs.is_empty() || ys[0].t <= xs[0].t + tie);
-        if x_first {
-            prefix.push(xs[0].wall);
-            let go = self.orders(r, &xs[1..], ys, tie, prefix, orders, scratch);
-            prefix.pop();
-            if !go {
+            if !self.path(r, &prefix, true, scratch) {
                 return false;
             }
+            let Some((fa, fb, len)) = forks.pop() else {
+                return true;
+            };
+            prefix.truncate(len);
+            prefix.push(ys[fb].wall);
+            (a, b) = (fa, fb + 1);
         }
-        if y_first {
-            prefix.push(ys[0].wall);
-            let go = self.orders(r, xs, &ys[1..], tie, prefix, orders, scratch);
-            prefix.pop();
-            if !go {
-                return false;
-            }
-        }
-        true
     }
 
     /// The path of wall sequence `sequence` to receiver `r` through the tree's arithmetic
@@ -467,6 +477,14 @@ where
         if self.stats.work > search.max_work {
             self.stats.stopped = true;
             return false;
+        }
+        self.unpolled += stack.len() as u64;
+        if self.unpolled >= POLL_WORK {
+            self.unpolled = 0;
+            if !(self.progress)(0) {
+                self.stats.stopped = true;
+                return false;
+            }
         }
         let mut validation = Validation {
             search,
@@ -726,6 +744,38 @@ mod tests {
         assert!(!room.serves(&search(&rect, Point::new(1.0, 1.0), &on, 3, 1.0, false)));
         let out = [Point::new(7.0, 1.0)];
         assert!(!room.serves(&search(&rect, Point::new(1.0, 1.0), &out, 3, 1.0, false)));
+    }
+
+    /// A thin room (10 × 0.01) searched 20,000 reflections deep: its images cost thousands of
+    /// reflections each, and a stop request answered at the first poll ends the search
+    /// within about [`POLL_WORK`] of work, long before its first block of beams is spent.
+    ///
+    /// Mutant caught: the lattice polling its run only per block of images.
+    #[test]
+    fn a_deep_search_polls_its_run_by_work() {
+        let rect = room(&[[0.0, 0.0], [10.0, 0.0], [10.0, 0.01], [0.0, 0.01]], true);
+        let walls = MirrorWalls::new(&rect, &[0]);
+        let receivers = [Point::new(7.0, 0.004)];
+        let mut polls = 0;
+        let stats = walls.arrivals(
+            &search(
+                &rect,
+                Point::new(2.0, 0.007),
+                &receivers,
+                20_000,
+                f64::INFINITY,
+                false,
+            ),
+            &mut MirrorScratch::default(),
+            &mut |_: MirrorPath<'_>| true,
+            &mut |beams| {
+                polls += usize::from(beams == 0);
+                beams > 0
+            },
+        );
+        assert!(stats.stopped && polls == 1, "{stats:?}");
+        assert!(stats.work < POLL_WORK + 2 * 20_000, "{stats:?}");
+        assert!(stats.beams < PROGRESS_BEAMS, "{stats:?}");
     }
 
     /// `max_steps`, `max_time`, the depth limit, the beams limit and a stop through
