@@ -702,18 +702,20 @@ mod tests {
             Point::new(1.0, 3.0),
             Point::new(3.0, 3.0 + 1e-14),
         ];
-        let s = search(
-            &scene,
-            Point::new(1.0, 1.0),
-            &receivers,
-            12,
-            f64::INFINITY,
-            false,
-        );
-        let (lattice, ls) = listing(&walls, &s, false);
-        let (tree, _) = listing(&walls, &s, true);
-        assert_same(&lattice, &tree, "corners");
-        assert!(!ls.stopped);
+        for obstructed in [false, true] {
+            let s = search(
+                &scene,
+                Point::new(1.0, 1.0),
+                &receivers,
+                12,
+                f64::INFINITY,
+                obstructed,
+            );
+            let (lattice, ls) = listing(&walls, &s, false);
+            let (tree, _) = listing(&walls, &s, true);
+            assert_same(&lattice, &tree, "corners");
+            assert!(!ls.stopped);
+        }
     }
 
     /// Not a rectangle: a parallelogram, a quadrilateral whose corner is off by 1e-9, five
