@@ -757,3 +757,98 @@ fn wedge_total_field_matches_the_eigenfunction_series() {
         }
     }
 }
+
+/// The ideal wedges: inside a wedge of angle π/N (N = 1: a flat wall's interior vertex;
+/// N = 2: a right-angle corner; 3, 4, 6) the image sum is the exact field, so the corner's
+/// diffracted arrival must carry nothing. For random sources and receivers inside, rigid and
+/// pressure-release faces, the search (`max_steps` N, diffraction on) lists the corner's
+/// diffracted arrival with an amplitude zero to round-off (against the direct sound), and its
+/// specular arrivals plus that diffracted one sum to the 2N-term image sum
+/// `Σ ±e^(ikR)/(4πR)` (the images at angles `2mα ± θ₀`, the reflected ones negated for
+/// pressure-release faces) to round-off. The faces' far open ends (wedges of 2π at 100 units)
+/// diffract for real, and are left out of both sides. Every pair's search is complete (with
+/// `vertex` arrivals off: see docs/method.md for why the walk of edge-held arrivals is not).
+#[test]
+fn ideal_wedges_diffract_nothing_and_their_field_is_the_image_sum() {
+    let mut rng = rng::SplitMix64(41);
+    let k = 10.0;
+    let mut worst_diffracted: f64 = 0.0;
+    let mut worst_field: f64 = 0.0;
+    for big_n in [1u32, 2, 3, 4, 6] {
+        let alpha = PI / f64::from(big_n);
+        let face = 100.0;
+        let polar = |r: f64, t: f64| [r * t.cos(), r * t.sin()];
+        let far = polar(face, alpha);
+        let mut inside = || {
+            polar(
+                0.5 + 4.0 * rng.next_f64(),
+                alpha * (0.03 + 0.94 * rng.next_f64()),
+            )
+        };
+        let source = inside();
+        let receivers: Vec<[f64; 2]> = (0..6).map(|_| inside()).collect();
+        for (law, sign) in [("rigid", 1.0), ("pressure-release", -1.0)] {
+            let json = format!(
+                r#"{{ "media": {{ "air": {{ "speed": 1 }} }}, "background": "air",
+                     "interfaces": {{ "wedge": {{ "points": [[{face:e}, 0], [0, 0], [{:e}, {:e}]],
+                                                  "reflection": "{law}" }} }},
+                     "sources": [[{:e}, {:e}]], "receivers": [{}],
+                     "search": {{ "max_steps": {big_n}, "refract": false, "diffraction": true }},
+                     "amplitudes": {{ "source": "point", "frequency": {:e} }} }}"#,
+                far[0],
+                far[1],
+                source[0],
+                source[1],
+                receivers
+                    .iter()
+                    .map(|r| format!("[{:e}, {:e}]", r[0], r[1]))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                k / TAU
+            );
+            let report = Tracer::new(scene(&json))
+                .unwrap()
+                .search(&eigenray::options::Run::new())
+                .unwrap();
+            let (rho, theta) = (source[0].hypot(source[1]), source[1].atan2(source[0]));
+            for (ri, &r) in receivers.iter().enumerate() {
+                let pair: Vec<_> = (report.arrivals.iter())
+                    .filter(|a| a.receiver == ri && a.arrival.status == Status::Converged)
+                    .collect();
+                assert!(pair.iter().all(|a| a.complete), "N = {big_n}");
+                let corner: Vec<_> = (pair.iter())
+                    .filter(|a| a.steps.iter().any(|s| s.kind.vertex() == Some(1)))
+                    .collect();
+                assert_eq!(corner.len(), 1, "N = {big_n} {law} receiver {ri}");
+                let corner_value = corner[0].arrival.amplitude.unwrap().value;
+                let direct = 1.0 / (4.0 * PI * dist(source, r));
+                worst_diffracted = worst_diffracted.max(corner_value.norm() / direct);
+                let mut field = Complex64::new(0.0, 0.0);
+                for a in pair.iter().filter(|a| {
+                    a.steps
+                        .iter()
+                        .all(|s| s.kind.vertex().is_none_or(|v| v == 1))
+                }) {
+                    let amp = a.arrival.amplitude.unwrap();
+                    assert!(amp.has_value());
+                    field += amp.value * Complex64::from_polar(1.0, k * a.arrival.time);
+                }
+                let mut images = Complex64::new(0.0, 0.0);
+                for m in 0..big_n {
+                    let turn = 2.0 * f64::from(m) * alpha;
+                    for (angle, s) in [(turn + theta, 1.0), (turn - theta, sign)] {
+                        let d = dist(polar(rho, angle), r);
+                        images += Complex64::from_polar(s / (4.0 * PI * d), k * d);
+                    }
+                }
+                worst_field = worst_field.max((field - images).norm() / images.norm());
+            }
+        }
+    }
+    eprintln!(
+        "ideal wedges: corner's diffracted amplitude ≤ {worst_diffracted:.1e} × the direct's; \
+         total field against the image sum ≤ {worst_field:.1e} relative"
+    );
+    assert!(worst_diffracted < 1e-12, "{worst_diffracted:e}");
+    assert!(worst_field < 1e-12, "{worst_field:e}");
+}
