@@ -210,7 +210,11 @@ pub enum Faces {
 /// `D = −e^(iπ/4) / (2n √(2πk)) [cot((π + β⁻)/2n) F(kL a⁺(β⁻)) + cot((π − β⁻)/2n) F(kL a⁻(β⁻))
 ///  ∓ (the same at β⁺)]`, `β∓ = φ ∓ φ′`, `a±(β) = 2 cos²((2nπN± − β)/2)` with `N±` the
 /// integers nearest to `(β ± π)/(2nπ)`; `−` for pressure-release faces, `+` for rigid ones.
-/// A term exactly on its boundary (`a = 0`) is its limit's mean over the two sides, 0.
+/// A term exactly on its boundary (`a = 0`) is its limit from the shadow side of that
+/// boundary, `−2n √(πkL/2) e^(−iπ/4)`: ray theory lists no arrival exactly on a boundary (the
+/// reflection there is held on the vertex, a `vertex` path without an amplitude; the direct
+/// ray through the vertex touches the face), so the total field there is the shadow side's,
+/// continuous with both sides.
 pub fn wedge_coefficient(
     angle: f64,
     k: f64,
@@ -228,7 +232,9 @@ pub fn wedge_coefficient(
         let arg = (PI + sign * beta) / (2.0 * n);
         let s = arg.sin();
         if s == 0.0 || a == 0.0 {
-            return Complex64::new(0.0, 0.0);
+            // cot → 2n/ε, F → √(πkL/2) |ε| e^(−iπ/4): the shadow side's ε < 0 for each of
+            // the four terms' boundaries (docs/method.md).
+            return Complex64::from_polar(-2.0 * n * (PI * k * l / 2.0).sqrt(), -PI / 4.0);
         }
         transition(k * l * a) * (arg.cos() / s)
     };
@@ -477,6 +483,26 @@ mod tests {
                     assert!(d.norm() < 1e-12, "{big_n} {d}");
                 }
             }
+        }
+    }
+
+    /// Exactly on a boundary (here the incident shadow boundary of a half-plane, β⁻ = π to
+    /// the bit) the coefficient is its limit from the shadow side, where ray theory lists no
+    /// arrival either: continuous with the shadow side, a whole jump away from the lit side.
+    #[test]
+    fn on_a_boundary_the_coefficient_is_the_shadow_sides_limit() {
+        let (k, l, phi_in) = (20.0, 3.0, 1.0);
+        let on = 1.0 + PI;
+        assert_eq!(on - phi_in, PI);
+        for faces in [Faces::Rigid, Faces::PressureRelease] {
+            let d = |phi: f64| wedge_coefficient(TAU, k, l, phi_in, phi, faces);
+            let (shadow, lit) = (d(on + 1e-9), d(on - 1e-9));
+            assert!(
+                (d(on) - shadow).norm() < 1e-6 * shadow.norm(),
+                "{} {shadow}",
+                d(on)
+            );
+            assert!((d(on) - lit).norm() > 0.5 * shadow.norm());
         }
     }
 
