@@ -219,7 +219,7 @@ fn scaled_tail(a: f64) -> Complex64 {
 /// (`X ≥ 0`; 1 far from the boundaries, `√(πX) e^(−iπ/4)` near them). From `X = 50` on, its
 /// asymptotic series `Σ (2n − 1)!! (−i/2X)ⁿ`, whose terms fall below 1e-17 before they grow
 /// there (most receivers lie far from the boundaries); below, `−2i √X h(√X)` with
-/// [`scaled_tail`]'s `h`.
+/// `h(a) = e^(−ia²) ∫_a^∞ e^(iτ²) dτ` from a table and its Taylor series.
 pub fn transition(x: f64) -> Complex64 {
     if x >= 50.0 {
         // The n-th term is (2n − 1)!!/(2X)ⁿ times (−i)ⁿ: its size a real recurrence, its
