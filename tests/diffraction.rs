@@ -852,3 +852,85 @@ fn ideal_wedges_diffract_nothing_and_their_field_is_the_image_sum() {
     assert!(worst_diffracted < 1e-12, "{worst_diffracted:e}");
     assert!(worst_field < 1e-12, "{worst_field:e}");
 }
+
+/// A path of one diffraction takes its own short way in the default mode (two straight legs,
+/// no list of arrivals): the same ray, bit for bit, as the pieces' complete searches give it
+/// (`"stationary": "all"`, the general code), for every vertex of an L-shaped room and of a
+/// screen over a floor, media looked up and given, receivers everywhere (seen, behind the
+/// walls, outside the room, on a wall).
+#[test]
+fn one_diffraction_takes_the_short_way_to_the_same_ray() {
+    let mut rng = rng::SplitMix64(4141);
+    let receivers: Vec<String> = (0..120)
+        .map(|i| {
+            if i == 0 {
+                "[4, 1]".to_string()
+            } else {
+                format!(
+                    "[{:e}, {:e}]",
+                    -1.0 + 6.0 * rng.next_f64(),
+                    -1.0 + 6.0 * rng.next_f64()
+                )
+            }
+        })
+        .collect();
+    let mut paths = Vec::new();
+    for k in 0..6 {
+        paths.push(format!(
+            r#"{{ "steps": [{{ "diffract": "room", "vertex": {k} }}] }}"#
+        ));
+        paths.push(format!(
+            r#"{{ "steps": [{{ "diffract": "room", "vertex": {k} }}], "media": ["air", "air"] }}"#
+        ));
+    }
+    for k in 0..2 {
+        paths.push(format!(
+            r#"{{ "steps": [{{ "diffract": "screen", "vertex": {k} }}] }}"#
+        ));
+    }
+    let json = |mode: &str| {
+        format!(
+            r#"{{ "media": {{ "air": {{ "speed": 343, "at": [1, 1] }} }},
+                 "interfaces": {{
+                     "room": {{ "points": [[0, 0], [4, 0], [4, 2], [2, 2], [2, 4], [0, 4]],
+                                "closed": true }},
+                     "screen": {{ "points": [[0.5, 0.5], [1.5, 1.0]] }} }},
+                 "sources": [[1, 3], [3.5, 0.5]], "receivers": [{}],
+                 "paths": [{}],
+                 "solver": {{ "stationary": "{mode}" }} }}"#,
+            receivers.join(", "),
+            paths.join(", ")
+        )
+    };
+    let run = eigenray::options::Run::new();
+    let batch = Tracer::new(scene(&json("one")))
+        .unwrap()
+        .trace_batch(&eigenray::BatchOptions::default(), &run)
+        .unwrap();
+    let all = Tracer::new(scene(&json("all")))
+        .unwrap()
+        .trace_stationary(&run)
+        .unwrap();
+    assert_eq!(batch.len(), all.triples.len());
+    let (mut found, mut none) = (0, 0);
+    for (i, t) in all.triples.iter().enumerate() {
+        let r = batch.record(i);
+        match t.arrivals.first() {
+            Some(a) => {
+                assert_eq!(t.arrivals.len(), 1);
+                assert_eq!(r.status, a.status, "ray {i}");
+                assert_eq!(r.time.to_bits(), a.time.to_bits(), "ray {i}");
+                assert_eq!(r.reason, a.reason, "ray {i}");
+                assert_eq!(batch.points(i), &a.points[..], "ray {i}");
+                found += 1;
+            }
+            None => {
+                assert_eq!(r.status, Status::NoPath, "ray {i}");
+                assert!(r.time.is_nan());
+                none += 1;
+            }
+        }
+    }
+    eprintln!("one diffraction: {found} rays with a path, {none} without, as the general code");
+    assert!(found > 500 && none > 500, "{found} {none}");
+}
