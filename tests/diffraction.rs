@@ -757,3 +757,180 @@ fn wedge_total_field_matches_the_eigenfunction_series() {
         }
     }
 }
+
+/// The ideal wedges: inside a wedge of angle π/N (N = 1: a flat wall's interior vertex;
+/// N = 2: a right-angle corner; 3, 4, 6) the image sum is the exact field, so the corner's
+/// diffracted arrival must carry nothing. For random sources and receivers inside, rigid and
+/// pressure-release faces, the search (`max_steps` N, diffraction on) lists the corner's
+/// diffracted arrival with an amplitude zero to round-off (against the direct sound), and its
+/// specular arrivals plus that diffracted one sum to the 2N-term image sum
+/// `Σ ±e^(ikR)/(4πR)` (the images at angles `2mα ± θ₀`, the reflected ones negated for
+/// pressure-release faces) to round-off. The faces' far open ends (wedges of 2π at 100 units)
+/// diffract for real, and are left out of both sides. Every pair's search is complete (with
+/// `vertex` arrivals off: see docs/method.md for why the walk of edge-held arrivals is not).
+#[test]
+fn ideal_wedges_diffract_nothing_and_their_field_is_the_image_sum() {
+    let mut rng = rng::SplitMix64(41);
+    let k = 10.0;
+    let mut worst_diffracted: f64 = 0.0;
+    let mut worst_field: f64 = 0.0;
+    for big_n in [1u32, 2, 3, 4, 6] {
+        let alpha = PI / f64::from(big_n);
+        let face = 100.0;
+        let polar = |r: f64, t: f64| [r * t.cos(), r * t.sin()];
+        let far = polar(face, alpha);
+        let mut inside = || {
+            polar(
+                0.5 + 4.0 * rng.next_f64(),
+                alpha * (0.03 + 0.94 * rng.next_f64()),
+            )
+        };
+        let source = inside();
+        let receivers: Vec<[f64; 2]> = (0..6).map(|_| inside()).collect();
+        for (law, sign) in [("rigid", 1.0), ("pressure-release", -1.0)] {
+            let json = format!(
+                r#"{{ "media": {{ "air": {{ "speed": 1 }} }}, "background": "air",
+                     "interfaces": {{ "wedge": {{ "points": [[{face:e}, 0], [0, 0], [{:e}, {:e}]],
+                                                  "reflection": "{law}" }} }},
+                     "sources": [[{:e}, {:e}]], "receivers": [{}],
+                     "search": {{ "max_steps": {big_n}, "refract": false, "diffraction": true }},
+                     "amplitudes": {{ "source": "point", "frequency": {:e} }} }}"#,
+                far[0],
+                far[1],
+                source[0],
+                source[1],
+                receivers
+                    .iter()
+                    .map(|r| format!("[{:e}, {:e}]", r[0], r[1]))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                k / TAU
+            );
+            let report = Tracer::new(scene(&json))
+                .unwrap()
+                .search(&eigenray::options::Run::new())
+                .unwrap();
+            let (rho, theta) = (source[0].hypot(source[1]), source[1].atan2(source[0]));
+            for (ri, &r) in receivers.iter().enumerate() {
+                let pair: Vec<_> = (report.arrivals.iter())
+                    .filter(|a| a.receiver == ri && a.arrival.status == Status::Converged)
+                    .collect();
+                assert!(pair.iter().all(|a| a.complete), "N = {big_n}");
+                let corner: Vec<_> = (pair.iter())
+                    .filter(|a| a.steps.iter().any(|s| s.kind.vertex() == Some(1)))
+                    .collect();
+                assert_eq!(corner.len(), 1, "N = {big_n} {law} receiver {ri}");
+                let corner_value = corner[0].arrival.amplitude.unwrap().value;
+                let direct = 1.0 / (4.0 * PI * dist(source, r));
+                worst_diffracted = worst_diffracted.max(corner_value.norm() / direct);
+                let mut field = Complex64::new(0.0, 0.0);
+                for a in pair.iter().filter(|a| {
+                    a.steps
+                        .iter()
+                        .all(|s| s.kind.vertex().is_none_or(|v| v == 1))
+                }) {
+                    let amp = a.arrival.amplitude.unwrap();
+                    assert!(amp.has_value());
+                    field += amp.value * Complex64::from_polar(1.0, k * a.arrival.time);
+                }
+                let mut images = Complex64::new(0.0, 0.0);
+                for m in 0..big_n {
+                    let turn = 2.0 * f64::from(m) * alpha;
+                    for (angle, s) in [(turn + theta, 1.0), (turn - theta, sign)] {
+                        let d = dist(polar(rho, angle), r);
+                        images += Complex64::from_polar(s / (4.0 * PI * d), k * d);
+                    }
+                }
+                worst_field = worst_field.max((field - images).norm() / images.norm());
+            }
+        }
+    }
+    eprintln!(
+        "ideal wedges: corner's diffracted amplitude ≤ {worst_diffracted:.1e} × the direct's; \
+         total field against the image sum ≤ {worst_field:.1e} relative"
+    );
+    assert!(worst_diffracted < 1e-12, "{worst_diffracted:e}");
+    assert!(worst_field < 1e-12, "{worst_field:e}");
+}
+
+/// A path of one diffraction takes its own short way in the default mode (two straight legs,
+/// no list of arrivals): the same ray, bit for bit, as the pieces' complete searches give it
+/// (`"stationary": "all"`, the general code), for every vertex of an L-shaped room and of a
+/// screen over a floor, media looked up and given, receivers everywhere (seen, behind the
+/// walls, outside the room, on a wall).
+#[test]
+fn one_diffraction_takes_the_short_way_to_the_same_ray() {
+    let mut rng = rng::SplitMix64(4141);
+    let receivers: Vec<String> = (0..120)
+        .map(|i| {
+            if i == 0 {
+                "[4, 1]".to_string()
+            } else {
+                format!(
+                    "[{:e}, {:e}]",
+                    -1.0 + 6.0 * rng.next_f64(),
+                    -1.0 + 6.0 * rng.next_f64()
+                )
+            }
+        })
+        .collect();
+    let mut paths = Vec::new();
+    for k in 0..6 {
+        paths.push(format!(
+            r#"{{ "steps": [{{ "diffract": "room", "vertex": {k} }}] }}"#
+        ));
+        paths.push(format!(
+            r#"{{ "steps": [{{ "diffract": "room", "vertex": {k} }}], "media": ["air", "air"] }}"#
+        ));
+    }
+    for k in 0..2 {
+        paths.push(format!(
+            r#"{{ "steps": [{{ "diffract": "screen", "vertex": {k} }}] }}"#
+        ));
+    }
+    let json = |mode: &str| {
+        format!(
+            r#"{{ "media": {{ "air": {{ "speed": 343, "at": [1, 1] }} }},
+                 "interfaces": {{
+                     "room": {{ "points": [[0, 0], [4, 0], [4, 2], [2, 2], [2, 4], [0, 4]],
+                                "closed": true }},
+                     "screen": {{ "points": [[0.5, 0.5], [1.5, 1.0]] }} }},
+                 "sources": [[1, 3], [3.5, 0.5]], "receivers": [{}],
+                 "paths": [{}],
+                 "solver": {{ "stationary": "{mode}" }} }}"#,
+            receivers.join(", "),
+            paths.join(", ")
+        )
+    };
+    let run = eigenray::options::Run::new();
+    let batch = Tracer::new(scene(&json("one")))
+        .unwrap()
+        .trace_batch(&eigenray::BatchOptions::default(), &run)
+        .unwrap();
+    let all = Tracer::new(scene(&json("all")))
+        .unwrap()
+        .trace_stationary(&run)
+        .unwrap();
+    assert_eq!(batch.len(), all.triples.len());
+    let (mut found, mut none) = (0, 0);
+    for (i, t) in all.triples.iter().enumerate() {
+        let r = batch.record(i);
+        match t.arrivals.first() {
+            Some(a) => {
+                assert_eq!(t.arrivals.len(), 1);
+                assert_eq!(r.status, a.status, "ray {i}");
+                assert_eq!(r.time.to_bits(), a.time.to_bits(), "ray {i}");
+                assert_eq!(r.reason, a.reason, "ray {i}");
+                assert_eq!(batch.points(i), &a.points[..], "ray {i}");
+                found += 1;
+            }
+            None => {
+                assert_eq!(r.status, Status::NoPath, "ray {i}");
+                assert!(r.time.is_nan());
+                none += 1;
+            }
+        }
+    }
+    eprintln!("one diffraction: {found} rays with a path, {none} without, as the general code");
+    assert!(found > 500 && none > 500, "{found} {none}");
+}

@@ -421,6 +421,7 @@ fn echoes(n: usize) -> Vec<Echo> {
             time: 0.001 * (i + 3) as f64 + 1e-4,
             amplitude: Complex64::new(1.0 / (i + 1) as f64, 0.5),
             order: i,
+            diffractions: 0,
         })
         .collect()
 }

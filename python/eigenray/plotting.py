@@ -10,6 +10,9 @@ __all__ = ["plot", "echogram", "tl_map"]
 #: Most orders an echogram keys by a legend; with more, a colour bar of orders.
 MAX_ORDER_LEGEND = 10
 
+#: The colour of a diffracted arrival's stem and diamond in an echogram.
+DIFFRACTED_COLOUR = "#111111"
+
 
 def _axis_spec(spec, default):
     """An axis's title and scale from `spec`: None (`default`, scale 1), a name, or a tuple
@@ -227,7 +230,9 @@ def echogram(echoes, source=0, receiver=0, *, ax=None, range_db=60.0, from_zero=
     its level in dB re the free field 1 unit of length from a point source, 20·log10(|a|·4π),
     coloured by its number of interactions. `echoes` is `Tracer.echoes()` (a dict of arrays).
     Stems start `range_db` below the loudest. Up to 10 orders are keyed by a legend beside the
-    plot; more by a colour bar of orders (each order its colour). The time axis starts just
+    plot; more by a colour bar of orders (each order its colour). Diffracted arrivals (those
+    with `diffractions` > 0) are drawn apart: dashed dark stems ending in diamonds, keyed
+    "diffracted" in the legend (their orders not among the colours). The time axis starts just
     before the first arrival, or at 0 with `from_zero`. Returns the axes."""
     import matplotlib.pyplot as plt
     from matplotlib.colors import BoundaryNorm
@@ -240,27 +245,30 @@ def echogram(echoes, source=0, receiver=0, *, ax=None, range_db=60.0, from_zero=
     time = np.asarray(echoes["time"])[chosen]
     level = 20 * np.log10(np.abs(np.asarray(echoes["amplitude"])[chosen]) * 4 * np.pi)
     order = np.asarray(echoes["order"])[chosen]
+    if "diffractions" in echoes:
+        diffracted = np.asarray(echoes["diffractions"])[chosen] > 0
+    else:
+        diffracted = np.zeros(len(time), dtype=bool)
     top = np.ceil(level.max() / 10) * 10 + 5 if len(level) else 0.0
     floor = top - range_db - 5
-    orders = sorted(set(order.tolist()))
+    orders = sorted(set(order[~diffracted].tolist()))
     shown = np.maximum(level, floor)
+    plain = ~diffracted
     if len(orders) <= MAX_ORDER_LEGEND:
         cmap = plt.get_cmap("tab10")
         for k, o in enumerate(orders):
-            mine = order == o
+            mine = plain & (order == o)
             ax.vlines(time[mine], floor, shown[mine], color=cmap(k), linewidth=1.4,
                       label=_order_label(o))
             ax.plot(time[mine], shown[mine], "o", ms=3, color=cmap(k))
-        if len(time):
-            ax.legend(title="order", fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0),
-                      borderaxespad=0.0)
-    else:
+    elif orders:
         lo, hi = orders[0], orders[-1]
         # One colour per order, short of viridis's palest yellow.
         cmap = plt.get_cmap("viridis").resampled(256)
         colours = cmap(0.92 * (order - lo) / max(hi - lo, 1))
         # The quietest first, so that the loud ones are on top.
         by_level = np.argsort(level)
+        by_level = by_level[plain[by_level]]
         ax.vlines(time[by_level], floor, shown[by_level], colors=colours[by_level], linewidth=1.2)
         ax.scatter(time[by_level], shown[by_level], s=9, c=colours[by_level], zorder=3)
         boundaries = np.arange(lo, hi + 2) - 0.5
@@ -276,6 +284,14 @@ def echogram(echoes, source=0, receiver=0, *, ax=None, range_db=60.0, from_zero=
         step = next(s for s in (1, 2, 5, 10, 20, 25, 50, 100, step) if s >= step)
         bar.set_ticks(np.arange(int(np.ceil(lo / step)) * step, hi + 1, step))
         bar.ax.invert_yaxis()
+    if diffracted.any():
+        ax.vlines(time[diffracted], floor, shown[diffracted], color=DIFFRACTED_COLOUR,
+                  linewidth=1.4, linestyles=(0, (3, 2)), label="diffracted", zorder=4)
+        ax.plot(time[diffracted], shown[diffracted], "D", ms=4.5, color=DIFFRACTED_COLOUR,
+                zorder=5, gid="diffracted")
+    if len(time) and (len(orders) <= MAX_ORDER_LEGEND or diffracted.any()):
+        ax.legend(title="order" if len(orders) <= MAX_ORDER_LEGEND else None, fontsize=8,
+                  loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     ax.set_ylim(floor, top)
     if len(time):
         first, last = time.min(), time.max()

@@ -110,3 +110,47 @@ def test_transmission_loss_has_no_jump_at_a_shadow_edge():
     scene["search"]["diffraction"] = False
     tl = np.asarray(eigenray.Tracer(eigenray.Scene(scene)).transmission_loss()).ravel()
     assert not np.isfinite(tl[1]) or tl[1] - tl[0] > 3
+
+
+def test_echoes_count_diffractions_and_the_echogram_marks_them_apart():
+    """The echoes of the example L-shaped room: the listener round the corner hears only the
+    diffracted arrivals (counted in `diffractions`), which the echogram draws as diamonds
+    keyed "diffracted", apart from the orders' colours; the listener in view hears the direct
+    sound and reflections too, and the paths' diffracted rays count as diffracted."""
+    pytest.importorskip("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from eigenray.plotting import DIFFRACTED_COLOUR, echogram
+
+    from conftest import ROOT
+
+    scene = eigenray.Scene(json.loads((ROOT / "examples/scenes/l_room_diffraction.json").read_text()))
+    echoes = eigenray.Tracer(scene).echoes()
+    diffractions = np.asarray(echoes["diffractions"])
+    assert diffractions.dtype == np.uint32
+    behind = np.asarray(echoes["receiver"]) == 0
+    assert behind.any() and (diffractions[behind] == 1).all()
+    # Every echo's count against the search's steps.
+    arrivals = eigenray.Tracer(scene).search()
+    want = sorted(
+        (a["receiver"], a["time"], sum("diffract" in s for s in a["steps"]))
+        for a in arrivals
+        if a["status"] == "converged"
+    )
+    got = sorted(zip(echoes["receiver"].tolist(), echoes["time"].tolist(), diffractions.tolist()))
+    assert got == want
+    for receiver in (0, 1):
+        mine = np.asarray(echoes["receiver"]) == receiver
+        ax = echogram(echoes, receiver=receiver)
+        marks = [line for line in ax.get_lines() if line.get_gid() == "diffracted"]
+        assert len(marks) == 1
+        assert len(marks[0].get_xdata()) == int((diffractions[mine] > 0).sum())
+        assert marks[0].get_marker() == "D" and marks[0].get_color() == DIFFRACTED_COLOUR
+        labels = [t.get_text() for t in ax.get_legend().get_texts()]
+        assert labels[-1] == "diffracted"
+        plain_orders = sorted(set(np.asarray(echoes["order"])[mine & (diffractions == 0)].tolist()))
+        assert len(labels) == len(plain_orders) + 1
+    # A path with a diffract step: its ray's echo counts as diffracted too.
+    screen = eigenray.Tracer(eigenray.Scene(SCREEN)).echoes()
+    assert (np.asarray(screen["diffractions"]) == 1).all() and len(screen["time"]) > 0

@@ -6,11 +6,12 @@ use num_complex::Complex64;
 
 use crate::options::Run;
 use crate::output::RaySet;
+use crate::scene::Scene;
 use crate::scene::SceneError;
 use crate::scene::StationaryMode;
-use crate::search::{SearchArrival, SearchError, StreamedArrival};
+use crate::search::{SearchArrival, SearchError, StreamedArrival, diffractions};
 use crate::trace::{Arrival, StationaryError, Status, Tracer};
-use crate::{Amplitude, BatchOptions, Ray};
+use crate::{Amplitude, BatchOptions};
 
 /// One arrival as a response sees it: when and how strongly it reaches a receiver from a
 /// source.
@@ -26,19 +27,22 @@ pub struct Echo {
     pub amplitude: Complex64,
     /// Interactions along the path (0: the direct path), what an echogram colours by.
     pub order: usize,
+    /// Of those, the diffractions at vertices (0: a specular path), what an echogram marks
+    /// apart.
+    pub diffractions: usize,
 }
 
 impl Echo {
     /// The echo of a path from `source` to `receiver` with `status`, `time` and `amplitude`:
     /// only a `converged` path with an amplitude value is one (an `obstructed` path is
     /// blocked, a `vertex` path has no ray-theory amplitude, and a path traced without
-    /// amplitudes has none to give).
+    /// amplitudes has none to give). `diffractions` of its `points.len() − 2` steps diffract.
     fn of(
         (source, receiver): (usize, usize),
         status: Status,
         time: f64,
         amplitude: Option<&Amplitude>,
-        points: usize,
+        (points, diffractions): (usize, usize),
     ) -> Option<Echo> {
         let a = amplitude.filter(|a| a.has_value())?;
         (status == Status::Converged).then_some(Echo {
@@ -47,6 +51,7 @@ impl Echo {
             time,
             amplitude: a.value,
             order: points.saturating_sub(2),
+            diffractions,
         })
     }
 
@@ -55,41 +60,59 @@ impl Echo {
     pub fn of_streamed(a: &StreamedArrival) -> Option<Echo> {
         let amplitude = a.amplitude.as_ref();
         let pair = (a.source, a.receiver);
-        Echo::of(pair, a.status, a.time, amplitude, a.steps + 2)
+        Echo::of(
+            pair,
+            a.status,
+            a.time,
+            amplitude,
+            (a.steps + 2, a.diffractions),
+        )
     }
 
-    fn of_ray(r: &Ray) -> Option<Echo> {
-        let pair = (r.source, r.receiver);
-        Echo::of(pair, r.status, r.time, r.amplitude.as_ref(), r.points.len())
-    }
-
-    fn of_arrival(source: usize, receiver: usize, a: &Arrival) -> Option<Echo> {
+    fn of_arrival(
+        (source, receiver): (usize, usize),
+        a: &Arrival,
+        diffractions: usize,
+    ) -> Option<Echo> {
         let pair = (source, receiver);
-        Echo::of(pair, a.status, a.time, a.amplitude.as_ref(), a.points.len())
+        let counts = (a.points.len(), diffractions);
+        Echo::of(pair, a.status, a.time, a.amplitude.as_ref(), counts)
     }
 }
 
-/// The echoes of a solve's rays: each `converged` ray (or stationary path) that has an
-/// amplitude, in the order of `rays`.
-pub fn echoes_of_rays<'a>(rays: RaySet<'a>) -> Box<dyn Iterator<Item = Echo> + 'a> {
+/// The echoes of a solve's rays (of `scene`'s paths): each `converged` ray (or stationary
+/// path) that has an amplitude, in the order of `rays`.
+pub fn echoes_of_rays<'a>(
+    scene: &'a Scene,
+    rays: RaySet<'a>,
+) -> Box<dyn Iterator<Item = Echo> + 'a> {
+    let paths = scene.paths();
+    let of_path = move |path: usize| paths.get(path).map_or(0, |p| diffractions(&p.steps));
     match rays {
-        RaySet::Rays(rays) => Box::new(rays.iter().filter_map(Echo::of_ray)),
+        RaySet::Rays(rays) => Box::new(rays.iter().filter_map(move |r| {
+            let pair = (r.source, r.receiver);
+            let counts = (r.points.len(), of_path(r.path));
+            Echo::of(pair, r.status, r.time, r.amplitude.as_ref(), counts)
+        })),
         RaySet::Batch(b) => Box::new((0..b.len()).filter_map(move |i| {
             let (t, r) = (b.triple(i), b.record(i));
             let pair = (t.source, t.receiver);
-            Echo::of(pair, r.status, r.time, b.amplitude(i), b.points(i).len())
+            let counts = (b.points(i).len(), of_path(t.path));
+            Echo::of(pair, r.status, r.time, b.amplitude(i), counts)
         })),
-        RaySet::Stationary(st) => Box::new(st.triples.iter().flat_map(|t| {
-            (t.arrivals.iter()).filter_map(move |a| Echo::of_arrival(t.source, t.receiver, a))
+        RaySet::Stationary(st) => Box::new(st.triples.iter().flat_map(move |t| {
+            let pair = (t.source, t.receiver);
+            let d = of_path(t.path);
+            (t.arrivals.iter()).filter_map(move |a| Echo::of_arrival(pair, a, d))
         })),
     }
 }
 
 /// The echoes of a search's arrivals: each `converged` arrival that has an amplitude.
 pub fn echoes_of_arrivals(arrivals: &[SearchArrival]) -> impl Iterator<Item = Echo> + '_ {
-    arrivals
-        .iter()
-        .filter_map(|a| Echo::of_arrival(a.source, a.receiver, &a.arrival))
+    arrivals.iter().filter_map(|a| {
+        Echo::of_arrival((a.source, a.receiver), &a.arrival, diffractions(&a.steps))
+    })
 }
 
 /// Why a scene's echoes could not be found ([`echoes_of_scene`]).
@@ -130,13 +153,13 @@ pub fn echoes_of_scene(tracer: &Tracer, run: &Run) -> Result<Vec<Echo>, EchoErro
             let batch = tracer
                 .trace_batch(&BatchOptions::default(), run)
                 .map_err(EchoError::Batch)?;
-            echoes_of_rays(RaySet::Batch(&batch)).collect()
+            echoes_of_rays(scene, RaySet::Batch(&batch)).collect()
         }
         StationaryMode::All => {
             let all = tracer
                 .trace_stationary(run)
                 .map_err(EchoError::Stationary)?;
-            echoes_of_rays(RaySet::Stationary(&all)).collect()
+            echoes_of_rays(scene, RaySet::Stationary(&all)).collect()
         }
     };
     if scene.search().is_some() {

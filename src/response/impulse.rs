@@ -23,7 +23,7 @@ use crate::scene::ImpulseResponseOptions;
 /// let options = ImpulseResponseOptions::of_spec("impulse_response", &spec).unwrap();
 /// let ir = ImpulseResponses::new(&options, 1, 2);
 /// let a = Complex64::new(0.5, 0.0);
-/// let echo = Echo { source: 0, receiver: 1, time: 0.02, amplitude: a, order: 0 };
+/// let echo = Echo { source: 0, receiver: 1, time: 0.02, amplitude: a, order: 0, diffractions: 0 };
 /// let mut out = vec![0.0; ir.len()];
 /// ir.render_into([echo], &Run::new(), &mut out);
 /// assert_eq!(ir.response(&out, 0, 1)[20], 0.5); // on a whole sample: that sample alone
@@ -176,6 +176,7 @@ mod tests {
                 time: 0.25,
                 amplitude: Complex64::new(2.0, 0.0),
                 order: 0,
+                diffractions: 0,
             },
             Echo {
                 source: 0,
@@ -183,6 +184,7 @@ mod tests {
                 time: 0.101,
                 amplitude: Complex64::new(0.0, 1.0),
                 order: 0,
+                diffractions: 0,
             },
             Echo {
                 source: 0,
@@ -190,6 +192,7 @@ mod tests {
                 time: 0.101,
                 amplitude: Complex64::new(0.0, -1.0),
                 order: 0,
+                diffractions: 0,
             },
             // Not in these responses: left out.
             Echo {
@@ -198,6 +201,7 @@ mod tests {
                 time: 0.1,
                 amplitude: Complex64::new(1.0, 0.0),
                 order: 0,
+                diffractions: 0,
             },
         ];
         let mut out = vec![f64::NAN; ir.len()];
@@ -223,6 +227,7 @@ mod tests {
                 time: 0.001 + 0.0071 * k as f64,
                 amplitude: Complex64::new(1.0 / (k + 1) as f64, 0.3 * k as f64 - 0.5),
                 order: 0,
+                diffractions: 0,
             })
             .collect();
         let out = ir.render(echoes.iter().copied(), &Run::new()).unwrap();

@@ -63,6 +63,7 @@ mod tests {
             time,
             amplitude,
             order: 0,
+            diffractions: 0,
         }
     }
 
@@ -117,6 +118,7 @@ mod tests {
                 time: 0.0,
                 amplitude: Complex64::new(1.0, 0.0),
                 order: 0,
+                diffractions: 0,
             },
             Echo {
                 source: 2,
@@ -124,6 +126,7 @@ mod tests {
                 time: 0.0,
                 amplitude: Complex64::new(1.0, 0.0),
                 order: 0,
+                diffractions: 0,
             },
             Echo {
                 source: 0,
@@ -131,6 +134,7 @@ mod tests {
                 time: 0.0,
                 amplitude: Complex64::new(1.0, 0.0),
                 order: 0,
+                diffractions: 0,
             },
         ];
         pressure_into(echoes, 100.0, 2, &Run::new(), &mut p);

@@ -63,7 +63,7 @@ pub fn echoes_of_scene_into(
                         timed_without_amplitude(batch.record(i).status, batch.amplitude(i))
                     })
                     .count() as u64;
-                for e in echoes_of_rays(RaySet::Batch(&batch)) {
+                for e in echoes_of_rays(scene, RaySet::Batch(&batch)) {
                     summed.echoes += 1;
                     sink(e);
                 }
@@ -76,7 +76,7 @@ pub fn echoes_of_scene_into(
                     .flat_map(|t| &t.arrivals)
                     .filter(|a| timed_without_amplitude(a.status, a.amplitude.as_ref()))
                     .count() as u64;
-                for e in echoes_of_rays(RaySet::Stationary(&all)) {
+                for e in echoes_of_rays(scene, RaySet::Stationary(&all)) {
                     summed.echoes += 1;
                     sink(e);
                 }

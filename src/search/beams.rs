@@ -206,6 +206,7 @@ impl StreamScratch {
             source,
             receiver: p.receiver,
             steps: k,
+            diffractions: 0,
             status: p.status,
             time: p.time,
             amplitude,

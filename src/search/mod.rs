@@ -66,11 +66,17 @@ impl SearchArrival {
             source: self.source,
             receiver: self.receiver,
             steps: self.steps.len(),
+            diffractions: diffractions(&self.steps),
             status: self.arrival.status,
             time: self.arrival.time,
             amplitude: self.arrival.amplitude,
         }
     }
+}
+
+/// The `diffract` steps of `steps`.
+pub(crate) fn diffractions(steps: &[Step]) -> usize {
+    steps.iter().filter(|s| s.kind.vertex().is_some()).count()
 }
 
 /// One arrival as a streaming search ([`Tracer::search_into`]) hands it on, the moment it
@@ -83,6 +89,8 @@ pub struct StreamedArrival {
     pub receiver: usize,
     /// Steps of its sequence (0: the direct ray).
     pub steps: usize,
+    /// Of those, the `diffract` steps (0: a specular path).
+    pub diffractions: usize,
     /// `converged`, or (when the search lists them) `obstructed` or `vertex`.
     pub status: Status,
     /// Travel time.
@@ -459,6 +467,7 @@ impl Tracer {
                         source: a.source,
                         receiver: a.receiver,
                         steps: a.steps.len(),
+                        diffractions: diffractions(&a.steps),
                         status: a.arrival.status,
                         time: a.arrival.time,
                         amplitude: a.arrival.amplitude,

@@ -451,6 +451,7 @@ impl PairState<'_> {
                     source: self.source,
                     receiver: self.receiver,
                     steps: self.steps.len(),
+                    diffractions: super::diffractions(&self.steps),
                     status: a.status,
                     time: a.time,
                     amplitude: a.amplitude,

@@ -163,6 +163,10 @@ impl Tracer {
         path: usize,
         ws: &mut Workspace,
     ) -> RayRecord {
+        let spec = &self.scene.paths()[path];
+        if let [step] = spec.steps[..] {
+            return self.solve_one_diffraction(source, receiver, step, spec.media.as_deref(), ws);
+        }
         let mut arrivals = Vec::new();
         let (stats, into_wedge) =
             self.diffracted_paths(path, source, receiver, self.search_budget(), &mut arrivals);
@@ -219,10 +223,32 @@ impl Tracer {
         out: &mut Vec<Arrival>,
     ) {
         out.clear();
-        let Some(m) = medium else { return };
+        let Some(leg) = self.straight_leg(from, to, medium, lookup) else {
+            return;
+        };
+        out.push(Arrival {
+            status: leg.status,
+            time: leg.time,
+            points: vec![from, to],
+            media: vec![leg.medium],
+            reason: leg.reason,
+            ..empty_arrival()
+        });
+    }
+
+    /// [`direct_piece`](Self::direct_piece)'s arrival without its points: what a path of one
+    /// diffraction is made of.
+    fn straight_leg(
+        &self,
+        from: Point,
+        to: Point,
+        medium: Option<usize>,
+        lookup: bool,
+    ) -> Option<StraightLeg> {
+        let m = medium?;
         let length = (to - from).length();
         if length == 0.0 {
-            return;
+            return None;
         }
         let scene = &*self.scene;
         let crossing = scene.first_crossing(from, to, END_MARGIN, [SegmentRef::NONE; 2]);
@@ -231,7 +257,7 @@ impl Tracer {
             && let Some(regions) = self.regions.as_ref()
             && regions.medium_at(from.lerp(to, 0.5)) != Some(m)
         {
-            return;
+            return None;
         }
         let (status, reason) = match crossing {
             Some(r) => (
@@ -243,14 +269,86 @@ impl Tracer {
             ),
             None => (Status::Converged, None),
         };
-        out.push(Arrival {
+        Some(StraightLeg {
             status,
             time: length * scene.media()[m].slowness,
-            points: vec![from, to],
-            media: vec![m],
+            medium: m,
             reason,
-            ..empty_arrival()
-        });
+        })
+    }
+
+    /// The ray of a path of one diffraction `step` (leg media `given`, or looked up), left in
+    /// `ws`: what [`solve_diffracted`](Self::solve_diffracted) gives through the pieces'
+    /// arrivals, bit for bit, from the two straight legs without a list of arrivals.
+    fn solve_one_diffraction(
+        &self,
+        source: Point,
+        receiver: Point,
+        step: Step,
+        given: Option<&[usize]>,
+        ws: &mut Workspace,
+    ) -> RayRecord {
+        let scene = &*self.scene;
+        let vertex = vertex_point(scene, step);
+        ws.ray.points.clear();
+        ws.ray.media.clear();
+        let lookup = given.is_none();
+        let first = match given {
+            Some(m) => m.first().copied(),
+            None => self.source_medium(false, source),
+        };
+        let legs = self
+            .straight_leg(source, vertex, first, lookup)
+            .and_then(|a| {
+                let second = given.map_or(Some(a.medium), |m| m.get(1).copied());
+                let b = self.straight_leg(vertex, receiver, second, lookup)?;
+                Some((a, b))
+            });
+        let Some((a, b)) = legs else {
+            return no_path(SearchOutcome::new().reason_without_arrivals());
+        };
+        if !outside_wedge_at(scene, step, source, vertex, receiver) {
+            return no_path(Reason::WrongSide { step: 0 });
+        }
+        let (status, reason) = match (a.status, b.status) {
+            (Status::Obstructed, _) => (Status::Obstructed, a.reason),
+            (_, Status::Obstructed) => (Status::Obstructed, b.reason.map(|r| shift_reason(r, 1))),
+            _ => (Status::Converged, None),
+        };
+        let line = &scene.interfaces()[step.interface].polyline;
+        let v = step.kind.vertex().unwrap_or(0);
+        ws.resize(1);
+        ws.newton.s[0] = line.start(v);
+        ws.newton.seg[0] = v.min(line.num_segments() - 1);
+        ws.ray.points.extend_from_slice(&[source, vertex, receiver]);
+        ws.ray.media.extend_from_slice(&[a.medium, b.medium]);
+        RayRecord {
+            status,
+            time: (0.0 + a.time) + b.time,
+            iterations: 0,
+            residual: 0.0,
+            reason,
+        }
+    }
+}
+
+/// A straight leg of a diffracted path: its status, time, medium and (when `obstructed`) the
+/// crossing.
+struct StraightLeg {
+    status: Status,
+    time: f64,
+    medium: usize,
+    reason: Option<Reason>,
+}
+
+/// The ray record of a diffracted path that has no path, for `reason`.
+fn no_path(reason: Reason) -> RayRecord {
+    RayRecord {
+        status: Status::NoPath,
+        time: f64::NAN,
+        iterations: 0,
+        residual: f64::NAN,
+        reason: Some(reason),
     }
 }
 
@@ -289,7 +387,18 @@ fn vertex_point(scene: &crate::Scene, step: Step) -> Point {
 /// the vertex's wedge, on the side the incoming leg comes from.
 fn outside_wedge(scene: &crate::Scene, step: Step, p: &Arrival, a: &Arrival) -> bool {
     let n = p.points.len();
-    let (here, before, after) = (p.points[n - 1], p.points[n - 2], a.points[1]);
+    outside_wedge_at(scene, step, p.points[n - 2], p.points[n - 1], a.points[1])
+}
+
+/// Whether the legs from `before` to `here` (the vertex of `step`) and on to `after` lie
+/// outside the vertex's wedge, on the side `before` lies on.
+fn outside_wedge_at(
+    scene: &crate::Scene,
+    step: Step,
+    before: Point,
+    here: Point,
+    after: Point,
+) -> bool {
     let (d_in, d_out) = (before - here, after - here);
     if d_in.length() == 0.0 || d_out.length() == 0.0 {
         return false;

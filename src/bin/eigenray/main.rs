@@ -341,13 +341,13 @@ impl Solved {
         }
     }
 
-    /// Hands every echo of the rays to `add`, and counts the timed rays without an
-    /// amplitude value.
-    fn echoes(&self, add: &mut dyn FnMut(Echo)) -> u64 {
+    /// Hands every echo of the rays (of `scene`'s paths) to `add`, and counts the timed rays
+    /// without an amplitude value.
+    fn echoes(&self, scene: &Scene, add: &mut dyn FnMut(Echo)) -> u64 {
         let without = |status: Status, a: Option<&eigenray::Amplitude>| {
             status.has_time() && !a.is_some_and(eigenray::Amplitude::has_value)
         };
-        eigenray::response::echoes_of_rays(self.rays()).for_each(add);
+        eigenray::response::echoes_of_rays(scene, self.rays()).for_each(add);
         match self {
             Solved::Batch(b) => (0..b.len())
                 .filter(|&i| without(b.record(i).status, b.amplitude(i)))
@@ -588,7 +588,7 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         StationaryMode::All => Solved::Stationary(trace_stationary(&tracer)?),
     };
     if let Some(sums) = &sums {
-        let without = solved.echoes(&mut |e| sums.add(e));
+        let without = solved.echoes(&scene, &mut |e| sums.add(e));
         (0..without).for_each(|_| sums.skip());
     }
     // The search's arrivals are listed only where written (or drawn); otherwise they go

@@ -28,6 +28,14 @@ pub const RANGE_DB: f64 = 60.0;
 /// its colour on a colour bar of orders.
 pub const MAX_ORDER_LEGEND: usize = 10;
 
+/// The colour of a diffracted arrival's stem and mark (apart from the orders' palettes).
+const DIFFRACTED_COLOUR: &str = "#111111";
+
+/// A diamond mark (a diffracted arrival's) of half-width `r` centred on `(x, y)`, as path data.
+fn diamond(x: f64, y: f64, r: f64) -> String {
+    format!("M{x:.2},{:.2}l{r},{r}l-{r},{r}l-{r},-{r}z", y - r)
+}
+
 /// A plot box mapping `[x0, x1] × [y0, y1]` onto the canvas (y up), numbered as its axes say.
 struct Plot<'a> {
     x0: f64,
@@ -186,7 +194,8 @@ fn time_axis(first: f64, last: f64, from_zero: bool) -> (f64, f64) {
 /// The echogram of `echoes` (one pair's): a stem per echo at its time, up to its level in dB
 /// re 1 unit of length of free field (from [`RANGE_DB`] below the loudest), coloured by its
 /// order, with a legend of the orders (or past [`MAX_ORDER_LEGEND`] of them a colour bar);
-/// `title` above. The time axis starts just before the first arrival, or at t = 0 with
+/// a diffracted echo (one with a diffraction at a vertex) apart: a dashed dark stem ending in
+/// a diamond, keyed "diffracted" (its order not among the colours); `title` above. The time axis starts just before the first arrival, or at t = 0 with
 /// `from_zero`.
 pub fn echogram_svg(title: &str, echoes: &[Echo], from_zero: bool) -> String {
     let mut s = String::with_capacity(4096 + 160 * echoes.len());
@@ -224,7 +233,10 @@ pub fn echogram_svg(title: &str, echoes: &[Echo], from_zero: bool) -> String {
         y_axis: &level_axis,
     };
     plot.open(&mut s, title);
-    let mut orders: Vec<usize> = echoes.iter().map(|e| e.order).collect();
+    let mut orders: Vec<usize> = (echoes.iter())
+        .filter(|e| e.diffractions == 0)
+        .map(|e| e.order)
+        .collect();
     orders.sort_unstable();
     orders.dedup();
     let colours = OrderColours { orders };
@@ -237,6 +249,17 @@ pub fn echogram_svg(title: &str, echoes: &[Echo], from_zero: bool) -> String {
         let level = levels[i].max(floor);
         let (x, y) = plot.px(e.time, level);
         let (_, y0) = plot.px(e.time, floor);
+        if e.diffractions > 0 {
+            let _ = writeln!(
+                s,
+                r##"<path d="M{x:.2},{y0:.2}V{y:.2}" stroke="{DIFFRACTED_COLOUR}" stroke-dasharray="3 2"/><path class="diffracted" d="{}" fill="{DIFFRACTED_COLOUR}" stroke="none"><title>{} s, {:.1} dB, {}, diffracted</title></path>"##,
+                diamond(x, y, 3.6),
+                e.time,
+                levels[i],
+                order_label(e.order)
+            );
+            continue;
+        }
         let c = colours.of(e.order);
         let _ = writeln!(
             s,
@@ -247,10 +270,15 @@ pub fn echogram_svg(title: &str, echoes: &[Echo], from_zero: bool) -> String {
         );
     }
     let _ = writeln!(s, "</g>");
+    let diffracted = echoes.iter().any(|e| e.diffractions > 0);
     if colours.legend() {
-        order_legend(&mut s, &colours);
+        order_legend(&mut s, &colours, diffracted);
     } else {
         order_colour_bar(&mut s, &colours);
+        if diffracted {
+            // Above the colour bar, in the title's row.
+            diffracted_key(&mut s, LEFT + PLOT_W + 22.0, TOP - 22.0);
+        }
     }
     let caption = format!(
         "{} arrivals; stems start {RANGE_DB:.0} dB below the loudest; time {}",
@@ -271,8 +299,22 @@ pub fn echogram_svg(title: &str, echoes: &[Echo], from_zero: bool) -> String {
     s
 }
 
-/// The legend of an echogram's orders, right of the plot: a swatch and a label each.
-fn order_legend(s: &mut String, colours: &OrderColours) {
+/// The key of a diffracted arrival's mark, its diamond's top left near `(x, y)`.
+fn diffracted_key(s: &mut String, x: f64, y: f64) {
+    let _ = writeln!(
+        s,
+        r##"<g class="diffracted-key" font-size="12" fill="#222"><path d="M{:.1},{:.1}v12" stroke="{DIFFRACTED_COLOUR}" stroke-width="1.6" stroke-dasharray="3 2"/><path d="{}" fill="{DIFFRACTED_COLOUR}"/><text x="{:.1}" y="{:.1}">diffracted</text></g>"##,
+        x + 6.0,
+        y + 2.0,
+        diamond(x + 6.0, y - 4.0, 4.0),
+        x + 18.0,
+        y + 2.0,
+    );
+}
+
+/// The legend of an echogram's orders, right of the plot: a swatch and a label each, and
+/// with `diffracted` the diffracted arrivals' mark below them.
+fn order_legend(s: &mut String, colours: &OrderColours, diffracted: bool) {
     let x = LEFT + PLOT_W + 22.0;
     let _ = writeln!(
         s,
@@ -290,6 +332,10 @@ fn order_legend(s: &mut String, colours: &OrderColours) {
             y,
             order_label(order)
         );
+    }
+    if diffracted {
+        let y = TOP + 30.0 + 17.0 * colours.orders.len() as f64 + 6.0;
+        diffracted_key(s, x, y);
     }
     let _ = writeln!(s, "</g>");
 }
@@ -658,6 +704,7 @@ mod tests {
             time,
             amplitude,
             order,
+            diffractions: 0,
         }
     }
 
@@ -694,6 +741,65 @@ mod tests {
         }
         // 0 dB for the first, −6.0 for the second; the quiet one drawn at the floor.
         assert!(svg.contains("0.01 s, 0.0 dB") && svg.contains("0.02 s, -6.0 dB"));
+    }
+
+    /// Diffracted echoes are marked apart: a diamond each (no circle), a "diffracted" entry in
+    /// the legend, their orders not among the legend's; with a colour bar, the key above it.
+    #[test]
+    fn the_echogram_marks_diffracted_arrivals_apart() {
+        let diffracted = |time: f64, order: usize| Echo {
+            diffractions: 1,
+            ..echo(time, 0.1 / (4.0 * PI), order)
+        };
+        let echoes = [
+            echo(0.01, 1.0 / (4.0 * PI), 0),
+            diffracted(0.012, 1),
+            echo(0.02, 0.5 / (4.0 * PI), 2),
+            diffracted(0.025, 3),
+            diffracted(0.03, 1),
+        ];
+        let svg = echogram_svg("L room", &echoes, false);
+        let doc = roxmltree::Document::parse(&svg).unwrap();
+        let marks: Vec<_> = doc
+            .descendants()
+            .filter(|n| n.attribute("class") == Some("diffracted"))
+            .collect();
+        assert_eq!(marks.len(), 3);
+        assert!(
+            marks
+                .iter()
+                .all(|n| n.attribute("fill") == Some(DIFFRACTED_COLOUR))
+        );
+        assert_eq!(svg.matches("<circle").count(), 2);
+        assert_eq!(svg.matches(r#"class="diffracted-key""#).count(), 1);
+        let legend = texts_in(&svg, "legend");
+        assert_eq!(legend, ["order", "direct", "2 interactions", "diffracted"]);
+        // Without diffracted echoes, no key.
+        let plain = echogram_svg("room", &[echoes[0], echoes[2]], false);
+        assert!(!plain.contains("diffracted"));
+        // A colour bar of 31 orders, and the key above it.
+        let mut many: Vec<Echo> = (0..=30)
+            .map(|o| echo(0.01 + 0.001 * o as f64, 0.1 / (1.0 + o as f64), o))
+            .collect();
+        many.push(diffracted(0.05, 1));
+        let svg = echogram_svg("room", &many, false);
+        assert!(svg.contains("order-bar"));
+        assert_eq!(svg.matches(r#"class="diffracted-key""#).count(), 1);
+        assert_eq!(svg.matches(r#"class="diffracted""#).count(), 1);
+    }
+
+    /// The texts inside the group of `class`, in order.
+    fn texts_in(svg: &str, class: &str) -> Vec<String> {
+        let doc = roxmltree::Document::parse(svg).unwrap();
+        let group = doc
+            .descendants()
+            .find(|n| n.attribute("class") == Some(class))
+            .unwrap();
+        group
+            .descendants()
+            .filter(|n| n.has_tag_name("text"))
+            .map(|n| n.text().unwrap_or_default().to_string())
+            .collect()
     }
 
     /// The time axis starts just before the first arrival, or at 0 when asked: at 4 km in
