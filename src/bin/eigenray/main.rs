@@ -1258,6 +1258,7 @@ mod tests {
                 amplitude: None,
             },
             complete: true,
+            heights: Vec::new(),
         }
     }
 
