@@ -1363,10 +1363,10 @@ impl Scene {
             Some(s) => Some(search_options(s, &interfaces)?),
             None => None,
         };
+        let extrusion = extrusion::validate(spec, sources.len(), receivers.len())?;
         let amplitudes = amplitudes::validate(spec, &sources, needs_regions)?;
         let impulse_response = impulse::validate(spec)?;
         let transmission_loss = transmission::validate(spec)?;
-        let extrusion = extrusion::validate(spec, sources.len(), receivers.len())?;
         let batch_size = batch_size(sources.len(), receivers.len(), &paths)?;
         if needs_regions {
             check_region_range(scene_points(
