@@ -387,3 +387,142 @@ fn an_extruded_scene_reads_back_from_its_document() {
     assert_eq!(format!("{scene:?}"), format!("{again:?}"));
     assert_eq!(again.extrusion().unwrap().receiver_heights, ZR.to_vec());
 }
+
+/// The shoebox room of the parameters' check: absorbing walls, floor and ceiling, every
+/// arrival up to 0.4 s, a 0.4 s response at 8 kHz.
+fn reverberant_box() -> Value {
+    json!({
+        "media": { "air": { "speed": C, "at": [1.0, 1.0] } },
+        "interfaces": { "walls": { "points": [[0, 0], [4.3, 0], [4.3, 3.1], [0, 3.1]],
+                                   "closed": true, "reflection": { "absorption": 0.3 } } },
+        "extrusion": { "height": 2.6, "floor": { "absorption": 0.4 }, "ceiling": "rigid" },
+        "sources": [[1.03, 1.11, 1.23]], "receivers": [[3.07, 2.02, 1.61]],
+        "search": { "max_time": 0.4 },
+        "amplitudes": { "source": "point", "frequency": 500 },
+        "impulse_response": { "rate": 8000, "duration": 0.4 }
+    })
+}
+
+/// Least squares of `y` over `x`, written the two-pass way (means first).
+fn slope(x: &[f64], y: &[f64]) -> f64 {
+    let n = x.len() as f64;
+    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = x.iter().map(|a| (a - mx) * (a - mx)).sum();
+    sxy / sxx
+}
+
+#[test]
+fn room_parameters_match_an_independent_schroeder_integration() {
+    use eigenray::response::{ImpulseResponses, echoes_of_scene, room_parameters_of_scene};
+    let scene = Scene::from_json(&reverberant_box().to_string()).unwrap();
+    let tracer = Tracer::new(&scene).unwrap();
+    let options = scene.impulse_response().unwrap();
+    let responses = ImpulseResponses::new(options, 1, 1);
+    let found = room_parameters_of_scene(&tracer, &responses, &Run::new()).unwrap();
+    let p = &found.parameters[0];
+    // The same response, collected then rendered; its first arrival from the echoes.
+    let echoes = echoes_of_scene(&tracer, &Run::new()).unwrap();
+    let t0 = echoes.iter().map(|e| e.time).fold(f64::INFINITY, f64::min);
+    assert_eq!(p.first_arrival, Some(t0));
+    let h = responses.render(echoes, &Run::new()).unwrap();
+    let rate = responses.rate();
+    // Schroeder: E(t) = Σ_{m ≥ n} h², as a running sum from the end, in dB of the total.
+    let total: f64 = h.iter().map(|v| v * v).sum();
+    let mut tail = total;
+    let mut level = Vec::with_capacity(h.len());
+    for v in &h {
+        level.push(10.0 * (tail / total).log10());
+        tail -= v * v;
+    }
+    let start = (t0 * rate).floor() as usize;
+    let decay_time = |hi: f64, lo: f64| {
+        let last = (start..h.len()).find(|&n| level[n] < lo).unwrap();
+        let (x, y): (Vec<f64>, Vec<f64>) = (start..last)
+            .filter(|&n| level[n] <= hi && level[n] >= lo)
+            .map(|n| (n as f64 / rate, level[n]))
+            .unzip();
+        -60.0 / slope(&x, &y)
+    };
+    let split = |ms: f64| {
+        let n = ((t0 + ms / 1000.0) * rate).ceil() as usize;
+        let early: f64 = h[..n].iter().map(|v| v * v).sum();
+        (early, total - early)
+    };
+    let checks = [
+        ("edt", &p.edt, decay_time(0.0, -10.0)),
+        ("t20", &p.t20, decay_time(-5.0, -25.0)),
+        ("t30", &p.t30, decay_time(-5.0, -35.0)),
+        (
+            "c50",
+            &p.c50,
+            10.0 * (split(50.0).0 / split(50.0).1).log10(),
+        ),
+        (
+            "c80",
+            &p.c80,
+            10.0 * (split(80.0).0 / split(80.0).1).log10(),
+        ),
+        ("d50", &p.d50, split(50.0).0 / total),
+    ];
+    for (what, got, want) in checks {
+        let got = got
+            .value
+            .unwrap_or_else(|| panic!("{what}: {:?}", got.reason));
+        assert!(
+            (got - want).abs() <= 0.01 * want.abs(),
+            "{what}: {got} {want}"
+        );
+    }
+    // A reverberation time of the order of Sabine's and Eyring's (0.2 to 0.5 s here).
+    let t30 = p.t30.value.unwrap();
+    assert!(t30 > 0.2 && t30 < 0.5, "{t30}");
+}
+
+#[test]
+fn the_command_line_writes_the_parameters_and_refuses_an_unwritable_file() {
+    let dir = std::env::temp_dir().join(format!("eigenray-parameters-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("box.json");
+    let mut doc = reverberant_box();
+    doc["search"] = json!({ "max_time": 0.1 });
+    doc["impulse_response"] = json!({ "rate": 8000, "duration": 0.1 });
+    std::fs::write(&scene, doc.to_string()).unwrap();
+    let bin = env!("CARGO_BIN_EXE_eigenray");
+    let file = dir.join("p.json");
+    let out = std::process::Command::new(bin)
+        .args([
+            "solve".as_ref(),
+            scene.as_os_str(),
+            "--parameters".as_ref(),
+            file.as_os_str(),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.stdout.is_empty());
+    let written: Value = serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+    let entry = &written["parameters"][0];
+    assert!(entry["c50"]["value"].is_number(), "{entry}");
+    // 0.1 s of response: too short for −35 dB.
+    assert!(
+        entry["t30"]["value"].is_null() && entry["t30"]["reason"].is_string(),
+        "{entry}"
+    );
+    let bad = dir.join("missing").join("p.json");
+    let out = std::process::Command::new(bin)
+        .args([
+            "solve".as_ref(),
+            scene.as_os_str(),
+            "--parameters".as_ref(),
+            bad.as_os_str(),
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--parameters"));
+}
