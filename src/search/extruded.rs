@@ -504,7 +504,7 @@ mod tests {
     /// (z → 2H − z) applied in order.
     #[test]
     fn unfolded_lengths_are_the_image_sources_distances() {
-        let (zs, zr, h) = (0.7, 2.1, 3.0);
+        let (zs, zr, h): (f64, f64, f64) = (0.7, 2.1, 3.0);
         for count in 0..7 {
             for first in [Face::Floor, Face::Ceiling] {
                 let mut z = zs;
@@ -527,7 +527,7 @@ mod tests {
     /// the floor's or the ceiling's height; at the end, the receiver's.
     #[test]
     fn heights_fold_at_the_faces() {
-        let (zs, zr, h) = (0.7, 2.1, 3.0);
+        let (zs, zr, h): (f64, f64, f64) = (0.7, 2.1, 3.0);
         for count in 1..6 {
             for first in [Face::Floor, Face::Ceiling] {
                 let v = Vertical {
