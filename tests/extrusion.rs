@@ -297,7 +297,7 @@ fn a_media_wall_reflects_at_the_3d_angle() {
         .unwrap();
     // The image of the source in the wall y = 0: (0, −1, 1).
     let (dx, dy, dz) = (2.0, 2.5, 1.0);
-    let d = (dx * dx + dy * dy + dz * dz) as f64;
+    let d: f64 = dx * dx + dy * dy + dz * dz;
     let cos1 = dy / d.sqrt();
     let (z1, z2) = (1.2 * 343.0, 1000.0 * 1500.0);
     let sin2 = 1.0 - cos1 * cos1;
@@ -318,7 +318,8 @@ fn a_media_wall_reflects_at_the_3d_angle() {
 #[test]
 fn bad_extruded_scenes_name_their_key() {
     let base = l_room(true, json!({ "max_steps": 2 }));
-    let cases: Vec<(Box<dyn Fn(&mut Value)>, &str)> = vec![
+    type Edit = Box<dyn Fn(&mut Value)>;
+    let cases: Vec<(Edit, &str)> = vec![
         (
             Box::new(|d| d["sources"] = json!([[1.0, 1.2, 3.0]])),
             "sources[0]",

@@ -104,7 +104,7 @@ pub fn room_parameters(response: &[f64], rate: f64, first_arrival: Option<f64>) 
         return none("no arrival reaches the receiver");
     };
     let energy: f64 = response.iter().map(|h| h * h).sum();
-    if !(energy > 0.0) {
+    if energy.is_nan() || energy <= 0.0 {
         return none("the response has no energy");
     }
     let decay = schroeder_decay(response);
@@ -180,7 +180,7 @@ fn fit(decay: &[f64], rate: f64, start: usize, trusted: usize, hi: f64, lo: f64)
         ));
     }
     let slope = (n * stl - st * sl) / (n * stt - st * st);
-    if !(slope < 0.0) {
+    if slope.is_nan() || slope >= 0.0 {
         return RoomParameter::none("the decay curve does not fall over its range");
     }
     RoomParameter::value(-60.0 / slope)
