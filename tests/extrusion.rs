@@ -558,3 +558,43 @@ fn an_extruded_search_keeps_to_its_run() {
     listed.sort_by(f64::total_cmp);
     assert_eq!(times, listed);
 }
+
+/// The writer gives an extruded arrival's points in 3-D in every format, and its steps name
+/// the floor and the ceiling.
+#[test]
+fn every_format_writes_3d_points() {
+    use eigenray::{Format, write};
+    let doc = l_room(true, json!({ "max_steps": 2 }));
+    let scene = Scene::from_json(&doc.to_string()).unwrap();
+    let arrivals = Tracer::new(&scene)
+        .unwrap()
+        .search(&Run::new())
+        .unwrap()
+        .arrivals;
+    let mut json_text = Vec::new();
+    write(&scene, &arrivals, Format::Json, &mut json_text).unwrap();
+    let written: Value = serde_json::from_slice(&json_text).unwrap();
+    let listed = written["arrivals"].as_array().unwrap();
+    assert_eq!(listed.len(), arrivals.len());
+    for (w, a) in listed.iter().zip(&arrivals) {
+        let points = w["points"].as_array().unwrap();
+        for (k, p) in points.iter().enumerate() {
+            assert_eq!(p[2].as_f64(), Some(a.heights[k]));
+        }
+    }
+    let names: Vec<&str> = listed
+        .iter()
+        .flat_map(|w| w["steps"].as_array().unwrap())
+        .map(|s| s["reflect"].as_str().unwrap())
+        .collect();
+    assert!(names.contains(&"floor") && names.contains(&"ceiling"));
+    let mut csv = Vec::new();
+    write(&scene, &arrivals, Format::Csv, &mut csv).unwrap();
+    let csv = String::from_utf8(csv).unwrap();
+    let first = csv.lines().nth(1).unwrap();
+    assert!(first.contains("1.0 1.2 1.1;"), "{first}");
+    let mut npy = Vec::new();
+    write(&scene, &arrivals, Format::Npy, &mut npy).unwrap();
+    let header = String::from_utf8_lossy(&npy[..npy.len().min(1024)]);
+    assert!(header.contains("('points', '<f8', (4, 3))"), "{header}");
+}
