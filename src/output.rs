@@ -490,10 +490,17 @@ impl Names {
                 plain.then(|| m.name.as_bytes().to_vec())
             })
             .collect();
+        let flat: &[&str] = if scene.extrusion().is_some() {
+            &[crate::scene::FLOOR, crate::scene::CEILING]
+        } else {
+            &[]
+        };
         let interfaces = scene
             .interfaces()
             .iter()
-            .map(|i| json_string(&i.name))
+            .map(|i| i.name.as_str())
+            .chain(flat.iter().copied())
+            .map(json_string)
             .collect();
         Names {
             media,
@@ -519,6 +526,11 @@ fn int(buf: &mut Vec<u8>, v: usize) {
 
 /// `[[x,y],…]`.
 fn points_json(buf: &mut Vec<u8>, points: &[Point]) {
+    points_heights_json(buf, points, &[]);
+}
+
+/// `[[x,y],…]`, or `[[x,y,z],…]` with the heights `heights` (an extruded scene's arrival).
+fn points_heights_json(buf: &mut Vec<u8>, points: &[Point], heights: &[f64]) {
     buf.push(b'[');
     for (i, p) in points.iter().enumerate() {
         if i > 0 {
@@ -528,6 +540,10 @@ fn points_json(buf: &mut Vec<u8>, points: &[Point]) {
         float(buf, p.x);
         buf.push(b',');
         float(buf, p.y);
+        if let Some(&z) = heights.get(i) {
+            buf.push(b',');
+            float(buf, z);
+        }
         buf.push(b']');
     }
     buf.push(b']');
@@ -691,6 +707,11 @@ fn gradient_csv(buf: &mut Vec<u8>, gradient: Option<&Gradient>) {
 
 /// `x y;x y;…`.
 fn points_csv(buf: &mut Vec<u8>, points: &[Point]) {
+    points_heights_csv(buf, points, &[]);
+}
+
+/// `x y;x y;…`, or `x y z;…` with the heights `heights` (an extruded scene's arrival).
+fn points_heights_csv(buf: &mut Vec<u8>, points: &[Point], heights: &[f64]) {
     for (i, p) in points.iter().enumerate() {
         if i > 0 {
             buf.push(b';');
@@ -698,6 +719,10 @@ fn points_csv(buf: &mut Vec<u8>, points: &[Point]) {
         float(buf, p.x);
         buf.push(b' ');
         float(buf, p.y);
+        if let Some(&z) = heights.get(i) {
+            buf.push(b' ');
+            float(buf, z);
+        }
     }
 }
 
@@ -1263,8 +1288,13 @@ fn arrivals_npy_header(n: usize, schema: &Schema, context: &Context<'_>) -> Vec<
         "('source', '<u4'), ('receiver', '<u4'), ('steps', '<u4'), ('step_kind', '|u1', ({k},)), \
          ('step_interface', '<u4', ({k},)), ('status', '|u1'), ('kink', '|u1'), \
          ('complete', '|u1'), ('iterations', '<u4'), ('time', '<f8'), ('residual', '<f8'), \
-         ('points', '<f8', ({}, 2)), ('media', '<u4', ({},))",
+         ('points', '<f8', ({}, {})), ('media', '<u4', ({},))",
         k + 2,
+        if context.scene.extrusion().is_some() {
+            3
+        } else {
+            2
+        },
         k + 1
     );
     descr.push_str(&schema.npy_descr(context));
@@ -1332,7 +1362,7 @@ fn arrival_json(
     buf.extend_from_slice(b",\"time\":");
     float(buf, a.time);
     buf.extend_from_slice(b",\"points\":");
-    points_json(buf, &a.points);
+    points_heights_json(buf, &a.points, &s.heights);
     let gradient = arrival_gradient(scene, s);
     schema.json(buf, context, &arrival_values(s, gradient.as_ref()));
     buf.extend_from_slice(b",\"iterations\":");
@@ -1374,10 +1404,7 @@ fn arrival_csv(buf: &mut Vec<u8>, schema: &Schema, context: &Context<'_>, s: &Se
         .iter()
         .map(|step| {
             let kind = step.kind.as_str();
-            let name = scene
-                .interfaces()
-                .get(step.interface)
-                .map_or("?", |i| i.name.as_str());
+            let name = scene.step_name(step.interface).unwrap_or("?");
             match step.kind.vertex() {
                 Some(v) => format!("{kind}:{}@{v}", csv_list_item(name)),
                 None => format!("{kind}:{}", csv_list_item(name)),
@@ -1396,7 +1423,7 @@ fn arrival_csv(buf: &mut Vec<u8>, schema: &Schema, context: &Context<'_>, s: &Se
     buf.push(b',');
     float(buf, a.time);
     buf.push(b',');
-    points_csv(buf, &a.points);
+    points_heights_csv(buf, &a.points, &s.heights);
     buf.push(b',');
     int(buf, a.iterations);
     buf.push(b',');
@@ -1440,7 +1467,21 @@ fn arrival_npy(buf: &mut Vec<u8>, schema: &Schema, context: &Context<'_>, s: &Se
     u32_le(buf, a.iterations);
     buf.extend_from_slice(&a.time.to_le_bytes());
     buf.extend_from_slice(&a.residual.to_le_bytes());
-    points_media_npy(buf, &a.points, k + 2, Some(a.media.iter().copied()), k + 1);
+    if scene.extrusion().is_some() {
+        // [x, y, z] per point, padded with NaN rows.
+        for i in 0..k + 2 {
+            let (p, z) = match (a.points.get(i), s.heights.get(i)) {
+                (Some(p), Some(&z)) => (*p, z),
+                _ => (Point::new(f64::NAN, f64::NAN), f64::NAN),
+            };
+            for v in [p.x, p.y, z] {
+                buf.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        points_media_npy(buf, &[], 0, Some(a.media.iter().copied()), k + 1);
+    } else {
+        points_media_npy(buf, &a.points, k + 2, Some(a.media.iter().copied()), k + 1);
+    }
     let gradient = arrival_gradient(scene, s);
     schema.npy(buf, context, &arrival_values(s, gradient.as_ref()));
 }
@@ -1545,7 +1586,9 @@ pub fn write_names<W: Write>(scene: &Scene, mut out: W) -> io::Result<()> {
         "status": STATUS_CODES.map(Status::as_str),
         "paths": scene.paths().iter().map(|p| p.name.as_deref()).collect::<Vec<_>>(),
         "media": scene.media().iter().map(|m| m.name.as_str()).collect::<Vec<_>>(),
-        "interfaces": scene.interfaces().iter().map(|i| i.name.as_str()).collect::<Vec<_>>(),
+        "interfaces": (0..scene.interfaces().len() + 2)
+            .filter_map(|i| scene.step_name(i))
+            .collect::<Vec<_>>(),
         "no_medium": NO_MEDIUM,
     });
     Schema::of(scene).names(&mut doc);

@@ -14,6 +14,7 @@ mod amplitudes;
 mod builder;
 mod crossings;
 mod document;
+mod extrusion;
 mod grid;
 mod impulse;
 mod names;
@@ -25,6 +26,7 @@ pub use amplitudes::{
     ReflectionSpec, SourceModel, Waves,
 };
 pub use builder::SceneBuilder;
+pub use extrusion::{CEILING, Extrusion, ExtrusionSpec, FLOOR};
 pub use grid::{ReceiverGridSpec, ReceiversSpec};
 pub use impulse::{
     DEFAULT_TAPS, ImpulseResponseOptions, ImpulseResponseSpec, MAX_RATE, MAX_SAMPLES, MAX_TAPS,
@@ -180,6 +182,10 @@ pub struct SceneSpec {
     /// Transmission loss: how `--tl` sums the arrivals at each receiver.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub transmission_loss: Option<TransmissionLossSpec>,
+    /// An extruded room: the plan's height, and its floor's and ceiling's laws (the points'
+    /// heights are their third coordinates, which [`SceneSpec::from_json`] moves here).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extrusion: Option<ExtrusionSpec>,
 }
 
 /// A JSON object of names: like a `BTreeMap`, but a name given twice is an error (serde's
@@ -681,6 +687,8 @@ pub struct Scene {
     amplitudes: Option<Amplitudes>,
     impulse_response: Option<ImpulseResponseOptions>,
     transmission_loss: Option<TransmissionLossMode>,
+    /// The extruded room, when the scene is one ([`Scene::extrusion`]).
+    extrusion: Option<Extrusion>,
     /// The document's keys as given, for [`Scene::to_spec`].
     document: document::Document,
 }
@@ -1355,6 +1363,7 @@ impl Scene {
             Some(s) => Some(search_options(s, &interfaces)?),
             None => None,
         };
+        let extrusion = extrusion::validate(spec, sources.len(), receivers.len())?;
         let amplitudes = amplitudes::validate(spec, &sources, needs_regions)?;
         let impulse_response = impulse::validate(spec)?;
         let transmission_loss = transmission::validate(spec)?;
@@ -1399,6 +1408,7 @@ impl Scene {
             amplitudes,
             impulse_response,
             transmission_loss,
+            extrusion,
             document: document::Document::of(spec),
         })
     }
@@ -1413,6 +1423,12 @@ impl Scene {
     /// `"transmission_loss"` section (without one, `--tl` sums them coherently).
     pub fn transmission_loss(&self) -> Option<TransmissionLossMode> {
         self.transmission_loss
+    }
+
+    /// The extruded room (`"extrusion"`), when the scene is one: its height, the laws of its
+    /// floor and ceiling, and the heights of its sources and receivers.
+    pub fn extrusion(&self) -> Option<&Extrusion> {
+        self.extrusion.as_ref()
     }
 
     /// The media, in name order.
@@ -1797,6 +1813,25 @@ impl SceneSpec {
             };
             return Err(SceneError::new("scene", msg));
         }
+        if text.contains("\"extrusion\"")
+            && let Ok(mut value) = serde_json::from_str::<serde_json::Value>(text)
+            && let Some((sources, receivers)) = extrusion::split_heights(&mut value)
+        {
+            // An extruded scene's points are [x, y, z]: their plans parsed as any scene's,
+            // their heights kept beside them.
+            let plan = value.to_string();
+            let mut spec = SceneSpec::parse_plan(&plan, JsonOrigin::Generated)?;
+            if let Some(e) = &mut spec.extrusion {
+                e.source_heights = sources;
+                e.receiver_heights = receivers;
+            }
+            return Ok(spec);
+        }
+        SceneSpec::parse_plan(text, origin)
+    }
+
+    /// Parses a scene document whose points are plan points `[x, y]`.
+    fn parse_plan(text: &str, origin: JsonOrigin) -> Result<SceneSpec, SceneError> {
         let de = &mut serde_json::Deserializer::from_str(text);
         let spec: SceneSpec = serde_path_to_error::deserialize(&mut *de).map_err(|e| {
             let path = e.path().to_string();

@@ -663,6 +663,7 @@ fn hand_built_arrivals(scene: &Scene) -> Vec<SearchArrival> {
                 None,
             ),
             complete: true,
+            heights: Vec::new(),
         },
         SearchArrival {
             source: 0,
@@ -683,6 +684,7 @@ fn hand_built_arrivals(scene: &Scene) -> Vec<SearchArrival> {
                 Some(Reason::AtVertex { step: 0 }),
             ),
             complete: true,
+            heights: Vec::new(),
         },
         SearchArrival {
             source: 0,
@@ -713,6 +715,7 @@ fn hand_built_arrivals(scene: &Scene) -> Vec<SearchArrival> {
                 }),
             ),
             complete: false,
+            heights: Vec::new(),
         },
     ]
 }

@@ -243,6 +243,9 @@ class Tracer:
         duration: float | None = None,
         taps: int | None = None,
     ) -> npt.NDArray[np.float64]: ...
+    def room_parameters(
+        self, rate: float | None = None, duration: float | None = None
+    ) -> list[dict[str, Any]]: ...
     def pressure(self, frequency: float | None = None) -> npt.NDArray[np.complex128]: ...
     def transmission_loss(
         self,

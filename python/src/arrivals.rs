@@ -181,7 +181,7 @@ impl PyArrivals {
     }
 
     /// Arrival `i` as a dict, from the arrays: `source`, `receiver`, `steps` (`{"reflect":
-    /// name}` each), `media` (names), `status`, `time`, `points` (`(order + 2, 2)`),
+    /// name}` each), `media` (names), `status`, `time`, `points` (`(order + 2, 2)`, `(order + 2, 3)` in an extruded scene),
     /// `iterations`, `residual`, `reason`, `kink`, `complete` and, with `"amplitudes"`, the
     /// amplitude's five keys.
     fn arrival<'py>(&self, py: Python<'py>, i: usize) -> PyResult<Bound<'py, PyDict>> {
@@ -221,15 +221,29 @@ impl PyArrivals {
             name(&self.status_names, at(py, &self.status, i)?)?,
         )?;
         d.set_item("time", at(py, &self.time, i)?)?;
-        let points = (0..order + 2)
-            .map(|j| {
-                Ok(Point::new(
-                    at(py, &self.points, [i, j, 0])?,
-                    at(py, &self.points, [i, j, 1])?,
-                ))
-            })
-            .collect::<PyResult<Vec<_>>>()?;
-        d.set_item("points", points_array(py, &points))?;
+        let dims = self.points.bind(py).shape()[2];
+        if dims == 3 {
+            // An extruded scene's points: (x, y, z).
+            let mut flat = Vec::with_capacity((order + 2) * 3);
+            for j in 0..order + 2 {
+                for k in 0..3 {
+                    flat.push(at(py, &self.points, [i, j, k])?);
+                }
+            }
+            let points = numpy::ndarray::Array2::from_shape_vec((order + 2, 3), flat)
+                .expect("three coordinates a point");
+            d.set_item("points", numpy::IntoPyArray::into_pyarray(points, py))?;
+        } else {
+            let points = (0..order + 2)
+                .map(|j| {
+                    Ok(Point::new(
+                        at(py, &self.points, [i, j, 0])?,
+                        at(py, &self.points, [i, j, 1])?,
+                    ))
+                })
+                .collect::<PyResult<Vec<_>>>()?;
+            d.set_item("points", points_array(py, &points))?;
+        }
         d.set_item("iterations", at(py, &self.iterations, i)?)?;
         d.set_item("residual", at(py, &self.residual, i)?)?;
         d.set_item("reason", self.reasons.word(i))?;

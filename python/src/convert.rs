@@ -102,7 +102,10 @@ pub(crate) fn kink_name(kink: Option<Kink>) -> Option<String> {
 
 /// The names of the interfaces of `scene`, by index.
 pub(crate) fn interface_names(scene: &Scene) -> Vec<String> {
-    scene.interfaces().iter().map(|i| i.name.clone()).collect()
+    // An extruded scene's steps also name the floor and the ceiling, after the interfaces.
+    (0..scene.interfaces().len() + 2)
+        .filter_map(|i| scene.step_name(i).map(str::to_owned))
+        .collect()
 }
 
 /// An index into a list of `len` named things (`what`: interface, medium) from a name (via

@@ -234,3 +234,59 @@ pub(crate) fn echoes<'py>(py: Python<'py>, tracer: &Tracer) -> PyResult<Bound<'p
     )?;
     Ok(d)
 }
+
+/// See `Tracer.room_parameters`.
+pub(crate) fn room_parameters<'py>(
+    py: Python<'py>,
+    tracer: &Tracer,
+    rate: Option<f64>,
+    duration: Option<f64>,
+) -> PyResult<Bound<'py, pyo3::types::PyList>> {
+    let scene = tracer.scene();
+    let options = response_options(py, scene, rate, duration, None)?;
+    let (s, r) = (scene.sources().len(), scene.receivers().len());
+    let responses = ImpulseResponses::new(&options, s, r);
+    needs_amplitudes(py, scene)?;
+    if responses
+        .checked_len()
+        .and_then(|n| buffer(n, 0.0f64))
+        .is_none()
+    {
+        return Err(PyMemoryError::new_err(format!(
+            "impulse responses of {s} sources × {r} receivers × {} samples",
+            options.samples
+        )));
+    }
+    // The responses rendered as the search finds each echo, on a thread of its own: Ctrl-C
+    // stops it.
+    let run = Run::new();
+    let found = interruptible(
+        py,
+        &run,
+        || eigenray::response::room_parameters_of_scene(tracer, &responses, &run),
+        || {},
+    )?
+    .map_err(|e| argument_error(py, "scene", e.to_string()))?;
+    let out = pyo3::types::PyList::empty(py);
+    for (k, p) in found.parameters.iter().enumerate() {
+        let d = PyDict::new(py);
+        d.set_item("source", k / r.max(1))?;
+        d.set_item("receiver", k % r.max(1))?;
+        d.set_item("first_arrival", p.first_arrival)?;
+        for (name, v) in [
+            ("edt", &p.edt),
+            ("t20", &p.t20),
+            ("t30", &p.t30),
+            ("c50", &p.c50),
+            ("c80", &p.c80),
+            ("d50", &p.d50),
+        ] {
+            d.set_item(name, v.value)?;
+            if let Some(why) = &v.reason {
+                d.set_item(format!("{name}_reason"), why)?;
+            }
+        }
+        out.append(d)?;
+    }
+    Ok(out)
+}

@@ -23,13 +23,18 @@ use crate::rays::Reasons;
 pub(crate) fn search_arrivals(py: Python<'_>, tracer: &Tracer) -> PyResult<PyArrivals> {
     let run = Run::new();
     let schema = Schema::of(tracer.scene());
+    let dims = if tracer.scene().extrusion().is_some() {
+        3
+    } else {
+        2
+    };
     let search = || {
         tracer.search(&run).map(|report| {
             if run.stop_requested() {
                 // Interrupted: the caller raises, the arrivals are not wanted.
                 return Ok(None);
             }
-            ArrivalTable::of(report.arrivals, schema).map(Some)
+            ArrivalTable::of(report.arrivals, schema, dims).map(Some)
         })
     };
     let table = interruptible(py, &run, search, || {})?
@@ -67,8 +72,11 @@ struct ArrivalTable {
     reason: Vec<Option<Reason>>,
     /// The kink of each `vertex` arrival.
     kink: Vec<Option<Kink>>,
-    /// `steps + 2` points an arrival, `(x, y)` each, NaN past its own.
+    /// `steps + 2` points an arrival, `(x, y)` each (`(x, y, z)` in an extruded scene), NaN
+    /// past its own.
     points: Vec<f64>,
+    /// Coordinates a point: 2, or 3 in an extruded scene.
+    dims: usize,
     /// `steps` interface indices an arrival, −1 past its own steps.
     step_interface: Vec<i64>,
     /// `steps` step kinds an arrival, [`NO_STEP`] past its own steps.
@@ -99,7 +107,7 @@ impl ArrivalTable {
 
     /// The columns of `arrivals` (with the columns of the quantities of `schema`), each
     /// arrival freed once written; `MemoryError` when they would not fit.
-    fn of(arrivals: Vec<SearchArrival>, schema: Schema) -> PyResult<ArrivalTable> {
+    fn of(arrivals: Vec<SearchArrival>, schema: Schema, dims: usize) -> PyResult<ArrivalTable> {
         let n = arrivals.len();
         let steps = arrivals.iter().map(|a| a.steps.len()).max().unwrap_or(0);
         check_memory(
@@ -124,7 +132,8 @@ impl ArrivalTable {
             residual: arrivals.iter().map(|a| a.arrival.residual).collect(),
             reason: arrivals.iter().map(|a| a.arrival.reason).collect(),
             kink: arrivals.iter().map(|a| a.arrival.kink).collect(),
-            points: vec![f64::NAN; n * (steps + 2) * 2],
+            points: vec![f64::NAN; n * (steps + 2) * dims],
+            dims,
             step_interface: vec![-1; n * steps],
             step_kind: vec![NO_STEP; n * steps],
             media: vec![-1; n * (steps + 1)],
@@ -139,9 +148,18 @@ impl ArrivalTable {
     /// The rows of arrival `i` in the tables of points, steps and media, and its amplitude.
     fn write_row(&mut self, i: usize, a: &SearchArrival) {
         let w = self.steps + 2;
-        let points = &mut self.points[i * w * 2..(i + 1) * w * 2];
-        for (xy, p) in points.chunks_exact_mut(2).zip(&a.arrival.points) {
-            xy.copy_from_slice(&[p.x, p.y]);
+        let d = self.dims;
+        let points = &mut self.points[i * w * d..(i + 1) * w * d];
+        for (k, (xy, p)) in points
+            .chunks_exact_mut(d)
+            .zip(&a.arrival.points)
+            .enumerate()
+        {
+            xy[0] = p.x;
+            xy[1] = p.y;
+            if d == 3 {
+                xy[2] = a.heights.get(k).copied().unwrap_or(f64::NAN);
+            }
         }
         let steps = i * self.steps..(i + 1) * self.steps;
         let interfaces = self.step_interface[steps.clone()].iter_mut();
@@ -180,7 +198,7 @@ impl ArrivalTable {
             complete: self.complete.into_pyarray(py).unbind(),
             iterations: self.iterations.into_pyarray(py).unbind(),
             residual: self.residual.into_pyarray(py).unbind(),
-            points: Array3::from_shape_vec((n, steps + 2, 2), self.points)
+            points: Array3::from_shape_vec((n, steps + 2, self.dims), self.points)
                 .expect("steps + 2 points a row")
                 .into_pyarray(py)
                 .unbind(),

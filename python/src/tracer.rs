@@ -563,6 +563,21 @@ impl PyTracer {
         response::impulse_response(py, &self.read(), rate, duration, taps)
     }
 
+    /// The room acoustic parameters (ISO 3382-1) of the impulse response of every (source,
+    /// receiver), as a list of dicts (source-major): `source`, `receiver`, `first_arrival`
+    /// (time zero), `edt`, `t20`, `t30` (s), `c50`, `c80` (dB) and `d50`, each `None` where
+    /// the response is too short or too sparse, with `<name>_reason` saying why. `rate` and
+    /// `duration` default to the scene's `impulse_response`. Needs `amplitudes`.
+    #[pyo3(signature = (rate=None, duration=None))]
+    fn room_parameters<'py>(
+        &self,
+        py: Python<'py>,
+        rate: Option<f64>,
+        duration: Option<f64>,
+    ) -> PyResult<Bound<'py, pyo3::types::PyList>> {
+        response::room_parameters(py, &self.read(), rate, duration)
+    }
+
     /// The coherent pressure of every (source, receiver) at `frequency` (default: the
     /// scene's `amplitudes.frequency`), complex128 `[sources, receivers]` (`[sources, nx,
     /// ny]` for a receiver grid): the sum over echoes of `amplitude · e^(iωT)`, each added as

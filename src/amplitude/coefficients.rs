@@ -83,6 +83,20 @@ impl Weights {
     }
 }
 
+/// The plane-wave reflection coefficient of a wave in medium `m1` (slowness `s1`) against
+/// medium `m2` (slowness `s2`) at the angle of incidence whose cosine is `cos1` (an extruded
+/// room's wall, at its 3-D angle).
+pub(crate) fn reflection_against(
+    settings: &Amplitudes,
+    [m1, m2]: [usize; 2],
+    [s1, s2]: [f64; 2],
+    cos1: f64,
+) -> Complex64 {
+    let weights = Weights::of(settings, [m1, m2], [s1, s2]);
+    let sin1_squared = (1.0 - cos1 * cos1).max(0.0);
+    weights.reflection(cos1, cos_across(s1 / s2, sin1_squared))
+}
+
 /// `cos θ₂` of the wave across an interface from `sin² θ₁` and the ratio of speeds `c₂/c₁`
 /// (`s₁/s₂` of the slownesses): `√(1 − (c₂/c₁)² sin² θ₁)`, and beyond the critical angle
 /// `+i √((c₂/c₁)² sin² θ₁ − 1)`.

@@ -22,6 +22,7 @@
 //! ring of azimuths at range `x_R` over the cone of take-off directions).
 
 mod coefficients;
+pub(crate) use coefficients::reflection_against;
 pub mod diffraction;
 mod ray;
 

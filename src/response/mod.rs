@@ -9,15 +9,19 @@
 
 mod echoes;
 mod impulse;
+mod parameters;
 mod pressure;
 mod pulse;
 mod stream;
 
 pub use echoes::{Echo, EchoError, echoes_of_arrivals, echoes_of_rays, echoes_of_scene};
 pub use impulse::ImpulseResponses;
+pub use parameters::{
+    MIN_FIT_SAMPLES, RoomParameter, RoomParameters, room_parameters, schroeder_decay,
+};
 pub use pressure::{pressure_into, transmission_loss};
 pub use pulse::FractionalDelay;
 pub use stream::{
-    Summed, echoes_of_scene_into, incoherent_loss, intensity_of_scene_into, pressure_of_scene_into,
-    transmission_loss_of_scene_into,
+    SceneRoomParameters, Summed, echoes_of_scene_into, incoherent_loss, intensity_of_scene_into,
+    pressure_of_scene_into, room_parameters_of_scene, transmission_loss_of_scene_into,
 };

@@ -260,6 +260,55 @@ fn receivers(tracer: &Tracer, len: usize) -> usize {
     r
 }
 
+/// The room acoustic parameters of every (source, receiver) of a scene
+/// ([`room_parameters_of_scene`]), source-major, and what was summed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneRoomParameters {
+    /// One per (source, receiver), source-major.
+    pub parameters: Vec<super::RoomParameters>,
+    /// What the responses summed.
+    pub summed: Summed,
+}
+
+/// The room acoustic parameters ([`room_parameters`](super::room_parameters)) of the
+/// response of every (source, receiver) of `tracer`'s scene as `responses` renders it, time
+/// zero at each pair's first arrival: the responses rendered as the search finds each echo
+/// ([`ImpulseResponses::render_scene_into`]), nothing of an echo kept; the memory is the
+/// responses'.
+///
+/// # Errors
+/// As [`echoes_of_scene`](super::echoes_of_scene).
+pub fn room_parameters_of_scene(
+    tracer: &Tracer,
+    responses: &ImpulseResponses,
+    run: &Run,
+) -> Result<SceneRoomParameters, EchoError> {
+    let scene = tracer.scene();
+    let pairs = scene.sources().len() * scene.receivers().len();
+    let mut out = vec![0.0; responses.len()];
+    let mut first = vec![f64::INFINITY; pairs];
+    let taps = responses.pulse().taps() as u64;
+    let rate = responses.rate();
+    let summed = {
+        let rows = Rows::new(&mut out, responses.receivers(), responses.samples());
+        let firsts = Rows::new(&mut first, scene.receivers().len(), 1);
+        echoes_of_scene_into(tracer, run, &|e| {
+            if run.keep_going(Progress::work(taps)) {
+                rows.with(&e, |r| responses.pulse().add(r, e.time * rate, e.amplitude));
+                firsts.with(&e, |t| t[0] = t[0].min(e.time));
+            }
+        })?
+    };
+    let parameters = (0..pairs)
+        .map(|k| {
+            let (s, r) = (k / scene.receivers().len(), k % scene.receivers().len());
+            let t0 = first[k].is_finite().then_some(first[k]);
+            super::room_parameters(responses.response(&out, s, r), rate, t0)
+        })
+        .collect();
+    Ok(SceneRoomParameters { parameters, summed })
+}
+
 impl ImpulseResponses {
     /// The responses of every echo of `tracer`'s scene into `out` (of [`len`](Self::len)
     /// numbers), each echo rendered the moment the search finds it: nothing of it is kept.

@@ -4,7 +4,8 @@
 //! document reads back to the same scene, bit for bit.
 
 use super::{
-    InterfaceSpec, ReceiverGridSpec, ReceiversSpec, Scene, SceneSpec, SolverOptions, SolverSpec,
+    ExtrusionSpec, InterfaceSpec, ReceiverGridSpec, ReceiversSpec, Scene, SceneSpec, SolverOptions,
+    SolverSpec,
 };
 
 /// The scene document without what the validated scene holds exactly and its edits change
@@ -31,6 +32,7 @@ impl Document {
             amplitudes,
             impulse_response,
             transmission_loss,
+            extrusion,
         } = spec;
         let interfaces = interfaces
             .iter()
@@ -61,6 +63,12 @@ impl Document {
             amplitudes: *amplitudes,
             impulse_response: *impulse_response,
             transmission_loss: *transmission_loss,
+            // The heights are the scene's own, as its points.
+            extrusion: extrusion.as_ref().map(|e| ExtrusionSpec {
+                source_heights: Vec::new(),
+                receiver_heights: Vec::new(),
+                ..e.clone()
+            }),
         })
     }
 
@@ -151,6 +159,10 @@ impl Scene {
             }
         }
         spec.solver = solver_spec(self.solver);
+        if let (Some(e), Some(x)) = (&mut spec.extrusion, &self.extrusion) {
+            e.source_heights = x.source_heights.clone();
+            e.receiver_heights = x.receiver_heights.clone();
+        }
         spec
     }
 
@@ -179,7 +191,17 @@ impl Scene {
     /// assert_eq!(again.media()[1].slowness, 1.5);
     /// ```
     pub fn to_json(&self) -> String {
-        serde_json::to_string(&self.to_spec()).expect("a scene document is plain JSON data")
+        let spec = self.to_spec();
+        match &spec.extrusion {
+            Some(e) => {
+                // The points' heights back as their third coordinates.
+                let mut value =
+                    serde_json::to_value(&spec).expect("a scene document is plain JSON data");
+                super::extrusion::join_heights(e, &mut value);
+                value.to_string()
+            }
+            None => serde_json::to_string(&spec).expect("a scene document is plain JSON data"),
+        }
     }
 }
 

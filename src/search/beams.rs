@@ -89,7 +89,15 @@ impl Tracer {
                 .saturating_mul(scene.receivers().len().max(1) as u64),
         };
         let progress = &mut |beams| control.run.keep_going(Progress::work(beams));
-        let stats = if let Some(sink) = control.sink {
+        let stats = if let Some(paths) = control.paths {
+            // Each path with its points to the caller's expansion (an extruded room's).
+            walls.arrivals(
+                &search,
+                scratch,
+                &mut |p: MirrorPath<'_>| paths(beam_arrival(walls, source, medium, p)),
+                progress,
+            )
+        } else if let Some(sink) = control.sink {
             // Streamed: each path's amplitude from its points, in buffers reused path to path.
             let mut path = StreamScratch::default();
             walls.arrivals(
@@ -160,6 +168,7 @@ fn beam_arrival(
             amplitude: None,
         },
         complete: true,
+        heights: Vec::new(),
     }
 }
 

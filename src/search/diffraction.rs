@@ -120,6 +120,7 @@ impl Tracer {
                     steps: vec![step],
                     arrival: a,
                     complete: true,
+                    heights: Vec::new(),
                 });
             }
         }

@@ -28,6 +28,7 @@
 
 mod beams;
 mod diffraction;
+mod extruded;
 mod sequences;
 mod strategy;
 
@@ -57,6 +58,12 @@ pub struct SearchArrival {
     /// Whether the search of its pair was complete: `false` where it stopped at a limit
     /// (its list may then be short).
     pub complete: bool,
+    /// In an extruded scene (`"extrusion"`), the height z of each of `arrival.points` (whose
+    /// x and y are the plan's): the 3-D path. Its `steps` then list the floor and ceiling
+    /// reflections among the walls', the floor as interface `interfaces().len()` and the
+    /// ceiling as the one after it (their `segments` 0, their `parameters` NaN). Empty
+    /// otherwise.
+    pub heights: Vec<f64>,
 }
 
 impl SearchArrival {
@@ -194,6 +201,10 @@ struct Control<'a> {
     /// Where each arrival goes the moment it is found ([`Tracer::search_into`]); `None`:
     /// the arrivals are listed with their points ([`Tracer::search`]).
     sink: Option<&'a (dyn Fn(StreamedArrival) + Sync)>,
+    /// Where each arrival goes with its points the moment it is found, instead of being
+    /// listed or streamed (an extruded room's plan paths, `extruded.rs`); it says whether to
+    /// go on.
+    paths: Option<&'a (dyn Fn(SearchArrival) -> bool + Sync)>,
 }
 
 /// What the search keeps per pair.
@@ -312,6 +323,9 @@ impl Tracer {
     pub fn search(&self, run: &Run) -> Result<SearchReport, SearchError> {
         let scene = self.scene();
         let options = scene.search().ok_or(SearchError::NoSearch)?;
+        if let Some(x) = scene.extrusion() {
+            return self.search_extruded(options, run, x);
+        }
         let nr = scene.receivers().len();
         let mut pairs = self.pair_table()?;
         let listed = ArrivalCount::new(&run.limits);
@@ -319,6 +333,7 @@ impl Tracer {
             run,
             listed: &listed,
             sink: None,
+            paths: None,
         };
         let (mut report, mut arrivals) = self.strategies(options, &control, &mut pairs);
         for a in &mut arrivals {
@@ -382,12 +397,16 @@ impl Tracer {
     ) -> Result<StreamReport, SearchError> {
         let scene = self.scene();
         let options = scene.search().ok_or(SearchError::NoSearch)?;
+        if let Some(x) = scene.extrusion() {
+            return self.search_extruded_into(options, run, x, sink);
+        }
         let mut pairs = self.pair_table()?;
         let listed = ArrivalCount::new(&run.limits);
         let control = Control {
             run,
             listed: &listed,
             sink: Some(sink),
+            paths: None,
         };
         let (report, _) = self.strategies(options, &control, &mut pairs);
         Ok(StreamReport {

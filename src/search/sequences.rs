@@ -156,6 +156,8 @@ struct Walk<'a> {
     run: &'a Run,
     /// Where each arrival goes when the search streams them.
     sink: Option<&'a (dyn Fn(StreamedArrival) + Sync)>,
+    /// Where each arrival goes with its points, when the search expands them (`extruded.rs`).
+    paths: Option<&'a (dyn Fn(SearchArrival) -> bool + Sync)>,
 }
 
 /// One pair's walk: its arrivals and what it did.
@@ -206,6 +208,7 @@ impl Tracer {
         let scene = self.scene();
         let mut walk = Walk::new(self, options, control.listed, control.run);
         walk.sink = control.sink;
+        walk.paths = control.paths;
         let nr = scene.receivers().len();
         let media: Vec<Option<usize>> = scene
             .sources()
@@ -287,6 +290,7 @@ impl<'a> Walk<'a> {
             listed,
             run,
             sink: None,
+            paths: None,
         }
     }
 
@@ -442,6 +446,21 @@ impl PairState<'_> {
             if !kept || a.time > options.time_limit() {
                 continue;
             }
+            if let Some(paths) = walk.paths {
+                let plan = SearchArrival {
+                    source: self.source,
+                    receiver: self.receiver,
+                    steps: self.steps.clone(),
+                    arrival: a,
+                    complete: true,
+                    heights: Vec::new(),
+                };
+                if !paths(plan) {
+                    self.stopped = true;
+                    return;
+                }
+                continue;
+            }
             if let Some(sink) = walk.sink {
                 walk.listed.stream();
                 let mut a = a;
@@ -468,6 +487,7 @@ impl PairState<'_> {
                 steps: self.steps.clone(),
                 arrival: a,
                 complete: true,
+                heights: Vec::new(),
             });
         }
     }

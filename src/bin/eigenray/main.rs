@@ -111,6 +111,13 @@ struct SolveArgs {
     /// as `--ir`.
     #[arg(long, value_name = "PATH")]
     tl: Option<PathBuf>,
+    /// Write the room acoustic parameters of every (source, receiver)'s impulse response
+    /// (the scene's `impulse_response`) to this JSON file: one entry per pair, source-major,
+    /// with `edt`, `t20`, `t30` (s), `c50`, `c80` (dB) and `d50`, time zero at the pair's
+    /// first arrival; `null` with a reason where the response is too short or too sparse.
+    /// A response output, as `--ir`.
+    #[arg(long, value_name = "PATH")]
+    parameters: Option<PathBuf>,
     /// Draw the echogram of one source at one receiver (`--source`, `--receiver`) to this SVG
     /// file: each arrival as a stem at its time, up to its level in dB, coloured by its
     /// number of interactions; the time axis starts just before the first arrival. Needs
@@ -384,6 +391,7 @@ fn response_outputs(args: &SolveArgs) -> Vec<OutputFile<'_>> {
     [
         ("--ir", &args.ir),
         ("--tl", &args.tl),
+        ("--parameters", &args.parameters),
         ("--echogram", &args.echogram),
         ("--tl-map", &args.tl_map),
     ]
@@ -580,6 +588,10 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         Some(path) => Some(response::TlOutput::check(path, &scene)?),
         None => None,
     };
+    let parameters = match &args.parameters {
+        Some(_) => Some(response::parameters_check(&scene)?),
+        None => None,
+    };
     check_output_files(args)?;
     let sums = response::Sums::new(&scene, ir.as_ref(), tl.as_ref(), charts.as_ref())?;
     let tracer = Tracer::new(std::sync::Arc::clone(&scene)).map_err(Failure::scene)?;
@@ -596,6 +608,8 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
     let listed = *to.of_arrivals() != Destination::Nowhere || args.svg.is_some();
     let (arrivals, streamed) = match (scene.search(), &sums) {
         (Some(_), Some(sums)) if !listed => (None, Some(search_streamed(&tracer, sums)?)),
+        // The parameters' own pass is the search's.
+        (Some(_), None) if !listed && parameters.is_some() => (None, None),
         (Some(_), _) => (Some(search(&tracer)?), None),
         (None, _) => (None, None),
     };
@@ -617,6 +631,9 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
     });
     if let Some(sums) = sums {
         sums.write(&scene)?;
+    }
+    if let (Some(responses), Some(path)) = (&parameters, &args.parameters) {
+        response::write_parameters(&tracer, responses, path)?;
     }
     write_outputs(args, &scene, &solved, arrivals.as_deref())?;
     let responses = response_outputs(args);
@@ -1258,6 +1275,7 @@ mod tests {
                 amplitude: None,
             },
             complete: true,
+            heights: Vec::new(),
         }
     }
 

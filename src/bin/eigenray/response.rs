@@ -478,3 +478,65 @@ impl<'a> Sums<'a> {
         Ok(())
     }
 }
+
+/// The responses `--parameters` reads (the scene's `impulse_response`), checked before the
+/// solve: exit 2 without one.
+pub(super) fn parameters_check(scene: &Scene) -> Result<ImpulseResponses, Failure> {
+    let Some(options) = scene.impulse_response() else {
+        return Err(Failure::Input(
+            "--parameters: the parameters are read from impulse responses, and the scene has \
+             no `impulse_response` section (add \"impulse_response\": {\"rate\": 48000, \
+             \"duration\": 1.0}, with \"amplitudes\")"
+                .into(),
+        ));
+    };
+    let responses = ImpulseResponses::new(options, scene.sources().len(), scene.receivers().len());
+    if responses
+        .checked_len()
+        .is_none_or(|n| n.checked_mul(8).is_none())
+    {
+        return Err(Failure::Input(
+            "--parameters: the responses do not fit in memory (fewer pairs, or a shorter \
+             `impulse_response.duration`)"
+                .into(),
+        ));
+    }
+    Ok(responses)
+}
+
+/// Writes `--parameters`: the room acoustic parameters of every (source, receiver), from its
+/// response rendered as the search finds each echo.
+pub(super) fn write_parameters(
+    tracer: &eigenray::Tracer,
+    responses: &ImpulseResponses,
+    path: &Path,
+) -> Result<(), Failure> {
+    let run = eigenray::options::Run::new();
+    let found = eigenray::response::room_parameters_of_scene(tracer, responses, &run)
+        .map_err(|e| Failure::Input(format!("--parameters: {e}")))?;
+    let receivers = tracer.scene().receivers().len().max(1);
+    let entries: Vec<serde_json::Value> = found
+        .parameters
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let mut v = serde_json::to_value(p).unwrap_or_default();
+            if let Some(o) = v.as_object_mut() {
+                o.insert("source".into(), (k / receivers).into());
+                o.insert("receiver".into(), (k % receivers).into());
+            }
+            v
+        })
+        .collect();
+    let doc = serde_json::json!({
+        "parameters": entries,
+        "incomplete_pairs": found.summed.incomplete_pairs,
+    });
+    let text = serde_json::to_string_pretty(&doc).unwrap_or_default();
+    std::fs::write(path, text + "\n").map_err(|e| {
+        Failure::Output(format!(
+            "--parameters: {}: cannot write: {e}",
+            path.display()
+        ))
+    })
+}

@@ -519,6 +519,7 @@ mod tests {
                 amplitude: None,
             },
             complete: true,
+            heights: Vec::new(),
         }
     }
 
