@@ -942,9 +942,9 @@ fn media_of(spec: &SceneSpec) -> Result<Vec<Medium>, SceneError> {
             slowness,
             index: m.index.is_some(),
             gradient,
-            least_speed: profile
-                .as_ref()
-                .map_or(1.0 / slowness, |k| k.iter().map(|k| k[1]).fold(f64::INFINITY, f64::min)),
+            least_speed: profile.as_ref().map_or(1.0 / slowness, |k| {
+                k.iter().map(|k| k[1]).fold(f64::INFINITY, f64::min)
+            }),
             profile,
             at,
         });
@@ -1032,9 +1032,9 @@ pub(crate) fn speeds_stay_positive(
     domain: Option<Aabb>,
 ) -> Result<(), SceneError> {
     let uniform_least = |m: &Medium| {
-        m.profile
-            .as_ref()
-            .map_or(1.0 / m.slowness, |k| k.iter().map(|k| k[1]).fold(f64::INFINITY, f64::min))
+        m.profile.as_ref().map_or(1.0 / m.slowness, |k| {
+            k.iter().map(|k| k[1]).fold(f64::INFINITY, f64::min)
+        })
     };
     if media.iter().all(|m| m.gradient.is_none()) {
         for m in media.iter_mut() {

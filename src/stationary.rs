@@ -123,6 +123,10 @@ pub struct StationaryEntry<'a> {
     pub complete: bool,
     /// Its amplitude, when the scene asks for amplitudes (none for a triple without paths).
     pub amplitude: Option<&'a Amplitude>,
+    /// The number of turning points on its legs, where known (a `profile` medium).
+    pub turns: Option<u32>,
+    /// The number of caustics its ray tube passed, where known (a `profile` medium).
+    pub caustics: Option<u32>,
 }
 
 impl TripleArrivals {
@@ -145,6 +149,8 @@ impl TripleArrivals {
             kink: a.kink,
             complete: self.complete,
             amplitude: a.amplitude.as_ref(),
+            turns: a.turns,
+            caustics: a.caustics,
         }
     }
 
@@ -170,6 +176,8 @@ impl TripleArrivals {
             kink: None,
             complete: self.complete,
             amplitude: None,
+            turns: None,
+            caustics: None,
         }
     }
 }

@@ -31,8 +31,6 @@
 
 use crate::geom::Vec2;
 
-use super::asinh_over;
-
 /// A speed profile: knots `(y, c)` in increasing `y` (the scene's order reversed).
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Profile {
@@ -95,6 +93,7 @@ impl ProfileRay {
         Vec2::new(self.p * ca, self.first * self.sines[0])
     }
     /// The unit direction at the end.
+    #[cfg(test)]
     pub fn direction_at_end(&self) -> Vec2 {
         let [_, cb] = self.speeds;
         Vec2::new(self.p * cb, self.last * self.sines[1])
@@ -222,11 +221,23 @@ impl Parts {
     /// The range of the branch `(first, turns)`.
     fn range(&self, first: f64, turns: u32) -> Option<f64> {
         if turns == 0 {
-            return if first == self.toward { self.direct } else { None };
+            return if first == self.toward {
+                self.direct
+            } else {
+                None
+            };
         }
-        let start = if first > 0.0 { self.first_up } else { self.first_down }?;
+        let start = if first > 0.0 {
+            self.first_up
+        } else {
+            self.first_down
+        }?;
         // The last run leaves the turning point reached going `first · (−1)^(turns − 1)`.
-        let last_up = if turns % 2 == 1 { first > 0.0 } else { first < 0.0 };
+        let last_up = if turns % 2 == 1 {
+            first > 0.0
+        } else {
+            first < 0.0
+        };
         let end = if last_up { self.from_hi } else { self.from_lo }?;
         let middle = if turns >= 2 {
             self.full? * f64::from(turns - 1)
@@ -246,11 +257,6 @@ impl Profile {
         }
     }
 
-    /// The number of knots.
-    pub fn knots(&self) -> usize {
-        self.y.len()
-    }
-
     /// The speed at height `y`.
     pub fn speed_at(&self, y: f64) -> f64 {
         let n = self.y.len();
@@ -264,16 +270,6 @@ impl Profile {
         let (y0, y1) = (self.y[i], self.y[i + 1]);
         let (c0, c1) = (self.c[i], self.c[i + 1]);
         c0 + (c1 - c0) * ((y - y0) / (y1 - y0))
-    }
-
-    /// The least speed.
-    pub fn least_speed(&self) -> f64 {
-        self.c.iter().copied().fold(f64::INFINITY, f64::min)
-    }
-
-    /// The greatest speed.
-    pub fn greatest_speed(&self) -> f64 {
-        self.c.iter().copied().fold(0.0, f64::max)
     }
 
     /// The index of the first knot strictly beyond `y` in the direction `dir` (`None`:
@@ -543,15 +539,6 @@ impl Profile {
         out
     }
 
-    /// The turning point of the ray of parameter `p` from `y` in the direction `dir`.
-    fn turning_point(&self, p: f64, y: f64, dir: f64) -> Option<f64> {
-        let s = sine(p, self.speed_at(y));
-        match self.run(p, y, s, dir, None, None)?.end {
-            RunEnd::Turn(at) => Some(at),
-            RunEnd::Target => None,
-        }
-    }
-
     /// Points along `ray` from `a`: each piece's ends and `per_piece − 1` points inside it
     /// (equal steps of the angle), for drawing.
     pub fn curve(&self, ray: &ProfileRay, a: Vec2, b: Vec2, per_piece: usize) -> Vec<Vec2> {
@@ -588,7 +575,11 @@ impl Profile {
                     let f = j as f64 / per as f64;
                     // Equal steps of the speed (of the angle along an arc, to first order).
                     let (yj, cj) = (y + (y_end - y) * f, c + (c_end - c) * f);
-                    let sj = if turning && j == per { 0.0 } else { sine(p, cj) };
+                    let sj = if turning && j == per {
+                        0.0
+                    } else {
+                        sine(p, cj)
+                    };
                     let part = piece(p, (yj - y).abs(), c, cj, s, sj);
                     out.push(Vec2::new(x + sx * part.x, yj));
                 }
@@ -647,7 +638,10 @@ mod tests {
             let (t1, x1) = quadrature(&profile, p, -50.0, -300.0, 20000);
             let (t2, x2) = quadrature(&profile, p, -300.0, -900.0, 20000);
             assert!((run.sums.t - (t1 + t2)).abs() < 1e-12 * run.sums.t, "{p}");
-            assert!((run.sums.x - (x1 + x2)).abs() < 1e-9 * (1.0 + run.sums.x), "{p}");
+            assert!(
+                (run.sums.x - (x1 + x2)).abs() < 1e-9 * (1.0 + run.sums.x),
+                "{p}"
+            );
         }
     }
 
@@ -666,7 +660,10 @@ mod tests {
             let h = 1e-10;
             let fd = (x(p + h).x - x(p - h).x) / (2.0 * h);
             let exact = x(p).x_p;
-            assert!((fd - exact).abs() < 1e-5 * exact.abs(), "{theta}: {fd} {exact}");
+            assert!(
+                (fd - exact).abs() < 1e-5 * exact.abs(),
+                "{theta}: {fd} {exact}"
+            );
         }
     }
 
@@ -711,5 +708,10 @@ mod tests {
         let caustics: Vec<u32> = found.rays.iter().map(|r| r.caustics).collect();
         assert_eq!(caustics, [0, 1]);
         assert!(found.rays.iter().all(|r| r.turns == 1 && r.first < 0.0));
+        // The horizontal slowness is conserved: cos θ / c at the end is p.
+        for r in &found.rays {
+            let end = r.direction_at_end();
+            assert!((end.x / r.speeds[1] - r.p).abs() < 1e-15 * r.p && end.y > 0.0);
+        }
     }
 }

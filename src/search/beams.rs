@@ -158,6 +158,8 @@ fn beam_arrival(
             // The image method's points: no solve, no residual.
             residual: f64::NAN,
             amplitude: None,
+            turns: None,
+            caustics: None,
         },
         complete: true,
     }

@@ -268,6 +268,8 @@ fn empty_arrival() -> Arrival {
         kink: None,
         residual: 0.0,
         amplitude: None,
+        turns: None,
+        caustics: None,
     }
 }
 
