@@ -922,8 +922,9 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
                     let media: Vec<usize> = view(i).media.into_iter().flatten().collect();
                     let shape = Entry::shape(scene, e.timed, r.points, &media);
                     Entry {
-                        turns: shape.map(|s| s.0),
-                        caustics: shape.map(|s| s.1),
+                        turns: shape.map(|s| s.turns),
+                        caustics: shape.map(|s| s.caustics),
+                        launch_angle: shape.map(|s| s.launch_angle),
                         ..e
                     }
                 } else {

@@ -127,6 +127,8 @@ pub struct StationaryEntry<'a> {
     pub turns: Option<u32>,
     /// The number of caustics its ray tube passed, where known (a `profile` medium).
     pub caustics: Option<u32>,
+    /// Its direction at the source (radians from +x), where known (a `profile` medium).
+    pub launch_angle: Option<f64>,
 }
 
 impl TripleArrivals {
@@ -151,6 +153,7 @@ impl TripleArrivals {
             amplitude: a.amplitude.as_ref(),
             turns: a.turns,
             caustics: a.caustics,
+            launch_angle: a.launch_angle,
         }
     }
 
@@ -178,6 +181,7 @@ impl TripleArrivals {
             amplitude: None,
             turns: None,
             caustics: None,
+            launch_angle: None,
         }
     }
 }

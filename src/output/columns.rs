@@ -11,6 +11,7 @@
 //! (the gradient: one number per medium, a list of vertices) writes each format itself.
 
 mod caustics;
+mod launch_angle;
 mod turns;
 
 use std::io;
@@ -125,6 +126,9 @@ pub struct Entry<'a> {
     /// The number of caustics its ray tube passed, where known (a ray through a `profile`
     /// medium).
     pub caustics: Option<u32>,
+    /// Its direction at the source (radians from +x), where the path alone does not give
+    /// it (a ray through a `profile` medium).
+    pub launch_angle: Option<f64>,
 }
 
 impl Entry<'static> {
@@ -153,6 +157,7 @@ impl Entry<'static> {
             amplitude: arrival.amplitude,
             turns: arrival.turns,
             caustics: arrival.caustics,
+            launch_angle: arrival.launch_angle,
             ..Entry::default()
         }
     }
@@ -165,6 +170,7 @@ impl Entry<'static> {
             amplitude: entry.amplitude.copied(),
             turns: entry.turns,
             caustics: entry.caustics,
+            launch_angle: entry.launch_angle,
             ..Entry::default()
         }
     }
@@ -176,6 +182,7 @@ impl Entry<'static> {
             amplitude: arrival.arrival.amplitude,
             turns: arrival.arrival.turns,
             caustics: arrival.arrival.caustics,
+            launch_angle: arrival.arrival.launch_angle,
             ..Entry::default()
         }
     }
@@ -195,8 +202,9 @@ impl Entry<'static> {
         Entry {
             timed: status.has_time(),
             amplitude: tracer.amplitude_of(steps, status, points, media),
-            turns: shape.map(|s| s.0),
-            caustics: shape.map(|s| s.1),
+            turns: shape.map(|s| s.turns),
+            caustics: shape.map(|s| s.caustics),
+            launch_angle: shape.map(|s| s.launch_angle),
             ..Entry::default()
         }
     }
@@ -213,8 +221,9 @@ impl Entry<'static> {
         Entry {
             timed: record.status.has_time(),
             amplitude: tracer.amplitude(path, record, ws),
-            turns: shape.map(|s| s.0),
-            caustics: shape.map(|s| s.1),
+            turns: shape.map(|s| s.turns),
+            caustics: shape.map(|s| s.caustics),
+            launch_angle: shape.map(|s| s.launch_angle),
             ..Entry::default()
         }
     }
@@ -226,7 +235,7 @@ impl Entry<'static> {
         timed: bool,
         points: &[Point],
         media: &[usize],
-    ) -> Option<(u32, u32)> {
+    ) -> Option<crate::trace::ProfileShape> {
         if !(timed && scene.curved() && points.len() == 2) {
             return None;
         }
@@ -378,11 +387,12 @@ pub(super) trait Quantity: Sync {
 }
 
 /// Every quantity, in the order in which they follow an entry's own fields.
-static QUANTITIES: [&dyn Quantity; 4] = [
+static QUANTITIES: [&dyn Quantity; 5] = [
     &GradientQuantity,
     &AmplitudeQuantity,
     &turns::TurnsQuantity,
     &caustics::CausticsQuantity,
+    &launch_angle::LaunchAngleQuantity,
 ];
 
 /// The quantities a scene asks for, in their written order.
@@ -627,6 +637,7 @@ mod tests {
                     gradient: None,
                     turns: timed.then_some(2),
                     caustics: None,
+                    launch_angle: None,
                 });
             }
         }

@@ -160,6 +160,7 @@ fn beam_arrival(
             amplitude: None,
             turns: None,
             caustics: None,
+            launch_angle: None,
         },
         complete: true,
     }

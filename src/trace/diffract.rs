@@ -270,6 +270,7 @@ fn empty_arrival() -> Arrival {
         amplitude: None,
         turns: None,
         caustics: None,
+        launch_angle: None,
     }
 }
 

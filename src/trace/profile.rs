@@ -135,6 +135,7 @@ impl Tracer {
                 amplitude: self.profile_amplitude(medium, source, receiver, r),
                 turns: Some(r.ray.turns),
                 caustics: Some(r.ray.caustics),
+                launch_angle: Some(launch_angle(&r.ray)),
             });
         }
         SearchOutcome {
@@ -196,14 +197,31 @@ fn profile_crossing(
     })
 }
 
-/// The turns and caustics of the default mode's ray of a path without steps through a
-/// profile medium between `points` (its source and receiver) in leg medium `media`: the
-/// earliest ray no interface crosses, else the earliest; `None` for any other path.
+/// The direction of a ray at its source, radians from +x.
+fn launch_angle(ray: &ProfileRay) -> f64 {
+    let d = ray.direction_at_start();
+    d.y.atan2(d.x)
+}
+
+/// What the path alone does not say of a ray through a profile medium.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct ProfileShape {
+    /// Its turning points.
+    pub turns: u32,
+    /// The caustics its tube passed.
+    pub caustics: u32,
+    /// Its direction at the source (radians from +x).
+    pub launch_angle: f64,
+}
+
+/// The shape of the default mode's ray of a path without steps through a profile medium
+/// between `points` (its source and receiver) in leg medium `media`: the earliest ray no
+/// interface crosses, else the earliest; `None` for any other path.
 pub(crate) fn profile_shape(
     scene: &Scene,
     points: &[Point],
     media: &[usize],
-) -> Option<(u32, u32)> {
+) -> Option<ProfileShape> {
     let (&[s, r], &[m]) = (points, media) else {
         return None;
     };
@@ -214,5 +232,9 @@ pub(crate) fn profile_shape(
         .iter()
         .find(|x| profile_crossing(scene, &profile, x, s, r).is_none())
         .or(found.rays.first())?;
-    Some((chosen.turns, chosen.caustics))
+    Some(ProfileShape {
+        turns: chosen.turns,
+        caustics: chosen.caustics,
+        launch_angle: launch_angle(chosen),
+    })
 }

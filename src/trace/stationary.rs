@@ -212,6 +212,7 @@ impl Tracer {
                 amplitude: None,
                 turns: None,
                 caustics: None,
+                launch_angle: None,
             });
         }
         out.sort_by(|a, b| a.time.total_cmp(&b.time));

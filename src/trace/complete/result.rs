@@ -61,6 +61,9 @@ pub struct Arrival {
     /// The number of caustics its ray tube passes, where it is known (a ray through a
     /// `profile` medium).
     pub caustics: Option<u32>,
+    /// The direction at the source (radians from +x, counterclockwise), where the path
+    /// alone does not give it (a ray through a `profile` medium).
+    pub launch_angle: Option<f64>,
 }
 
 impl Arrival {
@@ -80,6 +83,7 @@ impl Arrival {
             amplitude: None,
             turns: None,
             caustics: None,
+            launch_angle: None,
         }
     }
 }
