@@ -1005,7 +1005,7 @@ fn profile_of(key: &str, m: &MediumSpec) -> Result<Option<Vec<[f64; 2]>>, SceneE
                 format!("the speed c must be a finite positive number, got {c}"),
             ));
         }
-        if i > 0 && !(y < knots[i - 1][0]) {
+        if i > 0 && y >= knots[i - 1][0] {
             return Err(SceneError::new(
                 format!("{at}[{i}]"),
                 format!(

@@ -373,8 +373,7 @@ impl Profile {
         &self,
         p: f64,
         sa: f64,
-        ya: f64,
-        yb: f64,
+        [ya, yb]: [f64; 2],
         first: f64,
         turns: u32,
         caustics: Option<&mut u32>,
@@ -453,7 +452,7 @@ impl Profile {
         };
         let make = |p: f64, sa: f64, first: f64, turns: u32| -> Option<ProfileRay> {
             let mut caustics = 0;
-            let sums = self.branch(p, sa, a.y, b.y, first, turns, Some(&mut caustics))?;
+            let sums = self.branch(p, sa, [a.y, b.y], first, turns, Some(&mut caustics))?;
             let last = if turns % 2 == 0 { first } else { -first };
             Some(ProfileRay {
                 p: sign_x * p,
@@ -655,7 +654,7 @@ mod tests {
             let p = theta.cos() / ca;
             let x = |p: f64| {
                 let s = sine(p, ca);
-                profile.branch(p, s, ya, yb, -1.0, 1, None).unwrap()
+                profile.branch(p, s, [ya, yb], -1.0, 1, None).unwrap()
             };
             let h = 1e-10;
             let fd = (x(p + h).x - x(p - h).x) / (2.0 * h);

@@ -517,6 +517,9 @@ mod tests {
                 kink: None,
                 residual: 0.0,
                 amplitude: None,
+                turns: None,
+                caustics: None,
+                launch_angle: None,
             },
             complete: true,
         }
