@@ -153,10 +153,18 @@ fn sine(p: f64, c: f64) -> f64 {
 }
 
 /// The sums of one piece of a ray in one linear layer (see the module), `h ≥ 0`; `x_p` is
-/// left to the caller (it depends on which ends are turning points).
-fn piece(p: f64, h: f64, c1: f64, c2: f64, s1: f64, s2: f64) -> RaySums {
+/// left to the caller (it depends on which ends are turning points). Without `FULL`, only
+/// the range and `∫ c ds` (the sampling's and the refinement's: no transcendental call).
+fn piece<const FULL: bool>(p: f64, h: f64, c1: f64, c2: f64, s1: f64, s2: f64) -> RaySums {
     let den = s1 + s2;
     let width = h * (c1 + c2) / den;
+    if !FULL {
+        return RaySums {
+            x: p * width,
+            width,
+            ..RaySums::default()
+        };
+    }
     let m = c1 * c1 + c2 * c2 - p * p * c1 * c1 * c2 * c2;
     let q = (c2 * c2 - c1 * c1) * (1.0 + s1 * s2) / (den * m);
     let t = h * (c1 + c2) * (1.0 + s1 * s2) / (den * m) * atanh_over(q);
@@ -289,7 +297,7 @@ impl Profile {
     /// until the ray turns). `None` when it turns before its target, or never turns when
     /// asked to. `crossings` receives `(∂X/∂p so far in this run, direction)` at each knot
     /// the run crosses.
-    fn run(
+    fn run<const FULL: bool>(
         &self,
         p: f64,
         y0: f64,
@@ -329,7 +337,7 @@ impl Profile {
                 let slope = (c_end - c) / (y_end - y);
                 let y_turn = y + (inv - c) / slope;
                 let h = (y_turn - y).abs();
-                let mut part = piece(p, h, c, inv, s, 0.0);
+                let mut part = piece::<FULL>(p, h, c, inv, s, 0.0);
                 // (A layer is monotone in speed: a run turns at most once in it.)
                 part.x_p = -1.0 / (s * slope.abs() * p * p);
                 sums.add(part);
@@ -344,7 +352,7 @@ impl Profile {
             }
             let s_end = sine(p, c_end);
             let h = (y_end - y).abs();
-            let mut part = piece(p, h, c, c_end, s, s_end);
+            let mut part = piece::<FULL>(p, h, c, c_end, s, s_end);
             part.x_p = if first && starts_turned {
                 let slope = (c_end - c) / (y_end - y);
                 -1.0 / (s_end * slope.abs() * p * p)
@@ -369,7 +377,7 @@ impl Profile {
     /// The ray of branch `(first, turns)` with ray parameter `p ≥ 0` (launch sine `sa` at
     /// `ya`) to the height `yb`: its sums, `None` where the branch has no ray at this `p`.
     /// With `caustics`, also counts the caustics (the sign changes of `Q`).
-    fn branch(
+    fn branch<const FULL: bool>(
         &self,
         p: f64,
         sa: f64,
@@ -386,7 +394,7 @@ impl Profile {
         for k in 0..=turns {
             let target = (k == turns).then_some(yb);
             crossings.clear();
-            let run = self.run(p, y, s, dir, target, detail.then_some(&mut crossings))?;
+            let run = self.run::<FULL>(p, y, s, dir, target, detail.then_some(&mut crossings))?;
             if detail {
                 for x in &crossings {
                     signs.push(dir * (sums.x_p + x));
@@ -420,22 +428,44 @@ impl Profile {
     fn parts(&self, p: f64, sa: f64, ya: f64, yb: f64) -> Parts {
         let x = |r: Option<Run>| r.map(|r| r.sums.x);
         let toward = if yb >= ya { 1.0 } else { -1.0 };
-        let up = self.run(p, ya, sa, 1.0, None, None);
-        let down = self.run(p, ya, sa, -1.0, None, None);
+        let up = self.run::<false>(p, ya, sa, 1.0, None, None);
+        let down = self.run::<false>(p, ya, sa, -1.0, None, None);
         let turn = |r: Option<Run>| match r?.end {
             RunEnd::Turn(at) => Some(at),
             RunEnd::Target => None,
         };
         let (hi, lo) = (turn(up), turn(down));
         Parts {
-            direct: x(self.run(p, ya, sa, toward, Some(yb), None)),
+            direct: x(self.run::<false>(p, ya, sa, toward, Some(yb), None)),
             first_up: x(up),
             first_down: x(down),
-            full: lo.and_then(|lo| x(self.run(p, lo, 0.0, 1.0, None, None))),
-            from_hi: hi.and_then(|hi| x(self.run(p, hi, 0.0, -1.0, Some(yb), None))),
-            from_lo: lo.and_then(|lo| x(self.run(p, lo, 0.0, 1.0, Some(yb), None))),
+            full: lo.and_then(|lo| x(self.run::<false>(p, lo, 0.0, 1.0, None, None))),
+            from_hi: hi.and_then(|hi| x(self.run::<false>(p, hi, 0.0, -1.0, Some(yb), None))),
+            from_lo: lo.and_then(|lo| x(self.run::<false>(p, lo, 0.0, 1.0, Some(yb), None))),
             toward,
         }
+    }
+
+    /// [`arrivals`](Self::arrivals), remembered per thread for the last profile and pair
+    /// asked (the default mode's solve, its amplitude and its written turns ask for the same
+    /// pair in turn): keyed by the knots and the points themselves, so never stale.
+    pub fn arrivals_cached(&self, a: Vec2, b: Vec2) -> ProfileArrivals {
+        thread_local! {
+            static LAST: std::cell::RefCell<Option<(Profile, Vec2, Vec2, ProfileArrivals)>> =
+                const { std::cell::RefCell::new(None) };
+        }
+        LAST.with(|last| {
+            if let Some((p, la, lb, found)) = &*last.borrow()
+                && p == self
+                && *la == a
+                && *lb == b
+            {
+                return found.clone();
+            }
+            let found = self.arrivals(a, b);
+            *last.borrow_mut() = Some((self.clone(), a, b, found.clone()));
+            found
+        })
     }
 
     /// Every ray from `a` to `b` (up to [`MAX_TURNS`] turning points), by time: for each
@@ -452,7 +482,7 @@ impl Profile {
         };
         let make = |p: f64, sa: f64, first: f64, turns: u32| -> Option<ProfileRay> {
             let mut caustics = 0;
-            let sums = self.branch(p, sa, [a.y, b.y], first, turns, Some(&mut caustics))?;
+            let sums = self.branch::<true>(p, sa, [a.y, b.y], first, turns, Some(&mut caustics))?;
             let last = if turns % 2 == 0 { first } else { -first };
             Some(ProfileRay {
                 p: sign_x * p,
@@ -505,26 +535,38 @@ impl Profile {
                     if !(v0.is_finite() && v1.is_finite()) || (v0 > 0.0) == (v1 > 0.0) {
                         continue;
                     }
-                    // Bisection on the launch angle.
+                    // Newton on the launch angle inside the bracket (dX/dθ = −X_p sin θ / c_a),
+                    // bisecting where a step would leave it.
                     let (mut lo, mut hi) = (angle(j as f64), angle(j as f64 + 1.0));
-                    let mut v_lo = v0;
+                    let (mut v_lo, mut theta) = (v0, angle(j as f64 + 0.5));
                     for _ in 0..100 {
-                        let mid = 0.5 * (lo + hi);
-                        if mid <= lo || mid >= hi {
+                        let (p, sa) = at(theta);
+                        let Some(sums) =
+                            self.branch::<false>(p, sa, [a.y, b.y], first, turns, None)
+                        else {
                             break;
-                        }
-                        let (p, sa) = at(mid);
-                        let v = value(&self.parts(p, sa, a.y, b.y));
-                        if !v.is_finite() {
+                        };
+                        let v = sums.x - dx;
+                        if v == 0.0 || hi - lo <= 4.0 * f64::EPSILON * hi {
                             break;
                         }
                         if (v > 0.0) == (v_lo > 0.0) {
-                            (lo, v_lo) = (mid, v);
+                            (lo, v_lo) = (theta, v);
                         } else {
-                            hi = mid;
+                            hi = theta;
                         }
+                        let step = theta + v / (sums.x_p * sa / ca);
+                        let next = if step > lo && step < hi && step.is_finite() {
+                            step
+                        } else {
+                            0.5 * (lo + hi)
+                        };
+                        if next == theta {
+                            break;
+                        }
+                        theta = next;
                     }
-                    let (p, sa) = at(0.5 * (lo + hi));
+                    let (p, sa) = at(theta);
                     // A sign change across a jump of X (where the turning point jumps past
                     // a local maximum of the speed) is no root: its miss stays.
                     if let Some(mut ray) = make(p, sa, first, turns)
@@ -583,10 +625,10 @@ impl Profile {
                     } else {
                         sine(p, cj)
                     };
-                    let part = piece(p, (yj - y).abs(), c, cj, s, sj);
+                    let part = piece::<true>(p, (yj - y).abs(), c, cj, s, sj);
                     out.push(Vec2::new(x + sx * part.x, yj));
                 }
-                let part = piece(p, (y_end - y).abs(), c, c_end, s, sine(p, c_end));
+                let part = piece::<true>(p, (y_end - y).abs(), c, c_end, s, sine(p, c_end));
                 x += sx * part.x;
                 y = y_end;
                 s = if turning { 0.0 } else { sine(p, c_end) };
@@ -636,7 +678,9 @@ mod tests {
         let profile = Profile::new(&[[0.0, 1500.0], [-300.0, 1480.0], [-1000.0, 1520.0]]);
         for p in [0.0, 1e-4, 5e-4, 6.5e-4] {
             let s = sine(p, profile.speed_at(-50.0));
-            let run = profile.run(p, -50.0, s, -1.0, Some(-900.0), None).unwrap();
+            let run = profile
+                .run::<true>(p, -50.0, s, -1.0, Some(-900.0), None)
+                .unwrap();
             // Simpson per layer (the speed's kink at the knot).
             let (t1, x1) = quadrature(&profile, p, -50.0, -300.0, 20000);
             let (t2, x2) = quadrature(&profile, p, -300.0, -900.0, 20000);
@@ -658,7 +702,9 @@ mod tests {
             let p = theta.cos() / ca;
             let x = |p: f64| {
                 let s = sine(p, ca);
-                profile.branch(p, s, [ya, yb], -1.0, 1, None).unwrap()
+                profile
+                    .branch::<true>(p, s, [ya, yb], -1.0, 1, None)
+                    .unwrap()
             };
             let h = 1e-10;
             let fd = (x(p + h).x - x(p - h).x) / (2.0 * h);

@@ -54,7 +54,7 @@ impl Tracer {
         source: Point,
         receiver: Point,
     ) -> (Vec<TracedProfileRay>, ProfileArrivals) {
-        let found = profile.arrivals(source.to_vec2(), receiver.to_vec2());
+        let found = profile.arrivals_cached(source.to_vec2(), receiver.to_vec2());
         let rays = found
             .rays
             .iter()
@@ -226,7 +226,7 @@ pub(crate) fn profile_shape(
         return None;
     };
     let profile = scene.media().get(m)?.profile_model()?;
-    let found = profile.arrivals(s.to_vec2(), r.to_vec2());
+    let found = profile.arrivals_cached(s.to_vec2(), r.to_vec2());
     let chosen = found
         .rays
         .iter()
