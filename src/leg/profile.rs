@@ -435,13 +435,30 @@ impl Profile {
             RunEnd::Target => None,
         };
         let (hi, lo) = (turn(up), turn(down));
+        let (first_up, first_down) = (x(up), x(down));
+        // Three runs, the rest from differences along the duct (the sampling's signs only:
+        // the refinement evaluates each branch in full).
+        let full = first_up.zip(first_down).map(|(u, d)| u + d);
+        let from_hi = hi.and_then(|hi| x(self.run::<false>(p, hi, 0.0, -1.0, Some(yb), None)));
+        let from_lo = match (lo, full, from_hi) {
+            (Some(_), Some(full), Some(h)) => Some(full - h),
+            (Some(_), Some(_), None) => None,
+            (Some(lo), None, _) => x(self.run::<false>(p, lo, 0.0, 1.0, Some(yb), None)),
+            (None, ..) => None,
+        };
+        let direct = match (toward > 0.0, first_up, from_hi, first_down, from_lo) {
+            (true, Some(u), Some(h), ..) if yb >= ya => Some(u - h).filter(|&d| d >= 0.0),
+            (false, _, _, Some(d), Some(l)) => Some(d - l).filter(|&v| v >= 0.0),
+            (true, Some(_), None, ..) | (false, _, _, Some(_), None) => None,
+            _ => x(self.run::<false>(p, ya, sa, toward, Some(yb), None)),
+        };
         Parts {
-            direct: x(self.run::<false>(p, ya, sa, toward, Some(yb), None)),
-            first_up: x(up),
-            first_down: x(down),
-            full: lo.and_then(|lo| x(self.run::<false>(p, lo, 0.0, 1.0, None, None))),
-            from_hi: hi.and_then(|hi| x(self.run::<false>(p, hi, 0.0, -1.0, Some(yb), None))),
-            from_lo: lo.and_then(|lo| x(self.run::<false>(p, lo, 0.0, 1.0, Some(yb), None))),
+            direct,
+            first_up,
+            first_down,
+            full,
+            from_hi,
+            from_lo,
             toward,
         }
     }
