@@ -38,6 +38,8 @@
 
 use crate::geom::{Aabb, Point, Vec2};
 
+pub(crate) mod profile;
+
 /// One leg of a ray in one medium, evaluated from its two end points (see the module).
 pub(crate) trait Leg: Copy {
     /// The travel time along the leg.

@@ -940,8 +940,22 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
             };
             let r = view(i);
             // (Made only for a scene that asks for a quantity.)
-            let entry =
-                (!schema.is_empty()).then(|| r.values.entry(has_gradient.then_some(&gradient)));
+            let entry = (!schema.is_empty()).then(|| {
+                let e = r.values.entry(has_gradient.then_some(&gradient));
+                // A default-mode ray through a profile medium: its turns and caustics.
+                if e.turns.is_none() && scene.curved() && r.points.len() == 2 {
+                    let media: Vec<usize> = view(i).media.into_iter().flatten().collect();
+                    let shape = Entry::shape(scene, e.timed, r.points, &media);
+                    Entry {
+                        turns: shape.map(|s| s.turns),
+                        caustics: shape.map(|s| s.caustics),
+                        launch_angle: shape.map(|s| s.launch_angle),
+                        ..e
+                    }
+                } else {
+                    e
+                }
+            });
             let entry = entry.as_ref();
             match format {
                 Format::Json => {

@@ -7,6 +7,7 @@ use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::bvh::Bvh;
 use crate::geom::{Aabb, Point, Segment, SegmentContact, Vec2, orient, segment_contact};
+use crate::leg::profile::Profile;
 use crate::leg::{LegMedium, Linear, Uniform};
 use crate::polyline::{Polyline, PolylineError};
 
@@ -235,6 +236,11 @@ pub struct MediumSpec {
     /// `p` is `speed + gradient · p`; rays in the medium are circular arcs.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gradient: Option<[f64; 2]>,
+    /// Instead of `speed`: the speed profile `[[y, c], ...]` (`y` strictly decreasing, at
+    /// least two knots, `c > 0`): the speed is linear in `y` between knots, the nearest
+    /// knot's beyond the end knots, and constant in `x` (BELLHOP's `'C'` profile).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub profile: Option<Vec<[f64; 2]>>,
     /// A point strictly inside the region this medium fills (inside the domain, when there is
     /// one). One point claims one region: two separate pieces of one material are two media.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -478,6 +484,9 @@ pub struct Medium {
     /// gradient · p`: legs are circular arcs); `None` for a uniform medium (a gradient of
     /// zero is one).
     pub gradient: Option<Vec2>,
+    /// The speed profile's knots `[y, c]` (`y` strictly decreasing) when the speed is
+    /// piecewise linear in `y` (`slowness` is then `1 / c` of the first knot); `None` otherwise.
+    pub profile: Option<Vec<[f64; 2]>>,
     /// The least speed of the medium over the scene's extent (its `domain`, else the box of
     /// its points): `1 / slowness` for a uniform medium.
     pub least_speed: f64,
@@ -501,8 +510,16 @@ impl Medium {
         }
     }
 
+    /// The speed profile, when the medium has one.
+    pub(crate) fn profile_model(&self) -> Option<Profile> {
+        self.profile.as_deref().map(Profile::new)
+    }
+
     /// The speed at `p`.
     pub fn speed_at(&self, p: Point) -> f64 {
+        if let Some(model) = self.profile_model() {
+            return model.speed_at(p.y);
+        }
         match self.gradient {
             None => 1.0 / self.slowness,
             Some(g) => 1.0 / self.slowness + g.dot(p.to_vec2()),
@@ -887,7 +904,9 @@ fn media_of(spec: &SceneSpec) -> Result<Vec<Medium>, SceneError> {
     let mut media = Vec::with_capacity(spec.media.len());
     for (name, m) in &spec.media {
         let key = format!("media.{name}");
+        let profile = profile_of(&key, m)?;
         let slowness = match (m.speed, m.index) {
+            (None, None) if let Some(knots) = &profile => 1.0 / knots[0][1],
             (Some(v), None) => 1.0 / positive(format!("{key}.speed"), v)?,
             (None, Some(n)) => positive(format!("{key}.index"), n)?,
             (Some(_), Some(_)) => {
@@ -931,12 +950,81 @@ fn media_of(spec: &SceneSpec) -> Result<Vec<Medium>, SceneError> {
             slowness,
             index: m.index.is_some(),
             gradient,
-            least_speed: 1.0 / slowness,
+            least_speed: profile.as_ref().map_or(1.0 / slowness, |k| {
+                k.iter().map(|k| k[1]).fold(f64::INFINITY, f64::min)
+            }),
+            profile,
             at,
         });
     }
     one_kind_of_medium(&media)?;
     Ok(media)
+}
+
+/// The knots of a medium's `profile`, validated: only instead of `speed` (not with
+/// `speed`, `index` or `gradient`), at least two, `y` strictly decreasing, every number
+/// finite and `c > 0`.
+///
+/// # Errors
+/// `media.NAME.profile` (or `media.NAME.profile[i]` for one knot; `media.NAME.gradient` for a
+/// gradient beside a profile), saying what is wrong.
+fn profile_of(key: &str, m: &MediumSpec) -> Result<Option<Vec<[f64; 2]>>, SceneError> {
+    let Some(knots) = &m.profile else {
+        return Ok(None);
+    };
+    let at = format!("{key}.profile");
+    if m.index.is_some() {
+        return Err(SceneError::new(
+            at,
+            "only a `speed` medium takes a profile, not an `index` medium",
+        ));
+    }
+    if m.speed.is_some() {
+        return Err(SceneError::new(
+            at,
+            "give `speed` or `profile`, not both: the profile gives the speed at every height",
+        ));
+    }
+    if m.gradient.is_some() {
+        return Err(SceneError::new(
+            format!("{key}.gradient"),
+            "a `profile` medium takes no `gradient`: its speed is linear between its knots",
+        ));
+    }
+    if knots.len() < 2 {
+        return Err(SceneError::new(
+            at,
+            format!(
+                "needs at least two knots [[y, c], ...], got {}",
+                knots.len()
+            ),
+        ));
+    }
+    for (i, &[y, c]) in knots.iter().enumerate() {
+        if !(y.is_finite() && y.abs() <= MAX_COORDINATE) {
+            return Err(SceneError::new(
+                format!("{at}[{i}]"),
+                format!("y must be a finite number within ±{MAX_COORDINATE:e}, got {y}"),
+            ));
+        }
+        if !(c.is_finite() && c > 0.0) {
+            return Err(SceneError::new(
+                format!("{at}[{i}]"),
+                format!("the speed c must be a finite positive number, got {c}"),
+            ));
+        }
+        if i > 0 && y >= knots[i - 1][0] {
+            return Err(SceneError::new(
+                format!("{at}[{i}]"),
+                format!(
+                    "y must strictly decrease from knot to knot (y up, the first knot on \
+                     top): {y} follows {}",
+                    knots[i - 1][0]
+                ),
+            ));
+        }
+    }
+    Ok(Some(knots.clone()))
 }
 
 /// Sets each medium's least speed over the scene's extent (the `domain`, else the box of
@@ -951,9 +1039,14 @@ pub(crate) fn speeds_stay_positive(
     points: impl Iterator<Item = Point>,
     domain: Option<Aabb>,
 ) -> Result<(), SceneError> {
+    let uniform_least = |m: &Medium| {
+        m.profile.as_ref().map_or(1.0 / m.slowness, |k| {
+            k.iter().map(|k| k[1]).fold(f64::INFINITY, f64::min)
+        })
+    };
     if media.iter().all(|m| m.gradient.is_none()) {
         for m in media.iter_mut() {
-            m.least_speed = 1.0 / m.slowness;
+            m.least_speed = uniform_least(m);
         }
         return Ok(());
     }
@@ -969,7 +1062,7 @@ pub(crate) fn speeds_stay_positive(
     };
     for m in media.iter_mut() {
         let Some(g) = m.gradient else {
-            m.least_speed = 1.0 / m.slowness;
+            m.least_speed = uniform_least(m);
             continue;
         };
         let corners = [
@@ -1014,8 +1107,8 @@ pub(crate) fn speeds_stay_positive(
 /// # Errors
 /// `search`, `solver.derivatives` or the first `diffract` step.
 fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
-    let why = "is not available yet with curved legs (a medium with a `gradient`); prescribed \
-               paths solve, with `\"stationary\"` `\"one\"` or `\"all\"`";
+    let why = "is not available yet with curved legs (a medium with a `gradient` or a \
+               `profile`); prescribed paths solve, with `\"stationary\"` `\"one\"` or `\"all\"`";
     if let Some(s) = &spec.solver {
         if s.derivatives == Some(true) {
             return Err(SceneError::new(
@@ -1029,6 +1122,16 @@ fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
             "search",
             format!("the automatic search {why}"),
         ));
+    }
+    if spec.media.values().any(|m| m.profile.is_some()) {
+        if let Some(k) = spec.paths.iter().position(|p| !p.steps.is_empty()) {
+            return Err(SceneError::new(
+                format!("paths[{k}].steps"),
+                "a scene with a `profile` medium takes paths without steps only (a ray \
+                 through the profile from its source to its receiver, every turning point \
+                 and knot crossed); reflections and refractions there are not available yet",
+            ));
+        }
     }
     for (k, path) in spec.paths.iter().enumerate() {
         if let Some(j) = path
@@ -1384,7 +1487,9 @@ impl Scene {
             scene_points(&interfaces, &sources, &receivers, &[], domain),
             domain,
         )?;
-        let curved = media.iter().any(|m| m.gradient.is_some());
+        let curved = media
+            .iter()
+            .any(|m| m.gradient.is_some() || m.profile.is_some());
         if curved {
             curved_legs_supported(spec)?;
         }
@@ -1435,7 +1540,7 @@ impl Scene {
     pub fn media(&self) -> &[Medium] {
         &self.media
     }
-    /// Whether a medium's speed has a gradient (some legs are circular arcs).
+    /// Whether a medium's speed has a gradient or a profile (some legs are circular arcs).
     #[inline]
     pub fn curved(&self) -> bool {
         self.curved

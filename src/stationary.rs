@@ -123,6 +123,12 @@ pub struct StationaryEntry<'a> {
     pub complete: bool,
     /// Its amplitude, when the scene asks for amplitudes (none for a triple without paths).
     pub amplitude: Option<&'a Amplitude>,
+    /// The number of turning points on its legs, where known (a `profile` medium).
+    pub turns: Option<u32>,
+    /// The number of caustics its ray tube passed, where known (a `profile` medium).
+    pub caustics: Option<u32>,
+    /// Its direction at the source (radians from +x), where known (a `profile` medium).
+    pub launch_angle: Option<f64>,
 }
 
 impl TripleArrivals {
@@ -145,6 +151,9 @@ impl TripleArrivals {
             kink: a.kink,
             complete: self.complete,
             amplitude: a.amplitude.as_ref(),
+            turns: a.turns,
+            caustics: a.caustics,
+            launch_angle: a.launch_angle,
         }
     }
 
@@ -170,6 +179,9 @@ impl TripleArrivals {
             kink: None,
             complete: self.complete,
             amplitude: None,
+            turns: None,
+            caustics: None,
+            launch_angle: None,
         }
     }
 }

@@ -649,6 +649,9 @@ fn hand_built_arrivals(scene: &Scene) -> Vec<SearchArrival> {
         kink,
         residual: 1e-16,
         amplitude: None,
+        turns: None,
+        caustics: None,
+        launch_angle: None,
     };
     vec![
         SearchArrival {

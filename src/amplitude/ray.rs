@@ -691,6 +691,50 @@ fn walk_curved(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplit
     Ok(out)
 }
 
+/// The amplitude of one ray through a `profile` medium from `points[0]` to `points[1]`
+/// (`leg/profile.rs`), the pass of [`walk_curved`] for one leg with what it reads of the
+/// leg's Hessian in the ray-parameter form: `1 / W = c_s ‖∂²T/∂a∂b‖ = c_s / (|∂X/∂p| s_a s_b)`,
+/// the flux `c_r / c_s`, the out-of-plane width `w₀ ∫ c ds`, the attenuation per arc length,
+/// and `−π/2` for each caustic the tube passed (the zeros of `Q`, counted by the kernel).
+pub(crate) fn of_profile(
+    scene: &Scene,
+    settings: &Amplitudes,
+    points: [Point; 2],
+    medium: usize,
+    ray: &crate::leg::profile::ProfileRay,
+) -> Amplitude {
+    let cx = Context {
+        scene,
+        settings,
+        regions: None,
+    };
+    let [cs, cr] = ray.speeds;
+    let w0 = 1.0 / cs;
+    let d0 = ray.direction_at_start();
+    let side = (points[1].x - points[0].x).abs();
+    let l0 = if d0.x != 0.0 {
+        side / d0.x.abs()
+    } else {
+        ray.sums.arc
+    };
+    let mut coefficient = Complex64::new(1.0, 0.0);
+    if ray.caustics > 0 {
+        let phase = -std::f64::consts::FRAC_PI_2 * f64::from(ray.caustics);
+        coefficient *= Complex64::from_polar(1.0, phase);
+    }
+    let walk = Walk {
+        coefficient,
+        tube_num: (cr / cs) * ray.inverse_width(),
+        tube_den: 1.0,
+        out_of_plane: w0 * ray.sums.width,
+        attenuation_db: cx.settings.attenuation[medium] * ray.sums.arc,
+        l0,
+        w0,
+        converted: None,
+    };
+    finish(cx, &points, &walk)
+}
+
 /// The medium across the interface of `step` at `here` (on segment `seg`) from `from`.
 #[inline]
 fn medium_across(

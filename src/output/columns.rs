@@ -10,6 +10,10 @@
 //! CSV cells, `.npy` fields and numpy columns follow from them. A quantity of another shape
 //! (the gradient: one number per medium, a list of vertices) writes each format itself.
 
+mod caustics;
+mod launch_angle;
+mod turns;
+
 use std::io;
 
 use num_complex::Complex64;
@@ -116,6 +120,15 @@ pub struct Entry<'a> {
     /// Its time's gradient, when computed (the writer computes it; the Python package has
     /// `Tracer.gradients` for it).
     pub gradient: Option<&'a Gradient>,
+    /// The number of turning points on its legs, where known (a ray through a `profile`
+    /// medium).
+    pub turns: Option<u32>,
+    /// The number of caustics its ray tube passed, where known (a ray through a `profile`
+    /// medium).
+    pub caustics: Option<u32>,
+    /// Its direction at the source (radians from +x), where the path alone does not give
+    /// it (a ray through a `profile` medium).
+    pub launch_angle: Option<f64>,
 }
 
 impl Entry<'static> {
@@ -124,7 +137,7 @@ impl Entry<'static> {
         Entry {
             timed: ray.status.has_time(),
             amplitude: ray.amplitude,
-            gradient: None,
+            ..Entry::default()
         }
     }
 
@@ -133,7 +146,7 @@ impl Entry<'static> {
         Entry {
             timed: batch.record(i).status.has_time(),
             amplitude: batch.amplitude(i).copied(),
-            gradient: None,
+            ..Entry::default()
         }
     }
 
@@ -142,7 +155,10 @@ impl Entry<'static> {
         Entry {
             timed: arrival.status.has_time(),
             amplitude: arrival.amplitude,
-            gradient: None,
+            turns: arrival.turns,
+            caustics: arrival.caustics,
+            launch_angle: arrival.launch_angle,
+            ..Entry::default()
         }
     }
 
@@ -152,7 +168,10 @@ impl Entry<'static> {
         Entry {
             timed: entry.record.status.has_time(),
             amplitude: entry.amplitude.copied(),
-            gradient: None,
+            turns: entry.turns,
+            caustics: entry.caustics,
+            launch_angle: entry.launch_angle,
+            ..Entry::default()
         }
     }
 
@@ -161,7 +180,10 @@ impl Entry<'static> {
         Entry {
             timed: true,
             amplitude: arrival.arrival.amplitude,
-            gradient: None,
+            turns: arrival.arrival.turns,
+            caustics: arrival.arrival.caustics,
+            launch_angle: arrival.arrival.launch_angle,
+            ..Entry::default()
         }
     }
 
@@ -176,21 +198,48 @@ impl Entry<'static> {
         points: &[Point],
         media: &[usize],
     ) -> Self {
+        let shape = Self::shape(tracer.scene(), status.has_time(), points, media);
         Entry {
             timed: status.has_time(),
             amplitude: tracer.amplitude_of(steps, status, points, media),
-            gradient: None,
+            turns: shape.map(|s| s.turns),
+            caustics: shape.map(|s| s.caustics),
+            launch_angle: shape.map(|s| s.launch_angle),
+            ..Entry::default()
         }
     }
 
     /// The quantities `tracer`'s scene asks for of the ray of path `path` last solved in
     /// `ws`, which ended as `record`.
     pub fn solved(tracer: &Tracer, path: usize, record: &RayRecord, ws: &Workspace) -> Self {
+        let shape = Self::shape(
+            tracer.scene(),
+            record.status.has_time(),
+            ws.points(),
+            ws.media(),
+        );
         Entry {
             timed: record.status.has_time(),
             amplitude: tracer.amplitude(path, record, ws),
-            gradient: None,
+            turns: shape.map(|s| s.turns),
+            caustics: shape.map(|s| s.caustics),
+            launch_angle: shape.map(|s| s.launch_angle),
+            ..Entry::default()
         }
+    }
+
+    /// The turns and caustics of a default-mode ray with a time through a `profile`
+    /// medium (`None` for any other).
+    pub(crate) fn shape(
+        scene: &Scene,
+        timed: bool,
+        points: &[Point],
+        media: &[usize],
+    ) -> Option<crate::trace::ProfileShape> {
+        if !(timed && scene.curved() && points.len() == 2) {
+            return None;
+        }
+        crate::trace::profile_shape(scene, points, media)
     }
 }
 
@@ -338,7 +387,13 @@ pub(super) trait Quantity: Sync {
 }
 
 /// Every quantity, in the order in which they follow an entry's own fields.
-static QUANTITIES: [&dyn Quantity; 2] = [&GradientQuantity, &AmplitudeQuantity];
+static QUANTITIES: [&dyn Quantity; 5] = [
+    &GradientQuantity,
+    &AmplitudeQuantity,
+    &turns::TurnsQuantity,
+    &caustics::CausticsQuantity,
+    &launch_angle::LaunchAngleQuantity,
+];
 
 /// The quantities a scene asks for, in their written order.
 #[derive(Clone)]
@@ -580,6 +635,9 @@ mod tests {
                     timed,
                     amplitude,
                     gradient: None,
+                    turns: timed.then_some(2),
+                    caustics: None,
+                    launch_angle: None,
                 });
             }
         }

@@ -257,6 +257,12 @@ impl Scene {
             return Err(out_of_range("media", "media", medium, len));
         };
         let what = if index { "index" } else { "speed" };
+        if m.profile.is_some() {
+            return Err(SceneError::new(
+                format!("media.{}.profile", m.name),
+                format!("a `profile` medium has no single {what} to set: its knots give its speed"),
+            ));
+        }
         let v = positive(format!("media.{}.{what}", m.name), value)?;
         let slowness = if index { v } else { 1.0 / v };
         if !(slowness.is_finite() && slowness > 0.0) {

@@ -166,6 +166,9 @@ fn beam_arrival(
             // The image method's points: no solve, no residual.
             residual: f64::NAN,
             amplitude: None,
+            turns: None,
+            caustics: None,
+            launch_angle: None,
         },
         complete: true,
         heights: Vec::new(),

@@ -125,6 +125,16 @@ impl Tracer {
         if status != Status::Converged {
             return Self::no_amplitude(status);
         }
+        if steps.is_empty()
+            && self.scene.curved()
+            && let (&[s, r], &[m]) = (points, media)
+            && let Some(profile) = self.scene.media()[m].profile_model()
+        {
+            // The default mode's ray: the earliest one no interface crosses.
+            let (rays, _) = self.profile_rays(&profile, s, r);
+            let chosen = rays.iter().find(|x| x.status == Status::Converged)?;
+            return self.profile_amplitude(m, s, r, chosen);
+        }
         let path = PathGeometry {
             steps,
             points,
@@ -159,7 +169,7 @@ impl Tracer {
         if self.scene.amplitudes().is_none() {
             return;
         }
-        for a in arrivals {
+        for a in arrivals.iter_mut().filter(|a| a.turns.is_none()) {
             let segments = Some(&a.segments[..]);
             a.amplitude = self.amplitude_with(steps, a.status, &a.points, &a.media, segments);
         }

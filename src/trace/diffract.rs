@@ -366,6 +366,9 @@ fn empty_arrival() -> Arrival {
         kink: None,
         residual: 0.0,
         amplitude: None,
+        turns: None,
+        caustics: None,
+        launch_angle: None,
     }
 }
 

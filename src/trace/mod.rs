@@ -30,6 +30,8 @@ mod mirrors;
 mod occlusion;
 mod one_step;
 mod plan;
+mod profile;
+pub(crate) use profile::{ProfileShape, profile_shape};
 mod result;
 mod stack;
 mod start;
@@ -594,6 +596,9 @@ impl Tracer {
     ) -> RayRecord {
         if plan.diffracted() {
             return self.solve_diffracted(source, receiver, path, ws);
+        }
+        if let Some((m, profile)) = self.profile_medium(path, source, src_medium) {
+            return self.solve_profile(m, &profile, source, receiver, ws);
         }
         let cx = self.context();
         if let (Start::Default, Some(sp)) = (start, plan.stack())

@@ -109,6 +109,9 @@ impl Tracer {
             self.arrival_amplitudes(&spec.steps, out);
             return Ok(search);
         }
+        if let Some((m, profile)) = self.profile_medium(path, source, None) {
+            return Ok(self.profile_stationary_paths(m, &profile, source, receiver, out));
+        }
         if self.scene.curved() {
             let outcome = self.curved_stationary_paths(source, receiver, path, out);
             self.arrival_amplitudes(&spec.steps, out);
@@ -207,6 +210,9 @@ impl Tracer {
                 kink: None,
                 residual: record.residual,
                 amplitude: None,
+                turns: None,
+                caustics: None,
+                launch_angle: None,
             });
         }
         out.sort_by(|a, b| a.time.total_cmp(&b.time));

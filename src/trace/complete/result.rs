@@ -55,6 +55,15 @@ pub struct Arrival {
     pub residual: f64,
     /// Its amplitude, when the scene asks for amplitudes (`"amplitudes"`).
     pub amplitude: Option<Amplitude>,
+    /// The number of turning points on its legs, where it is known (a ray through a
+    /// `profile` medium).
+    pub turns: Option<u32>,
+    /// The number of caustics its ray tube passes, where it is known (a ray through a
+    /// `profile` medium).
+    pub caustics: Option<u32>,
+    /// The direction at the source (radians from +x, counterclockwise), where the path
+    /// alone does not give it (a ray through a `profile` medium).
+    pub launch_angle: Option<f64>,
 }
 
 impl Arrival {
@@ -72,6 +81,9 @@ impl Arrival {
             kink: None,
             residual: f64::NAN,
             amplitude: None,
+            turns: None,
+            caustics: None,
+            launch_angle: None,
         }
     }
 }

@@ -1,0 +1,117 @@
+"""Media with a speed profile from Python: the rays of a turning branch through two layers
+against scipy's quadrature of the ray integrals (the turning point's square-root singularity
+removed by a substitution, the ray parameter by brentq), the turns, caustics and
+launch_angle columns, and the refusals naming the key."""
+
+import copy
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+from scipy.optimize import brentq
+
+import eigenray
+
+KNOTS = [[0.0, 1520.0], [-1000.0, 1490.0], [-3000.0, 1530.0]]
+SCENE = {
+    "media": {"sea": {"profile": KNOTS}},
+    "sources": [[0, -500]],
+    "receivers": [[8000, -500]],
+    "paths": [{"name": "direct", "steps": [], "media": ["sea"]}],
+    "amplitudes": {"source": "point"},
+}
+
+
+def speed(y):
+    ys = [k[0] for k in KNOTS][::-1]
+    cs = [k[1] for k in KNOTS][::-1]
+    return float(np.interp(y, ys, cs))
+
+
+def down_and_back(p, y0):
+    """Range and time of the ray of parameter p from y0 (in the upper layer) down through
+    the axis to its turning point in the lower layer and back: 2 ∫ g(c) / s dy with s =
+    √(1 − p²c²), g = p c for the range and 1/c for the time. With y = y_turn + u², below the
+    knot at −1000 (where c = c_turn + slope·(y_turn − y), the layer's line) s = u √(p |slope|
+    (1 + p c)), so the integrand 2u g / s = 2 g / √(p |slope| (1 + p c)) has no singularity."""
+    slope = (1530.0 - 1490.0) / 2000.0
+    y_turn = brentq(lambda y: speed(y) - 1.0 / p, -3000.0, -1000.0, xtol=1e-14)
+    top = math.sqrt(y0 - y_turn)
+    cut = math.sqrt(-1000.0 - y_turn)
+
+    def both(g):
+        def lower(u):
+            c = speed(y_turn + u * u)
+            return 2.0 * g(c) / math.sqrt(p * slope * (1.0 + p * c))
+
+        def upper(u):
+            c = speed(y_turn + u * u)
+            return 2.0 * u * g(c) / math.sqrt(1.0 - p * p * c * c)
+
+        a = quad(lower, 0.0, cut, epsabs=0, epsrel=1e-13, limit=200)[0]
+        b = quad(upper, cut, top, epsabs=0, epsrel=1e-13, limit=200)[0]
+        return 2.0 * (a + b)
+
+    return both(lambda c: p * c), both(lambda c: 1.0 / c)
+
+
+Y0 = -500.0
+P_GRID = np.linspace(1.0 / 1530.0 * (1 + 1e-9), 1.0 / speed(Y0) * (1 - 1e-6), 300)
+
+
+def receivers():
+    """Two ranges the branch (down, one turn) reaches: within its range's span."""
+    xs = [down_and_back(p, Y0)[0] for p in P_GRID]
+    return [float(round(q)) for q in np.quantile(xs, [0.3, 0.7])]
+
+
+def test_turning_rays_match_quadrature():
+    tracer = eigenray.Tracer(eigenray.Scene(SCENE))
+    values_at = [down_and_back(p, Y0)[0] for p in P_GRID]
+    for rx in receivers():
+        values = [v - rx for v in values_at]
+        roots = [
+            brentq(lambda p: down_and_back(p, Y0)[0] - rx, P_GRID[i], P_GRID[i + 1], xtol=1e-20, rtol=1e-15)
+            for i in range(len(P_GRID) - 1)
+            if values[i] * values[i + 1] < 0
+        ]
+        expected = sorted(down_and_back(p, Y0)[1] for p in roots)
+        rays, complete = tracer.stationary_paths((0, Y0), (rx, Y0), "direct")
+        assert not complete
+        ours = sorted(r.time for r in rays if r.turns == 1 and r.launch_angle < 0)
+        assert len(ours) == len(expected) >= 1, (rx, ours, expected)
+        for a, b in zip(ours, expected):
+            assert abs(a - b) < 1e-9 * b, (a, b)
+        # Every ray has its columns, and amplitudes with a caustic phase of -π/2 each.
+        for r in rays:
+            assert r.turns >= 0 and r.caustics >= 0
+            phase = math.atan2(r.amplitude.imag, r.amplitude.real)
+            expect = math.remainder(-math.pi / 2 * r.caustics, 2 * math.pi)
+            assert abs(math.remainder(phase - expect, 2 * math.pi)) < 1e-9
+
+
+def test_columns_of_a_batch():
+    scene = dict(SCENE, solver={"stationary": "all"}, receivers=[[x, Y0] for x in receivers()])
+    rays = eigenray.Tracer(eigenray.Scene(scene)).trace()
+    assert len(rays.time) >= 2
+    assert np.all(np.isfinite(rays.turns))
+    assert np.all(np.isfinite(rays.caustics))
+    assert np.all(np.isfinite(rays.launch_angle))
+
+
+@pytest.mark.parametrize(
+    "change, key",
+    [
+        (lambda s: s["media"]["sea"].update(profile=[[0, 1500]]), "media.sea.profile"),
+        (lambda s: s["media"]["sea"].update(profile=[[0, 1500], [1, 1490]]), r"media.sea.profile\[1\]"),
+        (lambda s: s["media"]["sea"].update(profile=[[0, 1500], [-1, -3]]), r"media.sea.profile\[1\]"),
+        (lambda s: s["media"]["sea"].update(speed=1500), "media.sea.profile"),
+        (lambda s: s["media"]["sea"].update(gradient=[0, 1]), "media.sea.gradient"),
+    ],
+)
+def test_bad_profiles_are_refused_naming_the_key(change, key):
+    scene = copy.deepcopy(SCENE)
+    change(scene)
+    with pytest.raises((eigenray.EigenrayError, ValueError), match=key.replace(".", r"\.") if "[" not in key else key):
+        eigenray.Scene(scene)

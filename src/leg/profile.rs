@@ -1,0 +1,834 @@
+//! A medium whose speed is piecewise linear in `y` and constant in `x` (BELLHOP's `'C'`
+//! profile, `y` up): every ray between two points of it, in the ray-parameter form.
+//!
+//! In such a medium the horizontal slowness `p = cos θ / c` is conserved along a ray, so a
+//! ray is fixed by `p`, its first vertical direction and its number of turning points (its
+//! *branch*). Inside one linear layer the ray is a circular arc, and each quantity of a piece
+//! of it between heights `y₁` and `y₂` (speeds `c₁`, `c₂`, `sᵢ = √(1 − p²cᵢ²)` the sines of
+//! the angles with the horizontal) has a closed form written without a division by the
+//! layer's gradient or by `p`, so a uniform layer and a vertical ray are the same formulas:
+//!
+//! | quantity | piece from `y₁` to `y₂` (`h = |y₂ − y₁|`) |
+//! | --- | --- |
+//! | range `X` | `h p (c₁ + c₂) / (s₁ + s₂)` |
+//! | `∫ c ds = X / p` | `h (c₁ + c₂) / (s₁ + s₂)` |
+//! | time `T = (atanh s₁ − atanh s₂) / g` | `h (c₁ + c₂)(1 + s₁s₂) / ((s₁ + s₂)(c₁² + c₂² − p²c₁²c₂²)) · atanh(q)/q` |
+//! | arc length | `h (c₁ + c₂) / (c₂s₁ + c₁s₂) · asin(z)/z` |
+//! | `∂X/∂p`, both ends fixed | `X / (p s₁ s₂)` |
+//! | `∂X/∂p`, one end a turning point | `−1 / (s |g| p²)` (`s` at the other end) |
+//!
+//! with `q = (c₂² − c₁²)(1 + s₁s₂) / ((s₁ + s₂)(c₁² + c₂² − p²c₁²c₂²))` and
+//! `z = p (c₂² − c₁²) / (c₂s₁ + c₁s₂)`. A turning point is where `c = 1/p` (`s = 0`): the same
+//! formulas with `s₂ = 0`. Beyond the end knots the speed is that of the nearest knot (a
+//! uniform layer, where no ray turns).
+//!
+//! Between two points, the rays of a branch are the roots of `X(p) = Δx`; `X` is not
+//! monotone on a branch with turns (caustics), so [`Profile::arrivals`] samples the launch
+//! angle and refines every sign change by bisection. A caustic the ray tube passes is a zero
+//! of `Q ∝ sin θ · ∂X/∂p` (the prefix's `∂X/∂p` at fixed end): inside one linear layer `Q` is
+//! linear in `sin θ`, which is monotone along the arc, so `Q` has at most one zero per layer
+//! traversal and its sign at the knots and at the receiver counts them exactly.
+
+use crate::geom::Vec2;
+
+/// A speed profile: knots `(y, c)` in increasing `y` (the scene's order reversed).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Profile {
+    /// Heights of the knots, increasing.
+    y: Vec<f64>,
+    /// Speeds at the knots.
+    c: Vec<f64>,
+}
+
+/// The sums over the pieces of a ray (or of one of its runs).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct RaySums {
+    /// Horizontal range.
+    pub x: f64,
+    /// Travel time.
+    pub t: f64,
+    /// `∫ c ds`.
+    pub width: f64,
+    /// Arc length.
+    pub arc: f64,
+    /// `∂X/∂p` (ends fixed, turning points moving with `p`).
+    pub x_p: f64,
+}
+
+impl RaySums {
+    fn add(&mut self, o: RaySums) {
+        self.x += o.x;
+        self.t += o.t;
+        self.width += o.width;
+        self.arc += o.arc;
+        self.x_p += o.x_p;
+    }
+}
+
+/// One ray between two points of a profile: its branch, its ray parameter and its sums.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct ProfileRay {
+    /// The horizontal slowness, signed as the ray's horizontal direction.
+    pub p: f64,
+    /// The first vertical direction (+1 up, −1 down).
+    pub first: f64,
+    /// The number of turning points.
+    pub turns: u32,
+    /// The number of caustics the ray tube passes (zeros of `Q`).
+    pub caustics: u32,
+    /// The sine of the angle with the horizontal at the start and at the end (≥ 0).
+    pub sines: [f64; 2],
+    /// The speeds at the start and at the end.
+    pub speeds: [f64; 2],
+    /// The last vertical direction (+1 up, −1 down).
+    pub last: f64,
+    /// Time, range, `∫ c ds`, arc length and `∂X/∂p`.
+    pub sums: RaySums,
+}
+
+impl ProfileRay {
+    /// The unit direction at the start.
+    pub fn direction_at_start(&self) -> Vec2 {
+        let [ca, _] = self.speeds;
+        Vec2::new(self.p * ca, self.first * self.sines[0])
+    }
+    /// The unit direction at the end.
+    #[cfg(test)]
+    pub fn direction_at_end(&self) -> Vec2 {
+        let [_, cb] = self.speeds;
+        Vec2::new(self.p * cb, self.last * self.sines[1])
+    }
+    /// `c_s ‖∂²T/∂a∂b‖ = c_s / (|∂X/∂p| s_a s_b)`: the inverse of the tube's in-plane width
+    /// per unit turn of the take-off direction, times the source's speed over the
+    /// source's slowness as the amplitude's sweep has it (`1 / W`).
+    pub fn inverse_width(&self) -> f64 {
+        let [sa, sb] = self.sines;
+        self.speeds[0] / (self.sums.x_p.abs() * sa * sb)
+    }
+}
+
+/// What [`Profile::arrivals`] found.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct ProfileArrivals {
+    /// The rays, by time.
+    pub rays: Vec<ProfileRay>,
+    /// Whether the branches were searched up to the most turns a ray can have there (not a
+    /// proof: two roots closer than the sampling can be missed).
+    pub every_branch: bool,
+}
+
+/// The launch angles sampled on each branch ([`Profile::arrivals`]).
+pub(crate) const PROFILE_SAMPLES: usize = 4096;
+
+/// The most turning points searched on one leg.
+pub(crate) const MAX_TURNS: u32 = 200;
+
+/// `atanh(q) / q` for `|q| < 1`, without loss near 0.
+fn atanh_over(q: f64) -> f64 {
+    let q = q.abs();
+    if q < 1e-3 {
+        let q2 = q * q;
+        1.0 + q2 * (1.0 / 3.0 + q2 * (1.0 / 5.0 + q2 / 7.0))
+    } else {
+        q.atanh() / q
+    }
+}
+
+/// `asin(z) / z` for `|z| ≤ 1`, without loss near 0.
+fn asin_over(z: f64) -> f64 {
+    let z = z.abs();
+    if z < 1e-3 {
+        let z2 = z * z;
+        1.0 + z2 * (1.0 / 6.0 + z2 * (3.0 / 40.0 + z2 * (5.0 / 112.0)))
+    } else {
+        z.min(1.0).asin() / z
+    }
+}
+
+/// `√(1 − p²c²)`, 0 at and beyond a turning point.
+#[inline]
+fn sine(p: f64, c: f64) -> f64 {
+    let pc = p * c;
+    ((1.0 - pc) * (1.0 + pc)).max(0.0).sqrt()
+}
+
+/// The sums of one piece of a ray in one linear layer (see the module), `h ≥ 0`; `x_p` is
+/// left to the caller (it depends on which ends are turning points). Without `FULL`, only
+/// the range and `∫ c ds` (the sampling's and the refinement's: no transcendental call).
+fn piece<const FULL: bool>(p: f64, h: f64, c1: f64, c2: f64, s1: f64, s2: f64) -> RaySums {
+    let den = s1 + s2;
+    let width = h * (c1 + c2) / den;
+    if !FULL {
+        return RaySums {
+            x: p * width,
+            width,
+            ..RaySums::default()
+        };
+    }
+    let m = c1 * c1 + c2 * c2 - p * p * c1 * c1 * c2 * c2;
+    let q = (c2 * c2 - c1 * c1) * (1.0 + s1 * s2) / (den * m);
+    let t = h * (c1 + c2) * (1.0 + s1 * s2) / (den * m) * atanh_over(q);
+    let across = c2 * s1 + c1 * s2;
+    let z = p * (c2 * c2 - c1 * c1) / across;
+    let arc = h * (c1 + c2) / across * asin_over(z);
+    RaySums {
+        x: p * width,
+        t,
+        width,
+        arc,
+        x_p: 0.0,
+    }
+}
+
+/// Where a run ends: at its target height, or at a turning point.
+#[derive(Clone, Copy, Debug)]
+enum RunEnd {
+    /// At the target.
+    Target,
+    /// At a turning point, at this height.
+    Turn(f64),
+}
+
+/// A run of a ray: its sums and where it ended.
+#[derive(Clone, Copy, Debug)]
+struct Run {
+    sums: RaySums,
+    end: RunEnd,
+}
+
+/// The ranges of the runs every branch's ray at one `p` is made of ([`Profile::parts`]).
+#[derive(Clone, Copy, Debug)]
+struct Parts {
+    /// From `a` to `b` without a turn.
+    direct: Option<f64>,
+    /// From `a` up to its upper turning point, and down to its lower one.
+    first_up: Option<f64>,
+    first_down: Option<f64>,
+    /// From one turning point to the other.
+    full: Option<f64>,
+    /// From the upper turning point down to `b`, and from the lower one up to `b`.
+    from_hi: Option<f64>,
+    from_lo: Option<f64>,
+    /// The direction from `a` to `b`'s height.
+    toward: f64,
+}
+
+impl Parts {
+    fn none() -> Parts {
+        Parts {
+            direct: None,
+            first_up: None,
+            first_down: None,
+            full: None,
+            from_hi: None,
+            from_lo: None,
+            toward: 1.0,
+        }
+    }
+
+    /// The range of the branch `(first, turns)`.
+    fn range(&self, first: f64, turns: u32) -> Option<f64> {
+        if turns == 0 {
+            return if first == self.toward {
+                self.direct
+            } else {
+                None
+            };
+        }
+        let start = if first > 0.0 {
+            self.first_up
+        } else {
+            self.first_down
+        }?;
+        // The last run leaves the turning point reached going `first · (−1)^(turns − 1)`.
+        let last_up = if turns % 2 == 1 {
+            first > 0.0
+        } else {
+            first < 0.0
+        };
+        let end = if last_up { self.from_hi } else { self.from_lo }?;
+        let middle = if turns >= 2 {
+            self.full? * f64::from(turns - 1)
+        } else {
+            0.0
+        };
+        Some(start + middle + end)
+    }
+}
+
+impl Profile {
+    /// The profile of the knots `[y, c]`, `y` strictly decreasing (validated by the scene).
+    pub fn new(knots: &[[f64; 2]]) -> Profile {
+        Profile {
+            y: knots.iter().rev().map(|k| k[0]).collect(),
+            c: knots.iter().rev().map(|k| k[1]).collect(),
+        }
+    }
+
+    /// The speed at height `y`.
+    pub fn speed_at(&self, y: f64) -> f64 {
+        let n = self.y.len();
+        if y <= self.y[0] {
+            return self.c[0];
+        }
+        if y >= self.y[n - 1] {
+            return self.c[n - 1];
+        }
+        let i = self.y.partition_point(|&k| k <= y).clamp(1, n - 1) - 1;
+        let (y0, y1) = (self.y[i], self.y[i + 1]);
+        let (c0, c1) = (self.c[i], self.c[i + 1]);
+        c0 + (c1 - c0) * ((y - y0) / (y1 - y0))
+    }
+
+    /// The index of the first knot strictly beyond `y` in the direction `dir` (`None`:
+    /// the uniform speed beyond the end knot reaches to infinity).
+    fn next_knot(&self, y: f64, dir: f64) -> Option<usize> {
+        if dir > 0.0 {
+            let i = self.y.partition_point(|&k| k <= y);
+            (i < self.y.len()).then_some(i)
+        } else {
+            let i = self.y.partition_point(|&k| k < y);
+            i.checked_sub(1)
+        }
+    }
+
+    /// A run from `y0` (sine `s0` there, which the caller may know better than
+    /// `√(1 − p²c²)`; 0 at a turning point) in the direction `dir` until `target` (`None`:
+    /// until the ray turns). `None` when it turns before its target, or never turns when
+    /// asked to. `crossings` receives `(∂X/∂p so far in this run, direction)` at each knot
+    /// the run crosses.
+    fn run<const FULL: bool>(
+        &self,
+        p: f64,
+        y0: f64,
+        s0: f64,
+        dir: f64,
+        target: Option<f64>,
+        mut crossings: Option<&mut Vec<f64>>,
+    ) -> Option<Run> {
+        let inv = 1.0 / p;
+        let mut sums = RaySums::default();
+        let (mut y, mut c, mut s) = (y0, self.speed_at(y0), s0);
+        let starts_turned = s0 == 0.0;
+        let mut first = true;
+        loop {
+            let next = self.next_knot(y, dir);
+            // The piece ends at the next knot, the target, or the turning point.
+            let (mut y_end, mut c_end) = match next {
+                Some(i) => (self.y[i], self.c[i]),
+                None => (dir * f64::INFINITY, c),
+            };
+            let mut at_target = false;
+            if let Some(t) = target
+                && (t - y_end) * dir <= 0.0
+            {
+                (y_end, c_end) = (t, self.speed_at(t));
+                at_target = true;
+            }
+            // Does the ray turn in this piece? (speed reaches 1/p)
+            if c_end >= inv && p > 0.0 && c_end != c {
+                if target.is_some() && at_target && c_end == inv {
+                    // Turns exactly at the target: not a ray of this branch.
+                    return None;
+                }
+                if target.is_some() {
+                    return None;
+                }
+                let slope = (c_end - c) / (y_end - y);
+                let y_turn = y + (inv - c) / slope;
+                let h = (y_turn - y).abs();
+                let mut part = piece::<FULL>(p, h, c, inv, s, 0.0);
+                // (A layer is monotone in speed: a run turns at most once in it.)
+                part.x_p = -1.0 / (s * slope.abs() * p * p);
+                sums.add(part);
+                return Some(Run {
+                    sums,
+                    end: RunEnd::Turn(y_turn),
+                });
+            }
+            if !y_end.is_finite() {
+                // Uniform to infinity without a target: never turns.
+                return None;
+            }
+            let s_end = sine(p, c_end);
+            let h = (y_end - y).abs();
+            let mut part = piece::<FULL>(p, h, c, c_end, s, s_end);
+            part.x_p = if first && starts_turned {
+                let slope = (c_end - c) / (y_end - y);
+                -1.0 / (s_end * slope.abs() * p * p)
+            } else {
+                part.width / (s * s_end)
+            };
+            sums.add(part);
+            if at_target {
+                return Some(Run {
+                    sums,
+                    end: RunEnd::Target,
+                });
+            }
+            if let Some(out) = crossings.as_deref_mut() {
+                out.push(sums.x_p);
+            }
+            (y, c, s) = (y_end, c_end, s_end);
+            first = false;
+        }
+    }
+
+    /// The ray of branch `(first, turns)` with ray parameter `p ≥ 0` (launch sine `sa` at
+    /// `ya`) to the height `yb`: its sums, `None` where the branch has no ray at this `p`.
+    /// With `caustics`, also counts the caustics (the sign changes of `Q`).
+    fn branch<const FULL: bool>(
+        &self,
+        p: f64,
+        sa: f64,
+        [ya, yb]: [f64; 2],
+        first: f64,
+        turns: u32,
+        caustics: Option<&mut u32>,
+    ) -> Option<RaySums> {
+        let mut sums = RaySums::default();
+        let mut crossings = Vec::new();
+        let mut signs: Vec<f64> = Vec::new();
+        let detail = caustics.is_some();
+        let (mut y, mut s, mut dir) = (ya, sa, first);
+        for k in 0..=turns {
+            let target = (k == turns).then_some(yb);
+            crossings.clear();
+            let run = self.run::<FULL>(p, y, s, dir, target, detail.then_some(&mut crossings))?;
+            if detail {
+                for x in &crossings {
+                    signs.push(dir * (sums.x_p + x));
+                }
+            }
+            sums.add(run.sums);
+            match run.end {
+                RunEnd::Target => {}
+                RunEnd::Turn(at) => {
+                    (y, s) = (at, 0.0);
+                    dir = -dir;
+                }
+            }
+        }
+        if let Some(count) = caustics {
+            // The last direction is `dir`.
+            signs.push(dir * sums.x_p);
+            let mut previous = first;
+            *count = 0;
+            for q in signs {
+                if q != 0.0 && q.signum() != previous {
+                    *count += 1;
+                    previous = q.signum();
+                }
+            }
+        }
+        Some(sums)
+    }
+
+    /// The ranges of the runs that make up every branch's ray at `p` (launch sine `sa`).
+    fn parts(&self, p: f64, sa: f64, ya: f64, yb: f64) -> Parts {
+        let x = |r: Option<Run>| r.map(|r| r.sums.x);
+        let toward = if yb >= ya { 1.0 } else { -1.0 };
+        let up = self.run::<false>(p, ya, sa, 1.0, None, None);
+        let down = self.run::<false>(p, ya, sa, -1.0, None, None);
+        let turn = |r: Option<Run>| match r?.end {
+            RunEnd::Turn(at) => Some(at),
+            RunEnd::Target => None,
+        };
+        let (hi, lo) = (turn(up), turn(down));
+        let (first_up, first_down) = (x(up), x(down));
+        // Three runs, the rest from differences along the duct (the sampling's signs only:
+        // the refinement evaluates each branch in full).
+        let full = first_up.zip(first_down).map(|(u, d)| u + d);
+        let from_hi = hi.and_then(|hi| x(self.run::<false>(p, hi, 0.0, -1.0, Some(yb), None)));
+        let from_lo = match (lo, full, from_hi) {
+            (Some(_), Some(full), Some(h)) => Some(full - h),
+            (Some(_), Some(_), None) => None,
+            (Some(lo), None, _) => x(self.run::<false>(p, lo, 0.0, 1.0, Some(yb), None)),
+            (None, ..) => None,
+        };
+        let direct = match (toward > 0.0, first_up, from_hi, first_down, from_lo) {
+            (true, Some(u), Some(h), ..) if yb >= ya => Some(u - h).filter(|&d| d >= 0.0),
+            (false, _, _, Some(d), Some(l)) => Some(d - l).filter(|&v| v >= 0.0),
+            (true, Some(_), None, ..) | (false, _, _, Some(_), None) => None,
+            _ => x(self.run::<false>(p, ya, sa, toward, Some(yb), None)),
+        };
+        Parts {
+            direct,
+            first_up,
+            first_down,
+            full,
+            from_hi,
+            from_lo,
+            toward,
+        }
+    }
+
+    /// [`arrivals`](Self::arrivals), remembered per thread for the last profile and pair
+    /// asked (the default mode's solve, its amplitude and its written turns ask for the same
+    /// pair in turn): keyed by the knots and the points themselves, so never stale.
+    pub fn arrivals_cached(&self, a: Vec2, b: Vec2) -> ProfileArrivals {
+        thread_local! {
+            static LAST: std::cell::RefCell<Option<(Profile, Vec2, Vec2, ProfileArrivals)>> =
+                const { std::cell::RefCell::new(None) };
+        }
+        LAST.with(|last| {
+            if let Some((p, la, lb, found)) = &*last.borrow()
+                && p == self
+                && *la == a
+                && *lb == b
+            {
+                return found.clone();
+            }
+            let found = self.arrivals(a, b);
+            *last.borrow_mut() = Some((self.clone(), a, b, found.clone()));
+            found
+        })
+    }
+
+    /// Every ray from `a` to `b` (up to [`MAX_TURNS`] turning points), by time: for each
+    /// branch, the launch angle sampled at [`PROFILE_SAMPLES`] points and every sign change of
+    /// `X − Δx` refined by bisection, each ray then evaluated in full ([`ProfileRay`]).
+    pub fn arrivals(&self, a: Vec2, b: Vec2) -> ProfileArrivals {
+        let dx = b.x - a.x;
+        let sign_x = if dx < 0.0 { -1.0 } else { 1.0 };
+        let dx = dx.abs();
+        let (ca, cb) = (self.speed_at(a.y), self.speed_at(b.y));
+        let mut out = ProfileArrivals {
+            rays: Vec::new(),
+            every_branch: true,
+        };
+        let make = |p: f64, sa: f64, first: f64, turns: u32| -> Option<ProfileRay> {
+            let mut caustics = 0;
+            let sums = self.branch::<true>(p, sa, [a.y, b.y], first, turns, Some(&mut caustics))?;
+            let last = if turns % 2 == 0 { first } else { -first };
+            Some(ProfileRay {
+                p: sign_x * p,
+                first,
+                turns,
+                caustics,
+                sines: [sa, sine(p, cb)],
+                speeds: [ca, cb],
+                last,
+                sums,
+            })
+        };
+        if dx == 0.0 {
+            // A vertical ray (p = 0) on the direct branch.
+            if b.y != a.y {
+                let first = if b.y > a.y { 1.0 } else { -1.0 };
+                out.rays.extend(make(0.0, 1.0, first, 0));
+            }
+            return out;
+        }
+        // Launch angles θ ∈ (0, π/2] at a: p = cos θ / c_a, s_a = sin θ.
+        let n = PROFILE_SAMPLES;
+        let angle = |j: f64| std::f64::consts::FRAC_PI_2 * j / n as f64;
+        let at = |theta: f64| (theta.cos() / ca, theta.sin());
+        let parts: Vec<Parts> = (0..=n)
+            .map(|j| {
+                let (p, sa) = at(angle(j as f64));
+                if j == 0 {
+                    Parts::none()
+                } else {
+                    self.parts(p, sa, a.y, b.y)
+                }
+            })
+            .collect();
+        let least_cycle = parts
+            .iter()
+            .filter_map(|q| q.full)
+            .fold(f64::INFINITY, f64::min);
+        let most = if least_cycle > 0.0 {
+            ((dx / least_cycle).floor() + 2.0).min(MAX_TURNS as f64) as u32
+        } else {
+            MAX_TURNS
+        };
+        out.every_branch = most < MAX_TURNS;
+        for turns in 0..=most {
+            for first in [1.0, -1.0] {
+                let value = |q: &Parts| q.range(first, turns).map_or(f64::NAN, |x| x - dx);
+                for j in 1..n {
+                    let (v0, v1) = (value(&parts[j]), value(&parts[j + 1]));
+                    if !(v0.is_finite() && v1.is_finite()) || (v0 > 0.0) == (v1 > 0.0) {
+                        continue;
+                    }
+                    // Newton on the launch angle inside the bracket (dX/dθ = −X_p sin θ / c_a),
+                    // bisecting where a step would leave it.
+                    let (mut lo, mut hi) = (angle(j as f64), angle(j as f64 + 1.0));
+                    let (mut v_lo, mut theta) = (v0, angle(j as f64 + 0.5));
+                    for _ in 0..100 {
+                        let (p, sa) = at(theta);
+                        let Some(sums) =
+                            self.branch::<false>(p, sa, [a.y, b.y], first, turns, None)
+                        else {
+                            break;
+                        };
+                        let v = sums.x - dx;
+                        if v == 0.0 || hi - lo <= 4.0 * f64::EPSILON * hi {
+                            break;
+                        }
+                        if (v > 0.0) == (v_lo > 0.0) {
+                            (lo, v_lo) = (theta, v);
+                        } else {
+                            hi = theta;
+                        }
+                        let step = theta + v / (sums.x_p * sa / ca);
+                        let next = if step > lo && step < hi && step.is_finite() {
+                            step
+                        } else {
+                            0.5 * (lo + hi)
+                        };
+                        if next == theta {
+                            break;
+                        }
+                        theta = next;
+                    }
+                    let (p, sa) = at(theta);
+                    // A sign change across a jump of X (where the turning point jumps past
+                    // a local maximum of the speed) is no root: its miss stays.
+                    if let Some(mut ray) = make(p, sa, first, turns)
+                        && (ray.sums.x - dx).abs() <= 1e-7 * dx.max(1.0)
+                    {
+                        // The first-order correction of the time to the exact range
+                        // (dT = p dX along the family of rays from a).
+                        ray.sums.t += p * (dx - ray.sums.x);
+                        out.rays.push(ray);
+                    }
+                }
+            }
+        }
+        out.rays.sort_by(|x, y| x.sums.t.total_cmp(&y.sums.t));
+        out
+    }
+
+    /// Points along `ray` from `a`: each piece's ends and `per_piece − 1` points inside it
+    /// (equal steps of the angle), for drawing.
+    pub fn curve(&self, ray: &ProfileRay, a: Vec2, b: Vec2, per_piece: usize) -> Vec<Vec2> {
+        let p = ray.p.abs();
+        let sx = if ray.p < 0.0 { -1.0 } else { 1.0 };
+        let mut out = vec![a];
+        let (mut x, mut y, mut dir) = (a.x, a.y, ray.first);
+        let mut s = ray.sines[0];
+        let per = per_piece.max(1);
+        for k in 0..=ray.turns {
+            let last = k == ray.turns;
+            loop {
+                let c = self.speed_at(y);
+                let next = self.next_knot(y, dir);
+                let (mut y_end, mut c_end) = match next {
+                    Some(i) => (self.y[i], self.c[i]),
+                    None => (dir * 1e300, c),
+                };
+                let mut end_here = false;
+                let yb = last.then_some(b.y);
+                if let Some(t) = yb
+                    && (t - y_end) * dir <= 0.0
+                {
+                    (y_end, c_end) = (t, self.speed_at(t));
+                    end_here = true;
+                }
+                let turning = !end_here && c_end >= 1.0 / p && p > 0.0 && c_end != c;
+                if turning {
+                    let slope = (c_end - c) / (y_end - y);
+                    y_end = y + (1.0 / p - c) / slope;
+                    c_end = 1.0 / p;
+                }
+                for j in 1..=per {
+                    let f = j as f64 / per as f64;
+                    // Equal steps of the speed (of the angle along an arc, to first order).
+                    let (yj, cj) = (y + (y_end - y) * f, c + (c_end - c) * f);
+                    let sj = if turning && j == per {
+                        0.0
+                    } else {
+                        sine(p, cj)
+                    };
+                    let part = piece::<true>(p, (yj - y).abs(), c, cj, s, sj);
+                    out.push(Vec2::new(x + sx * part.x, yj));
+                }
+                let part = piece::<true>(p, (y_end - y).abs(), c, c_end, s, sine(p, c_end));
+                x += sx * part.x;
+                y = y_end;
+                s = if turning { 0.0 } else { sine(p, c_end) };
+                if turning {
+                    dir = -dir;
+                    break;
+                }
+                if end_here {
+                    return out;
+                }
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::leg::{Leg, LegModel, Linear};
+
+    /// The time and range of the ray of parameter `p` from `y1` to `y2` (monotone, no turn)
+    /// by Simpson's rule on `dy / (c s)` and `p c dy / s`, the reference: `n` intervals.
+    fn quadrature(profile: &Profile, p: f64, y1: f64, y2: f64, n: usize) -> (f64, f64) {
+        let h = (y2 - y1) / n as f64;
+        let (mut t, mut x) = (0.0, 0.0);
+        for i in 0..=n {
+            let y = y1 + h * i as f64;
+            let c = profile.speed_at(y);
+            let s = (1.0 - p * p * c * c).sqrt();
+            let w = if i == 0 || i == n {
+                1.0
+            } else if i % 2 == 1 {
+                4.0
+            } else {
+                2.0
+            };
+            t += w / (c * s);
+            x += w * p * c / s;
+        }
+        (t * h.abs() / 3.0, x * h.abs() / 3.0)
+    }
+
+    /// One layer's piece against Simpson quadrature, across knots.
+    #[test]
+    fn pieces_match_quadrature() {
+        let profile = Profile::new(&[[0.0, 1500.0], [-300.0, 1480.0], [-1000.0, 1520.0]]);
+        for p in [0.0, 1e-4, 5e-4, 6.5e-4] {
+            let s = sine(p, profile.speed_at(-50.0));
+            let run = profile
+                .run::<true>(p, -50.0, s, -1.0, Some(-900.0), None)
+                .unwrap();
+            // Simpson per layer (the speed's kink at the knot).
+            let (t1, x1) = quadrature(&profile, p, -50.0, -300.0, 20000);
+            let (t2, x2) = quadrature(&profile, p, -300.0, -900.0, 20000);
+            assert!((run.sums.t - (t1 + t2)).abs() < 1e-12 * run.sums.t, "{p}");
+            assert!(
+                (run.sums.x - (x1 + x2)).abs() < 1e-9 * (1.0 + run.sums.x),
+                "{p}"
+            );
+        }
+    }
+
+    /// `∂X/∂p` of a branch with a turn against a central difference.
+    #[test]
+    fn range_derivative_matches_differences() {
+        let profile = Profile::new(&[[0.0, 1500.0], [-300.0, 1480.0], [-1000.0, 1520.0]]);
+        let (ya, yb) = (-100.0, -200.0);
+        let ca = profile.speed_at(ya);
+        for theta in [0.05f64, 0.1, 0.15] {
+            let p = theta.cos() / ca;
+            let x = |p: f64| {
+                let s = sine(p, ca);
+                profile
+                    .branch::<true>(p, s, [ya, yb], -1.0, 1, None)
+                    .unwrap()
+            };
+            let h = 1e-10;
+            let fd = (x(p + h).x - x(p - h).x) / (2.0 * h);
+            let exact = x(p).x_p;
+            assert!(
+                (fd - exact).abs() < 1e-5 * exact.abs(),
+                "{theta}: {fd} {exact}"
+            );
+        }
+    }
+
+    /// A one-layer profile (and beyond its knots, where the ray does not go) is a `gradient`
+    /// medium: the one arc between two points, its time to 1e-13.
+    #[test]
+    fn one_layer_is_the_gradient_medium() {
+        let profile = Profile::new(&[[0.0, 1500.0], [-5000.0, 1585.0]]);
+        let linear = Linear {
+            speed: 1500.0,
+            gradient: Vec2::new(0.0, -0.017),
+            least_speed: 1500.0,
+        };
+        for (a, b) in [
+            (Vec2::new(0.0, -100.0), Vec2::new(5000.0, -300.0)),
+            (Vec2::new(0.0, -100.0), Vec2::new(-3000.0, -2000.0)),
+            (Vec2::new(0.0, -2000.0), Vec2::new(20000.0, -2000.0)),
+            (Vec2::new(0.0, -2000.0), Vec2::new(0.0, -100.0)),
+        ] {
+            let found = profile.arrivals(a, b);
+            assert_eq!(found.rays.len(), 1, "{a:?} {b:?}");
+            let ray = found.rays[0];
+            let arc = linear.leg(a, b);
+            let rel = (ray.sums.t - arc.time()).abs() / arc.time();
+            assert!(rel < 1e-13, "{a:?} {b:?}: {rel:e}");
+            let d = ray.direction_at_start() - arc.direction_at_start();
+            assert!(d.length() < 1e-9, "{d:?}");
+        }
+    }
+
+    /// The design note's caustic example: a uniform layer (200 m, 1500 m/s) over
+    /// c = 1500 + 0.1 (depth − 200), surface to surface over 10 km: two rays of the branch
+    /// (down, one turn), 6.672526446116 s past the caustic and 6.628258089353 s before it.
+    #[test]
+    fn caustic_example() {
+        let profile = Profile::new(&[[0.0, 1500.0], [-200.0, 1500.0], [-5200.0, 2000.0]]);
+        let found = profile.arrivals(Vec2::new(0.0, 0.0), Vec2::new(10000.0, 0.0));
+        let times: Vec<f64> = found.rays.iter().map(|r| r.sums.t).collect();
+        assert_eq!(times.len(), 2, "{times:?}");
+        assert!((times[0] - 6.628258089353).abs() < 1e-11, "{times:?}");
+        assert!((times[1] - 6.672526446116).abs() < 1e-11, "{times:?}");
+        let caustics: Vec<u32> = found.rays.iter().map(|r| r.caustics).collect();
+        assert_eq!(caustics, [0, 1]);
+        assert!(found.rays.iter().all(|r| r.turns == 1 && r.first < 0.0));
+        // The horizontal slowness is conserved: cos θ / c at the end is p.
+        for r in &found.rays {
+            let end = r.direction_at_end();
+            assert!((end.x / r.speeds[1] - r.p).abs() < 1e-15 * r.p && end.y > 0.0);
+        }
+    }
+
+    /// Random profiles and points, ends on knots and beyond the end knots, vertical and
+    /// same-height pairs included: no panic, and every ray listed lands on its receiver
+    /// (its range within 1e-6 of the pair's) with a finite, positive time at least the
+    /// straight line's at the greatest speed.
+    #[test]
+    fn random_profiles_give_rays_that_land() {
+        let mut rng = crate::demo::SplitMix64(0x40);
+        let mut rays = 0;
+        for case in 0..400 {
+            let n = 2 + (rng.next_f64() * 6.0) as usize;
+            let mut y = 0.0;
+            let knots: Vec<[f64; 2]> = (0..n)
+                .map(|_| {
+                    let k = [y, 1400.0 + 200.0 * rng.next_f64()];
+                    y -= 50.0 + 1000.0 * rng.next_f64();
+                    k
+                })
+                .collect();
+            let profile = Profile::new(&knots);
+            let depth = -y;
+            let mut point = |j: usize| {
+                let y = match (case + j) % 4 {
+                    0 => knots[(rng.next_f64() * n as f64) as usize % n][0],
+                    1 => 200.0 - (depth + 400.0) * rng.next_f64(),
+                    _ => -depth * rng.next_f64(),
+                };
+                Vec2::new(20000.0 * rng.next_f64() - 10000.0, y)
+            };
+            let a = point(0);
+            let mut b = point(1);
+            if case % 10 == 3 {
+                b.x = a.x;
+            }
+            if case % 10 == 7 {
+                b.y = a.y;
+            }
+            let fastest = knots.iter().map(|k| k[1]).fold(0.0, f64::max);
+            for r in profile.arrivals(a, b).rays {
+                rays += 1;
+                assert!(
+                    (r.sums.x - (b.x - a.x).abs()).abs() < 1e-6,
+                    "{a:?} {b:?} {r:?}"
+                );
+                assert!(
+                    r.sums.t.is_finite() && r.sums.t >= (b - a).length() / fastest * (1.0 - 1e-12)
+                );
+            }
+        }
+        assert!(rays > 20, "{rays}");
+    }
+}
