@@ -181,7 +181,7 @@ pub(crate) fn of_path(
         _ if path.points.len() != k + 2 || path.media.len() != k + 1 => {
             Err(NoAmplitude::UnknownMedia)
         }
-        _ => walk(cx, path),
+        _ => walk_reflections(cx, path).map_or_else(|| walk(cx, path), Ok),
     };
     match walked {
         Ok(walk) => finish(cx, path.points, &walk),
@@ -557,6 +557,85 @@ fn walk(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
     Ok(out)
 }
 
+/// [`walk`] for the commonest path: reflections only, every leg straight in one uniform
+/// medium (a scene without a gradient, whose walls are straight segments), two or more of
+/// them. Such a path is the straight line from the source's image, so its tube has a closed
+/// form in the unfolded length `L = Σ ℓⱼ`: the in-plane width is `W = L` (no sweep), the
+/// point source's out-of-plane width `w₀ Σ ℓⱼ / wⱼ` is `L`, the axisymmetric one
+/// ([`out_of_plane_axisymmetric`]) already depends on the first leg and the receiver's range
+/// only, and a line source's on neither; the attenuation is `α L`. Each bounce still takes
+/// its coefficient from the incoming leg's direction and the wall's normal.
+///
+/// `None` (the caller takes [`walk`]) for any other path, and for one that `walk` would
+/// end with a reason (a vanished or unusual leg, a grazing leg, a coefficient without a
+/// value), so that reasons stay [`walk`]'s. Equal to [`walk`] to round-off (its tests).
+#[inline]
+fn walk_reflections(cx: Context<'_>, path: PathGeometry<'_>) -> Option<Walk> {
+    let (points, legs, steps) = (path.points, path.media, path.steps);
+    let m0 = *legs.first()?;
+    if steps.len() < 2
+        || legs.iter().any(|&m| m != m0)
+        || steps.iter().any(|s| s.kind != StepKind::Reflect)
+    {
+        return None;
+    }
+    let w0 = slowness(cx.scene, m0).ok()?;
+    // The unit direction and length of the leg from `a` to `b` as `Uniform::valid_leg` gives
+    // them (the same bits), `None` for a leg of zero, tiny or huge length.
+    let leg = |a: Point, b: Point| {
+        let d = b - a;
+        let l2 = d.x * d.x + d.y * d.y;
+        (f64::MIN_POSITIVE..1e300).contains(&l2).then(|| {
+            let l = l2.sqrt();
+            (d * (1.0 / l), l)
+        })
+    };
+    let (mut u_in, l0) = leg(points[0], points[1])?;
+    let mut length = l0;
+    let mut product = Complex64::new(1.0, 0.0);
+    for (i, step) in steps.iter().enumerate() {
+        let (u, l) = leg(points[i + 1], points[i + 2])?;
+        let line = &cx.scene.interfaces()[step.interface].polyline;
+        let seg = segment_of(line, points[i + 1], path.segments, i);
+        let t = line.tangent(seg);
+        let n = t.perp();
+        let (c1, c2) = (u_in.dot(n), u.dot(n));
+        if c1 == 0.0 || c2 == 0.0 {
+            return None;
+        }
+        let x = Interaction {
+            i,
+            step,
+            seg,
+            from: points[i],
+            here: points[i + 1],
+            leg_in: u_in,
+            len_in: 1.0,
+            t,
+            cos1: c1.abs(),
+            cos2: c2.abs(),
+            cos_scale: 1.0,
+            m_in: m0,
+            m: m0,
+            w_in: w0,
+            w: w0,
+        };
+        product *= coefficient(cx, &x).ok()?;
+        length += l;
+        u_in = u;
+    }
+    Some(Walk {
+        coefficient: product,
+        tube_num: 1.0,
+        tube_den: length,
+        out_of_plane: length,
+        attenuation_db: cx.settings.attenuation[m0] * length,
+        l0,
+        w0,
+        converted: None,
+    })
+}
+
 /// [`walk`] for a path whose legs may be curved (a scene with a gradient medium): the same
 /// pass, each leg from its model ([`crate::leg::LegMedium`], relative to the source), with
 /// what a straight leg has in closed form taken from the leg's Hessian blocks:
@@ -754,6 +833,7 @@ fn medium_across(
 mod tests {
     use super::*;
     use crate::demo::SplitMix64;
+    use crate::regions::Regions;
 
     /// A refraction, a reflection and a converted reflection at one tilted segment (fluids).
     fn scene(amplitudes: &str) -> Scene {
@@ -846,5 +926,336 @@ mod tests {
             }
         }
         println!("one interaction against the sweep: {worst:.3e}");
+    }
+
+    /// The general pass (`walk`, the sweep) on `path`, finished.
+    fn swept(cx: Context<'_>, path: PathGeometry<'_>) -> Amplitude {
+        match walk(cx, path) {
+            Ok(w) => finish(cx, path.points, &w),
+            Err(reason) => Amplitude::none(reason),
+        }
+    }
+
+    /// The largest relative difference of two amplitudes' numbers (their reasons equal).
+    fn amplitude_error(a: &Amplitude, b: &Amplitude) -> f64 {
+        assert_eq!(a.reason, b.reason);
+        // Without a tube (a reason before the spreading) both are NaN.
+        let same = |x: f64, y: f64| {
+            if x.is_nan() && y.is_nan() {
+                0.0
+            } else {
+                rel(x, y)
+            }
+        };
+        let mut e = same(a.spreading, b.spreading).max(same(a.attenuation_db, b.attenuation_db));
+        if a.has_value() {
+            for (x, y) in [(a.value, b.value), (a.coefficient, b.coefficient)] {
+                if x != y {
+                    e = e.max((x - y).norm() / x.norm().max(y.norm()));
+                }
+            }
+        }
+        e
+    }
+
+    /// `p` mirrored in the line through `a` along the unit `t`.
+    fn mirror(p: Point, a: Point, t: Vec2) -> Point {
+        let d = p - a;
+        a + (t * (2.0 * d.dot(t)) - d)
+    }
+
+    /// The reflection points of the path from `source` to `receiver` off the walls
+    /// `walls` (indices of `corners`' edges, the polygon closed) by the image method: `None`
+    /// when a point falls outside its edge's middle or the image is on the wrong side.
+    fn image_path(
+        corners: &[Point],
+        walls: &[usize],
+        source: Point,
+        receiver: Point,
+    ) -> Option<Vec<Point>> {
+        let edge = |j: usize| (corners[j], corners[(j + 1) % corners.len()]);
+        let mut images = vec![source];
+        for &j in walls {
+            let (a, b) = edge(j);
+            let last = *images.last().unwrap();
+            images.push(mirror(last, a, (b - a) * (1.0 / (b - a).length())));
+        }
+        let mut points = vec![receiver];
+        let mut target = receiver;
+        for (k, &j) in walls.iter().enumerate().rev() {
+            let (a, b) = edge(j);
+            let image = images[k + 1];
+            // image + s (target − image) on the line a + r (b − a).
+            let (d, e) = (target - image, b - a);
+            let den = d.cross(e);
+            if den == 0.0 {
+                return None;
+            }
+            let s = (a - image).cross(e) / den;
+            let r = (a - image).cross(d) / den;
+            if !(0.01..0.99).contains(&s) || !(0.02..0.98).contains(&r) {
+                return None;
+            }
+            target = a + e * r;
+            points.push(target);
+        }
+        points.push(source);
+        points.reverse();
+        Some(points)
+    }
+
+    /// The path shot from `source` at `angle` through `bounces` specular reflections inside
+    /// the convex polygon `corners`, its receiver halfway along the last leg, and the edge of
+    /// each bounce; `None` when one lands within 2 % of a corner.
+    fn shot_path(
+        corners: &[Point],
+        source: Point,
+        angle: f64,
+        bounces: usize,
+    ) -> Option<(Vec<Point>, Vec<usize>)> {
+        let n = corners.len();
+        let (mut p, mut u) = (source, Vec2::new(angle.cos(), angle.sin()));
+        let (mut points, mut walls) = (vec![source], Vec::new());
+        let mut last = usize::MAX;
+        for _ in 0..=bounces {
+            // The nearest edge ahead.
+            let mut hit: Option<(f64, usize, f64)> = None;
+            for j in (0..n).filter(|&j| j != last) {
+                let (a, b) = (corners[j], corners[(j + 1) % n]);
+                let e = b - a;
+                let den = u.cross(e);
+                if den == 0.0 {
+                    continue;
+                }
+                let s = (a - p).cross(e) / den;
+                let r = (a - p).cross(u) / den;
+                if s > 1e-9 && (0.0..=1.0).contains(&r) && hit.is_none_or(|h| s < h.0) {
+                    hit = Some((s, j, r));
+                }
+            }
+            let (s, j, r) = hit?;
+            if walls.len() == bounces {
+                points.push(p + u * (0.5 * s));
+                return Some((points, walls));
+            }
+            if !(0.02..0.98).contains(&r) {
+                return None;
+            }
+            let (a, b) = (corners[j], corners[(j + 1) % n]);
+            let t = (b - a) * (1.0 / (b - a).length());
+            p = a + (b - a) * r;
+            u = t * (2.0 * u.dot(t)) - u;
+            points.push(p);
+            walls.push(j);
+            last = j;
+        }
+        None
+    }
+
+    /// A scene of one closed convex room (`corners`) of air, rock outside, the walls'
+    /// reflection `law`, the amplitudes `model`.
+    fn room(corners: &[Point], law: &str, model: &str, source: Point) -> Scene {
+        let points: Vec<String> = corners
+            .iter()
+            .map(|p| format!("[{}, {}]", p.x, p.y))
+            .collect();
+        Scene::from_json(&format!(
+            r#"{{ "media": {{ "air": {{ "speed": 343, "density": 1.2, "attenuation": 0.01 }},
+                             "rock": {{ "speed": 900, "density": 2.1, "at": [40, 40] }} }},
+                 "background": "air", "domain": [[-50, -50], [50, 50]],
+                 "interfaces": {{ "room": {{ "points": [{}], "closed": true,
+                                            "reflection": {law} }} }},
+                 "sources": [[{}, {}]], "receivers": [[1, 0]],
+                 "paths": [{{ "steps": [{{ "reflect": "room" }}], "media": ["air", "air"] }}],
+                 "amplitudes": {model} }}"#,
+            points.join(", "),
+            source.x,
+            source.y
+        ))
+        .unwrap()
+    }
+
+    /// The closed form for reflections only in one medium (`walk_reflections`: the unfolded
+    /// length, no sweep) against the general pass (`walk`) on image-method paths of up to
+    /// 12 bounces and shot paths of up to 80 in random convex rooms, for every source model and several reflection
+    /// laws (with the medium's attenuation, and `"media"` against the rock outside).
+    #[test]
+    fn the_unfolded_form_is_the_sweep() {
+        let mut rng = SplitMix64(39);
+        let (mut worst, mut compared, mut fast) = (0.0f64, 0usize, 0usize);
+        let models = [
+            r#"{ "source": "point" }"#,
+            r#"{ "source": "axisymmetric" }"#,
+            r#"{ "source": "line", "frequency": 300 }"#,
+        ];
+        let laws = [
+            r#""rigid""#,
+            r#"{ "absorption": 0.37 }"#,
+            r#""pressure-release""#,
+            r#""media""#,
+        ];
+        for round in 0..24 {
+            // A convex polygon: corners on an ellipse at sorted random angles, about a centre
+            // right of the axis (the axisymmetric source on it, inside the room).
+            let n = 3 + (rng.next_f64() * 5.0) as usize;
+            let mut angles: Vec<f64> = (0..n)
+                .map(|j| (j as f64 + 0.2 + 0.6 * rng.next_f64()) * 2.0 * PI / n as f64)
+                .collect();
+            angles.sort_by(f64::total_cmp);
+            let (ax, ay) = (4.0 + 6.0 * rng.next_f64(), 3.0 + 5.0 * rng.next_f64());
+            let centre = Point::new(0.5 * ax, 0.3 * rng.next_f64());
+            let corners: Vec<Point> = angles
+                .iter()
+                .map(|a| Point::new(centre.x + ax * a.cos(), centre.y + ay * a.sin()))
+                .collect();
+            let model = models[round % models.len()];
+            let law = laws[(round / models.len()) % laws.len()];
+            let source = Point::new(0.0, centre.y + 0.2 * ay * (rng.next_f64() - 0.5));
+            let scene = room(&corners, law, model, source);
+            let regions = Regions::build(&scene).unwrap();
+            let settings = scene.amplitudes().unwrap();
+            let cx = Context {
+                scene: &scene,
+                settings,
+                regions: Some(&regions),
+            };
+            let mut found = 0;
+            for _ in 0..4000 {
+                if found == 60 {
+                    break;
+                }
+                let receiver = Point::new(
+                    centre.x + 0.5 * ax * (rng.next_f64() - 0.3),
+                    centre.y + 0.5 * ay * (rng.next_f64() - 0.5),
+                );
+                // Image-method paths of up to 12 bounces, shot paths of up to 80.
+                let (points, walls) = if found % 2 == 0 {
+                    let k = 2 + (rng.next_f64() * 11.0) as usize;
+                    let mut walls = vec![(rng.next_f64() * n as f64) as usize % n];
+                    while walls.len() < k {
+                        let step = 1 + (rng.next_f64() * (n - 1) as f64) as usize;
+                        walls.push((walls[walls.len() - 1] + step) % n);
+                    }
+                    let Some(points) = image_path(&corners, &walls, source, receiver) else {
+                        continue;
+                    };
+                    (points, walls)
+                } else {
+                    let k = 2 + (rng.next_f64() * 79.0) as usize;
+                    let Some(shot) = shot_path(&corners, source, 2.0 * PI * rng.next_f64(), k)
+                    else {
+                        continue;
+                    };
+                    shot
+                };
+                let k = walls.len();
+                found += 1;
+                let steps = vec![
+                    Step {
+                        kind: StepKind::Reflect,
+                        interface: 0,
+                    };
+                    k
+                ];
+                let media = vec![0; k + 1];
+                let hinted = found % 2 == 0;
+                let path = PathGeometry {
+                    steps: &steps,
+                    points: &points,
+                    media: &media,
+                    segments: hinted.then_some(&walls[..]),
+                };
+                fast += usize::from(walk_reflections(cx, path).is_some());
+                let (a, b) = (
+                    of_path(&scene, settings, Some(&regions), path),
+                    swept(cx, path),
+                );
+                let e = amplitude_error(&a, &b);
+                assert!(e <= 1e-12, "{model} {law} {points:?}: {e:e}");
+                worst = worst.max(e);
+                compared += usize::from(a.has_value());
+            }
+        }
+        assert!(compared > 500 && fast > 1000, "{compared} {fast}");
+        println!("unfolded against the sweep: {worst:.3e} over {compared} values");
+    }
+
+    /// The closed form against the image sources of a flat waveguide (two horizontal
+    /// walls; every image on the axis, so that the axisymmetric tube is the point
+    /// source's): `Π R / (4π L)` with `L` the distance from the image, and for a line
+    /// source `Π R e^(iπ/4) / √(8π k₀ L)`.
+    #[test]
+    fn the_unfolded_form_is_the_image_source() {
+        let corners = [
+            Point::new(-30.0, -8.0),
+            Point::new(30.0, -8.0),
+            Point::new(30.0, 0.0),
+            Point::new(-30.0, 0.0),
+        ];
+        let mut rng = SplitMix64(7);
+        let mut worst = 0.0f64;
+        for (model, law, r) in [
+            (
+                r#"{ "source": "point" }"#,
+                r#"{ "absorption": 0.36 }"#,
+                0.8f64,
+            ),
+            (
+                r#"{ "source": "axisymmetric" }"#,
+                r#""pressure-release""#,
+                -1.0,
+            ),
+            (
+                r#"{ "source": "line", "frequency": 300 }"#,
+                r#""rigid""#,
+                1.0,
+            ),
+        ] {
+            let source = Point::new(0.0, -3.0);
+            let scene = room(&corners, law, model, source);
+            let settings = scene.amplitudes().unwrap();
+            for _ in 0..200 {
+                let receiver = Point::new(0.5 + 20.0 * rng.next_f64(), -7.5 + 7.0 * rng.next_f64());
+                let k = 2 + (rng.next_f64() * 10.0) as usize;
+                let first = usize::from(rng.next_f64() < 0.5);
+                // Floor (edge 0) and ceiling (edge 2) in turn.
+                let walls: Vec<usize> = (0..k).map(|j| 2 * ((first + j) % 2)).collect();
+                let Some(points) = image_path(&corners, &walls, source, receiver) else {
+                    continue;
+                };
+                let mut image = source;
+                for &j in &walls {
+                    image = Point::new(image.x, if j == 0 { -16.0 - image.y } else { -image.y });
+                }
+                let l = (receiver - image).length();
+                let attenuation = 10f64.powf(-0.01 * l / 20.0);
+                let product = r.powi(k as i32) * attenuation;
+                let expected = if model.contains("line") {
+                    let k0 = 2.0 * PI * 300.0 / 343.0;
+                    Complex64::new(1.0, 1.0) * (product / (16.0 * PI * k0 * l).sqrt())
+                } else {
+                    Complex64::new(product / (4.0 * PI * l), 0.0)
+                };
+                let steps = vec![
+                    Step {
+                        kind: StepKind::Reflect,
+                        interface: 0,
+                    };
+                    k
+                ];
+                let media = vec![0; k + 1];
+                let path = PathGeometry {
+                    steps: &steps,
+                    points: &points,
+                    media: &media,
+                    segments: None,
+                };
+                let a = of_path(&scene, settings, None, path);
+                let e = (a.value - expected).norm() / expected.norm();
+                assert!(e < 1e-12, "{model} {points:?}: {e:e}");
+                worst = worst.max(e);
+            }
+        }
+        println!("unfolded against the image sources: {worst:.3e}");
     }
 }
