@@ -261,6 +261,20 @@ pub fn echogram_svg(title: &str, echoes: &[Echo], from_zero: bool) -> String {
             continue;
         }
         let c = colours.of(e.order);
+        if e.vertical_reflections > 0 {
+            // Off the floor or the ceiling of an extruded room: a square, outlined.
+            let _ = writeln!(
+                s,
+                r##"<path d="M{x:.2},{y0:.2}V{y:.2}" stroke="{c}"/><rect class="vertical" x="{:.2}" y="{:.2}" width="6" height="6" fill="{c}" stroke="{DIFFRACTED_COLOUR}" stroke-width="0.9"><title>{} s, {:.1} dB, {}, {} floor/ceiling</title></rect>"##,
+                x - 3.0,
+                y - 3.0,
+                e.time,
+                levels[i],
+                order_label(e.order),
+                e.vertical_reflections
+            );
+            continue;
+        }
         let _ = writeln!(
             s,
             r##"<path d="M{x:.2},{y0:.2}V{y:.2}" stroke="{c}"/><circle cx="{x:.2}" cy="{y:.2}" r="2.4" fill="{c}" stroke="none"><title>{} s, {:.1} dB, {}</title></circle>"##,
@@ -271,13 +285,20 @@ pub fn echogram_svg(title: &str, echoes: &[Echo], from_zero: bool) -> String {
     }
     let _ = writeln!(s, "</g>");
     let diffracted = echoes.iter().any(|e| e.diffractions > 0);
+    let vertical = echoes
+        .iter()
+        .any(|e| e.diffractions == 0 && e.vertical_reflections > 0);
     if colours.legend() {
-        order_legend(&mut s, &colours, diffracted);
+        order_legend(&mut s, &colours, diffracted, vertical);
     } else {
         order_colour_bar(&mut s, &colours);
+        // Above the colour bar, in the title's row.
         if diffracted {
-            // Above the colour bar, in the title's row.
             diffracted_key(&mut s, LEFT + PLOT_W + 22.0, TOP - 22.0);
+        }
+        if vertical {
+            let x = LEFT + PLOT_W + if diffracted { -90.0 } else { 22.0 };
+            vertical_key(&mut s, x, TOP - 22.0);
         }
     }
     let caption = format!(
@@ -312,9 +333,23 @@ fn diffracted_key(s: &mut String, x: f64, y: f64) {
     );
 }
 
+/// The key of a floor or ceiling reflection's mark (an extruded room's), its square's top
+/// left near `(x, y)`.
+fn vertical_key(s: &mut String, x: f64, y: f64) {
+    let _ = writeln!(
+        s,
+        r##"<g class="vertical-key" font-size="12" fill="#222"><rect x="{:.1}" y="{:.1}" width="8" height="8" fill="none" stroke="{DIFFRACTED_COLOUR}" stroke-width="1.2"/><text x="{:.1}" y="{:.1}">floor/ceiling</text></g>"##,
+        x + 2.0,
+        y - 6.0,
+        x + 18.0,
+        y + 2.0,
+    );
+}
+
 /// The legend of an echogram's orders, right of the plot: a swatch and a label each, and
-/// with `diffracted` the diffracted arrivals' mark below them.
-fn order_legend(s: &mut String, colours: &OrderColours, diffracted: bool) {
+/// with `diffracted` the diffracted arrivals' mark below them, with `vertical` the floor
+/// and ceiling reflections'.
+fn order_legend(s: &mut String, colours: &OrderColours, diffracted: bool, vertical: bool) {
     let x = LEFT + PLOT_W + 22.0;
     let _ = writeln!(
         s,
@@ -333,9 +368,13 @@ fn order_legend(s: &mut String, colours: &OrderColours, diffracted: bool) {
             order_label(order)
         );
     }
+    let mut y = TOP + 30.0 + 17.0 * colours.orders.len() as f64 + 6.0;
     if diffracted {
-        let y = TOP + 30.0 + 17.0 * colours.orders.len() as f64 + 6.0;
         diffracted_key(s, x, y);
+        y += 20.0;
+    }
+    if vertical {
+        vertical_key(s, x, y);
     }
     let _ = writeln!(s, "</g>");
 }
@@ -705,6 +744,7 @@ mod tests {
             amplitude,
             order,
             diffractions: 0,
+            vertical_reflections: 0,
         }
     }
 
@@ -749,6 +789,7 @@ mod tests {
     fn the_echogram_marks_diffracted_arrivals_apart() {
         let diffracted = |time: f64, order: usize| Echo {
             diffractions: 1,
+            vertical_reflections: 0,
             ..echo(time, 0.1 / (4.0 * PI), order)
         };
         let echoes = [
