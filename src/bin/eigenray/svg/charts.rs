@@ -829,6 +829,74 @@ mod tests {
         assert_eq!(svg.matches(r#"class="diffracted""#).count(), 1);
     }
 
+    /// Echoes off the floor or ceiling of an extruded room are marked apart: a square each in
+    /// their order's colour (no circle), titled with their count, a "floor/ceiling" entry in
+    /// the legend after "diffracted"; with a colour bar, the key above it; none without them.
+    #[test]
+    fn the_echogram_marks_floor_and_ceiling_reflections_apart() {
+        let off = |time: f64, order: usize, vertical: usize| Echo {
+            vertical_reflections: vertical,
+            ..echo(time, 0.1 / (4.0 * PI), order)
+        };
+        let diffracted = Echo {
+            diffractions: 1,
+            ..echo(0.03, 0.1 / (4.0 * PI), 1)
+        };
+        let echoes = [
+            echo(0.01, 1.0 / (4.0 * PI), 0),
+            off(0.012, 1, 1),
+            echo(0.013, 0.5 / (4.0 * PI), 1),
+            off(0.02, 2, 2),
+            diffracted,
+        ];
+        let svg = echogram_svg("extruded", &echoes, false);
+        let doc = roxmltree::Document::parse(&svg).unwrap();
+        let marks: Vec<_> = doc
+            .descendants()
+            .filter(|n| n.attribute("class") == Some("vertical"))
+            .collect();
+        assert_eq!(marks.len(), 2);
+        let titles: Vec<&str> = marks
+            .iter()
+            .map(|n| n.children().find_map(|c| c.text()).unwrap())
+            .collect();
+        assert!(
+            titles[0].ends_with("1 interaction, 1 floor/ceiling"),
+            "{titles:?}"
+        );
+        assert!(
+            titles[1].ends_with("2 interactions, 2 floor/ceiling"),
+            "{titles:?}"
+        );
+        let colours = OrderColours {
+            orders: vec![0, 1, 2],
+        };
+        assert_eq!(marks[0].attribute("fill"), Some(colours.of(1).as_str()));
+        assert_eq!(svg.matches("<circle").count(), 2);
+        let legend = texts_in(&svg, "legend");
+        assert_eq!(
+            legend,
+            [
+                "order",
+                "direct",
+                "1 interaction",
+                "2 interactions",
+                "diffracted",
+                "floor/ceiling"
+            ]
+        );
+        let plain = echogram_svg("room", &[echoes[0], echoes[2]], false);
+        assert!(!plain.contains("vertical") && !plain.contains("floor/ceiling"));
+        let mut many: Vec<Echo> = (0..=30)
+            .map(|o| echo(0.01 + 0.001 * o as f64, 0.1 / (1.0 + o as f64), o))
+            .collect();
+        many.push(off(0.05, 3, 1));
+        let svg = echogram_svg("room", &many, false);
+        assert!(svg.contains("order-bar"));
+        assert_eq!(svg.matches(r#"class="vertical-key""#).count(), 1);
+        assert_eq!(svg.matches(r#"class="vertical""#).count(), 1);
+    }
+
     /// The texts inside the group of `class`, in order.
     fn texts_in(svg: &str, class: &str) -> Vec<String> {
         let doc = roxmltree::Document::parse(svg).unwrap();
