@@ -1364,4 +1364,65 @@ fn a_room_echogram_of_30_orders_gives_each_order_its_colour() {
     assert_eq!(distinct.len(), 31);
     assert_ne!(colours["direct"], colours["20 interactions"]);
     assert!(svg.contains(r#"class="order-bar""#));
+    // A plane scene has no floor or ceiling to mark.
+    assert!(!svg.contains("vertical"));
+}
+
+/// The extruded room of `examples/scenes/extruded_room.json`: the echogram marks each arrival
+/// that reflects off the floor or the ceiling with a square (its title saying how many times),
+/// every other one with a dot, exactly as the arrivals' own steps ("floor", "ceiling") count
+/// them; a 2-D scene's echogram has no such mark (the other echogram tests are unchanged).
+#[test]
+fn an_extruded_room_echogram_marks_floor_and_ceiling_reflections() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples")
+        .join("scenes")
+        .join("extruded_room.json");
+    let echogram = TempFile::path_only("extruded.svg");
+    let out = run([
+        OsStr::new("solve"),
+        scene.as_os_str(),
+        OsStr::new("--echogram"),
+        echogram.path().as_os_str(),
+        OsStr::new("--arrivals"),
+        OsStr::new("-"),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let doc: Value = serde_json::from_slice(&out.stdout).expect("JSON arrivals");
+    // (time's bits, floor and ceiling steps) of each echo of source 0 at receiver 0.
+    let mut expected: Vec<(u64, usize)> = (doc["arrivals"].as_array().unwrap().iter())
+        .filter(|a| a["source"] == 0 && a["receiver"] == 0 && a["status"] == "converged")
+        .filter(|a| !a["amplitude"].is_null())
+        .map(|a| {
+            let steps = a["steps"].as_array().unwrap();
+            let vertical = (steps.iter())
+                .filter(|s| s["reflect"] == "floor" || s["reflect"] == "ceiling")
+                .count();
+            (a["time"].as_f64().unwrap().to_bits(), vertical)
+        })
+        .collect();
+    expected.sort_unstable();
+    assert!(expected.iter().any(|e| e.1 == 0) && expected.iter().any(|e| e.1 >= 2));
+    let svg = std::fs::read_to_string(echogram.path()).unwrap();
+    let svg_doc = roxmltree::Document::parse(&svg).unwrap();
+    let mut drawn: Vec<(u64, usize)> = Vec::new();
+    for mark in svg_doc.descendants() {
+        let vertical = mark.attribute("class") == Some("vertical");
+        if !(vertical || mark.has_tag_name("circle")) {
+            continue;
+        }
+        let title = mark.children().find_map(|c| c.text()).unwrap();
+        let time: f64 = title.split(" s,").next().unwrap().parse().unwrap();
+        let count = if vertical {
+            let last = title.rsplit(", ").next().unwrap();
+            let n = last.strip_suffix(" floor/ceiling").expect("its count");
+            n.parse().unwrap()
+        } else {
+            0
+        };
+        drawn.push((time.to_bits(), count));
+    }
+    drawn.sort_unstable();
+    assert_eq!(drawn, expected);
+    assert!(svg.contains(r#"class="vertical-key""#));
 }

@@ -598,3 +598,45 @@ fn every_format_writes_3d_points() {
     let header = String::from_utf8_lossy(&npy[..npy.len().min(1024)]);
     assert!(header.contains("('points', '<f8', (4, 3))"), "{header}");
 }
+
+/// Each echo (listed or streamed) counts its arrival's floor and ceiling reflections, the
+/// steps on the interfaces past the walls (floor `interfaces().len()`, ceiling the next);
+/// the plane room's echoes count none.
+#[test]
+fn echoes_count_their_floor_and_ceiling_reflections() {
+    use eigenray::response::echoes_of_arrivals;
+    use eigenray::search::StreamedArrival;
+    let doc = l_room(true, json!({ "max_steps": 4, "max_time": 0.05 }));
+    let scene = Scene::from_json(&doc.to_string()).unwrap();
+    let tracer = Tracer::new(&scene).unwrap();
+    let report = tracer.search(&Run::new()).unwrap();
+    let walls = scene.interfaces().len();
+    let counted = |a: &SearchArrival| a.steps.iter().filter(|s| s.interface >= walls).count();
+    let mut want: Vec<(u64, usize)> = (report.arrivals.iter())
+        .map(|a| (a.arrival.time.to_bits(), counted(a)))
+        .collect();
+    want.sort_unstable();
+    assert!(want.iter().any(|w| w.1 == 0) && want.iter().any(|w| w.1 >= 3));
+    for a in &report.arrivals {
+        assert_eq!(a.vertical_reflections(), counted(a));
+    }
+    let mut echoes: Vec<(u64, usize)> = echoes_of_arrivals(&report.arrivals)
+        .map(|e| (e.time.to_bits(), e.vertical_reflections))
+        .collect();
+    echoes.sort_unstable();
+    assert_eq!(echoes, want);
+    let streamed = std::sync::Mutex::new(Vec::new());
+    let keep = |a: StreamedArrival| {
+        let pair = (a.time.to_bits(), a.vertical_reflections);
+        streamed.lock().unwrap().push(pair);
+    };
+    tracer.search_into(&Run::new(), &keep).unwrap();
+    let mut streamed = streamed.into_inner().unwrap();
+    streamed.sort_unstable();
+    assert_eq!(streamed, want);
+    // The plane room: none.
+    let plane = Scene::from_json(&l_room(false, json!({ "max_steps": 4 })).to_string()).unwrap();
+    let plane = Tracer::new(&plane).unwrap().search(&Run::new()).unwrap();
+    assert!(!plane.arrivals.is_empty());
+    assert!(echoes_of_arrivals(&plane.arrivals).all(|e| e.vertical_reflections == 0));
+}

@@ -422,6 +422,7 @@ fn echoes(n: usize) -> Vec<Echo> {
             amplitude: Complex64::new(1.0 / (i + 1) as f64, 0.5),
             order: i,
             diffractions: 0,
+            vertical_reflections: 0,
         })
         .collect()
 }

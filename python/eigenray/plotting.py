@@ -232,8 +232,10 @@ def echogram(echoes, source=0, receiver=0, *, ax=None, range_db=60.0, from_zero=
     Stems start `range_db` below the loudest. Up to 10 orders are keyed by a legend beside the
     plot; more by a colour bar of orders (each order its colour). Diffracted arrivals (those
     with `diffractions` > 0) are drawn apart: dashed dark stems ending in diamonds, keyed
-    "diffracted" in the legend (their orders not among the colours). The time axis starts just
-    before the first arrival, or at 0 with `from_zero`. Returns the axes."""
+    "diffracted" in the legend (their orders not among the colours). In an extruded room, the
+    other arrivals that reflect off the floor or the ceiling (`vertical` > 0) end in an outlined
+    square, keyed "floor/ceiling". The time axis starts just before the first arrival, or at 0
+    with `from_zero`. Returns the axes."""
     import matplotlib.pyplot as plt
     from matplotlib.colors import BoundaryNorm
 
@@ -289,7 +291,15 @@ def echogram(echoes, source=0, receiver=0, *, ax=None, range_db=60.0, from_zero=
                   linewidth=1.4, linestyles=(0, (3, 2)), label="diffracted", zorder=4)
         ax.plot(time[diffracted], shown[diffracted], "D", ms=4.5, color=DIFFRACTED_COLOUR,
                 zorder=5, gid="diffracted")
-    if len(time) and (len(orders) <= MAX_ORDER_LEGEND or diffracted.any()):
+    if "vertical" in echoes:
+        vertical = plain & (np.asarray(echoes["vertical"])[chosen] > 0)
+    else:
+        vertical = np.zeros(len(time), dtype=bool)
+    if vertical.any():
+        ax.plot(time[vertical], shown[vertical], "s", ms=5, mfc="none", mew=0.9,
+                color=DIFFRACTED_COLOUR, linestyle="none", label="floor/ceiling", zorder=5,
+                gid="vertical")
+    if len(time) and (len(orders) <= MAX_ORDER_LEGEND or diffracted.any() or vertical.any()):
         ax.legend(title="order" if len(orders) <= MAX_ORDER_LEGEND else None, fontsize=8,
                   loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     ax.set_ylim(floor, top)

@@ -224,6 +224,7 @@ pub(crate) fn echoes<'py>(py: Python<'py>, tracer: &Tracer) -> PyResult<Bound<'p
     d.set_item("receiver", column(|e| e.receiver as u32))?;
     d.set_item("order", column(|e| e.order as u32))?;
     d.set_item("diffractions", column(|e| e.diffractions as u32))?;
+    d.set_item("vertical", column(|e| e.vertical_reflections as u32))?;
     d.set_item(
         "time",
         Array1::from_iter(echoes.iter().map(|e| e.time)).into_pyarray(py),

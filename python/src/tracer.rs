@@ -540,7 +540,9 @@ impl PyTracer {
     /// Every arrival that reaches a receiver with an amplitude (each `converged` ray of the
     /// scene's paths and arrival of its search), as a dict of numpy arrays: `source`,
     /// `receiver`, `order` (interactions, uint32), `diffractions` (of those, the diffractions
-    /// at vertices, uint32), `time` (float64) and `amplitude` (complex128): what `impulse_response`, `pressure` and `eigenray.plotting.echogram` sum.
+    /// at vertices, uint32), `vertical` (of those, the floor and ceiling reflections of an
+    /// extruded scene, uint32; 0 in a plane one), `time` (float64) and `amplitude`
+    /// (complex128): what `impulse_response`, `pressure` and `eigenray.plotting.echogram` sum.
     fn echoes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         response::echoes(py, &self.read())
     }

@@ -190,7 +190,8 @@ def test_the_echogram_and_the_map_draw_their_keys():
     corners, source, receiver, order = ROOMS["pentagon"]
     tracer = eigenray.Tracer(eigenray.Scene(room_scene(corners, source, receiver, order)))
     echoes = tracer.echoes()
-    assert set(echoes) == {"source", "receiver", "order", "diffractions", "time", "amplitude"}
+    assert set(echoes) == {"source", "receiver", "order", "diffractions", "vertical",
+                           "time", "amplitude"}
     assert echoes["amplitude"].dtype == np.complex128
     assert len(echoes["time"]) == len(tracer.search())
     ax = echogram(echoes)

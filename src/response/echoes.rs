@@ -30,19 +30,23 @@ pub struct Echo {
     /// Of those, the diffractions at vertices (0: a specular path), what an echogram marks
     /// apart.
     pub diffractions: usize,
+    /// Of those, the floor and ceiling reflections of an extruded scene's 3-D path (0 in a
+    /// plane scene), what an echogram marks apart.
+    pub vertical_reflections: usize,
 }
 
 impl Echo {
     /// The echo of a path from `source` to `receiver` with `status`, `time` and `amplitude`:
     /// only a `converged` path with an amplitude value is one (an `obstructed` path is
     /// blocked, a `vertex` path has no ray-theory amplitude, and a path traced without
-    /// amplitudes has none to give). `diffractions` of its `points.len() − 2` steps diffract.
+    /// amplitudes has none to give). `diffractions` of its `points.len() − 2` steps diffract,
+    /// `vertical` reflect off the floor or the ceiling.
     fn of(
         (source, receiver): (usize, usize),
         status: Status,
         time: f64,
         amplitude: Option<&Amplitude>,
-        (points, diffractions): (usize, usize),
+        (points, diffractions, vertical): (usize, usize, usize),
     ) -> Option<Echo> {
         let a = amplitude.filter(|a| a.has_value())?;
         (status == Status::Converged).then_some(Echo {
@@ -52,6 +56,7 @@ impl Echo {
             amplitude: a.value,
             order: points.saturating_sub(2),
             diffractions,
+            vertical_reflections: vertical,
         })
     }
 
@@ -65,17 +70,17 @@ impl Echo {
             a.status,
             a.time,
             amplitude,
-            (a.steps + 2, a.diffractions),
+            (a.steps + 2, a.diffractions, a.vertical_reflections),
         )
     }
 
     fn of_arrival(
         (source, receiver): (usize, usize),
         a: &Arrival,
-        diffractions: usize,
+        (diffractions, vertical): (usize, usize),
     ) -> Option<Echo> {
         let pair = (source, receiver);
-        let counts = (a.points.len(), diffractions);
+        let counts = (a.points.len(), diffractions, vertical);
         Echo::of(pair, a.status, a.time, a.amplitude.as_ref(), counts)
     }
 }
@@ -91,18 +96,18 @@ pub fn echoes_of_rays<'a>(
     match rays {
         RaySet::Rays(rays) => Box::new(rays.iter().filter_map(move |r| {
             let pair = (r.source, r.receiver);
-            let counts = (r.points.len(), of_path(r.path));
+            let counts = (r.points.len(), of_path(r.path), 0);
             Echo::of(pair, r.status, r.time, r.amplitude.as_ref(), counts)
         })),
         RaySet::Batch(b) => Box::new((0..b.len()).filter_map(move |i| {
             let (t, r) = (b.triple(i), b.record(i));
             let pair = (t.source, t.receiver);
-            let counts = (b.points(i).len(), of_path(t.path));
+            let counts = (b.points(i).len(), of_path(t.path), 0);
             Echo::of(pair, r.status, r.time, b.amplitude(i), counts)
         })),
         RaySet::Stationary(st) => Box::new(st.triples.iter().flat_map(move |t| {
             let pair = (t.source, t.receiver);
-            let d = of_path(t.path);
+            let d = (of_path(t.path), 0);
             (t.arrivals.iter()).filter_map(move |a| Echo::of_arrival(pair, a, d))
         })),
     }
@@ -111,7 +116,8 @@ pub fn echoes_of_rays<'a>(
 /// The echoes of a search's arrivals: each `converged` arrival that has an amplitude.
 pub fn echoes_of_arrivals(arrivals: &[SearchArrival]) -> impl Iterator<Item = Echo> + '_ {
     arrivals.iter().filter_map(|a| {
-        Echo::of_arrival((a.source, a.receiver), &a.arrival, diffractions(&a.steps))
+        let counts = (diffractions(&a.steps), a.vertical_reflections());
+        Echo::of_arrival((a.source, a.receiver), &a.arrival, counts)
     })
 }
 

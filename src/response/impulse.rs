@@ -23,7 +23,7 @@ use crate::scene::ImpulseResponseOptions;
 /// let options = ImpulseResponseOptions::of_spec("impulse_response", &spec).unwrap();
 /// let ir = ImpulseResponses::new(&options, 1, 2);
 /// let a = Complex64::new(0.5, 0.0);
-/// let echo = Echo { source: 0, receiver: 1, time: 0.02, amplitude: a, order: 0, diffractions: 0 };
+/// let echo = Echo { source: 0, receiver: 1, time: 0.02, amplitude: a, order: 0, diffractions: 0, vertical_reflections: 0 };
 /// let mut out = vec![0.0; ir.len()];
 /// ir.render_into([echo], &Run::new(), &mut out);
 /// assert_eq!(ir.response(&out, 0, 1)[20], 0.5); // on a whole sample: that sample alone
@@ -177,6 +177,7 @@ mod tests {
                 amplitude: Complex64::new(2.0, 0.0),
                 order: 0,
                 diffractions: 0,
+                vertical_reflections: 0,
             },
             Echo {
                 source: 0,
@@ -185,6 +186,7 @@ mod tests {
                 amplitude: Complex64::new(0.0, 1.0),
                 order: 0,
                 diffractions: 0,
+                vertical_reflections: 0,
             },
             Echo {
                 source: 0,
@@ -193,6 +195,7 @@ mod tests {
                 amplitude: Complex64::new(0.0, -1.0),
                 order: 0,
                 diffractions: 0,
+                vertical_reflections: 0,
             },
             // Not in these responses: left out.
             Echo {
@@ -202,6 +205,7 @@ mod tests {
                 amplitude: Complex64::new(1.0, 0.0),
                 order: 0,
                 diffractions: 0,
+                vertical_reflections: 0,
             },
         ];
         let mut out = vec![f64::NAN; ir.len()];
@@ -228,6 +232,7 @@ mod tests {
                 amplitude: Complex64::new(1.0 / (k + 1) as f64, 0.3 * k as f64 - 0.5),
                 order: 0,
                 diffractions: 0,
+                vertical_reflections: 0,
             })
             .collect();
         let out = ir.render(echoes.iter().copied(), &Run::new()).unwrap();

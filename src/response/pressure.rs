@@ -64,6 +64,7 @@ mod tests {
             amplitude,
             order: 0,
             diffractions: 0,
+            vertical_reflections: 0,
         }
     }
 
@@ -119,6 +120,7 @@ mod tests {
                 amplitude: Complex64::new(1.0, 0.0),
                 order: 0,
                 diffractions: 0,
+                vertical_reflections: 0,
             },
             Echo {
                 source: 2,
@@ -127,6 +129,7 @@ mod tests {
                 amplitude: Complex64::new(1.0, 0.0),
                 order: 0,
                 diffractions: 0,
+                vertical_reflections: 0,
             },
             Echo {
                 source: 0,
@@ -135,6 +138,7 @@ mod tests {
                 amplitude: Complex64::new(1.0, 0.0),
                 order: 0,
                 diffractions: 0,
+                vertical_reflections: 0,
             },
         ];
         pressure_into(echoes, 100.0, 2, &Run::new(), &mut p);

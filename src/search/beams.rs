@@ -219,6 +219,7 @@ impl StreamScratch {
             receiver: p.receiver,
             steps: k,
             diffractions: 0,
+            vertical_reflections: 0,
             status: p.status,
             time: p.time,
             amplitude,

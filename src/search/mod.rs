@@ -74,10 +74,22 @@ impl SearchArrival {
             receiver: self.receiver,
             steps: self.steps.len(),
             diffractions: diffractions(&self.steps),
+            vertical_reflections: self.vertical_reflections(),
             status: self.arrival.status,
             time: self.arrival.time,
             amplitude: self.arrival.amplitude,
         }
+    }
+
+    /// Its floor and ceiling reflections (in an extruded scene; 0 otherwise): the steps that
+    /// reflect with no wall parameter (NaN), as `heights` documents them.
+    pub fn vertical_reflections(&self) -> usize {
+        if self.heights.is_empty() {
+            return 0;
+        }
+        (self.steps.iter().zip(&self.arrival.parameters))
+            .filter(|(s, t)| s.kind == StepKind::Reflect && t.is_nan())
+            .count()
     }
 }
 
@@ -98,6 +110,8 @@ pub struct StreamedArrival {
     pub steps: usize,
     /// Of those, the `diffract` steps (0: a specular path).
     pub diffractions: usize,
+    /// Of those, the floor and ceiling reflections (in an extruded scene; 0 otherwise).
+    pub vertical_reflections: usize,
     /// `converged`, or (when the search lists them) `obstructed` or `vertex`.
     pub status: Status,
     /// Travel time.
@@ -487,6 +501,7 @@ impl Tracer {
                         receiver: a.receiver,
                         steps: a.steps.len(),
                         diffractions: diffractions(&a.steps),
+                        vertical_reflections: 0,
                         status: a.arrival.status,
                         time: a.arrival.time,
                         amplitude: a.arrival.amplitude,

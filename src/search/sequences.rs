@@ -471,6 +471,7 @@ impl PairState<'_> {
                     receiver: self.receiver,
                     steps: self.steps.len(),
                     diffractions: super::diffractions(&self.steps),
+                    vertical_reflections: 0,
                     status: a.status,
                     time: a.time,
                     amplitude: a.amplitude,

@@ -261,6 +261,20 @@ pub fn echogram_svg(title: &str, echoes: &[Echo], from_zero: bool) -> String {
             continue;
         }
         let c = colours.of(e.order);
+        if e.vertical_reflections > 0 {
+            // Off the floor or the ceiling of an extruded room: a square, outlined.
+            let _ = writeln!(
+                s,
+                r##"<path d="M{x:.2},{y0:.2}V{y:.2}" stroke="{c}"/><rect class="vertical" x="{:.2}" y="{:.2}" width="6" height="6" fill="{c}" stroke="{DIFFRACTED_COLOUR}" stroke-width="0.9"><title>{} s, {:.1} dB, {}, {} floor/ceiling</title></rect>"##,
+                x - 3.0,
+                y - 3.0,
+                e.time,
+                levels[i],
+                order_label(e.order),
+                e.vertical_reflections
+            );
+            continue;
+        }
         let _ = writeln!(
             s,
             r##"<path d="M{x:.2},{y0:.2}V{y:.2}" stroke="{c}"/><circle cx="{x:.2}" cy="{y:.2}" r="2.4" fill="{c}" stroke="none"><title>{} s, {:.1} dB, {}</title></circle>"##,
@@ -271,13 +285,20 @@ pub fn echogram_svg(title: &str, echoes: &[Echo], from_zero: bool) -> String {
     }
     let _ = writeln!(s, "</g>");
     let diffracted = echoes.iter().any(|e| e.diffractions > 0);
+    let vertical = echoes
+        .iter()
+        .any(|e| e.diffractions == 0 && e.vertical_reflections > 0);
     if colours.legend() {
-        order_legend(&mut s, &colours, diffracted);
+        order_legend(&mut s, &colours, diffracted, vertical);
     } else {
         order_colour_bar(&mut s, &colours);
+        // Above the colour bar, in the title's row.
         if diffracted {
-            // Above the colour bar, in the title's row.
             diffracted_key(&mut s, LEFT + PLOT_W + 22.0, TOP - 22.0);
+        }
+        if vertical {
+            let x = LEFT + PLOT_W + if diffracted { -90.0 } else { 22.0 };
+            vertical_key(&mut s, x, TOP - 22.0);
         }
     }
     let caption = format!(
@@ -312,9 +333,23 @@ fn diffracted_key(s: &mut String, x: f64, y: f64) {
     );
 }
 
+/// The key of a floor or ceiling reflection's mark (an extruded room's), its square's top
+/// left near `(x, y)`.
+fn vertical_key(s: &mut String, x: f64, y: f64) {
+    let _ = writeln!(
+        s,
+        r##"<g class="vertical-key" font-size="12" fill="#222"><rect x="{:.1}" y="{:.1}" width="8" height="8" fill="none" stroke="{DIFFRACTED_COLOUR}" stroke-width="1.2"/><text x="{:.1}" y="{:.1}">floor/ceiling</text></g>"##,
+        x + 2.0,
+        y - 6.0,
+        x + 18.0,
+        y + 2.0,
+    );
+}
+
 /// The legend of an echogram's orders, right of the plot: a swatch and a label each, and
-/// with `diffracted` the diffracted arrivals' mark below them.
-fn order_legend(s: &mut String, colours: &OrderColours, diffracted: bool) {
+/// with `diffracted` the diffracted arrivals' mark below them, with `vertical` the floor
+/// and ceiling reflections'.
+fn order_legend(s: &mut String, colours: &OrderColours, diffracted: bool, vertical: bool) {
     let x = LEFT + PLOT_W + 22.0;
     let _ = writeln!(
         s,
@@ -333,9 +368,13 @@ fn order_legend(s: &mut String, colours: &OrderColours, diffracted: bool) {
             order_label(order)
         );
     }
+    let mut y = TOP + 30.0 + 17.0 * colours.orders.len() as f64 + 6.0;
     if diffracted {
-        let y = TOP + 30.0 + 17.0 * colours.orders.len() as f64 + 6.0;
         diffracted_key(s, x, y);
+        y += 20.0;
+    }
+    if vertical {
+        vertical_key(s, x, y);
     }
     let _ = writeln!(s, "</g>");
 }
@@ -705,6 +744,7 @@ mod tests {
             amplitude,
             order,
             diffractions: 0,
+            vertical_reflections: 0,
         }
     }
 
@@ -749,6 +789,7 @@ mod tests {
     fn the_echogram_marks_diffracted_arrivals_apart() {
         let diffracted = |time: f64, order: usize| Echo {
             diffractions: 1,
+            vertical_reflections: 0,
             ..echo(time, 0.1 / (4.0 * PI), order)
         };
         let echoes = [
@@ -786,6 +827,74 @@ mod tests {
         assert!(svg.contains("order-bar"));
         assert_eq!(svg.matches(r#"class="diffracted-key""#).count(), 1);
         assert_eq!(svg.matches(r#"class="diffracted""#).count(), 1);
+    }
+
+    /// Echoes off the floor or ceiling of an extruded room are marked apart: a square each in
+    /// their order's colour (no circle), titled with their count, a "floor/ceiling" entry in
+    /// the legend after "diffracted"; with a colour bar, the key above it; none without them.
+    #[test]
+    fn the_echogram_marks_floor_and_ceiling_reflections_apart() {
+        let off = |time: f64, order: usize, vertical: usize| Echo {
+            vertical_reflections: vertical,
+            ..echo(time, 0.1 / (4.0 * PI), order)
+        };
+        let diffracted = Echo {
+            diffractions: 1,
+            ..echo(0.03, 0.1 / (4.0 * PI), 1)
+        };
+        let echoes = [
+            echo(0.01, 1.0 / (4.0 * PI), 0),
+            off(0.012, 1, 1),
+            echo(0.013, 0.5 / (4.0 * PI), 1),
+            off(0.02, 2, 2),
+            diffracted,
+        ];
+        let svg = echogram_svg("extruded", &echoes, false);
+        let doc = roxmltree::Document::parse(&svg).unwrap();
+        let marks: Vec<_> = doc
+            .descendants()
+            .filter(|n| n.attribute("class") == Some("vertical"))
+            .collect();
+        assert_eq!(marks.len(), 2);
+        let titles: Vec<&str> = marks
+            .iter()
+            .map(|n| n.children().find_map(|c| c.text()).unwrap())
+            .collect();
+        assert!(
+            titles[0].ends_with("1 interaction, 1 floor/ceiling"),
+            "{titles:?}"
+        );
+        assert!(
+            titles[1].ends_with("2 interactions, 2 floor/ceiling"),
+            "{titles:?}"
+        );
+        let colours = OrderColours {
+            orders: vec![0, 1, 2],
+        };
+        assert_eq!(marks[0].attribute("fill"), Some(colours.of(1).as_str()));
+        assert_eq!(svg.matches("<circle").count(), 2);
+        let legend = texts_in(&svg, "legend");
+        assert_eq!(
+            legend,
+            [
+                "order",
+                "direct",
+                "1 interaction",
+                "2 interactions",
+                "diffracted",
+                "floor/ceiling"
+            ]
+        );
+        let plain = echogram_svg("room", &[echoes[0], echoes[2]], false);
+        assert!(!plain.contains("vertical") && !plain.contains("floor/ceiling"));
+        let mut many: Vec<Echo> = (0..=30)
+            .map(|o| echo(0.01 + 0.001 * o as f64, 0.1 / (1.0 + o as f64), o))
+            .collect();
+        many.push(off(0.05, 3, 1));
+        let svg = echogram_svg("room", &many, false);
+        assert!(svg.contains("order-bar"));
+        assert_eq!(svg.matches(r#"class="vertical-key""#).count(), 1);
+        assert_eq!(svg.matches(r#"class="vertical""#).count(), 1);
     }
 
     /// The texts inside the group of `class`, in order.
