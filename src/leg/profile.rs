@@ -134,17 +134,6 @@ fn atanh_over(q: f64) -> f64 {
     }
 }
 
-/// `asin(z) / z` for `|z| ≤ 1`, without loss near 0.
-fn asin_over(z: f64) -> f64 {
-    let z = z.abs();
-    if z < 1e-3 {
-        let z2 = z * z;
-        1.0 + z2 * (1.0 / 6.0 + z2 * (3.0 / 40.0 + z2 * (5.0 / 112.0)))
-    } else {
-        z.min(1.0).asin() / z
-    }
-}
-
 /// `√(1 − p²c²)`, 0 at and beyond a turning point.
 #[inline]
 fn sine(p: f64, c: f64) -> f64 {
@@ -170,7 +159,7 @@ fn piece<const FULL: bool>(p: f64, h: f64, c1: f64, c2: f64, s1: f64, s2: f64) -
     let t = h * (c1 + c2) * (1.0 + s1 * s2) / (den * m) * atanh_over(q);
     let across = c2 * s1 + c1 * s2;
     let z = p * (c2 * c2 - c1 * c1) / across;
-    let arc = h * (c1 + c2) / across * asin_over(z);
+    let arc = h * (c1 + c2) / across * super::asin_over(z.abs());
     RaySums {
         x: p * width,
         t,
