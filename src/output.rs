@@ -952,6 +952,24 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
                         launch_angle: shape.map(|s| s.launch_angle),
                         ..e
                     }
+                } else if e.caustics.is_none() && scene.curved() {
+                    // A ray through a gradient medium: its caustics from its path.
+                    let v = view(i);
+                    let steps = scene.paths().get(v.path).map(|p| &p.steps[..]);
+                    let media: Vec<usize> = v.media.into_iter().flatten().collect();
+                    let caustics = match (v.status, steps) {
+                        (crate::Status::Converged, Some(steps)) => {
+                            let path = crate::amplitude::PathGeometry {
+                                steps,
+                                points: r.points,
+                                media: &media,
+                                segments: None,
+                            };
+                            crate::amplitude::caustics_of_path(scene, path)
+                        }
+                        _ => None,
+                    };
+                    Entry { caustics, ..e }
                 } else {
                     e
                 }

@@ -481,3 +481,70 @@ fn a_caustic_turns_the_phase_by_a_quarter() {
         assert!(amp.coefficient.norm() > 0.0);
     }
 }
+
+/// The `caustics` column through gradient media: the caustic example's two eigenrays have
+/// the design note's Morse indices (1 past the caustic, 0 before it), which the path
+/// Hessian's pivots give independently, in the stationary paths (Rust) and in the
+/// command line's JSON, with `"stationary": "all"` and in the default mode.
+#[test]
+fn the_caustics_column_counts_the_morse_index_through_arcs() {
+    let scene = Scene::from_json(CAUSTIC).unwrap();
+    let tracer = Tracer::new(scene.clone()).unwrap();
+    let (s, r) = (Point::new(0.0, 0.0), Point::new(10000.0, 0.0));
+    let problem = PathProblem::new(&scene, 0, s, r).expect("media given");
+    let mut out: Vec<Arrival> = Vec::new();
+    tracer
+        .stationary_paths(s, r, 0, &eigenray::options::Run::new(), &mut out)
+        .unwrap();
+    let caustics: Vec<Option<u32>> = out.iter().map(|a| a.caustics).collect();
+    // Ordered by time: before the caustic (6.628 s), then past it (6.673 s).
+    assert_eq!(caustics, [Some(0), Some(1)]);
+    for a in &out {
+        let h = problem.hessian(&a.parameters);
+        let index = negative_pivots(&h.diag, &h.off);
+        assert_eq!(a.caustics, Some(index as u32), "{h:?}");
+    }
+    let dir = std::env::temp_dir().join(format!("eigenray-caustics-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let all = CAUSTIC.replace(
+        r#""sources""#,
+        r#""solver": { "stationary": "all" }, "sources""#,
+    );
+    // (time, caustics) of every ray of the command line's JSON for `json`.
+    let solve = |name: &str, json: &str| -> Vec<(f64, f64)> {
+        let file = dir.join(name);
+        std::fs::write(&file, json).unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_eigenray"))
+            .arg("solve")
+            .arg(&file)
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        doc["rays"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| (r["time"].as_f64().unwrap(), r["caustics"].as_f64().unwrap()))
+            .collect()
+    };
+    let rays = solve("all.json", &all);
+    assert_eq!(rays.len(), 4, "{rays:?}");
+    for (time, caustics) in rays {
+        let want = if (time - 6.672526446116).abs() < 1e-11 {
+            1.0
+        } else {
+            assert!((time - 6.628258089353).abs() < 1e-11, "{time}");
+            0.0
+        };
+        assert_eq!(caustics, want, "{time}");
+    }
+    // The default mode finds the ray past the caustic for both paths.
+    let rays = solve("default.json", CAUSTIC);
+    assert_eq!(rays.len(), 2, "{rays:?}");
+    for (time, caustics) in rays {
+        assert!((time - 6.672526446116).abs() < 1e-11, "{time}");
+        assert_eq!(caustics, 1.0);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -690,9 +690,8 @@ fn walk_curved(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplit
     };
     let mut flux = local(legs[0], points[0]) / local(legs[0], points[1]);
     let mut cos_ratio = 1.0;
-    let mut caustics = 0u32;
     let mut incoming = first;
-    let (mut pivot, mut product, mut prev) = (1.0, 1.0, Vec2::default());
+    let mut sweep = Sweep::default();
     let mut t0 = Vec2::default();
     for (i, step) in path.steps.iter().enumerate() {
         let (m_in, m) = (legs[i], legs[i + 1]);
@@ -705,23 +704,10 @@ fn walk_curved(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplit
         let n = t.perp();
         let u_in = incoming.direction_at_end();
         let (c1, c2) = (u_in.dot(n), leg.direction_at_start().dot(n));
-        let diag = incoming.end_block(t) + leg.start_block(t);
-        let (r, scale) = if i == 0 {
+        if i == 0 {
             t0 = t;
-            (diag, diag.abs())
-        } else {
-            let off = incoming.coupling(prev, t);
-            product *= -off / pivot;
-            (
-                diag - off * off / pivot,
-                diag.abs() + (off * off / pivot).abs(),
-            )
-        };
-        if !(r.abs() > 1e-6 * scale && r.is_finite()) {
-            return Err(NoAmplitude::Caustic);
         }
-        caustics += u32::from(r < 0.0);
-        (pivot, prev) = (r, t);
+        sweep.pivot(i, &incoming, &leg, t)?;
         let x = Interaction {
             i,
             step,
@@ -756,18 +742,111 @@ fn walk_curved(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplit
     let inverse_width = if path.steps.is_empty() {
         first.coupling(n_s, n_r).abs() / w0
     } else {
-        let beta = incoming.coupling(prev, n_r);
-        let x0 = beta * product / pivot;
+        let beta = incoming.coupling(sweep.prev, n_r);
+        let x0 = beta * sweep.product / sweep.pivot;
         (first.coupling(n_s, t0) * x0).abs() / w0
     };
     // `flux` is Π c_start / c_end in slownesses: c_end / c_start.
     out.tube_num = cos_ratio * flux * inverse_width;
     out.tube_den = 1.0;
-    if caustics > 0 {
-        let phase = -std::f64::consts::FRAC_PI_2 * f64::from(caustics);
+    if sweep.caustics > 0 {
+        let phase = -std::f64::consts::FRAC_PI_2 * f64::from(sweep.caustics);
         out.coefficient *= Complex64::from_polar(1.0, phase);
     }
     Ok(out)
+}
+
+/// The forward sweep of the LDLᵀ factorisation of a curved path's tridiagonal Hessian (its
+/// rows the interaction points' moves along their tangents), one row per interaction.
+struct Sweep {
+    /// The last pivot.
+    pivot: f64,
+    /// The product of `−off / pivot` over the rows after the first.
+    product: f64,
+    /// The last row's tangent.
+    prev: Vec2,
+    /// The negative pivots so far (the caustics the tube has passed).
+    caustics: u32,
+}
+
+impl Default for Sweep {
+    fn default() -> Self {
+        Sweep {
+            pivot: 1.0,
+            product: 1.0,
+            prev: Vec2::default(),
+            caustics: 0,
+        }
+    }
+}
+
+impl Sweep {
+    /// Row `i`: the interaction between `incoming` and `leg` on the tangent `t`.
+    /// [`NoAmplitude::Caustic`] for a pivot within `1e-6` of its row's scale.
+    #[inline]
+    fn pivot(
+        &mut self,
+        i: usize,
+        incoming: &AnyLeg,
+        leg: &AnyLeg,
+        t: Vec2,
+    ) -> Result<(), NoAmplitude> {
+        let diag = incoming.end_block(t) + leg.start_block(t);
+        let (r, scale) = if i == 0 {
+            (diag, diag.abs())
+        } else {
+            let off = incoming.coupling(self.prev, t);
+            self.product *= -off / self.pivot;
+            (
+                diag - off * off / self.pivot,
+                diag.abs() + (off * off / self.pivot).abs(),
+            )
+        };
+        if !(r.abs() > 1e-6 * scale && r.is_finite()) {
+            return Err(NoAmplitude::Caustic);
+        }
+        self.caustics += u32::from(r < 0.0);
+        (self.pivot, self.prev) = (r, t);
+        Ok(())
+    }
+}
+
+/// The number of caustics the ray tube of a solved path through a scene with a `gradient`
+/// medium passed: the Morse index of its Hessian (the negative pivots of [`walk_curved`]'s
+/// sweep, `design/curved-rays.md` §5). `None` for a scene without a gradient medium, a path
+/// whose points or media do not fit its steps, one that diffracts or has a leg through a
+/// `profile` medium, a vanished leg, or a path at a caustic.
+pub(crate) fn caustics_of_path(scene: &Scene, path: PathGeometry<'_>) -> Option<u32> {
+    let (points, legs) = (path.points, path.media);
+    let k = path.steps.len();
+    let media = scene.media();
+    if !media.iter().any(|m| m.gradient.is_some())
+        || path.steps.iter().any(|s| s.kind.vertex().is_some())
+        || points.len() != k + 2
+        || legs.len() != k + 1
+        || legs
+            .iter()
+            .any(|&m| media.get(m).is_none_or(|m| m.profile.is_some()))
+    {
+        return None;
+    }
+    let origin = points[0];
+    let leg_of = |j: usize, m: usize| {
+        media[m].leg_model(origin).valid_leg(
+            (points[j] - origin).to_point(),
+            (points[j + 1] - origin).to_point(),
+        )
+    };
+    let mut incoming = leg_of(0, legs[0])?;
+    let mut sweep = Sweep::default();
+    for (i, step) in path.steps.iter().enumerate() {
+        let leg = leg_of(i + 1, legs[i + 1])?;
+        let line = &scene.interfaces().get(step.interface)?.polyline;
+        let seg = segment_of(line, points[i + 1], path.segments, i);
+        sweep.pivot(i, &incoming, &leg, line.tangent(seg)).ok()?;
+        incoming = leg;
+    }
+    Some(sweep.caustics)
 }
 
 /// The amplitude of one ray through a `profile` medium from `points[0]` to `points[1]`

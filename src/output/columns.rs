@@ -124,7 +124,7 @@ pub struct Entry<'a> {
     /// medium).
     pub turns: Option<u32>,
     /// The number of caustics its ray tube passed, where known (a ray through a `profile`
-    /// medium).
+    /// or `gradient` medium).
     pub caustics: Option<u32>,
     /// Its direction at the source (radians from +x), where the path alone does not give
     /// it (a ray through a `profile` medium).
@@ -203,7 +203,9 @@ impl Entry<'static> {
             timed: status.has_time(),
             amplitude: tracer.amplitude_of(steps, status, points, media),
             turns: shape.map(|s| s.turns),
-            caustics: shape.map(|s| s.caustics),
+            caustics: shape
+                .map(|s| s.caustics)
+                .or_else(|| tracer.gradient_caustics(steps, status, points, media, None)),
             launch_angle: shape.map(|s| s.launch_angle),
             ..Entry::default()
         }
@@ -222,7 +224,11 @@ impl Entry<'static> {
             timed: record.status.has_time(),
             amplitude: tracer.amplitude(path, record, ws),
             turns: shape.map(|s| s.turns),
-            caustics: shape.map(|s| s.caustics),
+            caustics: shape.map(|s| s.caustics).or_else(|| {
+                let steps = tracer.scene().paths().get(path).map(|p| &p.steps[..])?;
+                let segments = Some(&ws.newton.seg[..steps.len()]);
+                tracer.gradient_caustics(steps, record.status, ws.points(), ws.media(), segments)
+            }),
             launch_angle: shape.map(|s| s.launch_angle),
             ..Entry::default()
         }

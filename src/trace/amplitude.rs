@@ -3,7 +3,8 @@
 //! stationary path and the search alike.
 
 use crate::amplitude::{
-    Amplitude, NoAmplitude, OnSegment, PathGeometry, of_diffracted, of_one, of_path,
+    Amplitude, NoAmplitude, OnSegment, PathGeometry, caustics_of_path, of_diffracted, of_one,
+    of_path,
 };
 use crate::geom::Point;
 use crate::scene::Step;
@@ -163,9 +164,38 @@ impl Tracer {
         }
     }
 
+    /// The number of caustics the ray tube of a converged ray of `steps` through `points` in
+    /// the leg media `media` passed, in a scene with a `gradient` medium (the Morse index of
+    /// its path's Hessian); `None` for any other ray (see [`caustics_of_path`]).
+    pub(crate) fn gradient_caustics(
+        &self,
+        steps: &[Step],
+        status: Status,
+        points: &[Point],
+        media: &[usize],
+        segments: Option<&[usize]>,
+    ) -> Option<u32> {
+        if status != Status::Converged || !self.scene.curved() {
+            return None;
+        }
+        let path = PathGeometry {
+            steps,
+            points,
+            media,
+            segments,
+        };
+        caustics_of_path(&self.scene, path)
+    }
+
     /// Gives each of `arrivals` (stationary paths of `steps`) its amplitude, when the scene
-    /// asks for amplitudes.
+    /// asks for amplitudes, and its caustics in a scene with a `gradient` medium.
     pub(crate) fn arrival_amplitudes(&self, steps: &[Step], arrivals: &mut [Arrival]) {
+        for a in arrivals.iter_mut().filter(|a| a.turns.is_none()) {
+            let segments = Some(&a.segments[..]);
+            a.caustics = a
+                .caustics
+                .or_else(|| self.gradient_caustics(steps, a.status, &a.points, &a.media, segments));
+        }
         if self.scene.amplitudes().is_none() {
             return;
         }
