@@ -112,3 +112,14 @@ def test_the_caustic_turns_the_phase_by_a_quarter():
     phases = [math.atan2(r.amplitude.imag, r.amplitude.real) for r in rays]
     assert abs(phases[0]) < 1e-12
     assert abs(phases[1] + math.pi / 2) < 1e-12
+
+
+def test_the_caustics_column_is_the_morse_index():
+    # The design note's Morse indices: 0 before the caustic (6.628 s), 1 past it (6.673 s).
+    tracer = eigenray.Tracer(eigenray.Scene(CAUSTIC))
+    rays, _ = tracer.stationary_paths((0, 0), (10000, 0), "given")
+    assert [r.caustics for r in rays] == [0, 1]
+    ray = tracer.solve((0, 0), (10000, 0), "looked up")
+    assert ray.caustics == 1
+    batch = tracer.trace()
+    assert list(batch.caustics) == [1, 1]
