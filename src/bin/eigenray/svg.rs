@@ -4,6 +4,7 @@
 //! interfaces and media. Big batches are drawn as a sample, and the picture says so. This file
 //! puts the picture together and draws the scene; its parts are in the files beside it.
 
+mod arcs;
 mod axes;
 mod caption;
 pub mod charts;
@@ -135,8 +136,8 @@ fn draw_domain(s: &mut String, scene: &Scene, view: &View) {
     }
 }
 
-/// Draws the drawn items as polylines in their `colours`, thinner the more there are, each
-/// titled with its source, receiver, path (or sequence), status and time.
+/// Draws the drawn items as polylines in their `colours` (legs through a gradient medium as
+/// sampled arcs), thinner the more there are, each titled with its source, receiver, path (or sequence), status and time.
 fn draw_rays(s: &mut String, scene: &Scene, view: &View, rays: &[Item], colours: &RayColours) {
     let stroke = match rays.len() {
         0..=50 => 1.6,
@@ -158,10 +159,15 @@ fn draw_rays(s: &mut String, scene: &Scene, view: &View, rays: &[Item], colours:
             Some(a) => format!(", arrival {a}"),
             None => String::new(),
         };
+        // Through a gradient medium: the arcs sampled, to the micro-pixel.
+        let points = match arcs::sampled(scene, r) {
+            Some(sampled) => view.points_fine(&sampled),
+            None => view.points(&r.points),
+        };
         let _ = writeln!(
             s,
             r#"<polyline points="{}" stroke="{}"{dash}><title>source {}, receiver {}, {}: {}{arrival}, time {t}</title></polyline>"#,
-            view.points(&r.points),
+            points,
             colours.of(k, r),
             r.source,
             r.receiver,

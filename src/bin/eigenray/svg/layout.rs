@@ -66,6 +66,19 @@ impl View {
         }
         s
     }
+    /// [`points`](Self::points) to 6 decimals (sampled arcs, which are checked against
+    /// their circles).
+    pub(super) fn points_fine(&self, pts: &[Point]) -> String {
+        let mut s = String::with_capacity(pts.len() * 24);
+        for (k, p) in pts.iter().enumerate() {
+            let (x, y) = self.px(*p);
+            if k > 0 {
+                s.push(' ');
+            }
+            let _ = write!(s, "{x:.6},{y:.6}");
+        }
+        s
+    }
     /// The plot's left edge, in pixels.
     pub(super) fn left(&self) -> f64 {
         self.pc.0 - self.half.0
