@@ -548,3 +548,68 @@ fn the_caustics_column_counts_the_morse_index_through_arcs() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The command line's `--svg` draws a leg through a gradient medium as its arc: a direct ray
+/// in the design note's ocean gradient (`c = 1500 − 0.017 y`), its polyline's points mapped
+/// back through the affine map its two ends give (the source and the receiver), all within
+/// 1e-6 of the radius of the circle through both ends whose centre lies where `c = 0`,
+/// computed here; the points run monotonically from the source to the receiver.
+#[test]
+fn the_svg_draws_an_arc_on_its_circle() {
+    let json = r#"{
+      "media": { "sea": { "speed": 1500, "gradient": [0, -0.017] } },
+      "domain": [[-10, -3000], [8000, 10]],
+      "sources": [[0, -100]], "receivers": [[5939.27, -943.56]],
+      "paths": [{ "steps": [], "media": ["sea"] }]
+    }"#;
+    let (s, r): ([f64; 2], [f64; 2]) = ([0.0, -100.0], [5939.27, -943.56]);
+    // The centre (xc, yc): yc where c = 0, xc equidistant from s and r.
+    let yc: f64 = 1500.0 / 0.017;
+    let xc = ((r[0] * r[0] - s[0] * s[0]) + (r[1] - yc).powi(2) - (s[1] - yc).powi(2))
+        / (2.0 * (r[0] - s[0]));
+    let radius = ((s[0] - xc).powi(2) + (s[1] - yc).powi(2)).sqrt();
+    let dir = std::env::temp_dir().join(format!("eigenray-svg-arc-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (file, svg) = (dir.join("arc.json"), dir.join("arc.svg"));
+    std::fs::write(&file, json).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_eigenray"))
+        .arg("solve")
+        .arg(&file)
+        .arg("--svg")
+        .arg(&svg)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = std::fs::read_to_string(&svg).unwrap();
+    let rays = text.split(r#"<g class="rays""#).nth(1).unwrap();
+    let attr = rays.split(r#"<polyline points=""#).nth(1).unwrap();
+    let pixels: Vec<[f64; 2]> = attr[..attr.find('"').unwrap()]
+        .split(' ')
+        .map(|p| {
+            let (x, y) = p.split_once(',').unwrap();
+            [x.parse().unwrap(), y.parse().unwrap()]
+        })
+        .collect();
+    // (At least 8 pieces a leg.)
+    assert!(pixels.len() >= 9, "{pixels:?}");
+    let (p0, p1) = (pixels[0], pixels[pixels.len() - 1]);
+    let world = |p: [f64; 2]| {
+        [
+            s[0] + (p[0] - p0[0]) / (p1[0] - p0[0]) * (r[0] - s[0]),
+            s[1] + (p[1] - p0[1]) / (p1[1] - p0[1]) * (r[1] - s[1]),
+        ]
+    };
+    let mut last = f64::NEG_INFINITY;
+    for p in &pixels {
+        let [x, y] = world(*p);
+        let off = ((x - xc).powi(2) + (y - yc).powi(2)).sqrt() - radius;
+        assert!(off.abs() < 1e-6 * radius, "{x} {y}: {off}");
+        assert!(x > last, "{x} after {last}");
+        last = x;
+    }
+    // The arc bulges off its chord (by its sagitta, tens of metres here).
+    let mid = world(pixels[pixels.len() / 2]);
+    let chord_y = s[1] + (mid[0] - s[0]) / (r[0] - s[0]) * (r[1] - s[1]);
+    assert!((mid[1] - chord_y).abs() > 10.0, "{mid:?} {chord_y}");
+    std::fs::remove_dir_all(&dir).ok();
+}
