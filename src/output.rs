@@ -941,18 +941,19 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
             let r = view(i);
             // (Made only for a scene that asks for a quantity.)
             let entry = (!schema.is_empty()).then(|| {
-                let e = r.values.entry(has_gradient.then_some(&gradient));
+                let mut e = r.values.entry(has_gradient.then_some(&gradient));
                 // A default-mode ray through a profile medium: its turns and caustics.
                 if e.turns.is_none() && scene.curved() && r.points.len() == 2 {
                     let media: Vec<usize> = view(i).media.into_iter().flatten().collect();
                     let shape = Entry::shape(scene, e.timed, r.points, &media);
-                    Entry {
+                    e = Entry {
                         turns: shape.map(|s| s.turns),
                         caustics: shape.map(|s| s.caustics),
                         launch_angle: shape.map(|s| s.launch_angle),
                         ..e
-                    }
-                } else if e.caustics.is_none() && scene.curved() {
+                    };
+                }
+                if e.caustics.is_none() && scene.curved() {
                     // A ray through a gradient medium: its caustics from its path.
                     let v = view(i);
                     let steps = scene.paths().get(v.path).map(|p| &p.steps[..]);

@@ -613,3 +613,68 @@ fn the_svg_draws_an_arc_on_its_circle() {
     assert!((mid[1] - chord_y).abs() > 10.0, "{mid:?} {chord_y}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A direct arc that bulges far below its ends (`c = 1500 − 0.1 y`, ends 10 km apart at
+/// y = 0, no domain: the circle's lowest point at `15000 − √(5000² + 15000²)` ≈ −811): the
+/// picture's plot holds every drawn point of it, and its `caustics` is 0 (a direct ray's
+/// Hessian has no rows).
+#[test]
+fn the_svg_frame_holds_a_bulging_arc() {
+    let json = r#"{
+      "media": { "sea": { "speed": 1500, "gradient": [0, -0.1] } },
+      "sources": [[0, 0]], "receivers": [[10000, 0]],
+      "paths": [{ "steps": [], "media": ["sea"] }]
+    }"#;
+    let dir = std::env::temp_dir().join(format!("eigenray-svg-bulge-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (file, svg) = (dir.join("bulge.json"), dir.join("bulge.svg"));
+    std::fs::write(&file, json).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_eigenray"))
+        .arg("solve")
+        .arg(&file)
+        .arg("--svg")
+        .arg(&svg)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(doc["rays"][0]["caustics"].as_f64(), Some(0.0));
+    let text = std::fs::read_to_string(&svg).unwrap();
+    // The plot's box: the rectangle filled #fafafa.
+    let rect = text
+        .lines()
+        .find(|l| l.starts_with("<rect") && l.contains("#fafafa"))
+        .unwrap();
+    let attr = |name: &str| -> f64 {
+        let at = rect.find(&format!(" {name}=\"")).unwrap() + name.len() + 3;
+        rect[at..at + rect[at..].find('"').unwrap()]
+            .parse()
+            .unwrap()
+    };
+    let (x0, y0) = (attr("x"), attr("y"));
+    let (x1, y1) = (x0 + attr("width"), y0 + attr("height"));
+    let rays = text.split(r#"<g class="rays""#).nth(1).unwrap();
+    let points = rays.split(r#"<polyline points=""#).nth(1).unwrap();
+    let pixels: Vec<(f64, f64)> = points[..points.find('"').unwrap()]
+        .split(' ')
+        .map(|p| {
+            let (x, y) = p.split_once(',').unwrap();
+            (x.parse().unwrap(), y.parse().unwrap())
+        })
+        .collect();
+    assert!(pixels.len() >= 9);
+    for (x, y) in &pixels {
+        assert!(
+            *x >= x0 && *x <= x1 && *y >= y0 && *y <= y1,
+            "{x} {y}: {rect}"
+        );
+    }
+    // The lowest point is well below the ends (which are at one height).
+    let lowest = pixels.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+    assert!(
+        lowest - pixels[0].1 > 0.5 * (y1 - y0),
+        "{lowest} {}",
+        pixels[0].1
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -110,12 +110,14 @@ struct World {
     pad: f64,
 }
 
-/// The world holding `scene` and the drawn `rays`; computed in halves so that huge coordinates
+/// The world holding `scene` and the drawn `rays` (arcs and all); computed in halves so that huge coordinates
 /// do not overflow.
 fn world(scene: &Scene, rays: &[Item]) -> World {
     let mut b = scene.bbox();
     for r in rays {
-        for p in &r.points {
+        // (A gradient medium's arcs as drawn: they may bulge past their ends.)
+        let sampled = super::arcs::sampled(scene, r);
+        for p in sampled.as_deref().unwrap_or(&r.points) {
             b = b.union(Aabb::from_points(*p, *p));
         }
     }
