@@ -72,6 +72,27 @@ struct Walk {
     converted: Option<usize>,
 }
 
+impl Walk {
+    /// Interaction `x`'s plane-wave coefficient into the walk, and, where it changes medium,
+    /// its cosine ratio into `cos_ratio` (a reflection that does is a converted wave).
+    #[inline]
+    fn take(
+        &mut self,
+        cx: Context<'_>,
+        x: &Interaction<'_>,
+        cos_ratio: &mut f64,
+    ) -> Result<(), NoAmplitude> {
+        self.coefficient *= coefficient(cx, x)?;
+        if changes_medium(x) {
+            *cos_ratio *= x.cos2 / x.cos1;
+            if x.step.kind == StepKind::Reflect {
+                self.converted.get_or_insert(x.i);
+            }
+        }
+        Ok(())
+    }
+}
+
 /// What the amplitude of one path reads besides the path.
 #[derive(Clone, Copy)]
 struct Context<'a> {
@@ -532,13 +553,7 @@ fn walk(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
             w_in,
             w,
         };
-        out.coefficient *= coefficient(cx, &x)?;
-        if changes_medium(&x) {
-            cos_ratio *= x.cos2 / x.cos1;
-            if step.kind == StepKind::Reflect {
-                out.converted.get_or_insert(i);
-            }
-        }
+        out.take(cx, &x, &mut cos_ratio)?;
         out.out_of_plane += leg.out_of_plane_width(w0);
         out.attenuation_db += attenuation[m] * leg.len;
         incoming = leg;
@@ -725,13 +740,7 @@ fn walk_curved(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplit
             w_in,
             w,
         };
-        out.coefficient *= coefficient(cx, &x)?;
-        if changes_medium(&x) {
-            cos_ratio *= x.cos2 / x.cos1;
-            if step.kind == StepKind::Reflect {
-                out.converted.get_or_insert(i);
-            }
-        }
+        out.take(cx, &x, &mut cos_ratio)?;
         out.out_of_plane += leg.out_of_plane_width(w0);
         out.attenuation_db += attenuation[m] * arc_length(&leg);
         flux *= local(m, here) / local(m, points[i + 2]);

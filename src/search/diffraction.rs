@@ -61,11 +61,7 @@ impl Tracer {
                         self.diffracted_pair(options, control, &vertices, least, source, receiver)
                     })
                 } else {
-                    PairWalk {
-                        arrivals: Vec::new(),
-                        complete: false,
-                        work: 0,
-                    }
+                    PairWalk::not_begun()
                 };
                 (pair, found)
             })

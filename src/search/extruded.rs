@@ -140,6 +140,16 @@ impl<'a> Expansion<'a> {
         }
     }
 
+    /// The source's and the receiver's heights of plan path `plan`, and the room's height.
+    fn heights(&self, plan: &SearchArrival) -> [f64; 3] {
+        let x = self.extrusion;
+        [
+            x.source_heights[plan.source],
+            x.receiver_heights[plan.receiver],
+            x.height,
+        ]
+    }
+
     /// The 3-D arrivals of plan path `plan`, each handed to `out` (which says whether to go
     /// on); `false` when `out` said stop.
     pub(super) fn arrivals(
@@ -147,12 +157,7 @@ impl<'a> Expansion<'a> {
         plan: &SearchArrival,
         out: &mut dyn FnMut(SearchArrival) -> bool,
     ) -> bool {
-        let x = self.extrusion;
-        let (zs, zr, h) = (
-            x.source_heights[plan.source],
-            x.receiver_heights[plan.receiver],
-            x.height,
-        );
+        let [zs, zr, h] = self.heights(plan);
         let a = &plan.arrival;
         let medium = a.media.first().copied().unwrap_or(0);
         let slowness = self.tracer.scene().media()[medium].slowness;
@@ -193,12 +198,7 @@ impl<'a> Expansion<'a> {
         v: Vertical,
         slowness: f64,
     ) -> SearchArrival {
-        let x = self.extrusion;
-        let (zs, zr, h) = (
-            x.source_heights[plan.source],
-            x.receiver_heights[plan.receiver],
-            x.height,
-        );
+        let [zs, zr, h] = self.heights(plan);
         let a = &plan.arrival;
         let length = at.last().copied().unwrap_or(0.0);
         let k = plan.steps.len() + v.count;

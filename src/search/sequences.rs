@@ -170,6 +170,17 @@ pub(super) struct PairWalk {
     pub work: u64,
 }
 
+impl PairWalk {
+    /// A pair the run refused before its walk began: nothing listed, not complete.
+    pub(super) fn not_begun() -> Self {
+        PairWalk {
+            arrivals: Vec::new(),
+            complete: false,
+            work: 0,
+        }
+    }
+}
+
 /// What the walk knows of a prefix of steps.
 #[derive(Clone, Copy, Debug)]
 struct Prefix {
@@ -227,11 +238,7 @@ impl Tracer {
                 let found = if begun {
                     walk.pair(source, receiver, medium)
                 } else {
-                    PairWalk {
-                        arrivals: Vec::new(),
-                        complete: false,
-                        work: 0,
-                    }
+                    PairWalk::not_begun()
                 };
                 (pair, found)
             })

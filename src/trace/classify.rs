@@ -246,14 +246,7 @@ impl Classifier {
         let mut own_a = SegmentRef::NONE;
         for leg in 0..=k {
             let (a, b) = (pts[leg], pts[leg + 1]);
-            let own_b = if leg < k {
-                SegmentRef {
-                    interface: steps[leg].interface as u32,
-                    segment: seg[leg] as u32,
-                }
-            } else {
-                SegmentRef::NONE
-            };
+            let own_b = own_segment(steps, seg, leg);
             if a != b {
                 let own = [own_a, own_b];
                 let listed = candidates.and_then(|c| c[leg].as_deref());
@@ -372,6 +365,19 @@ fn curved_wrong_side(
     })
 }
 
+/// The segment leg `leg` ends on (its step's), or none for the last leg.
+#[inline]
+fn own_segment(steps: &[Step], seg: &[usize], leg: usize) -> SegmentRef {
+    if leg < seg.len() {
+        SegmentRef {
+            interface: steps[leg].interface as u32,
+            segment: seg[leg] as u32,
+        }
+    } else {
+        SegmentRef::NONE
+    }
+}
+
 /// The first leg whose arc crosses an interface strictly between its ends, for legs that may
 /// be curved (`curved`, positions relative to the source `pts[0]`). A straight leg is tested
 /// as the classifier tests it; an arc as the polygon inscribed in it whose pieces each bulge
@@ -391,14 +397,7 @@ fn arc_obstruction(
     let mut own_a = SegmentRef::NONE;
     for leg in 0..=k {
         let (a, b) = (pts[leg], pts[leg + 1]);
-        let own_b = if leg < k {
-            SegmentRef {
-                interface: steps[leg].interface as u32,
-                segment: seg[leg] as u32,
-            }
-        } else {
-            SegmentRef::NONE
-        };
+        let own_b = own_segment(steps, seg, leg);
         if a != b {
             let hit = match curved[leg].leg(a - origin, b - origin).arc() {
                 None => scene.first_crossing(a, b, END_MARGIN, [own_a, own_b]),
