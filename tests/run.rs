@@ -217,7 +217,9 @@ fn the_batch_honours_its_run() {
         let part = batch_records(&tracer, &opts, &run);
         let solved: Vec<usize> = (0..part.len()).filter(|&i| !not_solved(&part[i])).collect();
         assert!(solved.len() as u64 <= budget, "{} > {budget}", solved.len());
-        assert_eq!(solved.len() % 16, 0);
+        // Whole units only: 62 of 16 rays and the last of 1000 % 16 = 8, which the scheduler
+        // may take first.
+        assert!([0, 8].contains(&(solved.len() % 16)), "{}", solved.len());
         assert_eq!(run.spent(), solved.len() as u64);
         assert!(run.stopped() && !run.stop_requested());
         for &i in &solved {
