@@ -1920,15 +1920,16 @@ impl SceneSpec {
         }
         if text.contains("\"extrusion\"")
             && let Ok(mut value) = serde_json::from_str::<serde_json::Value>(text)
-            && let Some((sources, receivers)) = extrusion::split_heights(&mut value)
+            && let Some(heights) = extrusion::split_heights(&mut value)
         {
             // An extruded scene's points are [x, y, z]: their plans parsed as any scene's,
             // their heights kept beside them.
             let plan = value.to_string();
             let mut spec = SceneSpec::parse_plan(&plan, JsonOrigin::Generated)?;
             if let Some(e) = &mut spec.extrusion {
-                e.source_heights = sources;
-                e.receiver_heights = receivers;
+                e.source_heights = heights.sources;
+                e.receiver_heights = heights.receivers;
+                e.grid_height = heights.grid;
             }
             return Ok(spec);
         }

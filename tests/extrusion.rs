@@ -354,6 +354,16 @@ fn bad_extruded_scenes_name_their_key() {
         ),
         (Box::new(|d| d["paths"] = json!([{ "steps": [] }])), "paths"),
         (
+            Box::new(|d| d["receivers"] = json!({ "grid": { "x": [1, 2, 2], "y": [1, 2, 2] } })),
+            "receivers.grid.z",
+        ),
+        (
+            Box::new(|d| {
+                d["receivers"] = json!({ "grid": { "x": [1, 2, 2], "y": [1, 2, 2], "z": 3.0 } })
+            }),
+            "receivers.grid.z",
+        ),
+        (
             Box::new(|d| d["search"]["diffraction"] = json!(true)),
             "search.diffraction",
         ),
@@ -387,6 +397,52 @@ fn an_extruded_scene_reads_back_from_its_document() {
     let again = Scene::from_json(&scene.to_json()).unwrap();
     assert_eq!(format!("{scene:?}"), format!("{again:?}"));
     assert_eq!(again.extrusion().unwrap().receiver_heights, ZR.to_vec());
+}
+
+/// A grid with its height `z` is the list of its points, each at that height: the same
+/// pressure at every receiver, to the bit, and its document reads back with the grid.
+#[test]
+fn an_extruded_grid_is_its_points_at_its_height() {
+    let (xs, z) = ([0.5, 2.5, 4.5], 1.6);
+    let search = json!({ "max_steps": 5, "refract": false });
+    let mut grid = l_room(true, search.clone());
+    grid["amplitudes"]["frequency"] = json!(250.0);
+    grid["receivers"] = json!({ "grid": { "x": [0.5, 4.5, 3], "y": [0.5, 4.5, 5], "z": z } });
+    let mut list = grid.clone();
+    let points: Vec<Value> = xs
+        .iter()
+        .flat_map(|&x| {
+            [0.5, 1.5, 2.5, 3.5, 4.5]
+                .into_iter()
+                .map(move |y| json!([x, y, z]))
+        })
+        .collect();
+    list["receivers"] = Value::Array(points);
+    let pressure = |doc: &Value| {
+        let scene = Scene::from_json(&doc.to_string()).unwrap();
+        let tracer = Tracer::new(&scene).unwrap();
+        let mut out = vec![Complex64::new(0.0, 0.0); scene.receivers().len()];
+        pressure_of_scene_into(&tracer, 250.0, &Run::new(), &mut out).unwrap();
+        (scene, out)
+    };
+    let (scene, from_grid) = pressure(&grid);
+    let (_, from_list) = pressure(&list);
+    assert_eq!(from_grid.len(), 15);
+    assert_eq!(from_grid, from_list);
+    // Receivers in the plan's missing corner (x > 3, y > 3) hear nothing; the others do.
+    for (k, p) in from_grid.iter().enumerate() {
+        let (x, y) = (xs[k / 5], [0.5, 1.5, 2.5, 3.5, 4.5][k % 5]);
+        assert_eq!(
+            *p == Complex64::new(0.0, 0.0),
+            x > 3.0 && y > 3.0,
+            "receiver {k}"
+        );
+    }
+    assert_eq!(scene.extrusion().unwrap().receiver_heights, vec![z; 15]);
+    let again = Scene::from_json(&scene.to_json()).unwrap();
+    assert_eq!(again.receiver_grid(), scene.receiver_grid());
+    assert_eq!(again.extrusion(), scene.extrusion());
+    assert!(scene.to_json().contains("\"z\":1.6"), "{}", scene.to_json());
 }
 
 /// The shoebox room of the parameters' check: absorbing walls, floor and ceiling, every
@@ -514,6 +570,56 @@ fn the_command_line_writes_the_parameters_and_refuses_an_unwritable_file() {
         entry["t30"]["value"].is_null() && entry["t30"]["reason"].is_string(),
         "{entry}"
     );
+    // The library's own pass over the scene: the same parameters, whether the file comes
+    // alone, beside `--ir` (one rendering for both: the written response is the one read) or
+    // beside the listed arrivals (summed in their listed order).
+    let built = Scene::from_json(&doc.to_string()).unwrap();
+    let responses = eigenray::response::ImpulseResponses::new(
+        built.impulse_response().unwrap(),
+        1,
+        built.receivers().len(),
+    );
+    let want = eigenray::response::room_parameters_of_scene(
+        &Tracer::new(&built).unwrap(),
+        &responses,
+        &Run::new(),
+    )
+    .unwrap();
+    let ir = dir.join("ir.npy");
+    let arrivals = dir.join("arrivals.json");
+    for extra in [
+        vec![],
+        vec!["--ir".as_ref(), ir.as_os_str()],
+        vec!["--arrivals".as_ref(), arrivals.as_os_str()],
+    ] {
+        let out = std::process::Command::new(bin)
+            .args([
+                "solve".as_ref(),
+                scene.as_os_str(),
+                "--parameters".as_ref(),
+                file.as_os_str(),
+            ])
+            .args(&extra)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{extra:?}");
+        let got: Value = serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+        for (k, p) in want.parameters.iter().enumerate() {
+            let w = serde_json::to_value(p).unwrap();
+            for key in ["edt", "t20", "c50", "c80", "d50"] {
+                let (g, w) = (&got["parameters"][k][key]["value"], &w[key]["value"]);
+                match (g.as_f64(), w.as_f64()) {
+                    (Some(g), Some(w)) => {
+                        assert!((g - w).abs() <= 1e-12 * w.abs(), "{extra:?} {key}: {g} {w}");
+                    }
+                    _ => assert!(g.is_null() && w.is_null(), "{extra:?} {key}: {g} {w}"),
+                }
+            }
+        }
+        // One search: its summary line once.
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(stderr.matches("search:").count(), 1, "{stderr}");
+    }
     let bad = dir.join("missing").join("p.json");
     let out = std::process::Command::new(bin)
         .args([

@@ -21,6 +21,7 @@ eigenray::
     room.add_source([1.0, 1.5, 1.2]); room.add_microphone([4.0, 2.0, 1.6])
     rir = room.compute_rir()            # [sources, microphones, samples]
     parameters = room.room_parameters()  # T20, T30, EDT, C50, C80, D50 per pair
+    level = room.level_map((0.1, 5.9, 59), (0.1, 3.9, 39), z=1.6, frequency=500)
 
 `corners` is an array of shape ``(2, N)`` as pyroomacoustics takes it (or ``(N, 2)``);
 `absorption` one energy absorption coefficient for every wall, or one per wall (wall ``k``
@@ -166,6 +167,29 @@ class ExtrudedRoom:
         """EDT, T20, T30, C50, C80 and D50 of each (source, microphone)
         (`Tracer.room_parameters`)."""
         return self.tracer().room_parameters()
+
+
+    def level_map(
+        self,
+        x: Sequence[float],
+        y: Sequence[float],
+        z: float,
+        frequency: float,
+        mode: str = "incoherent",
+    ) -> np.ndarray:
+        """The level of each source over a grid of listeners at height `z`: ``20 log10(4π|p|)``
+        dB (0 dB at 1 m in free field; minus the transmission loss), float64 ``[sources, nx,
+        ny]``. `x` and `y` are ``(first, last, count)`` as `numpy.linspace`; `mode`
+        ``"incoherent"`` (the energy sum of the arrivals, the usual room map) or
+        ``"coherent"`` (their sum at `frequency`). A listener outside the plan (or that no
+        path reaches) gets ``-inf``. The room's microphones play no part."""
+        doc = self.scene_dict()
+        doc["receivers"] = {
+            "grid": {"x": [float(v) for v in x], "y": [float(v) for v in y], "z": float(z)}
+        }
+        doc["amplitudes"]["frequency"] = float(frequency)
+        doc.pop("impulse_response")
+        return -Tracer(Scene(doc)).transmission_loss(mode=mode)
 
 
 def from_corners(corners: Any, height: float, **kwargs: Any) -> ExtrudedRoom:

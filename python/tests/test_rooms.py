@@ -118,3 +118,26 @@ def test_a_bad_room_names_its_key():
         room.scene()
     with pytest.raises(ValueError, match="absorption"):
         rooms.from_corners(np.array(CORNERS).T, 3.0, absorption=[0.1, 0.2], max_order=2)
+
+
+def test_a_level_map_is_the_energy_sum_of_each_listeners_arrivals():
+    """The grid at one height against each listener's arrivals listed and summed here."""
+    room = l_room(4)
+    xs, ys, z = np.linspace(0.5, 4.5, 3), np.linspace(0.5, 4.5, 4), 1.6
+    level = room.level_map((0.5, 4.5, 3), (0.5, 4.5, 4), z=z, frequency=250)
+    assert level.shape == (1, 3, 4)
+    listed = l_room(4)
+    listed.microphones = [[x, y, z] for x in xs for y in ys]
+    doc = listed.scene_dict()
+    doc["amplitudes"]["frequency"] = 250.0
+    arrivals = eigenray.Tracer(eigenray.Scene(doc)).search()
+    energy = np.zeros(len(listed.microphones))
+    for a in arrivals:
+        energy[a["receiver"]] += abs(complex(a["amplitude"])) ** 2
+    with np.errstate(divide="ignore"):
+        want = 10 * np.log10((4 * np.pi) ** 2 * energy).reshape(3, 4)
+    # The plan's missing corner (x > 3, y > 3) hears nothing.
+    assert np.isneginf(want[2, 2:]).all() and np.isfinite(want[:2]).all()
+    np.testing.assert_allclose(level[0], want, rtol=0, atol=1e-9)
+    coherent = room.level_map((0.5, 4.5, 3), (0.5, 4.5, 4), z=z, frequency=250, mode="coherent")
+    assert coherent.shape == (1, 3, 4) and np.isneginf(coherent[0, 2, 2:]).all()

@@ -162,6 +162,10 @@ impl Scene {
         if let (Some(e), Some(x)) = (&mut spec.extrusion, &self.extrusion) {
             e.source_heights = x.source_heights.clone();
             e.receiver_heights = x.receiver_heights.clone();
+            if self.document.receiver_grid().is_none() {
+                // Moved receivers are a list, each with its own height.
+                e.grid_height = None;
+            }
         }
         spec
     }

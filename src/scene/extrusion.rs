@@ -33,6 +33,10 @@ pub struct ExtrusionSpec {
     /// Each receiver's height z, in the order of `receivers` (NaN where its point gave none).
     #[serde(skip)]
     pub receiver_heights: Vec<f64>,
+    /// The height z of every receiver of a grid (`"receivers": {"grid": {..., "z": 1.6}}`),
+    /// `None` where the receivers are a list.
+    #[serde(skip)]
+    pub grid_height: Option<f64>,
 }
 
 /// A validated extrusion ([`Scene::extrusion`](super::Scene::extrusion)).
@@ -50,11 +54,21 @@ pub struct Extrusion {
     pub receiver_heights: Vec<f64>,
 }
 
+/// The heights an extruded scene's document gives ([`split_heights`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(super) struct DocumentHeights {
+    /// Each source's (NaN where its point has two coordinates).
+    pub sources: Vec<f64>,
+    /// Each listed receiver's (NaN where its point has two coordinates).
+    pub receivers: Vec<f64>,
+    /// A receiver grid's `z` (NaN where it is not a number), `None` without one.
+    pub grid: Option<f64>,
+}
+
 /// Moves the third coordinate of each point of `sources` and `receivers` (a list) of an
-/// extruded scene's document `value` into heights, leaving plan points `[x, y]`: the sources'
-/// and the receivers' heights (NaN where a point has two coordinates). `None` when the
-/// document has no `extrusion` object.
-pub(super) fn split_heights(value: &mut serde_json::Value) -> Option<(Vec<f64>, Vec<f64>)> {
+/// extruded scene's document `value` into heights, leaving plan points `[x, y]`, and a
+/// receiver grid's `z` likewise. `None` when the document has no `extrusion` object.
+pub(super) fn split_heights(value: &mut serde_json::Value) -> Option<DocumentHeights> {
     let object = value.as_object_mut()?;
     if !object.get("extrusion")?.is_object() {
         return None;
@@ -78,7 +92,17 @@ pub(super) fn split_heights(value: &mut serde_json::Value) -> Option<(Vec<f64>, 
     };
     let sources = split("sources");
     let receivers = split("receivers");
-    Some((sources, receivers))
+    let grid = object
+        .get_mut("receivers")
+        .and_then(|r| r.get_mut("grid"))
+        .and_then(serde_json::Value::as_object_mut)
+        .and_then(|g| g.remove("z"))
+        .map(|z| z.as_f64().unwrap_or(f64::NAN));
+    Some(DocumentHeights {
+        sources,
+        receivers,
+        grid,
+    })
 }
 
 /// `value` (a serialised scene document) with each height of `spec`'s extrusion written back
@@ -87,6 +111,14 @@ pub(super) fn join_heights(spec: &ExtrusionSpec, value: &mut serde_json::Value) 
     let Some(object) = value.as_object_mut() else {
         return;
     };
+    if let Some(z) = spec.grid_height.and_then(serde_json::Number::from_f64)
+        && let Some(grid) = object
+            .get_mut("receivers")
+            .and_then(|r| r.get_mut("grid"))
+            .and_then(serde_json::Value::as_object_mut)
+    {
+        grid.insert("z".into(), serde_json::Value::Number(z));
+    }
     for (key, heights) in [
         ("sources", &spec.source_heights),
         ("receivers", &spec.receiver_heights),
@@ -155,7 +187,7 @@ fn heights(key: &str, given: &[f64], count: usize, height: f64) -> Result<Vec<f6
 
 /// The validated extrusion of `spec` (`None` without one), with `sources` and `receivers`
 /// points: the height, the laws, the points' heights, and what an extruded scene cannot hold
-/// (a receiver grid, interfaces named `floor` or `ceiling`, paths, a speed gradient,
+/// (a receiver grid without its `z`, interfaces named `floor` or `ceiling`, paths, a speed gradient,
 /// refractions among several media, a source other than `point`, diffraction, derivatives).
 ///
 /// # Errors
@@ -177,12 +209,28 @@ pub(super) fn validate(
     }
     let floor = law("extrusion.floor", e.floor)?;
     let ceiling = law("extrusion.ceiling", e.ceiling)?;
-    if matches!(spec.receivers, ReceiversSpec::Grid { .. }) {
-        return Err(SceneError::new(
-            "receivers",
-            "a grid has no heights: list the receivers of an extruded scene as [x, y, z]",
-        ));
-    }
+    let receiver_heights = match (&spec.receivers, e.grid_height) {
+        (ReceiversSpec::Grid { .. }, None) => {
+            return Err(SceneError::new(
+                "receivers.grid.z",
+                "an extruded scene's grid needs its height: \"grid\": {\"x\": [...], \"y\": \
+                 [...], \"z\": 1.6} places every receiver at that height",
+            ));
+        }
+        (ReceiversSpec::Grid { .. }, Some(z)) if z > 0.0 && z < height => vec![z; receivers],
+        (ReceiversSpec::Grid { .. }, Some(z)) => {
+            return Err(SceneError::new(
+                "receivers.grid.z",
+                format!(
+                    "the grid's height must be a number strictly between the floor (0) and the \
+                     ceiling (extrusion.height = {height}), not {z}"
+                ),
+            ));
+        }
+        (ReceiversSpec::Points(_), _) => {
+            heights("receivers", &e.receiver_heights, receivers, height)?
+        }
+    };
     for name in [FLOOR, CEILING] {
         if spec.interfaces.contains_key(name) {
             return Err(SceneError::new(
@@ -249,7 +297,7 @@ pub(super) fn validate(
         floor,
         ceiling,
         source_heights: heights("sources", &e.source_heights, sources, height)?,
-        receiver_heights: heights("receivers", &e.receiver_heights, receivers, height)?,
+        receiver_heights,
     }))
 }
 

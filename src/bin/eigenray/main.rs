@@ -593,7 +593,13 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         None => None,
     };
     check_output_files(args)?;
-    let sums = response::Sums::new(&scene, ir.as_ref(), tl.as_ref(), charts.as_ref())?;
+    let sums = response::Sums::new(
+        &scene,
+        ir.as_ref(),
+        tl.as_ref(),
+        charts.as_ref(),
+        parameters.as_ref(),
+    )?;
     let tracer = Tracer::new(std::sync::Arc::clone(&scene)).map_err(Failure::scene)?;
     let solved = match scene.solver().stationary {
         StationaryMode::One => Solved::Batch(trace(&tracer, !args.no_warm_start)?),
@@ -606,12 +612,17 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
     // The search's arrivals are listed only where written (or drawn); otherwise they go
     // straight into the responses.
     let listed = *to.of_arrivals() != Destination::Nowhere || args.svg.is_some();
-    let (arrivals, streamed) = match (scene.search(), &sums) {
-        (Some(_), Some(sums)) if !listed => (None, Some(search_streamed(&tracer, sums)?)),
-        // The parameters' own pass is the search's.
-        (Some(_), None) if !listed && parameters.is_some() => (None, None),
-        (Some(_), _) => (Some(search(&tracer)?), None),
-        (None, _) => (None, None),
+    // One search feeds every output, `--parameters` included.
+    let (arrivals, streamed, incomplete_pairs) = match (scene.search(), &sums) {
+        (Some(_), Some(sums)) if !listed => {
+            let report = search_streamed(&tracer, sums)?;
+            (None, Some(report.arrivals), report.incomplete_pairs)
+        }
+        (Some(_), _) => {
+            let report = search(&tracer)?;
+            (Some(report.arrivals), None, report.incomplete_pairs)
+        }
+        (None, _) => (None, None, 0),
     };
     if let (Some(sums), Some(arrivals)) = (&sums, &arrivals) {
         for a in arrivals {
@@ -630,10 +641,7 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         )
     });
     if let Some(sums) = sums {
-        sums.write(&scene)?;
-    }
-    if let (Some(responses), Some(path)) = (&parameters, &args.parameters) {
-        response::write_parameters(&tracer, responses, path)?;
+        sums.write(&scene, args.parameters.as_deref(), incomplete_pairs)?;
     }
     write_outputs(args, &scene, &solved, arrivals.as_deref())?;
     let responses = response_outputs(args);
@@ -779,7 +787,7 @@ fn write_outputs(
 /// the format and whether or not standard error is a terminal: arrivals, beams, the bounds,
 /// the pairs a limit left short, and how many pairs no arrival reaches (they have no entry in
 /// the output).
-fn search(tracer: &Tracer) -> Result<Vec<SearchArrival>, Failure> {
+fn search(tracer: &Tracer) -> Result<eigenray::search::SearchReport, Failure> {
     let scene = tracer.scene();
     let options = scene.search().expect("a scene with a search section");
     let pairs = scene.sources().len() as u128 * scene.receivers().len() as u128;
@@ -830,7 +838,7 @@ fn search(tracer: &Tracer) -> Result<Vec<SearchArrival>, Failure> {
     }
     let _ = write!(line, "; {}", unreached_pairs(scene, &report.arrivals));
     eprintln!("{line}");
-    Ok(report.arrivals)
+    Ok(report)
 }
 
 /// The summary line's middle, shared by the listing and the streamed search: the walk's work
@@ -850,7 +858,10 @@ fn search_bounds(line: &mut String, work: u64, options: &eigenray::scene::Search
 /// The scene's `search` streamed into the response outputs' `sums` (no arrival listed), with
 /// the spinner of [`search`] and its summary line: the arrivals summed, beams, the bounds and
 /// the pairs a limit left short. The number of arrivals.
-fn search_streamed(tracer: &Tracer, sums: &response::Sums<'_>) -> Result<u64, Failure> {
+fn search_streamed(
+    tracer: &Tracer,
+    sums: &response::Sums<'_>,
+) -> Result<eigenray::search::StreamReport, Failure> {
     let scene = tracer.scene();
     let options = scene.search().expect("a scene with a search section");
     let bar = Bar::new(None, "units of work");
@@ -880,7 +891,7 @@ fn search_streamed(tracer: &Tracer, sums: &response::Sums<'_>) -> Result<u64, Fa
         );
     }
     eprintln!("{line}");
-    Ok(n)
+    Ok(report)
 }
 
 /// Pairs named in the search's summary line, at most.

@@ -13,7 +13,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use eigenray::Scene;
 use eigenray::amplitude::Complex64;
 use eigenray::output::write_f64_array;
-use eigenray::response::{Echo, ImpulseResponses, incoherent_loss, transmission_loss};
+use eigenray::response::{
+    Echo, ImpulseResponses, RoomParameters, incoherent_loss, room_parameters, transmission_loss,
+};
 use eigenray::scene::TransmissionLossMode;
 
 use super::{Failure, available_memory, write_failure};
@@ -341,8 +343,20 @@ impl TlOutput {
 /// output behind its lock): the impulse responses, the coherent pressures (`--tl` coherent
 /// and `--tl-map`), the intensities (`--tl` incoherent) and the echoes of the echogram's
 /// pair. Nothing else of an echo is kept.
+/// The impulse responses a run renders: for `--ir`, for `--parameters`, or one buffer for
+/// both.
+struct Rendered<'a> {
+    responses: &'a ImpulseResponses,
+    data: Mutex<Vec<f64>>,
+    /// Where `--ir` writes them.
+    file: Option<&'a IrOutput>,
+    /// Each pair's first arrival (the time zero of its parameters), when `--parameters`
+    /// reads them.
+    first: Option<Mutex<Vec<f64>>>,
+}
+
 pub(super) struct Sums<'a> {
-    ir: Option<(&'a IrOutput, Mutex<Vec<f64>>)>,
+    ir: Option<Rendered<'a>>,
     tl: Option<&'a TlOutput>,
     charts: Option<&'a Charts>,
     pressure: Option<(f64, Mutex<Vec<Complex64>>)>,
@@ -366,22 +380,36 @@ fn buffer<T: Clone>(n: usize, zero: T, what: &str) -> Result<Vec<T>, Failure> {
 
 impl<'a> Sums<'a> {
     /// The sums of the outputs asked for (`None` when none is), allocated before the solve.
+    /// `parameters`: the responses `--parameters` reads (rendered once with `--ir`'s).
     pub(super) fn new(
         scene: &Scene,
         ir: Option<&'a IrOutput>,
         tl: Option<&'a TlOutput>,
         charts: Option<&'a Charts>,
+        parameters: Option<&'a ImpulseResponses>,
     ) -> Result<Option<Sums<'a>>, Failure> {
-        if ir.is_none() && tl.is_none() && charts.is_none() {
+        if ir.is_none() && tl.is_none() && charts.is_none() && parameters.is_none() {
             return Ok(None);
         }
         let pairs = scene.sources().len() * scene.receivers().len();
-        let ir = match ir {
-            Some(o) => Some((
-                o,
-                Mutex::new(buffer(o.responses.len(), 0.0, "impulse_response")?),
-            )),
+        let first = match parameters {
+            Some(_) => Some(Mutex::new(buffer(pairs, f64::INFINITY, "--parameters")?)),
             None => None,
+        };
+        let ir = match (ir, parameters) {
+            (Some(o), _) => Some(Rendered {
+                responses: &o.responses,
+                data: Mutex::new(buffer(o.responses.len(), 0.0, "impulse_response")?),
+                file: Some(o),
+                first,
+            }),
+            (None, Some(responses)) => Some(Rendered {
+                responses,
+                data: Mutex::new(buffer(responses.len(), 0.0, "--parameters")?),
+                file: None,
+                first,
+            }),
+            (None, None) => None,
         };
         let coherent = tl.filter(|t| t.mode == TransmissionLossMode::Coherent);
         let map = charts.and_then(|c| c.tl_map.as_ref().map(|(_, f)| *f));
@@ -416,15 +444,18 @@ impl<'a> Sums<'a> {
         }
         self.echoes.fetch_add(1, Ordering::Relaxed);
         let k = e.source * self.receivers + e.receiver;
-        if let Some((o, data)) = &self.ir {
-            let r = &o.responses;
+        if let Some(rendered) = &self.ir {
+            let r = rendered.responses;
             let start = k * r.samples();
-            let mut data = lock(data);
             r.pulse().add(
-                &mut data[start..start + r.samples()],
+                &mut lock(&rendered.data)[start..start + r.samples()],
                 e.time * r.rate(),
                 e.amplitude,
             );
+            if let Some(first) = &rendered.first {
+                let t = &mut lock(first)[k];
+                *t = t.min(e.time);
+            }
         }
         if let Some((f, p)) = &self.pressure {
             let phase =
@@ -447,8 +478,14 @@ impl<'a> Sums<'a> {
         self.without_amplitude.fetch_add(1, Ordering::Relaxed);
     }
 
-    /// Writes every output.
-    pub(super) fn write(self, scene: &Scene) -> Result<(), Failure> {
+    /// Writes every output; `--parameters` to `parameters` (when given), read off the
+    /// rendered responses, with `incomplete_pairs` from the search.
+    pub(super) fn write(
+        self,
+        scene: &Scene,
+        parameters: Option<&Path>,
+        incomplete_pairs: usize,
+    ) -> Result<(), Failure> {
         let Sums {
             ir,
             tl,
@@ -459,8 +496,23 @@ impl<'a> Sums<'a> {
             ..
         } = self;
         let inner = |m: Mutex<Vec<f64>>| m.into_inner().unwrap_or_else(|e| e.into_inner());
-        if let Some((o, data)) = ir {
-            o.write(&inner(data))?;
+        if let Some(rendered) = ir {
+            let data = inner(rendered.data);
+            if let Some(o) = rendered.file {
+                o.write(&data)?;
+            }
+            if let (Some(path), Some(first)) = (parameters, rendered.first) {
+                let first = inner(first);
+                let r = rendered.responses;
+                let found: Vec<RoomParameters> = (0..first.len())
+                    .map(|k| {
+                        let (s, rc) = (k / r.receivers().max(1), k % r.receivers().max(1));
+                        let t0 = first[k].is_finite().then_some(first[k]);
+                        room_parameters(r.response(&data, s, rc), r.rate(), t0)
+                    })
+                    .collect();
+                write_parameters_file(scene, &found, incomplete_pairs, path)?;
+            }
         }
         let pressure = pressure.map(|(_, p)| p.into_inner().unwrap_or_else(|e| e.into_inner()));
         if let Some(t) = tl {
@@ -504,19 +556,16 @@ pub(super) fn parameters_check(scene: &Scene) -> Result<ImpulseResponses, Failur
     Ok(responses)
 }
 
-/// Writes `--parameters`: the room acoustic parameters of every (source, receiver), from its
-/// response rendered as the search finds each echo.
-pub(super) fn write_parameters(
-    tracer: &eigenray::Tracer,
-    responses: &ImpulseResponses,
+/// Writes `--parameters`: the room acoustic parameters `found` of every (source, receiver),
+/// source-major, with the search's count of `incomplete_pairs`.
+fn write_parameters_file(
+    scene: &Scene,
+    found: &[RoomParameters],
+    incomplete_pairs: usize,
     path: &Path,
 ) -> Result<(), Failure> {
-    let run = eigenray::options::Run::new();
-    let found = eigenray::response::room_parameters_of_scene(tracer, responses, &run)
-        .map_err(|e| Failure::Input(format!("--parameters: {e}")))?;
-    let receivers = tracer.scene().receivers().len().max(1);
+    let receivers = scene.receivers().len().max(1);
     let entries: Vec<serde_json::Value> = found
-        .parameters
         .iter()
         .enumerate()
         .map(|(k, p)| {
@@ -530,7 +579,7 @@ pub(super) fn write_parameters(
         .collect();
     let doc = serde_json::json!({
         "parameters": entries,
-        "incomplete_pairs": found.summed.incomplete_pairs,
+        "incomplete_pairs": incomplete_pairs,
     });
     let text = serde_json::to_string_pretty(&doc).unwrap_or_default();
     std::fs::write(path, text + "\n").map_err(|e| {
