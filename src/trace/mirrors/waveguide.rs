@@ -369,3 +369,65 @@ impl MirrorWalls {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Walls `a` and `b` (each one interface of one segment) and `more` interfaces, in air.
+    fn scene(a: [[f64; 2]; 2], b: [[f64; 2]; 2], more: &str) -> Scene {
+        Scene::from_json(&format!(
+            r#"{{ "media": {{ "air": {{ "speed": 343.0 }} }}, "background": "air",
+                "interfaces": {{ "a": {{ "points": {a:?} }}, "b": {{ "points": {b:?} }} {more} }},
+                "sources": [[1, 1]], "receivers": [[2, 1]], "paths": [{{ "steps": [] }}] }}"#
+        ))
+        .unwrap()
+    }
+
+    fn search<'a>(scene: &'a Scene, source: Point, receivers: &'a [Point]) -> MirrorSearch<'a> {
+        MirrorSearch {
+            scene,
+            source,
+            receivers,
+            max_steps: 10,
+            max_depth: crate::scene::MAX_SEARCH_STEPS,
+            max_time: f64::INFINITY,
+            slowness: 1.0 / 343.0,
+            obstructed: false,
+            max_beams: u64::MAX,
+            max_work: u64::MAX,
+        }
+    }
+
+    /// Parallel walls either way round, of different stretches: a waveguide over the
+    /// stretch both span; not parallel (by 1e-9), a third interface, one wall not
+    /// reflecting, or both on one line: none.
+    #[test]
+    fn only_two_parallel_walls_are_a_waveguide() {
+        let guide = |s: &Scene, reflecting: &[usize]| MirrorWalls::new(s, reflecting).waveguide;
+        let s = scene([[10.0, 3.0], [-5.0, 3.0]], [[0.0, 0.0], [20.0, 0.0]], "");
+        let g = guide(&s, &[0, 1]).expect("a waveguide");
+        assert_eq!(g.h, 3.0);
+        // The stretch both span: x from 0 to 10, whichever way round.
+        let r = [Point::new(9.0, 2.0)];
+        assert!(g.serves(&search(&s, Point::new(0.5, 1.0), &r)));
+        let beyond = [Point::new(11.0, 2.0)];
+        assert!(!g.serves(&search(&s, Point::new(0.5, 1.0), &beyond)));
+        let outside = [Point::new(5.0, 3.5)];
+        assert!(!g.serves(&search(&s, Point::new(0.5, 1.0), &outside)));
+        let at_source = [Point::new(0.5, 1.0)];
+        assert!(!g.serves(&search(&s, Point::new(0.5, 1.0), &at_source)));
+        let tilted = scene(
+            [[0.0, 0.0], [20.0, 0.0]],
+            [[0.0, 3.0], [20.0, 3.0 + 1e-9]],
+            "",
+        );
+        assert!(guide(&tilted, &[0, 1]).is_none());
+        let third = r#", "c": { "points": [[30, -1], [30, 4]] }"#;
+        let three = scene([[0.0, 0.0], [20.0, 0.0]], [[0.0, 3.0], [20.0, 3.0]], third);
+        assert!(guide(&three, &[0, 1]).is_none());
+        assert!(guide(&s, &[0]).is_none());
+        let collinear = scene([[0.0, 0.0], [5.0, 0.0]], [[6.0, 0.0], [20.0, 0.0]], "");
+        assert!(guide(&collinear, &[0, 1]).is_none());
+    }
+}
