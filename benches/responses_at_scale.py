@@ -15,7 +15,10 @@ reference commit:
   cargo build --release
   python3 benches/responses_at_scale.py /tmp/base/target/release/examples/response_reference [ROUNDS]
 
-ROUNDS (default 3) for the TL grids; the room (about a minute a run) runs once.
+ROUNDS (default 3) for the TL grids; the room (about a minute a run) runs once. A third
+argument `tl` runs the TL grids only:
+
+  python3 benches/responses_at_scale.py REFERENCE 5 tl
 
 Reports per scene: CPU seconds (user + sys, median of ROUNDS alternating runs), the ratio,
 the peak resident memory of each (/usr/bin/time -f %M), and the largest difference of the
@@ -123,11 +126,14 @@ def bench(name, doc, kind, reference, rounds, tmp, new_doc=None):
 def main():
     reference = pathlib.Path(sys.argv[1])
     rounds = int(sys.argv[2]) if len(sys.argv) > 2 else 3
+    only = sys.argv[3] if len(sys.argv) > 3 else None
     with tempfile.TemporaryDirectory() as tmp:
         tmp = pathlib.Path(tmp)
         for name in ("shallow_water_tl_flat", "shallow_water_tl_slope"):
             doc = json.loads((SCENES / f"{name}.json").read_text())
             bench(name, doc, "tl", reference, rounds, tmp)
+        if only == "tl":
+            return
         room = json.loads((SCENES / "room_response.json").read_text())
         one = dict(room, receivers=room["receivers"][:1])
         # The room's tree takes about a minute a run: one round.

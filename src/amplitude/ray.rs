@@ -14,6 +14,9 @@ use crate::polyline::Polyline;
 use crate::regions::Regions;
 use crate::scene::{Amplitudes, Reflection, Scene, SourceModel, Step, StepKind};
 
+mod unfolded;
+pub(crate) use unfolded::Unfolded;
+
 /// A solved path as the amplitude reads it.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct PathGeometry<'a> {
@@ -254,20 +257,27 @@ pub(crate) fn of_one(
 /// The amplitude from what the pass over `path` gathered.
 #[inline(always)]
 fn finish(cx: Context<'_>, points: &[Point], walk: &Walk) -> Amplitude {
-    let (settings, w0) = (cx.settings, walk.w0);
+    let axisymmetric = match cx.settings.source {
+        SourceModel::Axisymmetric => match out_of_plane_axisymmetric(points, walk.l0) {
+            Ok(y) => y,
+            Err(reason) => return Amplitude::none(reason),
+        },
+        SourceModel::Point | SourceModel::Line => None,
+    };
+    finish_with(cx.settings, walk, axisymmetric)
+}
+
+/// [`finish`] with the axisymmetric out-of-plane width given (`None`: the point source's,
+/// `walk.out_of_plane`; unused for the other source models).
+#[inline(always)]
+fn finish_with(settings: &Amplitudes, walk: &Walk, axisymmetric: Option<f64>) -> Amplitude {
+    let w0 = walk.w0;
     // spreading = √(Π cos θ₂/cos θ₁ / (W Y)) / (4π), or √(… / W) / √(8π k₀) for a line, whose
     // amplitude also takes the phase e^(iπ/4) of the 2-D Green's function's far field.
     let quarter = 0.25 / PI;
     let (out, scale) = match settings.source {
         SourceModel::Point => (walk.out_of_plane, quarter),
-        SourceModel::Axisymmetric => {
-            let out = match out_of_plane_axisymmetric(points, walk.l0) {
-                Ok(Some(y)) => y,
-                Ok(None) => walk.out_of_plane,
-                Err(reason) => return Amplitude::none(reason),
-            };
-            (out, quarter)
-        }
+        SourceModel::Axisymmetric => (axisymmetric.unwrap_or(walk.out_of_plane), quarter),
         SourceModel::Line => {
             let k0 = 2.0 * PI * settings.frequency.unwrap_or(f64::NAN) * w0;
             (k0, 1.0 / (8.0 * PI).sqrt())

@@ -6,9 +6,12 @@
 
 use rayon::prelude::*;
 
+use crate::amplitude::Unfolded;
+use crate::scene::SourceModel;
 use crate::scene::{SearchOptions, Step, StepKind};
 use crate::trace::{
-    Arrival, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls, Tracer,
+    Arrival, GuidePath, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls, Status,
+    Tracer, Waveguide,
 };
 
 use super::{Control, SearchArrival, StreamedArrival};
@@ -97,6 +100,51 @@ impl Tracer {
                 &mut |p: MirrorPath<'_>| paths(beam_arrival(walls, source, medium, p)),
                 progress,
             )
+        } else if let Some(sink) = control.sink
+            && let Some(guide) = walls.waveguide(&search)
+            && let Some(unfolded) = self.unfolded(walls, guide, &search, medium)
+        {
+            // Streamed between two parallel walls: each image's time and amplitude in closed
+            // form, no points (`trace/mirrors/waveguide.rs`).
+            let source_x = s.x;
+            let receivers = search.receivers;
+            let mut path = StreamScratch::default();
+            let mut walked = MirrorScratch::default();
+            walls.guide_arrivals(
+                guide,
+                &search,
+                &mut |p: GuidePath| {
+                    control.listed.stream();
+                    let amplitude = unfolded.and_then(|u| {
+                        let x = receivers[p.receiver].x;
+                        let width = Some(x.abs() * p.length / (x - source_x).abs());
+                        let closed = |checked| {
+                            u.amplitude(p.hits, p.length, p.along, p.across, width, checked)
+                        };
+                        closed(true).or_else(|| {
+                            // Ill-conditioned in closed form: the tree's path, walked.
+                            match walls.guide_path(guide, &search, &p, &mut walked) {
+                                Some(tree) => {
+                                    path.arrival(self, walls, source, medium, tree).amplitude
+                                }
+                                None => closed(false),
+                            }
+                        })
+                    });
+                    sink(StreamedArrival {
+                        source,
+                        receiver: p.receiver,
+                        steps: p.hits[0] + p.hits[1],
+                        diffractions: 0,
+                        vertical_reflections: 0,
+                        status: Status::Converged,
+                        time: p.time,
+                        amplitude,
+                    });
+                    true
+                },
+                progress,
+            )
         } else if let Some(sink) = control.sink {
             // Streamed: each path's amplitude from its points, in buffers reused path to path.
             let mut path = StreamScratch::default();
@@ -125,6 +173,43 @@ impl Tracer {
             )
         };
         SourceTree { arrivals, stats }
+    }
+}
+
+impl Tracer {
+    /// Whether a streamed search of one source (`search`, in medium `medium`) may take the
+    /// waveguide's closed forms: `Some(None)` in a scene without amplitudes (times only),
+    /// `Some(Some(form))` with the amplitudes' form, `None` where some path needs its
+    /// points (a scene with a gradient medium; an axisymmetric scene whose walls are not
+    /// horizontal, or with a receiver on the axis; a `"media"` wall whose medium across is
+    /// not one along it).
+    fn unfolded(
+        &self,
+        walls: &MirrorWalls,
+        guide: &Waveguide,
+        search: &MirrorSearch<'_>,
+        medium: usize,
+    ) -> Option<Option<Unfolded<'_>>> {
+        let scene = self.scene();
+        if scene.curved() {
+            return None;
+        }
+        let Some(settings) = scene.amplitudes() else {
+            return Some(None);
+        };
+        if settings.source == SourceModel::Axisymmetric {
+            let (u, _) = guide.axes();
+            let off_axis = |x: f64| x != 0.0 && x.is_finite();
+            if u.y != 0.0
+                || search.source.x != 0.0
+                || !search.receivers.iter().all(|r| off_axis(r.x))
+            {
+                return None;
+            }
+        }
+        let interfaces = guide.walls().map(|w| walls.place(w).interface);
+        let regions = self.regions();
+        Unfolded::new(scene, settings, regions, medium, interfaces, search.source).map(Some)
     }
 }
 

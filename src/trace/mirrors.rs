@@ -59,6 +59,8 @@ use super::{Reason, Status};
 
 mod shoebox;
 use shoebox::Shoebox;
+mod waveguide;
+pub(crate) use waveguide::{GuidePath, Waveguide};
 
 /// The beam tests' margin, relative to the largest coordinate an image can have: each
 /// mirroring and clip adds a few ulps (about 1e-16) of it, so this covers thousands of levels
@@ -124,6 +126,9 @@ pub(crate) struct MirrorWalls {
     /// The rectangle the walls form, when they are the scene's only segments
     /// (`mirrors/shoebox.rs`: its arrivals from the image lattice).
     shoebox: Option<Shoebox>,
+    /// The two parallel walls the walls form, when they are the scene's only segments
+    /// (`mirrors/waveguide.rs`: a streamed search's arrivals from their image lattice).
+    waveguide: Option<Waveguide>,
 }
 
 /// Where a wall of [`MirrorWalls`] lies in the scene.
@@ -547,11 +552,13 @@ impl MirrorWalls {
             .flat_map(|w| [w.p, w.q])
             .fold(0.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
         let shoebox = Shoebox::of(scene, &walls, extent);
+        let waveguide = Waveguide::of(scene, &walls);
         MirrorWalls {
             walls,
             extent,
             occluders: Occluders::new(scene),
             shoebox,
+            waveguide,
         }
     }
 
