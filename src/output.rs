@@ -943,7 +943,7 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
             let entry = (!schema.is_empty()).then(|| {
                 let mut e = r.values.entry(has_gradient.then_some(&gradient));
                 // A default-mode ray through a profile medium: its turns and caustics.
-                if e.turns.is_none() && scene.curved() && r.points.len() == 2 {
+                if e.turns.is_none() && scene.curved() && r.points.len() >= 2 {
                     let media: Vec<usize> = view(i).media.into_iter().flatten().collect();
                     let shape = Entry::shape(scene, e.timed, r.points, &media);
                     e = Entry {

@@ -1117,20 +1117,58 @@ fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
             ));
         }
     }
-    if spec.search.is_some() {
-        return Err(SceneError::new(
-            "search",
-            format!("the automatic search {why}"),
-        ));
-    }
-    if spec.media.values().any(|m| m.profile.is_some()) {
-        if let Some(k) = spec.paths.iter().position(|p| !p.steps.is_empty()) {
+    let profiled = spec.media.values().any(|m| m.profile.is_some());
+    let flat = |name: &str| spec.interfaces.get(name).is_some_and(flat_horizontal);
+    if let Some(search) = &spec.search {
+        if !profiled {
             return Err(SceneError::new(
-                format!("paths[{k}].steps"),
-                "a scene with a `profile` medium takes paths without steps only (a ray \
-                 through the profile from its source to its receiver, every turning point \
-                 and knot crossed); reflections and refractions there are not available yet",
+                "search",
+                format!("the automatic search {why}"),
             ));
+        }
+        if search.diffraction == Some(true) {
+            return Err(SceneError::new(
+                "search.diffraction",
+                "diffraction is not available yet in a scene with a `profile` medium",
+            ));
+        }
+        if let Some((name, _)) = spec.interfaces.iter().find(|(_, i)| !flat_horizontal(i)) {
+            return Err(SceneError::new(
+                "search",
+                format!(
+                    "the automatic search in a scene with a `profile` medium takes flat \
+                     horizontal interfaces only (a waveguide between a surface and a bottom, \
+                     each with all its points at one y); `interfaces.{name}` is not one"
+                ),
+            ));
+        }
+    }
+    if profiled {
+        for (k, path) in spec.paths.iter().enumerate() {
+            for (j, step) in path.steps.iter().enumerate() {
+                match step {
+                    StepSpec::Reflect(name)
+                        if flat(name) || !spec.interfaces.contains_key(name) => {}
+                    StepSpec::Reflect(name) => {
+                        return Err(SceneError::new(
+                            format!("paths[{k}].steps[{j}]"),
+                            format!(
+                                "in a scene with a `profile` medium a path reflects only off \
+                                 flat horizontal interfaces (all points at one y, not closed); \
+                                 `{name}` is not one (a sloping bottom is not available yet)"
+                            ),
+                        ));
+                    }
+                    StepSpec::Refract(_) => {
+                        return Err(SceneError::new(
+                            format!("paths[{k}].steps[{j}]"),
+                            "a scene with a `profile` medium takes reflections off flat \
+                             horizontal interfaces only; refraction there is not available yet",
+                        ));
+                    }
+                    StepSpec::Diffract { .. } => {}
+                }
+            }
         }
     }
     for (k, path) in spec.paths.iter().enumerate() {
@@ -1146,6 +1184,12 @@ fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
         }
     }
     Ok(())
+}
+
+/// Whether an interface is one flat horizontal line (open, every point at one `y`): a wall
+/// of a waveguide through a `profile` medium.
+pub(crate) fn flat_horizontal(i: &InterfaceSpec) -> bool {
+    !i.closed && i.points.windows(2).all(|w| w[0][1] == w[1][1])
 }
 
 /// Refuses a scene that mixes `speed` media with `index` media: a speed gives time in length
@@ -1756,6 +1800,20 @@ impl Scene {
             crossed
         });
         hit
+    }
+
+    /// [`first_crossing`](Self::first_crossing) ignoring the interfaces `skip` names (a
+    /// waveguide's walls, which its rays touch but never cross).
+    pub(crate) fn first_crossing_except(
+        &self,
+        a: Point,
+        b: Point,
+        margin: f64,
+        skip: impl Fn(usize) -> bool,
+    ) -> Option<SegmentRef> {
+        self.first_crossing_by(a, b, margin, [SegmentRef::NONE; 2], |i| {
+            !skip(self.segments[i as usize].interface as usize) && self.crosses(i, a, b, margin)
+        })
     }
 
     /// [`first_crossing`](Self::first_crossing) for a leg `a–b` known to lie on the line

@@ -394,10 +394,25 @@ fn bad_profiles_are_refused_naming_the_key() {
             "media.sea.gradient",
         ),
         (
-            with(good, r#"{ "reflect": "floor" }"#, ""),
-            "paths[0].steps",
+            with(good, r#"{ "refract": "floor" }"#, ""),
+            "paths[0].steps[0]",
         ),
-        (with(good, "", r#", "search": {}"#), "search"),
+        (
+            with(
+                good,
+                "",
+                r#", "search": { "max_steps": 2, "diffraction": true }"#,
+            ),
+            "search.diffraction",
+        ),
+        (
+            with(
+                r#"{ "speed": 1500, "gradient": [0, 0.01] }"#,
+                "",
+                r#", "search": { "max_steps": 2 }"#,
+            ),
+            "search",
+        ),
         (
             with(good, "", r#", "solver": { "derivatives": true }"#),
             "solver.derivatives",
@@ -408,6 +423,17 @@ fn bad_profiles_are_refused_naming_the_key() {
         assert_eq!(err.key, *key, "{err}");
     }
     Scene::from_json(&with(good, "", "")).unwrap();
+    // A sloping interface: no reflection off it, and no search.
+    let sloping =
+        with(good, r#"{ "reflect": "floor" }"#, "").replace("[9000, -900]", "[9000, -950]");
+    let err = Scene::from_json(&sloping).unwrap_err();
+    assert_eq!(err.key, "paths[0].steps[0]", "{err}");
+    assert!(err.to_string().contains("flat horizontal"), "{err}");
+    let sloping =
+        with(good, "", r#", "search": { "max_steps": 2 }"#).replace("[9000, -900]", "[9000, -950]");
+    let err = Scene::from_json(&sloping).unwrap_err();
+    assert_eq!(err.key, "search", "{err}");
+    assert!(err.to_string().contains("interfaces.floor"), "{err}");
     // A profile medium's speed is its knots: `set_medium_speed` refuses.
     let mut s = Scene::from_json(&with(good, "", "")).unwrap();
     let err = s.set_medium_speed(0, 1500.0).unwrap_err();

@@ -876,14 +876,16 @@ pub(crate) fn caustics_of_path(scene: &Scene, path: PathGeometry<'_>) -> Option<
 pub(crate) fn of_profile(
     scene: &Scene,
     settings: &Amplitudes,
+    regions: Option<&Regions>,
     points: [Point; 2],
     medium: usize,
     ray: &crate::leg::profile::ProfileRay,
+    reflections: &[ProfileReflection<'_>],
 ) -> Amplitude {
     let cx = Context {
         scene,
         settings,
-        regions: None,
+        regions,
     };
     let [cs, cr] = ray.speeds;
     let w0 = 1.0 / cs;
@@ -899,6 +901,33 @@ pub(crate) fn of_profile(
         let phase = -std::f64::consts::FRAC_PI_2 * f64::from(ray.caustics);
         coefficient *= Complex64::from_polar(1.0, phase);
     }
+    let line_of = |r: &ProfileReflection<'_>| &scene.interfaces()[r.step.interface].polyline;
+    for (i, r) in reflections.iter().enumerate() {
+        // A flat horizontal wall: the cosine of incidence is the sine of the ray's angle
+        // with the horizontal there, the tangent's component the horizontal slowness's.
+        let w = 1.0 / r.speed;
+        let x = Interaction {
+            i,
+            step: r.step,
+            seg: r.segment,
+            from: r.from,
+            here: r.here,
+            leg_in: r.direction,
+            len_in: 1.0,
+            t: line_of(r).tangent(r.segment),
+            cos1: r.sine,
+            cos2: r.sine,
+            cos_scale: 1.0,
+            m_in: medium,
+            m: medium,
+            w_in: w,
+            w,
+        };
+        match self::coefficient(cx, &x) {
+            Ok(c) => coefficient *= c,
+            Err(reason) => return Amplitude::none(reason),
+        }
+    }
     let walk = Walk {
         coefficient,
         tube_num: (cr / cs) * ray.inverse_width(),
@@ -910,6 +939,23 @@ pub(crate) fn of_profile(
         converted: None,
     };
     finish(cx, &points, &walk)
+}
+
+/// One reflection of a ray through a `profile` medium at a flat horizontal wall, as its
+/// coefficient sees it.
+pub(crate) struct ProfileReflection<'a> {
+    /// The step, and the segment of its interface.
+    pub step: &'a Step,
+    pub segment: usize,
+    /// The point before it on the path (for the side of a `"media"` reflection), and its
+    /// own point.
+    pub from: Point,
+    pub here: Point,
+    /// The ray's unit direction arriving there, the sine of its angle with the
+    /// horizontal (> 0) and the speed there.
+    pub direction: Vec2,
+    pub sine: f64,
+    pub speed: f64,
 }
 
 /// The medium across the interface of `step` at `here` (on segment `seg`) from `from`.

@@ -31,14 +31,61 @@
 
 use crate::geom::Vec2;
 
-/// A speed profile: knots `(y, c)` in increasing `y` (the scene's order reversed).
+/// A speed profile: knots `(y, c)` in increasing `y` (the scene's order reversed), and
+/// the flat horizontal reflecting walls that bound it, if any.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Profile {
     /// Heights of the knots, increasing.
     y: Vec<f64>,
     /// Speeds at the knots.
     c: Vec<f64>,
+    /// The walls: a ray that reaches one before it turns reflects there.
+    walls: Walls,
 }
+
+/// The flat horizontal walls of a waveguide (a surface above, a bottom below): a ray that
+/// reaches one before its turning point reflects there, which acts as a turning point at
+/// that height with the ray's angle there (no caustic of its own).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Walls {
+    /// The height of the upper wall.
+    pub top: Option<f64>,
+    /// The height of the lower wall.
+    pub bottom: Option<f64>,
+}
+
+impl Walls {
+    /// The wall met going in direction `dir` (+1 up) from `y`, strictly beyond it.
+    fn ahead(&self, y: f64, dir: f64) -> Option<f64> {
+        let w = if dir > 0.0 { self.top } else { self.bottom }?;
+        ((w - y) * dir > 0.0).then_some(w)
+    }
+}
+
+/// One turning point or reflection of a ray ([`Profile::events`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Event {
+    /// Where: the horizontal distance from the start (≥ 0) and the height.
+    pub x: f64,
+    pub y: f64,
+    /// A reflection at a wall (`true`) or a turning point.
+    pub wall: bool,
+    /// At a wall: the sine of the ray's angle with the horizontal there, and the speed.
+    pub sine: f64,
+    pub speed: f64,
+}
+
+/// What an enumeration of rays between walls keeps ([`Profile::arrivals_within`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Bounds {
+    /// The most reflections.
+    pub reflections: u32,
+    /// The latest time.
+    pub time: f64,
+}
+
+/// The most turning points and reflections searched on one ray between walls.
+pub(crate) const MAX_EVENTS: u32 = 400;
 
 /// The sums over the pieces of a ray (or of one of its runs).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -72,8 +119,10 @@ pub(crate) struct ProfileRay {
     pub p: f64,
     /// The first vertical direction (+1 up, −1 down).
     pub first: f64,
-    /// The number of turning points.
+    /// The number of turning points (reflections at walls not counted).
     pub turns: u32,
+    /// The number of reflections at walls.
+    pub reflections: u32,
     /// The number of caustics the ray tube passes (zeros of `Q`).
     pub caustics: u32,
     /// The sine of the angle with the horizontal at the start and at the end (≥ 0).
@@ -176,6 +225,8 @@ enum RunEnd {
     Target,
     /// At a turning point, at this height.
     Turn(f64),
+    /// At a wall, at this height, with this sine there.
+    Wall(f64, f64),
 }
 
 /// A run of a ray: its sums and where it ended.
@@ -200,6 +251,9 @@ struct Parts {
     from_lo: Option<f64>,
     /// The direction from `a` to `b`'s height.
     toward: f64,
+    /// Whether the upper and the lower event are reflections at walls.
+    hi_wall: bool,
+    lo_wall: bool,
 }
 
 impl Parts {
@@ -212,7 +266,20 @@ impl Parts {
             from_hi: None,
             from_lo: None,
             toward: 1.0,
+            hi_wall: false,
+            lo_wall: false,
         }
+    }
+
+    /// The reflections of the branch `(first, events)`: its events alternate between the
+    /// upper and the lower one.
+    fn reflections(&self, first: f64, events: u32) -> u32 {
+        let upper = if first > 0.0 {
+            events.div_ceil(2)
+        } else {
+            events / 2
+        };
+        u32::from(self.hi_wall) * upper + u32::from(self.lo_wall) * (events - upper)
     }
 
     /// The range of the branch `(first, turns)`.
@@ -251,7 +318,23 @@ impl Profile {
         Profile {
             y: knots.iter().rev().map(|k| k[0]).collect(),
             c: knots.iter().rev().map(|k| k[1]).collect(),
+            walls: Walls::default(),
         }
+    }
+
+    /// The profile between `walls` (the points a ray joins lie between them).
+    pub fn with_walls(mut self, walls: Walls) -> Profile {
+        self.walls = walls;
+        self
+    }
+
+    /// The greatest speed between the walls (or over the knots where there is none).
+    fn fastest(&self) -> f64 {
+        let mut c = self.c.iter().copied().fold(0.0, f64::max);
+        for w in [self.walls.top, self.walls.bottom].into_iter().flatten() {
+            c = c.max(self.speed_at(w));
+        }
+        c
     }
 
     /// The speed at height `y`.
@@ -308,11 +391,19 @@ impl Profile {
                 None => (dir * f64::INFINITY, c),
             };
             let mut at_target = false;
+            let mut at_wall = false;
+            if let Some(w) = self.walls.ahead(y, dir)
+                && (w - y_end) * dir <= 0.0
+            {
+                (y_end, c_end) = (w, self.speed_at(w));
+                at_wall = true;
+            }
             if let Some(t) = target
                 && (t - y_end) * dir <= 0.0
             {
                 (y_end, c_end) = (t, self.speed_at(t));
                 at_target = true;
+                at_wall = false;
             }
             // Does the ray turn in this piece? (speed reaches 1/p)
             if c_end >= inv && p > 0.0 && c_end != c {
@@ -355,6 +446,16 @@ impl Profile {
                     end: RunEnd::Target,
                 });
             }
+            if at_wall {
+                if target.is_some() {
+                    // The target lies beyond the wall.
+                    return None;
+                }
+                return Some(Run {
+                    sums,
+                    end: RunEnd::Wall(y_end, s_end),
+                });
+            }
             if let Some(out) = crossings.as_deref_mut() {
                 out.push(sums.x_p);
             }
@@ -366,6 +467,10 @@ impl Profile {
     /// The ray of branch `(first, turns)` with ray parameter `p ≥ 0` (launch sine `sa` at
     /// `ya`) to the height `yb`: its sums, `None` where the branch has no ray at this `p`.
     /// With `caustics`, also counts the caustics (the sign changes of `Q`).
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "a branch's ray parameter, ends, shape and what to record of it"
+    )]
     fn branch<const FULL: bool>(
         &self,
         p: f64,
@@ -374,19 +479,22 @@ impl Profile {
         first: f64,
         turns: u32,
         caustics: Option<&mut u32>,
+        mut events: Option<&mut Vec<Event>>,
     ) -> Option<RaySums> {
         let mut sums = RaySums::default();
         let mut crossings = Vec::new();
         let mut signs: Vec<f64> = Vec::new();
         let detail = caustics.is_some();
-        let (mut y, mut s, mut dir) = (ya, sa, first);
+        // `sense`: the vertical direction in the picture unfolded at the walls (a
+        // reflection turns the ray but not its tube).
+        let (mut y, mut s, mut dir, mut sense) = (ya, sa, first, first);
         for k in 0..=turns {
             let target = (k == turns).then_some(yb);
             crossings.clear();
             let run = self.run::<FULL>(p, y, s, dir, target, detail.then_some(&mut crossings))?;
             if detail {
                 for x in &crossings {
-                    signs.push(dir * (sums.x_p + x));
+                    signs.push(sense * (sums.x_p + x));
                 }
             }
             sums.add(run.sums);
@@ -395,12 +503,35 @@ impl Profile {
                 RunEnd::Turn(at) => {
                     (y, s) = (at, 0.0);
                     dir = -dir;
+                    sense = -sense;
+                    if let Some(out) = events.as_deref_mut() {
+                        out.push(Event {
+                            x: sums.x,
+                            y: at,
+                            wall: false,
+                            sine: 0.0,
+                            speed: 1.0 / p,
+                        });
+                    }
+                }
+                RunEnd::Wall(at, s_wall) => {
+                    (y, s) = (at, s_wall);
+                    dir = -dir;
+                    if let Some(out) = events.as_deref_mut() {
+                        out.push(Event {
+                            x: sums.x,
+                            y: at,
+                            wall: true,
+                            sine: s_wall,
+                            speed: self.speed_at(at),
+                        });
+                    }
                 }
             }
         }
         if let Some(count) = caustics {
-            // The last direction is `dir`.
-            signs.push(dir * sums.x_p);
+            // The last direction is `sense`.
+            signs.push(sense * sums.x_p);
             let mut previous = first;
             *count = 0;
             for q in signs {
@@ -419,8 +550,11 @@ impl Profile {
         let toward = if yb >= ya { 1.0 } else { -1.0 };
         let up = self.run::<false>(p, ya, sa, 1.0, None, None);
         let down = self.run::<false>(p, ya, sa, -1.0, None, None);
+        // Each event's height, its sine there (0 at a turning point) and whether it is a
+        // wall.
         let turn = |r: Option<Run>| match r?.end {
-            RunEnd::Turn(at) => Some(at),
+            RunEnd::Turn(at) => Some((at, 0.0, false)),
+            RunEnd::Wall(at, s) => Some((at, s, true)),
             RunEnd::Target => None,
         };
         let (hi, lo) = (turn(up), turn(down));
@@ -428,11 +562,12 @@ impl Profile {
         // Three runs, the rest from differences along the duct (the sampling's signs only:
         // the refinement evaluates each branch in full).
         let full = first_up.zip(first_down).map(|(u, d)| u + d);
-        let from_hi = hi.and_then(|hi| x(self.run::<false>(p, hi, 0.0, -1.0, Some(yb), None)));
+        let from_hi =
+            hi.and_then(|(hi, s, _)| x(self.run::<false>(p, hi, s, -1.0, Some(yb), None)));
         let from_lo = match (lo, full, from_hi) {
             (Some(_), Some(full), Some(h)) => Some(full - h),
             (Some(_), Some(_), None) => None,
-            (Some(lo), None, _) => x(self.run::<false>(p, lo, 0.0, 1.0, Some(yb), None)),
+            (Some((lo, s, _)), None, _) => x(self.run::<false>(p, lo, s, 1.0, Some(yb), None)),
             (None, ..) => None,
         };
         let direct = match (toward > 0.0, first_up, from_hi, first_down, from_lo) {
@@ -449,6 +584,8 @@ impl Profile {
             from_hi,
             from_lo,
             toward,
+            hi_wall: hi.is_some_and(|h| h.2),
+            lo_wall: lo.is_some_and(|l| l.2),
         }
     }
 
@@ -456,20 +593,33 @@ impl Profile {
     /// asked (the default mode's solve, its amplitude and its written turns ask for the same
     /// pair in turn): keyed by the knots and the points themselves, so never stale.
     pub fn arrivals_cached(&self, a: Vec2, b: Vec2) -> ProfileArrivals {
+        self.arrivals_within_cached(a, b, None)
+    }
+
+    /// [`arrivals_within`](Self::arrivals_within), remembered per thread as
+    /// [`arrivals_cached`](Self::arrivals_cached) is (keyed by the bounds too).
+    pub fn arrivals_within_cached(
+        &self,
+        a: Vec2,
+        b: Vec2,
+        bounds: Option<Bounds>,
+    ) -> ProfileArrivals {
+        type Key = (Profile, Vec2, Vec2, Option<Bounds>);
         thread_local! {
-            static LAST: std::cell::RefCell<Option<(Profile, Vec2, Vec2, ProfileArrivals)>> =
+            static LAST: std::cell::RefCell<Option<(Key, ProfileArrivals)>> =
                 const { std::cell::RefCell::new(None) };
         }
         LAST.with(|last| {
-            if let Some((p, la, lb, found)) = &*last.borrow()
+            if let Some(((p, la, lb, bd), found)) = &*last.borrow()
                 && p == self
                 && *la == a
                 && *lb == b
+                && *bd == bounds
             {
                 return found.clone();
             }
-            let found = self.arrivals(a, b);
-            *last.borrow_mut() = Some((self.clone(), a, b, found.clone()));
+            let found = self.arrivals_within(a, b, bounds);
+            *last.borrow_mut() = Some(((self.clone(), a, b, bounds), found.clone()));
             found
         })
     }
@@ -477,7 +627,34 @@ impl Profile {
     /// Every ray from `a` to `b` (up to [`MAX_TURNS`] turning points), by time: for each
     /// branch, the launch angle sampled at [`PROFILE_SAMPLES`] points and every sign change of
     /// `X − Δx` refined by bisection, each ray then evaluated in full ([`ProfileRay`]).
+    #[cfg(test)]
     pub fn arrivals(&self, a: Vec2, b: Vec2) -> ProfileArrivals {
+        self.arrivals_within(a, b, None)
+    }
+
+    /// The turning points and reflections of `ray` from `a` to `b`, in order (their `x`
+    /// the distance from `a`, unsigned).
+    pub fn events(&self, ray: &ProfileRay, a: Vec2, b: Vec2) -> Vec<Event> {
+        let mut out = Vec::new();
+        let events = ray.turns + ray.reflections;
+        self.branch::<false>(
+            ray.p.abs(),
+            ray.sines[0],
+            [a.y, b.y],
+            ray.first,
+            events,
+            None,
+            Some(&mut out),
+        );
+        out
+    }
+
+    /// [`arrivals`](Self::arrivals), or with `bounds` (a profile between walls) every ray
+    /// with at most `bounds.reflections` reflections arriving by `bounds.time`, each branch
+    /// (first direction and number of events, turning points and reflections together)
+    /// searched as long as one of its sampled rays lies within the bounds (at most
+    /// [`MAX_EVENTS`] events; `every_branch` says whether that cap was left untouched).
+    pub fn arrivals_within(&self, a: Vec2, b: Vec2, bounds: Option<Bounds>) -> ProfileArrivals {
         let dx = b.x - a.x;
         let sign_x = if dx < 0.0 { -1.0 } else { 1.0 };
         let dx = dx.abs();
@@ -488,12 +665,23 @@ impl Profile {
         };
         let make = |p: f64, sa: f64, first: f64, turns: u32| -> Option<ProfileRay> {
             let mut caustics = 0;
-            let sums = self.branch::<true>(p, sa, [a.y, b.y], first, turns, Some(&mut caustics))?;
+            let mut events = Vec::new();
+            let sums = self.branch::<true>(
+                p,
+                sa,
+                [a.y, b.y],
+                first,
+                turns,
+                Some(&mut caustics),
+                Some(&mut events),
+            )?;
+            let reflections = events.iter().filter(|e| e.wall).count() as u32;
             let last = if turns % 2 == 0 { first } else { -first };
             Some(ProfileRay {
                 p: sign_x * p,
                 first,
-                turns,
+                turns: turns - reflections,
+                reflections,
                 caustics,
                 sines: [sa, sine(p, cb)],
                 speeds: [ca, cb],
@@ -501,12 +689,38 @@ impl Profile {
                 sums,
             })
         };
+        let within = |r: &ProfileRay| {
+            bounds.is_none_or(|bd| r.reflections <= bd.reflections && r.sums.t <= bd.time)
+        };
         if dx == 0.0 {
-            // A vertical ray (p = 0) on the direct branch.
-            if b.y != a.y {
-                let first = if b.y > a.y { 1.0 } else { -1.0 };
-                out.rays.extend(make(0.0, 1.0, first, 0));
+            // A vertical ray (p = 0) on the direct branch, or between walls each number of
+            // reflections.
+            let Some(bd) = bounds else {
+                if b.y != a.y {
+                    let first = if b.y > a.y { 1.0 } else { -1.0 };
+                    out.rays.extend(make(0.0, 1.0, first, 0));
+                }
+                return out;
+            };
+            for events in 0..=MAX_EVENTS.min(bd.reflections) {
+                let mut any = false;
+                for first in [1.0, -1.0] {
+                    if events == 0 && (b.y - a.y) * first <= 0.0 {
+                        continue;
+                    }
+                    if let Some(ray) = make(0.0, 1.0, first, events)
+                        && ray.turns == 0
+                        && within(&ray)
+                    {
+                        any = true;
+                        out.rays.push(ray);
+                    }
+                }
+                if !any && events > 0 {
+                    break;
+                }
             }
+            out.rays.sort_by(|x, y| x.sums.t.total_cmp(&y.sums.t));
             return out;
         }
         // Launch angles θ ∈ (0, π/2] at a: p = cos θ / c_a, s_a = sin θ.
@@ -527,13 +741,42 @@ impl Profile {
             .iter()
             .filter_map(|q| q.full)
             .fold(f64::INFINITY, f64::min);
-        let most = if least_cycle > 0.0 {
+        let most = if bounds.is_some() {
+            MAX_EVENTS
+        } else if least_cycle > 0.0 {
             ((dx / least_cycle).floor() + 2.0).min(MAX_TURNS as f64) as u32
         } else {
             MAX_TURNS
         };
         out.every_branch = most < MAX_TURNS;
+        let slowest_time = 1.0 / (self.fastest() * self.fastest());
         for turns in 0..=most {
+            if let Some(bd) = bounds
+                && turns > 1
+            {
+                // A branch is searched while one of its samples could still be within the
+                // bounds: its range not beyond the pair's, its reflections (with a margin
+                // for a root past a sample where the ray turns instead) and a lower bound
+                // of its time (∫ c ds / c_max²) within them. Each grows with the events.
+                let open = (1..=n).any(|j| {
+                    let (p, _) = at(angle(j as f64));
+                    let q = &parts[j];
+                    [1.0, -1.0].into_iter().any(|first| {
+                        q.range(first, turns).is_some_and(|x| {
+                            x <= dx * (1.0 + 1e-6)
+                                && q.reflections(first, turns) <= bd.reflections.saturating_add(2)
+                                && 0.9 * (x / p) * slowest_time <= bd.time
+                        })
+                    })
+                });
+                if !open {
+                    out.every_branch = true;
+                    break;
+                }
+                if turns == most {
+                    out.every_branch = false;
+                }
+            }
             for first in [1.0, -1.0] {
                 let value = |q: &Parts| q.range(first, turns).map_or(f64::NAN, |x| x - dx);
                 for j in 1..n {
@@ -548,7 +791,7 @@ impl Profile {
                     for _ in 0..100 {
                         let (p, sa) = at(theta);
                         let Some(sums) =
-                            self.branch::<false>(p, sa, [a.y, b.y], first, turns, None)
+                            self.branch::<false>(p, sa, [a.y, b.y], first, turns, None, None)
                         else {
                             break;
                         };
@@ -577,6 +820,7 @@ impl Profile {
                     // a local maximum of the speed) is no root: its miss stays.
                     if let Some(mut ray) = make(p, sa, first, turns)
                         && (ray.sums.x - dx).abs() <= 1e-7 * dx.max(1.0)
+                        && within(&ray)
                     {
                         // The first-order correction of the time to the exact range
                         // (dT = p dX along the family of rays from a).
@@ -599,8 +843,9 @@ impl Profile {
         let (mut x, mut y, mut dir) = (a.x, a.y, ray.first);
         let mut s = ray.sines[0];
         let per = per_piece.max(1);
-        for k in 0..=ray.turns {
-            let last = k == ray.turns;
+        let events = ray.turns + ray.reflections;
+        for k in 0..=events {
+            let last = k == events;
             loop {
                 let c = self.speed_at(y);
                 let next = self.next_knot(y, dir);
@@ -609,12 +854,20 @@ impl Profile {
                     None => (dir * 1e300, c),
                 };
                 let mut end_here = false;
+                let mut at_wall = false;
+                if let Some(w) = self.walls.ahead(y, dir)
+                    && (w - y_end) * dir <= 0.0
+                {
+                    (y_end, c_end) = (w, self.speed_at(w));
+                    at_wall = true;
+                }
                 let yb = last.then_some(b.y);
                 if let Some(t) = yb
                     && (t - y_end) * dir <= 0.0
                 {
                     (y_end, c_end) = (t, self.speed_at(t));
                     end_here = true;
+                    at_wall = false;
                 }
                 let turning = !end_here && c_end >= 1.0 / p && p > 0.0 && c_end != c;
                 if turning {
@@ -638,7 +891,7 @@ impl Profile {
                 x += sx * part.x;
                 y = y_end;
                 s = if turning { 0.0 } else { sine(p, c_end) };
-                if turning {
+                if turning || at_wall {
                     dir = -dir;
                     break;
                 }
@@ -709,7 +962,7 @@ mod tests {
             let x = |p: f64| {
                 let s = sine(p, ca);
                 profile
-                    .branch::<true>(p, s, [ya, yb], -1.0, 1, None)
+                    .branch::<true>(p, s, [ya, yb], -1.0, 1, None, None)
                     .unwrap()
             };
             let h = 1e-10;
@@ -767,6 +1020,63 @@ mod tests {
         for r in &found.rays {
             let end = r.direction_at_end();
             assert!((end.x / r.speeds[1] - r.p).abs() < 1e-15 * r.p && end.y > 0.0);
+        }
+    }
+
+    /// An isovelocity profile between two walls: exactly the image method's arrivals, each
+    /// with its reflections, times to 1e-12, the reflection points on the walls.
+    #[test]
+    fn isovelocity_between_walls_is_the_image_method() {
+        let (top, bottom, c) = (0.0, -100.0, 1500.0);
+        let profile = Profile::new(&[[top, c], [bottom, c]]).with_walls(Walls {
+            top: Some(top),
+            bottom: Some(bottom),
+        });
+        for (a, b) in [
+            (Vec2::new(0.0, -30.0), Vec2::new(1000.0, -70.0)),
+            (Vec2::new(0.0, -50.0), Vec2::new(-400.0, -50.5)),
+            (Vec2::new(10.0, -1.0), Vec2::new(5010.0, -99.0)),
+            (Vec2::new(0.0, -20.0), Vec2::new(0.0, -60.0)),
+        ] {
+            let k = 7u32;
+            let found = profile.arrivals_within(
+                a,
+                b,
+                Some(Bounds {
+                    reflections: k,
+                    time: f64::INFINITY,
+                }),
+            );
+            // Images of the receiver: 2m·H ± y_b (H = top − bottom), reflections counted
+            // by the walls the unfolded path crosses.
+            let h = top - bottom;
+            let mut images = Vec::new();
+            for m in -10i32..=10 {
+                for sign in [1.0, -1.0] {
+                    let y = 2.0 * f64::from(m) * h + sign * (b.y - bottom) + bottom;
+                    let (lo, hi) = if y > a.y { (a.y, y) } else { (y, a.y) };
+                    // Walls at bottom + j H, j integer, strictly between.
+                    let count = (((hi - bottom) / h).ceil() - ((lo - bottom) / h).floor() - 1.0)
+                        .max(0.0) as u32;
+                    if count <= k {
+                        images.push(((b.x - a.x).hypot(y - a.y) / c, count));
+                    }
+                }
+            }
+            images.sort_by(|x, y| x.0.total_cmp(&y.0));
+            assert_eq!(found.rays.len(), images.len(), "{a:?} {b:?}");
+            for (r, (t, n)) in found.rays.iter().zip(&images) {
+                assert!(
+                    (r.sums.t - t).abs() <= 1e-12 * t,
+                    "{a:?} {b:?}: {} {t}",
+                    r.sums.t
+                );
+                assert_eq!(r.reflections, *n);
+                assert_eq!((r.turns, r.caustics), (0, 0));
+                for e in profile.events(r, a, b) {
+                    assert!(e.wall && (e.y == top || e.y == bottom));
+                }
+            }
         }
     }
 

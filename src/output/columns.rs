@@ -242,7 +242,7 @@ impl Entry<'static> {
         points: &[Point],
         media: &[usize],
     ) -> Option<crate::trace::ProfileShape> {
-        if !(timed && scene.curved() && points.len() == 2) {
+        if !(timed && scene.curved() && points.len() >= 2) {
             return None;
         }
         crate::trace::profile_shape(scene, points, media)

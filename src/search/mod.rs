@@ -29,6 +29,7 @@
 mod beams;
 mod diffraction;
 mod extruded;
+mod profile;
 mod sequences;
 mod strategy;
 
@@ -349,6 +350,14 @@ impl Tracer {
             sink: None,
             paths: None,
         };
+        if scene.media().iter().any(|m| m.profile.is_some()) {
+            // A waveguide through a profile medium: its own search, sampled (never
+            // complete), each arrival with its amplitude.
+            let (mut report, mut arrivals) = self.search_profile(options, &control);
+            sort_arrivals(&mut arrivals);
+            report.arrivals = arrivals;
+            return Ok(report);
+        }
         let (mut report, mut arrivals) = self.strategies(options, &control, &mut pairs);
         for a in &mut arrivals {
             a.complete = pairs[a.source * nr + a.receiver].complete;
@@ -422,7 +431,11 @@ impl Tracer {
             sink: Some(sink),
             paths: None,
         };
-        let (report, _) = self.strategies(options, &control, &mut pairs);
+        let (report, _) = if scene.media().iter().any(|m| m.profile.is_some()) {
+            self.search_profile(options, &control)
+        } else {
+            self.strategies(options, &control, &mut pairs)
+        };
         Ok(StreamReport {
             arrivals: listed.count.load(Ordering::Relaxed),
             beams: report.beams,

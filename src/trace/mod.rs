@@ -602,6 +602,9 @@ impl Tracer {
         if let Some((m, profile)) = self.profile_medium(path, source, src_medium) {
             return self.solve_profile(m, &profile, source, receiver, ws);
         }
+        if let Some((m, profile)) = self.profile_walled_medium(path, source, src_medium) {
+            return self.solve_walled(path, m, &profile, source, receiver, ws);
+        }
         let cx = self.context();
         if let (Start::Default, Some(sp)) = (start, plan.stack())
             && let Some(ray) = sp.solve_stack(&cx, path, source, receiver, ws)

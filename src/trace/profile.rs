@@ -4,9 +4,9 @@
 //! "all"` lists each; the default mode's ray is the earliest one that no interface crosses.
 //! Each ray is tested for obstruction as the polygon inscribed in its arcs.
 
-use crate::geom::Point;
-use crate::leg::profile::{Profile, ProfileArrivals, ProfileRay};
-use crate::scene::{Scene, SegmentRef};
+use crate::geom::{Point, Vec2};
+use crate::leg::profile::{Bounds, Profile, ProfileArrivals, ProfileRay, Walls};
+use crate::scene::{Scene, SegmentRef, Step, StepKind};
 
 use super::classify::END_MARGIN;
 use super::complete::Arrival;
@@ -163,9 +163,11 @@ impl Tracer {
         Some(crate::amplitude::of_profile(
             &self.scene,
             settings,
+            None,
             [source, receiver],
             medium,
             &r.ray,
+            &[],
         ))
     }
 }
@@ -222,6 +224,24 @@ pub(crate) fn profile_shape(
     points: &[Point],
     media: &[usize],
 ) -> Option<ProfileShape> {
+    if points.len() > 2 {
+        // A ray between walls: the one whose reflection points these are.
+        let (&m, [s, .., r]) = (media.first()?, points) else {
+            return None;
+        };
+        let profile = scene.media().get(m)?.profile_model()?;
+        let bounds = Bounds {
+            reflections: u32::try_from(points.len() - 2).unwrap_or(u32::MAX),
+            time: f64::INFINITY,
+        };
+        let (rays, _) = walled_rays(scene, &profile, *s, *r, bounds);
+        let chosen = rays.iter().find(|w| w.points == points)?;
+        return Some(ProfileShape {
+            turns: chosen.ray.turns,
+            caustics: chosen.ray.caustics,
+            launch_angle: launch_angle(&chosen.ray),
+        });
+    }
     let (&[s, r], &[m]) = (points, media) else {
         return None;
     };
@@ -236,5 +256,372 @@ pub(crate) fn profile_shape(
         turns: chosen.turns,
         caustics: chosen.caustics,
         launch_angle: launch_angle(chosen),
+    })
+}
+
+/// The walls of a waveguide through a profile medium: the nearest flat horizontal
+/// interfaces above and below a point (`Scene` validation keeps a profile scene's reflecting
+/// steps and searched interfaces to such lines).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Waveguide {
+    /// Their heights.
+    pub walls: Walls,
+    /// The interface of the upper and of the lower wall.
+    pub top: Option<usize>,
+    pub bottom: Option<usize>,
+}
+
+impl Waveguide {
+    /// Whether `y` lies strictly between the walls.
+    fn holds(&self, y: f64) -> bool {
+        self.walls.top.is_none_or(|t| y < t) && self.walls.bottom.is_none_or(|b| y > b)
+    }
+    /// Whether interface `i` is one of the walls.
+    fn is_wall(&self, i: usize) -> bool {
+        self.top == Some(i) || self.bottom == Some(i)
+    }
+}
+
+/// One ray of a waveguide between a source and a receiver: the profile's ray, its
+/// reflections as steps with their points, and what the tracer decided of it.
+#[derive(Clone, Debug)]
+pub(crate) struct WalledRay {
+    /// The ray.
+    pub ray: ProfileRay,
+    /// Its reflections, in order.
+    pub steps: Vec<Step>,
+    /// Source, reflection points, receiver.
+    pub points: Vec<Point>,
+    /// Each reflection's segment and arclength on its interface.
+    pub segments: Vec<usize>,
+    pub parameters: Vec<f64>,
+    /// Each reflection's arriving direction, sine with the horizontal and speed.
+    pub at_walls: Vec<(Vec2, f64, f64)>,
+    /// `converged`, or `obstructed` (with the interface crossed).
+    pub status: Status,
+    /// Why it is not `converged`.
+    pub reason: Option<Reason>,
+}
+
+/// The waveguide around `at`: the nearest flat horizontal interface above it and below.
+pub(crate) fn waveguide(scene: &Scene, at: Point) -> Waveguide {
+    let mut out = Waveguide::default();
+    for (i, itf) in scene.interfaces().iter().enumerate() {
+        let line = &itf.polyline;
+        let v = line.vertices();
+        if line.is_closed() || v.iter().any(|p| p.y != v[0].y) {
+            continue;
+        }
+        let y = v[0].y;
+        if y > at.y && out.walls.top.is_none_or(|t| y < t) {
+            (out.walls.top, out.top) = (Some(y), Some(i));
+        } else if y < at.y && out.walls.bottom.is_none_or(|b| y > b) {
+            (out.walls.bottom, out.bottom) = (Some(y), Some(i));
+        }
+    }
+    out
+}
+
+impl Tracer {
+    /// The profile medium of path `path` from `source` when the path has reflect steps only
+    /// and its first leg's medium (given, or found at the source) has a profile.
+    pub(crate) fn profile_walled_medium(
+        &self,
+        path: usize,
+        source: Point,
+        src_medium: Option<usize>,
+    ) -> Option<(usize, Profile)> {
+        let spec = self.scene.paths().get(path)?;
+        if spec.steps.is_empty()
+            || !self.scene.curved()
+            || spec.steps.iter().any(|s| s.kind != StepKind::Reflect)
+        {
+            return None;
+        }
+        let m = match &spec.media {
+            Some(m) => *m.first()?,
+            None => src_medium.or_else(|| self.source_medium(false, source))?,
+        };
+        Some((m, self.scene.media()[m].profile_model()?))
+    }
+
+    /// Every ray of `profile` between the walls around `source` from `source` to
+    /// `receiver` within `bounds`, by time, each with its reflections and status. A ray
+    /// whose reflection point misses its wall's extent is left out (it passes the wall's
+    /// end); one that crosses another interface is `obstructed`.
+    pub(crate) fn walled_rays(
+        &self,
+        profile: &Profile,
+        source: Point,
+        receiver: Point,
+        bounds: Bounds,
+    ) -> (Vec<WalledRay>, bool) {
+        walled_rays(&self.scene, profile, source, receiver, bounds)
+    }
+
+    /// The rays of a path of reflect steps through a profile medium between walls: those
+    /// of [`walled_rays`](Self::walled_rays) whose reflections are the path's steps.
+    pub(crate) fn path_walled_rays(
+        &self,
+        path: usize,
+        profile: &Profile,
+        source: Point,
+        receiver: Point,
+    ) -> Vec<WalledRay> {
+        let steps = &self.scene.paths()[path].steps;
+        let bounds = Bounds {
+            reflections: u32::try_from(steps.len()).unwrap_or(u32::MAX),
+            time: f64::INFINITY,
+        };
+        let (rays, _) = self.walled_rays(profile, source, receiver, bounds);
+        rays.into_iter().filter(|r| r.steps == *steps).collect()
+    }
+
+    /// The amplitude of one ray between walls, when the scene asks for amplitudes.
+    pub(crate) fn walled_amplitude(
+        &self,
+        medium: usize,
+        r: &WalledRay,
+    ) -> Option<crate::amplitude::Amplitude> {
+        let settings = self.scene.amplitudes()?;
+        if r.status != Status::Converged {
+            return Some(crate::amplitude::Amplitude::none(
+                crate::amplitude::NoAmplitude::Obstructed,
+            ));
+        }
+        let n = r.points.len();
+        let reflections: Vec<crate::amplitude::ProfileReflection<'_>> = (r.steps.iter())
+            .enumerate()
+            .map(|(i, step)| {
+                let (direction, sine, speed) = r.at_walls[i];
+                crate::amplitude::ProfileReflection {
+                    step,
+                    segment: r.segments[i],
+                    from: r.points[i],
+                    here: r.points[i + 1],
+                    direction,
+                    sine,
+                    speed,
+                }
+            })
+            .collect();
+        Some(crate::amplitude::of_profile(
+            &self.scene,
+            settings,
+            self.regions.as_ref(),
+            [r.points[0], r.points[n - 1]],
+            medium,
+            &r.ray,
+            &reflections,
+        ))
+    }
+
+    /// The arrival of one ray between walls, with its amplitude.
+    pub(crate) fn walled_arrival(&self, medium: usize, r: &WalledRay) -> Arrival {
+        Arrival {
+            status: r.status,
+            time: r.ray.sums.t,
+            points: r.points.clone(),
+            parameters: r.parameters.clone(),
+            segments: r.segments.clone(),
+            media: vec![medium; r.steps.len() + 1],
+            iterations: 0,
+            reason: r.reason,
+            kink: None,
+            residual: 0.0,
+            amplitude: self.walled_amplitude(medium, r),
+            turns: Some(r.ray.turns),
+            caustics: Some(r.ray.caustics),
+            launch_angle: Some(launch_angle(&r.ray)),
+        }
+    }
+
+    /// Every ray of a path of reflect steps through a profile medium as stationary paths,
+    /// by time.
+    pub(crate) fn walled_stationary_paths(
+        &self,
+        path: usize,
+        medium: usize,
+        profile: &Profile,
+        source: Point,
+        receiver: Point,
+        out: &mut Vec<Arrival>,
+    ) -> SearchOutcome {
+        let rays = self.path_walled_rays(path, profile, source, receiver);
+        out.extend(rays.iter().map(|r| self.walled_arrival(medium, r)));
+        SearchOutcome {
+            complete: false,
+            solves: 1,
+            work: rays.len(),
+            ..SearchOutcome::new()
+        }
+    }
+
+    /// The default mode's ray of a path of reflect steps through a profile medium: the
+    /// earliest that no interface crosses (else the earliest, `obstructed`), into `ws`.
+    pub(crate) fn solve_walled(
+        &self,
+        path: usize,
+        medium: usize,
+        profile: &Profile,
+        source: Point,
+        receiver: Point,
+        ws: &mut Workspace,
+    ) -> RayRecord {
+        let k = self.scene.paths()[path].steps.len();
+        ws.resize(k);
+        ws.ray.slowness.clear();
+        ws.ray.curved.clear();
+        ws.ray.media.clear();
+        ws.ray.points.clear();
+        ws.ray.media.extend(std::iter::repeat_n(medium, k + 1));
+        let rays = self.path_walled_rays(path, profile, source, receiver);
+        let chosen = rays
+            .iter()
+            .find(|r| r.status == Status::Converged)
+            .or(rays.first());
+        let Some(r) = chosen else {
+            return RayRecord::failed(Status::NoPath, Reason::NoStationaryPath);
+        };
+        ws.ray.points.extend_from_slice(&r.points);
+        ws.ray
+            .slowness
+            .extend(std::iter::repeat_n(1.0 / r.ray.speeds[0], k + 1));
+        ws.newton.s.clear();
+        ws.newton.s.extend_from_slice(&r.parameters);
+        ws.newton.seg.clear();
+        ws.newton.seg.extend_from_slice(&r.segments);
+        RayRecord {
+            status: r.status,
+            time: r.ray.sums.t,
+            iterations: 0,
+            residual: 0.0,
+            reason: r.reason,
+        }
+    }
+
+    /// The ray between walls that a default-mode solve chose, found again from its points
+    /// (`None` for any other path).
+    pub(crate) fn walled_ray_of(
+        &self,
+        steps: &[Step],
+        points: &[Point],
+        media: &[usize],
+    ) -> Option<(usize, WalledRay)> {
+        if steps.is_empty() || points.len() != steps.len() + 2 || !self.scene.curved() {
+            return None;
+        }
+        let m = *media.first()?;
+        let profile = self.scene.media().get(m)?.profile_model()?;
+        let (s, r) = (points[0], points[points.len() - 1]);
+        let bounds = Bounds {
+            reflections: u32::try_from(steps.len()).unwrap_or(u32::MAX),
+            time: f64::INFINITY,
+        };
+        let (rays, _) = self.walled_rays(&profile, s, r, bounds);
+        rays.into_iter()
+            .find(|w| w.steps == steps && w.points == points)
+            .map(|w| (m, w))
+    }
+}
+
+/// [`Tracer::walled_rays`] of `scene`.
+pub(crate) fn walled_rays(
+    scene: &Scene,
+    profile: &Profile,
+    source: Point,
+    receiver: Point,
+    bounds: Bounds,
+) -> (Vec<WalledRay>, bool) {
+    let guide = waveguide(scene, source);
+    if !guide.holds(receiver.y) {
+        return (Vec::new(), true);
+    }
+    let profile = profile.clone().with_walls(guide.walls);
+    let (a, b) = (source.to_vec2(), receiver.to_vec2());
+    let found = profile.arrivals_within_cached(a, b, Some(bounds));
+    let mut out = Vec::new();
+    'rays: for ray in &found.rays {
+        let sx = if ray.p < 0.0 { -1.0 } else { 1.0 };
+        let p = ray.p.abs();
+        let mut walled = WalledRay {
+            ray: *ray,
+            steps: Vec::new(),
+            points: vec![source],
+            segments: Vec::new(),
+            parameters: Vec::new(),
+            at_walls: Vec::new(),
+            status: Status::Converged,
+            reason: None,
+        };
+        for e in profile.events(ray, a, b).iter().filter(|e| e.wall) {
+            let up = guide.walls.top == Some(e.y);
+            let Some(interface) = (if up { guide.top } else { guide.bottom }) else {
+                continue 'rays;
+            };
+            let here = Point::new(source.x + sx * e.x, e.y);
+            let line = &scene.interfaces()[interface].polyline;
+            let Some(seg) = (0..line.num_segments()).find(|&j| {
+                let g = line.segment(j);
+                let (lo, hi) = (g.start.x.min(g.end.x), g.start.x.max(g.end.x));
+                here.x >= lo && here.x <= hi
+            }) else {
+                continue 'rays;
+            };
+            let g = line.segment(seg);
+            walled
+                .parameters
+                .push(line.start(seg) + (here - g.start).dot(line.tangent(seg)));
+            walled.segments.push(seg);
+            walled.steps.push(Step {
+                kind: StepKind::Reflect,
+                interface,
+            });
+            walled.points.push(here);
+            let vertical = if up { e.sine } else { -e.sine };
+            walled
+                .at_walls
+                .push((Vec2::new(sx * p * e.speed, vertical), e.sine, e.speed));
+        }
+        walled.points.push(receiver);
+        if let Some(hit) = walled_crossing(scene, &profile, ray, source, receiver, &guide) {
+            walled.status = Status::Obstructed;
+            walled.reason = Some(Reason::Crosses {
+                leg: 0,
+                interface: hit,
+            });
+        }
+        out.push(walled);
+    }
+    (out, found.every_branch)
+}
+
+/// The first interface other than the waveguide's walls that the ray crosses (its
+/// inscribed polygon's pieces, the ends' own margins left out).
+fn walled_crossing(
+    scene: &Scene,
+    profile: &Profile,
+    ray: &ProfileRay,
+    source: Point,
+    receiver: Point,
+    guide: &Waveguide,
+) -> Option<usize> {
+    if scene.interfaces().len()
+        <= usize::from(guide.top.is_some()) + usize::from(guide.bottom.is_some())
+    {
+        return None;
+    }
+    let curve = profile.curve(ray, source.to_vec2(), receiver.to_vec2(), PIECE_POINTS);
+    let n = curve.len().saturating_sub(1);
+    let at = |j: usize| Point::new(curve[j].x, curve[j].y);
+    (0..n).find_map(|j| {
+        let margin = if j == 0 || j + 1 == n {
+            (END_MARGIN * n as f64).min(0.25)
+        } else {
+            0.0
+        };
+        scene
+            .first_crossing_except(at(j), at(j + 1), margin, |i| guide.is_wall(i))
+            .map(|r| r.interface as usize)
     })
 }

@@ -112,6 +112,9 @@ impl Tracer {
         if let Some((m, profile)) = self.profile_medium(path, source, None) {
             return Ok(self.profile_stationary_paths(m, &profile, source, receiver, out));
         }
+        if let Some((m, profile)) = self.profile_walled_medium(path, source, None) {
+            return Ok(self.walled_stationary_paths(path, m, &profile, source, receiver, out));
+        }
         if self.scene.curved() {
             let outcome = self.curved_stationary_paths(source, receiver, path, out);
             self.arrival_amplitudes(&spec.steps, out);

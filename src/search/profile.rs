@@ -1,0 +1,121 @@
+//! The search of a scene with a `profile` medium between flat horizontal walls (a
+//! range-independent waveguide: a surface above, a bottom below): per (source, receiver)
+//! pair, every ray of the profile from the source to the receiver with at most `max_steps`
+//! reflections at the walls (and any number of turning points), arriving by `max_time`,
+//! found in the ray-parameter form ([`Profile::arrivals_within`]) as a path's rays are.
+//! Each is fixed by its first vertical direction, its number of events (turning points and
+//! reflections) and its ray parameter; the launch angle is sampled, so the search is not
+//! complete: every arrival says `complete: false`.
+//!
+//! [`Profile::arrivals_within`]: crate::leg::profile::Profile::arrivals_within
+
+use rayon::prelude::*;
+
+use crate::leg::profile::Bounds;
+use crate::options::Progress;
+use crate::scene::SearchOptions;
+use crate::trace::{Status, Tracer};
+
+use super::{Control, SearchArrival, SearchReport, StreamedArrival};
+
+impl Tracer {
+    /// The profile medium a search from `source` runs in: the one found there, or the
+    /// scene's only profile medium without regions.
+    fn search_profile_medium(&self, source: crate::geom::Point) -> Option<usize> {
+        let media = self.scene().media();
+        let m = self.source_medium(false, source).or_else(|| {
+            let mut profiled = (0..media.len()).filter(|&m| media[m].profile.is_some());
+            let first = profiled.next()?;
+            (media.len() == 1 || profiled.next().is_none()).then_some(first)
+        })?;
+        media[m].profile.is_some().then_some(m)
+    }
+
+    /// The search of a profile scene (see the module): its report, its arrivals (none when
+    /// `control` streams them) and each pair's completeness (always `false`: sampled).
+    pub(super) fn search_profile(
+        &self,
+        options: &SearchOptions,
+        control: &Control<'_>,
+    ) -> (SearchReport, Vec<SearchArrival>) {
+        let scene = self.scene();
+        let (ns, nr) = (scene.sources().len(), scene.receivers().len());
+        let bounds = Bounds {
+            reflections: if options.reflect {
+                u32::try_from(options.step_limit()).unwrap_or(u32::MAX)
+            } else {
+                0
+            },
+            time: options.time_limit(),
+        };
+        let found: Vec<(Vec<SearchArrival>, usize)> = (0..ns * nr)
+            .into_par_iter()
+            .map(|pair| {
+                let (source, receiver) = (pair / nr, pair % nr);
+                let mut out = Vec::new();
+                if !control.run.keep_going(Progress::items(1)) {
+                    return (out, 0);
+                }
+                let (s, r) = (scene.sources()[source], scene.receivers()[receiver]);
+                let Some(m) = self.search_profile_medium(s) else {
+                    return (out, 0);
+                };
+                let Some(profile) = scene.media()[m].profile_model() else {
+                    return (out, 0);
+                };
+                let (rays, _) = self.walled_rays(&profile, s, r, bounds);
+                let work = rays.len();
+                for w in rays {
+                    let listed = w.status == Status::Converged
+                        || (options.obstructed && w.status == Status::Obstructed);
+                    if !listed
+                        || w.ray.sums.t > bounds.time
+                        || !w
+                            .steps
+                            .iter()
+                            .all(|st| options.interfaces.contains(&st.interface))
+                    {
+                        continue;
+                    }
+                    let mut arrival = self.walled_arrival(m, &w);
+                    if let Some(sink) = control.sink {
+                        control.listed.stream();
+                        sink(StreamedArrival {
+                            source,
+                            receiver,
+                            steps: w.steps.len(),
+                            diffractions: 0,
+                            vertical_reflections: 0,
+                            status: arrival.status,
+                            time: arrival.time,
+                            amplitude: arrival.amplitude.take(),
+                        });
+                        continue;
+                    }
+                    if !control.listed.take(w.steps.len()) {
+                        break;
+                    }
+                    out.push(SearchArrival {
+                        source,
+                        receiver,
+                        steps: w.steps,
+                        arrival,
+                        complete: false,
+                        heights: Vec::new(),
+                    });
+                }
+                (out, work)
+            })
+            .collect();
+        let mut report = SearchReport {
+            incomplete_pairs: ns * nr,
+            ..SearchReport::default()
+        };
+        let mut arrivals = Vec::new();
+        for (a, work) in found {
+            report.work += work as u64;
+            arrivals.extend(a);
+        }
+        (report, arrivals)
+    }
+}
