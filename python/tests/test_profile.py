@@ -115,3 +115,45 @@ def test_bad_profiles_are_refused_naming_the_key(change, key):
     change(scene)
     with pytest.raises((eigenray.EigenrayError, ValueError), match=key.replace(".", r"\.") if "[" not in key else key):
         eigenray.Scene(scene)
+
+
+def guide(water):
+    """A waveguide 100 m deep: a pressure-release surface, a `"media"` bottom over mud."""
+    return {
+        "media": {
+            "water": dict(water, at=[0, -50]),
+            "mud": {"speed": 1700, "density": 1.8, "at": [0, -150]},
+            "air": {"speed": 340, "density": 0.0012, "at": [0, 50]},
+        },
+        "domain": [[-3000, -300], [6000, 100]],
+        "interfaces": {
+            "surface": {"points": [[-3000, 0], [6000, 0]], "reflection": "pressure-release"},
+            "bottom": {"points": [[-3000, -100], [6000, -100]], "reflection": "media"},
+        },
+        "sources": [[0, -30]],
+        "receivers": {"grid": {"x": [100, 3000, 12], "y": [-5, -95, 7]}},
+        "search": {"max_steps": 5},
+        "amplitudes": {"source": "point", "frequency": 100},
+    }
+
+
+def test_an_isovelocity_waveguide_is_the_uniform_medium():
+    """A profile of one speed between a surface and a bottom: the search lists the uniform
+    medium's (image-method) arrivals, and the transmission loss streamed from them is the
+    uniform medium's to 1e-9 dB."""
+    iso = eigenray.Tracer(eigenray.Scene(guide({"profile": [[0, 1500], [-100, 1500]]})))
+    uniform = eigenray.Tracer(eigenray.Scene(guide({"speed": 1500})))
+    a, b = iso.search(), uniform.search()
+    assert len(a) == len(b) > 12 * 7
+    assert not np.any(a.complete)
+    np.testing.assert_allclose(np.sort(a.time), np.sort(b.time), rtol=1e-12, atol=0)
+    tl_a, tl_b = iso.transmission_loss(), uniform.transmission_loss()
+    assert tl_a.shape == (1, 12, 7)
+    np.testing.assert_allclose(tl_a, tl_b, rtol=0, atol=1e-9)
+
+
+def test_a_sloping_bottom_is_refused_naming_the_key():
+    scene = guide({"profile": [[0, 1500], [-100, 1510]]})
+    scene["interfaces"]["bottom"]["points"] = [[-3000, -100], [6000, -130]]
+    with pytest.raises((eigenray.EigenrayError, ValueError), match="interfaces.bottom"):
+        eigenray.Scene(scene)
