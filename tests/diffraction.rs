@@ -936,3 +936,158 @@ fn one_diffraction_takes_the_short_way_to_the_same_ray() {
     eprintln!("one diffraction: {found} rays with a path, {none} without, as the general code");
     assert!(found > 500 && none > 500, "{found} {none}");
 }
+
+/// The search's diffracted paths with reflections around the diffraction, against brute
+/// force: on random small scenes (a floor, a ceiling and a bent fin, one medium), every
+/// sequence of one `diffract` step and up to two reflections, each prescribed as a path
+/// (`"stationary": "all"`), gives the same arrivals (the same sequences, as many per
+/// sequence, times to 1e-12) as the search with `max_steps` 3 and `"diffraction": true`;
+/// with `max_time` the search lists exactly those by that time.
+#[test]
+fn search_lists_every_path_reflected_around_a_diffraction() {
+    let mut rng = rng::SplitMix64(4143);
+    let mut compared = 0;
+    let mut reflected = 0;
+    for _ in 0..4 {
+        let mut u = |a: f64, b: f64| a + (b - a) * rng.next_f64();
+        let height = u(3.0, 5.0);
+        let fin = [
+            [u(-1.5, -0.5), u(0.5, 1.5)],
+            [u(-0.3, 0.3), u(1.5, height - 1.0)],
+            [u(0.5, 1.5), u(0.5, 1.5)],
+        ];
+        let mut point = || format!("[{:e}, {:e}]", u(-6.0, 6.0), u(0.2, height - 0.2));
+        let sources: Vec<String> = (0..2).map(|_| point()).collect();
+        let receivers: Vec<String> = (0..4).map(|_| point()).collect();
+        let names = ["ceiling", "fin", "floor"];
+        let counts = [2usize, 3, 2];
+        // Every sequence: reflections before, the diffraction, reflections after.
+        let mut sequences: Vec<Vec<(usize, Option<usize>)>> = Vec::new();
+        let reflections: Vec<Vec<usize>> = (0..=2)
+            .flat_map(|n| {
+                (0..3usize.pow(n)).map(move |code| {
+                    (0..n).map(|j| code / 3usize.pow(j) % 3).collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        for (i, &count) in counts.iter().enumerate() {
+            for k in 0..count {
+                for before in &reflections {
+                    for after in &reflections {
+                        if before.len() + after.len() > 2 {
+                            continue;
+                        }
+                        let mut seq: Vec<(usize, Option<usize>)> =
+                            before.iter().map(|&j| (j, None)).collect();
+                        seq.push((i, Some(k)));
+                        seq.extend(after.iter().map(|&j| (j, None)));
+                        sequences.push(seq);
+                    }
+                }
+            }
+        }
+        let paths: Vec<String> = (sequences.iter())
+            .map(|seq| {
+                let steps: Vec<String> = (seq.iter())
+                    .map(|&(i, v)| match v {
+                        Some(k) => format!(r#"{{ "diffract": "{}", "vertex": {k} }}"#, names[i]),
+                        None => format!(r#"{{ "reflect": "{}" }}"#, names[i]),
+                    })
+                    .collect();
+                format!(r#"{{ "steps": [{}] }}"#, steps.join(", "))
+            })
+            .collect();
+        let json = |tail: &str| {
+            format!(
+                r#"{{ "media": {{ "air": {{ "speed": 1 }} }}, "background": "air",
+                     "interfaces": {{
+                         "floor": {{ "points": [[-8, 0], [8, 0]] }},
+                         "ceiling": {{ "points": [[8, {height:e}], [-8, {height:e}]] }},
+                         "fin": {{ "points": [[{:e}, {:e}], [{:e}, {:e}], [{:e}, {:e}]] }} }},
+                     "sources": [{}], "receivers": [{}] {tail} }}"#,
+                fin[0][0],
+                fin[0][1],
+                fin[1][0],
+                fin[1][1],
+                fin[2][0],
+                fin[2][1],
+                sources.join(", "),
+                receivers.join(", ")
+            )
+        };
+        let run = eigenray::options::Run::new();
+        let brute = Tracer::new(scene(&json(&format!(
+            r#", "paths": [{}], "solver": {{ "stationary": "all" }}"#,
+            paths.join(", ")
+        ))))
+        .unwrap()
+        .trace_stationary(&run)
+        .unwrap();
+        let searched = Tracer::new(scene(&json(
+            r#", "search": { "max_steps": 3, "diffraction": true }"#,
+        )))
+        .unwrap();
+        let interface_names: Vec<&str> = (searched.scene().interfaces().iter())
+            .map(|i| i.name.as_str())
+            .collect();
+        let report = searched.search(&run).unwrap();
+        assert_eq!(report.incomplete_pairs, 0);
+        // (source, receiver, sequence as names) -> times.
+        type Key = (usize, usize, Vec<(String, Option<usize>)>);
+        let mut want: std::collections::BTreeMap<Key, Vec<f64>> = Default::default();
+        for t in &brute.triples {
+            assert!(t.complete, "{t:?}");
+            let seq: Vec<(String, Option<usize>)> = (sequences[t.path].iter())
+                .map(|&(i, v)| (names[i].to_string(), v))
+                .collect();
+            for a in t.arrivals.iter().filter(|a| a.status == Status::Converged) {
+                want.entry((t.source, t.receiver, seq.clone()))
+                    .or_default()
+                    .push(a.time);
+            }
+        }
+        let mut got: std::collections::BTreeMap<Key, Vec<f64>> = Default::default();
+        for a in report.arrivals.iter().filter(|a| {
+            a.steps.iter().any(|s| s.kind.vertex().is_some())
+        }) {
+            assert_eq!(a.arrival.status, Status::Converged);
+            let seq: Vec<(String, Option<usize>)> = (a.steps.iter())
+                .map(|s| (interface_names[s.interface].to_string(), s.kind.vertex()))
+                .collect();
+            got.entry((a.source, a.receiver, seq))
+                .or_default()
+                .push(a.arrival.time);
+        }
+        assert_eq!(
+            want.keys().collect::<Vec<_>>(),
+            got.keys().collect::<Vec<_>>()
+        );
+        for (key, w) in &want {
+            let mut w = w.clone();
+            let mut g = got[key].clone();
+            w.sort_by(f64::total_cmp);
+            g.sort_by(f64::total_cmp);
+            assert_eq!(w.len(), g.len(), "{key:?}");
+            for (x, y) in w.iter().zip(&g) {
+                assert!((x - y).abs() <= 1e-12 * x, "{key:?}: {x} {y}");
+            }
+            compared += w.len();
+            reflected += usize::from(key.2.len() > 1) * w.len();
+        }
+        // A time bound: exactly the arrivals by then.
+        let all_times: Vec<f64> = want.values().flatten().copied().collect();
+        let bound = all_times.iter().sum::<f64>() / all_times.len() as f64;
+        let timed = Tracer::new(scene(&json(&format!(
+            r#", "search": {{ "max_steps": 3, "max_time": {bound:e}, "diffraction": true }}"#
+        ))))
+        .unwrap()
+        .search(&run)
+        .unwrap();
+        let listed = (timed.arrivals.iter())
+            .filter(|a| a.steps.iter().any(|s| s.kind.vertex().is_some()))
+            .count();
+        assert_eq!(listed, all_times.iter().filter(|&&t| t <= bound).count());
+    }
+    eprintln!("{compared} diffracted arrivals as brute force, {reflected} with reflections");
+    assert!(reflected > 100, "{reflected}");
+}
