@@ -965,9 +965,8 @@ fn search_lists_every_path_reflected_around_a_diffraction() {
         let mut sequences: Vec<Vec<(usize, Option<usize>)>> = Vec::new();
         let reflections: Vec<Vec<usize>> = (0..=2)
             .flat_map(|n| {
-                (0..3usize.pow(n)).map(move |code| {
-                    (0..n).map(|j| code / 3usize.pow(j) % 3).collect::<Vec<_>>()
-                })
+                (0..3usize.pow(n))
+                    .map(move |code| (0..n).map(|j| code / 3usize.pow(j) % 3).collect::<Vec<_>>())
             })
             .collect();
         for (i, &count) in counts.iter().enumerate() {
@@ -1047,9 +1046,11 @@ fn search_lists_every_path_reflected_around_a_diffraction() {
             }
         }
         let mut got: std::collections::BTreeMap<Key, Vec<f64>> = Default::default();
-        for a in report.arrivals.iter().filter(|a| {
-            a.steps.iter().any(|s| s.kind.vertex().is_some())
-        }) {
+        for a in report
+            .arrivals
+            .iter()
+            .filter(|a| a.steps.iter().any(|s| s.kind.vertex().is_some()))
+        {
             assert_eq!(a.arrival.status, Status::Converged);
             let seq: Vec<(String, Option<usize>)> = (a.steps.iter())
                 .map(|s| (interface_names[s.interface].to_string(), s.kind.vertex()))
@@ -1090,4 +1091,61 @@ fn search_lists_every_path_reflected_around_a_diffraction() {
     }
     eprintln!("{compared} diffracted arrivals as brute force, {reflected} with reflections");
     assert!(reflected > 100, "{reflected}");
+}
+
+/// A half-plane (a screen's lower edge) above a reflecting floor: receivers stepping across
+/// the shadow boundary of the source's floor image (the line from the image through the edge)
+/// by 1e-9 rad see no jump in the total field (the pressure from the search's echoes) when
+/// the search lists the path that reflects off the floor and then diffracts at the edge
+/// (`max_steps` 2): 1e-8 dB; with the diffracted paths of one step only, the field jumps by
+/// 8 dB there.
+#[test]
+fn a_reflected_then_diffracted_path_fills_the_image_shadow_edge() {
+    use eigenray::response::{echoes_of_scene, pressure_into, transmission_loss};
+    let tl = |max_steps: usize| {
+        let (edge, image): ([f64; 2], [f64; 2]) = ([0.0, 2.0], [-3.0, -1.0]);
+        let boundary = (edge[1] - image[1]).atan2(edge[0] - image[0]);
+        let receivers: Vec<String> = [boundary - 1e-9, boundary + 1e-9]
+            .iter()
+            .map(|a| {
+                format!(
+                    "[{:e}, {:e}]",
+                    edge[0] + 4.0 * a.cos(),
+                    edge[1] + 4.0 * a.sin()
+                )
+            })
+            .collect();
+        let json = format!(
+            r#"{{ "media": {{ "air": {{ "speed": 343 }} }}, "background": "air",
+                 "interfaces": {{ "floor": {{ "points": [[-500, 0], [500, 0]] }},
+                                 "screen": {{ "points": [[0, 2], [0, 300]] }} }},
+                 "sources": [[-3, 1]], "receivers": [{}],
+                 "search": {{ "max_steps": {max_steps}, "refract": false, "diffraction": true }},
+                 "amplitudes": {{ "source": "point", "frequency": 250 }} }}"#,
+            receivers.join(", ")
+        );
+        let tracer = Tracer::new(scene(&json)).unwrap();
+        let run = eigenray::options::Run::new();
+        let report = tracer.search(&run).unwrap();
+        let reflected_first = (report.arrivals.iter())
+            .filter(|a| a.steps.len() == 2 && a.steps[1].kind.vertex() == Some(0))
+            .count();
+        let echoes = echoes_of_scene(&tracer, &run).unwrap();
+        let mut p = [Complex64::new(0.0, 0.0); 2];
+        pressure_into(echoes, 250.0, 1, &run, &mut p);
+        (
+            [transmission_loss(p[0]), transmission_loss(p[1])],
+            reflected_first,
+        )
+    };
+    let ([a, b], n) = tl(2);
+    eprintln!(
+        "TL across the floor image's shadow edge, reflected-then-diffracted: {a:.9} dB, {b:.9} dB"
+    );
+    assert!(n >= 2, "{n}");
+    assert!((a - b).abs() < 1e-5, "{a} {b}");
+    let ([a, b], n) = tl(1);
+    eprintln!("first-order diffraction only: {a:.3} dB, {b:.3} dB");
+    assert_eq!(n, 0);
+    assert!((a - b).abs() > 3.0, "{a} {b}");
 }
