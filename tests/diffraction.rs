@@ -766,7 +766,9 @@ fn wedge_total_field_matches_the_eigenfunction_series() {
 /// specular arrivals plus that diffracted one sum to the 2N-term image sum
 /// `Σ ±e^(ikR)/(4πR)` (the images at angles `2mα ± θ₀`, the reflected ones negated for
 /// pressure-release faces) to round-off. The faces' far open ends (wedges of 2π at 100 units)
-/// diffract for real, and are left out of both sides. Every pair's search is complete (with
+/// diffract for real, and are left out of both sides (`max_time` 50 keeps them out of the
+/// search: their paths with several reflections near the corner would leave the complete
+/// search of their pieces undecided by its thresholds). Every pair's search is complete (with
 /// `vertex` arrivals off: see docs/method.md for why the walk of edge-held arrivals is not).
 #[test]
 fn ideal_wedges_diffract_nothing_and_their_field_is_the_image_sum() {
@@ -793,7 +795,7 @@ fn ideal_wedges_diffract_nothing_and_their_field_is_the_image_sum() {
                      "interfaces": {{ "wedge": {{ "points": [[{face:e}, 0], [0, 0], [{:e}, {:e}]],
                                                   "reflection": "{law}" }} }},
                      "sources": [[{:e}, {:e}]], "receivers": [{}],
-                     "search": {{ "max_steps": {big_n}, "refract": false, "diffraction": true }},
+                     "search": {{ "max_steps": {big_n}, "max_time": 50, "refract": false, "diffraction": true }},
                      "amplitudes": {{ "source": "point", "frequency": {:e} }} }}"#,
                 far[0],
                 far[1],
@@ -933,4 +935,217 @@ fn one_diffraction_takes_the_short_way_to_the_same_ray() {
     }
     eprintln!("one diffraction: {found} rays with a path, {none} without, as the general code");
     assert!(found > 500 && none > 500, "{found} {none}");
+}
+
+/// The search's diffracted paths with reflections around the diffraction, against brute
+/// force: on random small scenes (a floor, a ceiling and a bent fin, one medium), every
+/// sequence of one `diffract` step and up to two reflections, each prescribed as a path
+/// (`"stationary": "all"`), gives the same arrivals (the same sequences, as many per
+/// sequence, times to 1e-12) as the search with `max_steps` 3 and `"diffraction": true`;
+/// with `max_time` the search lists exactly those by that time.
+#[test]
+fn search_lists_every_path_reflected_around_a_diffraction() {
+    let mut rng = rng::SplitMix64(4143);
+    let mut compared = 0;
+    let mut reflected = 0;
+    for _ in 0..4 {
+        let mut u = |a: f64, b: f64| a + (b - a) * rng.next_f64();
+        let height = u(3.0, 5.0);
+        let fin = [
+            [u(-1.5, -0.5), u(0.5, 1.5)],
+            [u(-0.3, 0.3), u(1.5, height - 1.0)],
+            [u(0.5, 1.5), u(0.5, 1.5)],
+        ];
+        let mut point = || format!("[{:e}, {:e}]", u(-6.0, 6.0), u(0.2, height - 0.2));
+        let sources: Vec<String> = (0..2).map(|_| point()).collect();
+        let receivers: Vec<String> = (0..4).map(|_| point()).collect();
+        let names = ["ceiling", "fin", "floor"];
+        let counts = [2usize, 3, 2];
+        // Every sequence: reflections before, the diffraction, reflections after.
+        let mut sequences: Vec<Vec<(usize, Option<usize>)>> = Vec::new();
+        let reflections: Vec<Vec<usize>> = (0..=2)
+            .flat_map(|n| {
+                (0..3usize.pow(n))
+                    .map(move |code| (0..n).map(|j| code / 3usize.pow(j) % 3).collect::<Vec<_>>())
+            })
+            .collect();
+        for (i, &count) in counts.iter().enumerate() {
+            for k in 0..count {
+                for before in &reflections {
+                    for after in &reflections {
+                        if before.len() + after.len() > 2 {
+                            continue;
+                        }
+                        let mut seq: Vec<(usize, Option<usize>)> =
+                            before.iter().map(|&j| (j, None)).collect();
+                        seq.push((i, Some(k)));
+                        seq.extend(after.iter().map(|&j| (j, None)));
+                        sequences.push(seq);
+                    }
+                }
+            }
+        }
+        let paths: Vec<String> = (sequences.iter())
+            .map(|seq| {
+                let steps: Vec<String> = (seq.iter())
+                    .map(|&(i, v)| match v {
+                        Some(k) => format!(r#"{{ "diffract": "{}", "vertex": {k} }}"#, names[i]),
+                        None => format!(r#"{{ "reflect": "{}" }}"#, names[i]),
+                    })
+                    .collect();
+                format!(r#"{{ "steps": [{}] }}"#, steps.join(", "))
+            })
+            .collect();
+        let json = |tail: &str| {
+            format!(
+                r#"{{ "media": {{ "air": {{ "speed": 1 }} }}, "background": "air",
+                     "interfaces": {{
+                         "floor": {{ "points": [[-8, 0], [8, 0]] }},
+                         "ceiling": {{ "points": [[8, {height:e}], [-8, {height:e}]] }},
+                         "fin": {{ "points": [[{:e}, {:e}], [{:e}, {:e}], [{:e}, {:e}]] }} }},
+                     "sources": [{}], "receivers": [{}] {tail} }}"#,
+                fin[0][0],
+                fin[0][1],
+                fin[1][0],
+                fin[1][1],
+                fin[2][0],
+                fin[2][1],
+                sources.join(", "),
+                receivers.join(", ")
+            )
+        };
+        let run = eigenray::options::Run::new();
+        let brute = Tracer::new(scene(&json(&format!(
+            r#", "paths": [{}], "solver": {{ "stationary": "all" }}"#,
+            paths.join(", ")
+        ))))
+        .unwrap()
+        .trace_stationary(&run)
+        .unwrap();
+        let searched = Tracer::new(scene(&json(
+            r#", "search": { "max_steps": 3, "diffraction": true }"#,
+        )))
+        .unwrap();
+        let interface_names: Vec<&str> = (searched.scene().interfaces().iter())
+            .map(|i| i.name.as_str())
+            .collect();
+        let report = searched.search(&run).unwrap();
+        assert_eq!(report.incomplete_pairs, 0);
+        // (source, receiver, sequence as names) -> times.
+        type Key = (usize, usize, Vec<(String, Option<usize>)>);
+        let mut want: std::collections::BTreeMap<Key, Vec<f64>> = Default::default();
+        for t in &brute.triples {
+            assert!(t.complete, "{t:?}");
+            let seq: Vec<(String, Option<usize>)> = (sequences[t.path].iter())
+                .map(|&(i, v)| (names[i].to_string(), v))
+                .collect();
+            for a in t.arrivals.iter().filter(|a| a.status == Status::Converged) {
+                want.entry((t.source, t.receiver, seq.clone()))
+                    .or_default()
+                    .push(a.time);
+            }
+        }
+        let mut got: std::collections::BTreeMap<Key, Vec<f64>> = Default::default();
+        for a in report
+            .arrivals
+            .iter()
+            .filter(|a| a.steps.iter().any(|s| s.kind.vertex().is_some()))
+        {
+            assert_eq!(a.arrival.status, Status::Converged);
+            let seq: Vec<(String, Option<usize>)> = (a.steps.iter())
+                .map(|s| (interface_names[s.interface].to_string(), s.kind.vertex()))
+                .collect();
+            got.entry((a.source, a.receiver, seq))
+                .or_default()
+                .push(a.arrival.time);
+        }
+        assert_eq!(
+            want.keys().collect::<Vec<_>>(),
+            got.keys().collect::<Vec<_>>()
+        );
+        for (key, w) in &want {
+            let mut w = w.clone();
+            let mut g = got[key].clone();
+            w.sort_by(f64::total_cmp);
+            g.sort_by(f64::total_cmp);
+            assert_eq!(w.len(), g.len(), "{key:?}");
+            for (x, y) in w.iter().zip(&g) {
+                assert!((x - y).abs() <= 1e-12 * x, "{key:?}: {x} {y}");
+            }
+            compared += w.len();
+            reflected += usize::from(key.2.len() > 1) * w.len();
+        }
+        // A time bound: exactly the arrivals by then.
+        let all_times: Vec<f64> = want.values().flatten().copied().collect();
+        let bound = all_times.iter().sum::<f64>() / all_times.len() as f64;
+        let timed = Tracer::new(scene(&json(&format!(
+            r#", "search": {{ "max_steps": 3, "max_time": {bound:e}, "diffraction": true }}"#
+        ))))
+        .unwrap()
+        .search(&run)
+        .unwrap();
+        let listed = (timed.arrivals.iter())
+            .filter(|a| a.steps.iter().any(|s| s.kind.vertex().is_some()))
+            .count();
+        assert_eq!(listed, all_times.iter().filter(|&&t| t <= bound).count());
+    }
+    eprintln!("{compared} diffracted arrivals as brute force, {reflected} with reflections");
+    assert!(reflected > 100, "{reflected}");
+}
+
+/// A half-plane (a screen's lower edge) above a reflecting floor: receivers stepping across
+/// the shadow boundary of the source's floor image (the line from the image through the edge)
+/// by 1e-9 rad see no jump in the total field (the pressure from the search's echoes) when
+/// the search lists the path that reflects off the floor and then diffracts at the edge
+/// (`max_steps` 2): 1e-8 dB; with the diffracted paths of one step only, the field jumps by
+/// 8 dB there.
+#[test]
+fn a_reflected_then_diffracted_path_fills_the_image_shadow_edge() {
+    use eigenray::response::{echoes_of_scene, pressure_into, transmission_loss};
+    let tl = |max_steps: usize| {
+        let (edge, image): ([f64; 2], [f64; 2]) = ([0.0, 2.0], [-3.0, -1.0]);
+        let boundary = (edge[1] - image[1]).atan2(edge[0] - image[0]);
+        let receivers: Vec<String> = [boundary - 1e-9, boundary + 1e-9]
+            .iter()
+            .map(|a| {
+                format!(
+                    "[{:e}, {:e}]",
+                    edge[0] + 4.0 * a.cos(),
+                    edge[1] + 4.0 * a.sin()
+                )
+            })
+            .collect();
+        let json = format!(
+            r#"{{ "media": {{ "air": {{ "speed": 343 }} }}, "background": "air",
+                 "interfaces": {{ "floor": {{ "points": [[-500, 0], [500, 0]] }},
+                                 "screen": {{ "points": [[0, 2], [0, 300]] }} }},
+                 "sources": [[-3, 1]], "receivers": [{}],
+                 "search": {{ "max_steps": {max_steps}, "refract": false, "diffraction": true }},
+                 "amplitudes": {{ "source": "point", "frequency": 250 }} }}"#,
+            receivers.join(", ")
+        );
+        let tracer = Tracer::new(scene(&json)).unwrap();
+        let run = eigenray::options::Run::new();
+        let report = tracer.search(&run).unwrap();
+        let reflected_first = (report.arrivals.iter())
+            .filter(|a| a.steps.len() == 2 && a.steps[1].kind.vertex() == Some(0))
+            .count();
+        let echoes = echoes_of_scene(&tracer, &run).unwrap();
+        let mut p = [Complex64::new(0.0, 0.0); 2];
+        pressure_into(echoes, 250.0, 1, &run, &mut p);
+        (
+            [transmission_loss(p[0]), transmission_loss(p[1])],
+            reflected_first,
+        )
+    };
+    let ([a, b], n) = tl(2);
+    eprintln!(
+        "TL across the floor image's shadow edge, reflected-then-diffracted: {a:.9} dB, {b:.9} dB"
+    );
+    assert!(n >= 2, "{n}");
+    assert!((a - b).abs() < 1e-5, "{a} {b}");
+    let ([a, b], n) = tl(1);
+    eprintln!("first-order diffraction only: {a:.3} dB, {b:.3} dB");
+    assert_eq!(n, 0);
+    assert!((a - b).abs() > 3.0, "{a} {b}");
 }

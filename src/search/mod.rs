@@ -502,25 +502,10 @@ impl Tracer {
                 pairs[pair].complete &= walk.complete;
                 diffracted.extend(walk.arrivals);
             }
-            if let Some(sink) = control.sink {
-                // Streamed: each diffracted arrival goes to the sink with its amplitude (the
-                // edge-held `vertex` entries it repeats have none, so no response counts
-                // them twice).
-                for mut a in diffracted {
-                    control.listed.stream();
-                    self.arrival_amplitudes(&a.steps, std::slice::from_mut(&mut a.arrival));
-                    sink(StreamedArrival {
-                        source: a.source,
-                        receiver: a.receiver,
-                        steps: a.steps.len(),
-                        diffractions: diffractions(&a.steps),
-                        vertical_reflections: 0,
-                        status: a.arrival.status,
-                        time: a.arrival.time,
-                        amplitude: a.arrival.amplitude,
-                    });
-                }
-            } else {
+            // Streamed, each diffracted arrival went to the sink with its amplitude (the
+            // edge-held `vertex` entries it repeats have none, so no response counts them
+            // twice); listed, the `vertex` entries of the same paths go.
+            if control.sink.is_none() {
                 arrivals.extend(diffracted);
                 diffraction::drop_listed_twice(self, &mut arrivals);
             }

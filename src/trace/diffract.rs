@@ -94,27 +94,18 @@ impl Tracer {
                             path: None,
                             curved: &[],
                         };
-                        let found = if given.is_none() && medium.is_none() {
-                            // No medium where the piece starts: no path.
-                            SearchOutcome::new()
-                        } else if piece_steps.is_empty() {
-                            let m = media.map_or(medium, |m| m.first().copied());
-                            self.direct_piece(from, to, m, given.is_none(), &mut pieces);
-                            SearchOutcome::new()
-                        } else {
-                            crate::options::with_current(|run| {
-                                self.stationary_of(
-                                    sequence,
-                                    media,
-                                    from,
-                                    medium,
-                                    to,
-                                    budget,
-                                    run,
-                                    &mut pieces,
-                                )
-                            })
-                        };
+                        let found = crate::options::with_current(|run| {
+                            self.piece_of(
+                                sequence,
+                                media,
+                                from,
+                                medium,
+                                to,
+                                budget,
+                                run,
+                                &mut pieces,
+                            )
+                        });
                         stats.add(found);
                         searched.push((medium, std::mem::take(&mut pieces)));
                         searched.len() - 1
@@ -210,6 +201,36 @@ impl Tracer {
 }
 
 impl Tracer {
+    /// The arrivals of one piece of a diffracted sequence (`sequence`: the steps between two
+    /// diffractions, or before the first, or after the last) from `from` (in `medium`, or with
+    /// `media` given) to `to`, into `out`: its complete search, or the straight leg of a piece
+    /// without steps. What [`diffracted_sequence`](Self::diffracted_sequence) combines, and what
+    /// the search's diffraction (`search/diffraction.rs`) calls piece by piece.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn piece_of(
+        &self,
+        sequence: Sequence<'_>,
+        media: Option<&[usize]>,
+        from: Point,
+        medium: Option<usize>,
+        to: Point,
+        budget: SearchBudget,
+        run: &crate::options::Run,
+        out: &mut Vec<Arrival>,
+    ) -> SearchOutcome {
+        if media.is_none() && medium.is_none() {
+            // No medium where the piece starts: no path.
+            out.clear();
+            SearchOutcome::new()
+        } else if sequence.steps.is_empty() {
+            let m = media.map_or(medium, |m| m.first().copied());
+            self.direct_piece(from, to, m, media.is_none(), out);
+            SearchOutcome::new()
+        } else {
+            self.stationary_of(sequence, media, from, medium, to, budget, run, out)
+        }
+    }
+
     /// The one arrival of a piece without steps (a straight leg from `from` to `to` in medium
     /// `medium`), as the complete search of the direct path gives it: `converged`, or
     /// `obstructed` where the leg crosses an interface; none where the leg vanishes or, with
@@ -370,6 +391,31 @@ fn empty_arrival() -> Arrival {
         caustics: None,
         launch_angle: None,
     }
+}
+
+/// The partial path of a diffracted sequence made of its first piece's arrival `a` from
+/// `source` (what [`Tracer::diffracted_sequence`] begins with, bit for bit).
+pub(crate) fn first_piece(scene: &crate::Scene, source: Point, a: &Arrival) -> Arrival {
+    let start = Arrival {
+        status: Status::Converged,
+        time: 0.0,
+        points: vec![source],
+        ..empty_arrival()
+    };
+    joined(scene, &[], None, &start, a)
+}
+
+/// The partial path `p` (ending at the vertex of diffraction `steps[cut]`) continued by the
+/// next piece's arrival `a`, where both legs at the vertex lie outside its wedge (else
+/// `None`): [`Tracer::diffracted_sequence`]'s join, bit for bit.
+pub(crate) fn through_vertex(
+    scene: &crate::Scene,
+    steps: &[Step],
+    cut: usize,
+    p: &Arrival,
+    a: &Arrival,
+) -> Option<Arrival> {
+    outside_wedge(scene, steps[cut], p, a).then(|| joined(scene, steps, Some(cut), p, a))
 }
 
 /// Where the partial paths end (all at the same point: the last vertex, or the source).

@@ -24,7 +24,7 @@ mod amplitude;
 mod chain;
 mod classify;
 mod complete;
-mod diffract;
+pub(crate) mod diffract;
 mod flat;
 mod mirrors;
 mod occlusion;

@@ -50,7 +50,7 @@ impl Search<'_> {
             }
             self.sc.places[i].interface = self.g.steps[i].interface;
         }
-        if self.pruned() || self.consecutive_on_one_line(segs) {
+        if self.pruned() || self.consecutive_on_one_line(segs) || self.end_on_line(segs, held) {
             return;
         }
         self.stats.solves += 1;
@@ -165,6 +165,27 @@ impl Search<'_> {
             let b = self.g.line(i).segment(segs[i]);
             orient(a.start, a.end, b.start) == 0.0 && orient(a.start, a.end, b.end) == 0.0
         })
+    }
+
+    /// Whether the source lies exactly on the line of the first point's segment, or the
+    /// receiver on the last's (the orientation test), that point free (not in `held`): the
+    /// leg between them runs along that line wherever the point is, on neither side of it
+    /// (or vanishes); or that point held on a vertex that is the end (the leg vanishes). The
+    /// assignment then holds no stationary path. A piece of a diffracted
+    /// path that starts or ends at a vertex of the interface it reflects off meets this on
+    /// the vertex's own segments.
+    fn end_on_line(&self, segs: &[usize], held: usize) -> bool {
+        let k = segs.len();
+        let on = |i: usize, end: crate::geom::Point| {
+            let line = self.g.line(i);
+            if held >> i & 1 == 1 {
+                // Held on the vertex the end is: the leg vanishes.
+                return line.vertices().get(segs[i]) == Some(&end);
+            }
+            let g = line.segment(segs[i]);
+            orient(g.start, g.end, end) == 0.0
+        };
+        k > 0 && (on(0, self.g.source) || on(k - 1, self.g.receiver))
     }
 
     /// Whether the end (source or receiver) that interaction `step` fell on
