@@ -625,7 +625,8 @@ impl Profile {
     }
 
     /// Every ray from `a` to `b` (up to [`MAX_TURNS`] turning points), by time: for each
-    /// branch, the launch angle sampled at [`PROFILE_SAMPLES`] points and every sign change of
+    /// branch, the launch angle sampled at [`PROFILE_SAMPLES`] points (and where the ray turns at a
+    /// knot or grazes a wall) and every sign change of
     /// `X − Δx` refined by bisection, each ray then evaluated in full ([`ProfileRay`]).
     #[cfg(test)]
     pub fn arrivals(&self, a: Vec2, b: Vec2) -> ProfileArrivals {
@@ -724,12 +725,34 @@ impl Profile {
             return out;
         }
         // Launch angles θ ∈ (0, π/2] at a: p = cos θ / c_a, s_a = sin θ.
-        let n = PROFILE_SAMPLES;
-        let angle = |j: f64| std::f64::consts::FRAC_PI_2 * j / n as f64;
+        // The sampled launch angles: an even grid, and the angles whose ray turns exactly
+        // at a knot or grazes a wall, where `X` has a kink (a pair of roots can sit in the
+        // dip beside one, closer together than the grid's step).
+        let mut thetas: Vec<f64> = (0..=PROFILE_SAMPLES)
+            .map(|j| std::f64::consts::FRAC_PI_2 * j as f64 / PROFILE_SAMPLES as f64)
+            .collect();
+        let walls = [self.walls.top, self.walls.bottom];
+        for c in self
+            .c
+            .iter()
+            .copied()
+            .chain(walls.into_iter().flatten().map(|w| self.speed_at(w)))
+        {
+            if c > ca {
+                let theta = (ca / c).acos();
+                if theta > 0.0 && theta < std::f64::consts::FRAC_PI_2 {
+                    thetas.push(theta);
+                }
+            }
+        }
+        thetas.sort_by(f64::total_cmp);
+        thetas.dedup();
+        let n = thetas.len() - 1;
+        let angle = |j: usize| thetas[j];
         let at = |theta: f64| (theta.cos() / ca, theta.sin());
         let parts: Vec<Parts> = (0..=n)
             .map(|j| {
-                let (p, sa) = at(angle(j as f64));
+                let (p, sa) = at(angle(j));
                 if j == 0 {
                     Parts::none()
                 } else {
@@ -759,7 +782,7 @@ impl Profile {
                 // for a root past a sample where the ray turns instead) and a lower bound
                 // of its time (∫ c ds / c_max²) within them. Each grows with the events.
                 let open = (1..=n).any(|j| {
-                    let (p, _) = at(angle(j as f64));
+                    let (p, _) = at(angle(j));
                     let q = &parts[j];
                     [1.0, -1.0].into_iter().any(|first| {
                         q.range(first, turns).is_some_and(|x| {
@@ -786,8 +809,8 @@ impl Profile {
                     }
                     // Newton on the launch angle inside the bracket (dX/dθ = −X_p sin θ / c_a),
                     // bisecting where a step would leave it.
-                    let (mut lo, mut hi) = (angle(j as f64), angle(j as f64 + 1.0));
-                    let (mut v_lo, mut theta) = (v0, angle(j as f64 + 0.5));
+                    let (mut lo, mut hi) = (angle(j), angle(j + 1));
+                    let (mut v_lo, mut theta) = (v0, 0.5 * (angle(j) + angle(j + 1)));
                     for _ in 0..100 {
                         let (p, sa) = at(theta);
                         let Some(sums) =
