@@ -215,7 +215,7 @@ impl Tracer {
 
 /// A path of the beam tree as a [`SearchArrival`]: its walls' steps, segments and arclengths,
 /// every leg in the source's medium.
-fn beam_arrival(
+pub(super) fn beam_arrival(
     walls: &MirrorWalls,
     source: usize,
     medium: usize,

@@ -496,17 +496,16 @@ impl Tracer {
             arrivals.extend(walk.arrivals);
         }
         if options.diffraction {
-            let mut diffracted = Vec::new();
-            for (pair, walk) in self.diffraction_pairs(options, control) {
-                report.work += walk.work;
-                pairs[pair].complete &= walk.complete;
-                diffracted.extend(walk.arrivals);
+            let diffracted = self.diffraction_search(options, control);
+            report.work += diffracted.work;
+            for (p, complete) in pairs.iter_mut().zip(&diffracted.complete) {
+                p.complete &= complete;
             }
             // Streamed, each diffracted arrival went to the sink with its amplitude (the
             // edge-held `vertex` entries it repeats have none, so no response counts them
             // twice); listed, the `vertex` entries of the same paths go.
             if control.sink.is_none() {
-                arrivals.extend(diffracted);
+                arrivals.extend(diffracted.arrivals);
                 diffraction::drop_listed_twice(self, &mut arrivals);
             }
         }
