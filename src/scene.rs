@@ -1098,14 +1098,15 @@ pub(crate) fn speeds_stay_positive(
     Ok(())
 }
 
-/// Refuses, in a scene with a medium whose speed has a gradient (curved legs), what curved
-/// legs do not reach yet: the automatic search, derivatives and diffraction. Each of those
-/// assumes straight legs (the image method and the complete search, the straight-leg
-/// derivatives, the wedge's straight pieces),
-/// so it is refused rather than wrong.
+/// Refuses, in a scene with a medium whose speed has a gradient or a profile (curved legs),
+/// what curved legs do not reach yet: derivatives, diffraction, and with a profile the
+/// automatic search. Each of those assumes straight legs (the straight-leg derivatives, the
+/// wedge's straight pieces) or a leg with one ray between its ends, so it is refused rather
+/// than wrong.
 ///
 /// # Errors
-/// `search`, `solver.derivatives` or the first `diffract` step.
+/// `solver.derivatives`, `search` (with a profile), `search.diffraction` or the first
+/// `diffract` step.
 fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
     let why = "is not available yet with curved legs (a medium with a `gradient` or a \
                `profile`); prescribed paths solve, with `\"stationary\"` `\"one\"` or `\"all\"`";
@@ -1117,13 +1118,22 @@ fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
             ));
         }
     }
-    if spec.search.is_some() {
-        return Err(SceneError::new(
-            "search",
-            format!("the automatic search {why}"),
-        ));
+    let profile = spec.media.values().any(|m| m.profile.is_some());
+    if let Some(search) = &spec.search {
+        if profile {
+            return Err(SceneError::new(
+                "search",
+                format!("the automatic search {why}"),
+            ));
+        }
+        if search.diffraction == Some(true) {
+            return Err(SceneError::new(
+                "search.diffraction",
+                format!("`true` {why}"),
+            ));
+        }
     }
-    if spec.media.values().any(|m| m.profile.is_some()) {
+    if profile {
         if let Some(k) = spec.paths.iter().position(|p| !p.steps.is_empty()) {
             return Err(SceneError::new(
                 format!("paths[{k}].steps"),
