@@ -1099,7 +1099,7 @@ pub(crate) fn speeds_stay_positive(
 }
 
 /// Refuses, in a scene with a medium whose speed has a gradient or a profile (curved legs),
-/// what curved legs do not reach yet: derivatives, diffraction, and with a profile the
+/// what curved legs do not reach yet: diffraction, and with a profile derivatives and the
 /// automatic search. Each of those assumes straight legs (the straight-leg derivatives, the
 /// wedge's straight pieces) or a leg with one ray between its ends, so it is refused rather
 /// than wrong.
@@ -1110,15 +1110,15 @@ pub(crate) fn speeds_stay_positive(
 fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
     let why = "is not available yet with curved legs (a medium with a `gradient` or a \
                `profile`); prescribed paths solve, with `\"stationary\"` `\"one\"` or `\"all\"`";
+    let profile = spec.media.values().any(|m| m.profile.is_some());
     if let Some(s) = &spec.solver {
-        if s.derivatives == Some(true) {
+        if profile && s.derivatives == Some(true) {
             return Err(SceneError::new(
                 "solver.derivatives",
                 format!("`true` {why}"),
             ));
         }
     }
-    let profile = spec.media.values().any(|m| m.profile.is_some());
     if let Some(search) = &spec.search {
         if profile {
             return Err(SceneError::new(
