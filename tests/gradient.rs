@@ -292,7 +292,7 @@ fn bad_gradients_are_refused_naming_the_key() {
         (
             with(
                 r#""a": { "speed": 1500, "gradient": [0, 0.1] }"#,
-                r#", "search": { "diffraction": true }"#,
+                r#", "search": { "max_steps": 1, "diffraction": true }"#,
             ),
             "search.diffraction",
         ),
