@@ -90,6 +90,11 @@ pub struct Gradient {
     /// Every vertex whose movement changes the time (those of the segments the path touches;
     /// for a point held on a vertex, that vertex), each once, ordered by interface and vertex.
     pub vertices: Vec<VertexGradient>,
+    /// `(dT/dgx, dT/dgy)` of each medium's speed gradient (`c(p) = speed + gradient · p`),
+    /// in the order of [`Scene::media`], in a scene with a gradient medium (zero for a medium
+    /// without one, or one the ray does not pass through); empty in other scenes. Its
+    /// `slowness` entry is then `dT/dw` with `w = 1/speed` and the gradient held.
+    pub speed_gradient: Vec<Vec2>,
 }
 
 /// Why derivatives could not be computed for a ray.
@@ -118,8 +123,8 @@ pub enum DerivativeError {
     },
     /// The Hessian at the solution is singular (a caustic): the points do not move smoothly.
     Singular,
-    /// The scene has a medium with a speed gradient: derivatives through curved legs are not
-    /// available yet.
+    /// The scene has a medium with a speed profile, or (for [`PointSensitivities`]) one with
+    /// a speed gradient: derivatives through those curved legs are not available yet.
     CurvedLegs,
 }
 
@@ -139,8 +144,8 @@ impl std::fmt::Display for DerivativeError {
                 write!(f, "interaction point {step} does not lie on its interface")
             }
             DerivativeError::CurvedLegs => f.write_str(
-                "derivatives through curved legs (a medium with a `gradient`) are not available \
-                 yet",
+                "these derivatives through curved legs (a medium with a `profile`, or point \
+                 sensitivities through a `gradient`) are not available yet",
             ),
             DerivativeError::Singular => f.write_str(
                 "the Hessian at the solution is singular (a caustic): the points do not move \
@@ -280,9 +285,15 @@ fn leg_unusual(d: Vec2) -> (Vec2, f64) {
     )
 }
 
+/// Whether the scene has a medium with a speed profile (whose legs the derivatives do not
+/// take yet).
+fn has_profile(scene: &Scene) -> bool {
+    scene.curved() && scene.media().iter().any(|m| m.profile.is_some())
+}
+
 /// The steps of path `path`.
 fn path_steps(scene: &Scene, path: usize) -> Result<&[Step], DerivativeError> {
-    if scene.curved() {
+    if has_profile(scene) {
         return Err(DerivativeError::CurvedLegs);
     }
     let spec = scene
@@ -334,6 +345,9 @@ fn gradient_parts(
             .ok_or(DerivativeError::Media)
     };
     slowness.fill(0.0);
+    if scene.curved() {
+        return curved_parts(scene, steps, points, medium, hint, slowness, None, put);
+    }
     // Leg 0.
     let m0 = medium()?;
     let (mut u_prev, l0) = leg(points[0], points[1]);
@@ -376,6 +390,96 @@ fn gradient_parts(
     }
     let receiver = u_prev * w_prev;
     Ok(EndGradients { source, receiver })
+}
+
+/// One leg's share of a gradient through curved legs: `−∇ₐT`, `∇_bT`, `dT/dw` of its medium
+/// (`w = 1/speed`, the gradient held) and `dT/dG` of its medium's gradient (zero without one).
+fn leg_parts(medium: &crate::scene::Medium, a: Point, b: Point) -> (Vec2, Vec2, f64, Vec2) {
+    if medium.gradient.is_none() {
+        let (u, l) = leg(a, b);
+        let w = medium.slowness;
+        return (u * w, u * w, l, Vec2::default());
+    }
+    let crate::leg::LegMedium::Linear(model) = medium.leg_model(Point::new(0.0, 0.0)) else {
+        unreachable!("a medium with a gradient has linear legs")
+    };
+    let arc = crate::leg::LegModel::leg(model, a.to_vec2(), b.to_vec2());
+    let (dc, dg) = arc.medium_derivatives(a.to_vec2(), b.to_vec2());
+    let c0 = 1.0 / medium.slowness;
+    use crate::leg::Leg as _;
+    (arc.departure(), arc.arrival(), -dc * c0 * c0, dg)
+}
+
+/// [`gradient_parts`] in a scene with curved legs (a medium with a gradient; `medium` gives
+/// the leg media, `slowness` already zeroed): each leg's slowness vectors at its ends from the
+/// leg model (an arc's, whose directions at its ends are not its chord's), and into
+/// `speed_gradient` (when given, one entry per medium) each medium's `dT/dG`.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "gradient_parts' arguments, and the speed gradients"
+)]
+fn curved_parts(
+    scene: &Scene,
+    steps: &[Step],
+    points: &[Point],
+    mut medium: impl FnMut() -> Result<usize, DerivativeError>,
+    hint: Option<&[usize]>,
+    slowness: &mut [f64],
+    mut speed_gradient: Option<&mut [Vec2]>,
+    mut put: impl FnMut(VertexGradient),
+) -> Result<EndGradients, DerivativeError> {
+    let all_media = scene.media();
+    if let Some(sg) = speed_gradient.as_deref_mut() {
+        sg.fill(Vec2::default());
+    }
+    let mut arrival_prev = Vec2::default();
+    let mut source = Vec2::default();
+    for (j, ends) in points.windows(2).enumerate() {
+        let m = medium()?;
+        let (departure, arrival, dw, dg) = leg_parts(&all_media[m], ends[0], ends[1]);
+        slowness[m] += dw;
+        if let Some(sg) = speed_gradient.as_deref_mut() {
+            sg[m] += dg;
+        }
+        if j == 0 {
+            source = departure * -1.0;
+        } else {
+            let i = j - 1;
+            let g = arrival_prev - departure;
+            let step = &steps[i];
+            let line = &scene.interfaces()[step.interface].polyline;
+            let c = locate(line, points[i + 1], hint.map(|h| h[i]))
+                .ok_or(DerivativeError::OffInterface { step: i })?;
+            let interface = step.interface;
+            match c.at_vertex {
+                Some(vertex) => put(VertexGradient {
+                    interface,
+                    vertex,
+                    d: g,
+                }),
+                None => {
+                    put(VertexGradient {
+                        interface,
+                        vertex: c.a,
+                        d: g * (1.0 - c.lambda),
+                    });
+                    put(VertexGradient {
+                        interface,
+                        vertex: c.b,
+                        d: g * c.lambda,
+                    });
+                }
+            }
+        }
+        arrival_prev = arrival;
+    }
+    if medium().is_ok() {
+        return Err(DerivativeError::Media);
+    }
+    Ok(EndGradients {
+        source,
+        receiver: arrival_prev,
+    })
 }
 
 /// The slownesses of the two legs' media `media`.
@@ -445,7 +549,9 @@ impl Gradient {
     ) -> Result<(), DerivativeError> {
         let points = ws.points();
         let steps = path_steps(scene, path)?;
-        if let ([step], &[p0, p1, p2], &[m0, m1]) = (steps, points, ws.media()) {
+        if let ([step], &[p0, p1, p2], &[m0, m1], false) =
+            (steps, points, ws.media(), scene.curved())
+        {
             self.size_slowness(scene);
             let hint = ws.newton.seg.first().copied();
             return self.fill_one(scene, step, [p0, p1, p2], [m0, m1], hint);
@@ -507,10 +613,13 @@ impl Gradient {
         mut media: impl Iterator<Item = usize>,
         segments: Option<&[usize]>,
     ) -> Result<(), DerivativeError> {
-        if scene.curved() {
+        if has_profile(scene) {
             return Err(DerivativeError::CurvedLegs);
         }
         self.size_slowness(scene);
+        if scene.curved() {
+            return self.fill_curved(scene, steps, points, media, segments);
+        }
         // One interaction (the common ray): written out, without the general bookkeeping.
         if let ([step], &[p0, p1, p2]) = (steps, points) {
             let media = match [media.next(), media.next(), media.next()] {
@@ -530,6 +639,53 @@ impl Gradient {
             media,
             segments,
             &mut self.slowness,
+            |v| vertices.push(v),
+        );
+        match result {
+            Ok(ends) => {
+                self.source = ends.source;
+                self.receiver = ends.receiver;
+                let n = merge(&mut self.vertices);
+                self.vertices.truncate(n);
+                Ok(())
+            }
+            Err(e) => {
+                self.vertices.clear();
+                Err(e)
+            }
+        }
+    }
+
+    /// [`fill`](Self::fill) in a scene with a gradient medium (curved legs), the slowness
+    /// entries sized: the leg model's slowness vectors, and each medium's speed gradient.
+    fn fill_curved(
+        &mut self,
+        scene: &Scene,
+        steps: &[Step],
+        points: &[Point],
+        mut media: impl Iterator<Item = usize>,
+        segments: Option<&[usize]>,
+    ) -> Result<(), DerivativeError> {
+        check_points(steps, points)?;
+        let all = scene.media();
+        let medium = || {
+            media
+                .next()
+                .filter(|&m| m < all.len())
+                .ok_or(DerivativeError::Media)
+        };
+        self.speed_gradient.resize(all.len(), Vec2::default());
+        self.slowness.fill(0.0);
+        self.vertices.clear();
+        let vertices = &mut self.vertices;
+        let result = curved_parts(
+            scene,
+            steps,
+            points,
+            medium,
+            segments,
+            &mut self.slowness,
+            Some(&mut self.speed_gradient),
             |v| vertices.push(v),
         );
         match result {
@@ -861,6 +1017,10 @@ impl PointSensitivities {
         media: &[usize],
         segments: Option<&[usize]>,
     ) -> Result<(), DerivativeError> {
+        // The implicit function theorem here takes straight legs' blocks.
+        if scene.curved() {
+            return Err(DerivativeError::CurvedLegs);
+        }
         let sc = &mut self.scratch;
         sc.gradient
             .fill(scene, steps, points, media.iter().copied(), segments)?;
@@ -1252,6 +1412,8 @@ impl BatchGradients {
             receiver: self.receiver(ray),
             slowness: self.slowness(ray).to_vec(),
             vertices: self.vertices(ray).to_vec(),
+            // The batch's arrays hold no speed gradients.
+            speed_gradient: Vec::new(),
         })
     }
     /// The flat arrays: sources' and receivers' gradients (one per ray), slowness gradients

@@ -532,7 +532,39 @@ impl LegModel for Linear {
     }
 }
 
+/// `(asinh(y)/y − 1/√(1 + y²)) / y²` for `y ≥ 0`, without loss near 0 (its series below
+/// 1e-2): the factor of an arc's time's derivative by its gradient's size, over `y`.
+#[inline]
+fn asinh_gap(y: f64) -> f64 {
+    let y2 = y * y;
+    if y < 1e-2 {
+        1.0 / 3.0 - y2 * (3.0 / 10.0 - y2 * (15.0 / 56.0 - y2 * (35.0 / 144.0)))
+    } else {
+        (asinh_over(y) - 1.0 / (1.0 + y2).sqrt()) / y2
+    }
+}
+
 impl ArcLeg {
+    /// The derivatives of the leg's time by its medium's speed at the origin `c₀` and by its
+    /// gradient `G` (`c(p) = c₀ + G · p`), its ends `a`, `b` held (relative to that origin):
+    /// with `T = (2/g) asinh(y)`, `∂T/∂c_a = −ℓ² T′A / (2 c_a)` (and so for `b`), `∂T/∂c₀`
+    /// their sum, and `∂T/∂G = −ℓ³ k(y) G / (4 c_a c_b √(c_a c_b)) + a ∂T/∂c_a + b ∂T/∂c_b`
+    /// with `k` [`asinh_gap`]: no division by `g` (at `G = 0`, `−ℓ (a + b) / (2 c₀²)`). Zero
+    /// for a vanished leg.
+    pub fn medium_derivatives(&self, a: Vec2, b: Vec2) -> (f64, Vec2) {
+        if !(self.len > 0.0) {
+            return (0.0, Vec2::default());
+        }
+        let [ca, cb] = self.speeds;
+        let l2 = self.len * self.len;
+        let (dca, dcb) = (-l2 * self.first / (2.0 * ca), -l2 * self.first / (2.0 * cb));
+        let p = ca * cb;
+        let root = p.sqrt();
+        let y = self.gradient.length() * self.len / (2.0 * root);
+        let along = -(l2 * self.len) / (4.0 * p * root) * asinh_gap(y);
+        (dca + dcb, self.gradient * along + a * dca + b * dcb)
+    }
+
     /// `v_a = −d − ℓ² G / (2 c_a)` and `v_b = d − ℓ² G / (2 c_b)`: `∇X / A` at the ends.
     #[inline]
     fn v(&self) -> [Vec2; 2] {
@@ -1096,6 +1128,42 @@ mod tests {
 
     /// The arc's gradient and Hessian blocks against central finite differences of its
     /// time, on random legs, gradients (down to zero) and directions.
+    #[test]
+    fn arc_medium_derivatives_match_finite_differences() {
+        let (a, b) = (Vec2::new(-300.0, 120.0), Vec2::new(2500.0, -400.0));
+        for (c0, g) in [
+            (1500.0, Vec2::new(0.0, -0.1)),
+            (2000.0, Vec2::new(0.3, 0.6)),
+            (1500.0, Vec2::new(1e-9, -2e-9)),
+            (1500.0, Vec2::new(0.0, 0.0)),
+        ] {
+            let time = |c0: f64, g: Vec2| {
+                Linear {
+                    speed: c0,
+                    gradient: g,
+                    least_speed: 1.0,
+                }
+                .leg(a, b)
+                .time
+            };
+            let leg = Linear {
+                speed: c0,
+                gradient: g,
+                least_speed: 1.0,
+            }
+            .leg(a, b);
+            let (dc, dg) = leg.medium_derivatives(a, b);
+            let h = 1e-3;
+            let fd_c = (time(c0 + h, g) - time(c0 - h, g)) / (2.0 * h);
+            assert!((dc - fd_c).abs() < 1e-9 * fd_c.abs(), "{dc} {fd_c}");
+            let hg = 1e-6;
+            for (e, d) in [(Vec2::new(hg, 0.0), dg.x), (Vec2::new(0.0, hg), dg.y)] {
+                let fd = (time(c0, g + e) - time(c0, g - e)) / (2.0 * hg);
+                assert!((d - fd).abs() < 1e-6 * fd.abs(), "{g:?}: {d} {fd}");
+            }
+        }
+    }
+
     #[test]
     fn arc_derivatives_match_finite_differences() {
         let mut rng = SplitMix64(0xd1ff);

@@ -424,6 +424,8 @@ struct Names {
     media_csv: Option<Vec<Vec<u8>>>,
     /// Escaped JSON strings of the interface names.
     interfaces: Vec<Vec<u8>>,
+    /// Per medium: whether its speed has a gradient.
+    gradient: Vec<bool>,
 }
 
 /// `s` as a JSON string.
@@ -508,6 +510,7 @@ impl Names {
             paths_csv,
             media_csv,
             interfaces,
+            gradient: scene.media().iter().map(|m| m.gradient.is_some()).collect(),
         }
     }
 }
@@ -649,7 +652,27 @@ fn gradient_json(buf: &mut Vec<u8>, names: &Names, g: &Gradient) {
         buf.push(b':');
         float(buf, *d);
     }
-    buf.extend_from_slice(b"},\"vertices\":[");
+    buf.push(b'}');
+    // In a scene with a gradient medium: `dT/dG` of each medium that has a gradient.
+    if !g.speed_gradient.is_empty() {
+        buf.extend_from_slice(b",\"speed_gradient\":{");
+        let mut first = true;
+        for (name, (d, m)) in (names.media.iter()).zip(g.speed_gradient.iter().zip(&names.gradient))
+        {
+            if !*m {
+                continue;
+            }
+            if !first {
+                buf.push(b',');
+            }
+            first = false;
+            buf.extend_from_slice(name);
+            buf.push(b':');
+            vec_json(buf, *d);
+        }
+        buf.push(b'}');
+    }
+    buf.extend_from_slice(b",\"vertices\":[");
     for (i, v) in g.vertices.iter().enumerate() {
         if i > 0 {
             buf.push(b',');

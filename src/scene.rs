@@ -1098,41 +1098,40 @@ pub(crate) fn speeds_stay_positive(
     Ok(())
 }
 
-/// Refuses, in a scene with a medium whose speed has a gradient (curved legs), what curved
-/// legs do not reach yet: the automatic search, derivatives and diffraction. Each of those
-/// assumes straight legs (the image method and the complete search, the straight-leg
-/// derivatives, the wedge's straight pieces),
-/// so it is refused rather than wrong.
+/// Refuses, in a scene with a medium whose speed has a gradient or a profile (curved legs),
+/// what curved legs do not reach yet: diffraction, and with a profile derivatives and the
+/// automatic search. Each of those assumes straight legs (the straight-leg derivatives, the
+/// wedge's straight pieces) or a leg with one ray between its ends, so it is refused rather
+/// than wrong.
 ///
 /// # Errors
-/// `search`, `solver.derivatives` or the first `diffract` step.
+/// `solver.derivatives`, `search` (with a profile), `search.diffraction` or the first
+/// `diffract` step.
 fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
     let why = "is not available yet with curved legs (a medium with a `gradient` or a \
                `profile`); prescribed paths solve, with `\"stationary\"` `\"one\"` or `\"all\"`";
+    let profiled = spec.media.values().any(|m| m.profile.is_some());
     if let Some(s) = &spec.solver {
-        if s.derivatives == Some(true) {
+        if profiled && s.derivatives == Some(true) {
             return Err(SceneError::new(
                 "solver.derivatives",
                 format!("`true` {why}"),
             ));
         }
     }
-    let profiled = spec.media.values().any(|m| m.profile.is_some());
     let flat = |name: &str| spec.interfaces.get(name).is_some_and(flat_horizontal);
     if let Some(search) = &spec.search {
-        if !profiled {
-            return Err(SceneError::new(
-                "search",
-                format!("the automatic search {why}"),
-            ));
-        }
         if search.diffraction == Some(true) {
-            return Err(SceneError::new(
-                "search.diffraction",
-                "diffraction is not available yet in a scene with a `profile` medium",
-            ));
+            let why = if profiled {
+                "diffraction is not available yet in a scene with a `profile` medium".to_string()
+            } else {
+                format!("`true` {why}")
+            };
+            return Err(SceneError::new("search.diffraction", why));
         }
-        if let Some((name, _)) = spec.interfaces.iter().find(|(_, i)| !flat_horizontal(i)) {
+        if profiled
+            && let Some((name, _)) = spec.interfaces.iter().find(|(_, i)| !flat_horizontal(i))
+        {
             return Err(SceneError::new(
                 "search",
                 format!(

@@ -292,16 +292,9 @@ fn bad_gradients_are_refused_naming_the_key() {
         (
             with(
                 r#""a": { "speed": 1500, "gradient": [0, 0.1] }"#,
-                r#", "search": {}"#,
+                r#", "search": { "max_steps": 1, "diffraction": true }"#,
             ),
-            "search",
-        ),
-        (
-            with(
-                r#""a": { "speed": 1500, "gradient": [0, 0.1] }"#,
-                r#", "solver": { "derivatives": true }"#,
-            ),
-            "solver.derivatives",
+            "search.diffraction",
         ),
     ];
     // A diffracted path through a medium with a gradient: refused at its step.

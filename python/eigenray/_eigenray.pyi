@@ -74,6 +74,7 @@ class Gradient:
     receiver: npt.NDArray[np.float64]
     slowness: dict[str, float]
     vertices: list[dict[str, Any]]
+    speed_gradient: dict[str, npt.NDArray[np.float64]]
 
 class PointSensitivities:
     """How one ray's points move: `d[i]` is d(points)/d(parameters[i]), shape (points, 2)."""

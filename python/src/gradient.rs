@@ -24,6 +24,10 @@ pub(crate) struct PyGradient {
     /// Every vertex whose movement changes the time, each once: dicts with `interface`
     /// (name), `vertex` (index in its points) and `d` (`(dT/dx, dT/dy)`).
     vertices: Py<PyList>,
+    /// `(dT/dgx, dT/dgy)` of each medium with a speed gradient, by name (a scene with a
+    /// `gradient` medium; empty otherwise). Their `slowness` entry is `dT/dw` with
+    /// `w = 1/speed` and the gradient held.
+    speed_gradient: Py<PyDict>,
 }
 
 #[pymethods]
@@ -58,6 +62,16 @@ impl PyGradient {
             d.set_item("d", PyArray1::from_slice(py, &[v.d.x, v.d.y]))?;
             vertices.append(d)?;
         }
+        let speed_gradient = PyDict::new(py);
+        for (i, m) in scene.media().iter().enumerate() {
+            if m.gradient.is_none() {
+                continue;
+            }
+            let d = g
+                .and_then(|g| g.speed_gradient.get(i))
+                .map_or([f64::NAN, f64::NAN], |d| [d.x, d.y]);
+            speed_gradient.set_item(&m.name, PyArray1::from_slice(py, &d))?;
+        }
         Ok(PyGradient {
             status: record.status.as_str().to_string(),
             time: record.time,
@@ -65,6 +79,7 @@ impl PyGradient {
             receiver: PyArray1::from_slice(py, &receiver).unbind(),
             slowness: slowness.unbind(),
             vertices: vertices.unbind(),
+            speed_gradient: speed_gradient.unbind(),
         })
     }
 }

@@ -77,7 +77,7 @@ def test_the_cli_gives_the_same_times(tmp_path):
     [
         (lambda s: s["media"]["rock"].update(gradient=[0, 1]), "media.rock.gradient"),
         (lambda s: s["media"]["rock"].update(gradient=[0, "x"]), "media"),
-        (lambda s: s.update(search={}), "search"),
+        (lambda s: s.update(search={"max_steps": 1, "diffraction": True}), "search.diffraction"),
     ],
 )
 def test_bad_gradients_are_refused_naming_the_key(change, key):
@@ -98,11 +98,33 @@ def test_every_stationary_path_of_the_caustic_example():
     assert abs(times[1] - 6.672526446116) < 1e-11
 
 
-def test_what_curved_legs_do_not_support_yet_raises():
-    tracer = eigenray.Tracer(eigenray.Scene(CAUSTIC))
-    # (The package raises a derivative's error as RuntimeError.)
-    with pytest.raises(RuntimeError, match="curved legs"):
-        tracer.gradient((0, 0), (10000, 0), "given")
+def test_gradients_through_arcs_match_finite_differences():
+    def solved(scene):
+        return eigenray.Tracer(eigenray.Scene(scene)).gradient((0, 0), (10000, 0), "given")
+
+    g = solved(CAUSTIC)
+    assert set(g.speed_gradient) == {"rock"}
+    h = 1e-7
+    for i in range(2):
+        times = []
+        for d in (h, -h):
+            scene = copy.deepcopy(CAUSTIC)
+            scene["media"]["rock"]["gradient"][i] += d
+            times.append(solved(scene).time)
+        fd = (times[0] - times[1]) / (2 * h)
+        assert abs(g.speed_gradient["rock"][i] - fd) < 1e-6 * g.time, (i, fd)
+
+
+def test_search_through_arcs():
+    scene = copy.deepcopy(CAUSTIC)
+    del scene["paths"]
+    scene["search"] = {"max_steps": 2, "reflect": False}
+    arrivals = eigenray.Tracer(eigenray.Scene(scene)).search()
+    times = sorted(a["time"] for a in arrivals)
+    # The direct arc-free ray and both caustic eigenrays, none a proof.
+    assert any(abs(t - 6.628258089353) < 1e-9 for t in times), times
+    assert any(abs(t - 6.672526446116) < 1e-9 for t in times), times
+    assert not any(a["complete"] for a in arrivals)
 
 
 def test_the_caustic_turns_the_phase_by_a_quarter():

@@ -17,6 +17,10 @@
 //!   pruned where no medium or no time allows a path. It counts sequences and the work of
 //!   their complete searches.
 //!
+//! In a scene with curved legs (a medium with a gradient) there are no images: the walk
+//! takes every sequence, the direct ray included, each searched from a grid of starts
+//! (`Tracer::curved_paths_of`), which is no proof (every such pair says `complete: false`).
+//!
 //! Limits count the work actually done (the [`Run`]'s [`Limits`](crate::options::Limits), and
 //! the scene's `solver.max_work` per pair's walk and, for each of its receivers, per source's
 //! tree): a source's tree that reaches its limit of beams or of work, a pair's walk that
@@ -476,7 +480,12 @@ impl Tracer {
     ) -> (SearchReport, Vec<SearchArrival>) {
         let nr = self.scene().receivers().len();
         let mut report = SearchReport::default();
-        let trees = self.beam_trees(options, control);
+        // Curved legs have no images: the walk takes every sequence (`strategy.rs`).
+        let trees = if self.scene().curved() {
+            Vec::new()
+        } else {
+            self.beam_trees(options, control)
+        };
         let walks = self.walks(options, control);
         let mut arrivals = Vec::new();
         for (source, tree) in trees.into_iter().enumerate() {

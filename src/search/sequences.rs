@@ -6,7 +6,8 @@
 //! receiver) pair, depth first, each prefix pruned where no extension can hold a path:
 //!
 //! - **Repeats.** A reflection off the one-segment interface of the reflection before it has
-//!   its two points on one line: no path.
+//!   its two points on one line: no path (with straight legs; an arc may leave a line and
+//!   turn back to it).
 //! - **Media.** Each leg's possible media, as a set: the source's medium first; a reflection
 //!   keeps the set; a refraction at interface `I` takes every medium across `I` from one in
 //!   the set (the pairs of media on `I`'s sides). This is the rule by which the complete
@@ -27,6 +28,16 @@
 //!   Each term is the leg model's lower bound (`LegModel::least_time`, `leg.rs`) of the
 //!   fastest medium of the set: for uniform media, slowness times distance.
 //!
+//! In a scene with curved legs (a medium with a gradient) the walk takes every sequence, the
+//! direct ray and the reflect-only ones too (`strategy.rs`: no image method through arcs),
+//! and the time bound is the leg model's per medium: leg `i` the least over the media of
+//! `Sᵢ` of each medium's `least_time(Bᵢ, Bᵢ₊₁)` (an arc's time grows with its chord and falls
+//! with the speeds at its ends, at most the greatest over each box's corners), and the
+//! last term the least time of a last leg: from `B_k` in a medium of `S_k` (the sequence
+//! itself), or from the box of any allowed interface in any medium (an extension), to the
+//! receiver. Each sequence is then searched by [`Tracer::curved_paths_of`] (Newton from a grid
+//! of starts, the media looked up), which is no proof: such a pair says `complete: false`.
+//!
 //! The work, counted against the scene's `solver.max_work` per pair, is one per sequence
 //! visited plus the work units of each complete search (what that budget counts: points moved
 //! by Newton steps and weighed in bounds); each complete search gets what is left of it. A pair whose walk stops at that limit, or at
@@ -36,7 +47,7 @@
 use rayon::prelude::*;
 
 use crate::geom::{Aabb, Point};
-use crate::leg::{LegModel, Uniform};
+use crate::leg::{LegMedium, LegModel, Uniform};
 use crate::options::{Progress, Run};
 use crate::scene::{MAX_STATIONARY_STEPS, SearchOptions, Step, StepKind};
 use crate::trace::{Arrival, SearchBudget, Sequence, Status, Tracer};
@@ -61,6 +72,9 @@ struct MediaSets {
     across: Vec<Vec<MediaSet>>,
     /// Per medium: its slowness.
     slowness: Vec<f64>,
+    /// Per medium, in a scene with curved legs: its leg model (absolute positions); empty
+    /// otherwise.
+    models: Vec<LegMedium>,
     /// Whether the sets are exact (at most [`MAX_SET_MEDIA`] media); otherwise every set is
     /// taken as full.
     exact: bool,
@@ -85,9 +99,16 @@ impl MediaSets {
                 across
             })
             .collect();
+        let models = if scene.curved() {
+            let origin = Point::new(0.0, 0.0);
+            scene.media().iter().map(|m| m.leg_model(origin)).collect()
+        } else {
+            Vec::new()
+        };
         MediaSets {
             across,
             slowness: scene.media().iter().map(|m| m.slowness).collect(),
+            models,
             exact,
         }
     }
@@ -110,6 +131,34 @@ impl MediaSets {
             out |= self.across[step.interface][m];
         }
         out
+    }
+
+    /// The media of `set`, by index.
+    fn members(&self, set: MediaSet) -> impl Iterator<Item = usize> + '_ {
+        let n = self.slowness.len();
+        (0..n).filter(move |&m| !self.exact || set & (1 << m) != 0)
+    }
+
+    /// The least time of a leg in a medium of `set` (curved legs: each medium's model) from
+    /// a point of `from` to a point of `to`.
+    fn least_leg(&self, set: MediaSet, from: Aabb, to: Aabb) -> f64 {
+        if self.models.is_empty() {
+            return Uniform::new(self.least(set)).least_time(from, to);
+        }
+        self.members(set)
+            .map(|m| self.models[m].least_time(from, to))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The least time of a leg in a medium of `set` (curved legs: each medium's model) from
+    /// a point of `from` to `to`.
+    fn least_leg_to(&self, set: MediaSet, from: Aabb, to: Point) -> f64 {
+        if self.models.is_empty() {
+            return Uniform::new(self.least(set)).least_time_to(from, to);
+        }
+        self.members(set)
+            .map(|m| self.models[m].least_time_to(from, to))
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// The least slowness of a medium in `set`.
@@ -146,6 +195,8 @@ struct Walk<'a> {
     /// Whether `vertex` arrivals are asked for and some allowed reflection is off an
     /// interface with vertices.
     vertex_reflections: bool,
+    /// Whether the scene has curved legs (the walk then takes every sequence).
+    curved: bool,
     /// The deepest sequence walked: `max_steps`, at most [`MAX_STATIONARY_STEPS`].
     depth: usize,
     /// Work per pair before the walk stops.
@@ -201,6 +252,9 @@ struct PairState<'w> {
     receiver: usize,
     s: Point,
     r: Point,
+    /// With curved legs: the least time of a last leg from any allowed interface to the
+    /// receiver, in any medium (the bound of what an extension adds); 0 otherwise.
+    last: f64,
     medium: usize,
     steps: Vec<Step>,
     found: Vec<Arrival>,
@@ -292,6 +346,7 @@ impl<'a> Walk<'a> {
                 .collect(),
             has_vertices,
             vertex_reflections,
+            curved: scene.curved(),
             depth: options.step_limit().min(MAX_STATIONARY_STEPS),
             max_work: scene.solver().max_work,
             listed,
@@ -303,7 +358,9 @@ impl<'a> Walk<'a> {
 
     /// Whether a pair whose source lies in `medium` needs the walk.
     fn needed(&self, medium: usize) -> bool {
-        self.depth > 0 && (self.can_refract(self.media.only(medium)) || self.vertex_reflections)
+        self.curved
+            || (self.depth > 0
+                && (self.can_refract(self.media.only(medium)) || self.vertex_reflections))
     }
 
     /// Whether a refraction is allowed and possible from a leg in `set`.
@@ -317,12 +374,22 @@ impl<'a> Walk<'a> {
     fn pair(&self, source: usize, receiver: usize, medium: usize) -> PairWalk {
         let scene = self.tracer.scene();
         let s = scene.sources()[source];
+        let r = scene.receivers()[receiver];
+        let last = if self.curved {
+            let all = MediaSet::MAX;
+            (self.choices.iter())
+                .map(|c| self.media.least_leg_to(all, self.boxes[c.interface], r))
+                .fold(f64::INFINITY, f64::min)
+        } else {
+            0.0
+        };
         let mut state = PairState {
             walk: self,
             source,
             receiver,
             s,
-            r: scene.receivers()[receiver],
+            r,
+            last,
             medium,
             steps: Vec::with_capacity(self.depth),
             found: Vec::new(),
@@ -337,21 +404,33 @@ impl<'a> Walk<'a> {
             set: self.media.only(medium),
             bound: 0.0,
             from: Aabb::from_points(s, s),
-            shape: Shape::default(),
+            shape: Shape {
+                curved: self.curved,
+                ..Shape::default()
+            },
         });
         state.out.complete &= !state.stopped;
         state.out
     }
 
     /// The prefix after `prefix` takes `step`, if some path may begin with it.
-    fn child(&self, prefix: &Prefix, last: Option<Step>, step: Step, r: Point) -> Option<Prefix> {
+    fn child(
+        &self,
+        prefix: &Prefix,
+        last: Option<Step>,
+        step: Step,
+        r: Point,
+        extension: f64,
+    ) -> Option<Prefix> {
         let interfaces = self.tracer.scene().interfaces();
-        let repeat = last.is_some_and(|l| {
-            l.interface == step.interface
-                && l.kind == StepKind::Reflect
-                && step.kind == StepKind::Reflect
-                && interfaces[step.interface].polyline.num_segments() == 1
-        });
+        // Through arcs a leg may leave a line and turn back to it (a duct): no repeat rule.
+        let repeat = !self.curved
+            && last.is_some_and(|l| {
+                l.interface == step.interface
+                    && l.kind == StepKind::Reflect
+                    && step.kind == StepKind::Reflect
+                    && interfaces[step.interface].polyline.num_segments() == 1
+            });
         if repeat {
             return None;
         }
@@ -365,9 +444,13 @@ impl<'a> Walk<'a> {
         }
         let to = self.boxes[step.interface];
         // The leg model's bounds: the least slowness's legs are the fastest.
-        let bound =
-            prefix.bound + Uniform::new(self.media.least(prefix.set)).least_time(prefix.from, to);
-        let rest = Uniform::new(self.least).least_time_to(to, r);
+        let bound = prefix.bound + self.media.least_leg(prefix.set, prefix.from, to);
+        let rest = if self.curved {
+            // The sequence's own last leg, or an extension's (`extension`).
+            self.media.least_leg_to(set, to, r).min(extension)
+        } else {
+            Uniform::new(self.least).least_time_to(to, r)
+        };
         if let Some(t) = self.options.max_time
             && (bound + rest) * (1.0 - TIME_MARGIN) > t
         {
@@ -388,7 +471,7 @@ impl PairState<'_> {
         let walk = self.walk;
         let k = self.steps.len();
         let claim = Claim::of(Strategy::Walk, prefix.shape, walk.options);
-        if k > 0 && claim.any() {
+        if (k > 0 || walk.curved) && claim.any() {
             self.search(claim);
         }
         self.out.work += 1;
@@ -400,7 +483,8 @@ impl PairState<'_> {
         }
         for c in 0..walk.choices.len() {
             let step = walk.choices[c];
-            let Some(next) = walk.child(&prefix, self.steps.last().copied(), step, self.r) else {
+            let last = self.steps.last().copied();
+            let Some(next) = walk.child(&prefix, last, step, self.r, self.last) else {
                 continue;
             };
             if k == walk.depth {
@@ -433,16 +517,29 @@ impl PairState<'_> {
             tuples: walk.run.limits.walk_tuples,
             work: usize::try_from(left).unwrap_or(usize::MAX),
         };
-        let outcome = walk.tracer.stationary_of(
-            sequence,
-            None,
-            self.s,
-            Some(self.medium),
-            self.r,
-            budget,
-            walk.run,
-            &mut self.found,
-        );
+        let outcome = if walk.curved {
+            walk.tracer.curved_paths_of(
+                &self.steps,
+                None,
+                self.s,
+                Some(self.medium),
+                self.r,
+                budget,
+                walk.run,
+                &mut self.found,
+            )
+        } else {
+            walk.tracer.stationary_of(
+                sequence,
+                None,
+                self.s,
+                Some(self.medium),
+                self.r,
+                budget,
+                walk.run,
+                &mut self.found,
+            )
+        };
         self.out.work += outcome.work as u64;
         self.out.complete &= outcome.complete;
         for a in self.found.drain(..) {

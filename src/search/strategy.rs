@@ -7,14 +7,15 @@
 //! | reflections only, no interface with vertices | the beam tree | none is listed |
 //! | reflections only, some off an interface with vertices | the beam tree | the walk |
 //! | with a refraction | the walk | the walk |
+//! | any, in a scene with curved legs (the direct ray too) | the walk | the walk |
 //!
 //! The beam tree covers every reflect-only sequence by construction (the image method from
 //! each source, every segment of each allowed interface a wall); the walk asks [`owner`] for
 //! each sequence it visits what to search and list, and prunes a prefix only where no
 //! extension of it is the walk's (its rule "need", checked against [`owner`] by the tests
-//! below). A new strategy (beam tracing of polylines, a medium whose legs are curved: no
-//! images, so its reflect-only sequences go to the walk) is a new [`Strategy`] and a new row
-//! here.
+//! below). A scene with a medium whose speed has a gradient has curved legs: no images, so
+//! every sequence there (the direct ray and the reflect-only ones too) goes to the walk. A
+//! new strategy (beam tracing of polylines) is a new [`Strategy`] and a new row here.
 
 use crate::scene::{SearchOptions, Step, StepKind};
 
@@ -43,16 +44,22 @@ pub(crate) struct Shape {
     pub refracts: bool,
     /// Whether it reflects off an interface with vertices.
     pub vertices: bool,
+    /// Whether its scene has curved legs (a medium with a gradient): no image method.
+    pub curved: bool,
 }
 
 impl Shape {
     /// The shape of the sequence `steps`, `has_vertices` telling per interface (scene index)
     /// whether a path can be held on one of its vertices.
     #[cfg(test)]
-    pub fn of(steps: &[Step], has_vertices: &[bool]) -> Shape {
-        steps.iter().fold(Shape::default(), |shape, &step| {
-            shape.then(step, has_vertices)
-        })
+    pub fn of(steps: &[Step], has_vertices: &[bool], curved: bool) -> Shape {
+        let start = Shape {
+            curved,
+            ..Shape::default()
+        };
+        steps
+            .iter()
+            .fold(start, |shape, &step| shape.then(step, has_vertices))
     }
 
     /// The shape of this sequence followed by `step`.
@@ -62,16 +69,18 @@ impl Shape {
             refracts: self.refracts || step.kind == StepKind::Refract,
             vertices: self.vertices
                 || (step.kind == StepKind::Reflect && has_vertices[step.interface]),
+            curved: self.curved,
         }
     }
 }
 
 /// The strategy that lists the arrivals of kind `kind` of the (non-empty) sequences of shape
 /// `shape`, or `None` where the search lists none (`vertex` arrivals not asked for, or a
-/// reflect-only sequence without vertices). The direct ray (no steps) is the beam tree's root.
+/// reflect-only sequence without vertices). The direct ray (no steps) is the beam tree's root,
+/// and the walk's in a scene with curved legs.
 pub(crate) fn owner(shape: Shape, kind: ArrivalKind, options: &SearchOptions) -> Option<Strategy> {
     match kind {
-        ArrivalKind::Specular if shape.refracts => Some(Strategy::Walk),
+        ArrivalKind::Specular if shape.refracts || shape.curved => Some(Strategy::Walk),
         ArrivalKind::Specular => Some(Strategy::BeamTree),
         ArrivalKind::Vertex => {
             (options.vertex && (shape.refracts || shape.vertices)).then_some(Strategy::Walk)
@@ -90,7 +99,7 @@ pub(crate) fn walk_may_extend(
     vertex_ahead: bool,
     refraction_ahead: impl FnOnce() -> bool,
 ) -> bool {
-    shape.refracts || vertex_ahead || refraction_ahead()
+    shape.refracts || shape.curved || vertex_ahead || refraction_ahead()
 }
 
 /// What `strategy` lists of a sequence of shape `shape`: which kinds of arrival.
@@ -166,24 +175,28 @@ mod tests {
     /// exactly once for its specular arrivals, and, when asked for, for its `vertex` ones
     /// exactly where some step can hold a path on a vertex (a refraction through any
     /// interface, a reflection off one with vertices); the beam tree claims exactly the
-    /// reflect-only sequences' specular arrivals, which is what it walks.
+    /// reflect-only sequences' specular arrivals, which is what it walks, and none in a scene
+    /// with curved legs (where the direct ray is the walk's too).
     #[test]
     fn every_sequence_is_claimed_exactly_once() {
         let has_vertices = [false, true, false];
         let all = sequences(3, 4);
         assert_eq!(all.len(), 1 + 6 + 36 + 216 + 1296);
         let mut counted = 0;
-        for vertex in [false, true] {
+        for (vertex, curved) in [(false, false), (true, false), (false, true), (true, true)] {
             let options = options(3, vertex);
+            let direct = Shape::of(&[], &has_vertices, curved);
+            let walk = Claim::of(Strategy::Walk, direct, &options);
+            assert_eq!(walk.specular, curved, "the direct ray");
             for steps in all.iter().filter(|s| !s.is_empty()) {
-                let shape = Shape::of(steps, &has_vertices);
+                let shape = Shape::of(steps, &has_vertices, curved);
                 let claims = [Strategy::BeamTree, Strategy::Walk]
                     .map(|strategy| Claim::of(strategy, shape, &options));
                 let specular = claims.iter().filter(|c| c.specular).count();
                 let vertices = claims.iter().filter(|c| c.vertex).count();
                 assert_eq!(specular, 1, "{steps:?}");
                 let reflect_only = steps.iter().all(|s| s.kind == StepKind::Reflect);
-                assert_eq!(claims[0].specular, reflect_only, "{steps:?}");
+                assert_eq!(claims[0].specular, reflect_only && !curved, "{steps:?}");
                 let holds = steps
                     .iter()
                     .any(|s| s.kind == StepKind::Refract || has_vertices[s.interface]);
@@ -192,7 +205,7 @@ mod tests {
                 counted += 1;
             }
         }
-        assert_eq!(counted, 2 * (all.len() - 1));
+        assert_eq!(counted, 4 * (all.len() - 1));
     }
 
     /// The walk's rule "need" against the partition, by brute force: for every prefix of up
@@ -205,7 +218,12 @@ mod tests {
     fn the_walk_prunes_exactly_what_is_not_its_own() {
         let has_vertices = [false, true];
         let mut cases = 0;
-        for (reflect, refract) in [(true, false), (false, true), (true, true)] {
+        for (reflect, refract, curved) in [
+            (true, false, false),
+            (false, true, false),
+            (true, true, false),
+            (true, false, true),
+        ] {
             for vertex in [false, true] {
                 for interfaces in [vec![0], vec![1], vec![0, 1]] {
                     let options = SearchOptions {
@@ -235,10 +253,9 @@ mod tests {
                             .filter(|s| s.iter().all(|t| choices.contains(t)))
                     };
                     for prefix in over(3).filter(|s| !s.is_empty()) {
-                        let shape = prefix
-                            .iter()
-                            .fold(Shape::default(), |s, &t| s.then(t, &has_vertices));
-                        assert_eq!(shape, Shape::of(&prefix, &has_vertices));
+                        let start = Shape::of(&[], &has_vertices, curved);
+                        let shape = prefix.iter().fold(start, |s, &t| s.then(t, &has_vertices));
+                        assert_eq!(shape, Shape::of(&prefix, &has_vertices, curved));
                         let extended = over(3).any(|more| {
                             let whole = more.iter().fold(shape, |s, &t| s.then(t, &has_vertices));
                             Claim::of(Strategy::Walk, whole, &options).any()
@@ -250,6 +267,6 @@ mod tests {
                 }
             }
         }
-        assert!(cases >= 300, "{cases} prefixes");
+        assert!(cases >= 340, "{cases} prefixes");
     }
 }

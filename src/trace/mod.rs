@@ -17,7 +17,7 @@ use rayon::prelude::*;
 use crate::geom::Point;
 use crate::problem::ProblemRef;
 use crate::regions::Regions;
-use crate::scene::{MAX_COORDINATE, Scene, SceneError};
+use crate::scene::{MAX_COORDINATE, Scene, SceneError, Step};
 use crate::solver::{NewtonOptions, NewtonWorkspace, solve};
 
 mod amplitude;
@@ -642,15 +642,74 @@ impl Tracer {
                 }
             }
         }
-        let lookup = spec.media.is_none();
-        if let Some(m) = &spec.media {
-            ws.ray.media.extend_from_slice(m);
-        } else if let Err(reason) = self.lookup_media(path, source, src_medium, ws) {
-            // All leg media or none, as a batch records them (not those found before the gap).
-            ws.ray.media.clear();
+        if let (Some(reason), Some(media)) = (beyond, &spec.media) {
+            // Only with media given: the ray records them.
+            ws.ray.media.extend_from_slice(media);
             return RayRecord::failed(Status::NoPath, reason);
         }
-        if let Some(reason) = beyond {
+        let sequence = Sequence::of(scene, path);
+        self.settle(
+            sequence,
+            spec.media.as_deref(),
+            source,
+            src_medium,
+            receiver,
+            start,
+            ws,
+        )
+    }
+
+    /// Leg media into `ws`: `media` when given, else from the regions at the points of `ws`
+    /// (all of them or none, as a batch records them: not those found before a gap).
+    fn leg_media(
+        &self,
+        steps: &[Step],
+        media: Option<&[usize]>,
+        source: Point,
+        src_medium: Option<usize>,
+        ws: &mut Workspace,
+    ) -> Result<(), Reason> {
+        if let Some(m) = media {
+            ws.ray.media.extend_from_slice(m);
+            return Ok(());
+        }
+        let found = classify::lookup_media(
+            self.regions.as_ref(),
+            &self.scene,
+            source,
+            src_medium,
+            steps,
+            &ws.newton,
+            &mut ws.ray.media,
+        );
+        if found.is_err() {
+            ws.ray.media.clear();
+        }
+        found
+    }
+
+    /// The general solve from the start in `ws` (its points placed): the leg media (given, or
+    /// looked up again at the solution until they settle), the Newton solve and the
+    /// classification of `sequence` (a path of the scene, or any sequence of steps through
+    /// curved legs).
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "a ray's ends, its sequence and media, its start and its workspace"
+    )]
+    fn settle(
+        &self,
+        sequence: Sequence<'_>,
+        media: Option<&[usize]>,
+        source: Point,
+        src_medium: Option<usize>,
+        receiver: Point,
+        start: Start,
+        ws: &mut Workspace,
+    ) -> RayRecord {
+        let scene = &*self.scene;
+        let steps = sequence.steps;
+        let lookup = media.is_none();
+        if let Err(reason) = self.leg_media(steps, media, source, src_medium, ws) {
             return RayRecord::failed(Status::NoPath, reason);
         }
         ws.ray
@@ -658,7 +717,7 @@ impl Tracer {
             .extend(ws.ray.media.iter().map(|&m| scene.media()[m].slowness));
         ws.ray.set_curved(scene, source);
         if let Start::Default = start {
-            refraction_guess(scene, &spec.steps, source, receiver, self.guess, ws);
+            refraction_guess(scene, steps, source, receiver, self.guess, ws);
         }
 
         let mut total_iterations = 0;
@@ -666,7 +725,7 @@ impl Tracer {
         let sol = loop {
             let g = ProblemRef {
                 scene,
-                steps: &spec.steps,
+                steps,
                 slowness: &ws.ray.slowness,
                 curved: &ws.ray.curved,
                 source,
@@ -684,7 +743,7 @@ impl Tracer {
             }
             // Media must match the solution's geometry: look them up again at the final points.
             std::mem::swap(&mut ws.ray.media, &mut ws.ray.media_prev);
-            if let Err(reason) = self.lookup_media(path, source, src_medium, ws) {
+            if let Err(reason) = self.leg_media(steps, None, source, src_medium, ws) {
                 std::mem::swap(&mut ws.ray.media, &mut ws.ray.media_prev);
                 return RayRecord::untimed(Status::NoPath, reason, &sol);
             }
@@ -703,9 +762,9 @@ impl Tracer {
         };
         let sequence = Sequence {
             curved: &ws.ray.curved,
-            ..Sequence::of(scene, path)
+            ..sequence
         };
-        cx.classifier.classify(
+        self.classifier.classify(
             scene,
             sequence,
             source,
@@ -716,24 +775,43 @@ impl Tracer {
         )
     }
 
-    /// Leg media of path `path`'s points in `ws` from the regions
-    /// ([`classify::lookup_media`]).
-    fn lookup_media(
+    /// One ray of the step sequence `steps` (not necessarily a path of the scene) in a scene
+    /// with curved legs, from the start `guess` (one arclength parameter per step; the
+    /// default start without steps), its leg media `media` or looked up from `src_medium` at
+    /// the source: the general solve, as a path of these steps solves from that start.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "a ray's ends, its sequence and media, its start and its workspace"
+    )]
+    pub(crate) fn solve_steps_curved(
         &self,
-        path: usize,
+        steps: &[Step],
+        media: Option<&[usize]>,
         source: Point,
         src_medium: Option<usize>,
+        receiver: Point,
+        guess: &[f64],
         ws: &mut Workspace,
-    ) -> Result<(), Reason> {
-        classify::lookup_media(
-            self.regions.as_ref(),
-            &self.scene,
-            source,
-            src_medium,
-            &self.scene.paths()[path].steps,
-            &ws.newton,
-            &mut ws.ray.media,
-        )
+    ) -> RayRecord {
+        let k = steps.len();
+        ws.resize(k);
+        ws.ray.slowness.clear();
+        ws.ray.curved.clear();
+        ws.ray.media.clear();
+        ws.ray.points.clear();
+        let start = if k == 0 {
+            initial_guess(&self.scene, steps, source, receiver, ws);
+            Start::Default
+        } else {
+            given_start(&self.scene, steps, guess, &mut ws.newton);
+            Start::Given(guess)
+        };
+        let sequence = Sequence {
+            steps,
+            path: None,
+            curved: &[],
+        };
+        self.settle(sequence, media, source, src_medium, receiver, start, ws)
     }
 }
 

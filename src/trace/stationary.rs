@@ -116,7 +116,7 @@ impl Tracer {
             return Ok(self.walled_stationary_paths(path, m, &profile, source, receiver, out));
         }
         if self.scene.curved() {
-            let outcome = self.curved_stationary_paths(source, receiver, path, out);
+            let outcome = self.curved_stationary_paths(source, receiver, path, run, out);
             self.arrival_amplitudes(&spec.steps, out);
             return Ok(outcome);
         }
@@ -135,24 +135,62 @@ impl Tracer {
         Ok(search)
     }
 
-    /// [`stationary_paths`](Self::stationary_paths) in a scene with curved legs: Newton from
-    /// a grid of starts over the interfaces ([`CURVED_STARTS`] in all, the same number along
-    /// each step's polyline, at the middles of equal pieces of its length), each distinct
-    /// ray with a time kept (points within 1e-8 of the path's length are one ray), ordered
-    /// by time. The complete search's leaf problems are convex only for straight legs (with
-    /// arcs one sequence can have a minimum and a saddle on the same segments), so this
-    /// search is not a proof: its outcome is never `complete`, and a ray without an arrival
-    /// says `search_limit`, not `no_path`. A direct ray (no steps) has its one arc.
+    /// [`stationary_paths`](Self::stationary_paths) in a scene with curved legs: the path's
+    /// steps and media through [`curved_paths_of`](Self::curved_paths_of).
     fn curved_stationary_paths(
         &self,
         source: Point,
         receiver: Point,
         path: usize,
+        run: &Run,
         out: &mut Vec<Arrival>,
     ) -> SearchOutcome {
         let spec = &self.scene.paths()[path];
-        let k = spec.steps.len();
         let source_medium = self.source_medium(spec.media.is_some(), source);
+        let budget = SearchBudget {
+            tuples: usize::MAX,
+            work: usize::MAX,
+        };
+        self.curved_paths_of(
+            &spec.steps,
+            spec.media.as_deref(),
+            source,
+            source_medium,
+            receiver,
+            budget,
+            run,
+            out,
+        )
+    }
+
+    /// Every stationary path of the step sequence `steps` in a scene with curved legs into
+    /// `out` (emptied first): Newton from a grid of starts over the interfaces
+    /// ([`CURVED_STARTS`] in all, the same number along each step's polyline, at the middles
+    /// of equal pieces of its length), its media `media` or looked up from `source_medium`,
+    /// each distinct ray with a time kept (points within 1e-8 of the path's length are one
+    /// ray), ordered by time. The complete search's leaf problems are convex only for
+    /// straight legs (with arcs one sequence can have a minimum and a saddle on the same
+    /// segments), so this search is not a proof: its outcome is never `complete` (but for
+    /// the direct ray, which has its one arc), and a ray without an arrival says
+    /// `search_limit`, not `no_path`. `run` is asked before each solve (its iterations the
+    /// work), and the search stops, not complete, where `budget`'s work is spent.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "a ray's ends, its sequence and media, the search's limit and its output"
+    )]
+    pub(crate) fn curved_paths_of(
+        &self,
+        steps: &[crate::scene::Step],
+        media: Option<&[usize]>,
+        source: Point,
+        source_medium: Option<usize>,
+        receiver: Point,
+        budget: SearchBudget,
+        run: &Run,
+        out: &mut Vec<Arrival>,
+    ) -> SearchOutcome {
+        out.clear();
+        let k = steps.len();
         let mut ws = Workspace::new();
         let per_step = if k == 0 {
             1
@@ -167,7 +205,11 @@ impl Tracer {
         let mut guess = vec![0.0; k];
         let mut index = vec![0usize; k];
         for _ in 0..starts {
-            for (i, step) in spec.steps.iter().enumerate() {
+            if outcome.work >= budget.work || !run.keep_going(options::Progress::work(1)) {
+                outcome.complete = false;
+                break;
+            }
+            for (i, step) in steps.iter().enumerate() {
                 let line = &self.scene.interfaces()[step.interface].polyline;
                 guess[i] = line.length() * (index[i] as f64 + 0.5) / per_step as f64;
             }
@@ -179,12 +221,15 @@ impl Tracer {
                 }
                 *i = 0;
             }
-            let start = if k == 0 {
-                super::Start::Default
-            } else {
-                super::Start::Given(&guess)
-            };
-            let record = self.solve_planned(source, source_medium, receiver, path, start, &mut ws);
+            let record = self.solve_steps_curved(
+                steps,
+                media,
+                source,
+                source_medium,
+                receiver,
+                &guess,
+                &mut ws,
+            );
             outcome.solves += 1;
             outcome.work += record.iterations as usize;
             if !record.status.has_time() {

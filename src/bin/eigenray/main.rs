@@ -828,12 +828,13 @@ fn search(tracer: &Tracer) -> Result<eigenray::search::SearchReport, Failure> {
         started.elapsed().as_secs_f64(),
         report.beams
     );
-    search_bounds(&mut line, report.work, options);
+    search_bounds(&mut line, report.work, scene.curved(), options);
     if report.incomplete_pairs > 0 {
         let _ = write!(
             line,
-            "; {} pairs stopped at a limit (their arrivals say complete: false)",
-            report.incomplete_pairs
+            "; {} pairs {} (their arrivals say complete: false)",
+            report.incomplete_pairs,
+            short_pairs(scene)
         );
     }
     let _ = write!(line, "; {}", unreached_pairs(scene, &report.arrivals));
@@ -841,11 +842,32 @@ fn search(tracer: &Tracer) -> Result<eigenray::search::SearchReport, Failure> {
     Ok(report)
 }
 
+/// What the summary line says of a search's short pairs: a limit stopped them, or, through
+/// curved legs, the search (from a grid of starts) is no proof.
+fn short_pairs(scene: &eigenray::Scene) -> &'static str {
+    if scene.curved() {
+        "searched through curved legs from a grid of starts (no proof)"
+    } else {
+        "stopped at a limit"
+    }
+}
+
 /// The summary line's middle, shared by the listing and the streamed search: the walk's work
-/// on refracting sequences (when any) and the search's bounds.
-fn search_bounds(line: &mut String, work: u64, options: &eigenray::scene::SearchOptions) {
+/// on refracting sequences (every sequence through curved legs) when any, and the search's
+/// bounds.
+fn search_bounds(
+    line: &mut String,
+    work: u64,
+    curved: bool,
+    options: &eigenray::scene::SearchOptions,
+) {
     if work > 0 {
-        let _ = write!(line, ", {work} units of work on refracting sequences");
+        let what = if curved {
+            "sequences"
+        } else {
+            "refracting sequences"
+        };
+        let _ = write!(line, ", {work} units of work on {what}");
     }
     match (options.max_steps, options.max_time) {
         (Some(k), Some(t)) => _ = write!(line, "; up to {k} steps and time {t}"),
@@ -882,12 +904,13 @@ fn search_streamed(
         started.elapsed().as_secs_f64(),
         report.beams
     );
-    search_bounds(&mut line, report.work, options);
+    search_bounds(&mut line, report.work, scene.curved(), options);
     if report.incomplete_pairs > 0 {
         let _ = write!(
             line,
-            "; {} pairs stopped at a limit (their sums may miss arrivals)",
-            report.incomplete_pairs
+            "; {} pairs {} (their sums may miss arrivals)",
+            report.incomplete_pairs,
+            short_pairs(scene)
         );
     }
     eprintln!("{line}");
