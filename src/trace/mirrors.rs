@@ -48,6 +48,12 @@
 //! so that a path the validation would accept is never pruned by rounding; the per-path
 //! validation alone decides. Where the side of a wall's line an image lies on is within that
 //! margin, the child's beam is the whole plane (no pruning below it).
+//!
+//! One pruning relies on exact geometry instead ([`MirrorWalls::degenerate`]): a thin child
+//! whose window, clipped again without any margin, is empty or one point holds only rays
+//! through a corner, which no valid path follows; certain but for the round-off of that
+//! clip (1e-15 of the coordinates). It removes the slivers that the margins alone keep where
+//! a beam's edge runs exactly through a corner.
 
 use crate::geom::{Aabb, Point, Vec2, orient};
 use crate::leg::Uniform;

@@ -354,7 +354,7 @@ fn grid_room(rng: &mut crate::demo::SplitMix64) -> super::tests::Room {
         let i = p.x.floor() as usize;
         p.x > 0.0 && p.x < columns as f64 && p.y > 0.0 && p.y < heights[i.min(columns - 1)]
     };
-    let mut point = |rng: &mut crate::demo::SplitMix64| loop {
+    let point = |rng: &mut crate::demo::SplitMix64| loop {
         let p = Point::new(
             (rng.next_u64() % (4 * columns as u64)) as f64 / 4.0
                 + 0.125 * (rng.next_u64() % 2) as f64,
