@@ -48,6 +48,12 @@
 //! so that a path the validation would accept is never pruned by rounding; the per-path
 //! validation alone decides. Where the side of a wall's line an image lies on is within that
 //! margin, the child's beam is the whole plane (no pruning below it).
+//!
+//! One pruning relies on exact geometry instead ([`MirrorWalls::degenerate`]): a thin child
+//! whose window, clipped again without any margin, is empty or one point holds only rays
+//! through a corner, which no valid path follows; certain but for the round-off of that
+//! clip (1e-15 of the coordinates). It removes the slivers that the margins alone keep where
+//! a beam's edge runs exactly through a corner.
 
 use crate::geom::{Aabb, Point, Vec2, orient};
 use crate::leg::Uniform;
@@ -385,6 +391,15 @@ fn segment_distance(x: Point, a: Point, b: Point) -> f64 {
     }
 }
 
+/// The angle (radians, up to a factor near 1 for thin ones) that segment `a–b` subtends
+/// from `x`: `|sin|` of the angle between the rays to its ends.
+#[inline(always)]
+fn subtends(x: Point, a: Point, b: Point) -> f64 {
+    let (u, v) = (a - x, b - x);
+    let d = u.length() * v.length();
+    if d > 0.0 { u.cross(v).abs() / d } else { 0.0 }
+}
+
 /// The bounds of one search, fixed at its start: the margin of the beam tests and the time
 /// bound's test.
 #[derive(Clone, Copy, Debug)]
@@ -399,7 +414,17 @@ struct Bounds {
     /// part to the receivers' box ([`Bounds::late_through`]); off only in tests, to show it
     /// changes no arrival.
     through: bool,
+    /// Whether a child is also pruned where its window, clipped without the margins, holds
+    /// no ray or only the rays through one point ([`MirrorWalls::degenerate`]); off only in
+    /// tests, to show it changes no arrival.
+    degenerate: bool,
 }
+
+/// The widest angle (radians) a child's window may subtend from its image and still be
+/// tested by [`MirrorWalls::degenerate`]: a window the margins alone keep is far narrower
+/// (their width over the beam's length, some 1e-6 here), and a wider one is not worth the
+/// test.
+const THIN: f64 = 1e-4;
 
 /// The most halvings [`Bounds::late_through`] makes of a wall's part.
 const THROUGH_STEPS: u32 = 24;
@@ -732,6 +757,7 @@ impl MirrorWalls {
             receivers: Aabb::around(search.receivers),
             reach,
             through: true,
+            degenerate: true,
         }
     }
 
@@ -744,7 +770,7 @@ impl MirrorWalls {
         node: &Node,
         w: usize,
         bounds: &Bounds,
-        occlusion: Option<&mut Vec<[f64; 2]>>,
+        mut occlusion: Option<&mut Vec<[f64; 2]>>,
         work: &mut u64,
     ) -> Option<Node> {
         let wall = &self.walls[w];
@@ -764,7 +790,7 @@ impl MirrorWalls {
                 range = restrict(range, gp.values[c], gq.values[c], margin)?;
             }
         }
-        if let Some(shadows) = occlusion
+        if let Some(shadows) = occlusion.as_deref_mut()
             && let Some(window) = self.window(node)
         {
             let target = Target {
@@ -783,6 +809,12 @@ impl MirrorWalls {
         let image = node.image - wall.n * (2.0 * h);
         let (a, b) = (wall.at(range[0]), wall.at(range[1]));
         if bounds.late(image, Some((a, b))) {
+            return None;
+        }
+        if bounds.degenerate
+            && subtends(image, a, b) < THIN
+            && self.degenerate(node, w, image, occlusion)
+        {
             return None;
         }
         // Where the image's side of the line is not certain, the beam is the whole plane.
@@ -808,6 +840,66 @@ impl MirrorWalls {
 }
 
 impl MirrorWalls {
+    /// Whether the window of `node`'s child through wall `w` (its image `image`), clipped by the node's beam
+    /// and (with `occlusion`) by the shadows with no margin at all, is empty or one point
+    /// (its two ends the same point, or on one ray from the child's image).
+    ///
+    /// Such a child holds no path the validation accepts, but through round-off of its clip
+    /// (below 1e-15 of the coordinates): its every ray reaches the wall outside the node's
+    /// beam, which is already wider than the exact one by the margins, or is hidden, or passes
+    /// through the one point where the window's ends meet. That point is a corner: a wall's
+    /// end, where a reflection is no path (but at a free end, which keeps the child: the
+    /// window then holds that end), or an occluder's end that the ray touches, and a leg that
+    /// touches an interface crosses it for the classifier; below such a child every ray
+    /// passes through the same corner. These children are the slivers the margins alone keep
+    /// where a beam's edge runs exactly through a corner (a room of right angles and round
+    /// coordinates has many): each splits again at the next corner its ray meets exactly, so
+    /// their number grows exponentially with the path length while the arrivals grow as its
+    /// square.
+    fn degenerate(
+        &self,
+        node: &Node,
+        w: usize,
+        image: Point,
+        occlusion: Option<&mut Vec<[f64; 2]>>,
+    ) -> bool {
+        let wall = &self.walls[w];
+        let mut range = [0.0, 1.0];
+        if let Some(beam) = &node.beam {
+            let last = &self.walls[node.wall];
+            let gp = beam.gauge(last, node.image, wall.p, 0.0);
+            let gq = beam.gauge(last, node.image, wall.q, 0.0);
+            for c in 0..3 {
+                match restrict(range, gp.values[c], gq.values[c], 0.0) {
+                    Some(r) => range = r,
+                    None => return true,
+                }
+            }
+        }
+        if let Some(shadows) = occlusion
+            && let Some(window) = self.window(node)
+        {
+            let target = Target {
+                own: wall.own,
+                p: wall.p,
+                q: wall.q,
+                n: wall.n,
+            };
+            match self
+                .occluders
+                .unhidden(&window, &target, range, 0.0, shadows)
+            {
+                Some(r) => range = r,
+                None => return true,
+            }
+        }
+        let (a, b) = (wall.at(range[0]), wall.at(range[1]));
+        if (range[0] == 0.0 && wall.open[0]) || (range[1] == 1.0 && wall.open[1]) {
+            return false;
+        }
+        a == b || (a - image).cross(b - image) == 0.0
+    }
+
     /// Where the legs of `node`'s children start, for their occlusion: the source at the
     /// root, the beam's part of its wall below it; `None` where its beam is the whole plane.
     fn window(&self, node: &Node) -> Option<Window> {
@@ -1071,10 +1163,10 @@ mod tests {
 
     /// A room: its corners (counter-clockwise, each wall from one corner to the next), its
     /// sources and receivers.
-    struct Room {
-        corners: Vec<Point>,
-        sources: Vec<Point>,
-        receivers: Vec<Point>,
+    pub(super) struct Room {
+        pub(super) corners: Vec<Point>,
+        pub(super) sources: Vec<Point>,
+        pub(super) receivers: Vec<Point>,
     }
 
     /// Whether `x` lies inside the polygon `corners` (even-odd rule).
@@ -1119,7 +1211,12 @@ mod tests {
     /// A random room of kind `kind` (0: a convex polygon of 5 to 8 walls on an ellipse; 1, 2,
     /// 3: an L, a U or a T with jittered corners), turned and moved at random, with
     /// `sources` sources and `receivers` receivers inside.
-    fn random_room(kind: usize, sources: usize, receivers: usize, rng: &mut SplitMix64) -> Room {
+    pub(super) fn random_room(
+        kind: usize,
+        sources: usize,
+        receivers: usize,
+        rng: &mut SplitMix64,
+    ) -> Room {
         let mut r = |lo: f64, hi: f64| lo + (hi - lo) * rng.next_f64();
         let shape: Vec<[f64; 2]> = match kind {
             0 => {
@@ -1216,7 +1313,7 @@ mod tests {
 
     /// The room as a scene: wall `i` the interface `w{i}` from corner `i` to the next, medium
     /// `air` (speed 343) inside, and `paths` (wall sequences) with their media given.
-    fn room_scene(room: &Room, paths: &[Vec<usize>]) -> Scene {
+    pub(super) fn room_scene(room: &Room, paths: &[Vec<usize>]) -> Scene {
         let n = room.corners.len();
         let xy = |p: &Point| [p.x, p.y];
         let interfaces: serde_json::Map<String, serde_json::Value> = (0..n)
