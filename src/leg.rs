@@ -552,7 +552,7 @@ impl ArcLeg {
     /// with `k` [`asinh_gap`]: no division by `g` (at `G = 0`, `−ℓ (a + b) / (2 c₀²)`). Zero
     /// for a vanished leg.
     pub fn medium_derivatives(&self, a: Vec2, b: Vec2) -> (f64, Vec2) {
-        if !(self.len > 0.0) {
+        if self.len.is_nan() || self.len <= 0.0 {
             return (0.0, Vec2::default());
         }
         let [ca, cb] = self.speeds;
