@@ -15,9 +15,9 @@ Two changes to the benchmark's scene, and why:
 The receivers are a line at DEPTH m from 1 to 5 km every STEP m. Without diffraction the TL
 jumps where an arrival switches off at a corner's shadow or reflection boundary (the
 bottom-reflected ray that grazes the corner at 1.5 km or 3.5 km); with it the corner's
-diffracted arrival fills the jump (first-order: the boundaries of the direct and
-once-reflected fields; those of paths with other reflections before or after the corner
-are not filled, since the search does not generate such paths yet).
+diffracted arrivals fill the jumps: the search lists every path of reflections, one
+diffraction and reflections (within `max_steps` and `max_time`), so the boundaries of paths
+with surface and bottom bounces before or after the corner are filled too.
 
 How to run (the Python package built, matplotlib installed):
   python benches/diffraction_tl.py [DEPTH] [STEP]
@@ -113,7 +113,8 @@ def main():
     top.set_ylabel("transmission loss (dB)")
     top.set_xlabel("range (km)")
     top.set_title(f"Sloping bottom (rigid), 100 Hz, receivers at {depth:g} m depth: TL without "
-                  "and with the search's (first-order) diffraction\ndotted: where the once "
+                  "and with the search's diffraction (reflections before and after it)\n"
+                  "dotted: where the once "
                   "bottom-reflected ray grazes the 1.5 km corner; below, 6 m about each",
                   fontsize=9)
     top.legend(fontsize=8, loc="lower left")
@@ -130,8 +131,8 @@ def main():
         ax.set_ylabel("TL (dB)")
         which = "flat part's" if k == 0 else "slope's"
         ax.set_title(f"the {which} reflection {'ends' if k == 0 else 'begins'} at {x:.1f} m "
-                     "\n(the other steps: paths with more reflections that "
-                     "graze a corner,\nwhose diffraction the search does not list yet)", fontsize=8)
+                     "\n(the red curve's other steps: paths with more reflections that graze\n"
+                     "a corner, filled by their reflected and diffracted paths)", fontsize=8)
         ax.grid(alpha=0.3)
     out = ROOT / "docs" / "diffraction_tl.png"
     fig.savefig(out, dpi=100)

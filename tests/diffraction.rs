@@ -766,9 +766,8 @@ fn wedge_total_field_matches_the_eigenfunction_series() {
 /// specular arrivals plus that diffracted one sum to the 2N-term image sum
 /// `Σ ±e^(ikR)/(4πR)` (the images at angles `2mα ± θ₀`, the reflected ones negated for
 /// pressure-release faces) to round-off. The faces' far open ends (wedges of 2π at 100 units)
-/// diffract for real, and are left out of both sides (`max_time` 50 keeps them out of the
-/// search: their paths with several reflections near the corner would leave the complete
-/// search of their pieces undecided by its thresholds). Every pair's search is complete (with
+/// diffract for real, and are left out of both sides (with the reflections around them that
+/// the search lists with them). Every pair's search is complete (with
 /// `vertex` arrivals off: see docs/method.md for why the walk of edge-held arrivals is not).
 #[test]
 fn ideal_wedges_diffract_nothing_and_their_field_is_the_image_sum() {
@@ -795,7 +794,7 @@ fn ideal_wedges_diffract_nothing_and_their_field_is_the_image_sum() {
                      "interfaces": {{ "wedge": {{ "points": [[{face:e}, 0], [0, 0], [{:e}, {:e}]],
                                                   "reflection": "{law}" }} }},
                      "sources": [[{:e}, {:e}]], "receivers": [{}],
-                     "search": {{ "max_steps": {big_n}, "max_time": 50, "refract": false, "diffraction": true }},
+                     "search": {{ "max_steps": {big_n}, "refract": false, "diffraction": true }},
                      "amplitudes": {{ "source": "point", "frequency": {:e} }} }}"#,
                 far[0],
                 far[1],

@@ -147,6 +147,9 @@ impl Tracer {
                         &mut |beams| control.run.keep_going(Progress::work(beams)),
                     )
                 });
+                for list in &mut pieces {
+                    list.sort_by(|a, b| a.partial.time.total_cmp(&b.partial.time));
+                }
                 (pieces, stats.work, stats.stopped)
             })
             .collect();
@@ -202,7 +205,11 @@ impl Tracer {
                                 }
                                 let q = beam_arrival(&walls, 0, m, p);
                                 for &source in &sources {
+                                    // By time: the joined time is this sum, bit for bit.
                                     for b in &before[source].0[v] {
+                                        if b.partial.time + q.arrival.time > max_time {
+                                            break;
+                                        }
                                         if b.steps.len() + 1 + q.steps.len() > max_steps {
                                             continue;
                                         }

@@ -204,10 +204,12 @@ impl Tracer {
     /// The arrivals of one piece of a diffracted sequence (`sequence`: the steps between two
     /// diffractions, or before the first, or after the last) from `from` (in `medium`, or with
     /// `media` given) to `to`, into `out`: its complete search, or the straight leg of a piece
-    /// without steps. What [`diffracted_sequence`](Self::diffracted_sequence) combines, and what
-    /// the search's diffraction (`search/diffraction.rs`) calls piece by piece.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn piece_of(
+    /// without steps. What [`diffracted_sequence`](Self::diffracted_sequence) combines.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the complete search's arguments, passed through"
+    )]
+    fn piece_of(
         &self,
         sequence: Sequence<'_>,
         media: Option<&[usize]>,
