@@ -29,7 +29,9 @@ mod ray;
 pub use num_complex::Complex64;
 
 pub(crate) use diffraction::of_diffracted;
-pub(crate) use ray::{OnSegment, PathGeometry, caustics_of_path, of_one, of_path, of_profile};
+pub(crate) use ray::{
+    OnSegment, PathGeometry, UnfoldedLaws, caustics_of_path, of_one, of_path, of_profile,
+};
 
 /// The amplitude of one timed ray or arrival (the contract's `amplitude`, `spreading`,
 /// `coefficient` and `attenuation_db`), or why it has none.

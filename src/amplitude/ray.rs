@@ -651,6 +651,143 @@ fn walk_reflections(cx: Context<'_>, path: PathGeometry<'_>) -> Option<Walk> {
     })
 }
 
+/// The reflection law of one wall of a rectangular room, as [`UnfoldedLaws`] holds it.
+#[derive(Clone, Copy, Debug)]
+enum WallLaw {
+    /// A fixed coefficient.
+    Fixed(f64),
+    /// The plane-wave coefficient against the medium across the wall: the weights from the
+    /// room's medium to it, and the ratio of the slownesses (the room's over the other's).
+    Media { weights: Weights, ratio: f64 },
+}
+
+/// The reflection laws of the four walls of a rectangular room (x = 0, x = L₁, y = 0,
+/// y = L₂ in its local coordinates), for the amplitude of an image path in closed form
+/// ([`crate::trace::Unfolded`]: the reflections off each wall, the incidence angle on each
+/// pair of walls, the unfolded length).
+#[derive(Clone, Debug)]
+pub(crate) struct UnfoldedLaws<'a> {
+    scene: &'a Scene,
+    settings: &'a Amplitudes,
+    medium: usize,
+    laws: [WallLaw; 4],
+}
+
+impl<'a> UnfoldedLaws<'a> {
+    /// The laws of `walls` (each an interface and a segment) for paths in medium `medium`
+    /// from `inside` (a point inside the room): `None` where the closed form does not hold
+    /// or would not be the general pass's result to round-off: a scene with a gradient
+    /// medium (curved legs), an axisymmetric source (its width reads the path's points), a
+    /// `"media"` wall whose sides are not the same media all along its interface (or have
+    /// no medium across).
+    pub(crate) fn new(
+        scene: &'a Scene,
+        settings: &'a Amplitudes,
+        regions: Option<&Regions>,
+        medium: usize,
+        walls: [(usize, usize); 4],
+        inside: Point,
+    ) -> Option<UnfoldedLaws<'a>> {
+        if scene.curved() || settings.source == SourceModel::Axisymmetric {
+            return None;
+        }
+        let w = slowness(scene, medium).ok()?;
+        let mut laws = [WallLaw::Fixed(1.0); 4];
+        for (law, (interface, seg)) in laws.iter_mut().zip(walls) {
+            *law = match *settings.reflection.get(interface)? {
+                Reflection::Fixed(r) => WallLaw::Fixed(r),
+                Reflection::Media => {
+                    let regions = regions?;
+                    if regions.interface_sides(interface).len() != 1 {
+                        return None;
+                    }
+                    let line = &scene.interfaces().get(interface)?.polyline;
+                    if seg >= line.num_segments() {
+                        return None;
+                    }
+                    let s = line.segment(seg);
+                    let middle = s.start + (s.end - s.start) * 0.5;
+                    let step = Step {
+                        kind: StepKind::Reflect,
+                        interface,
+                    };
+                    let across = medium_across(Some(regions), line, &step, seg, inside, middle)?;
+                    let w_across = slowness(scene, across).ok()?;
+                    WallLaw::Media {
+                        weights: Weights::of(settings, [medium, across], [w, w_across]),
+                        ratio: w / w_across,
+                    }
+                }
+            };
+        }
+        Some(UnfoldedLaws {
+            scene,
+            settings,
+            medium,
+            laws,
+        })
+    }
+
+    /// The amplitude of the image path of `length` with `reflections[w]` reflections off
+    /// wall `w` (in the order of [`new`](Self::new)'s walls), meeting the first two at the
+    /// cosine `cos[0]` and the last two at `cos[1]` (`cos[0]² + cos[1]² = 1`): what
+    /// [`of_path`] gives the path through its points (`walk_reflections`: the spreading and
+    /// the attenuation of the unfolded length, each bounce's coefficient at its angle), to
+    /// round-off. The product of each wall's coefficient to the power of its reflections.
+    pub(crate) fn amplitude(&self, reflections: [u64; 4], cos: [f64; 2], length: f64) -> Amplitude {
+        let cx = Context {
+            scene: self.scene,
+            settings: self.settings,
+            regions: None,
+        };
+        let mut coefficient = Complex64::new(1.0, 0.0);
+        for (w, (&law, &n)) in self.laws.iter().zip(&reflections).enumerate() {
+            if n == 0 {
+                continue;
+            }
+            // The incidence's cosine, and the squared sine (the other pair's cosine).
+            let (c, sine) = if w < 2 {
+                (cos[0], cos[1])
+            } else {
+                (cos[1], cos[0])
+            };
+            let r = match law {
+                WallLaw::Fixed(r) => Complex64::new(r, 0.0),
+                WallLaw::Media { weights, ratio } => {
+                    weights.reflection(c, cos_across(ratio, sine * sine))
+                }
+            };
+            coefficient *= power(r, n);
+        }
+        let walk = Walk {
+            coefficient,
+            tube_num: 1.0,
+            tube_den: length,
+            out_of_plane: length,
+            attenuation_db: self.settings.attenuation[self.medium] * length,
+            l0: length,
+            w0: self.scene.media()[self.medium].slowness,
+            converted: None,
+        };
+        finish(cx, &[], &walk)
+    }
+}
+
+/// `z^n` by repeated squaring (about `2 log₂ n` products, each rounding once).
+fn power(mut z: Complex64, mut n: u64) -> Complex64 {
+    let mut out = Complex64::new(1.0, 0.0);
+    while n > 0 {
+        if n & 1 == 1 {
+            out *= z;
+        }
+        n >>= 1;
+        if n > 0 {
+            z *= z;
+        }
+    }
+    out
+}
+
 /// [`walk`] for a path whose legs may be curved (a scene with a gradient medium): the same
 /// pass, each leg from its model ([`crate::leg::LegMedium`], relative to the source), with
 /// what a straight leg has in closed form taken from the leg's Hessian blocks:

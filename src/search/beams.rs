@@ -8,7 +8,8 @@ use rayon::prelude::*;
 
 use crate::scene::{SearchOptions, Step, StepKind};
 use crate::trace::{
-    Arrival, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls, Tracer,
+    Arrival, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls, Status, Tracer,
+    Unfolded,
 };
 
 use super::{Control, SearchArrival, StreamedArrival};
@@ -100,16 +101,44 @@ impl Tracer {
         } else if let Some(sink) = control.sink {
             // Streamed: each path's amplitude from its points, in buffers reused path to path.
             let mut path = StreamScratch::default();
-            walls.arrivals(
-                &search,
-                scratch,
-                &mut |p: MirrorPath<'_>| {
-                    control.listed.stream();
-                    sink(path.arrival(self, walls, source, medium, p));
-                    true
-                },
-                progress,
-            )
+            let found = &mut |p: MirrorPath<'_>| {
+                control.listed.stream();
+                sink(path.arrival(self, walls, source, medium, p));
+                true
+            };
+            // In a rectangular room, the image paths in closed form where the amplitude has
+            // one (or the scene asks for none).
+            let laws = walls.room_walls(&search).map(|room| {
+                let places = room.map(|w| {
+                    let place = walls.place(w);
+                    (place.interface, place.segment)
+                });
+                self.unfolded_laws(medium, places, s)
+            });
+            match laws {
+                Some(laws) if laws.is_some() || scene.amplitudes().is_none() => {
+                    let unfolded = &mut |u: &Unfolded| {
+                        control.listed.stream();
+                        let amplitude = laws.as_ref().map(|laws| {
+                            let reflections = u.walls.map(|(_, n)| n);
+                            laws.amplitude(reflections, u.cos, u.length)
+                        });
+                        sink(StreamedArrival {
+                            source,
+                            receiver: u.receiver,
+                            steps: u.steps,
+                            diffractions: 0,
+                            vertical_reflections: 0,
+                            status: Status::Converged,
+                            time: u.time,
+                            amplitude,
+                        });
+                        true
+                    };
+                    walls.arrivals_unfolded(&search, scratch, found, unfolded, progress)
+                }
+                _ => walls.arrivals(&search, scratch, found, progress),
+            }
         } else {
             walls.arrivals(
                 &search,

@@ -44,7 +44,9 @@ pub(crate) use classify::{Classifier, Sequence};
 pub(crate) use complete::SearchBudget;
 pub use complete::{Arrival, Kink, SearchOutcome, StationaryError};
 pub(crate) use flat::SegmentFrame;
-pub(crate) use mirrors::{MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls};
+pub(crate) use mirrors::{
+    MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls, Unfolded,
+};
 pub use plan::Kernels;
 pub use result::{Ray, RayRecord, Reason, Status, Threshold};
 
