@@ -60,8 +60,8 @@ impl FractionalDelay {
     /// One `sin_cos` per arrival, not one per tap: with `x = ⌊x⌋ + f` each tap's delay is
     /// `d = n − f` for a whole `n`, so `sin πd = −(−1)ⁿ sin πf` and `1 − cos πd` is
     /// `2 sin²(πf/2)` for even `n` and `2 cos²(πf/2)` for odd `n` (both without
-    /// cancellation); `d` itself is the direct form's to the bit. Equal to [`sinc`] and
-    /// [`hilbert_sinc`] per tap to round-off (its tests).
+    /// cancellation); `d` itself is the direct form's to the bit. Equal to the direct form
+    /// (a sine per tap and pulse) per tap to round-off (its tests).
     pub fn add(&self, out: &mut [f64], position: f64, amplitude: Complex64) {
         if !position.is_finite() {
             return;
@@ -107,8 +107,10 @@ impl FractionalDelay {
     }
 }
 
-/// `sin(πd)/(πd)`: 1 at 0, exactly 0 at the other whole numbers.
-pub(crate) fn sinc(d: f64) -> f64 {
+/// `sin(πd)/(πd)`: 1 at 0, exactly 0 at the other whole numbers (the direct form, which
+/// the tests hold `FractionalDelay::add` to).
+#[cfg(test)]
+fn sinc(d: f64) -> f64 {
     if d == 0.0 {
         1.0
     } else if d.fract() == 0.0 {
@@ -119,8 +121,10 @@ pub(crate) fn sinc(d: f64) -> f64 {
 }
 
 /// The Hilbert transform of [`sinc`]: `(1 − cos πd)/(πd)`, written `2 sin²(πd/2)/(πd)` so that
-/// it keeps its precision near 0: exactly 0 at even whole numbers, `2/(πd)` at odd ones.
-pub(crate) fn hilbert_sinc(d: f64) -> f64 {
+/// it keeps its precision near 0: exactly 0 at even whole numbers, `2/(πd)` at odd ones (the
+/// direct form, as [`sinc`]).
+#[cfg(test)]
+fn hilbert_sinc(d: f64) -> f64 {
     if d.fract() == 0.0 {
         if (d * 0.5).fract() == 0.0 {
             0.0

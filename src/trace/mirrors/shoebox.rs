@@ -206,7 +206,7 @@ impl Line {
     /// of the line) from every y crossing. The crossings of one axis are `L / |d|` apart;
     /// the two closest of the two axes are found by merging them in order.
     fn clear(&self, room: &Shoebox, ends: f64, margin: f64) -> bool {
-        if !(ends > margin) {
+        if ends <= margin || ends.is_nan() {
             return false;
         }
         let [i, j] = self.cell;
@@ -350,7 +350,10 @@ impl MirrorWalls {
     /// (a corner, a vanished leg, a leg on the wall's line). Elsewhere the tree's validation
     /// keeps the path with the lattice's sequence (the crossings in order), so the two give
     /// the same arrivals, to round-off.
-    #[allow(clippy::too_many_arguments)]
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the tree's arguments and the closed forms' sink"
+    )]
     pub(super) fn room_arrivals(
         &self,
         room: &Shoebox,
@@ -937,11 +940,11 @@ mod tests {
         sr: &MirrorSearch<'_>,
         what: &str,
     ) -> (usize, usize) {
-        let (all, _) = listing(&walls, &sr, false);
+        let (all, _) = listing(walls, sr, false);
         let scratch = &mut MirrorScratch::default();
         let plain_stats =
-            Some(walls.arrivals(&sr, scratch, &mut |_: MirrorPath<'_>| true, &mut |_| true));
-        let (rest, closed, stats) = unfolded_listing(&walls, &sr);
+            Some(walls.arrivals(sr, scratch, &mut |_: MirrorPath<'_>| true, &mut |_| true));
+        let (rest, closed, stats) = unfolded_listing(walls, sr);
         assert_eq!(Some(stats), plain_stats, "{what}: stats");
         assert_eq!(rest.len() + closed.len(), all.len(), "{what}: count");
         // The rest as before, to the bit; the others in closed form.
