@@ -14,11 +14,14 @@ reference commit:
   (cd /tmp/base && cargo build --release --example response_reference)
   cargo build --release
   python3 benches/responses_at_scale.py /tmp/base/target/release/examples/response_reference [ROUNDS]
+      [--room-only | --tl-only] [--previous BINARY]
 
-ROUNDS (default 3) for the TL grids; the room (about a minute a run) runs once. A third
-argument `tl` runs the TL grids only:
+ROUNDS (default 3) for the TL grids; the room against the reference (about a minute a run)
+runs once. `--room-only` leaves the TL grids out, `--tl-only` the room. `--previous BINARY`
+(an `eigenray` built from another commit) times the room's ten listeners alternating with it,
+ROUNDS rounds, and compares the two responses (each listener's relative to its peak):
 
-  python3 benches/responses_at_scale.py REFERENCE 5 tl
+  python3 benches/responses_at_scale.py REFERENCE 5 --tl-only
 
 Reports per scene: CPU seconds (user + sys, median of ROUNDS alternating runs), the ratio,
 the peak resident memory of each (/usr/bin/time -f %M), and the largest difference of the
@@ -123,27 +126,62 @@ def bench(name, doc, kind, reference, rounds, tmp, new_doc=None):
         print("   ", compare_tl(new, ref) if kind == "tl" else compare_ir(new, ref))
 
 
+def per_listener(a, b, listeners):
+    """The largest difference of two responses (flat, `listeners` of equal length), each
+    listener's relative to its peak in `b`."""
+    n = len(b) // listeners
+    worst = 0.0
+    for k in range(listeners):
+        x, y = a[k * n:(k + 1) * n], b[k * n:(k + 1) * n]
+        peak = max(abs(v) for v in y)
+        worst = max(worst, max(abs(p - q) for p, q in zip(x, y)) / peak)
+    return worst
+
+
 def main():
-    reference = pathlib.Path(sys.argv[1])
-    rounds = int(sys.argv[2]) if len(sys.argv) > 2 else 3
-    only = sys.argv[3] if len(sys.argv) > 3 else None
+    args = sys.argv[1:]
+    previous = None
+    if "--previous" in args:
+        at = args.index("--previous")
+        previous = pathlib.Path(args[at + 1])
+        del args[at:at + 2]
+    room_only = "--room-only" in args
+    tl_only = "--tl-only" in args
+    args = [a for a in args if a not in ("--room-only", "--tl-only")]
+    reference = pathlib.Path(args[0])
+    rounds = int(args[1]) if len(args) > 1 else 3
     with tempfile.TemporaryDirectory() as tmp:
         tmp = pathlib.Path(tmp)
-        for name in ("shallow_water_tl_flat", "shallow_water_tl_slope"):
-            doc = json.loads((SCENES / f"{name}.json").read_text())
-            bench(name, doc, "tl", reference, rounds, tmp)
-        if only == "tl":
+        if not room_only:
+            for name in ("shallow_water_tl_flat", "shallow_water_tl_slope"):
+                doc = json.loads((SCENES / f"{name}.json").read_text())
+                bench(name, doc, "tl", reference, rounds, tmp)
+        if tl_only:
             return
         room = json.loads((SCENES / "room_response.json").read_text())
         one = dict(room, receivers=room["receivers"][:1])
-        # The room's tree takes about a minute a run: one round.
+        # The reference's tree takes about a minute a run: one round.
         bench("room_response_one_listener", one, "ir", reference, 1, tmp)
-        # Ten listeners: the new build alone (timed; the reference's row is one listener's).
+        # Ten listeners: the new build (the reference's row is one listener's), alternating
+        # with a previous build where given.
         ten = tmp / "room_ten.json"
         ten.write_text(json.dumps(room))
-        runs = [timed([NEW, "solve", ten, "--ir", tmp / "ten.npy"])]
-        print(f"room_response (10 listeners): {statistics.median(t for t, _ in runs):.3f} CPU s, "
+        new_cmd = [NEW, "solve", ten, "--ir", tmp / "ten.npy"]
+        runs, before = [], []
+        for _ in range(rounds if previous else 1):
+            if previous:
+                before.append(timed([previous, "solve", ten, "--ir", tmp / "ten.previous.npy"]))
+            runs.append(timed(new_cmd))
+        a = statistics.median(t for t, _ in runs)
+        print(f"room_response (10 listeners): {a:.3f} CPU s (runs {[t for t, _ in runs]}), "
               f"peak {max(m for _, m in runs) / 1024:.1f} MB")
+        if previous:
+            b = statistics.median(t for t, _ in before)
+            diff = per_listener(read_npy(tmp / "ten.npy"), read_npy(tmp / "ten.previous.npy"),
+                                len(room["receivers"]))
+            print(f"    previous build: {b:.3f} CPU s (runs {[t for t, _ in before]}), "
+                  f"peak {max(m for _, m in before) / 1024:.1f} MB: {b / a:.1f}x; "
+                  f"largest response difference {diff:.2e} of its listener's peak")
 
 
 if __name__ == "__main__":

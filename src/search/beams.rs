@@ -6,12 +6,12 @@
 
 use rayon::prelude::*;
 
-use crate::amplitude::Unfolded;
+use crate::amplitude::{Incidence, UnfoldedLaws};
 use crate::scene::SourceModel;
 use crate::scene::{SearchOptions, Step, StepKind};
 use crate::trace::{
-    Arrival, GuidePath, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls, Status,
-    Tracer, Waveguide,
+    Arrival, GuidePath, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls,
+    RoomPath, Status, Tracer, Waveguide,
 };
 
 use super::{Control, SearchArrival, StreamedArrival};
@@ -118,9 +118,14 @@ impl Tracer {
                     let amplitude = unfolded.and_then(|u| {
                         let x = receivers[p.receiver].x;
                         let width = Some(x.abs() * p.length / (x - source_x).abs());
-                        let closed = |checked| {
-                            u.amplitude(p.hits, p.length, p.along, p.across, width, checked)
+                        let along = p.along / p.length;
+                        let incidence = Incidence {
+                            cos: p.across / p.length,
+                            sin2: along * along,
                         };
+                        let hits = p.hits.map(|n| n as u64);
+                        let closed =
+                            |checked| u.amplitude(hits, [incidence; 2], p.length, width, checked);
                         closed(true).or_else(|| {
                             // Ill-conditioned in closed form: the tree's path, walked.
                             match walls.guide_path(guide, &search, &p, &mut walked) {
@@ -148,16 +153,55 @@ impl Tracer {
         } else if let Some(sink) = control.sink {
             // Streamed: each path's amplitude from its points, in buffers reused path to path.
             let mut path = StreamScratch::default();
-            walls.arrivals(
-                &search,
-                scratch,
-                &mut |p: MirrorPath<'_>| {
-                    control.listed.stream();
-                    sink(path.arrival(self, walls, source, medium, p));
-                    true
-                },
-                progress,
-            )
+            let found = &mut |p: MirrorPath<'_>| {
+                control.listed.stream();
+                sink(path.arrival(self, walls, source, medium, p));
+                true
+            };
+            // In a rectangular room, the image paths in closed form where the amplitude has
+            // one (or the scene asks for none).
+            let laws = walls.room_walls(&search).map(|room| {
+                let places = room.map(|w| {
+                    let place = walls.place(w);
+                    (place.interface, place.segment)
+                });
+                self.unfolded_laws(medium, places, s)
+            });
+            match laws {
+                Some(laws) if laws.is_some() || scene.amplitudes().is_none() => {
+                    let unfolded = &mut |u: &RoomPath| {
+                        control.listed.stream();
+                        let amplitude = laws.as_ref().and_then(|laws| {
+                            let reflections = u.walls.map(|(_, n)| n);
+                            // The x walls at one angle, the y walls at the other.
+                            let [x, y] = u.cos;
+                            let on_x = Incidence {
+                                cos: x,
+                                sin2: y * y,
+                            };
+                            let on_y = Incidence {
+                                cos: y,
+                                sin2: x * x,
+                            };
+                            let incidence = [on_x, on_x, on_y, on_y];
+                            laws.amplitude(reflections, incidence, u.length, None, false)
+                        });
+                        sink(StreamedArrival {
+                            source,
+                            receiver: u.receiver,
+                            steps: u.steps,
+                            diffractions: 0,
+                            vertical_reflections: 0,
+                            status: Status::Converged,
+                            time: u.time,
+                            amplitude,
+                        });
+                        true
+                    };
+                    walls.arrivals_unfolded(&search, scratch, found, unfolded, progress)
+                }
+                _ => walls.arrivals(&search, scratch, found, progress),
+            }
         } else {
             walls.arrivals(
                 &search,
@@ -189,7 +233,7 @@ impl Tracer {
         guide: &Waveguide,
         search: &MirrorSearch<'_>,
         medium: usize,
-    ) -> Option<Option<Unfolded<'_>>> {
+    ) -> Option<Option<UnfoldedLaws<'_, 2>>> {
         let scene = self.scene();
         if scene.curved() {
             return None;
@@ -207,9 +251,12 @@ impl Tracer {
                 return None;
             }
         }
-        let interfaces = guide.walls().map(|w| walls.place(w).interface);
+        let places = guide.walls().map(|w| {
+            let place = walls.place(w);
+            (place.interface, place.segment)
+        });
         let regions = self.regions();
-        Unfolded::new(scene, settings, regions, medium, interfaces, search.source).map(Some)
+        UnfoldedLaws::new(scene, settings, regions, medium, places, search.source).map(Some)
     }
 }
 

@@ -3,8 +3,8 @@
 //! stationary path and the search alike.
 
 use crate::amplitude::{
-    Amplitude, NoAmplitude, OnSegment, PathGeometry, caustics_of_path, of_diffracted, of_one,
-    of_path,
+    Amplitude, NoAmplitude, OnSegment, PathGeometry, UnfoldedLaws, caustics_of_path, of_diffracted,
+    of_one, of_path,
 };
 use crate::geom::Point;
 use crate::scene::Step;
@@ -154,6 +154,26 @@ impl Tracer {
             ));
         }
         Some(of_path(&self.scene, settings, self.regions.as_ref(), path))
+    }
+
+    /// The reflection laws of a rectangular room's walls (each an interface and a segment,
+    /// on the local lines x = 0, x = L₁, y = 0, y = L₂) for the amplitudes of its image paths
+    /// in closed form, in medium `medium` from `inside` (a point in the room): `None` where
+    /// the scene asks for no amplitudes or the closed form does not hold
+    /// ([`UnfoldedLaws::new`]), in a scene with a gradient medium (curved legs) and for an
+    /// axisymmetric source (its width reads the path's points).
+    pub(crate) fn unfolded_laws(
+        &self,
+        medium: usize,
+        walls: [(usize, usize); 4],
+        inside: Point,
+    ) -> Option<UnfoldedLaws<'_, 4>> {
+        let settings = self.scene.amplitudes()?;
+        if self.scene.curved() || settings.source == crate::scene::SourceModel::Axisymmetric {
+            return None;
+        }
+        let regions = self.regions.as_ref();
+        UnfoldedLaws::new(&self.scene, settings, regions, medium, walls, inside)
     }
 
     /// The amplitude of a ray that is not `converged`: none without a time, no value on a

@@ -66,6 +66,7 @@ use super::{Reason, Status};
 mod shoebox;
 use shoebox::Shoebox;
 mod waveguide;
+pub(crate) use shoebox::RoomPath;
 pub(crate) use waveguide::{GuidePath, Waveguide};
 
 /// The beam tests' margin, relative to the largest coordinate an image can have: each
@@ -615,13 +616,52 @@ impl MirrorWalls {
         found: &mut impl FnMut(MirrorPath<'_>) -> bool,
         progress: &mut impl FnMut(u64) -> bool,
     ) -> MirrorStats {
+        self.arrivals_with(search, scratch, found, None, progress)
+    }
+
+    /// [`MirrorWalls::arrivals`] for a caller that needs no points: in a rectangular room,
+    /// the paths whose sequence the image lattice makes certain go to `unfolded` in closed
+    /// form ([`RoomPath`]: length, time, reflections per wall and the two incidence angles),
+    /// every other one to `found` as [`arrivals`](Self::arrivals) gives it. The same paths,
+    /// to round-off; everywhere else the same as [`arrivals`](Self::arrivals).
+    pub(crate) fn arrivals_unfolded(
+        &self,
+        search: &MirrorSearch<'_>,
+        scratch: &mut MirrorScratch,
+        found: &mut impl FnMut(MirrorPath<'_>) -> bool,
+        unfolded: &mut dyn FnMut(&RoomPath) -> bool,
+        progress: &mut impl FnMut(u64) -> bool,
+    ) -> MirrorStats {
+        self.arrivals_with(search, scratch, found, Some(unfolded), progress)
+    }
+
+    /// [`MirrorWalls::arrivals`], with [`arrivals_unfolded`](Self::arrivals_unfolded)'s
+    /// closed forms where `unfolded` is given.
+    fn arrivals_with(
+        &self,
+        search: &MirrorSearch<'_>,
+        scratch: &mut MirrorScratch,
+        found: &mut impl FnMut(MirrorPath<'_>) -> bool,
+        unfolded: Option<&mut dyn FnMut(&RoomPath) -> bool>,
+        progress: &mut impl FnMut(u64) -> bool,
+    ) -> MirrorStats {
         let bounds = self.bounds(search, search.max_steps.min(search.max_depth));
         if let Some(room) = &self.shoebox
             && room.serves(search)
         {
-            return self.room_arrivals(room, search, &bounds, scratch, found, progress);
+            return self.room_arrivals(room, search, &bounds, scratch, found, unfolded, progress);
         }
         self.walk(search, &bounds, scratch, found, progress)
+    }
+
+    /// Whether `search` goes through the image lattice of a rectangular room (where
+    /// [`arrivals_unfolded`](Self::arrivals_unfolded) gives closed forms), and its walls
+    /// (indices into the walls) on the local lines x = 0, x = L₁, y = 0, y = L₂.
+    pub(crate) fn room_walls(&self, search: &MirrorSearch<'_>) -> Option<[usize; 4]> {
+        self.shoebox
+            .as_ref()
+            .filter(|room| room.serves(search))
+            .map(Shoebox::walls)
     }
 
     /// [`MirrorWalls::arrivals`] through the beam tree, also in a rectangular room (the

@@ -45,7 +45,8 @@ pub(crate) use complete::SearchBudget;
 pub use complete::{Arrival, Kink, SearchOutcome, StationaryError};
 pub(crate) use flat::SegmentFrame;
 pub(crate) use mirrors::{
-    GuidePath, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls, Waveguide,
+    GuidePath, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls, RoomPath,
+    Waveguide,
 };
 pub use plan::Kernels;
 pub use result::{Ray, RayRecord, Reason, Status, Threshold};
