@@ -663,7 +663,7 @@ enum WallLaw {
 
 /// The reflection laws of the four walls of a rectangular room (x = 0, x = L₁, y = 0,
 /// y = L₂ in its local coordinates), for the amplitude of an image path in closed form
-/// ([`crate::trace::Unfolded`]: the reflections off each wall, the incidence angle on each
+/// (the search's `Unfolded`: the reflections off each wall, the incidence angle on each
 /// pair of walls, the unfolded length).
 #[derive(Clone, Debug)]
 pub(crate) struct UnfoldedLaws<'a> {
