@@ -725,30 +725,8 @@ impl Profile {
             return out;
         }
         // Launch angles θ ∈ (0, π/2] at a: p = cos θ / c_a, s_a = sin θ.
-        // The sampled launch angles: an even grid, and the angles whose ray turns exactly
-        // at a knot or grazes a wall, where `X` has a kink (a pair of roots can sit in the
-        // dip beside one, closer together than the grid's step).
-        let mut thetas: Vec<f64> = (0..=PROFILE_SAMPLES)
-            .map(|j| std::f64::consts::FRAC_PI_2 * j as f64 / PROFILE_SAMPLES as f64)
-            .collect();
-        let walls = [self.walls.top, self.walls.bottom];
-        for c in self
-            .c
-            .iter()
-            .copied()
-            .chain(walls.into_iter().flatten().map(|w| self.speed_at(w)))
-        {
-            if c > ca {
-                let theta = (ca / c).acos();
-                if theta > 0.0 && theta < std::f64::consts::FRAC_PI_2 {
-                    thetas.push(theta);
-                }
-            }
-        }
-        thetas.sort_by(f64::total_cmp);
-        thetas.dedup();
-        let n = thetas.len() - 1;
-        let angle = |j: usize| thetas[j];
+        let thetas = self.launch_angles(ca);
+        let (n, angle) = (thetas.len() - 1, |j: usize| thetas[j]);
         let at = |theta: f64| (theta.cos() / ca, theta.sin());
         let parts: Vec<Parts> = (0..=n)
             .map(|j| {
@@ -807,37 +785,8 @@ impl Profile {
                     if !(v0.is_finite() && v1.is_finite()) || (v0 > 0.0) == (v1 > 0.0) {
                         continue;
                     }
-                    // Newton on the launch angle inside the bracket (dX/dθ = −X_p sin θ / c_a),
-                    // bisecting where a step would leave it.
-                    let (mut lo, mut hi) = (angle(j), angle(j + 1));
-                    let (mut v_lo, mut theta) = (v0, 0.5 * (angle(j) + angle(j + 1)));
-                    for _ in 0..100 {
-                        let (p, sa) = at(theta);
-                        let Some(sums) =
-                            self.branch::<false>(p, sa, [a.y, b.y], first, turns, None, None)
-                        else {
-                            break;
-                        };
-                        let v = sums.x - dx;
-                        if v == 0.0 || hi - lo <= 4.0 * f64::EPSILON * hi {
-                            break;
-                        }
-                        if (v > 0.0) == (v_lo > 0.0) {
-                            (lo, v_lo) = (theta, v);
-                        } else {
-                            hi = theta;
-                        }
-                        let step = theta + v / (sums.x_p * sa / ca);
-                        let next = if step > lo && step < hi && step.is_finite() {
-                            step
-                        } else {
-                            0.5 * (lo + hi)
-                        };
-                        if next == theta {
-                            break;
-                        }
-                        theta = next;
-                    }
+                    let bracket = [angle(j), angle(j + 1)];
+                    let theta = self.refine(bracket, v0, [a.y, b.y], (first, turns), dx, ca);
                     let (p, sa) = at(theta);
                     // A sign change across a jump of X (where the turning point jumps past
                     // a local maximum of the speed) is no root: its miss stays.
@@ -855,6 +804,70 @@ impl Profile {
         }
         out.rays.sort_by(|x, y| x.sums.t.total_cmp(&y.sums.t));
         out
+    }
+
+    /// The launch angle of the root of `X − dx` on branch `(first, events)` inside the
+    /// bracket `[lo, hi]` (`v_lo` its value at `lo`): Newton on the angle (dX/dθ = −X_p sin θ
+    /// / c_a), bisecting where a step would leave the bracket.
+    fn refine(
+        &self,
+        [mut lo, mut hi]: [f64; 2],
+        mut v_lo: f64,
+        ends: [f64; 2],
+        (first, events): (f64, u32),
+        dx: f64,
+        ca: f64,
+    ) -> f64 {
+        let mut theta = 0.5 * (lo + hi);
+        for _ in 0..100 {
+            let (p, sa) = (theta.cos() / ca, theta.sin());
+            let Some(sums) = self.branch::<false>(p, sa, ends, first, events, None, None) else {
+                break;
+            };
+            let v = sums.x - dx;
+            if v == 0.0 || hi - lo <= 4.0 * f64::EPSILON * hi {
+                break;
+            }
+            if (v > 0.0) == (v_lo > 0.0) {
+                (lo, v_lo) = (theta, v);
+            } else {
+                hi = theta;
+            }
+            let step = theta + v / (sums.x_p * sa / ca);
+            let next = if step > lo && step < hi && step.is_finite() {
+                step
+            } else {
+                0.5 * (lo + hi)
+            };
+            if next == theta {
+                break;
+            }
+            theta = next;
+        }
+        theta
+    }
+
+    /// The launch angles [`arrivals_within`](Self::arrivals_within) samples from a point of
+    /// speed `ca`: an even grid of [`PROFILE_SAMPLES`] steps over `[0, π/2]`, and the angles
+    /// whose ray turns exactly at a knot or grazes a wall, where `X` has a kink (a pair of
+    /// roots can sit in the dip beside one, closer together than the grid's step).
+    fn launch_angles(&self, ca: f64) -> Vec<f64> {
+        let mut thetas: Vec<f64> = (0..=PROFILE_SAMPLES)
+            .map(|j| std::f64::consts::FRAC_PI_2 * j as f64 / PROFILE_SAMPLES as f64)
+            .collect();
+        let walls = [self.walls.top, self.walls.bottom];
+        let wall_speeds = walls.into_iter().flatten().map(|w| self.speed_at(w));
+        for c in self.c.iter().copied().chain(wall_speeds) {
+            if c > ca {
+                let theta = (ca / c).acos();
+                if theta > 0.0 && theta < std::f64::consts::FRAC_PI_2 {
+                    thetas.push(theta);
+                }
+            }
+        }
+        thetas.sort_by(f64::total_cmp);
+        thetas.dedup();
+        thetas
     }
 
     /// Points along `ray` from `a`: each piece's ends and `per_piece − 1` points inside it
