@@ -104,55 +104,7 @@ impl Tracer {
             .map(|&s| self.source_medium(false, s))
             .collect();
         // The pieces before each vertex, per source: (per vertex, its pieces), work, stopped.
-        let before: Vec<(Vec<Vec<Before>>, u64, bool)> = (0..ns)
-            .into_par_iter()
-            .map_init(MirrorScratch::default, |scratch, source| {
-                let s = scene.sources()[source];
-                let mut pieces: Vec<Vec<Before>> = points.iter().map(|_| Vec::new()).collect();
-                let Some(medium) = media[source] else {
-                    return (pieces, 0, false);
-                };
-                if !control.run.keep_going(Progress::default()) {
-                    return (pieces, 0, true);
-                }
-                let search = MirrorSearch {
-                    scene,
-                    source: s,
-                    receivers: &points,
-                    max_steps: max_steps - 1,
-                    max_time,
-                    slowness: scene.media()[medium].slowness,
-                    obstructed: options.obstructed,
-                    max_beams: limits.beams,
-                    max_depth: limits.depth,
-                    max_work: max_work.saturating_mul(points.len() as u64),
-                };
-                let stats = control.run.within(|| {
-                    walls.arrivals(
-                        &search,
-                        scratch,
-                        &mut |p: MirrorPath<'_>| {
-                            let n = p.points.len();
-                            if n > 2 && vanishes(p.points[n - 2], p.points[n - 1]) {
-                                // A reflection on the vertex itself (a free end): no piece.
-                                return true;
-                            }
-                            let a = beam_arrival(&walls, source, medium, p);
-                            pieces[p.receiver].push(Before {
-                                partial: first_piece(scene, s, &a.arrival),
-                                steps: a.steps,
-                            });
-                            true
-                        },
-                        &mut |beams| control.run.keep_going(Progress::work(beams)),
-                    )
-                });
-                for list in &mut pieces {
-                    list.sort_by(|a, b| a.partial.time.total_cmp(&b.partial.time));
-                }
-                (pieces, stats.work, stats.stopped)
-            })
-            .collect();
+        let before = self.pieces_before(options, control, &walls, &points, &media);
         for (source, b) in before.iter().enumerate() {
             out.work += b.1;
             if b.2 {
@@ -278,6 +230,71 @@ impl Tracer {
         found.sort_by_key(|f| f.0);
         out.arrivals = found.into_iter().flat_map(|f| f.1).collect();
         out
+    }
+
+    /// The pieces before each vertex (`points`), per source (`media` theirs): per vertex its
+    /// pieces by time, the tree's work, and whether it stopped.
+    fn pieces_before(
+        &self,
+        options: &SearchOptions,
+        control: &Control<'_>,
+        walls: &MirrorWalls,
+        points: &[Point],
+        media: &[Option<usize>],
+    ) -> Vec<(Vec<Vec<Before>>, u64, bool)> {
+        let scene = self.scene();
+        let limits = &control.run.limits;
+        let max_work = scene.solver().max_work;
+        let (max_steps, max_time) = (options.step_limit(), options.time_limit());
+        (0..scene.sources().len())
+            .into_par_iter()
+            .map_init(MirrorScratch::default, |scratch, source| {
+                let s = scene.sources()[source];
+                let mut pieces: Vec<Vec<Before>> = points.iter().map(|_| Vec::new()).collect();
+                let Some(medium) = media[source] else {
+                    return (pieces, 0, false);
+                };
+                if !control.run.keep_going(Progress::default()) {
+                    return (pieces, 0, true);
+                }
+                let search = MirrorSearch {
+                    scene,
+                    source: s,
+                    receivers: points,
+                    max_steps: max_steps - 1,
+                    max_time,
+                    slowness: scene.media()[medium].slowness,
+                    obstructed: options.obstructed,
+                    max_beams: limits.beams,
+                    max_depth: limits.depth,
+                    max_work: max_work.saturating_mul(points.len() as u64),
+                };
+                let stats = control.run.within(|| {
+                    walls.arrivals(
+                        &search,
+                        scratch,
+                        &mut |p: MirrorPath<'_>| {
+                            let n = p.points.len();
+                            if n > 2 && vanishes(p.points[n - 2], p.points[n - 1]) {
+                                // A reflection on the vertex itself (a free end): no piece.
+                                return true;
+                            }
+                            let a = beam_arrival(walls, source, medium, p);
+                            pieces[p.receiver].push(Before {
+                                partial: first_piece(scene, s, &a.arrival),
+                                steps: a.steps,
+                            });
+                            true
+                        },
+                        &mut |beams| control.run.keep_going(Progress::work(beams)),
+                    )
+                });
+                for list in &mut pieces {
+                    list.sort_by(|a, b| a.partial.time.total_cmp(&b.partial.time));
+                }
+                (pieces, stats.work, stats.stopped)
+            })
+            .collect()
     }
 
     /// Lists one diffracted arrival into `listed`, or streams it (with its amplitude):
