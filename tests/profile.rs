@@ -406,14 +406,6 @@ fn bad_profiles_are_refused_naming_the_key() {
             "search.diffraction",
         ),
         (
-            with(
-                r#"{ "speed": 1500, "gradient": [0, 0.01] }"#,
-                "",
-                r#", "search": { "max_steps": 2 }"#,
-            ),
-            "search",
-        ),
-        (
             with(good, "", r#", "solver": { "derivatives": true }"#),
             "solver.derivatives",
         ),

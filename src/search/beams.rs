@@ -106,50 +106,14 @@ impl Tracer {
         {
             // Streamed between two parallel walls: each image's time and amplitude in closed
             // form, no points (`trace/mirrors/waveguide.rs`).
-            let source_x = s.x;
-            let receivers = search.receivers;
-            let mut path = StreamScratch::default();
-            let mut walked = MirrorScratch::default();
-            walls.guide_arrivals(
+            let guided = Guided {
+                walls,
                 guide,
-                &search,
-                &mut |p: GuidePath| {
-                    control.listed.stream();
-                    let amplitude = unfolded.and_then(|u| {
-                        let x = receivers[p.receiver].x;
-                        let width = Some(x.abs() * p.length / (x - source_x).abs());
-                        let along = p.along / p.length;
-                        let incidence = Incidence {
-                            cos: p.across / p.length,
-                            sin2: along * along,
-                        };
-                        let hits = p.hits.map(|n| n as u64);
-                        let closed =
-                            |checked| u.amplitude(hits, [incidence; 2], p.length, width, checked);
-                        closed(true).or_else(|| {
-                            // Ill-conditioned in closed form: the tree's path, walked.
-                            match walls.guide_path(guide, &search, &p, &mut walked) {
-                                Some(tree) => {
-                                    path.arrival(self, walls, source, medium, tree).amplitude
-                                }
-                                None => closed(false),
-                            }
-                        })
-                    });
-                    sink(StreamedArrival {
-                        source,
-                        receiver: p.receiver,
-                        steps: p.hits[0] + p.hits[1],
-                        diffractions: 0,
-                        vertical_reflections: 0,
-                        status: Status::Converged,
-                        time: p.time,
-                        amplitude,
-                    });
-                    true
-                },
-                progress,
-            )
+                search: &search,
+                source,
+                medium,
+            };
+            self.stream_waveguide(&guided, unfolded, control, sink, progress)
         } else if let Some(sink) = control.sink {
             // Streamed: each path's amplitude from its points, in buffers reused path to path.
             let mut path = StreamScratch::default();
@@ -221,6 +185,64 @@ impl Tracer {
 }
 
 impl Tracer {
+    /// The streamed arrivals of one source between two parallel walls, each image's time and
+    /// amplitude in closed form (`unfolded`; `None` in a scene without amplitudes), a bounce
+    /// near a critical angle through the tree's own path, walked.
+    fn stream_waveguide(
+        &self,
+        g: &Guided<'_>,
+        unfolded: Option<UnfoldedLaws<'_, 2>>,
+        control: &Control<'_>,
+        sink: &(dyn Fn(StreamedArrival) + Sync),
+        progress: &mut impl FnMut(u64) -> bool,
+    ) -> MirrorStats {
+        let source_x = g.search.source.x;
+        let receivers = g.search.receivers;
+        let mut path = StreamScratch::default();
+        let mut walked = MirrorScratch::default();
+        g.walls.guide_arrivals(
+            g.guide,
+            g.search,
+            &mut |p: GuidePath| {
+                control.listed.stream();
+                let amplitude = unfolded.and_then(|u| {
+                    let x = receivers[p.receiver].x;
+                    let width = Some(x.abs() * p.length / (x - source_x).abs());
+                    let along = p.along / p.length;
+                    let incidence = Incidence {
+                        cos: p.across / p.length,
+                        sin2: along * along,
+                    };
+                    let hits = p.hits.map(|n| n as u64);
+                    let closed =
+                        |checked| u.amplitude(hits, [incidence; 2], p.length, width, checked);
+                    closed(true).or_else(|| {
+                        // Ill-conditioned in closed form: the tree's path, walked.
+                        match g.walls.guide_path(g.guide, g.search, &p, &mut walked) {
+                            Some(tree) => {
+                                path.arrival(self, g.walls, g.source, g.medium, tree)
+                                    .amplitude
+                            }
+                            None => closed(false),
+                        }
+                    })
+                });
+                sink(StreamedArrival {
+                    source: g.source,
+                    receiver: p.receiver,
+                    steps: p.hits[0] + p.hits[1],
+                    diffractions: 0,
+                    vertical_reflections: 0,
+                    status: Status::Converged,
+                    time: p.time,
+                    amplitude,
+                });
+                true
+            },
+            progress,
+        )
+    }
+
     /// Whether a streamed search of one source (`search`, in medium `medium`) may take the
     /// waveguide's closed forms: `Some(None)` in a scene without amplitudes (times only),
     /// `Some(Some(form))` with the amplitudes' form, `None` where some path needs its
@@ -258,6 +280,16 @@ impl Tracer {
         let regions = self.regions();
         UnfoldedLaws::new(scene, settings, regions, medium, places, search.source).map(Some)
     }
+}
+
+/// One source's search between two parallel walls: the walls, the waveguide they form, the
+/// search, the source and its medium.
+struct Guided<'a> {
+    walls: &'a MirrorWalls,
+    guide: &'a Waveguide,
+    search: &'a MirrorSearch<'a>,
+    source: usize,
+    medium: usize,
 }
 
 /// A path of the beam tree as a [`SearchArrival`]: its walls' steps, segments and arclengths,

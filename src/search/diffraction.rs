@@ -55,6 +55,15 @@ struct Before {
     partial: Arrival,
 }
 
+/// A vertex of the diffraction search with what a piece after it is joined to: its step,
+/// its index, the sources whose pieces before it are joined, and those pieces per source.
+struct Joint<'a> {
+    step: Step,
+    vertex: usize,
+    sources: &'a [usize],
+    before: &'a [(Vec<Vec<Before>>, u64, bool)],
+}
+
 impl Tracer {
     /// The diffracted arrivals of every pair (see the module).
     pub(super) fn diffraction_search(
@@ -156,40 +165,15 @@ impl Tracer {
                                     return true;
                                 }
                                 let q = beam_arrival(&walls, 0, m, p);
-                                for &source in &sources {
-                                    // By time: the joined time is this sum, bit for bit.
-                                    for b in &before[source].0[v] {
-                                        if b.partial.time + q.arrival.time > max_time {
-                                            break;
-                                        }
-                                        if b.steps.len() + 1 + q.steps.len() > max_steps {
-                                            continue;
-                                        }
-                                        let mut steps = b.steps.clone();
-                                        steps.push(step);
-                                        steps.extend_from_slice(&q.steps);
-                                        let cut = b.steps.len();
-                                        let Some(a) = through_vertex(
-                                            scene, &steps, cut, &b.partial, &q.arrival,
-                                        ) else {
-                                            continue;
-                                        };
-                                        if !Tracer::listed(a.status, options) || a.time > max_time {
-                                            continue;
-                                        }
-                                        let arrival = SearchArrival {
-                                            source,
-                                            receiver: p.receiver,
-                                            steps,
-                                            arrival: a,
-                                            complete: true,
-                                            heights: Vec::new(),
-                                        };
-                                        if !self.hand_on(control, arrival, &mut listed) {
-                                            full = true;
-                                            return false;
-                                        }
-                                    }
+                                let joint = Joint {
+                                    step,
+                                    vertex: v,
+                                    sources: &sources,
+                                    before: &before,
+                                };
+                                if !self.join_at_vertex(options, control, &joint, q, &mut listed) {
+                                    full = true;
+                                    return false;
                                 }
                                 true
                             },
@@ -230,6 +214,54 @@ impl Tracer {
         found.sort_by_key(|f| f.0);
         out.arrivals = found.into_iter().flat_map(|f| f.1).collect();
         out
+    }
+
+    /// Joins `q`, a piece from `joint`'s vertex to a receiver, with every piece before the
+    /// vertex of `joint.sources` (by time: the joined time is their sum, bit for bit), each
+    /// joined arrival within the limits handed on ([`hand_on`](Self::hand_on)): `false` once
+    /// the caller's limit on arrivals is reached.
+    fn join_at_vertex(
+        &self,
+        options: &SearchOptions,
+        control: &Control<'_>,
+        joint: &Joint<'_>,
+        q: SearchArrival,
+        listed: &mut Vec<SearchArrival>,
+    ) -> bool {
+        let scene = self.scene();
+        let (max_steps, max_time) = (options.step_limit(), options.time_limit());
+        for &source in joint.sources {
+            for b in &joint.before[source].0[joint.vertex] {
+                if b.partial.time + q.arrival.time > max_time {
+                    break;
+                }
+                if b.steps.len() + 1 + q.steps.len() > max_steps {
+                    continue;
+                }
+                let mut steps = b.steps.clone();
+                steps.push(joint.step);
+                steps.extend_from_slice(&q.steps);
+                let cut = b.steps.len();
+                let Some(a) = through_vertex(scene, &steps, cut, &b.partial, &q.arrival) else {
+                    continue;
+                };
+                if !Tracer::listed(a.status, options) || a.time > max_time {
+                    continue;
+                }
+                let arrival = SearchArrival {
+                    source,
+                    receiver: q.receiver,
+                    steps,
+                    arrival: a,
+                    complete: true,
+                    heights: Vec::new(),
+                };
+                if !self.hand_on(control, arrival, listed) {
+                    return false;
+                }
+            }
+        }
+        true
     }
 
     /// The pieces before each vertex (`points`), per source (`media` theirs): per vertex its
