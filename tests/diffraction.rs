@@ -767,8 +767,8 @@ fn wedge_total_field_matches_the_eigenfunction_series() {
 /// `Σ ±e^(ikR)/(4πR)` (the images at angles `2mα ± θ₀`, the reflected ones negated for
 /// pressure-release faces) to round-off. The faces' far open ends (wedges of 2π at 100 units)
 /// diffract for real, and are left out of both sides (with the reflections around them that
-/// the search lists with them). Every pair's search is complete (with
-/// `vertex` arrivals off: see docs/method.md for why the walk of edge-held arrivals is not).
+/// the search lists with them). Every pair's search is complete (with `vertex` arrivals off
+/// here; with them on, `narrow_wedges_search_completely_past_their_ideal_order`).
 #[test]
 fn ideal_wedges_diffract_nothing_and_their_field_is_the_image_sum() {
     let mut rng = rng::SplitMix64(41);
@@ -1149,4 +1149,72 @@ fn a_reflected_then_diffracted_path_fills_the_image_shadow_edge() {
     eprintln!("first-order diffraction only: {a:.3} dB, {b:.3} dB");
     assert_eq!(n, 0);
     assert!((a - b).abs() > 3.0, "{a} {b}");
+}
+
+/// Narrow wedges with edge-held arrivals listed (`"vertex": true`, so the walk searches the
+/// reflect-only sequences completely too): a search of `max_steps` k with kα > π used to
+/// mark every pair `complete: false` (alternate reflections that would turn about the corner
+/// by π or more, and points beside a held corner on its own faces, were ruled out by a
+/// threshold). Both are now ruled out by proof: every pair is complete, and the arrivals are
+/// those of the beam tree's image method alone (`"vertex"` off), the same times.
+#[test]
+fn narrow_wedges_search_completely_past_their_ideal_order() {
+    for big_n in [3u32, 4, 6] {
+        let alpha = PI / f64::from(big_n);
+        let polar = |r: f64, t: f64| [r * t.cos(), r * t.sin()];
+        let far = polar(100.0, alpha);
+        let (s, receivers) = (
+            polar(2.0, 0.3 * alpha),
+            [
+                polar(3.0, 0.6 * alpha),
+                polar(1.5, 0.8 * alpha),
+                polar(4.0, 0.45 * alpha),
+            ],
+        );
+        let doc = |vertex: bool| {
+            format!(
+                r#"{{ "media": {{ "air": {{ "speed": 1 }} }}, "background": "air",
+                     "interfaces": {{ "wedge": {{ "points": [[100, 0], [0, 0], [{:e}, {:e}]] }} }},
+                     "sources": [[{:e}, {:e}]],
+                     "receivers": [[{:e}, {:e}], [{:e}, {:e}], [{:e}, {:e}]],
+                     "search": {{ "max_steps": {}, "refract": false, "vertex": {vertex} }} }}"#,
+                far[0],
+                far[1],
+                s[0],
+                s[1],
+                receivers[0][0],
+                receivers[0][1],
+                receivers[1][0],
+                receivers[1][1],
+                receivers[2][0],
+                receivers[2][1],
+                big_n + 2
+            )
+        };
+        let search = |vertex| {
+            Tracer::new(scene(&doc(vertex)))
+                .unwrap()
+                .search(&eigenray::options::Run::new())
+                .unwrap()
+        };
+        let (with, images) = (search(true), search(false));
+        assert_eq!(with.incomplete_pairs, 0, "N = {big_n}");
+        assert!(with.arrivals.iter().all(|a| a.complete), "N = {big_n}");
+        let converged = |r: &eigenray::search::SearchReport| {
+            let mut t: Vec<(usize, f64)> = (r.arrivals.iter())
+                .filter(|a| a.arrival.status == Status::Converged)
+                .map(|a| (a.receiver, a.arrival.time))
+                .collect();
+            t.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            t
+        };
+        let (a, b) = (converged(&with), converged(&images));
+        assert_eq!(a.len(), b.len(), "N = {big_n}");
+        for (x, y) in a.iter().zip(&b) {
+            assert!(
+                x.0 == y.0 && (x.1 - y.1).abs() <= 1e-12 * y.1,
+                "N = {big_n}: {x:?} {y:?}"
+            );
+        }
+    }
 }

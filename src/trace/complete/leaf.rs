@@ -2,6 +2,7 @@
 
 use crate::geom::{Aabb, Segment, orient};
 use crate::problem::Pin;
+use crate::scene::StepKind;
 use crate::solver::{Outcome, Solution};
 
 use super::Search;
@@ -50,7 +51,11 @@ impl Search<'_> {
             }
             self.sc.places[i].interface = self.g.steps[i].interface;
         }
-        if self.pruned() || self.consecutive_on_one_line(segs) || self.end_on_line(segs, held) {
+        if self.pruned()
+            || self.consecutive_on_one_line(segs)
+            || self.end_on_line(segs, held)
+            || self.round_a_corner_past_pi(segs, held)
+        {
             return;
         }
         self.stats.solves += 1;
@@ -176,6 +181,23 @@ impl Search<'_> {
     /// the vertex's own segments.
     fn end_on_line(&self, segs: &[usize], held: usize) -> bool {
         let k = segs.len();
+        // A free point next to a point held on a vertex on its segment's line: the leg
+        // between them runs along that line too.
+        let is_held = |i: usize| held >> i & 1 == 1;
+        let beside_held = (0..k).filter(|&i| !is_held(i)).any(|i| {
+            let g = self.g.line(i).segment(segs[i]);
+            [i.checked_sub(1), Some(i + 1)]
+                .into_iter()
+                .flatten()
+                .filter(|&j| j < k && is_held(j))
+                .any(|j| {
+                    let held_at = self.g.line(j).vertices().get(segs[j]).copied();
+                    held_at.is_some_and(|w| orient(g.start, g.end, w) == 0.0)
+                })
+        });
+        if beside_held {
+            return true;
+        }
         let on = |i: usize, end: crate::geom::Point| {
             let line = self.g.line(i);
             if held >> i & 1 == 1 {
@@ -186,6 +208,48 @@ impl Search<'_> {
             orient(g.start, g.end, end) == 0.0
         };
         k > 0 && (on(0, self.g.source) || on(k - 1, self.g.receiver))
+    }
+
+    /// Whether every free point of `segs` (none held) reflects off a segment of one common
+    /// vertex `V`, in a scene of straight legs, and the path would have to turn about `V` by
+    /// π or more: the angles at `V` between the source, the segments' rays from `V` in turn
+    /// and the receiver (each the angle, below π, that a straight leg between them sweeps
+    /// about `V`) add up to π or more. The path unfolded about the segments' lines is then a
+    /// straight line, which turns about `V` by the same sum and by less than π: no interior
+    /// stationary path (a proof; the minimum of the time lies on the corner, where the solve
+    /// would stall against vanishing legs). The narrow wedges' alternate reflections, `max_steps`
+    /// k with kα > π, are such assignments.
+    fn round_a_corner_past_pi(&self, segs: &[usize], held: usize) -> bool {
+        const MARGIN: f64 = 1e-9;
+        let k = segs.len();
+        if held != 0 || k < 2 || self.g.scene.curved() {
+            return false;
+        }
+        if self.g.steps.iter().any(|s| s.kind != StepKind::Reflect) {
+            return false;
+        }
+        let first = self.g.line(0).segment(segs[0]);
+        let corner = (1..k).fold([Some(first.start), Some(first.end)], |found, i| {
+            let g = self.g.line(i).segment(segs[i]);
+            found.map(|v| v.filter(|&v| v == g.start || v == g.end))
+        });
+        let Some(v) = corner.into_iter().flatten().next() else {
+            return false;
+        };
+        let ray = |i: usize| {
+            let g = self.g.line(i).segment(segs[i]);
+            if g.start == v { g.end - v } else { g.start - v }
+        };
+        let angle = |a: crate::geom::Vec2, b: crate::geom::Vec2| a.cross(b).atan2(a.dot(b)).abs();
+        let (from, to) = (self.g.source - v, self.g.receiver - v);
+        if from.length() == 0.0 || to.length() == 0.0 {
+            return false;
+        }
+        let mut turn = angle(from, ray(0)) + angle(ray(k - 1), to);
+        for i in 1..k {
+            turn += angle(ray(i - 1), ray(i));
+        }
+        turn >= std::f64::consts::PI + MARGIN
     }
 
     /// Whether the end (source or receiver) that interaction `step` fell on
