@@ -211,7 +211,7 @@ impl Search<'_> {
     }
 
     /// Whether every free point of `segs` (none held) reflects off a segment of one common
-    /// vertex `V`, in a scene of straight legs, and the path would have to turn about `V` by
+    /// vertex `V`, every leg straight and of one slowness, and the path would have to turn about `V` by
     /// π or more: the angles at `V` between the source, the segments' rays from `V` in turn
     /// and the receiver (each the angle, below π, that a straight leg between them sweeps
     /// about `V`) add up to π or more. The path unfolded about the segments' lines is then a
@@ -222,7 +222,10 @@ impl Search<'_> {
     fn round_a_corner_past_pi(&self, segs: &[usize], held: usize) -> bool {
         const MARGIN: f64 = 1e-9;
         let k = segs.len();
-        if held != 0 || k < 2 || self.g.scene.curved() {
+        // Straight legs of one slowness: a reflection's law is then the mirror's.
+        let w = self.g.slowness;
+        let curved = !self.g.curved.is_empty() || self.g.scene.curved();
+        if held != 0 || k < 2 || curved || w.iter().any(|&x| x != w[0]) {
             return false;
         }
         if self.g.steps.iter().any(|s| s.kind != StepKind::Reflect) {
