@@ -1,5 +1,5 @@
-//! Criterion benchmarks: single rays, a 100,000-segment reflector, batches, a ray's gradient,
-//! and argmin's solvers.
+//! Criterion benchmarks: single rays (through uniform layers and through layers with a speed
+//! gradient), a 100,000-segment reflector, batches, a ray's gradient, and argmin's solvers.
 //!
 //! `cargo bench` runs everything but the argmin comparison; `cargo bench --features argmin`
 //! adds it. Every benchmark shares one short configuration ([`config`]) so that the whole run
@@ -82,6 +82,21 @@ fn single_ray(c: &mut Criterion) {
     ] {
         bench_rays(c, "single_ray_dipping", name, &scene(&spec));
     }
+}
+
+/// One ray through the ten layers of `fixtures/bench/layers10.json` as they are and with
+/// every medium's speed given the gradient `[0, -0.02]` (every leg a circular arc): the
+/// issue's target is at most twice the uniform layers' time (`benches/gradient_instructions.sh`
+/// counts the instructions of the two).
+fn curved(c: &mut Criterion) {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/bench/layers10.json");
+    let text = std::fs::read_to_string(path).expect("the benchmark scene");
+    let mut spec = eigenray::SceneSpec::from_json(&text).expect("a valid scene");
+    bench_rays(c, "curved_layers10", "uniform", &scene(&spec));
+    for medium in spec.media.values_mut() {
+        medium.gradient = Some([0.0, -0.02]);
+    }
+    bench_rays(c, "curved_layers10", "speed_gradient", &scene(&spec));
 }
 
 /// One reflection off a sea floor digitised with 100,000 segments.
@@ -272,6 +287,6 @@ fn versus_argmin(_c: &mut Criterion) {
 criterion_group! {
     name = benches;
     config = config();
-    targets = single_ray, reflector, batch, gradient, versus_argmin
+    targets = single_ray, curved, reflector, batch, gradient, versus_argmin
 }
 criterion_main!(benches);

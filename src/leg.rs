@@ -38,7 +38,10 @@
 
 use crate::geom::{Aabb, Point, Vec2};
 
+mod arc_crossing;
 pub(crate) mod profile;
+
+pub(crate) use arc_crossing::{ArcFrame, EndsOn};
 
 /// One leg of a ray in one medium, evaluated from its two end points (see the module).
 pub(crate) trait Leg: Copy {
@@ -416,6 +419,7 @@ fn asin_over(z: f64) -> f64 {
 }
 
 /// `sin(x) / x`, without loss near 0.
+#[cfg(test)]
 #[inline]
 fn sinc(x: f64) -> f64 {
     if x.abs() < 1e-3 {
@@ -589,7 +593,9 @@ impl ArcLeg {
         self.len * asin_over(z)
     }
 
-    /// The point at arc length `s` from the start, relative to the start.
+    /// The point at arc length `s` from the start, relative to the start (the tests' check of
+    /// an arc's points: the obstruction test meets the arc exactly, `arc_crossing.rs`).
+    #[cfg(test)]
     pub fn offset_at(&self, s: f64) -> Vec2 {
         let d0 = self.direction_at_start();
         let k = self.curvature();

@@ -22,7 +22,7 @@
 //! saddles that the segment-wise Hessian cannot see.
 
 use crate::geom::{Point, Segment, Vec2};
-use crate::leg::{Leg, LegMedium, LegModel, StraightLeg, Uniform};
+use crate::leg::{AnyLeg, Leg, LegMedium, LegModel, StraightLeg, Uniform};
 use crate::polyline::Polyline;
 use crate::scene::{Scene, Step};
 
@@ -107,6 +107,9 @@ pub(crate) struct Eval {
     /// Length below which a leg counts as vanished: 1e-12 of the path's length, or the
     /// round-off of the coordinates, whichever is larger.
     pub vanish: f64,
+    /// The legs of a path whose legs may be curved, `k + 1`, each evaluated once per
+    /// evaluation ([`ProblemRef::derive_curved`]; empty for straight legs).
+    pub legs: Vec<AnyLeg>,
 }
 
 impl Eval {
@@ -432,7 +435,12 @@ impl<'a> ProblemRef<'a> {
         let w = &self.slowness[..k + 1];
         let models = &self.curved[..k + 1];
         let rel = &e.rel[..k + 2];
-        let leg = |j: usize| models[j].leg(rel[j], rel[j + 1]);
+        // Each leg once (an arc's closed forms cost a square root, a `hypot` and an `asinh`):
+        // the residuals and the Hessian blocks read each twice or more.
+        let mut legs = std::mem::take(&mut e.legs);
+        legs.clear();
+        legs.extend((0..=k).map(|j| models[j].leg(rel[j], rel[j + 1])));
+        let leg = |j: usize| legs[j];
         let (mut time, mut total) = (0.0, 0.0);
         for j in 0..=k {
             let l = leg(j);
@@ -456,11 +464,11 @@ impl<'a> ProblemRef<'a> {
         );
         (e.phi, e.rmax, e.held, e.vanished, e.vanish) =
             (merit.phi, merit.rmax, merit.held, merit.vanished, vanish);
-        if !hessian {
-            return;
+        if hessian {
+            let (diag, off) = (&mut e.diag[..k], &mut e.off[..k.saturating_sub(1)]);
+            hessian_blocks(leg, &e.tan[..k], kappa, diag, off);
         }
-        let (diag, off) = (&mut e.diag[..k], &mut e.off[..k.saturating_sub(1)]);
-        hessian_blocks(leg, &e.tan[..k], kappa, diag, off);
+        e.legs = legs;
     }
 }
 

@@ -8,7 +8,7 @@ use serde::{Deserialize, Deserializer, Serialize};
 use crate::bvh::Bvh;
 use crate::geom::{Aabb, Point, Segment, SegmentContact, Vec2, orient, segment_contact};
 use crate::leg::profile::Profile;
-use crate::leg::{LegMedium, Linear, Uniform};
+use crate::leg::{ArcFrame, EndsOn, LegMedium, Linear, Uniform};
 use crate::polyline::{Polyline, PolylineError};
 
 mod amplitudes;
@@ -1799,6 +1799,37 @@ impl Scene {
             crossed
         });
         hit
+    }
+
+    /// [`first_crossing`](Self::first_crossing) for a circular arc (a leg in a medium with a
+    /// speed gradient), exactly ([`ArcFrame::meets`]): the interface segment that `arc`
+    /// crosses or touches at a fraction of its chord in `(margin, 1 − margin)`, the one
+    /// nearest its start. `own` names the segments that the arc's start and end lie on: it
+    /// meets those there, which does not count, and crosses them wherever else it meets them.
+    pub(crate) fn first_arc_crossing(
+        &self,
+        arc: &ArcFrame,
+        margin: f64,
+        own: [SegmentRef; 2],
+    ) -> Option<SegmentRef> {
+        let mut first: Option<(f64, SegmentRef)> = None;
+        self.segment_bvh.any_overlapping(arc.bounding_box(), |i| {
+            let r = self.segments[i as usize];
+            let ends_on = match (r == own[0], r == own[1]) {
+                (false, false) => EndsOn::Neither,
+                (true, false) => EndsOn::Start,
+                (false, true) => EndsOn::End,
+                (true, true) => EndsOn::Both,
+            };
+            let Segment { start, end } = self.segment_ends[i as usize];
+            if let Some(at) = arc.meets(start, end, margin, ends_on)
+                && first.is_none_or(|(nearest, _)| at < nearest)
+            {
+                first = Some((at, r));
+            }
+            false
+        });
+        first.map(|(_, r)| r)
     }
 
     /// [`first_crossing`](Self::first_crossing) ignoring the interfaces `skip` names (a

@@ -11,7 +11,7 @@
 //! fails.
 
 use crate::geom::{Aabb, Point, Segment, Vec2, orient, vertex_side};
-use crate::leg::{Leg, LegMedium, LegModel};
+use crate::leg::{AnyLeg, ArcFrame, Leg, LegMedium, LegModel};
 use crate::problem::Pin;
 use crate::regions::Regions;
 use crate::scene::{Scene, SegmentRef, Step, StepKind};
@@ -142,7 +142,7 @@ impl Classifier {
             return no_path(Reason::WrongSide { step });
         }
         let crossing = match of.path {
-            _ if curved => arc_obstruction(scene, steps, points, &nw.seg[..k], of.curved),
+            _ if curved => arc_obstruction(scene, steps, points, nw, of.curved),
             Some(path) => self.obstruction(scene, path, points, &nw.seg[..k]),
             None => self.obstruction_tested(scene, steps, None, points, &nw.seg[..k]),
         };
@@ -346,12 +346,9 @@ fn curved_wrong_side(
     curved: &[LegMedium],
 ) -> Option<usize> {
     let (k, e) = (steps.len(), &nw.eval);
-    let rel = &e.rel[..k + 2];
+    let leg = solved_legs(nw, curved, k);
     (0..k).find(|&i| {
-        let (before, after) = (
-            curved[i].leg(rel[i], rel[i + 1]),
-            curved[i + 1].leg(rel[i + 1], rel[i + 2]),
-        );
+        let (before, after) = (leg(i), leg(i + 1));
         if before.len() <= e.vanish || after.len() <= e.vanish {
             return false;
         }
@@ -363,6 +360,22 @@ fn curved_wrong_side(
         let b = side(n.dot(after.direction_at_start()));
         !sides_suit(steps[i].kind, a, b)
     })
+}
+
+/// Leg `j` of the `k + 1` legs through the points in `nw`, of the models `curved`: the
+/// solve's last evaluation's (`Eval::legs`, of these points and models: the solve evaluated
+/// them last), evaluated again only where it has not as many.
+fn solved_legs<'a>(
+    nw: &'a NewtonWorkspace,
+    curved: &'a [LegMedium],
+    k: usize,
+) -> impl Fn(usize) -> AnyLeg + 'a {
+    let e = &nw.eval;
+    let stored = (e.legs.len() == k + 1).then_some(&e.legs[..]);
+    move |j| match stored {
+        Some(legs) => legs[j],
+        None => curved[j].leg(e.rel[j], e.rel[j + 1]),
+    }
 }
 
 /// The segment leg `leg` ends on (its step's), or none for the last leg.
@@ -380,55 +393,32 @@ fn own_segment(steps: &[Step], seg: &[usize], leg: usize) -> SegmentRef {
 
 /// The first leg whose arc crosses an interface strictly between its ends, for legs that may
 /// be curved (`curved`, positions relative to the source `pts[0]`). A straight leg is tested
-/// as the classifier tests it; an arc as the polygon inscribed in it whose pieces each bulge
-/// from the arc by at most `1e-7` of the leg's chord (at most [`MAX_ARC_PIECES`] pieces):
-/// an interface that comes closer to the arc than that may be missed or found touching it.
-/// The first and last pieces leave out the segments the leg's ends lie on, as a straight leg
-/// does; the pieces between test every segment (an arc can dip below its own interface).
+/// as the classifier tests it; an arc exactly, as a circle against each segment near it
+/// ([`Scene::first_arc_crossing`]: the crossing nearest its start, at a fraction of its chord
+/// beyond [`END_MARGIN`] from either end). The segments the leg's ends lie on count where the
+/// arc meets them again (an arc can dip below its own interface).
 fn arc_obstruction(
     scene: &Scene,
     steps: &[Step],
     pts: &[Point],
-    seg: &[usize],
+    nw: &NewtonWorkspace,
     curved: &[LegMedium],
 ) -> Option<Crossing> {
+    let seg = &nw.seg[..steps.len()];
     let k = seg.len();
-    let origin = pts[0];
+    let solved = solved_legs(nw, curved, k);
     let mut own_a = SegmentRef::NONE;
     for leg in 0..=k {
         let (a, b) = (pts[leg], pts[leg + 1]);
         let own_b = own_segment(steps, seg, leg);
         if a != b {
-            let hit = match curved[leg].leg(a - origin, b - origin).arc() {
-                None => scene.first_crossing(a, b, END_MARGIN, [own_a, own_b]),
-                Some(arc) => {
-                    let arc_len = arc.arc_length();
-                    let bulge = 1e-7 * arc.len;
-                    let pieces = (arc_len * (arc.curvature().abs() / (8.0 * bulge)).sqrt()).ceil();
-                    let n = if pieces.is_finite() {
-                        (pieces as usize).clamp(1, MAX_ARC_PIECES)
-                    } else {
-                        1
-                    };
-                    let at = |j: usize| {
-                        if j == 0 {
-                            a
-                        } else if j == n {
-                            b
-                        } else {
-                            a + arc.offset_at(arc_len * j as f64 / n as f64)
-                        }
-                    };
-                    let margin = (END_MARGIN * n as f64).min(0.25);
-                    (0..n).find_map(|j| {
-                        let own = [
-                            if j == 0 { own_a } else { SegmentRef::NONE },
-                            if j + 1 == n { own_b } else { SegmentRef::NONE },
-                        ];
-                        let m = if j == 0 || j + 1 == n { margin } else { 0.0 };
-                        scene.first_crossing(at(j), at(j + 1), m, own)
-                    })
-                }
+            let own = [own_a, own_b];
+            let frame = solved(leg)
+                .arc()
+                .and_then(|arc| ArcFrame::new(a, b, arc.curvature()));
+            let hit = match frame {
+                Some(frame) => scene.first_arc_crossing(&frame, END_MARGIN, own),
+                None => scene.first_crossing(a, b, END_MARGIN, own),
             };
             if let Some(r) = hit {
                 return Some(Crossing {
@@ -441,9 +431,6 @@ fn arc_obstruction(
     }
     None
 }
-
-/// The most pieces an arc is tested as ([`arc_obstruction`]).
-const MAX_ARC_PIECES: usize = 4096;
 
 /// The first step whose legs are not on the sides it demands, for points in any state (held
 /// on a vertex: the sum of the two segments' normals; next to a vanished leg: the other leg
