@@ -95,6 +95,12 @@ pub struct Gradient {
     /// without one, or one the ray does not pass through); empty in other scenes. Its
     /// `slowness` entry is then `dT/dw` with `w = 1/speed` and the gradient held.
     pub speed_gradient: Vec<Vec2>,
+    /// `dT/dc` of each knot of each medium's speed profile, in the order of
+    /// [`Scene::media`] and of the medium's `profile` (empty for a medium without one, or
+    /// one the ray does not pass through: zeros), in a scene with a profile medium; empty in
+    /// other scenes. Its `slowness` entry is then `dT/dw` with `w = 1/c` of the first knot
+    /// and the profile's shape held (every knot's `c` moved alike): `−c₀² Σₖ dT/dcₖ`.
+    pub profile_speed: Vec<Vec<f64>>,
 }
 
 /// Why derivatives could not be computed for a ray.
@@ -123,9 +129,12 @@ pub enum DerivativeError {
     },
     /// The Hessian at the solution is singular (a caustic): the points do not move smoothly.
     Singular,
-    /// The scene has a medium with a speed profile, or (for [`PointSensitivities`]) one with
-    /// a speed gradient: derivatives through those curved legs are not available yet.
+    /// For [`PointSensitivities`]: the scene has a medium with a speed gradient or a
+    /// profile: point sensitivities through curved legs are not available yet.
     CurvedLegs,
+    /// The ray's points are not those of a ray of its profile medium (a path without steps
+    /// whose ends are not the points', or reflections off the walls elsewhere).
+    NoProfileRay,
 }
 
 impl std::fmt::Display for DerivativeError {
@@ -144,8 +153,12 @@ impl std::fmt::Display for DerivativeError {
                 write!(f, "interaction point {step} does not lie on its interface")
             }
             DerivativeError::CurvedLegs => f.write_str(
-                "these derivatives through curved legs (a medium with a `profile`, or point \
-                 sensitivities through a `gradient`) are not available yet",
+                "point sensitivities through curved legs (a medium with a `gradient` or a \
+                 `profile`) are not available yet",
+            ),
+            DerivativeError::NoProfileRay => f.write_str(
+                "the ray's points are not those of a ray of its profile medium (its ends, and \
+                 its reflections at the waveguide's walls)",
             ),
             DerivativeError::Singular => f.write_str(
                 "the Hessian at the solution is singular (a caustic): the points do not move \
@@ -285,17 +298,18 @@ fn leg_unusual(d: Vec2) -> (Vec2, f64) {
     )
 }
 
-/// Whether the scene has a medium with a speed profile (whose legs the derivatives do not
-/// take yet).
+/// Whether the scene has a medium with a speed profile.
 fn has_profile(scene: &Scene) -> bool {
     scene.curved() && scene.media().iter().any(|m| m.profile.is_some())
 }
 
+/// Whether the scene has a medium with a speed gradient.
+fn has_gradient(scene: &Scene) -> bool {
+    scene.curved() && scene.media().iter().any(|m| m.gradient.is_some())
+}
+
 /// The steps of path `path`.
 fn path_steps(scene: &Scene, path: usize) -> Result<&[Step], DerivativeError> {
-    if has_profile(scene) {
-        return Err(DerivativeError::CurvedLegs);
-    }
     let spec = scene
         .paths()
         .get(path)
@@ -338,16 +352,32 @@ fn gradient_parts(
 ) -> Result<EndGradients, DerivativeError> {
     check_points(steps, points)?;
     let all_media = scene.media();
+    slowness.fill(0.0);
+    if scene.curved() {
+        let mut media = media.peekable();
+        if let Some(m) = profile_medium(scene, media.peek().copied()) {
+            let ray = ProfileLegs {
+                steps,
+                points,
+                medium: m,
+                launch: None,
+            };
+            return profile_parts(scene, ray, media, slowness, None, put);
+        }
+        let medium = || {
+            media
+                .next()
+                .filter(|&m| m < all_media.len())
+                .ok_or(DerivativeError::Media)
+        };
+        return curved_parts(scene, steps, points, medium, hint, slowness, None, put);
+    }
     let mut medium = || {
         media
             .next()
             .filter(|&m| m < all_media.len())
             .ok_or(DerivativeError::Media)
     };
-    slowness.fill(0.0);
-    if scene.curved() {
-        return curved_parts(scene, steps, points, medium, hint, slowness, None, put);
-    }
     // Leg 0.
     let m0 = medium()?;
     let (mut u_prev, l0) = leg(points[0], points[1]);
@@ -482,6 +512,103 @@ fn curved_parts(
     })
 }
 
+/// The profile medium `first` (a ray's first leg medium) when it has a profile: its rays
+/// are the profile's ([`profile_parts`]).
+fn profile_medium(scene: &Scene, first: Option<usize>) -> Option<usize> {
+    let m = first?;
+    scene.media().get(m)?.profile.is_some().then_some(m)
+}
+
+/// A ray through a profile medium as the derivatives read it.
+#[derive(Clone, Copy)]
+struct ProfileLegs<'a> {
+    /// Its steps (none, or reflections at the waveguide's walls).
+    steps: &'a [Step],
+    /// Source, reflection points, receiver.
+    points: &'a [Point],
+    /// The profile medium (every leg's).
+    medium: usize,
+    /// Its direction at the source (`launch_angle`), where the entry gives it: which of the
+    /// rays between the same points it is.
+    launch: Option<f64>,
+}
+
+/// [`gradient_parts`] of a ray through a profile medium (`media` the leg media, every one
+/// `ray.medium`; `slowness` zeroed): the ray found again ([`crate::trace::profile_ray_of`]),
+/// the ends' slowness vectors (the ray's directions there over the speeds), each reflection's
+/// jump of the slowness vector (vertical: the horizontal slowness is conserved) shared by its
+/// segment's vertices, the knots' `dT/dc` into `profile_speed` (when given, one entry per
+/// medium) and the medium's `slowness` entry from them.
+fn profile_parts(
+    scene: &Scene,
+    ray: ProfileLegs<'_>,
+    media: impl Iterator<Item = usize>,
+    slowness: &mut [f64],
+    profile_speed: Option<&mut [Vec<f64>]>,
+    mut put: impl FnMut(VertexGradient),
+) -> Result<EndGradients, DerivativeError> {
+    let ProfileLegs {
+        steps,
+        points,
+        medium,
+        launch,
+    } = ray;
+    let mut legs = 0;
+    for m in media {
+        if m != medium {
+            return Err(DerivativeError::Media);
+        }
+        legs += 1;
+    }
+    if legs != steps.len() + 1 {
+        return Err(DerivativeError::Media);
+    }
+    let found = crate::trace::profile_ray_of(scene, steps, points, medium, launch)
+        .ok_or(DerivativeError::NoProfileRay)?;
+    let (r, [ya, yb]) = (&found.ray, [points[0].y, points[points.len() - 1].y]);
+    let mut knots = found.profile.knot_derivatives(r, ya, yb);
+    // The profile's knots run up; the scene's down.
+    knots.reverse();
+    let c0 = 1.0 / scene.media()[medium].slowness;
+    slowness[medium] = -c0 * c0 * knots.iter().sum::<f64>();
+    if let Some(ps) = profile_speed {
+        ps[medium].clear();
+        ps[medium].extend_from_slice(&knots);
+    }
+    for (i, (step, &(direction, _, speed))) in steps.iter().zip(&found.at_walls).enumerate() {
+        let arrival = direction * (1.0 / speed);
+        let g = Vec2::new(0.0, 2.0 * arrival.y);
+        let line = &scene.interfaces()[step.interface].polyline;
+        let c =
+            locate(line, points[i + 1], None).ok_or(DerivativeError::OffInterface { step: i })?;
+        let interface = step.interface;
+        match c.at_vertex {
+            Some(vertex) => put(VertexGradient {
+                interface,
+                vertex,
+                d: g,
+            }),
+            None => {
+                put(VertexGradient {
+                    interface,
+                    vertex: c.a,
+                    d: g * (1.0 - c.lambda),
+                });
+                put(VertexGradient {
+                    interface,
+                    vertex: c.b,
+                    d: g * c.lambda,
+                });
+            }
+        }
+    }
+    let [ca, cb] = r.speeds;
+    Ok(EndGradients {
+        source: r.direction_at_start() * (-1.0 / ca),
+        receiver: r.direction_at_end() * (1.0 / cb),
+    })
+}
+
 /// The slownesses of the two legs' media `media`.
 #[inline(always)]
 fn leg_slownesses(scene: &Scene, [m0, m1]: [usize; 2]) -> Result<[f64; 2], DerivativeError> {
@@ -588,6 +715,31 @@ impl Gradient {
         Ok(g)
     }
 
+    /// The gradient of a stationary path or search arrival `arrival` of `steps` (from
+    /// [`Tracer::stationary_paths`] or a search): [`of_points`](Self::of_points) of its
+    /// points and leg media, its `launch_angle` telling which ray it is where several share
+    /// the points (a path without steps through a `profile` medium).
+    ///
+    /// # Errors
+    /// See [`DerivativeError`].
+    pub fn of_arrival(
+        scene: &Scene,
+        steps: &[Step],
+        arrival: &crate::trace::Arrival,
+    ) -> Result<Gradient, DerivativeError> {
+        let mut g = Gradient::default();
+        let media = arrival.media.iter().copied();
+        g.fill_at(
+            scene,
+            steps,
+            &arrival.points,
+            media,
+            None,
+            arrival.launch_angle,
+        )?;
+        Ok(g)
+    }
+
     /// [`of_points`](Self::of_points) into this gradient, reusing its memory: allocates
     /// nothing once it has held a gradient of as many media and vertices.
     ///
@@ -610,15 +762,26 @@ impl Gradient {
         scene: &Scene,
         steps: &[Step],
         points: &[Point],
-        mut media: impl Iterator<Item = usize>,
+        media: impl Iterator<Item = usize>,
         segments: Option<&[usize]>,
     ) -> Result<(), DerivativeError> {
-        if has_profile(scene) {
-            return Err(DerivativeError::CurvedLegs);
-        }
+        self.fill_at(scene, steps, points, media, segments, None)
+    }
+
+    /// [`fill`](Self::fill) of an entry that gives its `launch_angle` (through a profile
+    /// medium, which of the rays between the same points it is).
+    pub(crate) fn fill_at(
+        &mut self,
+        scene: &Scene,
+        steps: &[Step],
+        points: &[Point],
+        mut media: impl Iterator<Item = usize>,
+        segments: Option<&[usize]>,
+        launch: Option<f64>,
+    ) -> Result<(), DerivativeError> {
         self.size_slowness(scene);
         if scene.curved() {
-            return self.fill_curved(scene, steps, points, media, segments);
+            return self.fill_curved(scene, steps, points, media, segments, launch);
         }
         // One interaction (the common ray): written out, without the general bookkeeping.
         if let ([step], &[p0, p1, p2]) = (steps, points) {
@@ -656,38 +819,74 @@ impl Gradient {
         }
     }
 
-    /// [`fill`](Self::fill) in a scene with a gradient medium (curved legs), the slowness
-    /// entries sized: the leg model's slowness vectors, and each medium's speed gradient.
+    /// [`fill`](Self::fill) in a scene with a gradient or a profile medium (curved legs),
+    /// the slowness entries sized: the leg model's slowness vectors, and each medium's speed
+    /// gradient; or a profile ray's ([`profile_parts`]) and its knots' derivatives.
     fn fill_curved(
         &mut self,
         scene: &Scene,
         steps: &[Step],
         points: &[Point],
-        mut media: impl Iterator<Item = usize>,
+        media: impl Iterator<Item = usize>,
         segments: Option<&[usize]>,
+        launch: Option<f64>,
     ) -> Result<(), DerivativeError> {
         check_points(steps, points)?;
         let all = scene.media();
-        let medium = || {
-            media
-                .next()
-                .filter(|&m| m < all.len())
-                .ok_or(DerivativeError::Media)
-        };
-        self.speed_gradient.resize(all.len(), Vec2::default());
+        let mut media = media.peekable();
+        self.speed_gradient.clear();
+        if has_gradient(scene) {
+            self.speed_gradient.resize(all.len(), Vec2::default());
+        }
+        if has_profile(scene) {
+            self.profile_speed.resize(all.len(), Vec::new());
+            for (knots, m) in self.profile_speed.iter_mut().zip(all) {
+                knots.clear();
+                knots.resize(m.profile.as_ref().map_or(0, Vec::len), 0.0);
+            }
+        } else {
+            self.profile_speed.clear();
+        }
         self.slowness.fill(0.0);
         self.vertices.clear();
         let vertices = &mut self.vertices;
-        let result = curved_parts(
-            scene,
-            steps,
-            points,
-            medium,
-            segments,
-            &mut self.slowness,
-            Some(&mut self.speed_gradient),
-            |v| vertices.push(v),
-        );
+        let result = match profile_medium(scene, media.peek().copied()) {
+            Some(medium) => {
+                let ray = ProfileLegs {
+                    steps,
+                    points,
+                    medium,
+                    launch,
+                };
+                profile_parts(
+                    scene,
+                    ray,
+                    media,
+                    &mut self.slowness,
+                    Some(&mut self.profile_speed),
+                    |v| vertices.push(v),
+                )
+            }
+            None => {
+                let medium = || {
+                    media
+                        .next()
+                        .filter(|&m| m < all.len())
+                        .ok_or(DerivativeError::Media)
+                };
+                let sg = (!self.speed_gradient.is_empty()).then_some(&mut self.speed_gradient[..]);
+                curved_parts(
+                    scene,
+                    steps,
+                    points,
+                    medium,
+                    segments,
+                    &mut self.slowness,
+                    sg,
+                    |v| vertices.push(v),
+                )
+            }
+        };
         match result {
             Ok(ends) => {
                 self.source = ends.source;
@@ -1414,6 +1613,7 @@ impl BatchGradients {
             vertices: self.vertices(ray).to_vec(),
             // The batch's arrays hold no speed gradients.
             speed_gradient: Vec::new(),
+            profile_speed: Vec::new(),
         })
     }
     /// The flat arrays: sources' and receivers' gradients (one per ray), slowness gradients

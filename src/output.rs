@@ -410,6 +410,15 @@ impl Source<'_> {
         };
         Entry { gradient, ..entry }
     }
+
+    /// Its direction at the source, where its result gives it (an entry of every stationary
+    /// path through a profile medium: which of the rays between its points it is).
+    fn launch_angle(self) -> Option<f64> {
+        match self {
+            Source::Stationary(e) => e.launch_angle,
+            Source::Ray(_) | Source::Batch(..) => None,
+        }
+    }
 }
 
 /// The medium, path and interface names as each format writes them, made once per document.
@@ -669,6 +678,30 @@ fn gradient_json(buf: &mut Vec<u8>, names: &Names, g: &Gradient) {
             buf.extend_from_slice(name);
             buf.push(b':');
             vec_json(buf, *d);
+        }
+        buf.push(b'}');
+    }
+    // In a scene with a profile medium: `dT/dc` of each knot of each profile.
+    if !g.profile_speed.is_empty() {
+        buf.extend_from_slice(b",\"profile_speed\":{");
+        let mut first = true;
+        for (name, knots) in names.media.iter().zip(&g.profile_speed) {
+            if knots.is_empty() {
+                continue;
+            }
+            if !first {
+                buf.push(b',');
+            }
+            first = false;
+            buf.extend_from_slice(name);
+            buf.extend_from_slice(b":[");
+            for (k, d) in knots.iter().enumerate() {
+                if k > 0 {
+                    buf.push(b',');
+                }
+                float(buf, *d);
+            }
+            buf.push(b']');
         }
         buf.push(b'}');
     }
@@ -956,7 +989,8 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
                 let steps = scene.paths().get(v.path).map(|p| &p.steps[..]);
                 match (v.time, v.media, steps) {
                     (Some(_), Some(media), Some(steps)) => {
-                        gradient.fill(scene, steps, v.points, media, None).is_ok()
+                        let launch = v.values.launch_angle();
+                        (gradient.fill_at(scene, steps, v.points, media, None, launch)).is_ok()
                     }
                     _ => false,
                 }
@@ -1442,9 +1476,14 @@ fn arrival_json(
 fn arrival_gradient(scene: &Scene, s: &SearchArrival) -> Option<Gradient> {
     let a = &s.arrival;
     let derivatives = scene.solver().derivatives;
-    derivatives
-        .then(|| Gradient::of_points(scene, &s.steps, &a.points, &a.media).ok())
-        .flatten()
+    if !derivatives {
+        return None;
+    }
+    let mut g = Gradient::default();
+    let media = a.media.iter().copied();
+    g.fill_at(scene, &s.steps, &a.points, media, None, a.launch_angle)
+        .ok()?;
+    Some(g)
 }
 
 /// One search arrival as a CSV line.

@@ -1099,26 +1099,17 @@ pub(crate) fn speeds_stay_positive(
 }
 
 /// Refuses, in a scene with a medium whose speed has a gradient or a profile (curved legs),
-/// what curved legs do not reach yet: diffraction, and with a profile derivatives and the
-/// automatic search. Each of those assumes straight legs (the straight-leg derivatives, the
-/// wedge's straight pieces) or a leg with one ray between its ends, so it is refused rather
-/// than wrong.
+/// what curved legs do not reach yet: diffraction, and with a profile the automatic search
+/// off interfaces that are not flat and horizontal. Each of those assumes straight legs (the
+/// wedge's straight pieces) or a waveguide of flat walls, so it is refused rather than wrong.
 ///
 /// # Errors
-/// `solver.derivatives`, `search` (with a profile), `search.diffraction` or the first
-/// `diffract` step.
+/// `search` (with a profile), `search.diffraction`, the first step a profile scene does not
+/// take, or the first `diffract` step.
 fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
     let why = "is not available yet with curved legs (a medium with a `gradient` or a \
                `profile`); prescribed paths solve, with `\"stationary\"` `\"one\"` or `\"all\"`";
     let profiled = spec.media.values().any(|m| m.profile.is_some());
-    if let Some(s) = &spec.solver {
-        if profiled && s.derivatives == Some(true) {
-            return Err(SceneError::new(
-                "solver.derivatives",
-                format!("`true` {why}"),
-            ));
-        }
-    }
     let flat = |name: &str| spec.interfaces.get(name).is_some_and(flat_horizontal);
     if let Some(search) = &spec.search {
         if search.diffraction == Some(true) {

@@ -75,6 +75,7 @@ class Gradient:
     slowness: dict[str, float]
     vertices: list[dict[str, Any]]
     speed_gradient: dict[str, npt.NDArray[np.float64]]
+    profile_speed: dict[str, npt.NDArray[np.float64]]
 
 class PointSensitivities:
     """How one ray's points move: `d[i]` is d(points)/d(parameters[i]), shape (points, 2)."""

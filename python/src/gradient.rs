@@ -28,6 +28,11 @@ pub(crate) struct PyGradient {
     /// `gradient` medium; empty otherwise). Their `slowness` entry is `dT/dw` with
     /// `w = 1/speed` and the gradient held.
     speed_gradient: Py<PyDict>,
+    /// `dT/dc` of each knot of each medium with a speed profile, by name (an array in the
+    /// order of the medium's `profile`; a scene with a `profile` medium, empty otherwise).
+    /// Their `slowness` entry is `dT/dw` with `w = 1/c` of the first knot and the profile's
+    /// shape held.
+    profile_speed: Py<PyDict>,
 }
 
 #[pymethods]
@@ -72,6 +77,17 @@ impl PyGradient {
                 .map_or([f64::NAN, f64::NAN], |d| [d.x, d.y]);
             speed_gradient.set_item(&m.name, PyArray1::from_slice(py, &d))?;
         }
+        let profile_speed = PyDict::new(py);
+        for (i, m) in scene.media().iter().enumerate() {
+            let Some(knots) = &m.profile else {
+                continue;
+            };
+            let d = g
+                .and_then(|g| g.profile_speed.get(i))
+                .filter(|d| d.len() == knots.len())
+                .map_or_else(|| vec![f64::NAN; knots.len()], Clone::clone);
+            profile_speed.set_item(&m.name, PyArray1::from_vec(py, d))?;
+        }
         Ok(PyGradient {
             status: record.status.as_str().to_string(),
             time: record.time,
@@ -80,6 +96,7 @@ impl PyGradient {
             slowness: slowness.unbind(),
             vertices: vertices.unbind(),
             speed_gradient: speed_gradient.unbind(),
+            profile_speed: profile_speed.unbind(),
         })
     }
 }

@@ -157,3 +157,61 @@ def test_a_sloping_bottom_is_refused_naming_the_key():
     scene["interfaces"]["bottom"]["points"] = [[-3000, -100], [6000, -130]]
     with pytest.raises((eigenray.EigenrayError, ValueError), match="interfaces.bottom"):
         eigenray.Scene(scene)
+
+
+@pytest.mark.parametrize("reflected", [False, True])
+def test_gradient_through_a_profile_matches_finite_differences(reflected):
+    """Tracer.gradient through a profile (the default mode's ray: a turning direct ray, or
+    one reflected off the bottom, then the surface): `profile_speed` (dT/dc of each knot),
+    the source, the receiver and the `slowness` entry (w = 1/c of the first knot, the
+    profile's shape held) against central differences of re-solved times."""
+    if reflected:
+        scene = guide({"profile": [[20, 1521], [-35, 1510], [-60, 1497], [-130, 1502]]})
+        del scene["search"], scene["receivers"]
+        scene["receivers"] = [[2500, -70]]
+        scene["paths"] = [{"name": "bs", "steps": [{"reflect": "bottom"}, {"reflect": "surface"}],
+                           "media": ["water"] * 3}]
+        medium, path, (s, r) = "water", "bs", ((0, -30), (2500, -70))
+    else:
+        scene = copy.deepcopy(SCENE)
+        medium, path, (s, r) = "sea", "direct", ((0, Y0), (receivers()[0], Y0))
+    knots = scene["media"][medium]["profile"]
+
+    def gradient(doc, s=s, r=r):
+        return eigenray.Tracer(eigenray.Scene(doc)).gradient(s, r, path)
+
+    g = gradient(scene)
+    assert g.status == "converged"
+    assert set(g.profile_speed) == {medium} and g.profile_speed[medium].shape == (len(knots),)
+    assert g.speed_gradient == {}
+
+    def difference(change, h):
+        times = []
+        for d in (h, -h):
+            doc = copy.deepcopy(scene)
+            change(doc, d)
+            times.append(gradient(doc).time)
+        return (times[0] - times[1]) / (2 * h)
+
+    for k in range(len(knots)):
+        def change(doc, d, k=k):
+            doc["media"][medium]["profile"][k][1] += d
+        fd = difference(change, 1e-3)
+        assert abs(g.profile_speed[medium][k] - fd) < 1e-9, (k, g.profile_speed[medium][k], fd)
+
+    def shift(doc, d):
+        for knot in doc["media"][medium]["profile"]:
+            knot[1] += d
+    c0 = knots[0][1]
+    assert abs(g.slowness[medium] - (-c0 * c0 * difference(shift, 1e-3))) < 1e-9 * c0 * c0
+    for i in range(2):
+        for end, d in (("source", g.source), ("receiver", g.receiver)):
+            def moved(h, i=i, end=end):
+                a, b = list(s), list(r)
+                (a if end == "source" else b)[i] += h
+                return gradient(scene, tuple(a), tuple(b)).time
+            fd = (moved(1e-2) - moved(-1e-2)) / 2e-2
+            assert abs(d[i] - fd) < 1e-9, (end, i, d[i], fd)
+    if reflected:
+        assert {v["interface"] for v in g.vertices} == {"surface", "bottom"}
+        assert all(v["d"][0] == 0.0 for v in g.vertices)

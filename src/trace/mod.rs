@@ -31,7 +31,7 @@ mod occlusion;
 mod one_step;
 mod plan;
 mod profile;
-pub(crate) use profile::{ProfileShape, profile_shape};
+pub(crate) use profile::{ProfileShape, profile_ray_of, profile_shape};
 mod result;
 mod stack;
 mod start;

@@ -259,6 +259,91 @@ pub(crate) fn profile_shape(
     })
 }
 
+/// One ray through a profile medium found again from what an entry says of it
+/// ([`profile_ray_of`]).
+#[derive(Clone, Debug)]
+pub(crate) struct FoundProfileRay {
+    /// The profile, with the walls its ray reflects at.
+    pub profile: Profile,
+    /// The ray.
+    pub ray: ProfileRay,
+    /// Each reflection's arriving direction (unit), sine with the horizontal and speed.
+    pub at_walls: Vec<(Vec2, f64, f64)>,
+}
+
+/// Of `candidates`, the one whose launch angle is nearest `launch` when given, else the
+/// first that `clear` holds for, else the first.
+fn choose<T>(
+    candidates: impl Iterator<Item = T> + Clone,
+    angle: impl Fn(&T) -> f64,
+    launch: Option<f64>,
+    clear: impl Fn(&T) -> bool,
+) -> Option<T> {
+    match launch {
+        Some(at) => candidates.min_by(|x, y| {
+            let (dx, dy) = ((angle(x) - at).abs(), (angle(y) - at).abs());
+            dx.total_cmp(&dy)
+        }),
+        None => candidates
+            .clone()
+            .find(|c| clear(c))
+            .or_else(|| candidates.clone().next()),
+    }
+}
+
+/// The ray through the profile medium `medium` (every leg's) of an entry with `steps` (none,
+/// or reflections at the walls) through `points`: for a path without steps, one of the
+/// rays between its ends; between walls, one whose reflections are `steps` at `points`.
+/// With `launch` (the entry's `launch_angle`), the one nearest that direction; without, the
+/// default mode's (the earliest no interface crosses, else the earliest). `None` when no ray
+/// fits.
+pub(crate) fn profile_ray_of(
+    scene: &Scene,
+    steps: &[Step],
+    points: &[Point],
+    medium: usize,
+    launch: Option<f64>,
+) -> Option<FoundProfileRay> {
+    let profile = scene.media().get(medium)?.profile_model()?;
+    let (&s, &r) = (points.first()?, points.last()?);
+    if steps.is_empty() {
+        if points.len() != 2 {
+            return None;
+        }
+        let found = profile.arrivals_cached(s.to_vec2(), r.to_vec2());
+        let ray = choose(
+            found.rays.iter(),
+            |x| launch_angle(x),
+            launch,
+            |x| profile_crossing(scene, &profile, x, s, r).is_none(),
+        )?;
+        return Some(FoundProfileRay {
+            profile,
+            ray: *ray,
+            at_walls: Vec::new(),
+        });
+    }
+    let bounds = Bounds {
+        reflections: u32::try_from(steps.len()).unwrap_or(u32::MAX),
+        time: f64::INFINITY,
+    };
+    let (rays, _) = walled_rays(scene, &profile, s, r, bounds);
+    let fits = rays
+        .iter()
+        .filter(|w| w.steps == steps && w.points == points);
+    let w = choose(
+        fits,
+        |w| launch_angle(&w.ray),
+        launch,
+        |w| w.status == Status::Converged,
+    )?;
+    Some(FoundProfileRay {
+        profile: profile.with_walls(waveguide(scene, s).walls),
+        ray: w.ray,
+        at_walls: w.at_walls.clone(),
+    })
+}
+
 /// The walls of a waveguide through a profile medium: the nearest flat horizontal
 /// interfaces above and below a point (`Scene` validation keeps a profile scene's reflecting
 /// steps and searched interfaces to such lines).
