@@ -20,6 +20,8 @@ mod markup;
 
 use std::fmt::Write as _;
 
+use rayon::prelude::*;
+
 use eigenray::{Point, RaySet, Scene, SearchArrival};
 
 pub use axes::{Axes, AxisSpec};
@@ -64,9 +66,11 @@ pub fn scene_svg_with_axes(
 ) -> String {
     let entries = Entries::new(scene, rays, arrivals);
     let mut drawn = entries.drawn();
-    for item in &mut drawn.items {
-        item.curve = curves::sampled(scene, item);
-    }
+    // (In parallel: a profile's ray is searched again per pair.)
+    drawn
+        .items
+        .par_iter_mut()
+        .for_each(|item| item.curve = curves::sampled(scene, item));
     let rays = &drawn.items;
     // Paths or sequences drawn, for the legend.
     let legend = Legend::new(scene, rays, colouring);
