@@ -415,3 +415,98 @@ fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let t = (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
     ((p[0] - a[0] - t * dx).powi(2) + (p[1] - a[1] - t * dy).powi(2)).sqrt()
 }
+
+/// `eigenray solve --svg` of a search in a linear profile between walls (`c = 1500 + 0.2 y`):
+/// each arrival's polyline, mapped back through its ends (the source and the receiver),
+/// passes through the arrival's reflection points (within 1e-3 m) and lies on its legs'
+/// circles (centre where `c = 0`, within 1e-3 m): the picture draws the search's curved
+/// arrivals with their launch angles.
+#[test]
+fn the_svg_draws_walled_arrivals_through_their_reflections() {
+    let json = r#"{ "media": {
+       "water": { "profile": [[0, 1500], [-100, 1480]], "at": [0, -50] },
+       "mud": { "speed": 1700, "at": [0, -150] }, "air": { "speed": 340, "at": [0, 50] } },
+     "domain": [[-3000, -300], [6000, 100]],
+     "interfaces": {
+       "surface": { "points": [[-3000, 0], [6000, 0]] },
+       "bottom": { "points": [[-3000, -100], [6000, -100]] } },
+     "sources": [[0, -30]], "receivers": [[2500, -70]],
+     "search": { "max_steps": 3 } }"#;
+    let dir = std::env::temp_dir().join(format!("eigenray-svg-walled-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (file, svg) = (dir.join("walled.json"), dir.join("walled.svg"));
+    std::fs::write(&file, json).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_eigenray"))
+        .arg("solve")
+        .arg(&file)
+        .arg("--svg")
+        .arg(&svg)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let arrivals: Vec<Vec<[f64; 2]>> = doc["arrivals"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| serde_json::from_value(a["points"].clone()).unwrap())
+        .collect();
+    let text = std::fs::read_to_string(&svg).unwrap();
+    let rays = text.split(r#"<g class="rays""#).nth(1).unwrap();
+    let rays = &rays[..rays.find("</g>").unwrap()];
+    let lines: Vec<Vec<[f64; 2]>> = rays
+        .split(r#"<polyline points=""#)
+        .skip(1)
+        .map(|l| {
+            l[..l.find('"').unwrap()]
+                .split(' ')
+                .map(|p| {
+                    let (x, y) = p.split_once(',').unwrap();
+                    [x.parse().unwrap(), y.parse().unwrap()]
+                })
+                .collect()
+        })
+        .collect();
+    assert_eq!(lines.len(), arrivals.len());
+    assert!(arrivals.iter().any(|a| a.len() == 5), "{arrivals:?}");
+    let (s, r) = ([0.0, -30.0], [2500.0, -70.0]);
+    for (pixels, points) in lines.iter().zip(&arrivals) {
+        assert!(pixels.len() > 64, "{}", pixels.len());
+        let (p0, p1) = (pixels[0], pixels[pixels.len() - 1]);
+        let world: Vec<[f64; 2]> = pixels
+            .iter()
+            .map(|p| {
+                [
+                    s[0] + (p[0] - p0[0]) / (p1[0] - p0[0]) * (r[0] - s[0]),
+                    s[1] + (p[1] - p0[1]) / (p1[1] - p0[1]) * (r[1] - s[1]),
+                ]
+            })
+            .collect();
+        for q in points {
+            let near = world
+                .iter()
+                .map(|w| (w[0] - q[0]).hypot(w[1] - q[1]))
+                .fold(f64::INFINITY, f64::min);
+            assert!(near < 1e-3, "{q:?}: {near}");
+        }
+        let circles: Vec<(f64, f64)> = points
+            .windows(2)
+            .map(|w| {
+                let (a, b) = (Point::new(w[0][0], w[0][1]), Point::new(w[1][0], w[1][1]));
+                circle(a, b, -7500.0)
+            })
+            .collect();
+        for w in &world {
+            let off = circles
+                .iter()
+                .map(|(xc, radius)| ((w[0] - xc).hypot(w[1] + 7500.0) - radius).abs())
+                .fold(f64::INFINITY, f64::min);
+            assert!(off < 1e-3, "{w:?}: {off}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
