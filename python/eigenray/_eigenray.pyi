@@ -78,7 +78,8 @@ class Ray:
     coefficient: Optional[complex]
     attenuation_db: Optional[float]
     amplitude_reason: Optional[str]
-    # With a `profile` medium (None without; NaN for a ray through another medium).
+    # turns, launch_angle with a `profile` medium, caustics with a `profile` or `gradient`
+    # medium (None without; NaN for a ray through another medium).
     turns: Optional[float]
     caustics: Optional[float]
     launch_angle: Optional[float]
@@ -145,7 +146,8 @@ class Rays:
     coefficient: Optional[npt.NDArray[np.complex128]]
     attenuation_db: Optional[npt.NDArray[np.float64]]
     amplitude_reason: Optional[list[Optional[str]]]
-    # With a `profile` medium (None without; NaN for a ray through another medium).
+    # turns, launch_angle with a `profile` medium, caustics with a `profile` or `gradient`
+    # medium (None without; NaN for a ray through another medium).
     turns: Optional[npt.NDArray[np.float64]]
     caustics: Optional[npt.NDArray[np.float64]]
     launch_angle: Optional[npt.NDArray[np.float64]]
@@ -214,7 +216,8 @@ class Arrivals:
     """The attenuation of the media along the path, dB."""
     amplitude_reason: Optional[list[Optional[str]]]
     """Why an amplitude has no value (`None` where it has one)."""
-    # With a `profile` medium (None without).
+    # turns, launch_angle with a `profile` medium, caustics with a `profile` or `gradient`
+    # medium (None without).
     turns: Optional[npt.NDArray[np.float64]]
     """Turning points on the arrival's legs."""
     caustics: Optional[npt.NDArray[np.float64]]
