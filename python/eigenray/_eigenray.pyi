@@ -44,7 +44,21 @@ class Scene:
     def receivers(self) -> npt.NDArray[np.float64]: ...
     @property
     def num_rays(self) -> int: ...
+    @property
+    def curved(self) -> bool:
+        """Whether a medium has a `gradient` or a `profile` (some legs are curved)."""
     def to_json(self) -> str: ...
+    def curve(
+        self,
+        points: npt.ArrayLike,
+        media: Optional[Sequence[Union[str, int]]] = None,
+        *,
+        launch_angle: Optional[float] = None,
+        n: int = 100,
+    ) -> npt.NDArray[np.float64]:
+        """The curve of the ray through `points` (source, interaction points, receiver) with
+        leg media `media` (names or indices; None or -1: unknown, straight), sampled at `n`
+        points on the ray, `(n, 2)`; through a `profile`, the ray leaving at `launch_angle`."""
 
 class Ray:
     """One ray: status, time (NaN without one), points `(k + 2, 2)`, leg media's names."""
@@ -64,6 +78,15 @@ class Ray:
     coefficient: Optional[complex]
     attenuation_db: Optional[float]
     amplitude_reason: Optional[str]
+    # turns, launch_angle with a `profile` medium, caustics with a `profile` or `gradient`
+    # medium (None without; NaN for a ray through another medium).
+    turns: Optional[float]
+    caustics: Optional[float]
+    launch_angle: Optional[float]
+    def curve(self, n: int = 100) -> npt.NDArray[np.float64]:
+        """The ray's curve sampled at `n` points on the ray, `(n, 2)`: arcs through `gradient`
+        and `profile` media, the first point the source, the last the receiver, every
+        interaction point among them, each leg's points evenly spaced along it."""
 
 class Gradient:
     """Derivatives of one ray's time: source, receiver, slowness per medium, touched vertices."""
@@ -124,6 +147,13 @@ class Rays:
     coefficient: Optional[npt.NDArray[np.complex128]]
     attenuation_db: Optional[npt.NDArray[np.float64]]
     amplitude_reason: Optional[list[Optional[str]]]
+    # turns, launch_angle with a `profile` medium, caustics with a `profile` or `gradient`
+    # medium (None without; NaN for a ray through another medium).
+    turns: Optional[npt.NDArray[np.float64]]
+    caustics: Optional[npt.NDArray[np.float64]]
+    launch_angle: Optional[npt.NDArray[np.float64]]
+    def curve(self, i: int, n: int = 100) -> npt.NDArray[np.float64]:
+        """Ray `i`'s curve sampled at `n` points on the ray, `(n, 2)` (as `Ray.curve`)."""
     def __len__(self) -> int: ...
 
 class Arrivals:
@@ -187,6 +217,17 @@ class Arrivals:
     """The attenuation of the media along the path, dB."""
     amplitude_reason: Optional[list[Optional[str]]]
     """Why an amplitude has no value (`None` where it has one)."""
+    # turns, launch_angle with a `profile` medium, caustics with a `profile` or `gradient`
+    # medium (None without).
+    turns: Optional[npt.NDArray[np.float64]]
+    """Turning points on the arrival's legs."""
+    caustics: Optional[npt.NDArray[np.float64]]
+    """Caustics the arrival's ray tube passed (each −π/2 of phase)."""
+    launch_angle: Optional[npt.NDArray[np.float64]]
+    """The arrival's direction at the source, radians from +x."""
+    def curve(self, i: int, n: int = 100) -> npt.NDArray[np.float64]:
+        """Arrival `i`'s curve sampled at `n` points on the ray, `(n, 2)` (as `Ray.curve`):
+        the first point the source, the last the receiver, every interaction among them."""
     def to_dicts(self) -> list[dict[str, Any]]:
         """Every arrival as a dict: the list `search` gave before it gave arrays."""
     def __len__(self) -> int: ...

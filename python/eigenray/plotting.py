@@ -100,8 +100,30 @@ def _y_within(vertices, x0, x1):
     return np.asarray(ys, dtype=float)
 
 
-def _rays_polylines(rays, max_rays):
-    """The drawn rays' polylines, their times and path labels, and how many were left out."""
+#: Points a curved ray is drawn through: this many, and more per leg (`CURVE_PER_LEG`).
+CURVE_POINTS = 200
+
+#: Points a curved ray is drawn through per leg, besides `CURVE_POINTS`.
+CURVE_PER_LEG = 32
+
+
+def _curve_or_points(curve, points):
+    """A ray's polyline: `curve(n)` (its curve sampled on the ray, in a scene with curved
+    legs), or its points where the curve cannot be had (a scene changed since)."""
+    points = np.asarray(points, dtype=float)
+    if curve is None:
+        return points
+    try:
+        return curve(CURVE_POINTS + CURVE_PER_LEG * (len(points) - 1))
+    except (ValueError, IndexError):
+        return points
+
+
+def _rays_polylines(rays, max_rays, scene=None):
+    """The drawn rays' polylines (each ray's curve in a scene with curved legs: its arcs
+    through `gradient` and `profile` media, sampled on the ray), their times and path
+    labels, and how many were left out."""
+    curved = scene is not None and getattr(scene, "curved", False)
     if hasattr(rays, "points") and hasattr(rays, "num_points"):  # Rays
         has_time = ~np.isnan(rays.time)
         chosen = np.flatnonzero(has_time)
@@ -109,12 +131,37 @@ def _rays_polylines(rays, max_rays):
         if len(chosen) > max_rays:
             left_out = len(chosen) - max_rays
             chosen = chosen[np.linspace(0, len(chosen) - 1, max_rays).astype(int)]
-        lines = [rays.points[i, : rays.num_points[i]] for i in chosen]
+        lines = [
+            _curve_or_points(
+                (lambda n, i=i: rays.curve(int(i), n)) if curved else None,
+                rays.points[i, : rays.num_points[i]],
+            )
+            for i in chosen
+        ]
         times = rays.time[chosen]
         labels = [
             rays.path_names[rays.path[i]] or f"path {rays.path[i]}" for i in chosen
         ]
         return lines, times, labels, left_out
+    if hasattr(rays, "step_interface") and hasattr(rays, "curve"):  # Arrivals
+        chosen = np.arange(len(rays))
+        left_out = max(0, len(chosen) - max_rays)
+        if left_out:
+            chosen = chosen[np.linspace(0, len(chosen) - 1, max_rays).astype(int)]
+        lines, labels = [], []
+        for i in chosen:
+            item = rays[int(i)]
+            lines.append(
+                _curve_or_points(
+                    (lambda n, i=i: rays.curve(int(i), n)) if curved else None,
+                    np.asarray(item["points"])[:, :2],
+                )
+            )
+            labels.append(
+                " → ".join(f"{kind} {name}" for s in item["steps"] for kind, name in s.items())
+                or "direct"
+            )
+        return lines, np.asarray(rays.time)[chosen], labels, left_out
     # A list of rays (Ray objects or search arrivals as dicts), or `Arrivals` (its dicts).
     items = list(rays)
     left_out = max(0, len(items) - max_rays)
@@ -129,11 +176,20 @@ def _rays_polylines(rays, max_rays):
                 " → ".join(f"{kind} {name}" for s in steps for kind, name in s.items())
                 or "direct"
             )
+            curve = None
+            if curved and item.get("media") is not None:
+                curve = lambda n, item=item: scene.curve(  # noqa: E731
+                    np.asarray(item["points"])[:, :2],
+                    item["media"],
+                    launch_angle=item.get("launch_angle"),
+                    n=n,
+                )
         else:
             points, time = item.points, item.time
             label = item.status
+            curve = item.curve if curved and hasattr(item, "curve") else None
         if len(points) and not np.isnan(time):
-            lines.append(np.asarray(points))
+            lines.append(_curve_or_points(curve, points))
             times.append(time)
             labels.append(label)
     return lines, np.asarray(times, dtype=float), labels, left_out
@@ -145,7 +201,9 @@ def plot(scene, rays=None, *, colour_by="time", ax=None, max_rays=2000, labels=T
 
     `rays` is a `Rays` (from `Tracer.trace`, `trace_stationary` or `solve_pairs`), a list of
     `Ray` (from `Tracer.stationary_paths`), or the `Arrivals` from `Tracer.search` (or a list
-    of its dicts).
+    of its dicts). In a scene with curved legs (`scene.curved`: a `gradient` or `profile`
+    medium) each ray is drawn as its curve (`curve`, sampled on the ray: arcs, turning
+    points and all), else through its points.
     `colour_by`: ``"time"`` (a colour bar of travel time) or ``"path"`` (a colour per path
     name, or per step sequence for search arrivals, with a legend). Past `max_rays` rays an
     even sample is drawn and the title says so.
@@ -182,7 +240,7 @@ def plot(scene, rays=None, *, colour_by="time", ax=None, max_rays=2000, labels=T
             )
     title = None
     if rays is not None:
-        lines, times, names, left_out = _rays_polylines(rays, max_rays)
+        lines, times, names, left_out = _rays_polylines(rays, max_rays, scene)
         if colour_by == "time" and len(lines):
             collection = LineCollection(lines, array=times, cmap="viridis", linewidths=0.8)
             ax.add_collection(collection)

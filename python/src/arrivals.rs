@@ -2,8 +2,10 @@
 //! list of dicts `search` gave before them too: `len`, indexing (slices and negative indices),
 //! iteration and `to_dicts`, each dict made from the arrays when asked for.
 
-use eigenray::Point;
+use std::sync::Arc;
+
 use eigenray::trace::Kink;
+use eigenray::{Point, Scene};
 use numpy::ndarray::Dimension;
 use numpy::{
     Element, NpyIndex, PyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods,
@@ -14,6 +16,7 @@ use pyo3::types::{PyDict, PyList, PySlice};
 
 use crate::columns::{QuantityArrays, dir_of, why_words};
 use crate::convert::{kink_name, points_array};
+use crate::curve::CurveInput;
 use crate::rays::Reasons;
 
 /// The names of the step kinds, by their code in `step_kind`.
@@ -95,6 +98,8 @@ pub(crate) struct PyArrivals {
     /// `spreading`, `coefficient`, `attenuation_db`, `amplitude_reason`), read as attributes
     /// (`None` for a quantity the scene does not ask for).
     pub(crate) quantities: QuantityArrays,
+    /// The scene searched, for the arrivals' curves.
+    pub(crate) scene: Arc<Scene>,
 }
 
 #[pymethods]
@@ -122,6 +127,48 @@ impl PyArrivals {
 
     fn __dir__(&self, py: Python<'_>) -> PyResult<Vec<String>> {
         dir_of::<PyArrivals>(py)
+    }
+
+    /// Arrival `i`'s curve (negative: from the end) sampled at `n` points, an `(n, 2)`
+    /// float64 array, as `Ray.curve` gives it: on the ray itself (arcs through `gradient`
+    /// and `profile` media, through a profile the ray of its `launch_angle`, turning points
+    /// and reflections and all), the first its source, the last its receiver, every
+    /// interaction point among them. Raises `IndexError` past the arrivals, `EigenrayError`
+    /// (a `ValueError`) for `n` below its number of points or an extruded scene's arrival
+    /// (its 3-D points are its straight legs).
+    #[pyo3(signature = (i, n = 100))]
+    fn curve<'py>(
+        &self,
+        py: Python<'py>,
+        i: isize,
+        n: usize,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let len = self.len(py);
+        let at = if i < 0 { i + len as isize } else { i };
+        if at < 0 || at >= len as isize {
+            return Err(PyIndexError::new_err(format!(
+                "arrival index {i} is out of range ({len} arrivals)"
+            )));
+        }
+        let at = at as usize;
+        if self.points.bind(py).shape()[2] != 2 {
+            return Err(PyValueError::new_err(
+                "an extruded scene's arrivals have 3-D points: their legs are straight, their points the curve",
+            ));
+        }
+        let k = self::at(py, &self.order, at)? as usize + 2;
+        let mut row = Vec::with_capacity(k);
+        for j in 0..k {
+            row.push(Point::new(
+                self::at(py, &self.points, [at, j, 0])?,
+                self::at(py, &self.points, [at, j, 1])?,
+            ));
+        }
+        let legs: Vec<i64> = (0..k - 1)
+            .map(|j| self::at(py, &self.media, [at, j]))
+            .collect::<PyResult<_>>()?;
+        let angle = self.quantities.float_at(py, "launch_angle", at);
+        CurveInput::of_row(row, legs.into_iter(), angle).array(py, &self.scene, n)
     }
 
     /// Every arrival as a dict: the list `search` gave before it gave arrays.

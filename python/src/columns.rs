@@ -147,6 +147,14 @@ impl QuantityArrays {
             .and_then(|(_, a)| a.as_ref())
     }
 
+    /// Entry `i` of the float column `name`, when there is one.
+    pub(crate) fn float_at(&self, py: Python<'_>, name: &str, i: usize) -> Option<f64> {
+        match self.array(name)? {
+            ColumnArray::Float(a) => a.bind(py).get_owned([i]),
+            ColumnArray::Complex(_) => None,
+        }
+    }
+
     /// Its column names, in order.
     pub(crate) fn names(&self) -> Vec<&'static str> {
         self.columns.iter().map(|(c, _)| c.name).collect()

@@ -7,6 +7,7 @@
 mod arrivals;
 mod columns;
 mod convert;
+mod curve;
 mod error;
 mod gradient;
 mod gradients;

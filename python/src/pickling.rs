@@ -2,11 +2,11 @@
 //! `Tracer` as the scene's JSON document (the library's `Scene::to_json`, which reads back to
 //! the same scene bit for bit), a `Rays` as its arrays, its names and its reasons as codes.
 
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
-use eigenray::Reason;
 use eigenray::amplitude::{DiffractionCase, NoAmplitude};
 use eigenray::trace::Threshold;
+use eigenray::{Reason, Scene};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
@@ -200,6 +200,9 @@ pub(crate) fn rays_state<'py>(py: Python<'py>, rays: &PyRays) -> PyResult<Bound<
     d.set_item("kink", &rays.kink)?;
     d.set_item("complete", &rays.complete)?;
     rays.quantities.set_items(&d)?;
+    // The scene (for the rays' curves), as its document.
+    let scene = py.detach(|| rays.scene.lock().ok()?.as_ref().map(|s| s.to_json()));
+    d.set_item("scene", scene)?;
     // The GIL released while waiting, as the `reason` getter does: a `trace(out=...)` of
     // these rays in another thread holds the lock through its batch.
     let reasons = py.detach(|| {
@@ -222,6 +225,17 @@ pub(crate) fn rays_state<'py>(py: Python<'py>, rays: &PyRays) -> PyResult<Bound<
         set_sparse(&d, name, why)?;
     }
     Ok(d)
+}
+
+/// The scene of a pickled state (its document under `"scene"`; `None` for none).
+fn scene_of_state(state: &Bound<'_, PyDict>) -> PyResult<Option<Arc<Scene>>> {
+    let Some(text) = state.get_item("scene")?.filter(|v| !v.is_none()) else {
+        return Ok(None);
+    };
+    let text: String = text.extract()?;
+    let scene = Scene::from_json(&text)
+        .map_err(|e| PyValueError::new_err(format!("Rays state: `scene`: {e}")))?;
+    Ok(Some(Arc::new(scene)))
 }
 
 /// The `Rays` of a state of [`rays_state`], its arrays checked for their types and lengths.
@@ -288,6 +302,7 @@ pub(crate) fn rays_of_state(state: &Bound<'_, PyDict>) -> PyResult<PyRays> {
         media: media.unbind(),
         iterations: column(state, "iterations", n)?,
         residual: column(state, "residual", n)?,
+        scene: Mutex::new(scene_of_state(state)?),
         reasons: Mutex::new(Reasons {
             codes,
             any,

@@ -1,5 +1,7 @@
 //! `Ray`: one ray (or one stationary path) as Python values.
 
+use std::sync::Arc;
+
 use eigenray::output::columns::Entry;
 use eigenray::{Arrival, Point, RayRecord, Scene};
 use numpy::PyArray2;
@@ -7,6 +9,7 @@ use pyo3::prelude::*;
 
 use crate::columns::{RayValues, dir_of};
 use crate::convert::{kink_name, medium_names, points_array};
+use crate::curve::CurveInput;
 
 /// One ray: its status, time, points and leg media (and its amplitude, when the scene asks
 /// for amplitudes).
@@ -42,6 +45,10 @@ pub(crate) struct PyRay {
     kink: Option<String>,
     /// The values of the quantities its scene asks for, read as attributes.
     quantities: RayValues,
+    /// Its scene (the tracer's when it was solved), for its curve.
+    scene: Arc<Scene>,
+    /// What its curve is sampled from.
+    curve_input: CurveInput,
 }
 
 #[pymethods]
@@ -61,6 +68,18 @@ impl PyRay {
         dir_of::<PyRay>(py)
     }
 
+    /// The ray's curve sampled at `n` points, an `(n, 2)` float64 array: on the ray itself
+    /// (a leg through a `gradient` medium is its circular arc, a ray through a `profile`
+    /// medium its arcs through its turning points and reflections, a straight leg its
+    /// chord), the first the source, the last the receiver and every interaction point
+    /// among them, each leg's points evenly spaced along it (each leg a share of the `n − 1`
+    /// steps in proportion to its length, at least one). Raises `EigenrayError` (a
+    /// `ValueError`) for a ray without a time, or `n` below its number of points.
+    #[pyo3(signature = (n = 100))]
+    fn curve<'py>(&self, py: Python<'py>, n: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        self.curve_input.array(py, &self.scene, n)
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "Ray(status={:?}, time={}, iterations={})",
@@ -74,12 +93,21 @@ impl PyRay {
     /// `Tracer.solve`).
     pub(crate) fn from_record(
         py: Python<'_>,
-        scene: &Scene,
+        scene: &Arc<Scene>,
         record: &RayRecord,
         points: &[Point],
         media: &[usize],
         entry: &Entry<'_>,
     ) -> PyRay {
+        let curve_input = CurveInput {
+            points: if record.status.has_time() {
+                points.to_vec()
+            } else {
+                Vec::new()
+            },
+            media: media.to_vec(),
+            launch_angle: entry.launch_angle,
+        };
         PyRay {
             status: record.status.as_str().to_string(),
             time: record.time,
@@ -91,12 +119,28 @@ impl PyRay {
             arrival: None,
             kink: None,
             quantities: RayValues::new(scene, entry),
+            scene: Arc::clone(scene),
+            curve_input,
         }
     }
 
     /// Stationary path `index` of a triple, `a` (of `Tracer.stationary_paths`).
-    pub(crate) fn from_arrival(py: Python<'_>, scene: &Scene, index: usize, a: &Arrival) -> PyRay {
+    pub(crate) fn from_arrival(
+        py: Python<'_>,
+        scene: &Arc<Scene>,
+        index: usize,
+        a: &Arrival,
+    ) -> PyRay {
         let entry = Entry::of_arrival(a);
+        let curve_input = CurveInput {
+            points: if a.status.has_time() {
+                a.points.clone()
+            } else {
+                Vec::new()
+            },
+            media: a.media.clone(),
+            launch_angle: a.launch_angle,
+        };
         PyRay {
             status: a.status.as_str().to_string(),
             time: a.time,
@@ -108,6 +152,8 @@ impl PyRay {
             arrival: Some(index),
             kink: kink_name(a.kink),
             quantities: RayValues::new(scene, &entry),
+            scene: Arc::clone(scene),
+            curve_input,
         }
     }
 }

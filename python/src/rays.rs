@@ -1,11 +1,14 @@
 //! `Rays`: every ray of a scene (or every stationary path) as numpy arrays, and the reasons of
 //! those that are not `converged`.
 
-use numpy::PyUntypedArrayMethods;
+use eigenray::Point;
+use numpy::{PyArray2, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::exceptions::{PyIndexError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyType};
 
 use crate::columns::{dir_of, why_words};
+use crate::curve::CurveInput;
 use crate::pickling;
 
 pub(crate) use crate::rays_data::{PyRays, Reasons, none_of};
@@ -36,6 +39,47 @@ impl PyRays {
 
     fn __dir__(&self, py: Python<'_>) -> PyResult<Vec<String>> {
         dir_of::<PyRays>(py)
+    }
+
+    /// Ray `i`'s curve (negative: from the end) sampled at `n` points, an `(n, 2)` float64
+    /// array, as `Ray.curve` gives it: on the ray itself (arcs through `gradient` and
+    /// `profile` media, the ray of its `launch_angle` through a profile), the first its
+    /// source, the last its receiver, every interaction point among them. Raises
+    /// `IndexError` past the rays, `EigenrayError` (a `ValueError`) for a ray without a time
+    /// or `n` below its number of points.
+    #[pyo3(signature = (i, n = 100))]
+    fn curve<'py>(
+        &self,
+        py: Python<'py>,
+        i: isize,
+        n: usize,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let len = self.time.bind(py).len();
+        let at = if i < 0 { i + len as isize } else { i };
+        if at < 0 || at >= len as isize {
+            return Err(PyIndexError::new_err(format!(
+                "ray index {i} is out of range ({len} rays)"
+            )));
+        }
+        let at = at as usize;
+        let scene = self
+            .scene
+            .lock()
+            .ok()
+            .and_then(|s| s.clone())
+            .ok_or_else(|| PyValueError::new_err("these rays carry no scene for their curves"))?;
+        let k = usize::try_from(self.num_points.bind(py).get_owned([at]).unwrap_or(0)).unwrap_or(0);
+        let points = self.points.bind(py).readonly();
+        let points = points.as_array();
+        let media = self.media.bind(py).readonly();
+        let media = media.as_array();
+        let k = k.min(points.shape()[1]);
+        let row: Vec<Point> = (0..k)
+            .map(|j| Point::new(points[[at, j, 0]], points[[at, j, 1]]))
+            .collect();
+        let legs = (0..k.saturating_sub(1)).map(|j| i64::from(media[[at, j]]));
+        let angle = self.quantities.float_at(py, "launch_angle", at);
+        CurveInput::of_row(row, legs, angle).array(py, &scene, n)
     }
 
     /// Pickling (`multiprocessing`, joblib, Dask): the arrays, the names and the reasons;

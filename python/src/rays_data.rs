@@ -2,9 +2,9 @@
 //! and the reasons of those that are not `converged` (`Reasons`), apart from the methods so
 //! that pickling (`pickling.rs`), which `Rays` calls, can build one without a circle.
 
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
-use eigenray::Reason;
+use eigenray::{Reason, Scene};
 use numpy::{PyArray1, PyArray2, PyArray3};
 use pyo3::prelude::*;
 use rayon::iter::ParallelExtend;
@@ -73,6 +73,9 @@ pub(crate) struct PyRays {
     /// `spreading`, `coefficient`, `attenuation_db`, `amplitude_reason`), read as attributes
     /// (`None` for a quantity the scene does not ask for).
     pub(crate) quantities: QuantityArrays,
+    /// The scene the rays were traced in (the tracer's, last written by `trace(out=...)`),
+    /// for their curves.
+    pub(crate) scene: Mutex<Option<Arc<Scene>>>,
 }
 
 /// Why each ray of a `Rays` is not `converged`, as the library's reasons (written by the

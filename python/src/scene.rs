@@ -10,7 +10,8 @@ use pyo3::exceptions::PyIOError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString, PyType};
 
-use crate::convert::points_array;
+use crate::convert::{named_index, points_arg, points_array};
+use crate::curve::CurveInput;
 use crate::error::{argument_error, scene_error};
 
 /// A scene: media, interfaces, sources, receivers and paths, validated.
@@ -184,6 +185,49 @@ impl PyScene {
     }
 
     /// Rays of the scene: sources × receivers × paths.
+    /// The curve of the ray through `points` (its source, its interaction points, its
+    /// receiver: a `Ray`'s `points`, a row of `Rays.points` or `Arrivals.points` without its
+    /// padding) whose legs lie in `media` (names or indices, one per leg, as `Ray.media` and
+    /// the rows of `media` give them; `None` or a −1: not known, the legs drawn straight),
+    /// sampled at `n` points, an `(n, 2)` float64 array, as `Ray.curve` gives it. Through a
+    /// `profile` medium, the ray that leaves at `launch_angle` (the entry's `launch_angle`;
+    /// `None`: the one the default mode chooses). Raises `EigenrayError` (a `ValueError`)
+    /// naming the argument at fault.
+    #[pyo3(signature = (points, media = None, *, launch_angle = None, n = 100))]
+    fn curve<'py>(
+        &self,
+        py: Python<'py>,
+        points: &Bound<'py, PyAny>,
+        media: Option<&Bound<'py, PyAny>>,
+        launch_angle: Option<f64>,
+        n: usize,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let points = points_arg(py, "points", points, 16)?;
+        let scene = &self.scene;
+        let mut legs = Vec::new();
+        if let Some(media) = media {
+            for m in media.try_iter()? {
+                let m = m?;
+                if m.extract::<i64>().is_ok_and(|i| i < 0) {
+                    legs.push(-1);
+                    continue;
+                }
+                let index = named_index(py, "media", &m, scene.media().len(), |name| {
+                    scene.medium_index(name)
+                })?;
+                legs.push(index as i64);
+            }
+        }
+        CurveInput::of_row(points, legs.into_iter(), launch_angle).array(py, scene, n)
+    }
+
+    /// Whether a medium has a `gradient` or a `profile` (some legs are curved: draw them with
+    /// `curve`).
+    #[getter]
+    fn curved(&self) -> bool {
+        self.scene.curved()
+    }
+
     #[getter]
     fn num_rays(&self) -> usize {
         self.scene.num_rays()

@@ -2,6 +2,8 @@
 //! own, and its arrivals written there into the columns of an `Arrivals` (no Python object per
 //! arrival).
 
+use std::sync::Arc;
+
 use eigenray::options::Run;
 use eigenray::output::columns::{Entry, Schema};
 use eigenray::trace::Kink;
@@ -44,7 +46,7 @@ pub(crate) fn search_arrivals(py: Python<'_>, tracer: &Tracer) -> PyResult<PyArr
             "the search was stopped",
         ));
     };
-    Ok(table.finish(py, tracer.scene()))
+    Ok(table.finish(py, &tracer.shared_scene()))
 }
 
 /// The columns of a search's arrivals while they are filled: one entry per arrival, and
@@ -181,7 +183,7 @@ impl ArrivalTable {
     }
 
     /// The columns as the `Arrivals` of `scene`.
-    fn finish(self, py: Python<'_>, scene: &Scene) -> PyArrivals {
+    fn finish(self, py: Python<'_>, scene: &Arc<Scene>) -> PyArrivals {
         let (n, steps) = (self.time.len(), self.steps);
         let (quantities, whys) = self.quantities.finish(py);
         let interfaces = interface_names(scene);
@@ -230,6 +232,7 @@ impl ArrivalTable {
             },
             kinks: self.kink,
             quantities,
+            scene: Arc::clone(scene),
         }
     }
 }

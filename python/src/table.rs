@@ -153,6 +153,7 @@ impl Table {
                 .unbind(),
             iterations: self.iterations.into_pyarray(py).unbind(),
             residual: self.residual.into_pyarray(py).unbind(),
+            scene: Mutex::new(None),
             reasons: Mutex::new(Reasons {
                 codes: self.reason,
                 any: self.any_reason.into_inner(),

@@ -1,6 +1,8 @@
 //! `Tracer.trace`: the batch of every ray, written into numpy's arrays by its own workers,
 //! with progress reported from the calling thread, which Ctrl-C interrupts.
 
+use std::sync::PoisonError;
+
 use eigenray::options::Run;
 use eigenray::output::columns::Schema;
 use eigenray::{
@@ -37,6 +39,9 @@ pub(crate) fn trace_rays(
             let progress = Progress::new(py, progress, n)?;
             let reported = trace_rows(py, tracer, scratch, warm_start, progress, sink)?;
             arrays.finish(scene);
+            if let Ok(mut kept) = out.get().scene.lock() {
+                *kept = Some(tracer.shared_scene());
+            }
             reported?;
             Ok(out.unbind())
         }
@@ -48,7 +53,10 @@ pub(crate) fn trace_rays(
             let sink = RowSink::new(scene, table.rows());
             let progress = Progress::new(py, progress, n)?;
             trace_rows(py, tracer, scratch, warm_start, progress, sink)??;
-            Py::new(py, table.finish(py, scene))
+            let rays = table.finish(py, scene);
+            *rays.scene.lock().unwrap_or_else(PoisonError::into_inner) =
+                Some(tracer.shared_scene());
+            Py::new(py, rays)
         }
     }
 }

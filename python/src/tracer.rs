@@ -225,7 +225,9 @@ impl PyTracer {
         .map_err(|e| scene_error(py, &e.into()))?;
         reports.finish()?;
         let table = py.detach(|| stationary_table(scene, &rays));
-        Ok(table.finish(py, scene))
+        let rays = table.finish(py, scene);
+        *rays.scene.lock().unwrap_or_else(PoisonError::into_inner) = Some(tracer.shared_scene());
+        Ok(rays)
     }
 
     /// One ray of path `path` (index or name) between any two points.
@@ -245,7 +247,7 @@ impl PyTracer {
             let entry = Entry::solved(&tracer, path, &record, ws);
             Ok(PyRay::from_record(
                 py,
-                scene,
+                &tracer.shared_scene(),
                 &record,
                 ws.points(),
                 ws.media(),
@@ -407,7 +409,9 @@ impl PyTracer {
             || pairs_table(&tracer, &sources, &receivers, path, &run),
             || {},
         )?;
-        Ok(table.finish(py, scene))
+        let rays = table.finish(py, scene);
+        *rays.scene.lock().unwrap_or_else(PoisonError::into_inner) = Some(tracer.shared_scene());
+        Ok(rays)
     }
 
     /// Every stationary path of path `path` between two points, ordered by time (a `Ray`
@@ -434,10 +438,11 @@ impl PyTracer {
                 || {},
             )?
             .map_err(|e| scene_error(py, &e.into()))?;
+            let shared = tracer.shared_scene();
             let rays = out
                 .iter()
                 .enumerate()
-                .map(|(i, a)| PyRay::from_arrival(py, scene, i, a))
+                .map(|(i, a)| PyRay::from_arrival(py, &shared, i, a))
                 .collect();
             Ok((rays, search.complete))
         })

@@ -1036,14 +1036,40 @@ impl Profile {
     }
 
     /// Points along `ray` from `a`: each piece's ends and `per_piece − 1` points inside it
-    /// (equal steps of the angle), for drawing.
+    /// (equal steps of the speed), for the obstruction test.
     pub fn curve(&self, ray: &ProfileRay, a: Vec2, b: Vec2, per_piece: usize) -> Vec<Vec2> {
+        let per = per_piece.max(1);
+        let mut out = vec![a];
+        for run in self.pieces(ray, a, b) {
+            let (p, y, y_end) = (run.p, run.start.y, run.end.y);
+            let ([c, c_end], s) = (run.speeds, run.sines[0]);
+            let turning = run.end_kind == PieceEnd::Turn;
+            for j in 1..=per {
+                let f = j as f64 / per as f64;
+                // Equal steps of the speed (of the angle along an arc, to first order).
+                let (yj, cj) = (y + (y_end - y) * f, c + (c_end - c) * f);
+                let sj = if turning && j == per {
+                    0.0
+                } else {
+                    sine(p, cj)
+                };
+                let part = piece::<true>(p, (yj - y).abs(), c, cj, s, sj);
+                out.push(Vec2::new(run.start.x + run.sx * part.x, yj));
+            }
+        }
+        out
+    }
+
+    /// The pieces of `ray` from `a` to `b`, in order: each inside one layer (a circular arc,
+    /// or a straight line), ended by a knot, a turning point, a wall or `b`'s height on the
+    /// last run. Each piece's end is the next one's start (its `x` the sum of the pieces'
+    /// closed-form ranges: the last end lies on `b` to the ray's own refinement).
+    pub fn pieces(&self, ray: &ProfileRay, a: Vec2, b: Vec2) -> Vec<RayPiece> {
         let p = ray.p.abs();
         let sx = if ray.p < 0.0 { -1.0 } else { 1.0 };
-        let mut out = vec![a];
+        let mut out = Vec::new();
         let (mut x, mut y, mut dir) = (a.x, a.y, ray.first);
         let mut s = ray.sines[0];
-        let per = per_piece.max(1);
         let events = ray.turns + ray.reflections;
         for k in 0..=events {
             let last = k == events;
@@ -1054,54 +1080,134 @@ impl Profile {
                     Some(i) => (self.y[i], self.c[i]),
                     None => (dir * 1e300, c),
                 };
-                let mut end_here = false;
-                let mut at_wall = false;
+                let mut end_kind = PieceEnd::Knot;
                 if let Some(w) = self.walls.ahead(y, dir)
                     && (w - y_end) * dir <= 0.0
                 {
                     (y_end, c_end) = (w, self.speed_at(w));
-                    at_wall = true;
+                    end_kind = PieceEnd::Wall;
                 }
                 let yb = last.then_some(b.y);
                 if let Some(t) = yb
                     && (t - y_end) * dir <= 0.0
                 {
                     (y_end, c_end) = (t, self.speed_at(t));
-                    end_here = true;
-                    at_wall = false;
+                    end_kind = PieceEnd::Target;
                 }
-                let turning = !end_here && c_end >= 1.0 / p && p > 0.0 && c_end != c;
-                if turning {
+                if end_kind != PieceEnd::Target && c_end >= 1.0 / p && p > 0.0 && c_end != c {
                     let slope = (c_end - c) / (y_end - y);
                     y_end = y + (1.0 / p - c) / slope;
                     c_end = 1.0 / p;
+                    end_kind = PieceEnd::Turn;
                 }
-                for j in 1..=per {
-                    let f = j as f64 / per as f64;
-                    // Equal steps of the speed (of the angle along an arc, to first order).
-                    let (yj, cj) = (y + (y_end - y) * f, c + (c_end - c) * f);
-                    let sj = if turning && j == per {
-                        0.0
-                    } else {
-                        sine(p, cj)
-                    };
-                    let part = piece::<true>(p, (yj - y).abs(), c, cj, s, sj);
-                    out.push(Vec2::new(x + sx * part.x, yj));
+                if y_end.abs() >= 1e300 {
+                    // Into the uniform speed beyond the end knots without a turn: no ray
+                    // of `ray`'s branch (never for a ray the profile found).
+                    return out;
                 }
                 let part = piece::<true>(p, (y_end - y).abs(), c, c_end, s, sine(p, c_end));
+                let s_end = if end_kind == PieceEnd::Turn {
+                    0.0
+                } else {
+                    sine(p, c_end)
+                };
+                let start = Vec2::new(x, y);
                 x += sx * part.x;
                 y = y_end;
-                s = if turning { 0.0 } else { sine(p, c_end) };
-                if turning || at_wall {
-                    dir = -dir;
-                    break;
-                }
-                if end_here {
-                    return out;
+                out.push(RayPiece {
+                    start,
+                    end: Vec2::new(x, y),
+                    speeds: [c, c_end],
+                    sines: [s, s_end],
+                    p,
+                    sx,
+                    end_kind,
+                });
+                s = s_end;
+                match end_kind {
+                    PieceEnd::Turn | PieceEnd::Wall => {
+                        dir = -dir;
+                        break;
+                    }
+                    PieceEnd::Target => return out,
+                    PieceEnd::Knot => {}
                 }
             }
         }
         out
+    }
+}
+
+/// What ends a [`RayPiece`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum PieceEnd {
+    /// A knot, crossed.
+    Knot,
+    /// A turning point.
+    Turn,
+    /// A wall, where the ray reflects.
+    Wall,
+    /// The end's height on the ray's last run: the ray's end.
+    Target,
+}
+
+/// One piece of a ray inside one layer of a profile ([`Profile::pieces`]): a circular arc
+/// (a straight line in a uniform layer or along a vertical ray), monotone in height.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct RayPiece {
+    /// Where it starts and where it ends.
+    pub start: Vec2,
+    pub end: Vec2,
+    /// The speeds at its ends.
+    pub speeds: [f64; 2],
+    /// The sines of the ray's angle with the horizontal at its ends (0 at a turning point).
+    pub sines: [f64; 2],
+    /// The horizontal slowness (≥ 0) and the ray's horizontal direction (±1).
+    pub p: f64,
+    pub sx: f64,
+    /// What ends it.
+    pub end_kind: PieceEnd,
+}
+
+impl RayPiece {
+    /// Its arc length (the closed form of the module's table).
+    pub fn arc_length(&self) -> f64 {
+        let ([c1, c2], [s1, s2]) = (self.speeds, self.sines);
+        let h = (self.end.y - self.start.y).abs();
+        piece::<true>(self.p, h, c1, c2, s1, s2).arc
+    }
+
+    /// The point of the piece at the fraction `f` of its arc length from its start (its
+    /// ends at 0 and 1): the ray's angle with the horizontal `φ` (`cos φ = p c`) turns
+    /// evenly along an arc, so the point's height is where `cos φ` is the one at
+    /// `φ₁ + f (φ₂ − φ₁)`, and its `x` the closed-form range from the start to that height:
+    /// the point lies on the ray whatever the rounding of its height.
+    pub fn at(&self, f: f64) -> Vec2 {
+        if f <= 0.0 {
+            return self.start;
+        }
+        if f >= 1.0 {
+            return self.end;
+        }
+        let ([c1, c2], [s1, s2], p) = (self.speeds, self.sines, self.p);
+        let (phi1, phi2) = (s1.atan2(p * c1), s2.atan2(p * c2));
+        let turn = phi2 - phi1;
+        // The fraction of the height: (cos φ − cos φ₁) / (cos φ₂ − cos φ₁), in products of
+        // sines (no cancellation); a straight piece (a uniform layer, a vertical ray, or one
+        // that barely turns) in equal steps of height.
+        let t = if turn.abs() < 1e-9 {
+            f
+        } else {
+            let phi = phi1 + f * turn;
+            ((0.5 * (phi + phi1)).sin() * (0.5 * f * turn).sin())
+                / ((0.5 * (phi2 + phi1)).sin() * (0.5 * turn).sin())
+        };
+        let t = t.clamp(0.0, 1.0);
+        let y = self.start.y + (self.end.y - self.start.y) * t;
+        let c = c1 + (c2 - c1) * t;
+        let s = if t == 1.0 { s2 } else { sine(p, c) };
+        let part = piece::<false>(p, (y - self.start.y).abs(), c1, c, s1, s);
+        Vec2::new(self.start.x + self.sx * part.x, y)
     }
 }
 

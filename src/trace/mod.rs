@@ -24,6 +24,7 @@ mod amplitude;
 mod chain;
 mod classify;
 mod complete;
+mod curve;
 pub(crate) mod diffract;
 mod flat;
 mod mirrors;
@@ -43,6 +44,7 @@ pub(crate) use chain::{ChainLink, ChainRays, WarmStarts};
 pub(crate) use classify::{Classifier, Sequence};
 pub(crate) use complete::SearchBudget;
 pub use complete::{Arrival, Kink, SearchOutcome, StationaryError};
+pub use curve::{CurveError, ray_curve};
 pub(crate) use flat::SegmentFrame;
 pub(crate) use mirrors::{
     GuidePath, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls, RoomPath,
@@ -344,6 +346,12 @@ impl Tracer {
     /// The scene.
     pub fn scene(&self) -> &Scene {
         &self.scene
+    }
+
+    /// The scene, shared (what a result that outlives the tracer keeps of it: the Python
+    /// package's rays, for their curves).
+    pub fn shared_scene(&self) -> Arc<Scene> {
+        Arc::clone(&self.scene)
     }
 
     /// The region lookup, if the scene needed one.

@@ -710,3 +710,62 @@ fn walled_crossing(
             .map(|r| r.interface as usize)
     })
 }
+
+/// The ray of a profile medium an entry between `points` (its source, its reflections at
+/// the waveguide's walls, its receiver) through medium `medium` is, with the profile it was
+/// traced in (between its walls for a ray with reflections or one of a search): the one
+/// that leaves at `launch_angle` (radians from +x, within 1e-9) when given, else the one
+/// the default mode chose (the earliest no interface crosses, else the earliest; between
+/// walls, the one whose reflection points are `points`). `None` where there is none.
+/// (`leaving`: the launch angle asked for.)
+pub(crate) fn profile_ray_of(
+    scene: &Scene,
+    points: &[Point],
+    medium: usize,
+    leaving: Option<f64>,
+) -> Option<(Profile, ProfileRay)> {
+    let profile = scene.media().get(medium)?.profile_model()?;
+    let (&s, &r) = (points.first()?, points.last()?);
+    let reflections = points.len().checked_sub(2)?;
+    let nearest = |rays: &mut dyn Iterator<Item = (Profile, ProfileRay)>, angle: f64| {
+        rays.map(|(pr, ray)| {
+            let off = (launch_angle(&ray) - angle).rem_euclid(std::f64::consts::TAU);
+            (off.min(std::f64::consts::TAU - off), pr, ray)
+        })
+        .filter(|(off, ..)| *off <= 1e-9)
+        .min_by(|x, y| x.0.total_cmp(&y.0))
+        .map(|(_, pr, ray)| (pr, ray))
+    };
+    if reflections == 0 {
+        let found = profile.arrivals_cached(s.to_vec2(), r.to_vec2());
+        let chosen = match leaving {
+            Some(angle) => nearest(
+                &mut found.rays.iter().map(|ray| (profile.clone(), *ray)),
+                angle,
+            ),
+            None => found
+                .rays
+                .iter()
+                .find(|x| profile_crossing(scene, &profile, x, s, r).is_none())
+                .or(found.rays.first())
+                .map(|ray| (profile.clone(), *ray)),
+        };
+        if chosen.is_some() || leaving.is_none() {
+            return chosen;
+        }
+    }
+    let guide = waveguide(scene, s);
+    let walled = profile.clone().with_walls(guide.walls);
+    let bounds = Bounds {
+        reflections: u32::try_from(reflections).unwrap_or(u32::MAX),
+        time: f64::INFINITY,
+    };
+    let (rays, _) = walled_rays(scene, &profile, s, r, bounds);
+    let mut own = rays.into_iter().filter(|w| w.points.len() == points.len());
+    match leaving {
+        Some(angle) => nearest(&mut own.map(|w| (walled.clone(), w.ray)), angle),
+        None => own
+            .find(|w| w.points == points)
+            .map(|w| (walled.clone(), w.ray)),
+    }
+}

@@ -4,12 +4,12 @@
 //! interfaces and media. Big batches are drawn as a sample, and the picture says so. This file
 //! puts the picture together and draws the scene; its parts are in the files beside it.
 
-mod arcs;
 mod axes;
 mod caption;
 pub mod charts;
 mod colour;
 mod colouring;
+mod curves;
 mod entries;
 mod key;
 mod labels;
@@ -19,6 +19,8 @@ mod marks;
 mod markup;
 
 use std::fmt::Write as _;
+
+use rayon::prelude::*;
 
 use eigenray::{Point, RaySet, Scene, SearchArrival};
 
@@ -63,7 +65,12 @@ pub fn scene_svg_with_axes(
     axes: &Axes,
 ) -> String {
     let entries = Entries::new(scene, rays, arrivals);
-    let drawn = entries.drawn();
+    let mut drawn = entries.drawn();
+    // (In parallel: a profile's ray is searched again per pair.)
+    drawn
+        .items
+        .par_iter_mut()
+        .for_each(|item| item.curve = curves::sampled(scene, item));
     let rays = &drawn.items;
     // Paths or sequences drawn, for the legend.
     let legend = Legend::new(scene, rays, colouring);
@@ -136,8 +143,8 @@ fn draw_domain(s: &mut String, scene: &Scene, view: &View) {
     }
 }
 
-/// Draws the drawn items as polylines in their `colours` (legs through a gradient medium as
-/// sampled arcs), thinner the more there are, each titled with its source, receiver, path (or sequence), status and time.
+/// Draws the drawn items as polylines in their `colours` (curved legs, through a gradient
+/// or a profile medium, sampled on the ray), thinner the more there are, each titled with its source, receiver, path (or sequence), status and time.
 fn draw_rays(s: &mut String, scene: &Scene, view: &View, rays: &[Item], colours: &RayColours) {
     let stroke = match rays.len() {
         0..=50 => 1.6,
@@ -159,9 +166,10 @@ fn draw_rays(s: &mut String, scene: &Scene, view: &View, rays: &[Item], colours:
             Some(a) => format!(", arrival {a}"),
             None => String::new(),
         };
-        // Through a gradient medium: the arcs sampled, to the micro-pixel.
-        let points = match arcs::sampled(scene, r) {
-            Some(sampled) => view.points_fine(&sampled),
+        // Curved legs (a gradient or a profile medium): sampled on the ray, to the
+        // micro-pixel.
+        let points = match &r.curve {
+            Some(sampled) => view.points_fine(sampled),
             None => view.points(&r.points),
         };
         let _ = writeln!(

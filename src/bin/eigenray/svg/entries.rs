@@ -27,6 +27,11 @@ pub(super) struct Item {
     pub(super) points: Vec<Point>,
     /// Leg media (indices into [`Scene::media`]), when known.
     pub(super) media: Vec<usize>,
+    /// Its direction at the source, where the points alone do not fix the ray (a
+    /// `profile` medium's stationary path or search arrival).
+    pub(super) launch_angle: Option<f64>,
+    /// The points drawn, its curved legs sampled (`None`: drawn through `points`).
+    pub(super) curve: Option<Vec<Point>>,
 }
 
 /// The entries a picture draws from: its rays (in any form) and a search's arrivals.
@@ -102,6 +107,8 @@ impl<'a> Entries<'a> {
                 time: a.arrival.time,
                 points: a.arrival.points.clone(),
                 media: a.arrival.media.clone(),
+                launch_angle: a.arrival.launch_angle,
+                curve: None,
             };
         }
         let ray = |r: eigenray::Ray| Item {
@@ -114,6 +121,8 @@ impl<'a> Entries<'a> {
             time: r.time,
             points: r.points,
             media: r.media,
+            launch_angle: None,
+            curve: None,
         };
         match self.rays {
             RaySet::Rays(rays) => ray(rays[i].clone()),
@@ -136,19 +145,23 @@ impl<'a> Entries<'a> {
                     time: f64::NAN,
                     points: Vec::new(),
                     media: Vec::new(),
+                    launch_angle: None,
+                    curve: None,
                 };
                 if let Some(a) = t.arrivals.get(arrival) {
                     item.status = a.status;
                     item.time = a.time;
                     item.points = a.points.clone();
                     item.media = a.media.clone();
+                    item.launch_angle = a.launch_angle;
                 }
                 item
             }
         }
     }
 
-    /// The items drawn: every drawable entry, or past [`MAX_RAYS`] those of a sample.
+    /// The items drawn: every drawable entry, or past [`MAX_RAYS`] those of a sample (their
+    /// curves not yet sampled).
     pub(super) fn drawn(&self) -> Drawn {
         let (picked, sampled) = sample(self.len());
         let items: Vec<Item> = picked

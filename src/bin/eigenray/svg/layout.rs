@@ -115,9 +115,8 @@ struct World {
 fn world(scene: &Scene, rays: &[Item]) -> World {
     let mut b = scene.bbox();
     for r in rays {
-        // (A gradient medium's arcs as drawn: they may bulge past their ends.)
-        let sampled = super::arcs::sampled(scene, r);
-        for p in sampled.as_deref().unwrap_or(&r.points) {
+        // (Curved legs as drawn: they may bulge past their ends.)
+        for p in r.curve.as_deref().unwrap_or(&r.points) {
             b = b.union(Aabb::from_points(*p, *p));
         }
     }
