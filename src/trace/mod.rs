@@ -46,7 +46,7 @@ pub use complete::{Arrival, Kink, SearchOutcome, StationaryError};
 pub(crate) use flat::SegmentFrame;
 pub(crate) use mirrors::{
     GuidePath, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls, RoomPath,
-    Waveguide,
+    TreePath, Waveguide,
 };
 pub use plan::Kernels;
 pub use result::{Ray, RayRecord, Reason, Status, Threshold};
