@@ -560,7 +560,9 @@ where
             Some(beam) => beam.holds(&self.walls.walls[top.wall], top.image, receiver, delta),
             None => true,
         };
-        if !inside || top.image.distance(receiver) - 4.0 * delta > self.bounds.reach {
+        // (Without a time bound, no receiver is too far: the distance is not needed.)
+        let reach = self.bounds.reach;
+        if !inside || (reach.is_finite() && top.image.distance(receiver) - 4.0 * delta > reach) {
             return true;
         }
         self.stats.leaves += 1;
