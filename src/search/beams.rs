@@ -6,12 +6,12 @@
 
 use rayon::prelude::*;
 
-use crate::amplitude::{Incidence, UnfoldedLaws};
+use crate::amplitude::{Incidence, TreeLaws, UnfoldedLaws};
 use crate::scene::SourceModel;
 use crate::scene::{SearchOptions, Step, StepKind};
 use crate::trace::{
     Arrival, GuidePath, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls,
-    RoomPath, Status, Tracer, Waveguide,
+    RoomPath, Status, Tracer, TreePath, Waveguide,
 };
 
 use super::{Control, SearchArrival, StreamedArrival};
@@ -164,7 +164,9 @@ impl Tracer {
                     };
                     walls.arrivals_unfolded(&search, scratch, found, unfolded, progress)
                 }
-                _ => walls.arrivals(&search, scratch, found, progress),
+                _ => self.stream_tree(
+                    walls, &search, source, medium, control, sink, scratch, found, progress,
+                ),
             }
         } else {
             walls.arrivals(
@@ -279,6 +281,123 @@ impl Tracer {
         });
         let regions = self.regions();
         UnfoldedLaws::new(scene, settings, regions, medium, places, search.source).map(Some)
+    }
+}
+
+impl Tracer {
+    /// The streamed tree of one source (`search`, in medium `medium`): the certain beams'
+    /// paths in closed form (`trace/mirrors/grid.rs`) where the laws allow it, each other
+    /// path to `found`.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the search, its source, its sink, its scratch and its callbacks"
+    )]
+    fn stream_tree(
+        &self,
+        walls: &MirrorWalls,
+        search: &MirrorSearch<'_>,
+        source: usize,
+        medium: usize,
+        control: &Control<'_>,
+        sink: &(dyn Fn(StreamedArrival) + Sync),
+        scratch: &mut MirrorScratch,
+        found: &mut impl FnMut(MirrorPath<'_>) -> bool,
+        progress: &mut impl FnMut(u64) -> bool,
+    ) -> MirrorStats {
+        let scene = self.scene();
+        let Some(laws) = self.tree_laws(walls, search, medium) else {
+            return walls.arrivals(search, scratch, found, progress);
+        };
+        let tree = TreeStream {
+            source,
+            search,
+            laws: laws.as_ref(),
+            axisymmetric: scene
+                .amplitudes()
+                .is_some_and(|a| a.source == SourceModel::Axisymmetric),
+        };
+        let angled: Vec<bool> = (0..scene.interfaces().len())
+            .map(|i| laws.as_ref().is_some_and(|l| l.angled(i)))
+            .collect();
+        let unfolded = &mut |p: &TreePath<'_>| {
+            let arrival = tree.arrival(p)?;
+            control.listed.stream();
+            sink(arrival);
+            Some(true)
+        };
+        walls.arrivals_streamed(search, scratch, &angled, found, unfolded, progress)
+    }
+}
+
+impl Tracer {
+    /// The laws of a streamed tree's closed forms (`trace/mirrors/grid.rs`) for one source
+    /// (`search`, in medium `medium`): `Some(None)` in a scene without amplitudes (times
+    /// only), `Some(Some(laws))` with them, `None` where some path needs its points (a
+    /// scene with a gradient medium; a `"media"` wall whose medium across is not one along
+    /// its interface).
+    fn tree_laws(
+        &self,
+        walls: &MirrorWalls,
+        search: &MirrorSearch<'_>,
+        medium: usize,
+    ) -> Option<Option<TreeLaws<'_>>> {
+        let scene = self.scene();
+        if scene.curved() {
+            return None;
+        }
+        let Some(settings) = scene.amplitudes() else {
+            return Some(None);
+        };
+        let places: Vec<(usize, usize)> = (0..walls.count())
+            .map(|w| {
+                let place = walls.place(w);
+                (place.interface, place.segment)
+            })
+            .collect();
+        let regions = self.regions();
+        TreeLaws::new(scene, settings, regions, medium, &places, search.source).map(Some)
+    }
+}
+
+/// One source's streamed tree in closed form: its index, its search, the laws (`None`: no
+/// amplitudes), and whether the source is axisymmetric.
+struct TreeStream<'a> {
+    source: usize,
+    search: &'a MirrorSearch<'a>,
+    laws: Option<&'a TreeLaws<'a>>,
+    axisymmetric: bool,
+}
+
+impl TreeStream<'_> {
+    /// The arrival of `p` with its amplitude in closed form; `None` where the closed form
+    /// declines (a bounce near a critical angle; for an axisymmetric source, one off the
+    /// axis or a path not certainly on one side of it): the path is then walked.
+    #[inline]
+    fn arrival(&self, p: &TreePath<'_>) -> Option<StreamedArrival> {
+        let amplitude = match self.laws {
+            None => None,
+            Some(laws) => {
+                let width = if self.axisymmetric {
+                    if self.search.source.x != 0.0 {
+                        return None;
+                    }
+                    Some(p.axisymmetric_width(self.search.receivers[p.receiver].x)?)
+                } else {
+                    None
+                };
+                Some(laws.amplitude(p.groups, p.direction, p.length, width, true)?)
+            }
+        };
+        Some(StreamedArrival {
+            source: self.source,
+            receiver: p.receiver,
+            steps: p.steps,
+            diffractions: 0,
+            vertical_reflections: 0,
+            status: Status::Converged,
+            time: p.time,
+            amplitude,
+        })
     }
 }
 

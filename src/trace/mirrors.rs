@@ -60,12 +60,14 @@ use crate::leg::Uniform;
 use crate::scene::{Scene, SegmentRef, StepKind};
 
 use super::classify::{END_MARGIN, leg_sides, sides_suit};
-use super::occlusion::{OCCLUSION_MARGIN, Occluders, Target, Window};
+use super::occlusion::{OCCLUSION_MARGIN, Occluders, Target, Window, segment_distance};
 use super::{Reason, Status};
 
+mod grid;
 mod shoebox;
 use shoebox::Shoebox;
 mod waveguide;
+pub(crate) use grid::TreePath;
 pub(crate) use shoebox::RoomPath;
 pub(crate) use waveguide::{GuidePath, Waveguide};
 
@@ -204,6 +206,10 @@ pub(crate) struct MirrorScratch {
     far: Vec<Point>,
     /// The hidden intervals of a child wall (the occlusion's scratch).
     shadows: Vec<[f64; 2]>,
+    /// What each node on the stack certainly holds (the streamed walk's, `mirrors/grid.rs`).
+    certain: Vec<grid::Certain>,
+    /// The bounce groups and mirrored axes of the nodes on the stack (`mirrors/grid.rs`).
+    bounces: grid::Bounces,
 }
 
 /// One source's search: what the tree walks and its bounds.
@@ -377,19 +383,6 @@ fn beyond_edge(beam: &Beam, last: &Wall, image: Point, wall: &Wall, delta: f64) 
         let g = beam.gauge(last, image, other, delta);
         g.values[c] < -g.margins[c]
     })
-}
-
-/// The distance from `x` to the segment `a–b`.
-#[inline(always)]
-fn segment_distance(x: Point, a: Point, b: Point) -> f64 {
-    let e = b - a;
-    let ee = e.dot(e);
-    if ee > 0.0 {
-        let t = ((x - a).dot(e) / ee).clamp(0.0, 1.0);
-        x.distance(a + e * t)
-    } else {
-        x.distance(a)
-    }
 }
 
 /// The angle (radians, up to a factor near 1 for thin ones) that segment `a–b` subtends
@@ -588,6 +581,11 @@ impl MirrorWalls {
         }
     }
 
+    /// The number of walls.
+    pub(crate) fn count(&self) -> usize {
+        self.walls.len()
+    }
+
     /// Where wall `i` lies in the scene.
     pub(crate) fn place(&self, i: usize) -> WallPlace {
         let w = &self.walls[i];
@@ -698,6 +696,7 @@ impl MirrorWalls {
             lens,
             far,
             shadows,
+            ..
         } = scratch;
         stack.clear();
         walls.clear();

@@ -48,7 +48,7 @@ pub use curve::{CurveError, ray_curve};
 pub(crate) use flat::SegmentFrame;
 pub(crate) use mirrors::{
     GuidePath, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls, RoomPath,
-    Waveguide,
+    TreePath, Waveguide,
 };
 pub use plan::Kernels;
 pub use result::{Ray, RayRecord, Reason, Status, Threshold};

@@ -62,6 +62,11 @@ impl Occluders {
     pub(crate) fn work(&self) -> u64 {
         self.segments.len() as u64
     }
+
+    /// Every segment: its ends and its name.
+    pub(crate) fn each(&self) -> impl Iterator<Item = (Point, Point, SegmentRef)> + '_ {
+        self.segments.iter().map(|&(c, d, own, _)| (c, d, own))
+    }
 }
 
 /// Where a node's legs start: on rays from its image, beyond a line.
@@ -170,6 +175,145 @@ impl Occluders {
             }
         }
         shrink(range, shadows)
+    }
+}
+
+impl Occluders {
+    /// The part of `range` (fractions along `wall`) that no leg from `window` to it crosses
+    /// an interface on the way, by the classifier's test: `range` shrunk past every shadow
+    /// widened by `m` (each a superset of the true one, where [`unhidden`]'s are subsets);
+    /// `None` where a shadow lies inside what is left (the visible part is then no one
+    /// interval), where all of it is hidden, where the image lies within `2 m` of the wall's
+    /// line, or where an occluder passes so near the image that its projection is
+    /// ill-conditioned. What the beam tree's certain beams (`mirrors/grid.rs`) clip their
+    /// windows with.
+    ///
+    /// Every point `z` where a leg crosses an occluder lies beyond the window's line, before
+    /// the wall's line and ahead of the image (on the wall's side of the line through it
+    /// parallel to the wall); the part of the occluder there, widened by `m`, projects from
+    /// the image over the shadow. Only points at least `2 m` ahead are projected; a point
+    /// nearer (`a` ahead, `w` along the wall from the image) reaches the wall's line `w |h| / a`
+    /// along it, beyond the wall's span unless `|w| ≤ 2 m W / |h|` (`W` the span's farthest
+    /// end from the image along the wall), so an occluder farther than `2 m (1 + W / |h|)`
+    /// from the image loses nothing to that cut, and a nearer one gives `None`.
+    ///
+    /// [`unhidden`]: Self::unhidden
+    pub(crate) fn clear(
+        &self,
+        window: &Window,
+        wall: &Target,
+        range: [f64; 2],
+        m: f64,
+        shadows: &mut Vec<[f64; 2]>,
+    ) -> Option<[f64; 2]> {
+        let i = window.image;
+        let h = wall.n.dot(i - wall.p);
+        if h.abs().partial_cmp(&(2.0 * m)) != Some(std::cmp::Ordering::Greater) {
+            return None;
+        }
+        let toward = wall.n * h.signum();
+        let along = wall.e() * (1.0 / wall.e().length());
+        let span = along.dot(wall.p - i).abs().max(along.dot(wall.q - i).abs());
+        let near = 2.0 * m * (1.0 + span / h.abs()) + m;
+        // Each side with the offset its value must reach: widened by `m` but ahead.
+        let ahead = (
+            Side {
+                normal: toward * -1.0,
+                origin: i,
+            },
+            2.0 * m,
+        );
+        let before = (
+            Side {
+                normal: toward,
+                origin: wall.p,
+            },
+            -m,
+        );
+        let beyond = window
+            .start
+            .map_or(ahead, |(normal, origin)| (Side { normal, origin }, -m));
+        let sides = [ahead, before, beyond];
+        let (x_lo, x_hi) = (wall.at(range[0]), wall.at(range[1]));
+        let grow = Vec2::new(2.0 * m, 2.0 * m);
+        let legs = window.bounds.union(Aabb::from_points(x_lo, x_hi));
+        let legs = Aabb::from_points(legs.min - grow, legs.max + grow);
+        shadows.clear();
+        for &(c, d, own, bbox) in &self.segments {
+            if own == wall.own || own == window.own || !bbox.overlaps(legs) {
+                continue;
+            }
+            let distance = segment_distance(i, c, d);
+            if distance.partial_cmp(&near) != Some(std::cmp::Ordering::Greater) {
+                return None;
+            }
+            if let Some(s) = widened_shadow(c, d, &sides, i, wall, m) {
+                shadows.push(s);
+            }
+        }
+        let [lo, hi] = shrink(range, shadows)?;
+        let inside = shadows.iter().any(|s| s[1] > lo && s[0] < hi);
+        (!inside).then_some([lo, hi])
+    }
+}
+
+/// The interval of `wall` (fractions) that occluder `c–d`'s part inside the region `sides`
+/// bound (each side's value at least its offset), extended by `m` past both its ends, hides
+/// from `image`, widened by `m`; `None` where that part is empty.
+fn widened_shadow(
+    c: Point,
+    d: Point,
+    sides: &[(Side, f64); 3],
+    image: Point,
+    wall: &Target,
+    m: f64,
+) -> Option<[f64; 2]> {
+    let od = d - c;
+    let len = od.length();
+    if len.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return None;
+    }
+    let (mut lo, mut hi) = (-m / len, 1.0 + m / len);
+    for (side, offset) in sides {
+        let fc = side.normal.dot(c - side.origin) - offset;
+        let fd = side.normal.dot(d - side.origin) - offset;
+        if fc >= 0.0 && fd >= 0.0 {
+            continue;
+        }
+        if !(fc >= 0.0 || fd >= 0.0) {
+            return None;
+        }
+        // The root, moved outward by its round-off.
+        let u = fc / (fc - fd);
+        if fc < 0.0 {
+            lo = lo.max(u - 4.0 * f64::EPSILON);
+        } else {
+            hi = hi.min(u + 4.0 * f64::EPSILON);
+        }
+        if lo.partial_cmp(&hi) != Some(std::cmp::Ordering::Less) {
+            return None;
+        }
+    }
+    let e = wall.e();
+    let project = |z: Point| {
+        let v = z - image;
+        (image - wall.p).cross(v) / e.cross(v)
+    };
+    let (t0, t1) = (project(c + od * lo), project(c + od * hi));
+    let margin = m / e.length();
+    Some([t0.min(t1) - margin, t0.max(t1) + margin])
+}
+
+/// The distance from `x` to the segment `a–b`.
+#[inline(always)]
+pub(super) fn segment_distance(x: Point, a: Point, b: Point) -> f64 {
+    let e = b - a;
+    let ee = e.dot(e);
+    if ee > 0.0 {
+        let t = ((x - a).dot(e) / ee).clamp(0.0, 1.0);
+        x.distance(a + e * t)
+    } else {
+        x.distance(a)
     }
 }
 

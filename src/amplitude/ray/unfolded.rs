@@ -15,7 +15,7 @@ use num_complex::Complex64;
 
 use super::super::coefficients::{Weights, cos_across};
 use super::{Amplitude, Walk, finish_with, medium_across};
-use crate::geom::Point;
+use crate::geom::{Point, Vec2};
 use crate::regions::Regions;
 use crate::scene::{Amplitudes, Reflection, Scene, Step, StepKind};
 
@@ -164,6 +164,109 @@ impl<'a, const N: usize> UnfoldedLaws<'a, N> {
             }
             let r = self.laws[k].at(incidence[k].cos, incidence[k].sin2, checked)?;
             coefficient *= power(r, reflections[k]);
+        }
+        let walk = Walk {
+            coefficient,
+            tube_num: 1.0,
+            tube_den: length,
+            out_of_plane: length,
+            attenuation_db: self.alpha * length,
+            l0: length,
+            w0: self.w0,
+            converted: None,
+        };
+        Some(finish_with(self.settings, &walk, axisymmetric))
+    }
+}
+
+/// The bounces of an image path that meet their walls at one angle: `count` bounces off
+/// interface `interface`, whose unit normal, mirrored into the frame of the path's last leg
+/// (the unfolded line's), is `normal` (up to its sign; any vector where the interface's
+/// coefficient does not depend on the angle). The bounce off wall `j` of `k` meets it at
+/// the cosine `|d · m|` of the unfolded line's direction `d` against `m = Lₖ ⋯ Lⱼ₊₁ nⱼ`
+/// (`Lᵢ` the mirroring in wall `i`'s line): the leg into wall `j` is `Lⱼ₊₁ ⋯ Lₖ d`, and
+/// mirrorings keep dot products.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct BounceGroup {
+    pub interface: u32,
+    pub count: u32,
+    pub normal: Vec2,
+}
+
+/// What the amplitudes of one source's image paths off any walls share (the beam tree's
+/// [`UnfoldedLaws`]): each interface's law, the medium's slowness and attenuation.
+#[derive(Clone, Debug)]
+pub(crate) struct TreeLaws<'a> {
+    settings: &'a Amplitudes,
+    /// Per interface of the scene: its law, `None` where it is no wall of the tree.
+    laws: Vec<Option<Law>>,
+    /// The medium's slowness and attenuation (dB per unit length).
+    w0: f64,
+    alpha: f64,
+}
+
+impl<'a> TreeLaws<'a> {
+    /// The laws of `walls` (each an interface and a segment) for paths in medium `medium`
+    /// reached from `inside`, as [`UnfoldedLaws::new`] takes them (`None` where the closed
+    /// form does not hold for every path).
+    pub(crate) fn new(
+        scene: &Scene,
+        settings: &'a Amplitudes,
+        regions: Option<&Regions>,
+        medium: usize,
+        walls: &[(usize, usize)],
+        inside: Point,
+    ) -> Option<TreeLaws<'a>> {
+        let mut laws: Vec<Option<Law>> = vec![None; scene.interfaces().len()];
+        for &(interface, seg) in walls {
+            if laws.get(interface)?.is_some() {
+                continue;
+            }
+            let one =
+                UnfoldedLaws::new(scene, settings, regions, medium, [(interface, seg)], inside)?;
+            laws[interface] = Some(one.laws[0]);
+        }
+        let w0 = scene.media().get(medium)?.slowness;
+        Some(TreeLaws {
+            settings,
+            laws,
+            w0,
+            alpha: settings.attenuation.get(medium).copied()?,
+        })
+    }
+
+    /// Whether the coefficient of `interface` depends on the angle (`false` also for an
+    /// interface that is no wall).
+    pub(crate) fn angled(&self, interface: usize) -> bool {
+        matches!(self.laws.get(interface), Some(Some(Law::Media { .. })))
+    }
+
+    /// The amplitude of the image path along `d` (the unfolded line, from the image to the
+    /// receiver, `length` long) with the bounces `groups`; `axisymmetric` as in
+    /// [`UnfoldedLaws::amplitude`]. `None` where `checked` and a bounce lies within
+    /// [`NEAR_CRITICAL`] of a critical angle, or a group's interface is no wall: the caller
+    /// then walks the path's points.
+    #[inline]
+    pub(crate) fn amplitude(
+        &self,
+        groups: &[BounceGroup],
+        d: Vec2,
+        length: f64,
+        axisymmetric: Option<f64>,
+        checked: bool,
+    ) -> Option<Amplitude> {
+        let inv = 1.0 / length;
+        let mut coefficient = Complex64::new(1.0, 0.0);
+        for g in groups {
+            let law = (*self.laws.get(g.interface as usize)?)?;
+            let r = match law {
+                Law::Fixed(r) => Complex64::new(r, 0.0),
+                Law::Media { .. } => {
+                    let (c, s) = (d.dot(g.normal) * inv, d.cross(g.normal) * inv);
+                    law.at(c.abs(), s * s, checked)?
+                }
+            };
+            coefficient *= power(r, u64::from(g.count));
         }
         let walk = Walk {
             coefficient,

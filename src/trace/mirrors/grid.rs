@@ -1,0 +1,842 @@
+//! The beam tree streamed: each node's receivers located directly (a scan over a grid of
+//! receivers), and the paths of the node's *certain beam* taken without their points: no
+//! validation but the last leg's crossings, and the amplitude from the unfolded line.
+//!
+//! **Which receivers a node visits.** The receivers [`Beam::holds`] keeps, as
+//! [`Validation::node`] visits them: when the receivers form a grid (every x of a set with
+//! every y of a set, in any order: a `receivers.grid`, or a list that is one), the beam's
+//! three half-planes, widened by their largest margin over the receivers' box and by far more
+//! than their round-off, cut each row (or column) of the grid to an interval, found by
+//! bisection; each receiver there then takes [`Beam::holds`] itself. Otherwise every
+//! receiver is tested, as before. The same receivers, in another order.
+//!
+//! **The certain beam.** Beside its beam (a superset of the rays of its valid paths: every
+//! test widened by the margins), each node carries a certain beam, a subset: its window is
+//! the part of its wall inside the parent's certain beam by [`INNER`] times the beam tests'
+//! margins, less every interval any leg from the parent's window to it could be obstructed
+//! on (the shadows widened by the occlusion's margin, [`Occluders::clear`]). A receiver
+//! inside the certain beam by [`INNER`] margins has, in exact arithmetic, the image method's
+//! path through every wall of the sequence with each reflection point strictly inside its
+//! certain window, hence inside its segment, and every leg but the last unobstructed; the
+//! margins lie far above the round-off of the images and of [`Validation::path`]'s tests, so
+//! that validation certainly accepts the path's points and its legs but the last. Its other
+//! tests, each leg on one side of its reflection and no vanished leg, hold where the heights
+//! of the points above the walls' lines exceed the vanishing threshold (1e-12 of the path,
+//! far below the margin `δ`): the node is *sure* where, for every two consecutive
+//! reflections `j−1, j`, the leg between them is at least `ℓ` long and meets both walls at
+//! cosines of at least `c`, with `ℓ` the larger of the least heights of window `j` over wall
+//! `j−1`'s line and of window `j−1` over wall `j`'s, `c` from the rays through the window's
+//! ends, and every height so bounded above `4 δ` ([`MirrorWalls::certain_child`]). Every
+//! other receiver of the node, and every receiver of a node that is not sure, is validated
+//! as before.
+//!
+//! **The last leg.** A node's last legs run from its window to its receivers, inside its
+//! beam beyond its wall's line and within the box of its window and the receivers. Where no
+//! segment of the scene meets that region (widened by the occlusion's margin; a segment that
+//! shares a corner with the wall counts only where it runs to the legs' side of the wall's
+//! line), no last leg can cross one, and none is tested; elsewhere each is, by the same test
+//! ([`Scene::first_crossing_on_line`](crate::scene::Scene) on the same points).
+//!
+//! **The amplitude.** The path's time is the slowness times the unfolded length `|I − r|`;
+//! its amplitude is the unfolded tube's closed form (`amplitude::ray::TreeLaws`) with each
+//! bounce's cosine the unfolded line's direction against its wall's normal mirrored into the
+//! last leg's frame ([`BounceGroup`]), the bounces grouped by interface and (where the
+//! coefficient depends on the angle) by that normal, so that each distinct angle's
+//! coefficient is taken once. An axisymmetric source's width takes the first leg's direction,
+//! the x axis mirrored likewise. Where the closed form declines (a bounce near a critical
+//! angle, a point of the path perhaps across the axis), the path is validated and walked as
+//! before.
+//!
+//! The walk, its limits, its work and its stops are [`MirrorWalls::walk`]'s: the same nodes,
+//! the same receivers visited, the same arrivals (each path's time and amplitude to
+//! round-off).
+
+use std::cmp::Ordering::{Equal, Greater, Less};
+
+use crate::amplitude::BounceGroup;
+use crate::geom::{Aabb, Point, Vec2, orient};
+use crate::scene::SegmentRef;
+
+use super::super::classify::END_MARGIN;
+use super::super::occlusion::{OCCLUSION_MARGIN, Target};
+use super::{
+    Beam, Bounds, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls, Node,
+    POLL_TRIES, PROGRESS_BEAMS, Status, Validation, Wall,
+};
+
+/// How many times the beam tests' margins a receiver (and a child's certain window) must lie
+/// inside a certain beam.
+const INNER: f64 = 16.0;
+
+/// The largest `|m × n|` of two unit normals taken for one angle: the mirrored normals'
+/// round-off is a few ulps a level.
+const SAME_ANGLE: f64 = 1e-13;
+
+/// Receivers that form a grid: every x of `xs` with every y of `ys`.
+#[derive(Clone, Debug)]
+pub(crate) struct ReceiverGrid {
+    /// The distinct x and y, ascending.
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+    /// The receiver at `(xs[i], ys[j])`: `index[i * ys.len() + j]`.
+    index: Vec<u32>,
+    /// The receivers' box.
+    bounds: Aabb,
+}
+
+impl ReceiverGrid {
+    /// The grid `receivers` form, when they form one (at least two x and two y, finite).
+    pub(crate) fn of(receivers: &[Point]) -> Option<ReceiverGrid> {
+        let n = receivers.len();
+        if n < 4 || u32::try_from(n).is_err() {
+            return None;
+        }
+        let axis = |f: fn(&Point) -> f64| {
+            let mut v: Vec<f64> = receivers.iter().map(f).collect();
+            v.sort_by(f64::total_cmp);
+            v.dedup_by(|a, b| a.to_bits() == b.to_bits());
+            v
+        };
+        let (xs, ys) = (axis(|p| p.x), axis(|p| p.y));
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        if xs.len() < 2 || ys.len() < 2 || xs.len() * ys.len() != n || !finite(&xs) || !finite(&ys)
+        {
+            return None;
+        }
+        let mut index = vec![u32::MAX; n];
+        for (k, p) in receivers.iter().enumerate() {
+            let i = xs.binary_search_by(|v| v.total_cmp(&p.x)).ok()?;
+            let j = ys.binary_search_by(|v| v.total_cmp(&p.y)).ok()?;
+            let slot = &mut index[i * ys.len() + j];
+            if *slot != u32::MAX {
+                return None;
+            }
+            *slot = k as u32;
+        }
+        Some(ReceiverGrid {
+            xs,
+            ys,
+            index,
+            bounds: Aabb::around(receivers),
+        })
+    }
+
+    /// Every receiver that may lie in `beam` (of the node of image `image` on `wall`; a
+    /// superset of those [`Beam::holds`] keeps with the margin `delta`) to `visit`, row by
+    /// row (or column by column, whichever are fewer); `false` where `visit` stops.
+    fn scan(
+        &self,
+        beam: &Beam,
+        wall: &Wall,
+        image: Point,
+        delta: f64,
+        visit: &mut impl FnMut(usize) -> bool,
+    ) -> bool {
+        let b = self.bounds;
+        let corners = [
+            b.min,
+            b.max,
+            Point::new(b.min.x, b.max.y),
+            Point::new(b.max.x, b.min.y),
+        ];
+        let reach = corners
+            .iter()
+            .map(|&c| (c.x - image.x).abs() + (c.y - image.y).abs())
+            .fold(0.0f64, f64::max);
+        let size = corners
+            .iter()
+            .map(|c| c.x.abs() + c.y.abs())
+            .fold(image.x.abs() + image.y.abs(), f64::max);
+        // Each constraint `a · x + c ≥ −margin`, widened far beyond its round-off.
+        let o = -beam.side;
+        let normal = wall.n * beam.side;
+        let edge_a = Vec2::new(-beam.to_a.y, beam.to_a.x) * o;
+        let edge_b = Vec2::new(beam.to_b.y, -beam.to_b.x) * o;
+        let constraints = [
+            (
+                normal,
+                -normal.dot(wall.p - Point::new(0.0, 0.0)),
+                2.0 * delta,
+            ),
+            (
+                edge_a,
+                -edge_a.dot(image - Point::new(0.0, 0.0)),
+                delta * (beam.reach_a + 2.0 * reach),
+            ),
+            (
+                edge_b,
+                -edge_b.dot(image - Point::new(0.0, 0.0)),
+                delta * (beam.reach_b + 2.0 * reach),
+            ),
+        ]
+        .map(|(a, c, margin)| {
+            let slack = 1e-9 * (a.x.abs() + a.y.abs()) * size;
+            (a, c, 2.0 * margin + slack)
+        });
+        let by_rows = self.ys.len() <= self.xs.len();
+        let (lines, along) = if by_rows {
+            (&self.ys, &self.xs)
+        } else {
+            (&self.xs, &self.ys)
+        };
+        let ny = self.ys.len();
+        'lines: for (li, &v) in lines.iter().enumerate() {
+            let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+            for (a, c, margin) in constraints {
+                let (a_along, a_line) = if by_rows { (a.x, a.y) } else { (a.y, a.x) };
+                // a_along · u ≥ rhs.
+                let rhs = -margin - c - a_line * v;
+                if a_along > 0.0 {
+                    lo = lo.max(rhs / a_along);
+                } else if a_along < 0.0 {
+                    hi = hi.min(rhs / a_along);
+                } else if !matches!(rhs.partial_cmp(&0.0), Some(Less | Equal)) {
+                    continue 'lines;
+                }
+            }
+            if !matches!(lo.partial_cmp(&hi), Some(Less | Equal)) {
+                continue;
+            }
+            let slack = 1e-9 * size;
+            let first = along.partition_point(|&u| u < lo - slack);
+            let last = along.partition_point(|&u| u <= hi + slack);
+            for ai in first..last {
+                let (i, j) = if by_rows { (ai, li) } else { (li, ai) };
+                if !visit(self.index[i * ny + j] as usize) {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+}
+
+/// One arrival of the streamed tree in closed form (valid during the call that reports it).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TreePath<'a> {
+    /// The receiver's index in the receivers given.
+    pub receiver: usize,
+    /// Its reflections.
+    pub steps: usize,
+    /// The unfolded length `|I − r|` and the travel time.
+    pub length: f64,
+    pub time: f64,
+    /// The unfolded line, from the image to the receiver (`length` long).
+    pub direction: Vec2,
+    /// Its bounces, grouped by angle.
+    pub groups: &'a [BounceGroup],
+    /// The x axis mirrored into the last leg's frame: `Lₖ ⋯ Lⱼ₊₁ eₓ` for each leg `j`
+    /// (distinct to 1e-13), so that leg `j`'s x component is `axes[j] · direction / length`;
+    /// the first leg's (`j = 0`) is `axis`.
+    pub axis: Vec2,
+    pub axes: &'a [Vec2],
+}
+
+impl TreePath<'_> {
+    /// The out-of-plane width of an axisymmetric source on the axis (`x = 0`): `|x_R| ℓ₀ /
+    /// |x₁ − x₀|`, `|x_R| L / |A₀ · d|`, where every leg certainly runs one way along x (each
+    /// `|Aⱼ · d|` above 1e-12 of `L`, all of one sign), so that every point of the path but
+    /// the source lies strictly on one side of the axis; `None` where that is not certain.
+    #[inline]
+    pub(crate) fn axisymmetric_width(&self, receiver_x: f64) -> Option<f64> {
+        let d = self.direction;
+        let tiny = 1e-12 * self.length;
+        let first = self.axis.dot(d);
+        let sign = first.signum();
+        let one_way = self.axes.iter().all(|a| {
+            let v = a.dot(d);
+            v.abs() > tiny && v.signum() == sign
+        });
+        (one_way && first.abs() > tiny).then(|| receiver_x.abs() * self.length / first.abs())
+    }
+}
+
+/// What a node of the tree certainly holds (beside its [`Node`] on the stack).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Certain {
+    /// Its certain beam (`None`: none, or the root's whole plane).
+    inner: Option<Beam>,
+    /// Whether every receiver inside `inner` by [`INNER`] margins (every receiver at the
+    /// root) certainly has a valid path but for its last leg's crossings.
+    sure: bool,
+    /// `Lₖ ⋯ L₁ eₓ`.
+    axis: Vec2,
+    /// Where the node's bounce groups, and its mirrored x axes ([`TreePath::axes`]), start
+    /// in the scratch's.
+    groups: usize,
+    axes: usize,
+}
+
+impl Default for Certain {
+    fn default() -> Certain {
+        Certain {
+            inner: None,
+            sure: true,
+            axis: Vec2::new(1.0, 0.0),
+            groups: 0,
+            axes: 0,
+        }
+    }
+}
+
+/// The fractions of `range` where an affine function, `g0` and `g1` at the segment's ends,
+/// is at least `margin`, shrunk inward by its round-off; `None` when empty.
+#[inline(always)]
+fn restrict_inside(range: [f64; 2], g0: f64, g1: f64, margin: f64) -> Option<[f64; 2]> {
+    let (f0, f1) = (g0 - margin, g1 - margin);
+    let [mut lo, mut hi] = range;
+    if f0 >= 0.0 && f1 >= 0.0 {
+        return Some(range);
+    }
+    if !(f0 >= 0.0 || f1 >= 0.0) {
+        return None;
+    }
+    let u = f0 / (f0 - f1);
+    if f0 < 0.0 {
+        lo = lo.max(u + 4.0 * f64::EPSILON);
+    } else {
+        hi = hi.min(u - 4.0 * f64::EPSILON);
+    }
+    (lo <= hi).then_some([lo, hi])
+}
+
+/// The bounce groups and mirrored x axes of the nodes on the stack, each node's after its
+/// parent's.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Bounces {
+    groups: Vec<BounceGroup>,
+    axes: Vec<Vec2>,
+}
+
+impl Bounces {
+    fn clear(&mut self) {
+        self.groups.clear();
+        self.axes.clear();
+    }
+
+    /// Back to the nodes below `c`.
+    fn pop(&mut self, c: &Certain) {
+        self.groups.truncate(c.groups);
+        self.axes.truncate(c.axes);
+    }
+}
+
+/// `a` into the axes from `start` on, unless one of them is within 1e-13 of it.
+#[inline(always)]
+fn push_axis(axes: &mut Vec<Vec2>, start: usize, a: Vec2) {
+    let near = |b: &Vec2| (a.x - b.x).abs() + (a.y - b.y).abs() <= 1e-13;
+    if !axes[start..].iter().any(near) {
+        axes.push(a);
+    }
+}
+
+/// `v` mirrored in a line of unit normal `n`.
+#[inline(always)]
+fn mirrored(v: Vec2, n: Vec2) -> Vec2 {
+    v - n * (2.0 * n.dot(v))
+}
+
+impl MirrorWalls {
+    /// The certain beam of `child` (`node`'s child through wall `w`) and what else it
+    /// certainly holds (see the module), its bounce groups appended to `groups`.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the parent and child, the search's bounds and its scratch"
+    )]
+    fn certain_child(
+        &self,
+        node: &Node,
+        parent: &Certain,
+        child: &Node,
+        w: usize,
+        bounds: &Bounds,
+        angled: &[bool],
+        shadows: &mut Vec<[f64; 2]>,
+        bounces: &mut Bounces,
+    ) -> Certain {
+        let wall = &self.walls[w];
+        let Bounces { groups, axes } = bounces;
+        let start = groups.len();
+        let parent_groups = parent.groups..start;
+        for k in parent_groups {
+            let g = groups[k];
+            groups.push(BounceGroup {
+                normal: mirrored(g.normal, wall.n),
+                ..g
+            });
+        }
+        let interface = wall.own.interface;
+        let angle = angled.get(interface as usize).copied().unwrap_or(true);
+        let normal = if angle { wall.n } else { Vec2::new(0.0, 0.0) };
+        match groups[start..].iter_mut().find(|g| {
+            g.interface == interface && (!angle || g.normal.cross(normal).abs() <= SAME_ANGLE)
+        }) {
+            Some(g) => g.count += 1,
+            None => groups.push(BounceGroup {
+                interface,
+                count: 1,
+                normal,
+            }),
+        }
+        let axis = mirrored(parent.axis, wall.n);
+        let first_axis = axes.len();
+        for k in parent.axes..first_axis {
+            let a = mirrored(axes[k], wall.n);
+            push_axis(axes, first_axis, a);
+        }
+        push_axis(axes, first_axis, Vec2::new(1.0, 0.0));
+        let inner = if parent.sure {
+            self.certain_window(node, parent, child, w, bounds, shadows)
+        } else {
+            None
+        };
+        Certain {
+            inner,
+            sure: inner.is_some(),
+            axis,
+            groups: start,
+            axes: first_axis,
+        }
+    }
+
+    /// The certain beam of `child` (`node`'s child through wall `w`) when the node is sure
+    /// and so is the child (see the module); `None` else.
+    fn certain_window(
+        &self,
+        node: &Node,
+        parent: &Certain,
+        child: &Node,
+        w: usize,
+        bounds: &Bounds,
+        shadows: &mut Vec<[f64; 2]>,
+    ) -> Option<Beam> {
+        let wall = &self.walls[w];
+        let delta = bounds.delta;
+        let side = child.beam?.side;
+        let mut range = [0.0, 1.0];
+        let root = node.wall == usize::MAX;
+        if !root {
+            let beam = parent.inner.as_ref()?;
+            let last = &self.walls[node.wall];
+            let gp = beam.gauge(last, node.image, wall.p, delta);
+            let gq = beam.gauge(last, node.image, wall.q, delta);
+            for c in 0..3 {
+                let margin = INNER * gp.margins[c].max(gq.margins[c]);
+                range = restrict_inside(range, gp.values[c], gq.values[c], margin)?;
+            }
+        }
+        let window = self.window(node)?;
+        let target = Target {
+            own: wall.own,
+            p: wall.p,
+            q: wall.q,
+            n: wall.n,
+        };
+        let m = OCCLUSION_MARGIN * delta;
+        range = self.occluders.clear(&window, &target, range, m, shadows)?;
+        let (a, b) = (wall.at(range[0]), wall.at(range[1]));
+        // The heights and cosines of the legs between the two reflections.
+        let floor = 4.0 * delta;
+        let height = |x: Point| side * wall.height(x);
+        if root {
+            if height(node.image).partial_cmp(&floor) != Some(Greater) {
+                return None;
+            }
+        } else {
+            let (pa, pb) = (parent.inner?.a, parent.inner?.b);
+            let last = &self.walls[node.wall];
+            let last_side = node.beam?.side;
+            let incoming = height(pa).min(height(pb));
+            let outgoing = (last_side * last.height(a)).min(last_side * last.height(b));
+            let leg = incoming.max(outgoing);
+            let unit = |x: Point| {
+                let d = x - node.image;
+                d * (1.0 / d.length())
+            };
+            let (ua, ub) = (unit(a), unit(b));
+            let cos = |n: Vec2| ua.dot(n).abs().min(ub.dot(n).abs());
+            let into = incoming.max(leg * cos(wall.n));
+            let out_of = outgoing.max(leg * cos(last.n));
+            if !(leg > floor && into > floor && out_of > floor) {
+                return None;
+            }
+        }
+        let (to_a, to_b) = (a - child.image, b - child.image);
+        Some(Beam {
+            side,
+            to_a,
+            to_b,
+            reach_a: to_a.x.abs() + to_a.y.abs(),
+            reach_b: to_b.x.abs() + to_b.y.abs(),
+            a,
+            b,
+        })
+    }
+
+    /// Whether a last leg of `node` (from its window to a receiver in its beam within
+    /// `receivers`, the receivers' box) may cross a segment of the scene: whether any
+    /// segment but the node's wall meets the region those legs fill (see the module).
+    fn last_legs_may_cross(&self, node: &Node, source: Point, receivers: Aabb, delta: f64) -> bool {
+        let m = OCCLUSION_MARGIN * delta;
+        let grow = |b: Aabb| {
+            let g = Vec2::new(m, m);
+            Aabb::from_points(b.min - g, b.max + g)
+        };
+        if node.wall == usize::MAX {
+            let region = grow(receivers.union(Aabb::from_points(source, source)));
+            return self
+                .occluders
+                .each()
+                .any(|(c, d, _)| Aabb::from_points(c, d).overlaps(region));
+        }
+        let Some(beam) = &node.beam else {
+            return true;
+        };
+        let wall = &self.walls[node.wall];
+        let region = grow(receivers.union(Aabb::from_points(beam.a, beam.b)));
+        self.occluders.each().any(|(c, d, own)| {
+            if own == wall.own || !Aabb::from_points(c, d).overlaps(region) {
+                return false;
+            }
+            let other = if c == wall.p || c == wall.q {
+                Some(d)
+            } else if d == wall.p || d == wall.q {
+                Some(c)
+            } else {
+                None
+            };
+            if let Some(other) = other {
+                // A segment from a corner of the wall: only one that runs to the legs' side.
+                let o = orient(wall.p, wall.q, other);
+                return o != 0.0 && o.signum() == beam.side;
+            }
+            let gc = beam.gauge(wall, node.image, c, delta);
+            let gd = beam.gauge(wall, node.image, d, delta);
+            let mut range = [0.0, 1.0];
+            for k in 0..3 {
+                let margin = m + INNER * gc.margins[k].max(gd.margins[k]);
+                match super::restrict(range, gc.values[k], gd.values[k], margin) {
+                    Some(r) => range = r,
+                    None => return false,
+                }
+            }
+            true
+        })
+    }
+}
+
+/// One node's receivers, as the streamed walk visits them.
+struct NodeReceivers<'v, 'a, 's, F> {
+    walls: &'a MirrorWalls,
+    bounds: &'a Bounds,
+    validation: Validation<'v, 's>,
+    found: &'v mut F,
+    unfolded: &'v mut dyn FnMut(&TreePath<'_>) -> Option<bool>,
+    stats: &'v mut MirrorStats,
+}
+
+impl<F> NodeReceivers<'_, '_, '_, F>
+where
+    F: FnMut(MirrorPath<'_>) -> bool,
+{
+    /// Receiver `r` at the node on top of `stack` (its walls `walls`): as
+    /// [`Validation::node`] takes it, but in closed form where the node's certain beam holds
+    /// it; `false` where `found` or `unfolded` stops the search. `crossings`: whether the
+    /// node's last legs may cross a segment, found at the first receiver that asks.
+    fn receiver(
+        &mut self,
+        stack: &[Node],
+        walls: &[usize],
+        certain: &Certain,
+        own: (&[BounceGroup], &[Vec2]),
+        crossings: &mut Option<bool>,
+        r: usize,
+    ) -> bool {
+        let search = self.validation.search;
+        let top = &stack[stack.len() - 1];
+        let receiver = search.receivers[r];
+        let delta = self.bounds.delta;
+        let inside = match &top.beam {
+            Some(beam) => beam.holds(&self.walls.walls[top.wall], top.image, receiver, delta),
+            None => true,
+        };
+        // (Without a time bound, no receiver is too far: the distance is not needed.)
+        let reach = self.bounds.reach;
+        if !inside || (reach.is_finite() && top.image.distance(receiver) - 4.0 * delta > reach) {
+            return true;
+        }
+        self.stats.leaves += 1;
+        self.stats.work += stack.len() as u64;
+        if let Some(go) = self.closed(stack, certain, own, crossings, r) {
+            return go;
+        }
+        let Some((length, reason)) = self.validation.path(stack, receiver) else {
+            return true;
+        };
+        let time = search.medium().time_along(length);
+        if time > search.max_time {
+            return true;
+        }
+        (self.found)(MirrorPath {
+            receiver: r,
+            walls,
+            points: self.validation.points,
+            time,
+            status: if reason.is_some() {
+                Status::Obstructed
+            } else {
+                Status::Converged
+            },
+            reason,
+        })
+    }
+
+    /// Receiver `r`'s path in closed form (`Some(go)`, `go` what `unfolded` says; also
+    /// `Some(true)` where it certainly has no path), or `None` where it must be validated.
+    fn closed(
+        &mut self,
+        stack: &[Node],
+        certain: &Certain,
+        (groups, axes): (&[BounceGroup], &[Vec2]),
+        crossings: &mut Option<bool>,
+        r: usize,
+    ) -> Option<bool> {
+        if !certain.sure {
+            return None;
+        }
+        let search = self.validation.search;
+        let top = &stack[stack.len() - 1];
+        let receiver = search.receivers[r];
+        let root = top.wall == usize::MAX;
+        if !root {
+            let wall = &self.walls.walls[top.wall];
+            let g = certain
+                .inner?
+                .gauge(wall, top.image, receiver, self.bounds.delta);
+            if !(0..3).all(|c| g.values[c] >= INNER * g.margins[c]) {
+                return None;
+            }
+        }
+        let d = receiver - top.image;
+        let l2 = d.x * d.x + d.y * d.y;
+        if !(f64::MIN_POSITIVE..1e300).contains(&l2) {
+            return None;
+        }
+        let length = l2.sqrt();
+        let time = search.medium().time_along(length);
+        if search.max_time.is_finite() && (time - search.max_time).abs() <= 1e-9 * time {
+            return None;
+        }
+        if time > search.max_time {
+            return Some(true);
+        }
+        let may_cross = *crossings.get_or_insert_with(|| {
+            self.walls.last_legs_may_cross(
+                top,
+                search.source,
+                self.bounds.receivers,
+                self.bounds.delta,
+            )
+        });
+        if may_cross {
+            // The last leg as `Validation::path` has it: from the wall's point on the line.
+            let (from, own) = if root {
+                (search.source, SegmentRef::NONE)
+            } else {
+                let wall = &self.walls.walls[top.wall];
+                let u = ((wall.p - top.image).cross(d) / d.cross(wall.e)).clamp(0.0, 1.0);
+                if u.is_nan() {
+                    return None;
+                }
+                (wall.at(u), wall.own)
+            };
+            let line = [top.image, receiver];
+            if from != receiver
+                && search
+                    .scene
+                    .first_crossing_on_line(
+                        from,
+                        receiver,
+                        line,
+                        END_MARGIN,
+                        [own, SegmentRef::NONE],
+                    )
+                    .is_some()
+            {
+                // Obstructed (listed only where asked, and then never in closed form).
+                return if search.obstructed { None } else { Some(true) };
+            }
+        }
+        (self.unfolded)(&TreePath {
+            receiver: r,
+            steps: stack.len() - 1,
+            length,
+            time,
+            direction: d,
+            groups,
+            axis: certain.axis,
+            axes,
+        })
+    }
+}
+
+impl MirrorWalls {
+    /// [`MirrorWalls::arrivals`] for a streamed search: the paths of each node's certain
+    /// beam to `unfolded` in closed form ([`TreePath`]; it returns `None` to have the path
+    /// validated and given to `found` instead, `Some(go)` else), every other one to `found`
+    /// as [`arrivals`](Self::arrivals) gives it; each node's receivers located on their grid
+    /// where they form one (see `mirrors/grid.rs`). `angled[i]`: whether interface `i`'s
+    /// coefficient depends on the angle. The same paths, to round-off, in another order.
+    pub(crate) fn arrivals_streamed(
+        &self,
+        search: &MirrorSearch<'_>,
+        scratch: &mut MirrorScratch,
+        angled: &[bool],
+        found: &mut impl FnMut(MirrorPath<'_>) -> bool,
+        unfolded: &mut dyn FnMut(&TreePath<'_>) -> Option<bool>,
+        progress: &mut impl FnMut(u64) -> bool,
+    ) -> MirrorStats {
+        let bounds = self.bounds(search, search.max_steps.min(search.max_depth));
+        let grid = ReceiverGrid::of(search.receivers);
+        let mut stats = MirrorStats::default();
+        let max_steps = search.max_steps.min(search.max_depth);
+        let (mut granted, mut tries) = (0u64, 0u32);
+        let MirrorScratch {
+            stack,
+            walls,
+            points,
+            rel,
+            lens,
+            far,
+            shadows,
+            certain,
+            bounces,
+        } = scratch;
+        stack.clear();
+        walls.clear();
+        certain.clear();
+        bounces.clear();
+        if bounds.late(search.source, None) {
+            return stats;
+        }
+        stack.push(Node {
+            wall: usize::MAX,
+            image: search.source,
+            beam: None,
+            next: 0,
+        });
+        certain.push(Certain::default());
+        bounces.axes.push(Vec2::new(1.0, 0.0));
+        let mut node = NodeReceivers {
+            walls: self,
+            bounds: &bounds,
+            validation: Validation {
+                search,
+                walls: &self.walls,
+                points,
+                rel,
+                lens,
+                far,
+                crossings: true,
+            },
+            found,
+            unfolded,
+            stats: &mut stats,
+        };
+        if !node.visit(stack, walls, certain, bounces, grid.as_ref()) {
+            node.stats.stopped = true;
+            return stats;
+        }
+        while let Some(top) = stack.last_mut() {
+            let depth = walls.len();
+            if depth >= max_steps || top.next >= self.walls.len() {
+                if depth >= max_steps && search.max_steps > max_steps && depth > 0 {
+                    node.stats.stopped = true;
+                }
+                stack.pop();
+                walls.pop();
+                if let Some(c) = certain.pop() {
+                    bounces.pop(&c);
+                }
+                continue;
+            }
+            let w = top.next;
+            top.next += 1;
+            if w == top.wall {
+                continue;
+            }
+            tries = tries.wrapping_add(1);
+            if tries % POLL_TRIES == 0 && !progress(0) {
+                node.stats.stopped = true;
+                break;
+            }
+            let parent = *top;
+            node.stats.work += 1;
+            if node.stats.work > search.max_work {
+                node.stats.stopped = true;
+                break;
+            }
+            let occlusion = (!search.obstructed).then_some(&mut *shadows);
+            let Some(child) = self.child(&parent, w, &bounds, occlusion, &mut node.stats.work)
+            else {
+                continue;
+            };
+            node.stats.beams += 1;
+            if node.stats.beams > granted {
+                if !progress(PROGRESS_BEAMS) {
+                    node.stats.beams -= 1;
+                    node.stats.stopped = true;
+                    break;
+                }
+                granted += PROGRESS_BEAMS;
+            }
+            if node.stats.beams > search.max_beams {
+                node.stats.beams -= 1;
+                node.stats.stopped = true;
+                break;
+            }
+            let up = certain[certain.len() - 1];
+            let next =
+                self.certain_child(&parent, &up, &child, w, &bounds, angled, shadows, bounces);
+            stack.push(child);
+            walls.push(w);
+            certain.push(next);
+            if !node.visit(stack, walls, certain, bounces, grid.as_ref()) {
+                node.stats.stopped = true;
+                break;
+            }
+        }
+        stats
+    }
+}
+
+impl<F> NodeReceivers<'_, '_, '_, F>
+where
+    F: FnMut(MirrorPath<'_>) -> bool,
+{
+    /// Every receiver of the node on top of `stack`: those its beam may hold on `grid`,
+    /// else all; `false` where the search stops.
+    fn visit(
+        &mut self,
+        stack: &[Node],
+        walls: &[usize],
+        certain: &[Certain],
+        bounces: &Bounces,
+        grid: Option<&ReceiverGrid>,
+    ) -> bool {
+        let top = stack[stack.len() - 1];
+        let c = certain[certain.len() - 1];
+        let own = (&bounces.groups[c.groups..], &bounces.axes[c.axes..]);
+        let (mirrors, delta) = (self.walls, self.bounds.delta);
+        let count = self.validation.search.receivers.len();
+        let mut crossings = None;
+        let mut each = |r: usize| self.receiver(stack, walls, &c, own, &mut crossings, r);
+        match (grid, &top.beam) {
+            (Some(grid), Some(beam)) => {
+                let wall = &mirrors.walls[top.wall];
+                grid.scan(beam, wall, top.image, delta, &mut each)
+            }
+            _ => (0..count).all(each),
+        }
+    }
+}
