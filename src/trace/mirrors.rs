@@ -1144,8 +1144,31 @@ impl Validation<'_, '_> {
                 return None;
             }
         }
+        // Where obstructed paths are not listed, any leg that crosses an interface makes the
+        // path none, whichever is found first: the last leg first, which crosses where a
+        // receiver lies outside the walls that the path reflects off (a receiver outside the
+        // room is in the beams as often as one inside).
+        let last_first = self.crossings && !self.search.obstructed && k > 0;
+        if last_first {
+            let own = self.walls[stack[k].wall].own;
+            let (a, b) = (points[k], points[k + 1]);
+            let line = [stack[k].image, fars[k]];
+            let crossing = (self.search.scene).first_crossing_on_line(
+                a,
+                b,
+                line,
+                END_MARGIN,
+                [own, SegmentRef::NONE],
+            );
+            if a != b && crossing.is_some() {
+                return None;
+            }
+        }
         let mut own_a = SegmentRef::NONE;
         for leg in 0..=k {
+            if last_first && leg == k {
+                break;
+            }
             let own_b = if leg < k {
                 self.walls[stack[leg + 1].wall].own
             } else {
