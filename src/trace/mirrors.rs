@@ -49,11 +49,12 @@
 //! validation alone decides. Where the side of a wall's line an image lies on is within that
 //! margin, the child's beam is the whole plane (no pruning below it).
 //!
-//! One pruning relies on exact geometry instead ([`MirrorWalls::tight`]): a thin child
-//! whose window, clipped again without any margin, is empty or one point holds only rays
-//! through a corner, which no valid path follows; certain but for the round-off of that
-//! clip (1e-15 of the coordinates). It removes the slivers that the margins alone keep where
-//! a beam's edge runs exactly through a corner.
+//! One pruning relies on exact geometry instead ([`MirrorWalls::tight`]): each beam also
+//! carries its tight beam, clipped level after level without any margin; a child whose
+//! window, clipped so, is empty or one point holds only rays through a corner, which no
+//! valid path follows; certain but for the round-off of those clips (1e-15 of the
+//! coordinates a level). It removes the slivers that the margins alone keep where a beam's
+//! edge runs exactly through a corner, and the slivers below them.
 
 use crate::geom::{Aabb, Point, Vec2, orient};
 use crate::leg::Uniform;
@@ -469,9 +470,9 @@ struct Bounds {
 }
 
 /// The widest angle (radians) a child's window may subtend from its image and still be
-/// clipped by the shadows with no margin in [`MirrorWalls::tight`]: a window the margins alone keep is far narrower
-/// (their width over the beam's length, some 1e-6 here), and a wider one is not worth the
-/// test.
+/// clipped by the shadows with no margin in [`MirrorWalls::tight`]: a window the margins
+/// alone keep is far narrower (their width over the beam's length, some 1e-6 here), and a
+/// wider one is not worth the test.
 const THIN: f64 = 1e-4;
 
 /// The most halvings [`Bounds::late_through`] makes of a wall's part.
