@@ -665,6 +665,58 @@ fn an_extruded_search_keeps_to_its_run() {
     assert_eq!(times, listed);
 }
 
+/// A streamed extruded search (each plan path's family in closed form, its walls'
+/// coefficients taken once) hands on the listed search's arrivals to the bit: the same
+/// steps, floor and ceiling reflections, status, time and amplitude, in the L room (a law
+/// of absorption per wall, floor and ceiling) and by a `"media"` wall (a coefficient at each
+/// member's own 3-D angle).
+///
+/// Mutants caught: a family's wall coefficient taken at one angle for a `"media"` wall; the
+/// floor and ceiling factors in another order or count; a member's time or vertical count
+/// off.
+#[test]
+fn streamed_extruded_arrivals_are_the_listed_ones_to_the_bit() {
+    let media = json!({
+        "media": { "air": { "speed": 343.0, "density": 1.2, "at": [0, 1] },
+                   "wall": { "speed": 1500.0, "density": 1000.0, "at": [0, -1] } },
+        "domain": [[-10, -5], [10, 5]],
+        "interfaces": { "w": { "points": [[-10, 0], [10, 0]], "reflection": "media" },
+                        "v": { "points": [[4, 0.5], [4, 4]],
+                               "reflection": { "absorption": 0.2 } } },
+        "extrusion": { "height": 3.0, "floor": { "absorption": 0.3 } },
+        "sources": [[0.0, 1.0, 1.0]], "receivers": [[2.0, 1.5, 2.0], [1.0, 3.0, 0.5]],
+        "search": { "max_time": 0.05, "refract": false },
+        "amplitudes": { "source": "point" }
+    });
+    for doc in [l_room(true, json!({ "max_time": 0.06 })), media] {
+        let scene = Scene::from_json(&doc.to_string()).unwrap();
+        let tracer = Tracer::new(&scene).unwrap();
+        let key = |a: &eigenray::search::StreamedArrival| {
+            let amplitude = a.amplitude.unwrap();
+            let v = amplitude.value;
+            let c = amplitude.coefficient;
+            (
+                (a.source, a.receiver, a.steps, a.diffractions),
+                (a.vertical_reflections, format!("{:?}", a.status)),
+                [a.time, v.re, v.im, c.re, c.im, amplitude.spreading].map(f64::to_bits),
+                amplitude.attenuation_db.to_bits(),
+            )
+        };
+        let mut listed: Vec<_> = (tracer.search(&Run::new()).unwrap().arrivals.iter())
+            .map(|a| key(&a.streamed()))
+            .collect();
+        let streamed = std::sync::Mutex::new(Vec::new());
+        tracer
+            .search_into(&Run::new(), &|a| streamed.lock().unwrap().push(key(&a)))
+            .unwrap();
+        let mut streamed = streamed.into_inner().unwrap();
+        assert!(listed.iter().any(|k| k.1.0 > 0 && k.0.2 > k.1.0));
+        listed.sort();
+        streamed.sort();
+        assert_eq!(streamed, listed);
+    }
+}
+
 /// The writer gives an extruded arrival's points in 3-D in every format, and its steps name
 /// the floor and the ceiling.
 #[test]

@@ -90,19 +90,19 @@ impl FractionalDelay {
         // sin πf, 1 − cos πf, 1 + cos πf.
         let (sine, even, odd) = (2.0 * s * c, 2.0 * s * s, 2.0 * c * c);
         let (re, im) = (amplitude.re, amplitude.im);
-        let half = half as i64;
-        for (k, slot) in (lo..hi).zip(&mut out[start..]) {
-            let n = k as i64 - half;
+        // The numerators at even and odd taps.
+        let (at_even, at_odd) = (im * even - re * sine, im * odd + re * sine);
+        // Whole taps: `|n|` is at most half the window, so the counter fits an `i32` (whose
+        // conversion to `f64` the loop may take several taps at a time).
+        let half = half as i32;
+        let slots = &mut out[start..start + (hi - lo)];
+        for ((k, slot), &weight) in (lo..hi).zip(slots).zip(&self.window[lo..hi]) {
+            let n = k as i32 - half;
             // `first + k − position`, to the bit (both round the same real number).
-            let d = n as f64 - f;
-            let value = if d == 0.0 {
-                re
-            } else if n & 1 == 0 {
-                (im * even - re * sine) / (PI * d)
-            } else {
-                (im * odd + re * sine) / (PI * d)
-            };
-            *slot += self.window[k] * value;
+            let d = f64::from(n) - f;
+            let numerator = if n & 1 == 0 { at_even } else { at_odd };
+            let value = if d == 0.0 { re } else { numerator / (PI * d) };
+            *slot += weight * value;
         }
     }
 }

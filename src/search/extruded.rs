@@ -27,7 +27,7 @@ use crate::trace::{Status, Tracer};
 
 use super::{
     ArrivalCount, Control, SearchArrival, SearchError, SearchReport, StreamReport, StreamedArrival,
-    sort_arrivals,
+    diffractions, sort_arrivals,
 };
 
 /// Which of the two flat faces a vertical family's first reflection is off.
@@ -47,6 +47,8 @@ pub(super) struct Vertical {
     first: Face,
     /// The unfolded vertical length `Z`.
     length: f64,
+    /// The 3-D length `√(L² + Z²)` with the plan length `L` (`L.hypot(Z)`).
+    distance: f64,
 }
 
 /// The unfolded vertical length of `count` alternating reflections, the first off `first`,
@@ -73,25 +75,30 @@ fn family(
     out: &mut Vec<Vertical>,
 ) {
     out.clear();
-    let within = |z: f64| (plan.hypot(z) * slowness) <= max_time;
+    let within = |z: f64| {
+        let distance = plan.hypot(z);
+        ((distance * slowness) <= max_time).then_some(distance)
+    };
     let direct = unfolded(0, Face::Floor, zs, zr, h);
-    if within(direct) {
+    if let Some(distance) = within(direct) {
         out.push(Vertical {
             count: 0,
             first: Face::Floor,
             length: direct,
+            distance,
         });
     }
     for count in 1..=max_vertical {
         let mut any = false;
         for first in [Face::Floor, Face::Ceiling] {
             let length = unfolded(count, first, zs, zr, h);
-            if within(length) {
+            if let Some(distance) = within(length) {
                 any = true;
                 out.push(Vertical {
                     count,
                     first,
                     length,
+                    distance,
                 });
             }
         }
@@ -258,7 +265,7 @@ impl<'a> Expansion<'a> {
         }
         points.push(*a.points.last().unwrap_or(&a.points[0]));
         heights.push(zr);
-        let time = length.hypot(v.length) * slowness;
+        let time = v.distance * slowness;
         let medium = a.media.first().copied().unwrap_or(0);
         let mut arrival = a.clone();
         arrival.time = time;
@@ -276,41 +283,90 @@ impl<'a> Expansion<'a> {
             heights,
         };
         if self.tracer.scene().amplitudes().is_some() {
-            out.arrival.amplitude = Some(self.amplitude(plan, &out, length, v));
+            out.arrival.amplitude = Some(self.amplitude(plan, length, v, None));
         }
         out
     }
 
-    /// The amplitude of 3-D arrival `a` of plan path `plan` (plan length `length`, vertical
-    /// member `v`): `1/(4π D)` spreading over the path's length `D`, each wall's law at its
-    /// 3-D incidence angle, the floor's and ceiling's, the medium's attenuation over `D`.
+    /// The amplitude of the 3-D arrival of plan path `plan` (plan length `length`) with
+    /// vertical member `v`: `1/(4π D)` spreading over the path's length `D`, each wall's law
+    /// at its 3-D incidence angle, the floor's and ceiling's (alternating from `v`'s first,
+    /// in order along the path), the medium's attenuation over `D`. `walls`: the walls'
+    /// product of coefficients where it was computed once for the whole family (a plan path
+    /// of no `"media"` law, whose coefficients do not depend on the angle), the same number.
     fn amplitude(
         &self,
         plan: &SearchArrival,
-        a: &SearchArrival,
         length: f64,
         v: Vertical,
+        walls: Option<Complex64>,
     ) -> Amplitude {
         let scene: &Scene = self.tracer.scene();
         let Some(settings) = scene.amplitudes() else {
             return Amplitude::none(crate::amplitude::NoAmplitude::UnknownMedia);
         };
-        match a.arrival.status {
+        match plan.arrival.status {
             Status::Vertex => return Amplitude::none(crate::amplitude::NoAmplitude::Vertex),
             Status::Obstructed => {
                 return Amplitude::none(crate::amplitude::NoAmplitude::Obstructed);
             }
             _ => {}
         }
-        let distance = length.hypot(v.length);
-        let medium = a.arrival.media.first().copied().unwrap_or(0);
-        let slowness = scene.media()[medium].slowness;
+        let distance = v.distance;
+        let medium = plan.arrival.media.first().copied().unwrap_or(0);
         // The plan leg's share of each 3-D leg: the wall cosines scale by it.
         let horizontal = if distance > 0.0 {
             length / distance
         } else {
             0.0
         };
+        let mut coefficient = match walls {
+            Some(c) => c,
+            None => match self.walls_coefficient(plan, horizontal) {
+                Ok(c) => c,
+                Err(none) => return none,
+            },
+        };
+        let x = self.extrusion;
+        // The flat faces alternate from the first, in order along the path.
+        for flat in 0..v.count {
+            if (v.first == Face::Floor) == (flat % 2 == 0) {
+                coefficient *= x.floor;
+            } else {
+                coefficient *= x.ceiling;
+            }
+        }
+        let spreading = 1.0 / (4.0 * std::f64::consts::PI * distance);
+        let attenuation_db = settings.attenuation[medium] * distance;
+        // 10⁰ is 1 exactly: no power to take without attenuation.
+        let attenuation = if attenuation_db == 0.0 {
+            1.0
+        } else {
+            10f64.powf(-attenuation_db / 20.0)
+        };
+        Amplitude {
+            value: coefficient * spreading * attenuation,
+            spreading,
+            coefficient,
+            attenuation_db,
+            reason: None,
+        }
+    }
+
+    /// The product of plan path `plan`'s wall coefficients, in order, each wall's law at its
+    /// 3-D incidence angle (the plan cosine times `horizontal`, the plan leg's share of the
+    /// 3-D leg); the amplitude without one where a `"media"` law finds no medium across.
+    fn walls_coefficient(
+        &self,
+        plan: &SearchArrival,
+        horizontal: f64,
+    ) -> Result<Complex64, Amplitude> {
+        let scene: &Scene = self.tracer.scene();
+        let Some(settings) = scene.amplitudes() else {
+            return Err(Amplitude::none(crate::amplitude::NoAmplitude::UnknownMedia));
+        };
+        let medium = plan.arrival.media.first().copied().unwrap_or(0);
+        let slowness = scene.media()[medium].slowness;
         let mut coefficient = Complex64::new(1.0, 0.0);
         let p = &plan.arrival.points;
         for (i, step) in plan.steps.iter().enumerate() {
@@ -332,9 +388,9 @@ impl<'a> Expansion<'a> {
                         .regions()
                         .and_then(|r| r.medium_across(step.interface, seg, s, from));
                     let Some(across) = across else {
-                        return Amplitude::none(crate::amplitude::NoAmplitude::NoMediumAcross {
-                            step: i,
-                        });
+                        return Err(Amplitude::none(
+                            crate::amplitude::NoAmplitude::NoMediumAcross { step: i },
+                        ));
                     };
                     let leg = here - from;
                     let plan_cos = if leg.length() > 0.0 {
@@ -353,23 +409,70 @@ impl<'a> Expansion<'a> {
             };
             coefficient *= r;
         }
-        let x = self.extrusion;
-        for step in &a.steps {
-            if step.interface == self.floor {
-                coefficient *= x.floor;
-            } else if step.interface == self.floor + 1 {
-                coefficient *= x.ceiling;
+        Ok(coefficient)
+    }
+
+    /// [`Expansion::arrivals`] for a streaming search: each 3-D arrival of plan path `plan`
+    /// as [`SearchArrival::streamed`] gives it (the same steps, time and amplitude, to the
+    /// bit), handed to `out` without its points; `false` when `out` said stop. A plan path
+    /// of no `"media"` law takes its walls' coefficients once for its whole family.
+    pub(super) fn streamed(
+        &self,
+        plan: &SearchArrival,
+        out: &mut dyn FnMut(StreamedArrival) -> bool,
+    ) -> bool {
+        let [zs, zr, h] = self.heights(plan);
+        let a = &plan.arrival;
+        let medium = a.media.first().copied().unwrap_or(0);
+        let slowness = self.tracer.scene().media()[medium].slowness;
+        // The plan length, summed as `arrivals` sums it.
+        let mut length = 0.0;
+        for i in 1..a.points.len() {
+            length += a.points[i - 1].distance(a.points[i]);
+        }
+        let walls = plan.steps.len();
+        let max_vertical = self.options.step_limit().saturating_sub(walls);
+        let mut members = Vec::new();
+        family(
+            length,
+            slowness,
+            [zs, zr, h],
+            max_vertical,
+            self.options.time_limit(),
+            &mut members,
+        );
+        // The wall reflections without a parameter count as vertical ones, as `streamed`
+        // counts them.
+        let unplaced = (plan.steps.iter().enumerate())
+            .filter(|&(i, s)| {
+                s.kind == StepKind::Reflect && a.parameters.get(i).is_none_or(|t| t.is_nan())
+            })
+            .count();
+        let diffractions = diffractions(&plan.steps);
+        let amplitudes = self.tracer.scene().amplitudes();
+        let fixed = amplitudes.and_then(|settings| {
+            let angle_free = (plan.steps.iter())
+                .all(|s| !matches!(settings.reflection[s.interface], Reflection::Media));
+            let ready = angle_free && matches!(a.status, Status::Converged);
+            ready.then(|| self.walls_coefficient(plan, 0.0).ok())?
+        });
+        for v in members {
+            let amplitude = amplitudes.map(|_| self.amplitude(plan, length, v, fixed));
+            let arrival = StreamedArrival {
+                source: plan.source,
+                receiver: plan.receiver,
+                steps: walls + v.count,
+                diffractions,
+                vertical_reflections: unplaced + v.count,
+                status: a.status,
+                time: v.distance * slowness,
+                amplitude,
+            };
+            if !out(arrival) {
+                return false;
             }
         }
-        let spreading = 1.0 / (4.0 * std::f64::consts::PI * distance);
-        let attenuation_db = settings.attenuation[medium] * distance;
-        Amplitude {
-            value: coefficient * spreading * 10f64.powf(-attenuation_db / 20.0),
-            spreading,
-            coefficient,
-            attenuation_db,
-            reason: None,
-        }
+        true
     }
 }
 
@@ -472,9 +575,9 @@ impl Tracer {
         let plan = plan_options(scene, options, x);
         let expansion = Expansion::new(self, x, options);
         let paths = |p: SearchArrival| {
-            expansion.arrivals(&p, &mut |a| {
+            expansion.streamed(&p, &mut |a| {
                 listed.stream();
-                sink(a.streamed());
+                sink(a);
                 true
             })
         };
@@ -534,6 +637,7 @@ mod tests {
                     count,
                     first,
                     length: unfolded(count, first, zs, zr, h),
+                    distance: f64::NAN,
                 };
                 let end = height_at(v, zs, zr, h, v.length);
                 assert!((end - zr).abs() < 1e-12, "{count} {first:?}: {end}");

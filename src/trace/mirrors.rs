@@ -49,11 +49,12 @@
 //! validation alone decides. Where the side of a wall's line an image lies on is within that
 //! margin, the child's beam is the whole plane (no pruning below it).
 //!
-//! One pruning relies on exact geometry instead ([`MirrorWalls::degenerate`]): a thin child
-//! whose window, clipped again without any margin, is empty or one point holds only rays
-//! through a corner, which no valid path follows; certain but for the round-off of that
-//! clip (1e-15 of the coordinates). It removes the slivers that the margins alone keep where
-//! a beam's edge runs exactly through a corner.
+//! One pruning relies on exact geometry instead ([`MirrorWalls::tight`]): each beam also
+//! carries its tight beam, clipped level after level without any margin; a child whose
+//! window, clipped so, is empty or one point holds only rays through a corner, which no
+//! valid path follows; certain but for the round-off of those clips (1e-15 of the
+//! coordinates a level). It removes the slivers that the margins alone keep where a beam's
+//! edge runs exactly through a corner, and the slivers below them.
 
 use crate::geom::{Aabb, Point, Vec2, orient};
 use crate::leg::Uniform;
@@ -121,6 +122,13 @@ impl Wall {
     fn at(&self, u: f64) -> Point {
         self.p + self.e * u
     }
+
+    /// [`Wall::at`], exactly `q` at 1 (the tight beam's edges run exactly through a corner
+    /// where its clip ends there).
+    #[inline(always)]
+    fn end_at(&self, u: f64) -> Point {
+        if u == 1.0 { self.q } else { self.at(u) }
+    }
 }
 
 /// The walls a search may reflect off: every segment of the reflecting interfaces.
@@ -170,6 +178,11 @@ struct Beam {
     /// The window's ends `a` and `b` themselves.
     a: Point,
     b: Point,
+    /// The edges of the tight beam: the rays from the image through the window clipped
+    /// without any margin, level after level ([`MirrorWalls::tight`]): the true beam to
+    /// round-off, narrower than `to_a → to_b` by the margins.
+    tight_a: Vec2,
+    tight_b: Vec2,
 }
 
 /// A node of the image-source tree on the search's stack.
@@ -314,6 +327,19 @@ impl Beam {
         }
     }
 
+    /// The constraints of point `x` against the tight beam (`tight_a → tight_b`), with no
+    /// margin: each is at least 0 where `x` lies in it.
+    #[inline(always)]
+    fn tight_values(&self, wall: &Wall, image: Point, x: Point) -> [f64; 3] {
+        let v = x - image;
+        let o = -self.side;
+        [
+            self.side * wall.height(x),
+            o * self.tight_a.cross(v),
+            o * v.cross(self.tight_b),
+        ]
+    }
+
     /// Whether `x` may lie in the beam (certainly so when it lies in it).
     #[inline(always)]
     fn holds(&self, wall: &Wall, image: Point, x: Point, delta: f64) -> bool {
@@ -343,6 +369,28 @@ fn restrict(range: [f64; 2], g0: f64, g1: f64, margin: f64) -> Option<[f64; 2]> 
         lo = lo.max(u - 4.0 * f64::EPSILON);
     } else {
         hi = hi.min(u + 4.0 * f64::EPSILON);
+    }
+    (lo <= hi).then_some([lo, hi])
+}
+
+/// The fractions `[lo, hi]` of a segment from `x(0)` to `x(1)` where an affine constraint
+/// with values `g0` and `g1` at the ends is at least 0, intersected with `range`, with no
+/// margin and the root not widened (the tight beam's clip: the exact one to round-off, and
+/// exact where the root is, as at a constraint that vanishes at an end); `None` when empty.
+#[inline(always)]
+fn restrict_tight(range: [f64; 2], g0: f64, g1: f64) -> Option<[f64; 2]> {
+    let [mut lo, mut hi] = range;
+    if g0 >= 0.0 && g1 >= 0.0 {
+        return Some(range);
+    }
+    if !(g0 >= 0.0 || g1 >= 0.0) {
+        return None;
+    }
+    let u = g0 / (g0 - g1);
+    if g0 < 0.0 {
+        lo = lo.max(u);
+    } else {
+        hi = hi.min(u);
     }
     (lo <= hi).then_some([lo, hi])
 }
@@ -409,15 +457,15 @@ struct Bounds {
     /// changes no arrival.
     through: bool,
     /// Whether a child is also pruned where its window, clipped without the margins, holds
-    /// no ray or only the rays through one point ([`MirrorWalls::degenerate`]); off only in
+    /// no ray or only the rays through one point ([`MirrorWalls::tight`]); off only in
     /// tests, to show it changes no arrival.
     degenerate: bool,
 }
 
 /// The widest angle (radians) a child's window may subtend from its image and still be
-/// tested by [`MirrorWalls::degenerate`]: a window the margins alone keep is far narrower
-/// (their width over the beam's length, some 1e-6 here), and a wider one is not worth the
-/// test.
+/// clipped by the shadows with no margin in [`MirrorWalls::tight`]: a window the margins
+/// alone keep is far narrower (their width over the beam's length, some 1e-6 here), and a
+/// wider one is not worth the test.
 const THIN: f64 = 1e-4;
 
 /// The most halvings [`Bounds::late_through`] makes of a wall's part.
@@ -850,12 +898,11 @@ impl MirrorWalls {
         if bounds.late(image, Some((a, b))) {
             return None;
         }
-        if bounds.degenerate
-            && subtends(image, a, b) < THIN
-            && self.degenerate(node, w, image, occlusion)
-        {
-            return None;
-        }
+        let tight = if bounds.degenerate {
+            self.tight(node, w, image, range, occlusion)?
+        } else {
+            range
+        };
         // Where the image's side of the line is not certain, the beam is the whole plane.
         let beam = (h.abs() > 2.0 * delta).then(|| {
             let (to_a, to_b) = (a - image, b - image);
@@ -867,6 +914,8 @@ impl MirrorWalls {
                 reach_b: to_b.x.abs() + to_b.y.abs(),
                 a,
                 b,
+                tight_a: wall.end_at(tight[0]) - image,
+                tight_b: wall.end_at(tight[1]) - image,
             }
         });
         Some(Node {
@@ -879,43 +928,49 @@ impl MirrorWalls {
 }
 
 impl MirrorWalls {
-    /// Whether the window of `node`'s child through wall `w` (its image `image`), clipped by the node's beam
-    /// and (with `occlusion`) by the shadows with no margin at all, is empty or one point
-    /// (its two ends the same point, or on one ray from the child's image).
+    /// The tight window of `node`'s child through wall `w` (its image `image`): its window as
+    /// the margins keep it (`range`), clipped again by the node's tight beam with no margin
+    /// and (with `occlusion`, where the window is thin, below [`THIN`]) by the shadows with
+    /// no margin; `None` where that is empty or one point (its two ends the same point, or
+    /// on one ray from the child's image), so that the child is pruned.
     ///
-    /// Such a child holds no path the validation accepts, but through round-off of its clip
-    /// (below 1e-15 of the coordinates): its every ray reaches the wall outside the node's
-    /// beam, which is already wider than the exact one by the margins, or is hidden, or passes
-    /// through the one point where the window's ends meet. That point is a corner: a wall's
-    /// end, where a reflection is no path (but at a free end, which keeps the child: the
-    /// window then holds that end), or an occluder's end that the ray touches, and a leg that
-    /// touches an interface crosses it for the classifier; below such a child every ray
-    /// passes through the same corner. These children are the slivers the margins alone keep
-    /// where a beam's edge runs exactly through a corner (a room of right angles and round
-    /// coordinates has many): each splits again at the next corner its ray meets exactly, so
-    /// their number grows exponentially with the path length while the arrivals grow as its
-    /// square.
-    fn degenerate(
+    /// Such a child holds no path the validation accepts, but through round-off of the
+    /// clips (below 1e-15 of the coordinates a level): the tight beam is the true beam (the
+    /// rays from the image through the part of the wall that paths can reach) up to that
+    /// round-off, since each level clips the true rays with no margin, so every ray of the
+    /// child outside it reaches the wall outside the node's true beam, or is hidden, or
+    /// passes through the one point where the window's ends meet. That point is a corner: a
+    /// wall's end, where a reflection is no path (but at a free end, which keeps the child:
+    /// the window then holds that end), or an occluder's end that the ray touches, and a leg
+    /// that touches an interface crosses it for the classifier; below such a child every ray
+    /// passes through the same corner. These children are the slivers that the margins alone
+    /// keep where a beam's edge runs exactly through a corner (a room of right angles and
+    /// round coordinates has many), and below them the slivers of their own margins: each
+    /// splits again at the next corner its ray meets exactly, so their number grows
+    /// exponentially with the path length while the arrivals grow as its square. The
+    /// tight beam is kept level after level for that reason: a beam clipped by the margins
+    /// alone keeps a sliver one margin wide along its edge.
+    fn tight(
         &self,
         node: &Node,
         w: usize,
         image: Point,
+        range: [f64; 2],
         occlusion: Option<&mut Vec<[f64; 2]>>,
-    ) -> bool {
+    ) -> Option<[f64; 2]> {
         let wall = &self.walls[w];
-        let mut range = [0.0, 1.0];
+        let mut tight = range;
         if let Some(beam) = &node.beam {
             let last = &self.walls[node.wall];
-            let gp = beam.gauge(last, node.image, wall.p, 0.0);
-            let gq = beam.gauge(last, node.image, wall.q, 0.0);
+            let gp = beam.tight_values(last, node.image, wall.p);
+            let gq = beam.tight_values(last, node.image, wall.q);
             for c in 0..3 {
-                match restrict(range, gp.values[c], gq.values[c], 0.0) {
-                    Some(r) => range = r,
-                    None => return true,
-                }
+                tight = restrict_tight(tight, gp[c], gq[c])?;
             }
         }
+        let thin = |t: [f64; 2]| subtends(image, wall.end_at(t[0]), wall.end_at(t[1])) < THIN;
         if let Some(shadows) = occlusion
+            && thin(tight)
             && let Some(window) = self.window(node)
         {
             let target = Target {
@@ -924,19 +979,15 @@ impl MirrorWalls {
                 q: wall.q,
                 n: wall.n,
             };
-            match self
+            tight = self
                 .occluders
-                .unhidden(&window, &target, range, 0.0, shadows)
-            {
-                Some(r) => range = r,
-                None => return true,
-            }
+                .unhidden(&window, &target, tight, 0.0, shadows)?;
         }
-        let (a, b) = (wall.at(range[0]), wall.at(range[1]));
-        if (range[0] == 0.0 && wall.open[0]) || (range[1] == 1.0 && wall.open[1]) {
-            return false;
+        if (tight[0] == 0.0 && wall.open[0]) || (tight[1] == 1.0 && wall.open[1]) {
+            return Some(tight);
         }
-        a == b || (a - image).cross(b - image) == 0.0
+        let (a, b) = (wall.end_at(tight[0]), wall.end_at(tight[1]));
+        (a != b && (a - image).cross(b - image) != 0.0).then_some(tight)
     }
 
     /// Where the legs of `node`'s children start, for their occlusion: the source at the
@@ -1093,8 +1144,31 @@ impl Validation<'_, '_> {
                 return None;
             }
         }
+        // Where obstructed paths are not listed, any leg that crosses an interface makes the
+        // path none, whichever is found first: the last leg first, which crosses where a
+        // receiver lies outside the walls that the path reflects off (a receiver outside the
+        // room is in the beams as often as one inside).
+        let last_first = self.crossings && !self.search.obstructed && k > 0;
+        if last_first {
+            let own = self.walls[stack[k].wall].own;
+            let (a, b) = (points[k], points[k + 1]);
+            let line = [stack[k].image, fars[k]];
+            let crossing = (self.search.scene).first_crossing_on_line(
+                a,
+                b,
+                line,
+                END_MARGIN,
+                [own, SegmentRef::NONE],
+            );
+            if a != b && crossing.is_some() {
+                return None;
+            }
+        }
         let mut own_a = SegmentRef::NONE;
         for leg in 0..=k {
+            if last_first && leg == k {
+                break;
+            }
             let own_b = if leg < k {
                 self.walls[stack[leg + 1].wall].own
             } else {
