@@ -419,7 +419,6 @@ fn asin_over(z: f64) -> f64 {
 }
 
 /// `sin(x) / x`, without loss near 0.
-#[cfg(test)]
 #[inline]
 fn sinc(x: f64) -> f64 {
     if x.abs() < 1e-3 {
@@ -593,9 +592,8 @@ impl ArcLeg {
         self.len * asin_over(z)
     }
 
-    /// The point at arc length `s` from the start, relative to the start (the tests' check of
-    /// an arc's points: the obstruction test meets the arc exactly, `arc_crossing.rs`).
-    #[cfg(test)]
+    /// The point at arc length `s` from the start, relative to the start (a ray's sampled
+    /// curve, `trace::curve`; the tests' check of an arc's points).
     pub fn offset_at(&self, s: f64) -> Vec2 {
         let d0 = self.direction_at_start();
         let k = self.curvature();

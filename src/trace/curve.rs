@@ -14,7 +14,7 @@ use crate::leg::profile::{PieceEnd, RayPiece};
 use crate::leg::{ArcLeg, LegModel};
 use crate::scene::Scene;
 
-use super::profile::profile_ray_of;
+use super::profile::profile_ray_between;
 
 /// Why a ray's curve could not be sampled.
 #[derive(Clone, Debug, PartialEq)]
@@ -206,7 +206,7 @@ fn profile_legs(
     let missing = || CurveError::NoProfileRay {
         medium: scene.media()[m].name.clone(),
     };
-    let (profile, ray) = profile_ray_of(scene, points, m, launch_angle).ok_or_else(missing)?;
+    let (profile, ray) = profile_ray_between(scene, points, m, launch_angle).ok_or_else(missing)?;
     let (a, b) = (points[0].to_vec2(), points[points.len() - 1].to_vec2());
     let pieces = profile.pieces(&ray, a, b);
     if pieces.last().map(|p| p.end_kind) != Some(PieceEnd::Target) {

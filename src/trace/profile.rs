@@ -718,7 +718,7 @@ fn walled_crossing(
 /// the default mode chose (the earliest no interface crosses, else the earliest; between
 /// walls, the one whose reflection points are `points`). `None` where there is none.
 /// (`leaving`: the launch angle asked for.)
-pub(crate) fn profile_ray_of(
+pub(crate) fn profile_ray_between(
     scene: &Scene,
     points: &[Point],
     medium: usize,

@@ -470,6 +470,9 @@ impl MirrorWalls {
             reach_b: to_b.x.abs() + to_b.y.abs(),
             a,
             b,
+            // The certain beam is inside the true one: its own edges bound it tightly.
+            tight_a: to_a,
+            tight_b: to_b,
         })
     }
 
