@@ -108,7 +108,7 @@ fn zigzag(search: Value, solver: Value) -> Scene {
 /// child's work over at most), `complete: false`.
 #[test]
 fn a_zigzag_beam_tree_stays_inside_max_work() {
-    for max_work in [1u64 << 18, 1 << 20] {
+    for max_work in [1u64 << 17, 1 << 19] {
         let scene = zigzag(
             json!({ "max_time": 30, "vertex": true }),
             json!({ "max_work": max_work }),
