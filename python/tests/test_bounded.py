@@ -83,15 +83,17 @@ sources = np.column_stack([np.linspace(1, 5, n), np.full(n, -1.0)])
 receivers = np.column_stack([np.linspace(9, 5, n), np.full(n, 1.1)])
 """
 
-# The comb room's every arrival to 0.25 s: millions of beams, seconds.
+# An E-shaped room's every arrival to 0.6 s at eight listeners: millions of beams, seconds.
 LATE_ROOM = """
 corners = [[0, 0], [0, 5], [1, 5], [1, 2], [2, 2], [2, 5], [3, 5], [3, 0], [2, 0], [2, 1],
            [1, 1], [1, 0]]
 tracer = eigenray.Tracer(eigenray.Scene({
     "media": {"air": {"speed": 343.0, "at": [0.5, 0.5]}},
     "interfaces": {"room": {"points": corners, "closed": True}},
-    "sources": [[0.5, 0.5]], "receivers": [[2.5, 4.5], [1.5, 1.5]],
-    "search": {"max_time": 0.25}, "amplitudes": {"source": "point"},
+    "sources": [[0.5, 0.5]],
+    "receivers": [[2.5, 4.5], [1.5, 1.5], [0.5, 4.5], [2.5, 0.5], [0.5, 2.5], [2.5, 2.5],
+                  [0.6, 1.5], [0.4, 3.5]],
+    "search": {"max_time": 0.6}, "amplitudes": {"source": "point"},
 }))
 """
 
