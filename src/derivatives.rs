@@ -184,6 +184,34 @@ struct Contact {
     at_vertex: Option<usize>,
 }
 
+impl Contact {
+    /// Puts `g`, the time's gradient with respect to the point, onto the polyline's vertices:
+    /// all of it on the vertex the point sits on, else shared between its segment's two ends
+    /// as the point's position is (`1 − λ` and `λ`).
+    #[inline(always)]
+    fn share(&self, interface: usize, g: Vec2, put: &mut impl FnMut(VertexGradient)) {
+        match self.at_vertex {
+            Some(vertex) => put(VertexGradient {
+                interface,
+                vertex,
+                d: g,
+            }),
+            None => {
+                put(VertexGradient {
+                    interface,
+                    vertex: self.a,
+                    d: g * (1.0 - self.lambda),
+                });
+                put(VertexGradient {
+                    interface,
+                    vertex: self.b,
+                    d: g * self.lambda,
+                });
+            }
+        }
+    }
+}
+
 /// Where `p` lies on `line`: on segment `hint` when it lies there (the solver's segment), else
 /// on the nearest segment. `None` when it is not on the polyline (beyond round-off).
 #[inline(always)]
@@ -393,26 +421,7 @@ fn gradient_parts(
         let line = &scene.interfaces()[step.interface].polyline;
         let c = locate(line, points[i + 1], hint.map(|h| h[i]))
             .ok_or(DerivativeError::OffInterface { step: i })?;
-        let interface = step.interface;
-        match c.at_vertex {
-            Some(vertex) => put(VertexGradient {
-                interface,
-                vertex,
-                d: g,
-            }),
-            None => {
-                put(VertexGradient {
-                    interface,
-                    vertex: c.a,
-                    d: g * (1.0 - c.lambda),
-                });
-                put(VertexGradient {
-                    interface,
-                    vertex: c.b,
-                    d: g * c.lambda,
-                });
-            }
-        }
+        c.share(step.interface, g, &mut put);
         (u_prev, w_prev) = (u, w);
     }
     if media.next().is_some() {
@@ -480,26 +489,7 @@ fn curved_parts(
             let line = &scene.interfaces()[step.interface].polyline;
             let c = locate(line, points[i + 1], hint.map(|h| h[i]))
                 .ok_or(DerivativeError::OffInterface { step: i })?;
-            let interface = step.interface;
-            match c.at_vertex {
-                Some(vertex) => put(VertexGradient {
-                    interface,
-                    vertex,
-                    d: g,
-                }),
-                None => {
-                    put(VertexGradient {
-                        interface,
-                        vertex: c.a,
-                        d: g * (1.0 - c.lambda),
-                    });
-                    put(VertexGradient {
-                        interface,
-                        vertex: c.b,
-                        d: g * c.lambda,
-                    });
-                }
-            }
+            c.share(step.interface, g, &mut put);
         }
         arrival_prev = arrival;
     }
@@ -581,26 +571,7 @@ fn profile_parts(
         let line = &scene.interfaces()[step.interface].polyline;
         let c =
             locate(line, points[i + 1], None).ok_or(DerivativeError::OffInterface { step: i })?;
-        let interface = step.interface;
-        match c.at_vertex {
-            Some(vertex) => put(VertexGradient {
-                interface,
-                vertex,
-                d: g,
-            }),
-            None => {
-                put(VertexGradient {
-                    interface,
-                    vertex: c.a,
-                    d: g * (1.0 - c.lambda),
-                });
-                put(VertexGradient {
-                    interface,
-                    vertex: c.b,
-                    d: g * c.lambda,
-                });
-            }
-        }
+        c.share(step.interface, g, &mut put);
     }
     let [ca, cb] = r.speeds;
     Ok(EndGradients {
