@@ -1696,6 +1696,10 @@ pub struct GradientRows<'a> {
     pub num_points: &'a [i64],
     /// Leg media, `width − 1` a row (indices into [`Scene::media`]; negative where unknown).
     pub media: &'a [i32],
+    /// Each ray's direction at its source (its `launch_angle`; `n` entries, NaN where
+    /// unknown), where the rows carry one: which of the rays between the same points through
+    /// a `profile` medium a row is. Without it such a row is the default mode's ray.
+    pub launch_angles: Option<&'a [f64]>,
 }
 
 /// Where [`GradientRows::gradients_into`] writes: flat arrays of `n` rows, every entry
@@ -1715,6 +1719,14 @@ pub struct GradientArraysMut<'a> {
     pub vertex: &'a mut [i32],
     /// `(dT/dx, dT/dy)` of that vertex, NaN past the ray's own (`n × slots × 2` entries).
     pub vertex_d: &'a mut [f64],
+    /// `(dT/dgx, dT/dgy)` of each medium's speed gradient, in the order of [`Scene::media`]
+    /// (`n × media × 2` entries in a scene with a `gradient` medium, zero for a medium
+    /// without one; empty in other scenes: see [`GradientArraysMut::speed_gradient_width`]).
+    pub speed_gradient: &'a mut [f64],
+    /// `dT/dc` of each knot of each `profile` medium, the media in the order of
+    /// [`Scene::media`] and each one's knots in its profile's order (`n × knots` entries,
+    /// see [`GradientArraysMut::profile_speed_width`]; empty in a scene without a profile).
+    pub profile_speed: &'a mut [f64],
 }
 
 impl GradientArraysMut<'_> {
@@ -1727,6 +1739,29 @@ impl GradientArraysMut<'_> {
             .map(|p| p.steps.len())
             .max()
             .unwrap_or(0)
+    }
+
+    /// Entries a row of [`speed_gradient`](Self::speed_gradient) has for rays of `scene`:
+    /// two per medium in a scene with a `gradient` medium, else none.
+    pub fn speed_gradient_width(scene: &Scene) -> usize {
+        if has_gradient(scene) {
+            2 * scene.media().len()
+        } else {
+            0
+        }
+    }
+
+    /// Entries a row of [`profile_speed`](Self::profile_speed) has for rays of `scene`: the
+    /// knots of all its `profile` media (none without one).
+    pub fn profile_speed_width(scene: &Scene) -> usize {
+        if !has_profile(scene) {
+            return 0;
+        }
+        scene
+            .media()
+            .iter()
+            .map(|m| m.profile.as_ref().map_or(0, Vec::len))
+            .sum()
     }
 }
 
@@ -1742,11 +1777,14 @@ impl GradientRows<'_> {
     pub fn gradients_into(&self, scene: &Scene, out: GradientArraysMut<'_>) {
         let n = self.paths.len();
         let (media, slots) = (scene.media().len(), GradientArraysMut::slots(scene));
+        let sg_width = GradientArraysMut::speed_gradient_width(scene);
+        let ps_width = GradientArraysMut::profile_speed_width(scene);
         assert!(
             self.statuses.len() == n
                 && self.num_points.len() == n
                 && self.points.len() == n * self.width * 2
-                && self.media.len() == n * self.width.saturating_sub(1),
+                && self.media.len() == n * self.width.saturating_sub(1)
+                && self.launch_angles.is_none_or(|a| a.len() == n),
             "gradient rows of different lengths"
         );
         assert!(
@@ -1755,7 +1793,9 @@ impl GradientRows<'_> {
                 && out.slowness.len() == n * media
                 && out.vertex_interface.len() == n * slots
                 && out.vertex.len() == n * slots
-                && out.vertex_d.len() == 2 * n * slots,
+                && out.vertex_d.len() == 2 * n * slots
+                && out.speed_gradient.len() == n * sg_width
+                && out.profile_speed.len() == n * ps_width,
             "gradient arrays of other lengths than the rows"
         );
         let count = n.div_ceil(GRADIENT_PIECE);
@@ -1765,22 +1805,31 @@ impl GradientRows<'_> {
             .zip(row_pieces(out.vertex_interface, slots, count))
             .zip(row_pieces(out.vertex, slots, count))
             .zip(row_pieces(out.vertex_d, 2 * slots, count))
+            .zip(row_pieces(out.speed_gradient, sg_width, count))
+            .zip(row_pieces(out.profile_speed, ps_width, count))
             .map(
-                |(((((source, receiver), slowness), vertex_interface), vertex), vertex_d)| {
-                    RowsPiece {
-                        media,
-                        slots,
-                        source,
-                        receiver,
-                        slowness,
-                        vertex_interface,
-                        vertex,
-                        vertex_d,
-                        room: vec![VertexGradient::default(); slots],
-                    }
+                |(
+                    ((((((source, receiver), slowness), vertex_interface), vertex), vertex_d), sg),
+                    ps,
+                )| RowsPiece {
+                    media,
+                    slots,
+                    source,
+                    receiver,
+                    slowness,
+                    vertex_interface,
+                    vertex,
+                    vertex_d,
+                    speed_gradient: sg,
+                    profile_speed: ps,
+                    widths: [sg_width, ps_width],
+                    room: vec![VertexGradient::default(); slots],
                 },
             )
             .collect();
+        if scene.curved() {
+            return self.curved_gradients_into(scene, pieces);
+        }
         gradients_in_pieces(pieces, |rays, piece| {
             let first = rays.start;
             let mut points = Vec::new();
@@ -1791,6 +1840,28 @@ impl GradientRows<'_> {
                         store_gradient(scene, piece, ray - first, steps, path.points, media);
                     }
                     None => piece.store_none(ray - first),
+                }
+            }
+        });
+    }
+
+    /// [`gradients_into`](Self::gradients_into) in a scene with curved legs: each row as
+    /// [`Gradient::of_arrival`] computes it (the ray of the row's launch angle through a
+    /// profile), with its speed gradients and knots' derivatives.
+    fn curved_gradients_into(&self, scene: &Scene, pieces: Vec<RowsPiece<'_>>) {
+        gradients_in_pieces(pieces, |rays, piece| {
+            let first = rays.start;
+            let (mut points, mut gradient) = (Vec::new(), Gradient::default());
+            for ray in rays {
+                let row = ray - first;
+                let launch = self.launch_angles.map(|a| a[ray]).filter(|a| a.is_finite());
+                let filled = self.ray(scene, ray, &mut points).map(|path| {
+                    let (steps, media) = (path.steps, path.media);
+                    gradient.fill_at(scene, steps, path.points, media, None, launch)
+                });
+                match filled {
+                    Some(Ok(())) => piece.store_curved(row, &gradient),
+                    _ => piece.store_none(row),
                 }
             }
         });
@@ -1981,8 +2052,46 @@ struct RowsPiece<'a> {
     vertex: &'a mut [i32],
     /// `2 × slots` a row.
     vertex_d: &'a mut [f64],
+    /// `widths[0]` a row.
+    speed_gradient: &'a mut [f64],
+    /// `widths[1]` a row.
+    profile_speed: &'a mut [f64],
+    /// Entries a row of `speed_gradient` and of `profile_speed`.
+    widths: [usize; 2],
     /// Room for one row's vertex shares (`slots`).
     room: Vec<VertexGradient>,
+}
+
+impl RowsPiece<'_> {
+    /// Row `row` holds `g`, a gradient of a ray with curved legs: [`store`](GradientPiece::store)
+    /// of its parts, its speed gradients and its knots' derivatives.
+    fn store_curved(&mut self, row: usize, g: &Gradient) {
+        let media = self.media;
+        self.slowness[row * media..(row + 1) * media].copy_from_slice(&g.slowness);
+        let count = g.vertices.len().min(self.slots);
+        self.room[..count].copy_from_slice(&g.vertices[..count]);
+        let ends = EndGradients {
+            source: g.source,
+            receiver: g.receiver,
+        };
+        self.store(row, ends, count);
+        let [sg_width, ps_width] = self.widths;
+        let sg = &mut self.speed_gradient[row * sg_width..(row + 1) * sg_width];
+        sg.fill(0.0);
+        for (d, v) in sg.chunks_exact_mut(2).zip(&g.speed_gradient) {
+            d.copy_from_slice(&[v.x, v.y]);
+        }
+        let ps = &mut self.profile_speed[row * ps_width..(row + 1) * ps_width];
+        ps.fill(0.0);
+        // (One entry per medium, each as long as its profile: their concatenation.)
+        let mut at = 0;
+        for knots in &g.profile_speed {
+            if let Some(d) = ps.get_mut(at..at + knots.len()) {
+                d.copy_from_slice(knots);
+            }
+            at += knots.len();
+        }
+    }
 }
 
 impl GradientPiece for RowsPiece<'_> {
@@ -2024,6 +2133,9 @@ impl GradientPiece for RowsPiece<'_> {
         self.vertex_interface[row * slots..(row + 1) * slots].fill(-1);
         self.vertex[row * slots..(row + 1) * slots].fill(-1);
         self.vertex_d[2 * row * slots..2 * (row + 1) * slots].fill(f64::NAN);
+        let [sg, ps] = self.widths;
+        self.speed_gradient[row * sg..(row + 1) * sg].fill(f64::NAN);
+        self.profile_speed[row * ps..(row + 1) * ps].fill(f64::NAN);
     }
 }
 
@@ -2081,6 +2193,7 @@ mod tests {
                 points: &self.points,
                 num_points: &self.num_points,
                 media: &self.media,
+                launch_angles: None,
             }
         }
     }
@@ -2094,6 +2207,8 @@ mod tests {
         vertex_interface: Vec<i32>,
         vertex: Vec<i32>,
         vertex_d: Vec<f64>,
+        speed_gradient: Vec<f64>,
+        profile_speed: Vec<f64>,
     }
 
     impl Arrays {
@@ -2107,6 +2222,8 @@ mod tests {
                 vertex_interface: vec![99; n * slots],
                 vertex: vec![99; n * slots],
                 vertex_d: vec![7.5; 2 * n * slots],
+                speed_gradient: vec![7.5; n * GradientArraysMut::speed_gradient_width(scene)],
+                profile_speed: vec![7.5; n * GradientArraysMut::profile_speed_width(scene)],
             };
             rows.gradients_into(
                 scene,
@@ -2117,6 +2234,8 @@ mod tests {
                     vertex_interface: &mut a.vertex_interface,
                     vertex: &mut a.vertex,
                     vertex_d: &mut a.vertex_d,
+                    speed_gradient: &mut a.speed_gradient,
+                    profile_speed: &mut a.profile_speed,
                 },
             );
             a

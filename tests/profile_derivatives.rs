@@ -338,3 +338,85 @@ fn command_line_entries_carry_their_own_gradients() {
         assert!(near(slowness, g.slowness[0]), "{entry}");
     }
 }
+
+/// The gradients of many rays as flat rows ([`GradientRows`], what Python's
+/// `Tracer.gradients(rays)` computes) through a profile: each row the ray of its launch angle,
+/// bit for bit the gradient of that arrival ([`Gradient::of_arrival`], checked against
+/// central differences above), with each knot's `dT/dc`; without the launch angles every row
+/// is the default mode's ray, so rows of different rays between the same points differ only
+/// with them.
+#[test]
+fn rows_with_launch_angles_are_each_arrivals_gradient() {
+    use eigenray::derivatives::{GradientArraysMut, GradientRows};
+    let doc = json!({
+        "media": { "ocean": { "profile": munk(11) } },
+        "sources": [[0, -1000]], "receivers": [[60000, -800]],
+        "paths": [{ "steps": [], "media": ["ocean"] }]
+    });
+    let (scene, found) = arrivals(&doc);
+    assert_eq!(found.len(), 3);
+    let n = found.len();
+    let codes = eigenray::output::STATUS_CODES;
+    let converged = codes.iter().position(|s| s.has_time()).unwrap() as u8;
+    let points: Vec<f64> = found
+        .iter()
+        .flat_map(|a| a.points.iter().flat_map(|p| [p.x, p.y]))
+        .collect();
+    let launch: Vec<f64> = found.iter().map(|a| a.launch_angle.unwrap()).collect();
+    let knots = GradientArraysMut::profile_speed_width(&scene);
+    assert_eq!(knots, 11);
+    assert_eq!(GradientArraysMut::speed_gradient_width(&scene), 0);
+    let rows_of = |launch_angles: Option<&[f64]>| {
+        let rows = GradientRows {
+            paths: &vec![0; n],
+            statuses: &vec![converged; n],
+            status_of_code: &codes,
+            width: 2,
+            points: &points,
+            num_points: &vec![2; n],
+            media: &vec![0; n],
+            launch_angles,
+        };
+        let (mut source, mut receiver, mut slowness) =
+            (vec![0.0; 2 * n], vec![0.0; 2 * n], vec![0.0; n]);
+        let mut profile_speed = vec![0.0; n * knots];
+        rows.gradients_into(
+            &scene,
+            GradientArraysMut {
+                source: &mut source,
+                receiver: &mut receiver,
+                slowness: &mut slowness,
+                vertex_interface: &mut [],
+                vertex: &mut [],
+                vertex_d: &mut [],
+                speed_gradient: &mut [],
+                profile_speed: &mut profile_speed,
+            },
+        );
+        (source, receiver, slowness, profile_speed)
+    };
+    let (source, receiver, slowness, profile_speed) = rows_of(Some(&launch));
+    let steps = &scene.paths()[0].steps;
+    for (i, a) in found.iter().enumerate() {
+        let g = Gradient::of_arrival(&scene, steps, a).unwrap();
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(
+            bits(&source[2 * i..2 * i + 2]),
+            bits(&[g.source.x, g.source.y])
+        );
+        assert_eq!(
+            bits(&receiver[2 * i..2 * i + 2]),
+            bits(&[g.receiver.x, g.receiver.y])
+        );
+        assert_eq!(slowness[i].to_bits(), g.slowness[0].to_bits());
+        assert_eq!(
+            bits(&profile_speed[knots * i..knots * (i + 1)]),
+            bits(&g.profile_speed[0])
+        );
+    }
+    // The three rays leave the source in three directions: their rows differ.
+    assert!(source[0] != source[2] && source[2] != source[4] && source[0] != source[4]);
+    // Without launch angles each row is the default mode's ray: all alike.
+    let (source, _, _, _) = rows_of(None);
+    assert!(source[0] == source[2] && source[2] == source[4]);
+}

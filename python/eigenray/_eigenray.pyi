@@ -117,6 +117,8 @@ class Gradients:
     vertex_interface: npt.NDArray[np.int32]
     vertex: npt.NDArray[np.int32]
     vertex_d: npt.NDArray[np.float64]
+    speed_gradient: dict[str, npt.NDArray[np.float64]]
+    profile_speed: dict[str, npt.NDArray[np.float64]]
     media_names: list[str]
     interface_names: list[str]
     def __len__(self) -> int: ...

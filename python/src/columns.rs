@@ -147,6 +147,18 @@ impl QuantityArrays {
             .and_then(|(_, a)| a.as_ref())
     }
 
+    /// The float column `name`, when there is one.
+    pub(crate) fn float_column<'py>(
+        &self,
+        py: Python<'py>,
+        name: &str,
+    ) -> Option<Bound<'py, PyArray1<f64>>> {
+        match self.array(name)? {
+            ColumnArray::Float(a) => Some(a.bind(py).clone()),
+            ColumnArray::Complex(_) => None,
+        }
+    }
+
     /// Entry `i` of the float column `name`, when there is one.
     pub(crate) fn float_at(&self, py: Python<'_>, name: &str, i: usize) -> Option<f64> {
         match self.array(name)? {

@@ -3,10 +3,11 @@
 
 use eigenray::derivatives::{GradientArraysMut, GradientRows};
 use eigenray::{Scene, output::STATUS_CODES};
-use numpy::ndarray::{Array2, Array3, ArrayBase, Data, Dimension};
+use numpy::ndarray::{Array2, Array3, ArrayBase, Axis, Data, Dimension, s};
 use numpy::{IntoPyArray, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use crate::convert::interface_names;
 use crate::error::{argument_error, check_memory};
@@ -30,6 +31,15 @@ pub(crate) struct PyGradients {
     vertex: Py<PyArray2<i32>>,
     /// `(dT/dx, dT/dy)` of that vertex, shape `(n, 2K, 2)`, NaN past the ray's own.
     vertex_d: Py<PyArray3<f64>>,
+    /// `(dT/dgx, dT/dgy)` of each medium with a speed gradient, by name, shape `(n, 2)` (a
+    /// scene with a `gradient` medium; empty otherwise). Their `slowness` column is then
+    /// `dT/dw` with `w = 1/speed` and the gradient held.
+    speed_gradient: Py<PyDict>,
+    /// `dT/dc` of each knot of each medium with a speed profile, by name, shape
+    /// `(n, knots)` in the order of the medium's `profile` (a scene with a `profile` medium;
+    /// empty otherwise). Their `slowness` column is then `dT/dw` with `w = 1/c` of the first
+    /// knot and the profile's shape held.
+    profile_speed: Py<PyDict>,
     /// The scene's medium names.
     media_names: Vec<String>,
     /// The scene's interface names.
@@ -100,7 +110,10 @@ impl PyGradients {
             + copy(points.is_standard_layout(), 8 * points.len())
             + copy(num_points.is_standard_layout(), 8 * n)
             + copy(media.is_standard_layout(), 4 * media.len());
-        let per_ray = 8 * (4 + m as u64) + slots as u64 * (4 + 4 + 16);
+        let sg_width = GradientArraysMut::speed_gradient_width(scene);
+        let ps_width = GradientArraysMut::profile_speed_width(scene);
+        let per_ray =
+            8 * (4 + m as u64 + (sg_width + ps_width) as u64) + slots as u64 * (4 + 4 + 16);
         check_memory(
             &format!("gradients: {n} rays"),
             (n as u64)
@@ -114,6 +127,14 @@ impl PyGradients {
             points.as_standard_layout(),
         );
         let (num_points, media) = (num_points.as_standard_layout(), media.as_standard_layout());
+        // Which ray each row is where several share their points (through a profile).
+        let launch = rays.quantities.float_column(py, "launch_angle");
+        let launch = launch.as_ref().map(|a| a.readonly());
+        let launch = launch.as_ref().map(|a| a.as_array());
+        let launch = launch.as_ref().map(|a| a.as_standard_layout());
+        if launch.as_ref().is_some_and(|a| a.len() != n) {
+            return Err(argument_error(py, "rays", "arrays of different lengths"));
+        }
         let rows = GradientRows {
             paths: flat(&path),
             statuses: flat(&status),
@@ -122,6 +143,7 @@ impl PyGradients {
             points: flat(&points),
             num_points: flat(&num_points),
             media: flat(&media),
+            launch_angles: launch.as_ref().map(flat),
         };
         // (Zeroed memory, written in the computation's parallel pass: every entry is written.)
         let mut source = vec![0.0; 2 * n];
@@ -130,6 +152,8 @@ impl PyGradients {
         let mut vertex_interface = vec![0i32; slots * n];
         let mut vertex = vec![0i32; slots * n];
         let mut vertex_d = vec![0.0; 2 * slots * n];
+        let mut speed_gradient = vec![0.0; sg_width * n];
+        let mut profile_speed = vec![0.0; ps_width * n];
         py.detach(|| {
             let out = GradientArraysMut {
                 source: &mut source,
@@ -138,6 +162,8 @@ impl PyGradients {
                 vertex_interface: &mut vertex_interface,
                 vertex: &mut vertex,
                 vertex_d: &mut vertex_d,
+                speed_gradient: &mut speed_gradient,
+                profile_speed: &mut profile_speed,
             };
             rows.gradients_into(scene, out);
         });
@@ -168,10 +194,63 @@ impl PyGradients {
                 .map_err(shape_error)?
                 .into_pyarray(py)
                 .unbind(),
+            speed_gradient: speed_gradient_columns(py, scene, speed_gradient, n)?,
+            profile_speed: profile_speed_columns(py, scene, profile_speed, n)?,
             media_names,
             interface_names: interface_names(scene),
         })
     }
+}
+
+/// The speed gradients' columns (`n` rows of two per medium, every medium's) as a dict by
+/// the name of each medium with a gradient, `(n, 2)` arrays.
+fn speed_gradient_columns(
+    py: Python<'_>,
+    scene: &Scene,
+    rows: Vec<f64>,
+    n: usize,
+) -> PyResult<Py<PyDict>> {
+    let d = PyDict::new(py);
+    if GradientArraysMut::speed_gradient_width(scene) == 0 {
+        return Ok(d.unbind());
+    }
+    let media = scene.media();
+    let all = Array3::from_shape_vec((n, media.len(), 2), rows)
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    for (i, m) in media.iter().enumerate() {
+        if m.gradient.is_some() {
+            let column = all.index_axis(Axis(1), i).to_owned();
+            d.set_item(&m.name, column.into_pyarray(py))?;
+        }
+    }
+    Ok(d.unbind())
+}
+
+/// The knots' columns (`n` rows of every profile medium's knots, in the media's order) as a
+/// dict by the name of each medium with a profile, `(n, knots)` arrays.
+fn profile_speed_columns(
+    py: Python<'_>,
+    scene: &Scene,
+    rows: Vec<f64>,
+    n: usize,
+) -> PyResult<Py<PyDict>> {
+    let d = PyDict::new(py);
+    let width = GradientArraysMut::profile_speed_width(scene);
+    if width == 0 {
+        return Ok(d.unbind());
+    }
+    let all = Array2::from_shape_vec((n, width), rows)
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    let mut at = 0;
+    for m in scene.media() {
+        let Some(knots) = &m.profile else {
+            continue;
+        };
+        let column = all.slice(s![.., at..at + knots.len()]).to_owned();
+        d.set_item(&m.name, column.into_pyarray(py))?;
+        at += knots.len();
+    }
+    Ok(d.unbind())
 }
 
 /// The entries of an array in standard (C) order, as one slice.

@@ -145,3 +145,20 @@ def test_the_caustics_column_is_the_morse_index():
     assert ray.caustics == 1
     batch = tracer.trace()
     assert list(batch.caustics) == [1, 1]
+
+
+def test_gradients_of_a_batch_give_the_speed_gradients():
+    """`Tracer.gradients(rays)` through arcs: each row's `speed_gradient` (by medium) and its
+    other entries are those of `Tracer.gradient` for the same ray (checked against finite
+    differences above)."""
+    tracer = eigenray.Tracer(eigenray.Scene(CAUSTIC))
+    rays = tracer.trace(warm_start=False)
+    grads = tracer.gradients(rays)
+    assert set(grads.speed_gradient) == {"rock"} and grads.profile_speed == {}
+    assert grads.speed_gradient["rock"].shape == (len(rays), 2)
+    for i in range(len(rays)):
+        one = tracer.gradient((0, 0), (10000, 0), int(rays.path[i]))
+        assert one.status == "converged"
+        assert grads.speed_gradient["rock"][i].tolist() == one.speed_gradient["rock"].tolist()
+        assert grads.receiver[i].tolist() == one.receiver.tolist()
+        assert dict(zip(grads.media_names, grads.slowness[i].tolist())) == dict(one.slowness)

@@ -215,3 +215,62 @@ def test_gradient_through_a_profile_matches_finite_differences(reflected):
     if reflected:
         assert {v["interface"] for v in g.vertices} == {"surface", "bottom"}
         assert all(v["d"][0] == 0.0 for v in g.vertices)
+
+
+def munk(n):
+    """The Munk profile at n knots from 0 to 5000 m depth (y = -z)."""
+    knots = []
+    for z in np.linspace(0.0, 5000.0, n):
+        eta = 2.0 * (z - 1300.0) / 1300.0
+        knots.append([-float(z), 1500.0 * (1.0 + 0.00737 * (eta - 1.0 + math.exp(-eta)))])
+    return knots
+
+
+def test_gradients_of_a_batch_are_each_rays_own():
+    """`Tracer.gradients(rays)` through a profile: of the three rays `"stationary": "all"`
+    finds between the same points in the Munk profile at 60 km, each row is the ray of its
+    own `launch_angle`: its receiver gradient and its knots' `profile_speed` against central
+    differences of that ray's re-solved time (found again by its turns and nearest launch
+    angle)."""
+    scene = {
+        "media": {"ocean": {"profile": munk(11)}},
+        "sources": [[0, -1000]],
+        "receivers": [[60000, -800]],
+        "paths": [{"steps": [], "media": ["ocean"]}],
+    }
+
+    def rays_of(doc):
+        return eigenray.Tracer(eigenray.Scene(doc)).trace_stationary()
+
+    rays = rays_of(scene)
+    n = len(rays.time)
+    assert n == 3
+    grads = eigenray.Tracer(eigenray.Scene(scene)).gradients(rays)
+    assert grads.speed_gradient == {}
+    assert grads.profile_speed["ocean"].shape == (n, 11)
+
+    def time_of(doc, i):
+        again = rays_of(doc)
+        same = [j for j in range(len(again.time)) if again.turns[j] == rays.turns[i]]
+        j = min(same, key=lambda j: abs(again.launch_angle[j] - rays.launch_angle[i]))
+        return again.time[j]
+
+    for i in range(n):
+        for axis in range(2):
+            times = []
+            for h in (1e-2, -1e-2):
+                doc = copy.deepcopy(scene)
+                doc["receivers"][0][axis] += h
+                times.append(time_of(doc, i))
+            fd = (times[0] - times[1]) / 2e-2
+            assert abs(grads.receiver[i, axis] - fd) < 1e-9, (i, axis, grads.receiver[i], fd)
+        for k in (0, 2, 5, 10):
+            times = []
+            for h in (1e-3, -1e-3):
+                doc = copy.deepcopy(scene)
+                doc["media"]["ocean"]["profile"][k][1] += h
+                times.append(time_of(doc, i))
+            fd = (times[0] - times[1]) / 2e-3
+            assert abs(grads.profile_speed["ocean"][i, k] - fd) < 2e-9, (i, k)
+    # The rows are of different rays: their receiver gradients differ.
+    assert len({tuple(np.round(grads.receiver[i], 12)) for i in range(n)}) == n
