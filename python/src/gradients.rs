@@ -2,8 +2,8 @@
 //! from the arrays of a `Rays`.
 
 use eigenray::derivatives::{GradientArraysMut, GradientRows};
-use eigenray::{Scene, output::STATUS_CODES};
-use numpy::ndarray::{Array2, Array3, ArrayBase, Axis, Data, Dimension, s};
+use eigenray::{Scene, output::STATUS_CODES, scene::Medium};
+use numpy::ndarray::{Array2, Array3, ArrayBase, Data, Dimension, s};
 use numpy::{IntoPyArray, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
@@ -194,61 +194,45 @@ impl PyGradients {
                 .map_err(shape_error)?
                 .into_pyarray(py)
                 .unbind(),
-            speed_gradient: speed_gradient_columns(py, scene, speed_gradient, n)?,
-            profile_speed: profile_speed_columns(py, scene, profile_speed, n)?,
+            // Two a medium in a scene with a gradient medium; each profile's knots.
+            speed_gradient: columns_by_medium(py, scene, speed_gradient, n, |m| {
+                (2 * usize::from(sg_width > 0), m.gradient.is_some())
+            })?,
+            profile_speed: columns_by_medium(py, scene, profile_speed, n, |m| {
+                let knots = m.profile.as_ref().map_or(0, Vec::len);
+                (knots * usize::from(ps_width > 0), knots > 0)
+            })?,
             media_names,
             interface_names: interface_names(scene),
         })
     }
 }
 
-/// The speed gradients' columns (`n` rows of two per medium, every medium's) as a dict by
-/// the name of each medium with a gradient, `(n, 2)` arrays.
-fn speed_gradient_columns(
+/// Per-medium columns of `n` rows as a dict of `(n, w)` arrays by medium name: each row
+/// holds `columns(m).0` entries of each medium `m` in the scene's order, and the medium is
+/// listed when `columns(m).1`.
+fn columns_by_medium(
     py: Python<'_>,
     scene: &Scene,
     rows: Vec<f64>,
     n: usize,
+    columns: impl Fn(&Medium) -> (usize, bool),
 ) -> PyResult<Py<PyDict>> {
     let d = PyDict::new(py);
-    if GradientArraysMut::speed_gradient_width(scene) == 0 {
-        return Ok(d.unbind());
-    }
-    let media = scene.media();
-    let all = Array3::from_shape_vec((n, media.len(), 2), rows)
-        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-    for (i, m) in media.iter().enumerate() {
-        if m.gradient.is_some() {
-            let column = all.index_axis(Axis(1), i).to_owned();
-            d.set_item(&m.name, column.into_pyarray(py))?;
-        }
-    }
-    Ok(d.unbind())
-}
-
-/// The knots' columns (`n` rows of every profile medium's knots, in the media's order) as a
-/// dict by the name of each medium with a profile, `(n, knots)` arrays.
-fn profile_speed_columns(
-    py: Python<'_>,
-    scene: &Scene,
-    rows: Vec<f64>,
-    n: usize,
-) -> PyResult<Py<PyDict>> {
-    let d = PyDict::new(py);
-    let width = GradientArraysMut::profile_speed_width(scene);
-    if width == 0 {
+    let width: usize = scene.media().iter().map(|m| columns(m).0).sum();
+    if !scene.media().iter().any(|m| columns(m).1) {
         return Ok(d.unbind());
     }
     let all = Array2::from_shape_vec((n, width), rows)
         .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
     let mut at = 0;
     for m in scene.media() {
-        let Some(knots) = &m.profile else {
-            continue;
-        };
-        let column = all.slice(s![.., at..at + knots.len()]).to_owned();
-        d.set_item(&m.name, column.into_pyarray(py))?;
-        at += knots.len();
+        let (w, listed) = columns(m);
+        if listed {
+            let column = all.slice(s![.., at..at + w]).to_owned();
+            d.set_item(&m.name, column.into_pyarray(py))?;
+        }
+        at += w;
     }
     Ok(d.unbind())
 }
