@@ -656,14 +656,18 @@ impl Leg for ArcLeg {
     }
 }
 
-/// The model of one leg's medium when a path may hold curved legs: [`Uniform`] or
-/// [`Linear`], chosen per leg (a path through a medium with a gradient).
+/// The model of one leg's medium when a path may hold curved legs: [`Uniform`],
+/// [`Linear`] or one branch of a profile ([`profile::ProfileLegModel`], borrowing its
+/// profile: a path through a profile medium whose reflections are not all on flat
+/// horizontal walls), chosen per leg.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) enum LegMedium {
+pub(crate) enum LegMedium<'a> {
     /// A uniform medium.
     Uniform(Uniform),
     /// A medium whose speed is linear in position.
     Linear(Linear),
+    /// One branch of a profile medium.
+    Profile(profile::ProfileLegModel<'a>),
 }
 
 /// A leg of a [`LegMedium`].
@@ -673,6 +677,8 @@ pub(crate) enum AnyLeg {
     Straight(StraightLeg),
     /// A circular arc.
     Arc(ArcLeg),
+    /// A ray of a profile medium.
+    Profile(profile::ProfileLeg),
 }
 
 impl AnyLeg {
@@ -682,6 +688,7 @@ impl AnyLeg {
         match self {
             AnyLeg::Straight(l) => l.len,
             AnyLeg::Arc(l) => l.len,
+            AnyLeg::Profile(l) => l.len,
         }
     }
 
@@ -691,7 +698,8 @@ impl AnyLeg {
         match self {
             AnyLeg::Straight(l) => l.u,
             AnyLeg::Arc(l) if l.len > 0.0 => l.chord * (1.0 / l.len),
-            AnyLeg::Arc(_) => Vec2::default(),
+            AnyLeg::Profile(l) if l.len > 0.0 => l.chord * (1.0 / l.len),
+            AnyLeg::Arc(_) | AnyLeg::Profile(_) => Vec2::default(),
         }
     }
 
@@ -700,7 +708,26 @@ impl AnyLeg {
     pub fn arc(&self) -> Option<&ArcLeg> {
         match self {
             AnyLeg::Arc(l) => Some(l),
-            AnyLeg::Straight(_) => None,
+            AnyLeg::Straight(_) | AnyLeg::Profile(_) => None,
+        }
+    }
+
+    /// The profile's ray, if the leg is one.
+    #[inline]
+    pub fn profile(&self) -> Option<&profile::ProfileLeg> {
+        match self {
+            AnyLeg::Profile(l) => Some(l),
+            AnyLeg::Straight(_) | AnyLeg::Arc(_) => None,
+        }
+    }
+
+    /// The length along the leg: a straight leg's, an arc's, a profile ray's.
+    #[inline]
+    pub fn arc_length(&self) -> f64 {
+        match self {
+            AnyLeg::Straight(l) => l.len,
+            AnyLeg::Arc(l) => l.arc_length(),
+            AnyLeg::Profile(l) => l.arc,
         }
     }
 }
@@ -710,6 +737,7 @@ macro_rules! either {
         match $self {
             AnyLeg::Straight($l) => $e,
             AnyLeg::Arc($l) => $e,
+            AnyLeg::Profile($l) => $e,
         }
     };
 }
@@ -753,13 +781,14 @@ impl Leg for AnyLeg {
     }
 }
 
-impl LegModel for LegMedium {
+impl LegModel for LegMedium<'_> {
     type Leg = AnyLeg;
 
     #[inline]
     fn leg(self, a: Vec2, b: Vec2) -> AnyLeg {
         match self {
             LegMedium::Uniform(m) => AnyLeg::Straight(m.leg(a, b)),
+            LegMedium::Profile(m) => AnyLeg::Profile(m.leg(a, b)),
             LegMedium::Linear(m) => AnyLeg::Arc(m.leg(a, b)),
         }
     }
@@ -768,30 +797,35 @@ impl LegModel for LegMedium {
         match self {
             LegMedium::Uniform(m) => m.valid_leg(a, b).map(AnyLeg::Straight),
             LegMedium::Linear(m) => m.valid_leg(a, b).map(AnyLeg::Arc),
+            LegMedium::Profile(m) => m.valid_leg(a, b).map(AnyLeg::Profile),
         }
     }
     fn least_time(self, from: Aabb, to: Aabb) -> f64 {
         match self {
             LegMedium::Uniform(m) => m.least_time(from, to),
             LegMedium::Linear(m) => m.least_time(from, to),
+            LegMedium::Profile(m) => m.least_time(from, to),
         }
     }
     fn least_time_to(self, from: Aabb, to: Point) -> f64 {
         match self {
             LegMedium::Uniform(m) => m.least_time_to(from, to),
             LegMedium::Linear(m) => m.least_time_to(from, to),
+            LegMedium::Profile(m) => m.least_time_to(from, to),
         }
     }
     fn along_at_ends(self, chord_along: [f64; 2]) -> [f64; 2] {
         match self {
             LegMedium::Uniform(m) => m.along_at_ends(chord_along),
             LegMedium::Linear(m) => m.along_at_ends(chord_along),
+            LegMedium::Profile(m) => m.along_at_ends(chord_along),
         }
     }
     fn greatest_slowness(self) -> f64 {
         match self {
             LegMedium::Uniform(m) => m.greatest_slowness(),
             LegMedium::Linear(m) => m.greatest_slowness(),
+            LegMedium::Profile(m) => m.greatest_slowness(),
         }
     }
 }

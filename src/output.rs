@@ -1002,7 +1002,8 @@ fn write_all<'a, W: Write, M: Iterator<Item = usize>>(
                 // A default-mode ray through a profile medium: its turns and caustics.
                 if e.turns.is_none() && scene.curved() && r.points.len() >= 2 {
                     let media: Vec<usize> = view(i).media.into_iter().flatten().collect();
-                    let shape = Entry::shape(scene, e.timed, r.points, &media);
+                    let steps = scene.paths().get(r.path).map_or(&[][..], |p| &p.steps[..]);
+                    let shape = Entry::shape(scene, steps, e.timed, r.points, &media);
                     e = Entry {
                         turns: shape.map(|s| s.turns),
                         caustics: shape.map(|s| s.caustics),

@@ -137,7 +137,7 @@ pub(crate) struct ProblemRef<'a> {
     /// Each leg's model, positions relative to the source, where a leg of the path may be
     /// curved (a medium with a gradient); empty for a path of straight legs only (every leg
     /// [`Uniform`] of its slowness, the common case, on its own code).
-    pub curved: &'a [LegMedium],
+    pub curved: &'a [LegMedium<'a>],
     pub source: Point,
     pub receiver: Point,
 }
@@ -776,7 +776,7 @@ pub struct PathProblem<'a> {
     path: usize,
     slowness: Vec<f64>,
     /// The legs' models where a leg is curved (see [`ProblemRef::curved`]).
-    curved: Vec<LegMedium>,
+    curved: Vec<LegMedium<'static>>,
     source: Point,
     receiver: Point,
 }

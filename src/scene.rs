@@ -496,7 +496,7 @@ pub struct Medium {
 
 impl Medium {
     /// The model of legs through this medium, positions relative to `origin`.
-    pub(crate) fn leg_model(&self, origin: Point) -> LegMedium {
+    pub(crate) fn leg_model(&self, origin: Point) -> LegMedium<'static> {
         match self.gradient {
             None => LegMedium::Uniform(Uniform::new(self.slowness)),
             Some(gradient) => LegMedium::Linear(
@@ -1099,9 +1099,10 @@ pub(crate) fn speeds_stay_positive(
 }
 
 /// Refuses, in a scene with a medium whose speed has a gradient or a profile (curved legs),
-/// what curved legs do not reach yet: diffraction, and with a profile the automatic search
-/// off interfaces that are not flat and horizontal. Each of those assumes straight legs (the
-/// wedge's straight pieces) or a waveguide of flat walls, so it is refused rather than wrong.
+/// what curved legs do not reach yet: diffraction, and with a profile refraction and the
+/// automatic search off interfaces that are not flat and horizontal. Each of those assumes
+/// straight legs (the wedge's straight pieces) or a waveguide of flat walls, so it is
+/// refused rather than wrong.
 ///
 /// # Errors
 /// `search` (with a profile), `search.diffraction`, the first step a profile scene does not
@@ -1110,7 +1111,6 @@ fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
     let why = "is not available yet with curved legs (a medium with a `gradient` or a \
                `profile`); prescribed paths solve, with `\"stationary\"` `\"one\"` or `\"all\"`";
     let profiled = spec.media.values().any(|m| m.profile.is_some());
-    let flat = |name: &str| spec.interfaces.get(name).is_some_and(flat_horizontal);
     if let Some(search) = &spec.search {
         if search.diffraction == Some(true) {
             let why = if profiled {
@@ -1134,26 +1134,32 @@ fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
         }
     }
     if profiled {
+        let derivatives = spec.solver.as_ref().and_then(|s| s.derivatives) == Some(true);
         for (k, path) in spec.paths.iter().enumerate() {
             for (j, step) in path.steps.iter().enumerate() {
                 match step {
                     StepSpec::Reflect(name)
-                        if flat(name) || !spec.interfaces.contains_key(name) => {}
-                    StepSpec::Reflect(name) => {
+                        if derivatives
+                            && spec
+                                .interfaces
+                                .get(name)
+                                .is_some_and(|i| !flat_horizontal(i)) =>
+                    {
                         return Err(SceneError::new(
-                            format!("paths[{k}].steps[{j}]"),
+                            "solver.derivatives",
                             format!(
-                                "in a scene with a `profile` medium a path reflects only off \
-                                 flat horizontal interfaces (all points at one y, not closed); \
-                                 `{name}` is not one (a sloping bottom is not available yet)"
+                                "derivatives are not available yet for a path through a \
+                                 `profile` medium that reflects off an interface that is not \
+                                 flat and horizontal (`paths[{k}]` reflects off `{name}`)"
                             ),
                         ));
                     }
+                    StepSpec::Reflect(_) => {}
                     StepSpec::Refract(_) => {
                         return Err(SceneError::new(
                             format!("paths[{k}].steps[{j}]"),
-                            "a scene with a `profile` medium takes reflections off flat \
-                             horizontal interfaces only; refraction there is not available yet",
+                            "a scene with a `profile` medium takes reflections only; refraction \
+                             there is not available yet",
                         ));
                     }
                     StepSpec::Diffract { .. } => {}

@@ -678,7 +678,7 @@ fn walk_reflections(cx: Context<'_>, path: PathGeometry<'_>) -> Option<Walk> {
 ///   attenuation is per unit of arc length; the axisymmetric width takes the departure's
 ///   direction (through `l0`, see [`out_of_plane_axisymmetric`]).
 fn walk_curved(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
-    let (points, legs) = (path.points, path.media);
+    let points = path.points;
     let origin = points[0];
     let media = cx.scene.media();
     let model = |m: usize| media[m].leg_model(origin);
@@ -690,10 +690,26 @@ fn walk_curved(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplit
             )
             .ok_or(NoAmplitude::VanishedLeg { leg: j })
     };
+    walk_legs(cx, path, leg_of)
+}
+
+/// [`walk_curved`]'s pass with each leg `j` (in medium `m`) from `leg_of(j, m)`: any leg
+/// model, a profile's rays included (each leg's own caustics, those of its tube from its
+/// start, add to the sweep's: the Morse index of a broken ray is its pieces' and its
+/// break points' Hessian's).
+fn walk_legs(
+    cx: Context<'_>,
+    path: PathGeometry<'_>,
+    leg_of: impl Fn(usize, usize) -> Result<AnyLeg, NoAmplitude>,
+) -> Result<Walk, NoAmplitude> {
+    let (points, legs) = (path.points, path.media);
+    let media = cx.scene.media();
     let local = |m: usize, p: Point| 1.0 / media[m].speed_at(p);
-    let arc_length = |leg: &AnyLeg| leg.arc().map_or(leg.len(), |a| a.arc_length());
+    let arc_length = |leg: &AnyLeg| leg.arc_length();
+    let own_caustics = |leg: &AnyLeg| leg.profile().map_or(0, |l| l.caustics);
     let w0 = local(legs[0], points[0]);
     let first = leg_of(0, legs[0])?;
+    let mut caustics = own_caustics(&first);
     let attenuation = &cx.settings.attenuation;
     let d0 = first.direction_at_start();
     // The axisymmetric width |x_R| / |d₀ₓ| as `range · l0 / side`.
@@ -751,6 +767,7 @@ fn walk_curved(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplit
             w,
         };
         out.take(cx, &x, &mut cos_ratio)?;
+        caustics += own_caustics(&leg);
         out.out_of_plane += leg.out_of_plane_width(w0);
         out.attenuation_db += attenuation[m] * arc_length(&leg);
         flux *= local(m, here) / local(m, points[i + 2]);
@@ -768,11 +785,53 @@ fn walk_curved(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplit
     // `flux` is Π c_start / c_end in slownesses: c_end / c_start.
     out.tube_num = cos_ratio * flux * inverse_width;
     out.tube_den = 1.0;
-    if sweep.caustics > 0 {
-        let phase = -std::f64::consts::FRAC_PI_2 * f64::from(sweep.caustics);
+    let caustics = caustics + sweep.caustics;
+    if caustics > 0 {
+        let phase = -std::f64::consts::FRAC_PI_2 * f64::from(caustics);
         out.coefficient *= Complex64::from_polar(1.0, phase);
     }
     Ok(out)
+}
+
+/// The amplitude of a path of reflections through a profile medium (every leg the
+/// medium's) whose legs are `legs` (`leg/profile/leg.rs`, each its branch's ray between
+/// its points): [`walk_curved`]'s pass with these legs, and the caustics it counted (the
+/// legs' own and the sweep's negative pivots) beside it.
+pub(crate) fn of_profile_legs(
+    scene: &Scene,
+    settings: &Amplitudes,
+    regions: Option<&Regions>,
+    path: PathGeometry<'_>,
+    legs: &[crate::leg::profile::ProfileLeg],
+) -> Amplitude {
+    let cx = Context {
+        scene,
+        settings,
+        regions,
+    };
+    let points = path.points;
+    match walk_legs(cx, path, |j, _| Ok(AnyLeg::Profile(legs[j]))) {
+        Ok(walk) => finish(cx, points, &walk),
+        Err(reason) => Amplitude::none(reason),
+    }
+}
+
+/// The caustics of a path of reflections through a profile medium whose legs are `legs`:
+/// the legs' own (their tubes from their starts) and the negative pivots of the sweep over
+/// its reflections (`None` at a caustic).
+pub(crate) fn caustics_of_profile_legs(
+    scene: &Scene,
+    path: PathGeometry<'_>,
+    legs: &[crate::leg::profile::ProfileLeg],
+) -> Option<u32> {
+    let mut sweep = Sweep::default();
+    for (i, step) in path.steps.iter().enumerate() {
+        let line = &scene.interfaces().get(step.interface)?.polyline;
+        let seg = segment_of(line, path.points[i + 1], path.segments, i);
+        let (a, b) = (AnyLeg::Profile(legs[i]), AnyLeg::Profile(legs[i + 1]));
+        sweep.pivot(i, &a, &b, line.tangent(seg)).ok()?;
+    }
+    Some(sweep.caustics + legs.iter().map(|l| l.caustics).sum::<u32>())
 }
 
 /// The forward sweep of the LDLᵀ factorisation of a curved path's tridiagonal Hessian (its

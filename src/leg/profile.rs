@@ -37,6 +37,10 @@
 
 use crate::geom::Vec2;
 
+mod leg;
+
+pub(crate) use leg::{Branch, ProfileLeg, ProfileLegModel};
+
 /// A speed profile: knots `(y, c)` in increasing `y` (the scene's order reversed), and
 /// the flat horizontal reflecting walls that bound it, if any.
 #[derive(Clone, Debug, PartialEq)]

@@ -198,7 +198,7 @@ impl Entry<'static> {
         points: &[Point],
         media: &[usize],
     ) -> Self {
-        let shape = Self::shape(tracer.scene(), status.has_time(), points, media);
+        let shape = Self::shape(tracer.scene(), steps, status.has_time(), points, media);
         Entry {
             timed: status.has_time(),
             amplitude: tracer.amplitude_of(steps, status, points, media),
@@ -214,8 +214,14 @@ impl Entry<'static> {
     /// The quantities `tracer`'s scene asks for of the ray of path `path` last solved in
     /// `ws`, which ended as `record`.
     pub fn solved(tracer: &Tracer, path: usize, record: &RayRecord, ws: &Workspace) -> Self {
+        let steps = tracer
+            .scene()
+            .paths()
+            .get(path)
+            .map_or(&[][..], |p| &p.steps[..]);
         let shape = Self::shape(
             tracer.scene(),
+            steps,
             record.status.has_time(),
             ws.points(),
             ws.media(),
@@ -238,6 +244,7 @@ impl Entry<'static> {
     /// medium (`None` for any other).
     pub(crate) fn shape(
         scene: &Scene,
+        steps: &[Step],
         timed: bool,
         points: &[Point],
         media: &[usize],
@@ -245,7 +252,8 @@ impl Entry<'static> {
         if !(timed && scene.curved() && points.len() >= 2) {
             return None;
         }
-        crate::trace::profile_shape(scene, points, media)
+        crate::trace::sloped_shape(scene, steps, points, media)
+            .or_else(|| crate::trace::profile_shape(scene, points, media))
     }
 }
 

@@ -74,7 +74,7 @@ struct MediaSets {
     slowness: Vec<f64>,
     /// Per medium, in a scene with curved legs: its leg model (absolute positions); empty
     /// otherwise.
-    models: Vec<LegMedium>,
+    models: Vec<LegMedium<'static>>,
     /// Whether the sets are exact (at most [`MAX_SET_MEDIA`] media); otherwise every set is
     /// taken as full.
     exact: bool,

@@ -136,6 +136,9 @@ impl Tracer {
             let chosen = rays.iter().find(|x| x.status == Status::Converged)?;
             return self.profile_amplitude(m, s, r, chosen);
         }
+        if let Some((m, sloped)) = self.sloped_ray_of(steps, points, media) {
+            return self.sloped_amplitude(steps, m, &sloped);
+        }
         if let Some((m, walled)) = self.walled_ray_of(steps, points, media) {
             return self.walled_amplitude(m, &walled);
         }

@@ -279,7 +279,7 @@ pub(crate) struct Sequence<'a> {
     pub path: Option<usize>,
     /// The legs' models relative to the source where legs may be curved (empty: every leg
     /// straight; see `ProblemRef::curved`).
-    pub curved: &'a [LegMedium],
+    pub curved: &'a [LegMedium<'a>],
 }
 
 impl<'a> Sequence<'a> {

@@ -32,7 +32,9 @@ mod occlusion;
 mod one_step;
 mod plan;
 mod profile;
+mod profile_slope;
 pub(crate) use profile::{ProfileShape, profile_ray_of, profile_shape};
+pub(crate) use profile_slope::sloped_shape;
 mod result;
 mod stack;
 mod start;
@@ -133,7 +135,7 @@ pub(crate) struct RayData {
     pub slowness: Vec<f64>,
     /// Leg models relative to the source, in a scene with curved legs (else empty: see
     /// [`ProblemRef::curved`]).
-    pub curved: Vec<crate::leg::LegMedium>,
+    pub curved: Vec<crate::leg::LegMedium<'static>>,
     /// Leg media, and those of the last lookup while they settle.
     pub media: Vec<usize>,
     pub media_prev: Vec<usize>,
@@ -610,6 +612,9 @@ impl Tracer {
         }
         if let Some((m, profile)) = self.profile_medium(path, source, src_medium) {
             return self.solve_profile(m, &profile, source, receiver, ws);
+        }
+        if let Some(m) = self.profile_sloped_medium(path, source, src_medium) {
+            return self.solve_sloped(path, m, source, receiver, ws);
         }
         if let Some((m, profile)) = self.profile_walled_medium(path, source, src_medium) {
             return self.solve_walled(path, m, &profile, source, receiver, ws);

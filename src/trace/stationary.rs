@@ -112,6 +112,9 @@ impl Tracer {
         if let Some((m, profile)) = self.profile_medium(path, source, None) {
             return Ok(self.profile_stationary_paths(m, &profile, source, receiver, out));
         }
+        if let Some(m) = self.profile_sloped_medium(path, source, None) {
+            return Ok(self.sloped_stationary_paths(path, m, source, receiver, out));
+        }
         if let Some((m, profile)) = self.profile_walled_medium(path, source, None) {
             return Ok(self.walled_stationary_paths(path, m, &profile, source, receiver, out));
         }
