@@ -302,9 +302,9 @@ impl<'a> Expansion<'a> {
         walls: Option<Complex64>,
     ) -> Amplitude {
         let scene: &Scene = self.tracer.scene();
-        let Some(settings) = scene.amplitudes() else {
+        if scene.amplitudes().is_none() {
             return Amplitude::none(crate::amplitude::NoAmplitude::UnknownMedia);
-        };
+        }
         match plan.arrival.status {
             Status::Vertex => return Amplitude::none(crate::amplitude::NoAmplitude::Vertex),
             Status::Obstructed => {
@@ -313,7 +313,6 @@ impl<'a> Expansion<'a> {
             _ => {}
         }
         let distance = v.distance;
-        let medium = plan.arrival.media.first().copied().unwrap_or(0);
         // The plan leg's share of each 3-D leg: the wall cosines scale by it.
         let horizontal = if distance > 0.0 {
             length / distance
@@ -327,15 +326,38 @@ impl<'a> Expansion<'a> {
                 Err(none) => return none,
             },
         };
-        let x = self.extrusion;
         // The flat faces alternate from the first, in order along the path.
         for flat in 0..v.count {
-            if (v.first == Face::Floor) == (flat % 2 == 0) {
-                coefficient *= x.floor;
-            } else {
-                coefficient *= x.ceiling;
-            }
+            coefficient *= self.flat_coefficient(v.first, flat);
         }
+        self.amplitude_with(plan, v, coefficient)
+    }
+
+    /// The coefficient of the `flat`-th floor or ceiling reflection (from 0) of a member
+    /// whose first is off `first`: the faces alternate from the first.
+    #[inline]
+    fn flat_coefficient(&self, first: Face, flat: usize) -> f64 {
+        if (first == Face::Floor) == (flat % 2 == 0) {
+            self.extrusion.floor
+        } else {
+            self.extrusion.ceiling
+        }
+    }
+
+    /// [`Expansion::amplitude`] of a converged plan path `plan`'s member `v` whose
+    /// reflections' product of coefficients, in order, is `coefficient`.
+    fn amplitude_with(
+        &self,
+        plan: &SearchArrival,
+        v: Vertical,
+        coefficient: Complex64,
+    ) -> Amplitude {
+        let scene: &Scene = self.tracer.scene();
+        let Some(settings) = scene.amplitudes() else {
+            return Amplitude::none(crate::amplitude::NoAmplitude::UnknownMedia);
+        };
+        let distance = v.distance;
+        let medium = plan.arrival.media.first().copied().unwrap_or(0);
         let spreading = 1.0 / (4.0 * std::f64::consts::PI * distance);
         let attenuation_db = settings.attenuation[medium] * distance;
         // 10⁰ is 1 exactly: no power to take without attenuation.
@@ -456,8 +478,23 @@ impl<'a> Expansion<'a> {
             let ready = angle_free && matches!(a.status, Status::Converged);
             ready.then(|| self.walls_coefficient(plan, 0.0).ok())?
         });
+        // Where the walls' product is fixed, each member's product of coefficients is that
+        // of the member one flat reflection fewer off the same first face, times the next
+        // face's: per first face, the flats multiplied so far and their product (the same
+        // multiplications in the same order as `amplitude`'s, so the same bits).
+        let mut products = fixed.map(|c| [(0, c), (0, c)]);
         for v in members {
-            let amplitude = amplitudes.map(|_| self.amplitude(plan, length, v, fixed));
+            let amplitude = amplitudes.map(|_| match &mut products {
+                Some(products) => {
+                    let (done, product) = &mut products[usize::from(v.first == Face::Ceiling)];
+                    while *done < v.count {
+                        *product *= self.flat_coefficient(v.first, *done);
+                        *done += 1;
+                    }
+                    self.amplitude_with(plan, v, *product)
+                }
+                None => self.amplitude(plan, length, v, fixed),
+            });
             let arrival = StreamedArrival {
                 source: plan.source,
                 receiver: plan.receiver,

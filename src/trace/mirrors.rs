@@ -146,7 +146,14 @@ pub(crate) struct MirrorWalls {
     /// The two parallel walls the walls form, when they are the scene's only segments
     /// (`mirrors/waveguide.rs`: a streamed search's arrivals from their image lattice).
     waveguide: Option<Waveguide>,
+    /// Per pair of walls (`last · count + child`), the heights of the child's ends above the
+    /// last's line ([`MirrorWalls::behind`]); empty above [`BEHIND_WALLS`] walls.
+    heights: Vec<[f64; 2]>,
 }
+
+/// The most walls whose pairs [`MirrorWalls::behind`] keeps heights for (a table of their
+/// square).
+const BEHIND_WALLS: usize = 64;
 
 /// Where a wall of [`MirrorWalls`] lies in the scene.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -442,6 +449,28 @@ fn subtends(x: Point, a: Point, b: Point) -> f64 {
     if d > 0.0 { u.cross(v).abs() / d } else { 0.0 }
 }
 
+/// Whether segment `a–b` subtends less than [`THIN`] from `x` ([`subtends`] below it): decided
+/// from the squares of the sine's terms where they are farther from the threshold than
+/// their round-off (some 1e-15 relative, against a band of 1e-9), else by [`subtends`] itself,
+/// so always as [`subtends`] decides, without its two square roots but near the threshold.
+#[inline(always)]
+fn thin(x: Point, a: Point, b: Point) -> bool {
+    let (u, v) = (a - x, b - x);
+    let cross = u.cross(v);
+    let (uu, vv) = (u.dot(u), v.dot(v));
+    let (lhs, rhs) = (cross * cross, THIN * THIN * uu * vv);
+    // Both finite and normal (no overflow or underflow in the squares): the band decides.
+    if lhs.is_normal() && rhs.is_normal() {
+        if lhs < rhs * (1.0 - 1e-9) {
+            return true;
+        }
+        if lhs > rhs * (1.0 + 1e-9) {
+            return false;
+        }
+    }
+    subtends(x, a, b) < THIN
+}
+
 /// The bounds of one search, fixed at its start: the margin of the beam tests and the time
 /// bound's test.
 #[derive(Clone, Copy, Debug)]
@@ -620,13 +649,37 @@ impl MirrorWalls {
             .fold(0.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
         let shoebox = Shoebox::of(scene, &walls, extent);
         let waveguide = Waveguide::of(scene, &walls);
+        let heights = if walls.len() <= BEHIND_WALLS {
+            (walls.iter())
+                .flat_map(|last| walls.iter().map(|w| [last.height(w.p), last.height(w.q)]))
+                .collect()
+        } else {
+            Vec::new()
+        };
         MirrorWalls {
             walls,
             extent,
             occluders: Occluders::new(scene),
             shoebox,
             waveguide,
+            heights,
         }
+    }
+
+    /// Whether wall `w` lies wholly behind wall `last`'s line, beyond the beam tests' margin
+    /// (`delta`), on the side that a beam of `last` whose rays travel on `side` does not
+    /// reach: then [`child`](Self::child) clips `w` to nothing by its first constraint (this
+    /// is that test, on the same numbers), so the child is none. `false` where no heights
+    /// are kept (over [`BEHIND_WALLS`] walls).
+    #[inline(always)]
+    fn behind(&self, last: usize, w: usize, side: f64, delta: f64) -> bool {
+        let Some(&[hp, hq]) = self.heights.get(last * self.walls.len() + w) else {
+            return false;
+        };
+        // As `Beam::gauge` and `restrict` take them: the value times the side, plus the
+        // margin (the larger of the two ends', which are equal).
+        let margin = 2.0 * delta;
+        !(side * hp + margin >= 0.0 || side * hq + margin >= 0.0)
     }
 
     /// The number of walls.
@@ -791,14 +844,26 @@ impl MirrorWalls {
                 stats.stopped = true;
                 break;
             }
-            let node = *top;
             stats.work += 1;
             if stats.work > search.max_work {
                 stats.stopped = true;
                 break;
             }
             let occlusion = (!search.obstructed).then_some(&mut *shadows);
-            let Some(child) = self.child(&node, w, bounds, occlusion, &mut stats.work) else {
+            // Most walls tried are none of the node's children, many because they lie behind
+            // its wall: that one test first, from the walls' heights.
+            if let Some(beam) = &top.beam
+                && self.behind(top.wall, w, beam.side, bounds.delta)
+            {
+                continue;
+            }
+            // The node in place (a copy of its beam per wall tried costs more than the test),
+            // and its beam's clip first, here.
+            let Some(range) = self.in_beam(top, w, bounds.delta) else {
+                continue;
+            };
+            let Some(child) = self.child_in(top, w, range, bounds, occlusion, &mut stats.work)
+            else {
                 continue;
             };
             stats.beams += 1;
@@ -857,26 +922,54 @@ impl MirrorWalls {
         node: &Node,
         w: usize,
         bounds: &Bounds,
-        mut occlusion: Option<&mut Vec<[f64; 2]>>,
+        occlusion: Option<&mut Vec<[f64; 2]>>,
         work: &mut u64,
     ) -> Option<Node> {
+        let range = self.in_beam(node, w, bounds.delta)?;
+        self.child_in(node, w, range, bounds, occlusion, work)
+    }
+
+    /// The part of wall `w` (fractions along it) that lies in `node`'s beam, with the margin
+    /// `delta` (all of it where the beam is the whole plane): the first test of
+    /// [`child`](Self::child), which leaves out most walls (inlined where the tree walks,
+    /// the rest of the child made only for the walls it keeps).
+    #[inline(always)]
+    fn in_beam(&self, node: &Node, w: usize, delta: f64) -> Option<[f64; 2]> {
         let wall = &self.walls[w];
-        let delta = bounds.delta;
         let mut range = [0.0, 1.0];
         if let Some(beam) = &node.beam {
             let last = &self.walls[node.wall];
-            if behind_corner(last, wall, beam.side)
-                || beyond_edge(beam, last, node.image, wall, delta)
-            {
-                return None;
-            }
             let gp = beam.gauge(last, node.image, wall.p, delta);
             let gq = beam.gauge(last, node.image, wall.q, delta);
             for c in 0..3 {
                 let margin = gp.margins[c].max(gq.margins[c]);
                 range = restrict(range, gp.values[c], gq.values[c], margin)?;
             }
+            // After the clips, which leave out most walls first (each test only prunes, so
+            // the order changes no child).
+            if behind_corner(last, wall, beam.side)
+                || beyond_edge(beam, last, node.image, wall, delta)
+            {
+                return None;
+            }
         }
+        Some(range)
+    }
+
+    /// [`child`](Self::child) of the part `range` of wall `w` that lies in `node`'s beam
+    /// ([`in_beam`](Self::in_beam)).
+    #[inline(never)]
+    fn child_in(
+        &self,
+        node: &Node,
+        w: usize,
+        mut range: [f64; 2],
+        bounds: &Bounds,
+        mut occlusion: Option<&mut Vec<[f64; 2]>>,
+        work: &mut u64,
+    ) -> Option<Node> {
+        let wall = &self.walls[w];
+        let delta = bounds.delta;
         if let Some(shadows) = occlusion.as_deref_mut()
             && let Some(window) = self.window(node)
         {
@@ -968,7 +1061,7 @@ impl MirrorWalls {
                 tight = restrict_tight(tight, gp[c], gq[c])?;
             }
         }
-        let thin = |t: [f64; 2]| subtends(image, wall.end_at(t[0]), wall.end_at(t[1])) < THIN;
+        let thin = |t: [f64; 2]| thin(image, wall.end_at(t[0]), wall.end_at(t[1]));
         if let Some(shadows) = occlusion
             && thin(tight)
             && let Some(window) = self.window(node)
