@@ -67,6 +67,47 @@ pub(crate) trait Leg: Copy {
     fn out_of_plane_width(&self, source_slowness: f64) -> f64;
 }
 
+/// A leg read in place (the solver's evaluation keeps its legs and reads each several
+/// times): the same numbers, without a copy.
+impl<L: Leg> Leg for &L {
+    #[inline(always)]
+    fn time(&self) -> f64 {
+        (**self).time()
+    }
+    #[inline(always)]
+    fn arrival(&self) -> Vec2 {
+        (**self).arrival()
+    }
+    #[inline(always)]
+    fn departure(&self) -> Vec2 {
+        (**self).departure()
+    }
+    #[inline(always)]
+    fn direction_at_end(&self) -> Vec2 {
+        (**self).direction_at_end()
+    }
+    #[inline(always)]
+    fn direction_at_start(&self) -> Vec2 {
+        (**self).direction_at_start()
+    }
+    #[inline(always)]
+    fn end_block(&self, t: Vec2) -> f64 {
+        (**self).end_block(t)
+    }
+    #[inline(always)]
+    fn start_block(&self, t: Vec2) -> f64 {
+        (**self).start_block(t)
+    }
+    #[inline(always)]
+    fn coupling(&self, ta: Vec2, tb: Vec2) -> f64 {
+        (**self).coupling(ta, tb)
+    }
+    #[inline(always)]
+    fn out_of_plane_width(&self, source_slowness: f64) -> f64 {
+        (**self).out_of_plane_width(source_slowness)
+    }
+}
+
 /// A medium's model of the legs through it (see the module).
 pub(crate) trait LegModel: Copy {
     /// An evaluated leg.
