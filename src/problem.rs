@@ -440,7 +440,7 @@ impl<'a> ProblemRef<'a> {
         let mut legs = std::mem::take(&mut e.legs);
         legs.clear();
         legs.extend((0..=k).map(|j| models[j].leg(rel[j], rel[j + 1])));
-        let leg = |j: usize| legs[j];
+        let leg = |j: usize| &legs[j];
         let (mut time, mut total) = (0.0, 0.0);
         for j in 0..=k {
             let l = leg(j);

@@ -290,6 +290,30 @@ fn piece<const FULL: bool>(p: f64, h: f64, c1: f64, c2: f64, s1: f64, s2: f64) -
     }
 }
 
+/// The range of a ray of horizontal slowness `p ≥ 0` across one linear layer of thickness
+/// `h` with speeds `c₁`, `c₂` at its faces, without a turning point (`p c < 1` at both), and
+/// its derivative in `p` (both ends fixed): [`piece`]'s range and the module's `∂X/∂p =
+/// X / (p s₁ s₂)`, written `∫ c ds / (s₁ s₂)` (no division by `p`). The start of a ray
+/// through flat layers with vertical gradients (`trace::start`) sums them.
+#[inline]
+pub(crate) fn layer_range(p: f64, h: f64, [c1, c2]: [f64; 2]) -> LayerRange {
+    let (s1, s2) = (sine(p, c1), sine(p, c2));
+    let part = piece::<false>(p, h, c1, c2, s1, s2);
+    LayerRange {
+        x: part.x,
+        x_p: part.width / (s1 * s2),
+    }
+}
+
+/// [`layer_range`]'s result.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct LayerRange {
+    /// The horizontal range across the layer.
+    pub x: f64,
+    /// Its derivative in the ray parameter.
+    pub x_p: f64,
+}
+
 /// Where a run ends: at its target height, or at a turning point.
 #[derive(Clone, Copy, Debug)]
 enum RunEnd {

@@ -53,6 +53,12 @@ pub(crate) struct Classifier {
     /// The boxes of the scene's sources and receivers, for which the candidates of the legs
     /// from the source and to the receiver hold.
     ends: [Aabb; 2],
+    /// In a scene with curved legs, per path: whether no segment but the legs' own meets the
+    /// box of any leg's ends' interfaces (see [`arc_boxes_clear`]); empty otherwise.
+    arc_boxes_clear: Vec<bool>,
+    /// Whether [`Classifier::arcs_clear`] may decide obstruction (not with the general code
+    /// alone, [`Kernels::GeneralOnly`](super::Kernels::GeneralOnly)).
+    pub(super) arc_shortcut: bool,
 }
 
 impl Classifier {
@@ -67,7 +73,15 @@ impl Classifier {
             .iter()
             .map(|p| leg_candidates(scene, &p.steps, ends))
             .collect();
+        let arc_boxes_clear = if scene.curved() {
+            let clear = |p: &crate::scene::Path| arc_boxes_clear(scene, &p.steps, ends);
+            scene.paths().iter().map(clear).collect()
+        } else {
+            Vec::new()
+        };
         Classifier {
+            arc_boxes_clear,
+            arc_shortcut: true,
             clear: candidates
                 .iter()
                 .map(|legs| legs.iter().all(|c| c.as_deref() == Some(&[])))
@@ -142,6 +156,9 @@ impl Classifier {
             return no_path(Reason::WrongSide { step });
         }
         let crossing = match of.path {
+            Some(path) if curved && self.arcs_clear(scene, path, steps, points, nw, of.curved) => {
+                None
+            }
             _ if curved => arc_obstruction(scene, steps, points, nw, of.curved),
             Some(path) => self.obstruction(scene, path, points, &nw.seg[..k]),
             None => self.obstruction_tested(scene, steps, None, points, &nw.seg[..k]),
@@ -269,6 +286,104 @@ impl Classifier {
     }
 }
 
+impl Classifier {
+    /// Whether no leg of the ray of path `path` through `points` (of the legs' models `curved`,
+    /// the solve's state in `nw`) can cross a segment, proved without a query: the path's
+    /// legs' boxes are clear ([`arc_boxes_clear`]), the ends lie in the scene's sources' and
+    /// receivers' boxes, and every leg runs monotonically in `x`, in `y` and across the
+    /// interfaces it ends on (its directions at its two ends on one side, by at least
+    /// [`MONOTONE`], of each of those axes: an arc turns by less than half a turn, its circle's
+    /// centre lying where the speed would be zero, so a direction component of one sign at
+    /// both ends keeps that sign all along). Such a leg lies in the box of its ends, inside
+    /// the clear box of its interfaces, and meets the lines of its own interfaces at its ends
+    /// only. `false` decides nothing (the exact test, [`arc_obstruction`], follows).
+    fn arcs_clear(
+        &self,
+        scene: &Scene,
+        path: usize,
+        steps: &[Step],
+        points: &[Point],
+        nw: &NewtonWorkspace,
+        curved: &[LegMedium],
+    ) -> bool {
+        let k = steps.len();
+        if !(self.arc_shortcut
+            && self.arc_boxes_clear.get(path) == Some(&true)
+            && self.ends[0].contains(points[0])
+            && self.ends[1].contains(points[k + 1]))
+        {
+            return false;
+        }
+        // The solve's last legs (of these points: see `solved_legs`), by reference.
+        let legs = &nw.eval.legs;
+        if legs.len() != k + 1 || curved.len() != k + 1 {
+            return false;
+        }
+        let normal = |i: usize| {
+            scene.interfaces()[steps[i].interface]
+                .polyline
+                .normal(nw.seg[i])
+        };
+        let one_way = |a: Vec2, b: Vec2, n: Vec2| {
+            let (x, y) = (a.dot(n), b.dot(n));
+            (x >= MONOTONE && y >= MONOTONE) || (x <= -MONOTONE && y <= -MONOTONE)
+        };
+        legs.iter().enumerate().all(|(j, leg)| {
+            let (a, b) = (leg.direction_at_start(), leg.direction_at_end());
+            one_way(a, b, Vec2::new(1.0, 0.0))
+                && one_way(a, b, Vec2::new(0.0, 1.0))
+                && (j == 0 || one_way(a, b, normal(j - 1)))
+                && (j == k || one_way(a, b, normal(j)))
+        })
+    }
+}
+
+/// The least component of a leg's unit directions at its ends along an axis, in either sense,
+/// for [`Classifier::arcs_clear`] to take the leg as running one way along it.
+const MONOTONE: f64 = 1e-6;
+
+/// Whether, for every leg of a path of `steps` through interfaces of one segment each, no
+/// scene segment but the leg's own (its ends' interfaces') has a box meeting the box of the
+/// leg's ends' sides (its interfaces' segments; the box `ends[0]` of the sources for the first
+/// leg, `ends[1]` of the receivers for the last), grown by round-off: what
+/// [`Classifier::arcs_clear`] needs of the scene.
+fn arc_boxes_clear(scene: &Scene, steps: &[Step], ends: [Aabb; 2]) -> bool {
+    let k = steps.len();
+    let line = |i: usize| &scene.interfaces()[steps[i].interface].polyline;
+    if k == 0 || (0..k).any(|i| line(i).num_segments() != 1) {
+        return false;
+    }
+    (0..=k).all(|leg| {
+        let side = |i: Option<usize>, b: Aabb| match i {
+            Some(i) => line(i).bbox(),
+            None => b,
+        };
+        let (before, after) = (leg.checked_sub(1), (leg < k).then_some(leg));
+        let (a, b) = (side(before, ends[0]), side(after, ends[1]));
+        if a.min.x > a.max.x || b.min.x > b.max.x {
+            return false;
+        }
+        let bbox = a.union(b);
+        let pad = 1e-9
+            * (bbox.max.x - bbox.min.x
+                + (bbox.max.y - bbox.min.y)
+                + bbox.max.x.abs()
+                + bbox.min.x.abs()
+                + bbox.max.y.abs()
+                + bbox.min.y.abs());
+        let grown = Aabb {
+            min: Point::new(bbox.min.x - pad, bbox.min.y - pad),
+            max: Point::new(bbox.max.x + pad, bbox.max.y + pad),
+        };
+        let own = [before, after].map(|i| i.map(|i| steps[i].interface as u32));
+        scene.segments_in(grown, 64).is_some_and(|found| {
+            found
+                .iter()
+                .all(|&i| own.contains(&Some(scene.segments()[i as usize].interface)))
+        })
+    })
+}
+
 /// A step sequence to classify: a scene path's (whose legs' candidate segments the classifier
 /// prepared) or any other.
 #[derive(Clone, Copy, Debug)]
@@ -346,18 +461,18 @@ fn curved_wrong_side(
     curved: &[LegMedium],
 ) -> Option<usize> {
     let (k, e) = (steps.len(), &nw.eval);
-    let leg = solved_legs(nw, curved, k);
+    let leg = solved_ends(nw, curved, k);
     (0..k).find(|&i| {
         let (before, after) = (leg(i), leg(i + 1));
-        if before.len() <= e.vanish || after.len() <= e.vanish {
+        if before.len <= e.vanish || after.len <= e.vanish {
             return false;
         }
         let n = scene.interfaces()[steps[i].interface]
             .polyline
             .normal(nw.seg[i]);
         let side = |x: f64| if x.abs() <= SIDE_MARGIN { 0.0 } else { x };
-        let a = side(-n.dot(before.direction_at_end()));
-        let b = side(n.dot(after.direction_at_start()));
+        let a = side(-n.dot(before.end));
+        let b = side(n.dot(after.start));
         !sides_suit(steps[i].kind, a, b)
     })
 }
@@ -375,6 +490,34 @@ fn solved_legs<'a>(
     move |j| match stored {
         Some(legs) => legs[j],
         None => curved[j].leg(e.rel[j], e.rel[j + 1]),
+    }
+}
+
+/// What the side tests read of a leg: its chord's length and its unit directions at its
+/// start and at its end.
+#[derive(Clone, Copy, Debug)]
+struct LegEnds {
+    len: f64,
+    start: Vec2,
+    end: Vec2,
+}
+
+/// [`solved_legs`]'s [`LegEnds`], read in place where the solve kept its legs.
+fn solved_ends<'a>(
+    nw: &'a NewtonWorkspace,
+    curved: &'a [LegMedium],
+    k: usize,
+) -> impl Fn(usize) -> LegEnds + 'a {
+    let e = &nw.eval;
+    let stored = (e.legs.len() == k + 1).then_some(&e.legs[..]);
+    let ends = |l: &AnyLeg| LegEnds {
+        len: l.len(),
+        start: l.direction_at_start(),
+        end: l.direction_at_end(),
+    };
+    move |j| match stored {
+        Some(legs) => ends(&legs[j]),
+        None => ends(&curved[j].leg(e.rel[j], e.rel[j + 1])),
     }
 }
 

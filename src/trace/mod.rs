@@ -303,6 +303,8 @@ impl Tracer {
         // Curved legs take the general code alone: the kernels and the fast path are the
         // straight leg's.
         self.newton.fast_path = self.kernels != Kernels::GeneralOnly && !scene.curved();
+        // The classifier's proof that arcs are clear is a shortcut, like a kernel.
+        self.classifier.arc_shortcut = self.kernels != Kernels::GeneralOnly;
     }
 
     /// The same tracer with another refinement of the start of refraction paths.
@@ -582,6 +584,16 @@ impl Tracer {
             PlanKernel::General(plan) => {
                 self.solve_general(plan, source, src_medium, receiver, path, start, ws)
             }
+            PlanKernel::Graded(sp, plan) => {
+                let cx = self.context();
+                match start {
+                    Start::Default => sp.solve_graded_stack(&cx, path, source, receiver, ws),
+                    _ => None,
+                }
+                .unwrap_or_else(|| {
+                    self.solve_general(plan, source, src_medium, receiver, path, start, ws)
+                })
+            }
         };
         if record.status.has_time() || matches!(start, Start::Trial(_)) {
             return record;
@@ -832,7 +844,7 @@ impl Tracer {
 impl RayData {
     /// The leg models of the media in `media`, relative to `source`, when the scene has
     /// curved legs (else none: every leg straight, on the uniform medium's own code).
-    fn set_curved(&mut self, scene: &Scene, source: Point) {
+    pub(super) fn set_curved(&mut self, scene: &Scene, source: Point) {
         self.curved.clear();
         if scene.curved() {
             let models = self

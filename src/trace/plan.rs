@@ -13,6 +13,7 @@ use crate::scene::{Scene, StepKind};
 
 use super::InitialGuess;
 use super::flat::FlatRefraction;
+use super::start::graded_stack_path;
 use super::straight::StraightPath;
 
 /// Which kernels a [`Tracer`](super::Tracer) may use (see
@@ -45,6 +46,10 @@ pub(crate) enum PathPlan {
     /// Two or more refractions at parallel interfaces of one segment, the media given: from
     /// the default start, the stack kernel (`trace::stack`); otherwise as `Straight`.
     Stack(StraightPath),
+    /// In a scene with curved legs, two or more refractions at parallel interfaces of one
+    /// segment, the media given: from the default start, the graded stack kernel
+    /// (`trace::stack`); otherwise as `General`.
+    GradedStack(StraightPath),
     /// One interaction with its media given: the one-step code (`trace::one_step`).
     OneStep(OneStepPath),
     /// One refraction at an interface of one segment, the media given: from the default
@@ -64,6 +69,8 @@ pub(crate) enum PlanKernel<'p> {
     OneStep(&'p OneStepPath),
     /// The general solve (with the stack kernel first where the plan has it).
     General(&'p PathPlan),
+    /// The graded stack kernel from the default start, the general solve otherwise.
+    Graded(&'p StraightPath, &'p PathPlan),
 }
 
 /// A path of one interaction whose leg media are given.
@@ -88,13 +95,18 @@ impl PathPlan {
         if scene.paths()[path].diffracts() {
             return PathPlan::Diffracted;
         }
+        let ray_parameter = guess == InitialGuess::RayParameter;
         if scene.curved() {
-            // Curved legs: the general solve alone (the kernels, the image method and the
-            // start's proofs of no path are the straight leg's).
-            return PathPlan::General;
+            // Curved legs: the general solve (the other kernels, the image method and the
+            // start's proofs of no path are the straight leg's), after the graded stack
+            // kernel where it applies.
+            let stack = (kernels != Kernels::GeneralOnly && ray_parameter)
+                .then(|| StraightPath::of(scene, path))
+                .flatten()
+                .filter(|sp| sp.stack() && graded_stack_path(scene, path));
+            return stack.map_or(PathPlan::General, PathPlan::GradedStack);
         }
         let straight = StraightPath::of(scene, path);
-        let ray_parameter = guess == InitialGuess::RayParameter;
         if kernels != Kernels::GeneralOnly
             && let Some(one) = OneStepPath::of(scene, path, straight.as_ref(), ray_parameter)
         {
@@ -134,6 +146,7 @@ impl PathPlan {
         match self {
             PathPlan::FlatRefraction(one, flat) => PlanKernel::Flat(one, flat),
             PathPlan::OneStep(one) => PlanKernel::OneStep(one),
+            PathPlan::GradedStack(sp) => PlanKernel::Graded(sp, self),
             plan => PlanKernel::General(plan),
         }
     }
@@ -177,6 +190,8 @@ impl PathPlan {
             PathPlan::OneStep(one) => one.images,
             PathPlan::Straight(sp) | PathPlan::Stack(sp) => sp.exact(ray_parameter),
             PathPlan::General => false,
+            // Its start is the ray up to round-off (`trace::start::graded`).
+            PathPlan::GradedStack(_) => ray_parameter,
             // Its pieces are searched, not started.
             PathPlan::Diffracted => true,
         }

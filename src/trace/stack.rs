@@ -14,12 +14,14 @@
 //! Anything else (a point at a segment's end, a fast path that ends otherwise than
 //! converged) goes to the general solve from the same start.
 
+use super::classify::Sequence;
+use super::start::{graded_guess, layered_guess};
 use super::straight::StraightPath;
-use super::{Context, RayRecord, Workspace, start::layered_guess};
+use super::{Context, RayRecord, Workspace};
 use crate::geom::Point;
 use crate::problem::ProblemRef;
 use crate::scene::StepKind;
-use crate::solver::{Outcome, fast_newton_from};
+use crate::solver::{Outcome, fast_newton_from, solve};
 
 impl StraightPath {
     /// The ray of path `path` (described by `self`, a [`StraightPath::stack`]) from `source`
@@ -97,6 +99,63 @@ impl StraightPath {
             &nw.seg[..k],
             &sol,
         ))
+    }
+}
+
+impl StraightPath {
+    /// The ray of path `path` (described by `self`, a [`StraightPath::stack`]) in a scene with
+    /// curved legs from `source` to `receiver` from the default start, as the general solve
+    /// gives it (record, and parameters, points and media in `ws`), or `None` where the
+    /// graded start does not apply (`trace::start::graded`; the general code then solves it
+    /// from the uniform layers' start). The general code's own steps: the crossings from the
+    /// segments kept here (`initial_guess`'s, bit for bit), the media given, the graded start
+    /// on the same numbers, the Newton solve and the classification. Out of line: the uniform
+    /// stack kernel's caller keeps its code.
+    #[inline(never)]
+    pub(super) fn solve_graded_stack(
+        &self,
+        cx: &Context,
+        path: usize,
+        source: Point,
+        receiver: Point,
+        ws: &mut Workspace,
+    ) -> Option<RayRecord> {
+        let scene = cx.scene;
+        let spec = &scene.paths()[path];
+        let (steps, lines) = (&spec.steps[..], &self.lines[..]);
+        let media = spec.media.as_deref()?;
+        ws.resize(lines.len());
+        if !self.crossings(source, receiver, ws) {
+            return None;
+        }
+        ws.ray.media.clear();
+        ws.ray.media.extend_from_slice(media);
+        ws.ray.slowness.clear();
+        ws.ray.slowness.extend_from_slice(&self.slowness);
+        ws.ray.set_curved(scene, source);
+        if !graded_guess(lines, receiver - source, ws) {
+            return None;
+        }
+        let g = ProblemRef {
+            scene,
+            steps,
+            slowness: &ws.ray.slowness,
+            curved: &ws.ray.curved,
+            source,
+            receiver,
+        };
+        let sol = solve(&g, &mut ws.newton, cx.newton);
+        let sequence = Sequence {
+            steps,
+            path: Some(path),
+            curved: &ws.ray.curved,
+        };
+        let nw = &ws.newton;
+        let points = &mut ws.ray.points;
+        Some(
+            cx.classifier
+                .classify(scene, sequence, source, receiver, &sol, nw, points),
+        )
     }
 }
 

@@ -10,6 +10,9 @@ use crate::solver::NewtonWorkspace;
 
 use super::{InitialGuess, Workspace};
 
+mod graded;
+pub(super) use graded::{graded_guess, graded_stack_path};
+
 /// Scratch of the start: crossings, the layers of the ray-parameter refinement, and the
 /// default guess kept while a warm start is compared with it.
 #[derive(Clone, Debug, Default)]
@@ -20,6 +23,8 @@ pub(crate) struct StartScratch {
     /// Per layer of the ray-parameter refinement: thickness, speed, and the lateral offset
     /// across it at the ray parameter found.
     pub layers: Vec<Layer>,
+    /// Per layer of the graded refinement (media with speed gradients across the layers).
+    pub graded: Vec<graded::GradedLayer>,
     /// The default guess's parameters and segments while a warm start is tried.
     pub s_alt: Vec<f64>,
     pub seg_alt: Vec<usize>,
@@ -144,6 +149,13 @@ pub(super) fn refraction_guess(
         return;
     }
     let lines = SceneStepLines { scene, steps };
+    // Curved legs through flat layers whose speeds vary across them only: the ray itself.
+    if guess == InitialGuess::RayParameter
+        && !ws.ray.curved.is_empty()
+        && graded_guess(&lines, receiver - source, ws)
+    {
+        return;
+    }
     layered_guess(&lines, receiver - source, guess, ws);
 }
 
