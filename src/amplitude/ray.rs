@@ -590,15 +590,17 @@ fn walk(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
     // The sweep: the last pivot, the product so far, the previous tangent; the first cosine.
     let (mut pivot, mut product, mut prev) = (1.0, 1.0, Vec2::default());
     let mut first_cos = 0.0;
-    for (i, step) in path.steps.iter().enumerate() {
-        let (m_in, m) = (legs[i], legs[i + 1]);
+    // Each step with its two legs' media and the three points about it.
+    let around = legs.windows(2).zip(points.windows(3));
+    for (i, (step, (media, near))) in path.steps.iter().zip(around).enumerate() {
+        let (m_in, m) = (media[0], media[1]);
         let w = slowness(cx.scene, m)?;
         let leg = Uniform::new(w)
-            .valid_leg(points[i + 1], points[i + 2])
+            .valid_leg(near[1], near[2])
             .ok_or(NoAmplitude::VanishedLeg { leg: i + 1 })?;
         let w_in = incoming.slowness;
         let line = &cx.scene.interfaces()[step.interface].polyline;
-        let seg = segment_of(line, points[i + 1], path.segments, i);
+        let seg = segment_of(line, near[1], path.segments, i);
         let t = line.tangent(seg);
         let n = t.perp();
         let u_in = incoming.direction_at_end();
@@ -621,8 +623,8 @@ fn walk(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
             i,
             step,
             seg,
-            from: points[i],
-            here: points[i + 1],
+            from: near[0],
+            here: near[1],
             leg_in: u_in,
             len_in: 1.0,
             t,
