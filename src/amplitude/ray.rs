@@ -78,7 +78,7 @@ struct Walk {
 impl Walk {
     /// Interaction `x`'s plane-wave coefficient into the walk, and, where it changes medium,
     /// its cosine ratio into `cos_ratio` (a reflection that does is a converted wave).
-    #[inline]
+    #[inline(always)]
     fn take(
         &mut self,
         cx: Context<'_>,
@@ -88,7 +88,7 @@ impl Walk {
         self.coefficient *= coefficient(cx, x)?;
         if changes_medium(x) {
             *cos_ratio *= x.cos2 / x.cos1;
-            if x.step.kind == StepKind::Reflect {
+            if matches!(x.step.kind, StepKind::Reflect) {
                 self.converted.get_or_insert(x.i);
             }
         }
@@ -134,7 +134,7 @@ struct Interaction<'a> {
 /// or a converted reflection): its tube's in-plane width then changes by `cos θ₂ / cos θ₁`.
 #[inline(always)]
 fn changes_medium(x: &Interaction<'_>) -> bool {
-    x.step.kind == StepKind::Refract || x.m_in != x.m
+    matches!(x.step.kind, StepKind::Refract) || x.m_in != x.m
 }
 
 /// The coefficient of one interaction (1 on a converted reflection, whose coefficient is not
@@ -179,22 +179,51 @@ pub(crate) fn of_path(
     regions: Option<&Regions>,
     path: PathGeometry<'_>,
 ) -> Amplitude {
+    if scene.curved() {
+        return of_curved_path(scene, settings, regions, path);
+    }
     let cx = Context {
         scene,
         settings,
         regions,
     };
+    match walk_straight(cx, path) {
+        Ok(walk) => finish(cx, path.points, &walk),
+        Err(reason) => diffracted_or_none(cx, path, reason),
+    }
+}
+
+/// [`of_path`] in a scene without a gradient medium (every leg straight), for the tracer's
+/// amplitude (always `Some`, its return): the uniform passes only ([`walk_straight`]), a
+/// diffracted path (a step at a vertex) by [`of_diffracted`](super::of_diffracted).
+#[inline(always)]
+pub(crate) fn of_straight_path(
+    scene: &Scene,
+    settings: &Amplitudes,
+    regions: Option<&Regions>,
+    path: PathGeometry<'_>,
+) -> Option<Amplitude> {
+    let cx = Context {
+        scene,
+        settings,
+        regions,
+    };
+    match walk_straight(cx, path) {
+        Ok(walk) => Some(finish(cx, path.points, &walk)),
+        Err(reason) => not_walked(cx, path, reason),
+    }
+}
+
+/// The pass over a path whose legs are all straight: one interaction written out
+/// ([`walk_one`]), reflections in one medium in closed form ([`walk_reflections`]), any other
+/// path swept ([`walk`]). A path with a step at a vertex ends with a reason, at its
+/// coefficient if not before.
+#[inline(always)]
+fn walk_straight(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
     let k = path.steps.len();
-    let walked = match (path.steps, path.points, path.media) {
-        _ if scene.curved() => {
-            if path.points.len() != k + 2 || path.media.len() != k + 1 {
-                Err(NoAmplitude::UnknownMedia)
-            } else {
-                walk_curved(cx, path)
-            }
-        }
+    match (path.steps, path.points, path.media) {
         ([step], &[p0, p1, p2], &[m0, m1]) => {
-            let line = &scene.interfaces()[step.interface].polyline;
+            let line = &cx.scene.interfaces()[step.interface].polyline;
             let seg = segment_of(line, p1, path.segments, 0);
             let at = OnSegment {
                 seg,
@@ -206,6 +235,45 @@ pub(crate) fn of_path(
             Err(NoAmplitude::UnknownMedia)
         }
         _ => walk_reflections(cx, path).map_or_else(|| walk(cx, path), Ok),
+    }
+}
+
+/// [`diffracted_or_none`] as the tracer returns it (out of line).
+#[cold]
+#[inline(never)]
+fn not_walked(cx: Context<'_>, path: PathGeometry<'_>, reason: NoAmplitude) -> Option<Amplitude> {
+    Some(diffracted_or_none(cx, path, reason))
+}
+
+/// The amplitude of a path [`walk_straight`] ended with `reason`: a diffracted path's
+/// ([`of_diffracted`](super::of_diffracted)), else none for `reason`.
+#[cold]
+fn diffracted_or_none(cx: Context<'_>, path: PathGeometry<'_>, reason: NoAmplitude) -> Amplitude {
+    if path.steps.iter().any(|s| s.kind.vertex().is_some()) {
+        return super::of_diffracted(cx.scene, cx.settings, cx.regions, path);
+    }
+    Amplitude::none(reason)
+}
+
+/// [`of_path`] in a scene with a gradient medium: every leg from its model
+/// ([`walk_curved`]). Out of line, so that the straight passes' callers stay lean.
+#[inline(never)]
+fn of_curved_path(
+    scene: &Scene,
+    settings: &Amplitudes,
+    regions: Option<&Regions>,
+    path: PathGeometry<'_>,
+) -> Amplitude {
+    let cx = Context {
+        scene,
+        settings,
+        regions,
+    };
+    let k = path.steps.len();
+    let walked = if path.points.len() != k + 2 || path.media.len() != k + 1 {
+        Err(NoAmplitude::UnknownMedia)
+    } else {
+        walk_curved(cx, path)
     };
     match walked {
         Ok(walk) => finish(cx, path.points, &walk),
@@ -257,27 +325,30 @@ pub(crate) fn of_one(
 /// The amplitude from what the pass over `path` gathered.
 #[inline(always)]
 fn finish(cx: Context<'_>, points: &[Point], walk: &Walk) -> Amplitude {
-    let axisymmetric = match cx.settings.source {
-        SourceModel::Axisymmetric => match out_of_plane_axisymmetric(points, walk.l0) {
-            Ok(y) => y,
-            Err(reason) => return Amplitude::none(reason),
-        },
-        SourceModel::Point | SourceModel::Line => None,
-    };
-    finish_with(cx.settings, walk, axisymmetric)
+    finish_with(cx.settings, walk, || {
+        out_of_plane_axisymmetric(points, walk.l0)
+    })
 }
 
-/// [`finish`] with the axisymmetric out-of-plane width given (`None`: the point source's,
-/// `walk.out_of_plane`; unused for the other source models).
+/// [`finish`] with the axisymmetric out-of-plane width from `axisymmetric` (asked for that
+/// source model only; `None`: the point source's, `walk.out_of_plane`; an error: no
+/// amplitude, for its reason).
 #[inline(always)]
-fn finish_with(settings: &Amplitudes, walk: &Walk, axisymmetric: Option<f64>) -> Amplitude {
+fn finish_with(
+    settings: &Amplitudes,
+    walk: &Walk,
+    axisymmetric: impl FnOnce() -> Result<Option<f64>, NoAmplitude>,
+) -> Amplitude {
     let w0 = walk.w0;
     // spreading = √(Π cos θ₂/cos θ₁ / (W Y)) / (4π), or √(… / W) / √(8π k₀) for a line, whose
     // amplitude also takes the phase e^(iπ/4) of the 2-D Green's function's far field.
     let quarter = 0.25 / PI;
     let (out, scale) = match settings.source {
         SourceModel::Point => (walk.out_of_plane, quarter),
-        SourceModel::Axisymmetric => (axisymmetric.unwrap_or(walk.out_of_plane), quarter),
+        SourceModel::Axisymmetric => match axisymmetric() {
+            Ok(out) => (out.unwrap_or(walk.out_of_plane), quarter),
+            Err(reason) => return Amplitude::none(reason),
+        },
         SourceModel::Line => {
             let k0 = 2.0 * PI * settings.frequency.unwrap_or(f64::NAN) * w0;
             (k0, 1.0 / (8.0 * PI).sqrt())
@@ -485,7 +556,7 @@ fn walk_one(
         attenuation_db,
         l0,
         w0,
-        converted: (crosses && step.kind == StepKind::Reflect).then_some(0),
+        converted: (crosses && matches!(step.kind, StepKind::Reflect)).then_some(0),
     })
 }
 
@@ -519,15 +590,17 @@ fn walk(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
     // The sweep: the last pivot, the product so far, the previous tangent; the first cosine.
     let (mut pivot, mut product, mut prev) = (1.0, 1.0, Vec2::default());
     let mut first_cos = 0.0;
-    for (i, step) in path.steps.iter().enumerate() {
-        let (m_in, m) = (legs[i], legs[i + 1]);
+    // Each step with its two legs' media and the three points about it.
+    let around = legs.windows(2).zip(points.windows(3));
+    for (i, (step, (media, near))) in path.steps.iter().zip(around).enumerate() {
+        let (m_in, m) = (media[0], media[1]);
         let w = slowness(cx.scene, m)?;
         let leg = Uniform::new(w)
-            .valid_leg(points[i + 1], points[i + 2])
+            .valid_leg(near[1], near[2])
             .ok_or(NoAmplitude::VanishedLeg { leg: i + 1 })?;
         let w_in = incoming.slowness;
         let line = &cx.scene.interfaces()[step.interface].polyline;
-        let seg = segment_of(line, points[i + 1], path.segments, i);
+        let seg = segment_of(line, near[1], path.segments, i);
         let t = line.tangent(seg);
         let n = t.perp();
         let u_in = incoming.direction_at_end();
@@ -550,8 +623,8 @@ fn walk(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
             i,
             step,
             seg,
-            from: points[i],
-            here: points[i + 1],
+            from: near[0],
+            here: near[1],
             leg_in: u_in,
             len_in: 1.0,
             t,
@@ -598,9 +671,10 @@ fn walk(cx: Context<'_>, path: PathGeometry<'_>) -> Result<Walk, NoAmplitude> {
 fn walk_reflections(cx: Context<'_>, path: PathGeometry<'_>) -> Option<Walk> {
     let (points, legs, steps) = (path.points, path.media, path.steps);
     let m0 = *legs.first()?;
+    // (`legs` has one more than `steps`.)
     if steps.len() < 2
-        || legs.iter().any(|&m| m != m0)
-        || steps.iter().any(|s| s.kind != StepKind::Reflect)
+        || (steps.iter().zip(&legs[1..]))
+            .any(|(s, &m)| !matches!(s.kind, StepKind::Reflect) || m != m0)
     {
         return None;
     }

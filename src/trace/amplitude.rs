@@ -4,10 +4,10 @@
 
 use crate::amplitude::{
     Amplitude, NoAmplitude, OnSegment, PathGeometry, UnfoldedLaws, caustics_of_path, of_diffracted,
-    of_one, of_path,
+    of_one, of_path, of_straight_path,
 };
 use crate::geom::Point;
-use crate::scene::Step;
+use crate::scene::{Amplitudes, Step};
 
 use super::{Arrival, RayRecord, Status, Tracer, Workspace};
 
@@ -126,8 +126,32 @@ impl Tracer {
         if status != Status::Converged {
             return Self::no_amplitude(status);
         }
+        let path = PathGeometry {
+            steps,
+            points,
+            media,
+            segments,
+        };
+        if self.scene.curved() {
+            return self.curved_amplitude(settings, path);
+        }
+        // Every leg straight: the uniform passes, inlined (a diffracted path among them).
+        of_straight_path(&self.scene, settings, self.regions.as_ref(), path)
+    }
+
+    /// [`amplitude_with`](Self::amplitude_with) of a converged ray in a scene with a gradient
+    /// medium (curved legs): a `profile` medium's direct ray or walled ray, a diffracted path,
+    /// or [`of_path`]'s curved pass. Out of line, so that a uniform scene's amplitude does not
+    /// carry it.
+    #[inline(never)]
+    fn curved_amplitude(&self, settings: &Amplitudes, path: PathGeometry<'_>) -> Option<Amplitude> {
+        let PathGeometry {
+            steps,
+            points,
+            media,
+            ..
+        } = path;
         if steps.is_empty()
-            && self.scene.curved()
             && let (&[s, r], &[m]) = (points, media)
             && let Some(profile) = self.scene.media()[m].profile_model()
         {
@@ -142,21 +166,17 @@ impl Tracer {
         if let Some((m, walled)) = self.walled_ray_of(steps, points, media) {
             return self.walled_amplitude(m, &walled);
         }
-        let path = PathGeometry {
-            steps,
-            points,
-            media,
-            segments,
-        };
         if steps.iter().any(|s| s.kind.vertex().is_some()) {
-            return Some(of_diffracted(
-                &self.scene,
-                settings,
-                self.regions.as_ref(),
-                path,
-            ));
+            return Some(self.diffracted_amplitude(settings, path));
         }
         Some(of_path(&self.scene, settings, self.regions.as_ref(), path))
+    }
+
+    /// The amplitude of a converged diffracted path ([`of_diffracted`]), out of line.
+    #[cold]
+    #[inline(never)]
+    fn diffracted_amplitude(&self, settings: &Amplitudes, path: PathGeometry<'_>) -> Amplitude {
+        of_diffracted(&self.scene, settings, self.regions.as_ref(), path)
     }
 
     /// The reflection laws of a rectangular room's walls (each an interface and a segment,

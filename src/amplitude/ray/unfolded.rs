@@ -175,7 +175,7 @@ impl<'a, const N: usize> UnfoldedLaws<'a, N> {
             w0: self.w0,
             converted: None,
         };
-        Some(finish_with(self.settings, &walk, axisymmetric))
+        Some(finish_with(self.settings, &walk, || Ok(axisymmetric)))
     }
 }
 
@@ -278,6 +278,6 @@ impl<'a> TreeLaws<'a> {
             w0: self.w0,
             converted: None,
         };
-        Some(finish_with(self.settings, &walk, axisymmetric))
+        Some(finish_with(self.settings, &walk, || Ok(axisymmetric)))
     }
 }
