@@ -30,8 +30,8 @@ pub use num_complex::Complex64;
 
 pub(crate) use diffraction::of_diffracted;
 pub(crate) use ray::{
-    BounceGroup, Incidence, OnSegment, PathGeometry, ProfileReflection, TreeLaws, UnfoldedLaws,
-    caustics_of_path, of_one, of_path, of_profile,
+    BounceGroup, Incidence, NodeBounces, OnSegment, PathGeometry, ProfileReflection, TreeLaws,
+    UnfoldedLaws, caustics_of_path, of_one, of_path, of_profile,
 };
 
 /// The amplitude of one timed ray or arrival (the contract's `amplitude`, `spreading`,

@@ -214,6 +214,9 @@ impl ReceiverGrid {
 /// One arrival of the streamed tree in closed form (valid during the call that reports it).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TreePath<'a> {
+    /// Which node of the walk it comes from (the number of beams before it): the paths of
+    /// one node, which share its bounce groups and axes, come one after another.
+    pub node: u64,
     /// The receiver's index in the receivers given.
     pub receiver: usize,
     /// Its reflections.
@@ -671,6 +674,7 @@ where
             }
         }
         (self.unfolded)(&TreePath {
+            node: self.stats.beams,
             receiver: r,
             steps: stack.len() - 1,
             length,
