@@ -9,7 +9,7 @@
 use std::sync::Mutex;
 
 use eigenray::options::Run;
-use eigenray::search::StreamedArrival;
+use eigenray::search::{ArrivalSink, StreamedArrival};
 use eigenray::{Scene, Tracer};
 use serde_json::{Value, json};
 
@@ -139,6 +139,51 @@ fn the_sloping_grid_streams_the_listed_arrivals() {
     );
     assert!(c.arrivals > 25 * 9 * 60, "{}", c.arrivals);
     assert_eq!(c.with_amplitude, c.arrivals);
+}
+
+/// A sink that keeps each batch as it came.
+struct Batches(Mutex<Vec<Vec<StreamedArrival>>>);
+
+impl ArrivalSink for Batches {
+    fn arrival(&self, a: StreamedArrival) {
+        self.0.lock().unwrap().push(vec![a]);
+    }
+
+    fn arrivals(&self, batch: &[StreamedArrival]) {
+        self.0.lock().unwrap().push(batch.to_vec());
+    }
+}
+
+/// A batching sink (`search_into_sink`) gets the arrivals `search_into` hands on one at a
+/// time, every one once, in the same order (one source: one tree, one order), bit for bit;
+/// the closed-form ones in batches of several, the search's count the same.
+#[test]
+fn a_batching_sink_gets_every_arrival_once_in_order() {
+    let grid = json!({ "grid": { "x": [100, 5000, 25], "y": [-1, -99, 9] } });
+    let scene = slope_scene(grid, 40, "axisymmetric");
+    let tracer = Tracer::new(&scene).unwrap();
+    let one = Mutex::new(Vec::<StreamedArrival>::new());
+    let each = tracer
+        .search_into(&Run::new(), &|a| one.lock().unwrap().push(a))
+        .unwrap();
+    let batches = Batches(Mutex::new(Vec::new()));
+    let batched = tracer.search_into_sink(&Run::new(), &batches).unwrap();
+    let batches = batches.0.into_inner().unwrap();
+    let flat: Vec<StreamedArrival> = batches.iter().flatten().copied().collect();
+    let one = one.into_inner().unwrap();
+    assert_eq!(each.arrivals, one.len() as u64);
+    assert_eq!(batched.arrivals, flat.len() as u64);
+    assert_eq!(one.len(), flat.len());
+    let bits = |a: &StreamedArrival| {
+        let v = a
+            .amplitude
+            .map(|v| [v.value.re, v.value.im, v.spreading].map(f64::to_bits));
+        (a.source, a.receiver, a.steps, a.time.to_bits(), v)
+    };
+    assert!(one.iter().zip(&flat).all(|(a, b)| bits(a) == bits(b)));
+    let longest = batches.iter().map(Vec::len).max().unwrap();
+    assert!(longest > 100, "{longest}");
+    assert!(batches.len() * 10 < flat.len(), "{} batches", batches.len());
 }
 
 /// Receivers exactly on a beam's edge (on the line from the source's image in the bottom

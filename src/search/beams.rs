@@ -6,7 +6,7 @@
 
 use rayon::prelude::*;
 
-use crate::amplitude::{Incidence, TreeLaws, UnfoldedLaws};
+use crate::amplitude::{Incidence, NodeBounces, TreeLaws, UnfoldedLaws};
 use crate::scene::SourceModel;
 use crate::scene::{SearchOptions, Step, StepKind};
 use crate::trace::{
@@ -14,7 +14,7 @@ use crate::trace::{
     RoomPath, Status, Tracer, TreePath, Waveguide,
 };
 
-use super::{Control, SearchArrival, StreamedArrival};
+use super::{ArrivalCount, ArrivalSink, Control, SearchArrival, StreamedArrival};
 use crate::options::Progress;
 
 /// What one source's tree gives: its arrivals and what it did.
@@ -119,7 +119,7 @@ impl Tracer {
             let mut path = StreamScratch::default();
             let found = &mut |p: MirrorPath<'_>| {
                 control.listed.stream();
-                sink(path.arrival(self, walls, source, medium, p));
+                sink.arrival(path.arrival(self, walls, source, medium, p));
                 true
             };
             // In a rectangular room, the image paths in closed form where the amplitude has
@@ -150,7 +150,7 @@ impl Tracer {
                             let incidence = [on_x, on_x, on_y, on_y];
                             laws.amplitude(reflections, incidence, u.length, None, false)
                         });
-                        sink(StreamedArrival {
+                        sink.arrival(StreamedArrival {
                             source,
                             receiver: u.receiver,
                             steps: u.steps,
@@ -195,18 +195,18 @@ impl Tracer {
         g: &Guided<'_>,
         unfolded: Option<UnfoldedLaws<'_, 2>>,
         control: &Control<'_>,
-        sink: &(dyn Fn(StreamedArrival) + Sync),
+        sink: &dyn ArrivalSink,
         progress: &mut impl FnMut(u64) -> bool,
     ) -> MirrorStats {
         let source_x = g.search.source.x;
         let receivers = g.search.receivers;
         let mut path = StreamScratch::default();
         let mut walked = MirrorScratch::default();
+        let mut batch = SinkBatch::new(sink, control.listed);
         g.walls.guide_arrivals(
             g.guide,
             g.search,
             &mut |p: GuidePath| {
-                control.listed.stream();
                 let amplitude = unfolded.and_then(|u| {
                     let x = receivers[p.receiver].x;
                     let width = Some(x.abs() * p.length / (x - source_x).abs());
@@ -229,7 +229,7 @@ impl Tracer {
                         }
                     })
                 });
-                sink(StreamedArrival {
+                batch.push(StreamedArrival {
                     source: g.source,
                     receiver: p.receiver,
                     steps: p.hits[0] + p.hits[1],
@@ -299,7 +299,7 @@ impl Tracer {
         source: usize,
         medium: usize,
         control: &Control<'_>,
-        sink: &(dyn Fn(StreamedArrival) + Sync),
+        sink: &dyn ArrivalSink,
         scratch: &mut MirrorScratch,
         found: &mut impl FnMut(MirrorPath<'_>) -> bool,
         progress: &mut impl FnMut(u64) -> bool,
@@ -319,10 +319,16 @@ impl Tracer {
         let angled: Vec<bool> = (0..scene.interfaces().len())
             .map(|i| laws.as_ref().is_some_and(|l| l.angled(i)))
             .collect();
+        let mut batch = SinkBatch::new(sink, control.listed);
+        let (mut node, mut prepared) = (NodeBounces::default(), None);
         let unfolded = &mut |p: &TreePath<'_>| {
-            let arrival = tree.arrival(p)?;
-            control.listed.stream();
-            sink(arrival);
+            if prepared != Some(p.node) {
+                if let Some(laws) = tree.laws {
+                    laws.prepare(p.groups, &mut node);
+                }
+                prepared = Some(p.node);
+            }
+            batch.push(tree.arrival(p, &node)?);
             Some(true)
         };
         walls.arrivals_streamed(search, scratch, &angled, found, unfolded, progress)
@@ -371,9 +377,10 @@ struct TreeStream<'a> {
 impl TreeStream<'_> {
     /// The arrival of `p` with its amplitude in closed form; `None` where the closed form
     /// declines (a bounce near a critical angle; for an axisymmetric source, one off the
-    /// axis or a path not certainly on one side of it): the path is then walked.
+    /// axis or a path not certainly on one side of it): the path is then walked. `node`:
+    /// the bounces of `p`'s node, prepared (once a node).
     #[inline]
-    fn arrival(&self, p: &TreePath<'_>) -> Option<StreamedArrival> {
+    fn arrival(&self, p: &TreePath<'_>, node: &NodeBounces) -> Option<StreamedArrival> {
         let amplitude = match self.laws {
             None => None,
             Some(laws) => {
@@ -385,7 +392,7 @@ impl TreeStream<'_> {
                 } else {
                     None
                 };
-                Some(laws.amplitude(p.groups, p.direction, p.length, width, true)?)
+                Some(laws.node_amplitude(node, p.direction, p.length, width)?)
             }
         };
         Some(StreamedArrival {
@@ -398,6 +405,49 @@ impl TreeStream<'_> {
             time: p.time,
             amplitude,
         })
+    }
+}
+
+/// How many arrivals in closed form a [`SinkBatch`] holds before it hands them on.
+const SINK_BATCH: usize = 256;
+
+/// Arrivals in closed form on their way to the sink, handed on (and counted) a batch at a
+/// time, in the order found; the rest when it is dropped.
+struct SinkBatch<'a> {
+    sink: &'a dyn ArrivalSink,
+    listed: &'a ArrivalCount,
+    held: Vec<StreamedArrival>,
+}
+
+impl<'a> SinkBatch<'a> {
+    fn new(sink: &'a dyn ArrivalSink, listed: &'a ArrivalCount) -> SinkBatch<'a> {
+        SinkBatch {
+            sink,
+            listed,
+            held: Vec::with_capacity(SINK_BATCH),
+        }
+    }
+
+    #[inline]
+    fn push(&mut self, arrival: StreamedArrival) {
+        self.held.push(arrival);
+        if self.held.len() >= SINK_BATCH {
+            self.flush();
+        }
+    }
+
+    fn flush(&mut self) {
+        if !self.held.is_empty() {
+            self.listed.stream_many(self.held.len());
+            self.sink.arrivals(&self.held);
+            self.held.clear();
+        }
+    }
+}
+
+impl Drop for SinkBatch<'_> {
+    fn drop(&mut self) {
+        self.flush();
     }
 }
 

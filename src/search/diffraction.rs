@@ -340,7 +340,7 @@ impl Tracer {
         if let Some(sink) = control.sink {
             control.listed.stream();
             self.arrival_amplitudes(&a.steps, std::slice::from_mut(&mut a.arrival));
-            sink(StreamedArrival {
+            sink.arrival(StreamedArrival {
                 source: a.source,
                 receiver: a.receiver,
                 steps: a.steps.len(),

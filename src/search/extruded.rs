@@ -604,7 +604,7 @@ impl Tracer {
         options: &SearchOptions,
         run: &Run,
         x: &Extrusion,
-        sink: &(dyn Fn(StreamedArrival) + Sync),
+        sink: &dyn super::ArrivalSink,
     ) -> Result<StreamReport, SearchError> {
         let scene = self.scene();
         let mut pairs = self.pair_table()?;
@@ -614,7 +614,7 @@ impl Tracer {
         let paths = |p: SearchArrival| {
             expansion.streamed(&p, &mut |a| {
                 listed.stream();
-                sink(a);
+                sink.arrival(a);
                 true
             })
         };

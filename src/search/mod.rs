@@ -127,6 +127,31 @@ pub struct StreamedArrival {
     pub amplitude: Option<Amplitude>,
 }
 
+/// Where a streaming search ([`Tracer::search_into_sink`]) hands its arrivals: one at a
+/// time, or several at once (each batch's arrivals in the order found). Called from the
+/// search's threads.
+pub trait ArrivalSink: Sync {
+    /// Takes one arrival.
+    fn arrival(&self, arrival: StreamedArrival);
+
+    /// Takes `batch`, in order: by default one at a time.
+    fn arrivals(&self, batch: &[StreamedArrival]) {
+        for &a in batch {
+            self.arrival(a);
+        }
+    }
+}
+
+/// A sink of one arrival at a time ([`Tracer::search_into`]'s).
+struct EachArrival<'a>(&'a (dyn Fn(StreamedArrival) + Sync));
+
+impl ArrivalSink for EachArrival<'_> {
+    #[inline]
+    fn arrival(&self, arrival: StreamedArrival) {
+        (self.0)(arrival);
+    }
+}
+
 /// What a streaming search ([`Tracer::search_into`]) did: [`SearchReport`] without the
 /// arrivals, which went to the caller's sink.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -220,7 +245,7 @@ struct Control<'a> {
     listed: &'a ArrivalCount,
     /// Where each arrival goes the moment it is found ([`Tracer::search_into`]); `None`:
     /// the arrivals are listed with their points ([`Tracer::search`]).
-    sink: Option<&'a (dyn Fn(StreamedArrival) + Sync)>,
+    sink: Option<&'a dyn ArrivalSink>,
     /// Where each arrival goes with its points the moment it is found, instead of being
     /// listed or streamed (an extruded room's plan paths, `extruded.rs`); it says whether to
     /// go on.
@@ -262,6 +287,11 @@ impl ArrivalCount {
     /// Counts one more streamed arrival, which holds nothing: no limit.
     fn stream(&self) {
         self.count.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// Counts `n` more streamed arrivals at once.
+    fn stream_many(&self, n: usize) {
+        self.count.fetch_add(n as u64, Ordering::Relaxed);
     }
 
     /// Takes one more arrival that holds `bytes`; `false` (and nothing taken) when that
@@ -427,6 +457,21 @@ impl Tracer {
         &self,
         run: &Run,
         sink: &(dyn Fn(StreamedArrival) + Sync),
+    ) -> Result<StreamReport, SearchError> {
+        self.search_into_sink(run, &EachArrival(sink))
+    }
+
+    /// [`search_into`](Self::search_into) with a sink that may take the arrivals several at
+    /// a time ([`ArrivalSink::arrivals`]): the same arrivals, some of them handed on in
+    /// batches (a beam tree's closed-form ones, `search/beams.rs`), so that a sink that locks
+    /// or counts does so once a batch.
+    ///
+    /// # Errors
+    /// As [`search`](Self::search).
+    pub fn search_into_sink(
+        &self,
+        run: &Run,
+        sink: &dyn ArrivalSink,
     ) -> Result<StreamReport, SearchError> {
         let scene = self.scene();
         let options = scene.search().ok_or(SearchError::NoSearch)?;

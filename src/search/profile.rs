@@ -80,7 +80,7 @@ impl Tracer {
                     let mut arrival = self.walled_arrival(m, &w);
                     if let Some(sink) = control.sink {
                         control.listed.stream();
-                        sink(StreamedArrival {
+                        sink.arrival(StreamedArrival {
                             source,
                             receiver,
                             steps: w.steps.len(),

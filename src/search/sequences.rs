@@ -206,7 +206,7 @@ struct Walk<'a> {
     /// The search's run: each sequence visited is a unit of its work.
     run: &'a Run,
     /// Where each arrival goes when the search streams them.
-    sink: Option<&'a (dyn Fn(StreamedArrival) + Sync)>,
+    sink: Option<&'a dyn super::ArrivalSink>,
     /// Where each arrival goes with its points, when the search expands them (`extruded.rs`).
     paths: Option<&'a (dyn Fn(SearchArrival) -> bool + Sync)>,
 }
@@ -570,7 +570,7 @@ impl PairState<'_> {
                 let mut a = a;
                 walk.tracer
                     .arrival_amplitudes(&self.steps, std::slice::from_mut(&mut a));
-                sink(StreamedArrival {
+                sink.arrival(StreamedArrival {
                     source: self.source,
                     receiver: self.receiver,
                     steps: self.steps.len(),

@@ -193,6 +193,43 @@ pub(crate) struct BounceGroup {
     pub normal: Vec2,
 }
 
+/// One node's bounces as [`TreeLaws::node_amplitude`] takes them: the product of the
+/// coefficients that do not depend on the angle, taken once for the node, and the groups
+/// whose coefficient does, each with its law.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct NodeBounces {
+    /// The angle-free groups' coefficients' product (`None`: a group's interface is no
+    /// wall, and the closed form declines).
+    fixed: Option<Complex64>,
+    angled: Vec<AngledGroup>,
+}
+
+/// A group of bounces whose coefficient depends on the angle: its mirrored normal, its
+/// number of bounces, its wall's weights and ratio of slownesses.
+#[derive(Clone, Copy, Debug)]
+struct AngledGroup {
+    normal: Vec2,
+    count: u32,
+    weights: Weights,
+    ratio: f64,
+}
+
+/// `x^n` of a real `x` by squaring, as `powi` computes it (the same products, in line).
+#[inline(always)]
+fn real_power(x: f64, n: u32) -> f64 {
+    let (mut base, mut n, mut out) = (x, n, 1.0);
+    loop {
+        if n & 1 == 1 {
+            out *= base;
+        }
+        n >>= 1;
+        if n == 0 {
+            return out;
+        }
+        base *= base;
+    }
+}
+
 /// What the amplitudes of one source's image paths off any walls share (the beam tree's
 /// [`UnfoldedLaws`]): each interface's law, the medium's slowness and attenuation.
 #[derive(Clone, Debug)]
@@ -235,41 +272,64 @@ impl<'a> TreeLaws<'a> {
         })
     }
 
-    /// Whether the coefficient of `interface` depends on the angle (`false` also for an
-    /// interface that is no wall).
-    pub(crate) fn angled(&self, interface: usize) -> bool {
-        matches!(self.laws.get(interface), Some(Some(Law::Media { .. })))
+    /// `groups` (one node's) prepared into `out` for [`node_amplitude`](Self::node_amplitude).
+    pub(crate) fn prepare(&self, groups: &[BounceGroup], out: &mut NodeBounces) {
+        out.angled.clear();
+        let mut fixed = Complex64::new(1.0, 0.0);
+        for g in groups {
+            match self.laws.get(g.interface as usize).copied().flatten() {
+                None => {
+                    out.fixed = None;
+                    return;
+                }
+                Some(Law::Fixed(r)) => fixed *= power(Complex64::new(r, 0.0), u64::from(g.count)),
+                Some(Law::Media { weights, ratio }) => out.angled.push(AngledGroup {
+                    normal: g.normal,
+                    count: g.count,
+                    weights,
+                    ratio,
+                }),
+            }
+        }
+        out.fixed = Some(fixed);
     }
 
     /// The amplitude of the image path along `d` (the unfolded line, from the image to the
-    /// receiver, `length` long) with the bounces `groups`; `axisymmetric` as in
-    /// [`UnfoldedLaws::amplitude`]. `None` where `checked` and a bounce lies within
+    /// receiver, `length` long) of the node whose bounce groups `node` holds
+    /// ([`prepare`](Self::prepare)); `axisymmetric` as in [`UnfoldedLaws::amplitude`]. Each
+    /// group's coefficient is taken once and powered; the angle-free ones' product comes
+    /// first, then the real ones', then the complex ones'. `None` where a bounce lies within
     /// [`NEAR_CRITICAL`] of a critical angle, or a group's interface is no wall: the caller
     /// then walks the path's points.
     #[inline]
-    pub(crate) fn amplitude(
+    pub(crate) fn node_amplitude(
         &self,
-        groups: &[BounceGroup],
+        node: &NodeBounces,
         d: Vec2,
         length: f64,
         axisymmetric: Option<f64>,
-        checked: bool,
     ) -> Option<Amplitude> {
         let inv = 1.0 / length;
-        let mut coefficient = Complex64::new(1.0, 0.0);
-        for g in groups {
-            let law = (*self.laws.get(g.interface as usize)?)?;
-            let r = match law {
-                Law::Fixed(r) => Complex64::new(r, 0.0),
-                Law::Media { .. } => {
-                    let (c, s) = (d.dot(g.normal) * inv, d.cross(g.normal) * inv);
-                    law.at(c.abs(), s * s, checked)?
-                }
-            };
-            coefficient *= power(r, u64::from(g.count));
+        let mut coefficient = node.fixed?;
+        let mut real = 1.0;
+        for g in &node.angled {
+            let (c, s) = (d.dot(g.normal) * inv, d.cross(g.normal) * inv);
+            let sin2 = s * s;
+            let q2 = g.ratio * g.ratio * sin2;
+            if (q2 - 1.0).abs() < NEAR_CRITICAL {
+                return None;
+            }
+            if q2 <= 1.0 {
+                // `Weights::reflection` with a real `cos θ₂`, as `cos_across` gives it.
+                let (a, b) = (g.weights.a * c.abs(), (1.0 - q2).sqrt() * g.weights.b);
+                real *= real_power((a - b) / (a + b), g.count);
+            } else {
+                let r = g.weights.reflection(c.abs(), cos_across(g.ratio, sin2));
+                coefficient *= power(r, u64::from(g.count));
+            }
         }
         let walk = Walk {
-            coefficient,
+            coefficient: coefficient * real,
             tube_num: 1.0,
             tube_den: length,
             out_of_plane: length,
@@ -279,5 +339,11 @@ impl<'a> TreeLaws<'a> {
             converted: None,
         };
         Some(finish_with(self.settings, &walk, || Ok(axisymmetric)))
+    }
+
+    /// Whether the coefficient of `interface` depends on the angle (`false` also for an
+    /// interface that is no wall).
+    pub(crate) fn angled(&self, interface: usize) -> bool {
+        matches!(self.laws.get(interface), Some(Some(Law::Media { .. })))
     }
 }

@@ -891,10 +891,7 @@ fn search_streamed(
     let run = Run::new().on_progress(move |p: eigenray::options::Progress| shown.inc(p.work));
     let started = Instant::now();
     let report = tracer
-        .search_into(&run, &|a| match Echo::of_streamed(&a) {
-            Some(e) => sums.add(e),
-            None => sums.skip(),
-        })
+        .search_into_sink(&run, &response::StreamedSums(sums))
         .map_err(|e| Failure::Input(format!("search: {e}")))?;
     bar.finish();
     let n = report.arrivals;

@@ -17,6 +17,7 @@ use eigenray::response::{
     Echo, ImpulseResponses, RoomParameters, incoherent_loss, room_parameters, transmission_loss,
 };
 use eigenray::scene::TransmissionLossMode;
+use eigenray::search::{ArrivalSink, StreamedArrival};
 
 use super::{Failure, available_memory, write_failure};
 
@@ -369,6 +370,23 @@ pub(super) struct Sums<'a> {
     pub(super) without_amplitude: AtomicU64,
 }
 
+/// A search's arrivals streamed into [`Sums`]: each batch's echoes summed under one lock
+/// per output.
+pub(super) struct StreamedSums<'s, 'a>(pub(super) &'s Sums<'a>);
+
+impl ArrivalSink for StreamedSums<'_, '_> {
+    fn arrival(&self, a: StreamedArrival) {
+        match Echo::of_streamed(&a) {
+            Some(e) => self.0.add(e),
+            None => self.0.skip(),
+        }
+    }
+
+    fn arrivals(&self, batch: &[StreamedArrival]) {
+        self.0.add_all(batch.iter().map(Echo::of_streamed));
+    }
+}
+
 /// A buffer of `n` numbers, or the failure that names what could not be allocated.
 fn buffer<T: Clone>(n: usize, zero: T, what: &str) -> Result<Vec<T>, Failure> {
     let mut v = Vec::new();
@@ -437,7 +455,8 @@ impl<'a> Sums<'a> {
         }))
     }
 
-    /// Adds `e` to every output.
+    /// Adds `e` to every output (each output locked for it alone; a batch of echoes goes
+    /// through [`add_all`](Self::add_all), which adds the same).
     pub(super) fn add(&self, e: Echo) {
         fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
             m.lock().unwrap_or_else(|e| e.into_inner())
@@ -458,9 +477,7 @@ impl<'a> Sums<'a> {
             }
         }
         if let Some((f, p)) = &self.pressure {
-            let phase =
-                Complex64::from_polar(1.0, 2.0 * std::f64::consts::PI * (f * e.time).fract());
-            lock(p)[k] += e.amplitude * phase;
+            lock(p)[k] += e.amplitude * unit_phase(f * e.time);
         }
         if let Some(i) = &self.intensity {
             lock(i)[k] += e.amplitude.norm_sqr();
@@ -470,6 +487,60 @@ impl<'a> Sums<'a> {
             && (e.source, e.receiver) == (c.source, c.receiver)
         {
             lock(&self.pair).push(e);
+        }
+    }
+
+    /// Adds each echo of `echoes` to every output, each output locked once for them all;
+    /// counts each `None` (a timed arrival without an amplitude value) as
+    /// [`skip`](Self::skip) does.
+    pub(super) fn add_all(&self, echoes: impl IntoIterator<Item = Option<Echo>>) {
+        fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+            m.lock().unwrap_or_else(|e| e.into_inner())
+        }
+        let mut ir = self.ir.as_ref().map(|r| {
+            let first = r.first.as_ref().map(lock);
+            (r.responses, lock(&r.data), first)
+        });
+        let mut pressure = self.pressure.as_ref().map(|(f, p)| (*f, lock(p)));
+        let mut intensity = self.intensity.as_ref().map(lock);
+        let echogram = self.charts.filter(|c| c.echogram.is_some());
+        let mut pair = echogram.map(|_| lock(&self.pair));
+        let (mut added, mut skipped) = (0u64, 0u64);
+        for e in echoes {
+            let Some(e) = e else {
+                skipped += 1;
+                continue;
+            };
+            added += 1;
+            let k = e.source * self.receivers + e.receiver;
+            if let Some((r, data, first)) = &mut ir {
+                let start = k * r.samples();
+                r.pulse().add(
+                    &mut data[start..start + r.samples()],
+                    e.time * r.rate(),
+                    e.amplitude,
+                );
+                if let Some(first) = first {
+                    first[k] = first[k].min(e.time);
+                }
+            }
+            if let Some((f, p)) = &mut pressure {
+                p[k] += e.amplitude * unit_phase(*f * e.time);
+            }
+            if let Some(i) = &mut intensity {
+                i[k] += e.amplitude.norm_sqr();
+            }
+            if let (Some(c), Some(pair)) = (echogram, &mut pair)
+                && (e.source, e.receiver) == (c.source, c.receiver)
+            {
+                pair.push(e);
+            }
+        }
+        if added > 0 {
+            self.echoes.fetch_add(added, Ordering::Relaxed);
+        }
+        if skipped > 0 {
+            self.without_amplitude.fetch_add(skipped, Ordering::Relaxed);
         }
     }
 
@@ -588,4 +659,124 @@ fn write_parameters_file(
             path.display()
         ))
     })
+}
+
+/// `e^(2πi · frac(turns))`, the phase factor of an echo at `turns = f · T` cycles: what
+/// `Complex64::from_polar(1, 2π frac(turns))` gives, without its general range reduction
+/// (nor the library calls of `fract` and `round` on a CPU without SSE4.1). The fraction
+/// `x` (exactly `fract`'s) is split exactly into quarter turns `q` and a rest `f = 4x − q`,
+/// `|f| ≤ 1/2` (integer parts and differences of numbers below 4: no rounding); the sine and
+/// cosine of `π/2 · f` (at most π/4) are fdlibm's kernels (within an ulp), turned by `q`
+/// quarter turns, exactly. So each component is within about 2e-16 of the true phase
+/// factor of `2π · frac(turns)` (`tests::the_phase_kernel_is_within_an_ulp_or_two_of_libm`).
+#[inline]
+fn unit_phase(turns: f64) -> Complex64 {
+    // Below 2^52 the integer part is the truncating conversion's, exactly.
+    let x = if turns.abs() < 4_503_599_627_370_496.0 {
+        turns - (turns as i64) as f64
+    } else {
+        turns.fract()
+    };
+    let y = 4.0 * x;
+    let mut q = y as i64;
+    let mut f = y - q as f64;
+    if f > 0.5 {
+        q += 1;
+        f -= 1.0;
+    } else if f < -0.5 {
+        q -= 1;
+        f += 1.0;
+    }
+    let t = std::f64::consts::FRAC_PI_2 * f;
+    let (s, c) = (sin_kernel(t), cos_kernel(t));
+    match q & 3 {
+        0 => Complex64::new(c, s),
+        1 => Complex64::new(-s, c),
+        2 => Complex64::new(-c, -s),
+        _ => Complex64::new(s, -c),
+    }
+}
+
+/// `sin t` for `|t| ≤ π/4`: fdlibm's `__kernel_sin` (its tail `y` zero), within one ulp.
+#[inline(always)]
+fn sin_kernel(t: f64) -> f64 {
+    const S1: f64 = -0.16666666666666632;
+    const S2: f64 = 0.00833333333332249;
+    const S3: f64 = -0.0001984126982985795;
+    const S4: f64 = 2.7557313707070068e-06;
+    const S5: f64 = -2.5050760253406863e-08;
+    const S6: f64 = 1.58969099521155e-10;
+    let z = t * t;
+    let w = z * z;
+    let r = S2 + z * (S3 + z * S4) + z * w * (S5 + z * S6);
+    t + z * t * (S1 + z * r)
+}
+
+/// `cos t` for `|t| ≤ π/4`: fdlibm's `__kernel_cos` (its tail `y` zero), within one ulp.
+#[inline(always)]
+fn cos_kernel(t: f64) -> f64 {
+    const C1: f64 = 0.0416666666666666;
+    const C2: f64 = -0.001388888888887411;
+    const C3: f64 = 2.480158728947673e-05;
+    const C4: f64 = -2.7557314351390663e-07;
+    const C5: f64 = 2.087572321298175e-09;
+    const C6: f64 = -1.1359647557788195e-11;
+    let z = t * t;
+    let w = z * z;
+    let r = z * (C1 + z * (C2 + z * C3)) + w * w * (C4 + z * (C5 + z * C6));
+    let hz = 0.5 * z;
+    let one_less = 1.0 - hz;
+    one_less + (((1.0 - one_less) - hz) + z * r)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The kernel against libm's `sin` and `cos` of the same reduced argument `2π r` (within
+    /// 2.3e-16 a component: an ulp or two), and against `from_polar` of `2π frac(turns)`
+    /// (within 1e-15: that argument's own rounding, up to 4.4e-16 rad near a full turn),
+    /// over a million fractions spread over `[−3, 3000)` turns, the eighths of a turn and
+    /// their neighbours.
+    #[test]
+    fn the_phase_kernel_is_within_an_ulp_or_two_of_libm() {
+        let (mut kernel, mut polar) = (0.0f64, 0.0f64);
+        let mut check = |turns: f64| {
+            let got = unit_phase(turns);
+            let want = Complex64::from_polar(1.0, std::f64::consts::TAU * turns.fract());
+            polar = polar
+                .max((got.re - want.re).abs())
+                .max((got.im - want.im).abs());
+            let x = turns.fract();
+            let q = (4.0 * x).round();
+            let t = std::f64::consts::TAU * (x - 0.25 * q);
+            let quarter = Complex64::new(0.0, 1.0).powi((q as i32).rem_euclid(4));
+            let exact = Complex64::new(t.cos(), t.sin()) * quarter;
+            kernel = kernel
+                .max((got.re - exact.re).abs())
+                .max((got.im - exact.im).abs());
+        };
+        // A fixed linear congruential sequence: the same numbers every run.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        for _ in 0..1_000_000 {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+            check(u * 3003.0 - 3.0);
+        }
+        for k in -8..=8 {
+            let at = f64::from(k) / 8.0;
+            for t in [at, at.next_up(), at.next_down(), 300.0 + at, -2.0 + at] {
+                check(t);
+            }
+        }
+        assert!(kernel <= 2.3e-16, "{kernel:e}");
+        assert!(polar <= 1e-15, "{polar:e}");
+        // Exact at the quarter turns, as `from_polar`'s multiples of π/2 are not.
+        assert_eq!(unit_phase(0.25), Complex64::new(0.0, 1.0));
+        assert_eq!(unit_phase(2.5), Complex64::new(-1.0, 0.0));
+        assert_eq!(unit_phase(-0.75), Complex64::new(0.0, 1.0));
+        assert!(unit_phase(f64::NAN).re.is_nan());
+    }
 }

@@ -214,6 +214,9 @@ impl ReceiverGrid {
 /// One arrival of the streamed tree in closed form (valid during the call that reports it).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TreePath<'a> {
+    /// Which node of the walk it comes from (the number of beams before it): the paths of
+    /// one node, which share its bounce groups and axes, come one after another.
+    pub node: u64,
     /// The receiver's index in the receivers given.
     pub receiver: usize,
     /// Its reflections.
@@ -559,10 +562,22 @@ where
         let top = &stack[stack.len() - 1];
         let receiver = search.receivers[r];
         let delta = self.bounds.delta;
-        let inside = match &top.beam {
-            Some(beam) => beam.holds(&self.walls.walls[top.wall], top.image, receiver, delta),
-            None => true,
-        };
+        // Inside the certain beam by `INNER` margins (a sure node's): inside the beam, whose
+        // test is then not needed (the certain beam lies in it, its margins far above the
+        // round-off of either test).
+        let deep = certain.sure
+            && match (&top.beam, &certain.inner) {
+                (Some(_), Some(inner)) => {
+                    let g = inner.gauge(&self.walls.walls[top.wall], top.image, receiver, delta);
+                    (0..3).all(|c| g.values[c] >= INNER * g.margins[c])
+                }
+                _ => false,
+            };
+        let inside = deep
+            || match &top.beam {
+                Some(beam) => beam.holds(&self.walls.walls[top.wall], top.image, receiver, delta),
+                None => true,
+            };
         // (Without a time bound, no receiver is too far: the distance is not needed.)
         let reach = self.bounds.reach;
         if !inside || (reach.is_finite() && top.image.distance(receiver) - 4.0 * delta > reach) {
@@ -570,7 +585,7 @@ where
         }
         self.stats.leaves += 1;
         self.stats.work += stack.len() as u64;
-        if let Some(go) = self.closed(stack, certain, own, crossings, r) {
+        if let Some(go) = self.closed(stack, certain, own, crossings, (r, deep)) {
             return go;
         }
         let Some((length, reason)) = self.validation.path(stack, receiver) else {
@@ -596,13 +611,14 @@ where
 
     /// Receiver `r`'s path in closed form (`Some(go)`, `go` what `unfolded` says; also
     /// `Some(true)` where it certainly has no path), or `None` where it must be validated.
+    /// `deep`: whether it lies inside the node's certain beam by [`INNER`] margins.
     fn closed(
         &mut self,
         stack: &[Node],
         certain: &Certain,
         (groups, axes): (&[BounceGroup], &[Vec2]),
         crossings: &mut Option<bool>,
-        r: usize,
+        (r, deep): (usize, bool),
     ) -> Option<bool> {
         if !certain.sure {
             return None;
@@ -611,14 +627,8 @@ where
         let top = &stack[stack.len() - 1];
         let receiver = search.receivers[r];
         let root = top.wall == usize::MAX;
-        if !root {
-            let wall = &self.walls.walls[top.wall];
-            let g = certain
-                .inner?
-                .gauge(wall, top.image, receiver, self.bounds.delta);
-            if !(0..3).all(|c| g.values[c] >= INNER * g.margins[c]) {
-                return None;
-            }
+        if !root && !deep {
+            return None;
         }
         let d = receiver - top.image;
         let l2 = d.x * d.x + d.y * d.y;
@@ -671,6 +681,7 @@ where
             }
         }
         (self.unfolded)(&TreePath {
+            node: self.stats.beams,
             receiver: r,
             steps: stack.len() - 1,
             length,
