@@ -71,6 +71,7 @@ pub(in crate::trace) fn graded_stack_path(scene: &Scene, path: usize) -> bool {
                     let along = l.gradient.dot(t);
                     along * along <= ALONG * ALONG * l.gradient.dot(l.gradient)
                 }
+                LegMedium::Profile(_) => false,
             };
             across && medium.profile_model().is_none()
         })
@@ -154,6 +155,7 @@ fn fill_layers(
                 let rate = g.dot(down);
                 [l.speed + rate * u0, l.speed + rate * u1]
             }
+            LegMedium::Profile(_) => return false,
         };
         let [c0, c1] = speeds;
         if !(c0 > 0.0 && c1 > 0.0 && c0 < f64::INFINITY && c1 < f64::INFINITY) {
