@@ -213,6 +213,23 @@ impl Aabb {
             max: Point::new(self.max.x.max(o.max.x), self.max.y.max(o.max.y)),
         }
     }
+    /// `rel` times the box's size plus its coordinates' magnitudes: room for the round-off
+    /// of points computed on its contents.
+    pub fn round_off_pad(self, rel: f64) -> f64 {
+        rel * (self.max.x - self.min.x
+            + (self.max.y - self.min.y)
+            + self.max.x.abs()
+            + self.min.x.abs()
+            + self.max.y.abs()
+            + self.min.y.abs())
+    }
+    /// The box grown by `pad` on every side.
+    pub fn grown(self, pad: f64) -> Aabb {
+        Aabb {
+            min: Point::new(self.min.x - pad, self.min.y - pad),
+            max: Point::new(self.max.x + pad, self.max.y + pad),
+        }
+    }
     /// Whether the closed boxes share a point.
     #[inline]
     pub fn overlaps(self, o: Aabb) -> bool {

@@ -364,17 +364,7 @@ fn arc_boxes_clear(scene: &Scene, steps: &[Step], ends: [Aabb; 2]) -> bool {
             return false;
         }
         let bbox = a.union(b);
-        let pad = 1e-9
-            * (bbox.max.x - bbox.min.x
-                + (bbox.max.y - bbox.min.y)
-                + bbox.max.x.abs()
-                + bbox.min.x.abs()
-                + bbox.max.y.abs()
-                + bbox.min.y.abs());
-        let grown = Aabb {
-            min: Point::new(bbox.min.x - pad, bbox.min.y - pad),
-            max: Point::new(bbox.max.x + pad, bbox.max.y + pad),
-        };
+        let grown = bbox.grown(bbox.round_off_pad(1e-9));
         let own = [before, after].map(|i| i.map(|i| steps[i].interface as u32));
         scene.segments_in(grown, 64).is_some_and(|found| {
             found
@@ -730,17 +720,8 @@ fn leg_candidates(
                     Side::Box(b) => *b,
                 })
                 .fold(Aabb::EMPTY, Aabb::union);
-            let pad = 1e-9
-                * (bbox.max.x - bbox.min.x
-                    + (bbox.max.y - bbox.min.y)
-                    + bbox.max.x.abs()
-                    + bbox.min.x.abs()
-                    + bbox.max.y.abs()
-                    + bbox.min.y.abs());
-            let grown = Aabb {
-                min: Point::new(bbox.min.x - pad, bbox.min.y - pad),
-                max: Point::new(bbox.max.x + pad, bbox.max.y + pad),
-            };
+            let pad = bbox.round_off_pad(1e-9);
+            let grown = bbox.grown(pad);
             // (A long interface fills the box with its own segments: no copy of its vertices.)
             let in_box = scene.segments_in(grown, BOX_LIMIT)?;
             let pts = sides

@@ -641,10 +641,7 @@ impl Tracer {
         let spec = &scene.paths()[path];
         let k = spec.steps.len();
         ws.resize(k);
-        ws.ray.slowness.clear();
-        ws.ray.curved.clear();
-        ws.ray.media.clear();
-        ws.ray.points.clear();
+        ws.ray.clear();
         let mut beyond = None;
         match start {
             Start::Given(params) | Start::Trial(params) => {
@@ -821,10 +818,7 @@ impl Tracer {
     ) -> RayRecord {
         let k = steps.len();
         ws.resize(k);
-        ws.ray.slowness.clear();
-        ws.ray.curved.clear();
-        ws.ray.media.clear();
-        ws.ray.points.clear();
+        ws.ray.clear();
         let start = if k == 0 {
             initial_guess(&self.scene, steps, source, receiver, ws);
             Start::Default
@@ -842,6 +836,14 @@ impl Tracer {
 }
 
 impl RayData {
+    /// Empties its legs and points (keeps `media_prev`, the last lookup's).
+    pub(super) fn clear(&mut self) {
+        self.slowness.clear();
+        self.curved.clear();
+        self.media.clear();
+        self.points.clear();
+    }
+
     /// The leg models of the media in `media`, relative to `source`, when the scene has
     /// curved legs (else none: every leg straight, on the uniform medium's own code).
     pub(super) fn set_curved(&mut self, scene: &Scene, source: Point) {

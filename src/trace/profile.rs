@@ -85,10 +85,7 @@ impl Tracer {
         ws: &mut Workspace,
     ) -> RayRecord {
         ws.resize(0);
-        ws.ray.slowness.clear();
-        ws.ray.curved.clear();
-        ws.ray.media.clear();
-        ws.ray.points.clear();
+        ws.ray.clear();
         ws.ray.media.push(medium);
         let (rays, _) = self.profile_rays(profile, source, receiver);
         let chosen = rays
@@ -555,27 +552,14 @@ impl Tracer {
     ) -> RayRecord {
         let k = self.scene.paths()[path].steps.len();
         ws.resize(k);
-        ws.ray.slowness.clear();
-        ws.ray.curved.clear();
-        ws.ray.media.clear();
-        ws.ray.points.clear();
+        ws.ray.clear();
         ws.ray.media.extend(std::iter::repeat_n(medium, k + 1));
         let rays = self.path_walled_rays(path, profile, source, receiver);
-        let chosen = rays
-            .iter()
-            .find(|r| r.status == Status::Converged)
-            .or(rays.first());
-        let Some(r) = chosen else {
+        let Some(r) = default_choice(&rays, |r| r.status) else {
             return RayRecord::failed(Status::NoPath, Reason::NoStationaryPath);
         };
-        ws.ray.points.extend_from_slice(&r.points);
-        ws.ray
-            .slowness
-            .extend(std::iter::repeat_n(1.0 / r.ray.speeds[0], k + 1));
-        ws.newton.s.clear();
-        ws.newton.s.extend_from_slice(&r.parameters);
-        ws.newton.seg.clear();
-        ws.newton.seg.extend_from_slice(&r.segments);
+        let slowness = std::iter::repeat_n(1.0 / r.ray.speeds[0], k + 1);
+        ws.keep_profile_ray(&r.points, slowness, &r.parameters, &r.segments);
         RayRecord {
             status: r.status,
             time: r.ray.sums.t,
@@ -767,5 +751,32 @@ pub(crate) fn profile_ray_between(
         None => own
             .find(|w| w.points == points)
             .map(|w| (walled.clone(), w.ray)),
+    }
+}
+
+/// The ray the default mode reports of a profile route's rays (by time): the earliest that
+/// converged (no interface crosses it), else the earliest.
+pub(super) fn default_choice<T>(rays: &[T], status: impl Fn(&T) -> Status) -> Option<&T> {
+    rays.iter()
+        .find(|r| status(r) == Status::Converged)
+        .or(rays.first())
+}
+
+impl Workspace {
+    /// Keeps the ray a profile route chose (its leg media already set): its points, each
+    /// leg's slowness, its interactions' parameters and segments.
+    pub(super) fn keep_profile_ray(
+        &mut self,
+        points: &[Point],
+        slowness: impl Iterator<Item = f64>,
+        parameters: &[f64],
+        segments: &[usize],
+    ) {
+        self.ray.points.extend_from_slice(points);
+        self.ray.slowness.extend(slowness);
+        self.newton.s.clear();
+        self.newton.s.extend_from_slice(parameters);
+        self.newton.seg.clear();
+        self.newton.seg.extend_from_slice(segments);
     }
 }

@@ -586,27 +586,14 @@ impl Tracer {
         let steps = &self.scene.paths()[path].steps;
         let k = steps.len();
         ws.resize(k);
-        ws.ray.slowness.clear();
-        ws.ray.curved.clear();
-        ws.ray.media.clear();
-        ws.ray.points.clear();
+        ws.ray.clear();
         ws.ray.media.extend(std::iter::repeat_n(medium, k + 1));
         let rays = sloped_rays_cached(&self.scene, steps, medium, source, receiver);
-        let chosen = rays
-            .iter()
-            .find(|r| r.status == Status::Converged)
-            .or(rays.first());
-        let Some(r) = chosen else {
+        let Some(r) = super::profile::default_choice(&rays, |r| r.status) else {
             return RayRecord::failed(Status::NoPath, Reason::NoStationaryPath);
         };
-        ws.ray.points.extend_from_slice(&r.points);
-        ws.ray
-            .slowness
-            .extend(r.legs.iter().map(|l| 1.0 / l.speeds[0]));
-        ws.newton.s.clear();
-        ws.newton.s.extend_from_slice(&r.parameters);
-        ws.newton.seg.clear();
-        ws.newton.seg.extend_from_slice(&r.segments);
+        let slowness = r.legs.iter().map(|l| 1.0 / l.speeds[0]);
+        ws.keep_profile_ray(&r.points, slowness, &r.parameters, &r.segments);
         RayRecord {
             status: r.status,
             time: r.time,

@@ -376,10 +376,7 @@ pub(super) struct StreamedSums<'s, 'a>(pub(super) &'s Sums<'a>);
 
 impl ArrivalSink for StreamedSums<'_, '_> {
     fn arrival(&self, a: StreamedArrival) {
-        match Echo::of_streamed(&a) {
-            Some(e) => self.0.add(e),
-            None => self.0.skip(),
-        }
+        self.0.add_all([Echo::of_streamed(&a)]);
     }
 
     fn arrivals(&self, batch: &[StreamedArrival]) {
@@ -455,39 +452,9 @@ impl<'a> Sums<'a> {
         }))
     }
 
-    /// Adds `e` to every output (each output locked for it alone; a batch of echoes goes
-    /// through [`add_all`](Self::add_all), which adds the same).
+    /// Adds `e` to every output.
     pub(super) fn add(&self, e: Echo) {
-        fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-            m.lock().unwrap_or_else(|e| e.into_inner())
-        }
-        self.echoes.fetch_add(1, Ordering::Relaxed);
-        let k = e.source * self.receivers + e.receiver;
-        if let Some(rendered) = &self.ir {
-            let r = rendered.responses;
-            let start = k * r.samples();
-            r.pulse().add(
-                &mut lock(&rendered.data)[start..start + r.samples()],
-                e.time * r.rate(),
-                e.amplitude,
-            );
-            if let Some(first) = &rendered.first {
-                let t = &mut lock(first)[k];
-                *t = t.min(e.time);
-            }
-        }
-        if let Some((f, p)) = &self.pressure {
-            lock(p)[k] += e.amplitude * unit_phase(f * e.time);
-        }
-        if let Some(i) = &self.intensity {
-            lock(i)[k] += e.amplitude.norm_sqr();
-        }
-        if let Some(c) = self.charts
-            && c.echogram.is_some()
-            && (e.source, e.receiver) == (c.source, c.receiver)
-        {
-            lock(&self.pair).push(e);
-        }
+        self.add_all([Some(e)]);
     }
 
     /// Adds each echo of `echoes` to every output, each output locked once for them all;
