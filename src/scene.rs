@@ -1857,15 +1857,51 @@ impl Scene {
         own: [SegmentRef; 2],
     ) -> Option<SegmentRef> {
         self.first_crossing_by(a, b, margin, own, |i| {
-            let Segment { start: p, end: q } = self.segment_ends[i as usize];
-            let (d, e) = (b - a, q - p);
-            let den = d.cross(e);
-            let t = (p - a).cross(e) / den;
-            den != 0.0
-                && t > margin
-                && t < 1.0 - margin
-                && orient(line[0], line[1], p) * orient(line[0], line[1], q) <= 0.0
+            self.crosses_on_line(i, a, b, line, margin)
         })
+    }
+
+    /// [`first_crossing_on_line`](Self::first_crossing_on_line) among `candidates` only
+    /// (scene segment indices, which must include every segment that the leg can be found
+    /// to cross), each tested as the hierarchy's leaves test it (its box against the leg's
+    /// middle box, then the crossing): the first one listed that `a–b` crosses.
+    pub(crate) fn first_crossing_on_line_among(
+        &self,
+        a: Point,
+        b: Point,
+        line: [Point; 2],
+        margin: f64,
+        candidates: &[u32],
+        own: [SegmentRef; 2],
+    ) -> Option<SegmentRef> {
+        let mut sbox = None;
+        for &i in candidates {
+            let r = self.segments[i as usize];
+            if r == own[0] || r == own[1] {
+                continue;
+            }
+            let sbox = *sbox.get_or_insert_with(|| middle_box(a, b, margin));
+            let Segment { start: p, end: q } = self.segment_ends[i as usize];
+            if Aabb::from_finite(p, q).overlaps(sbox) && self.crosses_on_line(i, a, b, line, margin)
+            {
+                return Some(r);
+            }
+        }
+        None
+    }
+
+    /// Whether scene segment `i` meets leg `a–b` at a fraction `t ∈ (margin, 1 − margin)` of
+    /// it, with its ends on either side of (or on) the line through `line` (exactly).
+    #[inline]
+    fn crosses_on_line(&self, i: u32, a: Point, b: Point, line: [Point; 2], margin: f64) -> bool {
+        let Segment { start: p, end: q } = self.segment_ends[i as usize];
+        let (d, e) = (b - a, q - p);
+        let den = d.cross(e);
+        let t = (p - a).cross(e) / den;
+        den != 0.0
+            && t > margin
+            && t < 1.0 - margin
+            && orient(line[0], line[1], p) * orient(line[0], line[1], q) <= 0.0
     }
 
     /// [`first_crossing`](Self::first_crossing) among `candidates` only (scene segment
