@@ -4,7 +4,10 @@
 //! ([`ArcLeg::offset_at`]); a ray through a `profile` medium the ray the profile traced (found
 //! again by its launch angle, or by the default mode's rule), piece by piece: a circular arc
 //! per layer, through its turning points and its reflections at the walls
-//! ([`RayPiece::at`]). Every point is on the ray to rounding: the arcs' points are their
+//! ([`RayPiece::at`]); a ray reflected off walls that are not all flat and horizontal (the
+//! sloped route) leg by leg, each leg its own ray of the profile between its two points
+//! (the ray found again by its points, its reflections' interfaces read off them). Every
+//! point is on the ray to rounding: the arcs' points are their
 //! closed forms at an arc length, a profile's its closed-form range at a height.
 
 use std::fmt;
