@@ -7,8 +7,8 @@
 //! ([`RayPiece::at`]); a ray reflected off walls that are not all flat and horizontal (the
 //! sloped route) leg by leg, each leg its own ray of the profile between its two points
 //! (the ray found again by its points, its reflections' interfaces read off them). Every
-//! point is on the ray to rounding: the arcs' points are their
-//! closed forms at an arc length, a profile's its closed-form range at a height.
+//! point is on the ray to rounding: the arcs' points are their closed forms at an arc
+//! length, a profile's its closed-form range at a height.
 
 use std::fmt;
 

@@ -11,8 +11,7 @@ use crate::leg::profile::{Profile, RayPiece};
 use crate::scene::{Scene, Step, StepKind};
 
 use super::profile::default_choice;
-pub(crate) use super::profile_slope::takes_sloped_route;
-use super::profile_slope::{SlopedRay, sloped_rays_cached};
+use super::profile_slope::{SlopedRay, sloped_rays_cached, takes_sloped_route};
 
 /// How far (relative to the box of the points) an entry's points may lie from a ray's to be
 /// that ray's: the entry's points are the ray's own (to the digits written), so this only
