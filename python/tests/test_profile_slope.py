@@ -113,3 +113,21 @@ def test_curves_off_a_sloping_bottom_are_the_rays():
             d = (b - a) / math.hypot(*(b - a))
             off = max(off, np.max(np.abs((part[:, 0] - a[0]) * d[1] - (part[:, 1] - a[1]) * d[0])))
         assert off > 1.0, off
+
+
+def test_the_plot_draws_the_curves_off_a_sloping_bottom():
+    """`eigenray.plot` of the rays: each drawn through its curve (many vertices, not its
+    three points), the same points as `Rays.curve`."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.collections import LineCollection
+
+    scene = eigenray.Scene(SCENE)
+    rays = eigenray.Tracer(scene).trace_stationary()
+    ax = eigenray.plot(scene, rays, aspect="auto")
+    lines = [c for c in ax.collections if isinstance(c, LineCollection)][0].get_segments()
+    assert len(lines) == len(rays.time) == 3
+    for i, line in enumerate(lines):
+        assert len(line) > 100
+        np.testing.assert_allclose(line, rays.curve(i, len(line)), rtol=0, atol=1e-9)
