@@ -1134,26 +1134,9 @@ fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
         }
     }
     if profiled {
-        let derivatives = spec.solver.as_ref().and_then(|s| s.derivatives) == Some(true);
         for (k, path) in spec.paths.iter().enumerate() {
             for (j, step) in path.steps.iter().enumerate() {
                 match step {
-                    StepSpec::Reflect(name)
-                        if derivatives
-                            && spec
-                                .interfaces
-                                .get(name)
-                                .is_some_and(|i| !flat_horizontal(i)) =>
-                    {
-                        return Err(SceneError::new(
-                            "solver.derivatives",
-                            format!(
-                                "derivatives are not available yet for a path through a \
-                                 `profile` medium that reflects off an interface that is not \
-                                 flat and horizontal (`paths[{k}]` reflects off `{name}`)"
-                            ),
-                        ));
-                    }
                     StepSpec::Reflect(_) => {}
                     StepSpec::Refract(_) => {
                         return Err(SceneError::new(
