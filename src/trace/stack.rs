@@ -138,8 +138,28 @@ impl StraightPath {
         };
         let hessian = layer_hessian(&self.lines, &ws.start.graded);
         let frames = self.lines.iter().map(|l| l.frame(source));
-        let sol = confirm_start(&g, frames, hessian, &mut ws.newton, cx.newton)
-            .unwrap_or_else(|| solve(&g, &mut ws.newton, cx.newton));
+        if let Some(sol) = confirm_start(&g, frames, hessian, &mut ws.newton, cx.newton) {
+            // The classification of free points on the kept segments.
+            let points = &mut ws.ray.points;
+            points.clear();
+            points.push(source);
+            let on = self.lines.iter().zip(&ws.newton.s[..self.lines.len()]);
+            points.extend(on.map(|(l, &s)| l.point_on(s)));
+            points.push(receiver);
+            let normal = |i: usize| self.lines[i].normal();
+            return Some(cx.classifier.graded_free_points(
+                scene,
+                path,
+                normal,
+                source,
+                receiver,
+                &sol,
+                &ws.newton,
+                &ws.ray.curved,
+                points,
+            ));
+        }
+        let sol = solve(&g, &mut ws.newton, cx.newton);
         let sequence = Sequence {
             steps,
             path: Some(path),
