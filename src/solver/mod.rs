@@ -358,7 +358,8 @@ pub(crate) fn confirm_start(
     e.factored = false;
     let tol = opts.tolerance;
     // (`rmax` NaN fails this too.)
-    if e.vanished > 0 || e.held > 0 || !(e.rmax <= tol) {
+    let within = e.rmax <= tol;
+    if e.vanished > 0 || e.held > 0 || !within {
         return None;
     }
     // The Newton correction `x = H⁻¹ r` by the Thomas algorithm (the step is `−x`).
@@ -390,7 +391,9 @@ pub(crate) fn confirm_start(
     let mut x = 0.0;
     for i in (0..k).rev() {
         x = if i + 1 == k { y[i] } else { y[i] - cp[i] * x };
-        if !(x.abs() <= bound * (len[i] + len[i + 1])) {
+        // (A NaN correction fails this too.)
+        let small = x.abs() <= bound * (len[i] + len[i + 1]);
+        if !small {
             return None;
         }
     }
