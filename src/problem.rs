@@ -212,6 +212,24 @@ impl<'a> ProblemRef<'a> {
         );
     }
 
+    /// [`evaluate_framed`](Self::evaluate_framed) without the Hessian (`e.diag`, `e.off` left
+    /// alone): positions, legs, time, residuals and merit, the same numbers. For a caller that
+    /// has the Hessian at the points from elsewhere (`solver::confirm_start`).
+    pub fn evaluate_framed_first(&self, s: &[f64], frames: &[Frame], e: &mut Eval) {
+        let k = self.k();
+        let (s, frames) = (&s[..k], &frames[..k]);
+        {
+            let (rel, tan) = (&mut e.rel[..k + 2], &mut e.tan[..k]);
+            rel[0] = Vec2::default();
+            for i in 0..k {
+                rel[i + 1] = frames[i].offset(s[i]);
+                tan[i] = frames[i].t;
+            }
+            rel[k + 1] = self.receiver - self.source;
+        }
+        self.derive(e, |_| Pin::Free, false, None::<fn(usize) -> f64>);
+    }
+
     /// [`evaluate_framed`](Self::evaluate_framed) for `k ≥ 1` with the forward sweep of the
     /// Thomas algorithm on `H x = r` folded in: leaves `e.cp` and `e.y` (see [`Eval::factored`])
     /// for the back substitution. The same numbers as `evaluate_framed` followed by `thomas`,

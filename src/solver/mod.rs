@@ -317,6 +317,94 @@ pub(crate) fn fast_newton_from(
     fast_newton(g, ws, opts, &mut fast)
 }
 
+/// How far inside the general loop's tests [`confirm_start`] stays: its Newton correction
+/// at most this fraction of the general loop's bound on a correction it may leave untaken,
+/// and its pivots at least `1 / CONFIRM_MARGIN` times the general loop's least pivot, so that
+/// the Hessian it is given (accurate to far better than this fraction) leads to the general
+/// loop's verdict.
+const CONFIRM_MARGIN: f64 = 1e-3;
+
+/// The general solve's verdict on a start that is the ray up to round-off, without the
+/// Hessian blocks of the legs: evaluates the positions, legs, time, residuals and merit at the
+/// parameters in `ws` (every point free, on the segments described by `frames`, a path of two
+/// or more interactions) as [`solve`] does first (the general loop's evaluation, bit for bit,
+/// but its Hessian), and where the general loop would stop there
+/// without a step (no leg vanished, the relative residual within the tolerance, and the Newton
+/// correction `H⁻¹ r` below its bound), returns what [`solve`] returns: converged, no
+/// iterations, the time and residual of that evaluation, bit for bit. The Hessian comes from
+/// the caller (`hessian(i)`: row `i`'s diagonal and its coupling to row `i + 1`, at these
+/// points), and the correction from it must pass the general loop's tests by the margin
+/// [`CONFIRM_MARGIN`] (the general loop's own Hessian differs from it by round-off). `None`
+/// otherwise: `ws` holds the evaluation without its Hessian, and [`solve`] from the same
+/// parameters takes the general code's steps.
+pub(crate) fn confirm_start(
+    g: &ProblemRef,
+    frames: impl Iterator<Item = Frame>,
+    hessian: impl Fn(usize) -> (f64, f64),
+    ws: &mut NewtonWorkspace,
+    opts: NewtonOptions,
+) -> Option<Solution> {
+    let k = g.k();
+    if k < 2 || opts.max_iterations == 0 {
+        return None;
+    }
+    if ws.pin[..k].iter().any(|&p| p != Pin::Free) {
+        return None;
+    }
+    ws.frames.clear();
+    ws.frames.extend(frames);
+    g.evaluate_framed_first(&ws.s, &ws.frames, &mut ws.eval);
+    let e = &mut ws.eval;
+    e.factored = false;
+    let tol = opts.tolerance;
+    // (`rmax` NaN fails this too.)
+    let within = e.rmax <= tol;
+    if e.vanished > 0 || e.held > 0 || !within {
+        return None;
+    }
+    // The Newton correction `x = H⁻¹ r` by the Thomas algorithm (the step is `−x`).
+    let (diag, off, r, len) = (
+        &mut e.diag[..k],
+        &mut e.off[..k - 1],
+        &e.r[..k],
+        &e.len[..k + 1],
+    );
+    let (cp, y) = (&mut e.cp[..k], &mut e.y[..k]);
+    let (mut prev_c, mut prev_y, mut sub) = (0.0, 0.0, 0.0);
+    for i in 0..k {
+        let (d, o) = hessian(i);
+        let sup = if i + 1 < k { o } else { 0.0 };
+        diag[i] = d;
+        if i + 1 < k {
+            off[i] = o;
+        }
+        let den = d - sub * prev_c;
+        let scale = d.abs() + sub.abs() + sup.abs();
+        if !(finite(den) && den.abs() > 1e-14 / CONFIRM_MARGIN * scale) {
+            return None;
+        }
+        let inv = 1.0 / den;
+        (prev_c, prev_y) = (sup * inv, (r[i] - sub * prev_y) * inv);
+        (cp[i], y[i], sub) = (prev_c, prev_y, sup);
+    }
+    let bound = CONFIRM_MARGIN * tol.sqrt();
+    let mut x = 0.0;
+    for i in (0..k).rev() {
+        x = if i + 1 == k { y[i] } else { y[i] - cp[i] * x };
+        // (A NaN correction fails this too.)
+        let small = x.abs() <= bound * (len[i] + len[i + 1]);
+        if !small {
+            return None;
+        }
+    }
+    Some(Solution {
+        outcome: Outcome::Converged,
+        time: e.time,
+        iterations: 0,
+        residual: e.rmax,
+    })
+}
+
 /// How the solution in `ws` moves with the receiver, to first order: after a solve that ended
 /// with every point free, writes `z = H⁻¹ eₖ₋₁` into `z` and returns `g = ∂rₖ₋₁/∂R` (only the
 /// last residual depends on the receiver), so that moving the receiver by `ΔR` moves the

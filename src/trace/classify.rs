@@ -338,6 +338,99 @@ impl Classifier {
     }
 }
 
+impl Classifier {
+    /// [`classify`](Self::classify) for a converged ray of scene path `path` (`steps`) whose
+    /// points are all free with no leg vanished and whose solve kept its legs (`Eval::legs`,
+    /// of the models `curved`: the graded stack kernel's confirmed start), the points already
+    /// in `points` (source, interactions, receiver) and the interfaces' unit normals at them
+    /// `normal(i)` (the polylines' [`normal`](crate::polyline::Polyline::normal) there, bit
+    /// for bit): the same tests on the same numbers, each leg's directions read once for the
+    /// side test ([`curved_wrong_side`]) and the proof that the arcs are clear
+    /// ([`Classifier::arcs_clear`]); the exact obstruction test ([`arc_obstruction`]) where
+    /// that proof does not hold. Anything else (a leg not kept) takes [`classify`](Self::classify).
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the parts of a ray, none of which the classifier owns"
+    )]
+    pub(crate) fn graded_free_points(
+        &self,
+        scene: &Scene,
+        path: usize,
+        normal: impl Fn(usize) -> Vec2,
+        source: Point,
+        receiver: Point,
+        sol: &Solution,
+        nw: &NewtonWorkspace,
+        curved: &[LegMedium],
+        points: &mut Vec<Point>,
+    ) -> RayRecord {
+        let steps = &scene.paths()[path].steps[..];
+        let (k, e) = (steps.len(), &nw.eval);
+        let legs = &e.legs[..];
+        if legs.len() != k + 1
+            || curved.len() != k + 1
+            || points.len() != k + 2
+            || sol.outcome != Outcome::Converged
+            || nw.pin[..k].iter().any(|&p| p != Pin::Free)
+        {
+            let of = Sequence {
+                steps,
+                path: Some(path),
+                curved,
+            };
+            return self.classify(scene, of, source, receiver, sol, nw, points);
+        }
+        let no_path = |reason| RayRecord::untimed(Status::NoPath, reason, sol);
+        // The vanished-leg tests of `classify` (none holds after a confirmed start).
+        if let Some(step) = e.len[1..k].iter().position(|&l| l <= e.vanish) {
+            return no_path(Reason::Coincident { step });
+        }
+        if e.len[0] <= e.vanish {
+            return no_path(Reason::AtEnd { step: 0 });
+        }
+        if e.len[k] <= e.vanish {
+            return no_path(Reason::AtEnd { step: k - 1 });
+        }
+        let mut clear = self.arc_shortcut
+            && self.arc_boxes_clear.get(path) == Some(&true)
+            && self.ends[0].contains(points[0])
+            && self.ends[1].contains(points[k + 1]);
+        let one_way = |a: Vec2, b: Vec2, n: Vec2| {
+            let (x, y) = (a.dot(n), b.dot(n));
+            (x >= MONOTONE && y >= MONOTONE) || (x <= -MONOTONE && y <= -MONOTONE)
+        };
+        let side = |x: f64| if x.abs() <= SIDE_MARGIN { 0.0 } else { x };
+        // The previous leg's length and direction at its end.
+        let (mut before_len, mut before_end) = (0.0, Vec2::default());
+        for (j, leg) in legs.iter().enumerate() {
+            let (start, end, len) = (leg.direction_at_start(), leg.direction_at_end(), leg.len());
+            if j > 0 && before_len > e.vanish && len > e.vanish {
+                let i = j - 1;
+                let n = normal(i);
+                let (a, b) = (side(-n.dot(before_end)), side(n.dot(start)));
+                if !sides_suit(steps[i].kind, a, b) {
+                    return no_path(Reason::WrongSide { step: i });
+                }
+            }
+            clear = clear
+                && one_way(start, end, Vec2::new(1.0, 0.0))
+                && one_way(start, end, Vec2::new(0.0, 1.0))
+                && (j == 0 || one_way(start, end, normal(j - 1)))
+                && (j == k || one_way(start, end, normal(j)));
+            (before_len, before_end) = (len, end);
+        }
+        let crossing = if clear {
+            None
+        } else {
+            arc_obstruction(scene, steps, points, nw, curved)
+        };
+        match crossing {
+            Some(crossing) => crossing.record(sol),
+            None => RayRecord::timed(Status::Converged, None, sol),
+        }
+    }
+}
+
 /// The least component of a leg's unit directions at its ends along an axis, in either sense,
 /// for [`Classifier::arcs_clear`] to take the leg as running one way along it.
 const MONOTONE: f64 = 1e-6;

@@ -15,13 +15,13 @@
 //! converged) goes to the general solve from the same start.
 
 use super::classify::Sequence;
-use super::start::{graded_guess, layered_guess};
-use super::straight::StraightPath;
+use super::start::{GradedLayer, graded_guess, layered_guess};
+use super::straight::{StraightPath, StraightSegment};
 use super::{Context, RayRecord, Workspace};
 use crate::geom::Point;
 use crate::problem::ProblemRef;
 use crate::scene::StepKind;
-use crate::solver::{Outcome, fast_newton_from, solve};
+use crate::solver::{Outcome, confirm_start, fast_newton_from, solve};
 
 impl StraightPath {
     /// The ray of path `path` (described by `self`, a [`StraightPath::stack`]) from `source`
@@ -109,8 +109,11 @@ impl StraightPath {
     /// graded start does not apply (`trace::start::graded`; the general code then solves it
     /// from the uniform layers' start). The general code's own steps: the crossings from the
     /// segments kept here (`initial_guess`'s, bit for bit), the media given, the graded start
-    /// on the same numbers, the Newton solve and the classification. Out of line: the uniform
-    /// stack kernel's caller keeps its code.
+    /// on the same numbers ([`graded_start`](Self::graded_start)), the Newton solve and the
+    /// classification; but where the start is the ray, the solve's first evaluation without
+    /// the legs' Hessian blocks (`solver::confirm_start`, with [`layer_hessian`]: the general
+    /// solve's verdict and numbers). Out of line: the uniform stack kernel's caller keeps its
+    /// code.
     #[inline(never)]
     pub(super) fn solve_graded_stack(
         &self,
@@ -120,22 +123,11 @@ impl StraightPath {
         receiver: Point,
         ws: &mut Workspace,
     ) -> Option<RayRecord> {
+        if !self.graded_start(cx, path, source, receiver, ws) {
+            return None;
+        }
         let scene = cx.scene;
-        let spec = &scene.paths()[path];
-        let (steps, lines) = (&spec.steps[..], &self.lines[..]);
-        let media = spec.media.as_deref()?;
-        ws.resize(lines.len());
-        if !self.crossings(source, receiver, ws) {
-            return None;
-        }
-        ws.ray.media.clear();
-        ws.ray.media.extend_from_slice(media);
-        ws.ray.slowness.clear();
-        ws.ray.slowness.extend_from_slice(&self.slowness);
-        ws.ray.set_curved(scene, source);
-        if !graded_guess(lines, receiver - source, ws) {
-            return None;
-        }
+        let steps = &scene.paths()[path].steps[..];
         let g = ProblemRef {
             scene,
             steps,
@@ -144,6 +136,29 @@ impl StraightPath {
             source,
             receiver,
         };
+        let hessian = layer_hessian(&self.lines, &ws.start.graded);
+        let frames = self.lines.iter().map(|l| l.frame(source));
+        if let Some(sol) = confirm_start(&g, frames, hessian, &mut ws.newton, cx.newton) {
+            // The classification of free points on the kept segments.
+            let points = &mut ws.ray.points;
+            points.clear();
+            points.push(source);
+            let on = self.lines.iter().zip(&ws.newton.s[..self.lines.len()]);
+            points.extend(on.map(|(l, &s)| l.point_on(s)));
+            points.push(receiver);
+            let normal = |i: usize| self.lines[i].normal();
+            return Some(cx.classifier.graded_free_points(
+                scene,
+                path,
+                normal,
+                source,
+                receiver,
+                &sol,
+                &ws.newton,
+                &ws.ray.curved,
+                points,
+            ));
+        }
         let sol = solve(&g, &mut ws.newton, cx.newton);
         let sequence = Sequence {
             steps,
@@ -156,6 +171,57 @@ impl StraightPath {
             cx.classifier
                 .classify(scene, sequence, source, receiver, &sol, nw, points),
         )
+    }
+
+    /// The start of [`solve_graded_stack`](Self::solve_graded_stack) in `ws` (the crossings,
+    /// the media, the legs' models and the graded start's parameters and layers): whether the
+    /// graded start applies.
+    #[inline(always)]
+    fn graded_start(
+        &self,
+        cx: &Context,
+        path: usize,
+        source: Point,
+        receiver: Point,
+        ws: &mut Workspace,
+    ) -> bool {
+        let scene = cx.scene;
+        let Some(media) = scene.paths()[path].media.as_deref() else {
+            return false;
+        };
+        ws.resize(self.lines.len());
+        if !self.crossings(source, receiver, ws) {
+            return false;
+        }
+        ws.ray.media.clear();
+        ws.ray.media.extend_from_slice(media);
+        ws.ray.slowness.clear();
+        ws.ray.slowness.extend_from_slice(&self.slowness);
+        ws.ray.set_curved(scene, source);
+        graded_guess(&self.lines[..], receiver - source, ws)
+    }
+}
+
+/// The Hessian of the time along the interfaces at the graded start's ray through parallel
+/// layers (`layers`, one per leg, at the start's `p`; `lines` the interfaces): row `i`'s
+/// diagonal and its coupling to row `i + 1`. A leg's time as a function of its range `X`
+/// across its layer has `∂T/∂X = p` and `∂²T/∂X² = 1 / (∂X/∂p)` (its
+/// [`stiffness`](super::start::GradedLayer::stiffness)); moving point `i` along its
+/// interface's tangent moves the ranges of its two legs by `±1` times as much, so `Hᵢᵢ` is the
+/// sum of the two legs' and `Hᵢ,ᵢ₊₁` is `−(tᵢ · tᵢ₊₁)` times the leg between them: the legs'
+/// Hessian blocks (`Leg::end_block`, `start_block`, `coupling`) at the start's ray, without
+/// evaluating them.
+pub(super) fn layer_hessian<'a>(
+    lines: &'a [StraightSegment],
+    layers: &'a [GradedLayer],
+) -> impl Fn(usize) -> (f64, f64) + 'a {
+    move |i| {
+        let (before, after) = (layers[i].stiffness(), layers[i + 1].stiffness());
+        let coupling = match lines.get(i + 1) {
+            Some(next) => -lines[i].normal().dot(next.normal()) * after,
+            None => 0.0,
+        };
+        (before + after, coupling)
     }
 }
 
@@ -306,6 +372,103 @@ mod tests {
             taken > rays / 3 && taken < rays && obstructed > 10,
             "{taken} of {rays} rays taken, {obstructed} obstructed"
         );
+    }
+
+    /// The graded stack kernel's Hessian from the start's layers ([`super::layer_hessian`])
+    /// against the legs' Hessian blocks of the general evaluation at the same points (within
+    /// 1e-6: the start's `∂X/∂p` are those of its last `p` evaluated, one step short of the
+    /// root; the Hessian only sizes the Newton correction, which `CONFIRM_MARGIN` keeps 1e3
+    /// times inside the general loop's bound), on
+    /// `layer_stack(8, …)` with a random gradient across each layer (faster downward or
+    /// upward, some zero) and on `layers10` with `[0, −0.02]`; and the confirmation without
+    /// the blocks (`confirm_start`) taken for nearly every ray, with the general evaluation's
+    /// time and residual.
+    #[test]
+    fn the_graded_hessian_is_the_legs_hessian() {
+        use crate::problem::{Eval, ProblemRef};
+        use crate::solver::confirm_start;
+        use crate::trace::PathPlan;
+        let layers10 = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/bench/layers10.json");
+        let mut rng = SplitMix64(41);
+        let mut specs = Vec::new();
+        for _ in 0..4 {
+            let mut spec = demo::layer_stack(8, 60);
+            for m in spec.media.values_mut() {
+                let g = if rng.next_f64() < 0.2 {
+                    0.0
+                } else {
+                    0.05 * (rng.next_f64() - 0.3)
+                };
+                m.gradient = Some([0.0, g]);
+            }
+            specs.push(spec);
+        }
+        let mut spec =
+            crate::SceneSpec::from_json(&std::fs::read_to_string(layers10).unwrap()).unwrap();
+        for m in spec.media.values_mut() {
+            m.gradient = Some([0.0, -0.02]);
+        }
+        specs.push(spec);
+        let (mut tried, mut confirmed, mut worst) = (0, 0, 0.0f64);
+        for spec in &specs {
+            let scene = Scene::from_spec(spec).unwrap();
+            let tracer = Tracer::new(&scene).unwrap();
+            let PathPlan::GradedStack(sp) = tracer.plan_of(0) else {
+                panic!("a graded stack");
+            };
+            let cx = tracer.context();
+            let mut ws = Workspace::new();
+            let k = sp.lines.len();
+            let mut general = Eval::default();
+            general.resize(k);
+            for &source in scene.sources() {
+                for &receiver in scene.receivers() {
+                    if !sp.graded_start(&cx, 0, source, receiver, &mut ws) {
+                        continue;
+                    }
+                    tried += 1;
+                    let g = ProblemRef {
+                        scene: &scene,
+                        steps: &scene.paths()[0].steps,
+                        slowness: &ws.ray.slowness,
+                        curved: &ws.ray.curved,
+                        source,
+                        receiver,
+                    };
+                    let nw = &ws.newton;
+                    g.evaluate(&nw.s, &nw.seg, &nw.pin, &mut general, true, false);
+                    let hessian = super::layer_hessian(&sp.lines, &ws.start.graded);
+                    for i in 0..k {
+                        let (d, o) = hessian(i);
+                        let scale = general.diag[i].abs();
+                        assert!(
+                            (d - general.diag[i]).abs() <= 1e-6 * scale,
+                            "{i}: {d} {}",
+                            general.diag[i]
+                        );
+                        let o_general = general.off.get(i).copied().unwrap_or(0.0);
+                        assert!(
+                            (o - o_general).abs() <= 1e-6 * scale,
+                            "{i}: {o} {o_general}"
+                        );
+                        worst = worst.max((d - general.diag[i]).abs() / scale);
+                    }
+                    let frames = sp.lines.iter().map(|l| l.frame(source));
+                    if let Some(sol) = confirm_start(&g, frames, hessian, &mut ws.newton, cx.newton)
+                    {
+                        confirmed += 1;
+                        assert_eq!(sol.iterations, 0);
+                        assert_eq!(sol.time.to_bits(), general.time.to_bits());
+                        assert_eq!(sol.residual.to_bits(), general.rmax.to_bits());
+                    }
+                }
+            }
+        }
+        assert!(
+            tried > 400 && confirmed * 100 >= tried * 95,
+            "{confirmed} of {tried} confirmed"
+        );
+        eprintln!("{confirmed} of {tried} confirmed; Hessian within {worst:.1e}");
     }
 
     /// The kernel is not taken from the paraxial start, nor for a path without its media.

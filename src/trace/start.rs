@@ -11,7 +11,7 @@ use crate::solver::NewtonWorkspace;
 use super::{InitialGuess, Workspace};
 
 mod graded;
-pub(super) use graded::{graded_guess, graded_stack_path};
+pub(super) use graded::{GradedLayer, graded_guess, graded_stack_path};
 
 /// Scratch of the start: crossings, the layers of the ray-parameter refinement, and the
 /// default guess kept while a warm start is compared with it.

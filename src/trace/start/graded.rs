@@ -41,6 +41,15 @@ pub(crate) struct GradedLayer {
     x_p: f64,
 }
 
+impl GradedLayer {
+    /// `∂²T/∂X²` of the layer's leg at the start's ray (`X` its range): `1 / (∂X/∂p)`, as
+    /// `∂T/∂X = p`. The graded stack kernel's Hessian (`StraightPath::solve_graded_stack`).
+    #[inline]
+    pub(in crate::trace) fn stiffness(&self) -> f64 {
+        1.0 / self.x_p
+    }
+}
+
 /// Whether path `path` of `scene` (a stack of refractions at parallel interfaces of one
 /// segment each, its media given: `StraightPath::stack`)
 /// suits the graded start: its interfaces at distinct offsets, in order across them (so that
@@ -105,7 +114,10 @@ pub(in crate::trace) fn graded_guess(
         return false;
     }
     if !(along > 0.0 && along.is_finite()) {
-        // No lateral offset: the straight line across the layers is the ray.
+        // No lateral offset: the straight line across the layers is the ray (`p = 0`).
+        for l in ws.start.graded.iter_mut() {
+            l.x_p = layer_range(0.0, l.h, l.speeds).x_p;
+        }
         return along == 0.0;
     }
     if !solve_ray_parameter(&mut ws.start.graded, along) {
