@@ -1120,15 +1120,13 @@ fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
             };
             return Err(SceneError::new("search.diffraction", why));
         }
-        if profiled
-            && let Some((name, _)) = spec.interfaces.iter().find(|(_, i)| !flat_horizontal(i))
-        {
+        if profiled && let Some((name, _)) = spec.interfaces.iter().find(|(_, i)| i.closed) {
             return Err(SceneError::new(
                 "search",
                 format!(
-                    "the automatic search in a scene with a `profile` medium takes flat \
-                     horizontal interfaces only (a waveguide between a surface and a bottom, \
-                     each with all its points at one y); `interfaces.{name}` is not one"
+                    "the automatic search in a scene with a `profile` medium takes open \
+                     interfaces only (a surface, a bottom: flat, sloping or polylines); \
+                     `interfaces.{name}` is closed"
                 ),
             ));
         }

@@ -34,7 +34,7 @@ mod plan;
 mod profile;
 mod profile_slope;
 pub(crate) use profile::{ProfileShape, profile_ray_of, profile_shape};
-pub(crate) use profile_slope::sloped_shape;
+pub(crate) use profile_slope::{has_sloped_walls, sloped_shape};
 mod result;
 mod stack;
 mod start;
