@@ -392,3 +392,55 @@ fn search_over_a_sloping_bottom_is_the_image_method() {
     eprintln!("{checked} image paths found by the search: times {worst:.1e} relative");
     assert!(checked >= 60, "{checked}");
 }
+
+/// The search off a sloping bottom within its limits: `solver.max_work` stops each pair's
+/// fan (fewer arrivals, each one of the full search's, the work reported within the limit
+/// and one ray's overshoot), a run's budget stops it, a stop asked for before it lists
+/// nothing; the path route's shooting (`stationary: all`) stops at `solver.max_work` too.
+#[test]
+fn the_search_over_a_slope_keeps_to_its_limits() {
+    let bottom = "[[-500, -100], [900, -125], [12000, -110]]";
+    let (s, r) = ([0.0, -30.0], [2000.0, -60.0]);
+    let medium = r#"{ "profile": [[0, 1500], [-50, 1490], [-200, 1500]], "at": [0, -50] }"#;
+    let full = scene(medium, bottom, s, r, r#"[], "search": { "max_steps": 3 }"#);
+    let all = Tracer::new(&full).unwrap().search(&Run::new()).unwrap();
+    assert!(all.arrivals.len() >= 6, "{:?}", all.arrivals);
+    assert!(all.work > 400_000, "{}", all.work);
+    let limited = scene(
+        medium,
+        bottom,
+        s,
+        r,
+        r#"[], "search": { "max_steps": 3 }, "solver": { "max_work": 200000 }"#,
+    );
+    let some = Tracer::new(&limited).unwrap().search(&Run::new()).unwrap();
+    assert!(some.work >= 200_000 && some.work < 220_000, "{}", some.work);
+    assert!(some.arrivals.len() < all.arrivals.len());
+    for a in &some.arrivals {
+        assert!(
+            all.arrivals
+                .iter()
+                .any(|b| b.steps == a.steps && rel(a.arrival.time, b.arrival.time) <= 1e-12),
+            "{a:?}"
+        );
+    }
+    let budget = Run::new().budget(100);
+    let few = Tracer::new(&full).unwrap().search(&budget).unwrap();
+    assert!(few.arrivals.len() < all.arrivals.len() && budget.stopped());
+    let stopped = Run::new();
+    stopped.request_stop();
+    let none = Tracer::new(&full).unwrap().search(&stopped).unwrap();
+    assert!(none.arrivals.is_empty());
+    // The path route: a bottom reflection, all its arrivals, then within a small budget.
+    let path = r#"[{ "steps": [{ "reflect": "bottom" }] }], "solver": { "max_work": 1000 }"#;
+    let small = scene(medium, bottom, s, r, path);
+    let unlimited = scene(
+        medium,
+        bottom,
+        s,
+        r,
+        r#"[{ "steps": [{ "reflect": "bottom" }] }]"#,
+    );
+    assert!(!arrivals(&unlimited, 0).is_empty());
+    assert!(arrivals(&small, 0).is_empty());
+}

@@ -43,8 +43,10 @@ const MAX_PIECES: usize = 20_000;
 const MAX_PASSES: usize = 256;
 /// Points per piece of a leg for its obstruction test.
 const PIECE_POINTS: usize = 16;
-/// The work of one chord of a piece beyond its segments weighed (its point on the arc).
-const CHORD_WORK: u64 = 4;
+/// The work of one chord of a piece (its point on the arc; a unit is about 35 ns).
+const CHORD_WORK: u64 = 2;
+/// The work of one crossing of a chord and a segment refined on the piece (64 points).
+const REFINE_WORK: u64 = 128;
 /// The work of one Newton solve per leg (its legs' roots at each iteration).
 const NEWTON_WORK: u64 = 2000;
 
@@ -157,8 +159,9 @@ struct WallHit {
 
 /// Where `piece` first meets a segment of one of `interfaces` ([`CHORDS`] chords, each
 /// crossing refined by bisection on the piece). `leaving`: the piece starts a leg on a wall,
-/// whose start (within `eps` of a segment) is not a meeting. `work` grows by one per
-/// segment weighed per chord, plus [`CHORD_WORK`] per chord.
+/// whose start (within `eps` of a segment) is not a meeting. `work` grows by
+/// [`CHORD_WORK`] per chord, one per segment whose box the chord's meets and
+/// [`REFINE_WORK`] per crossing refined.
 fn piece_hit(
     scene: &Scene,
     piece: &RayPiece,
@@ -177,12 +180,12 @@ fn piece_hit(
         *work += CHORD_WORK;
         for &interface in interfaces {
             let line = &scene.interfaces()[interface].polyline;
-            *work += line.num_segments() as u64;
             for seg in 0..line.num_segments() {
                 let g = line.segment(seg);
                 if !chord.overlaps(Aabb::from_points(g.start, g.end)) {
                     continue;
                 }
+                *work += 1;
                 let (mut g0, g1) = (side(g.start, g.end, prev), side(g.start, g.end, q));
                 if leaving && j == 1 && g0.abs() < eps {
                     g0 = g1;
@@ -191,6 +194,7 @@ fn piece_hit(
                     continue;
                 }
                 // Refine on the piece itself.
+                *work += REFINE_WORK;
                 let (mut lo, mut hi, sign0) = (f0, f1, g0 > 0.0);
                 for _ in 0..64 {
                     let mid = 0.5 * (lo + hi);
@@ -678,13 +682,14 @@ pub(crate) fn sloped_rays_cached(
     [source, receiver]: [Point; 2],
     run: Option<&Run>,
 ) -> Vec<SlopedRay> {
-    type Key = (Vec<Step>, usize, Point, Point, Vec<u64>);
+    type Key = (Vec<Step>, usize, Point, Point, Vec<u64>, u64);
     thread_local! {
         static LAST: std::cell::RefCell<Option<(Key, Vec<SlopedRay>)>> =
             const { std::cell::RefCell::new(None) };
     }
     let print = fingerprint(scene).iter().map(|v| v.to_bits()).collect();
-    let key: Key = (steps.to_vec(), medium, source, receiver, print);
+    let work = scene.solver().max_work;
+    let key: Key = (steps.to_vec(), medium, source, receiver, print, work);
     LAST.with(|last| {
         if let Some((k, found)) = &*last.borrow()
             && *k == key
