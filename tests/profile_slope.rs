@@ -271,15 +271,14 @@ fn munk_over_a_sloping_bottom_converges_with_the_knots() {
     }
 }
 
+/// A sequence of walls: their names, and per step the segments it may reflect off.
+type Sequence = (Vec<&'static str>, Vec<Vec<(P, P)>>);
+
 /// Every sequence of `n` walls or fewer off a flat surface and the bottom's segments (no two
 /// surfaces in a row): per step, the segments it may reflect off, and the names.
-fn sequences(
-    n: usize,
-    surface: (P, P),
-    bottom: &[(P, P)],
-) -> Vec<(Vec<&'static str>, Vec<Vec<(P, P)>>)> {
+fn sequences(n: usize, surface: (P, P), bottom: &[(P, P)]) -> Vec<Sequence> {
     let mut out = vec![(Vec::new(), Vec::new())];
-    let mut last: Vec<(Vec<&'static str>, Vec<Vec<(P, P)>>)> = vec![(Vec::new(), Vec::new())];
+    let mut last: Vec<Sequence> = vec![(Vec::new(), Vec::new())];
     for _ in 0..n {
         let mut next = Vec::new();
         for (names, choices) in &last {

@@ -45,6 +45,8 @@ const MAX_PASSES: usize = 256;
 const PIECE_POINTS: usize = 16;
 /// The work of one chord of a piece (its point on the arc; a unit is about 35 ns).
 const CHORD_WORK: u64 = 2;
+/// Segment boxes weighed against a chord per unit of work.
+const SEGMENTS_PER_UNIT: usize = 8;
 /// The work of one crossing of a chord and a segment refined on the piece (64 points).
 const REFINE_WORK: u64 = 128;
 /// The work of one Newton solve per leg (its legs' roots at each iteration).
@@ -160,8 +162,8 @@ struct WallHit {
 /// Where `piece` first meets a segment of one of `interfaces` ([`CHORDS`] chords, each
 /// crossing refined by bisection on the piece). `leaving`: the piece starts a leg on a wall,
 /// whose start (within `eps` of a segment) is not a meeting. `work` grows by
-/// [`CHORD_WORK`] per chord, one per segment whose box the chord's meets and
-/// [`REFINE_WORK`] per crossing refined.
+/// [`CHORD_WORK`] per chord, one per [`SEGMENTS_PER_UNIT`] segment boxes weighed and one
+/// per box the chord's meets, and [`REFINE_WORK`] per crossing refined.
 fn piece_hit(
     scene: &Scene,
     piece: &RayPiece,
@@ -180,6 +182,7 @@ fn piece_hit(
         *work += CHORD_WORK;
         for &interface in interfaces {
             let line = &scene.interfaces()[interface].polyline;
+            *work += line.num_segments().div_ceil(SEGMENTS_PER_UNIT) as u64;
             for seg in 0..line.num_segments() {
                 let g = line.segment(seg);
                 if !chord.overlaps(Aabb::from_points(g.start, g.end)) {

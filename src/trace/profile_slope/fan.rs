@@ -74,6 +74,8 @@ struct Fan<'a> {
     max_time: f64,
     source: Point,
     receiver: Point,
+    /// Where the rays may go ([`extent`]).
+    bounds: crate::geom::Aabb,
     budget: &'a ShotBudget<'a>,
 }
 
@@ -83,7 +85,7 @@ impl Fan<'_> {
         if !self.budget.shot() {
             return None;
         }
-        let bounds = extent(self.scene, self.source, self.receiver);
+        let bounds = self.bounds;
         let eps = 1e-9 * bounds.diagonal();
         let yr = self.receiver.y;
         let (mut at, mut d) = (
@@ -171,6 +173,7 @@ pub(crate) fn sloped_search(
     let Some(profile) = scene.media().get(medium).and_then(|m| m.profile_model()) else {
         return SlopedSearch::default();
     };
+    let bounds = extent(scene, source, receiver);
     let fan = Fan {
         scene,
         profile: &profile,
@@ -179,6 +182,7 @@ pub(crate) fn sloped_search(
         max_time: max_time * (1.0 + TIME_MARGIN),
         source,
         receiver,
+        bounds,
         budget,
     };
     let angle = |i: usize| -std::f64::consts::PI + std::f64::consts::TAU * i as f64 / shots as f64;
@@ -189,7 +193,6 @@ pub(crate) fn sloped_search(
         };
         rays.push(ray);
     }
-    let bounds = extent(scene, source, receiver);
     let mut found: Vec<(Vec<Step>, Vec<SlopedRay>)> = Vec::new();
     for (i, pair) in rays.windows(2).enumerate() {
         let (r0, r1) = (&pair[0], &pair[1]);
