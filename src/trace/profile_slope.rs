@@ -1008,8 +1008,9 @@ mod tests {
 
     /// A Munk profile over a bottom sloping 4000 → 4300 → 3800 m, 10 km, up to two walls:
     /// the fan of 8192 rays lists the same arrivals as fans of 16384 and 32768 (the same
-    /// walls, turns, times to 1e-9 relative), and every one is an arrival of its steps as
-    /// the path route (its own shooting through those walls) finds it.
+    /// walls, turns, times to 1e-9 relative), every one off walls is an arrival of its
+    /// steps as the path route (its own shooting through those walls) finds it, and the
+    /// direct ones are the profile's free rays that no interface crosses (times to 1e-12).
     #[test]
     fn munk_over_a_slope_is_stable_as_the_fan_densifies() {
         let knots: Vec<String> = (0..=5000)
@@ -1071,6 +1072,24 @@ mod tests {
                 ray.time
             );
             walls += 1;
+        }
+        // The direct rays: the free rays of the profile (`Profile::arrivals`) that no
+        // interface crosses.
+        let tracer = Tracer::new(&scene).unwrap();
+        let profile = scene.media()[0].profile_model().unwrap();
+        let (free, _) = tracer.profile_rays(&profile, s, r);
+        let free: Vec<f64> = (free.iter())
+            .filter(|f| f.status == Status::Converged)
+            .map(|f| f.ray.sums.t)
+            .collect();
+        let direct: Vec<f64> = (fans[0].rays.iter())
+            .filter(|x| x.0.is_empty() && x.1.status == Status::Converged)
+            .map(|x| x.1.time)
+            .collect();
+        assert!(!free.is_empty());
+        assert_eq!(direct.len(), free.len(), "{direct:?} {free:?}");
+        for (a, b) in direct.iter().zip(&free) {
+            assert!((a - b).abs() <= 1e-12 * b, "{a} {b}");
         }
         let times: Vec<f64> = fans[0].rays.iter().map(|x| x.1.time).collect();
         eprintln!("{} arrivals ({walls} off walls): {times:?}", times.len());
