@@ -553,6 +553,9 @@ fn profile_parts(
     if legs != steps.len() + 1 {
         return Err(DerivativeError::Media);
     }
+    if crate::trace::takes_sloped_route(scene, steps) {
+        return sloped_parts(scene, ray, slowness, profile_speed, put);
+    }
     let found = crate::trace::profile_ray_of(scene, steps, points, medium, launch)
         .ok_or(DerivativeError::NoProfileRay)?;
     let (r, [ya, yb]) = (&found.ray, [points[0].y, points[points.len() - 1].y]);
@@ -577,6 +580,48 @@ fn profile_parts(
     Ok(EndGradients {
         source: r.direction_at_start() * (-1.0 / ca),
         receiver: r.direction_at_end() * (1.0 / cb),
+    })
+}
+
+/// [`profile_parts`] of a ray of reflections off walls not all flat and horizontal (the
+/// sloped route; its leg media checked): the ray found again
+/// ([`crate::trace::sloped_derivatives`]), the ends' slowness vectors from its end legs,
+/// each reflection's jump of the slowness vector shared by its segment's vertices (as the
+/// point sits on it), the knots' `dT/dc` summed over the legs into `profile_speed` (when
+/// given) and the medium's `slowness` entry from them.
+fn sloped_parts(
+    scene: &Scene,
+    ray: ProfileLegs<'_>,
+    slowness: &mut [f64],
+    profile_speed: Option<&mut [Vec<f64>]>,
+    mut put: impl FnMut(VertexGradient),
+) -> Result<EndGradients, DerivativeError> {
+    let ProfileLegs {
+        steps,
+        points,
+        medium,
+        launch,
+    } = ray;
+    let found = crate::trace::sloped_derivatives(scene, steps, points, medium, launch)
+        .ok_or(DerivativeError::NoProfileRay)?;
+    let mut knots = found.knots;
+    // The profile's knots run up; the scene's down.
+    knots.reverse();
+    let c0 = 1.0 / scene.media()[medium].slowness;
+    slowness[medium] = -c0 * c0 * knots.iter().sum::<f64>();
+    if let Some(ps) = profile_speed {
+        ps[medium].clear();
+        ps[medium].extend_from_slice(&knots);
+    }
+    for (i, (step, &g)) in steps.iter().zip(&found.walls).enumerate() {
+        let line = &scene.interfaces()[step.interface].polyline;
+        let c =
+            locate(line, points[i + 1], None).ok_or(DerivativeError::OffInterface { step: i })?;
+        c.share(step.interface, g, &mut put);
+    }
+    Ok(EndGradients {
+        source: found.source,
+        receiver: found.receiver,
     })
 }
 

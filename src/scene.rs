@@ -1132,26 +1132,9 @@ fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
         }
     }
     if profiled {
-        let derivatives = spec.solver.as_ref().and_then(|s| s.derivatives) == Some(true);
         for (k, path) in spec.paths.iter().enumerate() {
             for (j, step) in path.steps.iter().enumerate() {
                 match step {
-                    StepSpec::Reflect(name)
-                        if derivatives
-                            && spec
-                                .interfaces
-                                .get(name)
-                                .is_some_and(|i| !flat_horizontal(i)) =>
-                    {
-                        return Err(SceneError::new(
-                            "solver.derivatives",
-                            format!(
-                                "derivatives are not available yet for a path through a \
-                                 `profile` medium that reflects off an interface that is not \
-                                 flat and horizontal (`paths[{k}]` reflects off `{name}`)"
-                            ),
-                        ));
-                    }
                     StepSpec::Reflect(_) => {}
                     StepSpec::Refract(_) => {
                         return Err(SceneError::new(
@@ -1178,12 +1161,6 @@ fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
         }
     }
     Ok(())
-}
-
-/// Whether an interface is one flat horizontal line (open, every point at one `y`): a wall
-/// of a waveguide through a `profile` medium.
-pub(crate) fn flat_horizontal(i: &InterfaceSpec) -> bool {
-    !i.closed && i.points.windows(2).all(|w| w[0][1] == w[1][1])
 }
 
 /// Refuses a scene that mixes `speed` media with `index` media: a speed gives time in length
@@ -1855,15 +1832,51 @@ impl Scene {
         own: [SegmentRef; 2],
     ) -> Option<SegmentRef> {
         self.first_crossing_by(a, b, margin, own, |i| {
-            let Segment { start: p, end: q } = self.segment_ends[i as usize];
-            let (d, e) = (b - a, q - p);
-            let den = d.cross(e);
-            let t = (p - a).cross(e) / den;
-            den != 0.0
-                && t > margin
-                && t < 1.0 - margin
-                && orient(line[0], line[1], p) * orient(line[0], line[1], q) <= 0.0
+            self.crosses_on_line(i, a, b, line, margin)
         })
+    }
+
+    /// [`first_crossing_on_line`](Self::first_crossing_on_line) among `candidates` only
+    /// (scene segment indices, which must include every segment that the leg can be found
+    /// to cross), each tested as the hierarchy's leaves test it (its box against the leg's
+    /// middle box, then the crossing): the first one listed that `a–b` crosses.
+    pub(crate) fn first_crossing_on_line_among(
+        &self,
+        a: Point,
+        b: Point,
+        line: [Point; 2],
+        margin: f64,
+        candidates: &[u32],
+        own: [SegmentRef; 2],
+    ) -> Option<SegmentRef> {
+        let mut sbox = None;
+        for &i in candidates {
+            let r = self.segments[i as usize];
+            if r == own[0] || r == own[1] {
+                continue;
+            }
+            let sbox = *sbox.get_or_insert_with(|| middle_box(a, b, margin));
+            let Segment { start: p, end: q } = self.segment_ends[i as usize];
+            if Aabb::from_finite(p, q).overlaps(sbox) && self.crosses_on_line(i, a, b, line, margin)
+            {
+                return Some(r);
+            }
+        }
+        None
+    }
+
+    /// Whether scene segment `i` meets leg `a–b` at a fraction `t ∈ (margin, 1 − margin)` of
+    /// it, with its ends on either side of (or on) the line through `line` (exactly).
+    #[inline]
+    fn crosses_on_line(&self, i: u32, a: Point, b: Point, line: [Point; 2], margin: f64) -> bool {
+        let Segment { start: p, end: q } = self.segment_ends[i as usize];
+        let (d, e) = (b - a, q - p);
+        let den = d.cross(e);
+        let t = (p - a).cross(e) / den;
+        den != 0.0
+            && t > margin
+            && t < 1.0 - margin
+            && orient(line[0], line[1], p) * orient(line[0], line[1], q) <= 0.0
     }
 
     /// [`first_crossing`](Self::first_crossing) among `candidates` only (scene segment

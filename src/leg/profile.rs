@@ -1133,12 +1133,14 @@ impl Profile {
                     // of `ray`'s branch (never for a ray the profile found).
                     return out;
                 }
-                let part = piece::<true>(p, (y_end - y).abs(), c, c_end, s, sine(p, c_end));
+                // (At a turning point the sine is 0, not `sine(p, 1/p)`'s rounding: that
+                // moved the range after each turn by ~1e-8 of the arc's radius.)
                 let s_end = if end_kind == PieceEnd::Turn {
                     0.0
                 } else {
                     sine(p, c_end)
                 };
+                let part = piece::<true>(p, (y_end - y).abs(), c, c_end, s, s_end);
                 let start = Vec2::new(x, y);
                 x += sx * part.x;
                 y = y_end;

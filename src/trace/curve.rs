@@ -4,17 +4,22 @@
 //! ([`ArcLeg::offset_at`]); a ray through a `profile` medium the ray the profile traced (found
 //! again by its launch angle, or by the default mode's rule), piece by piece: a circular arc
 //! per layer, through its turning points and its reflections at the walls
-//! ([`RayPiece::at`]). Every point is on the ray to rounding: the arcs' points are their
-//! closed forms at an arc length, a profile's its closed-form range at a height.
+//! ([`RayPiece::at`]); a ray reflected off walls that are not all flat and horizontal (the
+//! sloped route) leg by leg, each leg its own ray of the profile between its two points
+//! (the ray found again by its points, its reflections' interfaces read off them). Every
+//! point is on the ray to rounding: the arcs' points are their closed forms at an arc
+//! length, a profile's its closed-form range at a height.
 
 use std::fmt;
 
 use crate::geom::Point;
 use crate::leg::profile::{PieceEnd, RayPiece};
 use crate::leg::{ArcLeg, LegModel};
-use crate::scene::Scene;
+use crate::scene::{Scene, Step};
 
 use super::profile::profile_ray_between;
+use super::profile_slope::takes_sloped_route;
+use super::sloped_found::{reflections_through, sloped_leg_pieces, sloped_ray_found};
 
 /// Why a ray's curve could not be sampled.
 #[derive(Clone, Debug, PartialEq)]
@@ -206,6 +211,11 @@ fn profile_legs(
     let missing = || CurveError::NoProfileRay {
         medium: scene.media()[m].name.clone(),
     };
+    if let Some(steps) = reflections_through(scene, points)
+        && takes_sloped_route(scene, &steps)
+    {
+        return sloped_legs(scene, &steps, points, m, launch_angle).ok_or_else(missing);
+    }
     let (profile, ray) = profile_ray_between(scene, points, m, launch_angle).ok_or_else(missing)?;
     let (a, b) = (points[0].to_vec2(), points[points.len() - 1].to_vec2());
     let pieces = profile.pieces(&ray, a, b);
@@ -231,11 +241,32 @@ fn profile_legs(
             leg[0].start = points[i].to_vec2();
             let last = leg.len() - 1;
             leg[last].end = points[i + 1].to_vec2();
-            let mut sums = vec![0.0];
-            for piece in &leg {
-                sums.push(sums[sums.len() - 1] + piece.arc_length());
-            }
-            LegShape::Pieces(leg, sums)
+            pieces_shape(leg)
         })
         .collect())
+}
+
+/// The legs of a ray of the sloped route (reflections of `steps` through the profile medium
+/// `m` off walls not all flat and horizontal): each leg's own ray of the profile, piece by
+/// piece, its ends on the given points. `None` when no ray of the path passes through them.
+fn sloped_legs(
+    scene: &Scene,
+    steps: &[Step],
+    points: &[Point],
+    m: usize,
+    launch_angle: Option<f64>,
+) -> Option<Vec<LegShape>> {
+    let profile = scene.media()[m].profile_model()?;
+    let ray = sloped_ray_found(scene, steps, points, m, launch_angle)?;
+    let legs = sloped_leg_pieces(&profile, &ray)?;
+    Some(legs.into_iter().map(pieces_shape).collect())
+}
+
+/// The shape of one leg of a profile's pieces (its arc lengths summed).
+fn pieces_shape(leg: Vec<RayPiece>) -> LegShape {
+    let mut sums = vec![0.0];
+    for piece in &leg {
+        sums.push(sums[sums.len() - 1] + piece.arc_length());
+    }
+    LegShape::Pieces(leg, sums)
 }

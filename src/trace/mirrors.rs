@@ -64,8 +64,10 @@ use super::classify::{END_MARGIN, leg_sides, sides_suit};
 use super::occlusion::{OCCLUSION_MARGIN, Occluders, Target, Window, segment_distance};
 use super::{Reason, Status};
 
+mod crossers;
 mod grid;
 mod shoebox;
+use crossers::Crossers;
 use shoebox::Shoebox;
 mod waveguide;
 pub(crate) use grid::TreePath;
@@ -149,6 +151,9 @@ pub(crate) struct MirrorWalls {
     /// Per pair of walls (`last · count + child`), the heights of the child's ends above the
     /// last's line ([`MirrorWalls::behind`]); empty above [`BEHIND_WALLS`] walls.
     heights: Vec<[f64; 2]>,
+    /// Per pair of walls, the segments a leg between them can be found to cross
+    /// (`mirrors/crossers.rs`); none kept above [`BEHIND_WALLS`] walls.
+    crossers: Crossers,
 }
 
 /// The most walls whose pairs [`MirrorWalls::behind`] keeps heights for (a table of their
@@ -656,6 +661,11 @@ impl MirrorWalls {
         } else {
             Vec::new()
         };
+        let crossers = if walls.len() <= BEHIND_WALLS {
+            Crossers::new(scene, &walls)
+        } else {
+            Crossers::default()
+        };
         MirrorWalls {
             walls,
             extent,
@@ -663,6 +673,7 @@ impl MirrorWalls {
             shoebox,
             waveguide,
             heights,
+            crossers,
         }
     }
 
@@ -818,6 +829,7 @@ impl MirrorWalls {
             lens,
             far,
             crossings: true,
+            crossers: Some(&self.crossers),
         };
         if !validation.node(stack, walls, bounds, found, &mut stats) {
             stats.stopped = true;
@@ -1117,6 +1129,9 @@ struct Validation<'a, 's> {
     /// Whether each leg is tested for crossing an interface (the lattice of a rectangular
     /// room leaves it out where no leg can cross one).
     crossings: bool,
+    /// [`MirrorWalls::crossers`]: per pair of walls, the segments a leg between them can be
+    /// found to cross (`None`: the whole scene's test for every leg).
+    crossers: Option<&'a Crossers>,
 }
 
 impl Validation<'_, '_> {
@@ -1189,6 +1204,12 @@ impl Validation<'_, '_> {
         let fars = &mut *self.far;
         fars.clear();
         fars.resize(k + 1, receiver);
+        // Where obstructed paths are not listed, any leg that crosses an interface makes the
+        // path none, whichever is found first: the last leg first, the moment its reflection
+        // point is known (before the other points are unfolded), for it crosses where a
+        // receiver lies outside the walls that the path reflects off (a receiver outside the
+        // room is in the beams as often as one inside).
+        let last_first = self.crossings && !self.search.obstructed && k > 0;
         let (mut to, mut far) = (receiver, receiver);
         for i in (1..=k).rev() {
             let node = &stack[i];
@@ -1214,6 +1235,21 @@ impl Validation<'_, '_> {
             }
             to = wall.at(u);
             points[i] = to;
+            if last_first && i == k {
+                // The last leg, on the line from the last image through the receiver.
+                let own = wall.own;
+                let line = [node.image, receiver];
+                let crossing = (self.search.scene).first_crossing_on_line(
+                    to,
+                    receiver,
+                    line,
+                    END_MARGIN,
+                    [own, SegmentRef::NONE],
+                );
+                if to != receiver && crossing.is_some() {
+                    return None;
+                }
+            }
             far = wall.mirror(far);
             fars[i - 1] = far;
         }
@@ -1237,26 +1273,6 @@ impl Validation<'_, '_> {
                 return None;
             }
         }
-        // Where obstructed paths are not listed, any leg that crosses an interface makes the
-        // path none, whichever is found first: the last leg first, which crosses where a
-        // receiver lies outside the walls that the path reflects off (a receiver outside the
-        // room is in the beams as often as one inside).
-        let last_first = self.crossings && !self.search.obstructed && k > 0;
-        if last_first {
-            let own = self.walls[stack[k].wall].own;
-            let (a, b) = (points[k], points[k + 1]);
-            let line = [stack[k].image, fars[k]];
-            let crossing = (self.search.scene).first_crossing_on_line(
-                a,
-                b,
-                line,
-                END_MARGIN,
-                [own, SegmentRef::NONE],
-            );
-            if a != b && crossing.is_some() {
-                return None;
-            }
-        }
         let mut own_a = SegmentRef::NONE;
         for leg in 0..=k {
             if last_first && leg == k {
@@ -1269,12 +1285,24 @@ impl Validation<'_, '_> {
             };
             let (a, b) = (points[leg], points[leg + 1]);
             let line = [stack[leg].image, fars[leg]];
+            let scene = self.search.scene;
+            // Between two walls, the segments the leg can be found to cross (where an
+            // obstructed path is not listed: any crossing ends it, whichever is found).
+            let listed = match self.crossers {
+                Some(c) if leg > 0 && leg < k && last_first && lens[leg] > c.shortest => {
+                    c.of(stack[leg].wall, stack[leg + 1].wall)
+                }
+                _ => None,
+            };
+            let hit = || match listed {
+                Some(list) => {
+                    scene.first_crossing_on_line_among(a, b, line, END_MARGIN, list, [own_a, own_b])
+                }
+                None => scene.first_crossing_on_line(a, b, line, END_MARGIN, [own_a, own_b]),
+            };
             if self.crossings
                 && a != b
-                && let Some(hit) =
-                    self.search
-                        .scene
-                        .first_crossing_on_line(a, b, line, END_MARGIN, [own_a, own_b])
+                && let Some(hit) = hit()
             {
                 if !self.search.obstructed {
                     return None;

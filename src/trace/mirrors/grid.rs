@@ -752,6 +752,7 @@ impl MirrorWalls {
                 lens,
                 far,
                 crossings: true,
+                crossers: Some(&self.crossers),
             },
             found,
             unfolded,

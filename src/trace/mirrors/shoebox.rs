@@ -703,6 +703,7 @@ where
             lens,
             far,
             crossings,
+            crossers: None,
         };
         let receiver = search.receivers[r];
         let Some((length, reason)) = validation.path(stack, receiver) else {

@@ -356,6 +356,7 @@ impl MirrorWalls {
             lens,
             far,
             crossings: false,
+            crossers: None,
         };
         let receiver = search.receivers[path.receiver];
         let (length, _) = validation.path(stack, receiver)?;
