@@ -1120,15 +1120,13 @@ fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
             };
             return Err(SceneError::new("search.diffraction", why));
         }
-        if profiled
-            && let Some((name, _)) = spec.interfaces.iter().find(|(_, i)| !flat_horizontal(i))
-        {
+        if profiled && let Some((name, _)) = spec.interfaces.iter().find(|(_, i)| i.closed) {
             return Err(SceneError::new(
                 "search",
                 format!(
-                    "the automatic search in a scene with a `profile` medium takes flat \
-                     horizontal interfaces only (a waveguide between a surface and a bottom, \
-                     each with all its points at one y); `interfaces.{name}` is not one"
+                    "the automatic search in a scene with a `profile` medium takes open \
+                     interfaces only (a surface, a bottom: flat, sloping or polylines); \
+                     `interfaces.{name}` is closed"
                 ),
             ));
         }
@@ -1163,12 +1161,6 @@ fn curved_legs_supported(spec: &SceneSpec) -> Result<(), SceneError> {
         }
     }
     Ok(())
-}
-
-/// Whether an interface is one flat horizontal line (open, every point at one `y`): a wall
-/// of a waveguide through a `profile` medium.
-pub(crate) fn flat_horizontal(i: &InterfaceSpec) -> bool {
-    !i.closed && i.points.windows(2).all(|w| w[0][1] == w[1][1])
 }
 
 /// Refuses a scene that mixes `speed` media with `index` media: a speed gives time in length

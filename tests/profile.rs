@@ -413,8 +413,8 @@ fn bad_profiles_are_refused_naming_the_key() {
     Scene::from_json(&with(good, "", "")).unwrap();
     // Derivatives through a profile are taken (tests/profile_derivatives.rs).
     Scene::from_json(&with(good, "", r#", "solver": { "derivatives": true }"#)).unwrap();
-    // A sloping interface: a reflection off it is taken (tests/profile_slope.rs), the
-    // search is not.
+    // A sloping interface: a reflection off it is taken (tests/profile_slope.rs), and so is
+    // the search (a closed interface is not).
     let sloping =
         with(good, r#"{ "reflect": "floor" }"#, "").replace("[9000, -900]", "[9000, -950]");
     Scene::from_json(&sloping).unwrap();
@@ -433,7 +433,9 @@ fn bad_profiles_are_refused_naming_the_key() {
     );
     let sloping =
         with(good, "", r#", "search": { "max_steps": 2 }"#).replace("[9000, -900]", "[9000, -950]");
-    let err = Scene::from_json(&sloping).unwrap_err();
+    Scene::from_json(&sloping).unwrap();
+    let closed = sloping.replace("-950]] }", r#"-950], [4000, -990]], "closed": true }"#);
+    let err = Scene::from_json(&closed).unwrap_err();
     assert_eq!(err.key, "search", "{err}");
     assert!(err.to_string().contains("interfaces.floor"), "{err}");
     // A profile medium's speed is its knots: `set_medium_speed` refuses.

@@ -270,3 +270,176 @@ fn munk_over_a_sloping_bottom_converges_with_the_knots() {
         assert!(d2 <= 0.5 * d1 && d2 < 1e-3, "{j}: {d1:e} {d2:e}");
     }
 }
+
+/// A sequence of walls: their names, and per step the segments it may reflect off.
+type Sequence = (Vec<&'static str>, Vec<Vec<(P, P)>>);
+
+/// Every sequence of `n` walls or fewer off a flat surface and the bottom's segments (no two
+/// surfaces in a row): per step, the segments it may reflect off, and the names.
+fn sequences(n: usize, surface: (P, P), bottom: &[(P, P)]) -> Vec<Sequence> {
+    let mut out = vec![(Vec::new(), Vec::new())];
+    let mut last: Vec<Sequence> = vec![(Vec::new(), Vec::new())];
+    for _ in 0..n {
+        let mut next = Vec::new();
+        for (names, choices) in &last {
+            for wall in ["surface", "bottom"] {
+                if wall == "surface" && names.last() == Some(&"surface") {
+                    continue;
+                }
+                let (mut names, mut choices) = (names.clone(), choices.clone());
+                names.push(wall);
+                choices.push(if wall == "surface" {
+                    vec![surface]
+                } else {
+                    bottom.to_vec()
+                });
+                next.push((names, choices));
+            }
+        }
+        out.extend(next.iter().cloned());
+        last = next;
+    }
+    out
+}
+
+/// The search off a sloping bottom (and a bottom of two segments: a valley) in an
+/// isovelocity profile is the image method: every image path of up to `max_steps` walls
+/// (each reflection inside its segment; the water is convex, so none is obstructed), and,
+/// with `max_time` alone, every image path arriving by then; no other arrival, the same
+/// walls, times to 1e-12, reflection points to 1e-9 of the range.
+#[test]
+fn search_over_a_sloping_bottom_is_the_image_method() {
+    let c = 1500.0;
+    let surface = ([-500.0, 0.0], [12000.0, 0.0]);
+    let bottoms: [&[P]; 2] = [
+        &[[-500.0, -100.0], [12000.0, -130.0]],
+        &[[-500.0, -100.0], [900.0, -125.0], [12000.0, -110.0]],
+    ];
+    let pairs: [(P, P); 3] = [
+        ([0.0, -30.0], [2000.0, -60.0]),
+        ([0.0, -30.0], [-400.0, -90.0]),
+        ([100.0, -80.0], [4000.0, -15.0]),
+    ];
+    let (mut checked, mut worst) = (0, 0.0f64);
+    for bottom in bottoms {
+        let segments: Vec<(P, P)> = bottom.windows(2).map(|w| (w[0], w[1])).collect();
+        for (s, r) in pairs {
+            for search in [r#"{ "max_steps": 3 }"#, "MAX_TIME"] {
+                // The time bound: the direct path's time plus 2.5 %.
+                let direct = ((r[0] - s[0]).powi(2) + (r[1] - s[1]).powi(2)).sqrt() / c;
+                let limit = (search == "MAX_TIME").then_some(direct * 1.025);
+                let search = match limit {
+                    Some(t) => format!(r#"{{ "max_time": {t:e} }}"#),
+                    None => search.to_string(),
+                };
+                let text = format!("{bottom:?}");
+                let sc = scene(
+                    r#"{ "profile": [[0, 1500], [-200, 1500]], "at": [0, -50] }"#,
+                    &text,
+                    s,
+                    r,
+                    &format!(r#"[], "search": {search}"#),
+                );
+                let depth = if limit.is_some() { 12 } else { 3 };
+                let mut want: Vec<(f64, Vec<&str>, Vec<P>)> = Vec::new();
+                for (names, choices) in sequences(depth, surface, &segments) {
+                    for (length, points) in images(s, r, &choices) {
+                        // Two reflections in a row off one segment's line: no path (the
+                        // image method's degenerate solution, both points one).
+                        let twice = points.windows(2).any(|w| {
+                            (w[0][0] - w[1][0]).abs().max((w[0][1] - w[1][1]).abs()) < 1e-6
+                        });
+                        if twice {
+                            continue;
+                        }
+                        let t = length / c;
+                        if limit.is_none_or(|l| t <= l) {
+                            // The deepest sequences arrive after the bound.
+                            assert!(names.len() < depth || limit.is_none(), "{names:?}");
+                            want.push((t, names.clone(), points));
+                        }
+                    }
+                }
+                want.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let tracer = Tracer::new(&sc).unwrap();
+                let got = tracer.search(&Run::new()).unwrap().arrivals;
+                let what = format!("{text} {s:?} {r:?} {search}");
+                assert_eq!(got.len(), want.len(), "{what}: {got:?}\n{want:?}");
+                for (a, (t, names, points)) in got.iter().zip(&want) {
+                    let walls: Vec<&str> = a
+                        .steps
+                        .iter()
+                        .map(|st| sc.interfaces()[st.interface].name.as_str())
+                        .collect();
+                    assert_eq!(&walls, names, "{what}");
+                    assert!(
+                        rel(a.arrival.time, *t) <= 1e-12,
+                        "{what}: {} {t}",
+                        a.arrival.time
+                    );
+                    worst = worst.max(rel(a.arrival.time, *t));
+                    let pts = &a.arrival.points;
+                    for (p, q) in pts[1..pts.len() - 1].iter().zip(points) {
+                        assert!((p.x - q[0]).abs().max((p.y - q[1]).abs()) <= 1e-9 * 4000.0);
+                    }
+                    assert!(!a.complete);
+                    checked += 1;
+                }
+            }
+        }
+    }
+    eprintln!("{checked} image paths found by the search: times {worst:.1e} relative");
+    assert!(checked >= 60, "{checked}");
+}
+
+/// The search off a sloping bottom within its limits: `solver.max_work` stops each pair's
+/// fan (fewer arrivals, each one of the full search's, the work reported within the limit
+/// and one ray's overshoot), a run's budget stops it, a stop asked for before it lists
+/// nothing; the path route's shooting (`stationary: all`) stops at `solver.max_work` too.
+#[test]
+fn the_search_over_a_slope_keeps_to_its_limits() {
+    let bottom = "[[-500, -100], [900, -125], [12000, -110]]";
+    let (s, r) = ([0.0, -30.0], [2000.0, -60.0]);
+    let medium = r#"{ "profile": [[0, 1500], [-50, 1490], [-200, 1500]], "at": [0, -50] }"#;
+    let full = scene(medium, bottom, s, r, r#"[], "search": { "max_steps": 3 }"#);
+    let all = Tracer::new(&full).unwrap().search(&Run::new()).unwrap();
+    assert!(all.arrivals.len() >= 6, "{:?}", all.arrivals);
+    assert!(all.work > 400_000, "{}", all.work);
+    let limited = scene(
+        medium,
+        bottom,
+        s,
+        r,
+        r#"[], "search": { "max_steps": 3 }, "solver": { "max_work": 200000 }"#,
+    );
+    let some = Tracer::new(&limited).unwrap().search(&Run::new()).unwrap();
+    assert!(some.work >= 200_000 && some.work < 220_000, "{}", some.work);
+    assert!(some.arrivals.len() < all.arrivals.len());
+    for a in &some.arrivals {
+        assert!(
+            all.arrivals
+                .iter()
+                .any(|b| b.steps == a.steps && rel(a.arrival.time, b.arrival.time) <= 1e-12),
+            "{a:?}"
+        );
+    }
+    let budget = Run::new().budget(100);
+    let few = Tracer::new(&full).unwrap().search(&budget).unwrap();
+    assert!(few.arrivals.len() < all.arrivals.len() && budget.stopped());
+    let stopped = Run::new();
+    stopped.request_stop();
+    let none = Tracer::new(&full).unwrap().search(&stopped).unwrap();
+    assert!(none.arrivals.is_empty());
+    // The path route: a bottom reflection, all its arrivals, then within a small budget.
+    let path = r#"[{ "steps": [{ "reflect": "bottom" }] }], "solver": { "max_work": 1000 }"#;
+    let small = scene(medium, bottom, s, r, path);
+    let unlimited = scene(
+        medium,
+        bottom,
+        s,
+        r,
+        r#"[{ "steps": [{ "reflect": "bottom" }] }]"#,
+    );
+    assert!(!arrivals(&unlimited, 0).is_empty());
+    assert!(arrivals(&small, 0).is_empty());
+}

@@ -152,9 +152,33 @@ def test_an_isovelocity_waveguide_is_the_uniform_medium():
     np.testing.assert_allclose(tl_a, tl_b, rtol=0, atol=1e-9)
 
 
-def test_a_sloping_bottom_is_refused_naming_the_key():
+def test_a_sloping_bottom_search_is_the_uniform_medium():
+    """A profile of one speed over a bottom sloping from 100 to 130 (and a `"media"` bottom
+    over mud): the search lists the uniform medium's (beam tree, image method) arrivals up to
+    three reflections, the same walls, times to 1e-12 and amplitudes (the angle-dependent
+    bottom coefficient included) to 1e-9."""
+    def sloping(water):
+        scene = guide(water)
+        scene["interfaces"]["bottom"]["points"] = [[-3000, -100], [6000, -130]]
+        scene["receivers"] = [[2000, -60], [-1500, -95], [4500, -10]]
+        scene["search"] = {"max_steps": 3, "refract": False}
+        return scene
+
+    iso = eigenray.Tracer(eigenray.Scene(sloping({"profile": [[0, 1500], [-150, 1500]]})))
+    uniform = eigenray.Tracer(eigenray.Scene(sloping({"speed": 1500})))
+    a, b = iso.search(), uniform.search()
+    assert len(a) == len(b) >= 20
+    assert not np.any(a.complete)
+    np.testing.assert_array_equal(a.receiver, b.receiver)
+    np.testing.assert_array_equal(a.step_interface, b.step_interface)
+    np.testing.assert_allclose(a.time, b.time, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(a.amplitude, b.amplitude, rtol=1e-9, atol=0)
+
+
+def test_a_closed_interface_in_a_profile_search_is_refused_naming_the_key():
     scene = guide({"profile": [[0, 1500], [-100, 1510]]})
-    scene["interfaces"]["bottom"]["points"] = [[-3000, -100], [6000, -130]]
+    scene["interfaces"]["bottom"]["points"] = [[-3000, -100], [6000, -130], [0, -200]]
+    scene["interfaces"]["bottom"]["closed"] = True
     with pytest.raises((eigenray.EigenrayError, ValueError), match="interfaces.bottom"):
         eigenray.Scene(scene)
 

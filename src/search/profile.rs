@@ -13,8 +13,8 @@ use rayon::prelude::*;
 
 use crate::leg::profile::Bounds;
 use crate::options::Progress;
-use crate::scene::SearchOptions;
-use crate::trace::{Status, Tracer};
+use crate::scene::{SearchOptions, Step};
+use crate::trace::{Arrival, Status, Tracer};
 
 use super::{Control, SearchArrival, SearchReport, StreamedArrival};
 
@@ -48,7 +48,8 @@ impl Tracer {
             },
             time: options.time_limit(),
         };
-        let found: Vec<(Vec<SearchArrival>, usize)> = (0..ns * nr)
+        let sloped = crate::trace::has_sloped_walls(scene);
+        let found: Vec<(Vec<SearchArrival>, u64)> = (0..ns * nr)
             .into_par_iter()
             .map(|pair| {
                 let (source, receiver) = (pair / nr, pair % nr);
@@ -60,30 +61,18 @@ impl Tracer {
                 let Some(m) = self.search_profile_medium(s) else {
                     return (out, 0);
                 };
-                let Some(profile) = scene.media()[m].profile_model() else {
-                    return (out, 0);
+                let (found, work) = if sloped {
+                    self.search_sloped_pair(m, [s, r], options, control.run)
+                } else {
+                    self.walled_pair(m, [s, r], bounds, options)
                 };
-                let (rays, _) = self.walled_rays(&profile, s, r, bounds);
-                let work = rays.len();
-                for w in rays {
-                    let listed = w.status == Status::Converged
-                        || (options.obstructed && w.status == Status::Obstructed);
-                    if !listed
-                        || w.ray.sums.t > bounds.time
-                        || !w
-                            .steps
-                            .iter()
-                            .all(|st| options.interfaces.contains(&st.interface))
-                    {
-                        continue;
-                    }
-                    let mut arrival = self.walled_arrival(m, &w);
+                for (steps, mut arrival) in found {
                     if let Some(sink) = control.sink {
                         control.listed.stream();
                         sink.arrival(StreamedArrival {
                             source,
                             receiver,
-                            steps: w.steps.len(),
+                            steps: steps.len(),
                             diffractions: 0,
                             vertical_reflections: 0,
                             status: arrival.status,
@@ -92,13 +81,13 @@ impl Tracer {
                         });
                         continue;
                     }
-                    if !control.listed.take(w.steps.len()) {
+                    if !control.listed.take(steps.len()) {
                         break;
                     }
                     out.push(SearchArrival {
                         source,
                         receiver,
-                        steps: w.steps,
+                        steps,
                         arrival,
                         complete: false,
                         heights: Vec::new(),
@@ -113,9 +102,42 @@ impl Tracer {
         };
         let mut arrivals = Vec::new();
         for (a, work) in found {
-            report.work += work as u64;
+            report.work += work;
             arrivals.extend(a);
         }
         (report, arrivals)
+    }
+
+    /// The arrivals of one pair between flat walls within `bounds`, each with its steps, by
+    /// time: `converged` ones (and `obstructed` ones when the search lists them) whose
+    /// steps are all off allowed interfaces; and the rays found (the work).
+    fn walled_pair(
+        &self,
+        m: usize,
+        [s, r]: [crate::geom::Point; 2],
+        bounds: Bounds,
+        options: &SearchOptions,
+    ) -> (Vec<(Vec<Step>, Arrival)>, u64) {
+        let Some(profile) = self.scene().media()[m].profile_model() else {
+            return (Vec::new(), 0);
+        };
+        let (rays, _) = self.walled_rays(&profile, s, r, bounds);
+        let work = rays.len() as u64;
+        let listed = rays
+            .into_iter()
+            .filter(|w| {
+                (w.status == Status::Converged
+                    || (options.obstructed && w.status == Status::Obstructed))
+                    && w.ray.sums.t <= bounds.time
+                    && w.steps
+                        .iter()
+                        .all(|st| options.interfaces.contains(&st.interface))
+            })
+            .map(|w| {
+                let arrival = self.walled_arrival(m, &w);
+                (w.steps, arrival)
+            })
+            .collect();
+        (listed, work)
     }
 }

@@ -12,9 +12,12 @@
 //! ray's reflection points and legs' branches start Newton. Like the flat waveguide's
 //! sampling this is no proof (two rays closer than a sample apart may be missed).
 
+use std::cell::Cell;
+
 use crate::geom::{Aabb, Point, Vec2};
-use crate::leg::profile::{Branch, PieceEnd, Profile, ProfileLeg, ProfileLegModel};
+use crate::leg::profile::{Branch, PieceEnd, Profile, ProfileLeg, ProfileLegModel, RayPiece};
 use crate::leg::{Leg, LegMedium, LegModel};
+use crate::options::{Progress, Run};
 use crate::problem::ProblemRef;
 use crate::scene::{Scene, Step, StepKind};
 use crate::solver::{NewtonOptions, NewtonWorkspace, Outcome, solve};
@@ -24,6 +27,11 @@ use super::complete::Arrival;
 use super::profile::ProfileShape;
 use super::{RayRecord, Reason, SearchOutcome, Status, Tracer, Workspace};
 use crate::amplitude::{Amplitude, PathGeometry};
+
+mod fan;
+pub(crate) use fan::has_sloped_walls;
+#[cfg(test)]
+use fan::{SlopedSearch, sloped_search};
 
 /// The launch angles shot all round the source.
 pub(crate) const SHOTS: usize = 8192;
@@ -35,6 +43,14 @@ const MAX_PIECES: usize = 20_000;
 const MAX_PASSES: usize = 256;
 /// Points per piece of a leg for its obstruction test.
 const PIECE_POINTS: usize = 16;
+/// The work of one chord of a piece (its point on the arc; a unit is about 35 ns).
+const CHORD_WORK: u64 = 2;
+/// Segment boxes weighed against a chord per unit of work.
+const SEGMENTS_PER_UNIT: usize = 8;
+/// The work of one crossing of a chord and a segment refined on the piece (64 points).
+const REFINE_WORK: u64 = 128;
+/// The work of one Newton solve per leg (its legs' roots at each iteration).
+const NEWTON_WORK: u64 = 2000;
 
 /// One ray of a path of reflections through a profile medium.
 #[derive(Clone, Debug)]
@@ -129,6 +145,142 @@ struct Shooting<'a> {
     source: Point,
     receiver: Point,
     bounds: Aabb,
+    budget: &'a ShotBudget<'a>,
+}
+
+/// Where a ray piece first meets a wall: the point, its interface and segment, the ray's
+/// direction there and the fraction of the piece's arc length (an upper bracket).
+#[derive(Clone, Copy, Debug)]
+struct WallHit {
+    point: Point,
+    interface: usize,
+    segment: usize,
+    arriving: Vec2,
+    fraction: f64,
+}
+
+/// Where `piece` first meets a segment of one of `interfaces` ([`CHORDS`] chords, each
+/// crossing refined by bisection on the piece). `leaving`: the piece starts a leg on a wall,
+/// whose start (within `eps` of a segment) is not a meeting. `work` grows by
+/// [`CHORD_WORK`] per chord, one per [`SEGMENTS_PER_UNIT`] segment boxes weighed and one
+/// per box the chord's meets, and [`REFINE_WORK`] per crossing refined.
+fn piece_hit(
+    scene: &Scene,
+    piece: &RayPiece,
+    interfaces: &[usize],
+    eps: f64,
+    leaving: bool,
+    work: &mut u64,
+) -> Option<WallHit> {
+    let at = |f: f64| piece.at(f).to_point();
+    let mut found: Option<WallHit> = None;
+    let mut prev = at(0.0);
+    for j in 1..=CHORDS {
+        let (f0, f1) = ((j - 1) as f64 / CHORDS as f64, j as f64 / CHORDS as f64);
+        let q = at(f1);
+        let chord = Aabb::from_points(prev, q);
+        *work += CHORD_WORK;
+        for &interface in interfaces {
+            let line = &scene.interfaces()[interface].polyline;
+            *work += line.num_segments().div_ceil(SEGMENTS_PER_UNIT) as u64;
+            for seg in 0..line.num_segments() {
+                let g = line.segment(seg);
+                if !chord.overlaps(Aabb::from_points(g.start, g.end)) {
+                    continue;
+                }
+                *work += 1;
+                let (mut g0, g1) = (side(g.start, g.end, prev), side(g.start, g.end, q));
+                if leaving && j == 1 && g0.abs() < eps {
+                    g0 = g1;
+                }
+                if g0 * g1 > 0.0 || g0 == g1 {
+                    continue;
+                }
+                // Refine on the piece itself.
+                *work += REFINE_WORK;
+                let (mut lo, mut hi, sign0) = (f0, f1, g0 > 0.0);
+                for _ in 0..64 {
+                    let mid = 0.5 * (lo + hi);
+                    if (side(g.start, g.end, at(mid)) > 0.0) == sign0 {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                let hit = at(0.5 * (lo + hi));
+                let along =
+                    (hit - g.start).dot(g.end - g.start) / (g.end - g.start).dot(g.end - g.start);
+                if (0.0..=1.0).contains(&along) && found.is_none_or(|f| hi < f.fraction) {
+                    found = Some(WallHit {
+                        point: hit,
+                        interface,
+                        segment: seg,
+                        arriving: piece.direction_at(hit.y),
+                        fraction: hi,
+                    });
+                }
+            }
+        }
+        if found.is_some() {
+            return found;
+        }
+        prev = q;
+    }
+    None
+}
+
+/// The direction `arriving` reflected specularly off segment `seg` of `interface`.
+fn reflected(scene: &Scene, interface: usize, seg: usize, arriving: Vec2) -> Vec2 {
+    let n = scene.interfaces()[interface].polyline.tangent(seg).perp();
+    arriving - n * (2.0 * arriving.dot(n))
+}
+
+/// What the shooting of one pair may spend: the scene's `solver.max_work` (units counted by
+/// [`piece_hit`] and per piece marched) and the run's stop request and budget (one unit
+/// per shot), when there is a run.
+pub(crate) struct ShotBudget<'r> {
+    run: Option<&'r Run>,
+    max_work: u64,
+    spent: Cell<u64>,
+    stopped: Cell<bool>,
+}
+
+impl<'r> ShotBudget<'r> {
+    pub(crate) fn new(max_work: u64, run: Option<&'r Run>) -> ShotBudget<'r> {
+        ShotBudget {
+            run,
+            max_work,
+            spent: Cell::new(0),
+            stopped: Cell::new(false),
+        }
+    }
+
+    /// Whether one more shot may be taken (`false` from the first refusal on).
+    fn shot(&self) -> bool {
+        if self.stopped.get()
+            || self.spent.get() >= self.max_work
+            || self.run.is_some_and(|r| !r.keep_going(Progress::work(1)))
+        {
+            self.stopped.set(true);
+            return false;
+        }
+        true
+    }
+
+    /// Counts `work` units spent.
+    fn spend(&self, work: u64) {
+        self.spent.set(self.spent.get().saturating_add(work));
+    }
+
+    /// The units spent so far.
+    pub(crate) fn spent(&self) -> u64 {
+        self.spent.get()
+    }
+
+    /// Whether the shooting stopped at a limit (or a stop request).
+    pub(crate) fn stopped(&self) -> bool {
+        self.stopped.get()
+    }
 }
 
 impl Shooting<'_> {
@@ -141,73 +293,38 @@ impl Shooting<'_> {
         interface: usize,
         eps: f64,
     ) -> Option<(Point, usize, Vec2, u32)> {
-        let line = &self.scene.interfaces()[interface].polyline;
-        let (b, profile) = (self.bounds, self.profile);
+        let b = self.bounds;
         let mut found = None;
         let mut turns = 0;
-        let mut first_chord = true;
-        profile.march(from.to_vec2(), d, [b.min.y, b.max.y], MAX_PIECES, |piece| {
-            let at = |f: f64| piece.at(f).to_point();
-            let mut prev = at(0.0);
-            for j in 1..=CHORDS {
-                let (f0, f1) = ((j - 1) as f64 / CHORDS as f64, j as f64 / CHORDS as f64);
-                let q = at(f1);
-                let chord = Aabb::from_points(prev, q);
-                for seg in 0..line.num_segments() {
-                    let g = line.segment(seg);
-                    if !chord.overlaps(Aabb::from_points(g.start, g.end)) {
-                        continue;
-                    }
-                    let (mut g0, g1) = (side(g.start, g.end, prev), side(g.start, g.end, q));
-                    if first_chord && g0.abs() < eps {
-                        g0 = g1;
-                    }
-                    if g0 * g1 > 0.0 || g0 == g1 {
-                        continue;
-                    }
-                    // Refine on the piece itself.
-                    let (mut lo, mut hi, sign0) = (f0, f1, g0 > 0.0);
-                    for _ in 0..64 {
-                        let mid = 0.5 * (lo + hi);
-                        if (side(g.start, g.end, at(mid)) > 0.0) == sign0 {
-                            lo = mid;
-                        } else {
-                            hi = mid;
-                        }
-                    }
-                    let hit = at(0.5 * (lo + hi));
-                    let along = (hit - g.start).dot(g.end - g.start)
-                        / (g.end - g.start).dot(g.end - g.start);
-                    if (0.0..=1.0).contains(&along)
-                        && found.as_ref().is_none_or(|&(_, _, _, _, f)| hi < f)
-                    {
-                        let dir = piece.direction_at(hit.y);
-                        found = Some((hit, seg, dir, turns, hi));
-                    }
-                }
-                first_chord = false;
-                if found.is_some() {
+        let mut first = true;
+        let mut work = 0;
+        self.profile
+            .march(from.to_vec2(), d, [b.min.y, b.max.y], MAX_PIECES, |piece| {
+                let hit = piece_hit(self.scene, piece, &[interface], eps, first, &mut work);
+                first = false;
+                if let Some(h) = hit {
+                    found = Some((h.point, h.segment, h.arriving, turns));
                     return false;
                 }
-                prev = q;
-            }
-            turns += u32::from(piece.end_kind == PieceEnd::Turn);
-            piece.end.x >= b.min.x && piece.end.x <= b.max.x
-        });
-        found.map(|(hit, seg, dir, turns, _)| (hit, seg, dir, turns))
+                turns += u32::from(piece.end_kind == PieceEnd::Turn);
+                piece.end.x >= b.min.x && piece.end.x <= b.max.x
+            });
+        self.budget.spend(work);
+        found
     }
 
     /// The shot at launch angle `theta` (radians from +x).
     fn shoot(&self, theta: f64) -> Option<Shot> {
+        if !self.budget.shot() {
+            return None;
+        }
         let eps = 1e-9 * self.bounds.diagonal();
         let mut shot = Shot::default();
         let (mut at, mut d) = (self.source, Vec2::new(theta.cos(), theta.sin()));
         shot.departures.push(d);
         for step in self.steps {
             let (hit, seg, arriving, turns) = self.to_wall(at, d, step.interface, eps)?;
-            let line = &self.scene.interfaces()[step.interface].polyline;
-            let n = line.tangent(seg).perp();
-            d = arriving - n * (2.0 * arriving.dot(n));
+            d = reflected(self.scene, step.interface, seg, arriving);
             at = hit;
             shot.hits.push((hit, seg));
             shot.departures.push(d);
@@ -216,8 +333,10 @@ impl Shooting<'_> {
         let (b, yr) = (self.bounds, self.receiver.y);
         let mut turns = 0;
         let mut passes = Vec::new();
+        let mut pieces = 0;
         self.profile
             .march(at.to_vec2(), d, [b.min.y, b.max.y], MAX_PIECES, |piece| {
+                pieces += 1;
                 let here = piece.at_height(yr).filter(|q| *q != piece.start);
                 if let Some(q) = here
                     && (q.to_point() - at).length() > eps
@@ -227,6 +346,7 @@ impl Shooting<'_> {
                 turns += u32::from(piece.end_kind == PieceEnd::Turn);
                 passes.len() < MAX_PASSES && piece.end.x >= b.min.x && piece.end.x <= b.max.x
             });
+        self.budget.spend(pieces);
         shot.passes = passes;
         Some(shot)
     }
@@ -333,8 +453,8 @@ pub(crate) fn sloped_rays(
     scene: &Scene,
     steps: &[Step],
     medium: usize,
-    source: Point,
-    receiver: Point,
+    [source, receiver]: [Point; 2],
+    budget: &ShotBudget<'_>,
 ) -> Vec<SlopedRay> {
     let Some(profile) = scene.media().get(medium).and_then(|m| m.profile_model()) else {
         return Vec::new();
@@ -346,34 +466,59 @@ pub(crate) fn sloped_rays(
         source,
         receiver,
         bounds: extent(scene, source, receiver),
+        budget,
     };
     let mut out: Vec<SlopedRay> = Vec::new();
-    let tol = 1e-7 * shooting.bounds.diagonal();
     for start in shooting.starts() {
-        let mut branch = branches(&profile, &start);
-        // The first leg's ray parameter from the launch angle.
-        let d0 = start.1.departures[0];
-        branch[0].near = d0.x.abs() / profile.speed_at(source.y);
-        let Some(ray) = polish(scene, &profile, steps, source, receiver, &start.1, &branch) else {
-            continue;
-        };
-        let same = |r: &SlopedRay| {
-            r.segments == ray.segments
-                && r.points
-                    .iter()
-                    .zip(&ray.points)
-                    .all(|(a, b)| a.distance(*b) <= tol)
-                && r.legs
-                    .iter()
-                    .zip(&ray.legs)
-                    .all(|(a, b)| a.branch().first == b.branch().first && a.turns == b.turns)
-        };
-        if !out.iter().any(same) {
-            out.push(ray);
+        if let Some(ray) = shooting.ray_of_start(&start) {
+            keep_new(&mut out, ray, shooting.bounds);
         }
     }
     out.sort_by(|a, b| a.time.total_cmp(&b.time));
     out
+}
+
+/// Pushes `ray` onto `out` unless `out` holds it already (the same segments, points within
+/// 1e-7 of the extent's diagonal, the same branches).
+fn keep_new(out: &mut Vec<SlopedRay>, ray: SlopedRay, bounds: Aabb) {
+    let tol = 1e-7 * bounds.diagonal();
+    let same = |r: &SlopedRay| {
+        r.segments == ray.segments
+            && r.points.len() == ray.points.len()
+            && r.points
+                .iter()
+                .zip(&ray.points)
+                .all(|(a, b)| a.distance(*b) <= tol)
+            && r.legs
+                .iter()
+                .zip(&ray.legs)
+                .all(|(a, b)| a.branch().first == b.branch().first && a.turns == b.turns)
+    };
+    if !out.iter().any(same) {
+        out.push(ray);
+    }
+}
+
+impl Shooting<'_> {
+    /// The ray Newton finds from a start (its legs' branches held), when it converges to
+    /// one whose legs all exist and reflect.
+    fn ray_of_start(&self, start: &(f64, Shot, usize)) -> Option<SlopedRay> {
+        let profile = self.profile;
+        let mut branch = branches(profile, start);
+        // The first leg's ray parameter from the launch angle.
+        let d0 = start.1.departures[0];
+        branch[0].near = d0.x.abs() / profile.speed_at(self.source.y);
+        self.budget
+            .spend(NEWTON_WORK * (self.steps.len() as u64 + 1));
+        polish(
+            self.scene,
+            profile,
+            self.steps,
+            [self.source, self.receiver],
+            &start.1,
+            &branch,
+        )
+    }
 }
 
 /// Newton on the reflection points from a shot, the legs' branches held; the ray when it
@@ -382,8 +527,7 @@ fn polish(
     scene: &Scene,
     profile: &Profile,
     steps: &[Step],
-    source: Point,
-    receiver: Point,
+    [source, receiver]: [Point; 2],
     shot: &Shot,
     branch: &[Branch],
 ) -> Option<SlopedRay> {
@@ -418,18 +562,24 @@ fn polish(
         receiver,
     };
     let options = scene.solver();
-    let sol = solve(
-        &g,
-        &mut nw,
-        NewtonOptions {
-            tolerance: options.tolerance,
-            max_iterations: options.max_iterations,
-            fast_path: false,
-        },
-    );
-    if sol.outcome != Outcome::Converged {
-        return None;
-    }
+    // No reflection (the direct ray): nothing to move, the leg is the branch's ray.
+    let (iterations, residual) = if k == 0 {
+        (0, 0.0)
+    } else {
+        let sol = solve(
+            &g,
+            &mut nw,
+            NewtonOptions {
+                tolerance: options.tolerance,
+                max_iterations: options.max_iterations,
+                fast_path: false,
+            },
+        );
+        if sol.outcome != Outcome::Converged {
+            return None;
+        }
+        (sol.iterations, sol.residual)
+    };
     let mut points = vec![source];
     for (i, step) in steps.iter().enumerate() {
         points.push(
@@ -466,8 +616,8 @@ fn polish(
         segments: nw.seg[..k].to_vec(),
         parameters: nw.s[..k].to_vec(),
         legs,
-        iterations: sol.iterations,
-        residual: sol.residual,
+        iterations,
+        residual,
         status: Status::Converged,
         reason: None,
     };
@@ -524,30 +674,36 @@ fn fingerprint(scene: &Scene) -> Vec<f64> {
     out
 }
 
-/// [`sloped_rays`], remembered per thread for the last path and pair asked (the default
-/// mode's solve, its amplitude and its written turns ask for the same in turn).
+/// [`sloped_rays`] within the scene's `solver.max_work` (and `run`'s stop request and
+/// budget, when given), remembered per thread for the last path and pair asked (the default
+/// mode's solve, its amplitude and its written turns ask for the same in turn) unless the
+/// shooting stopped at a limit.
 pub(crate) fn sloped_rays_cached(
     scene: &Scene,
     steps: &[Step],
     medium: usize,
-    source: Point,
-    receiver: Point,
+    [source, receiver]: [Point; 2],
+    run: Option<&Run>,
 ) -> Vec<SlopedRay> {
-    type Key = (Vec<Step>, usize, Point, Point, Vec<u64>);
+    type Key = (Vec<Step>, usize, Point, Point, Vec<u64>, u64);
     thread_local! {
         static LAST: std::cell::RefCell<Option<(Key, Vec<SlopedRay>)>> =
             const { std::cell::RefCell::new(None) };
     }
     let print = fingerprint(scene).iter().map(|v| v.to_bits()).collect();
-    let key: Key = (steps.to_vec(), medium, source, receiver, print);
+    let work = scene.solver().max_work;
+    let key: Key = (steps.to_vec(), medium, source, receiver, print, work);
     LAST.with(|last| {
         if let Some((k, found)) = &*last.borrow()
             && *k == key
         {
             return found.clone();
         }
-        let found = sloped_rays(scene, steps, medium, source, receiver);
-        *last.borrow_mut() = Some((key, found.clone()));
+        let budget = ShotBudget::new(scene.solver().max_work, run);
+        let found = sloped_rays(scene, steps, medium, [source, receiver], &budget);
+        if !budget.stopped() {
+            *last.borrow_mut() = Some((key, found.clone()));
+        }
         found
     })
 }
@@ -588,7 +744,7 @@ impl Tracer {
         ws.resize(k);
         ws.ray.clear();
         ws.ray.media.extend(std::iter::repeat_n(medium, k + 1));
-        let rays = sloped_rays_cached(&self.scene, steps, medium, source, receiver);
+        let rays = sloped_rays_cached(&self.scene, steps, medium, [source, receiver], None);
         let Some(r) = super::profile::default_choice(&rays, |r| r.status) else {
             return RayRecord::failed(Status::NoPath, Reason::NoStationaryPath);
         };
@@ -630,41 +786,46 @@ impl Tracer {
         ))
     }
 
-    /// Every ray of a path on the sloped route as stationary paths, by time.
+    /// Every ray of a path on the sloped route as stationary paths, by time (the shooting
+    /// within `solver.max_work` and `run`).
     pub(crate) fn sloped_stationary_paths(
         &self,
         path: usize,
         medium: usize,
-        source: Point,
-        receiver: Point,
+        [source, receiver]: [Point; 2],
+        run: &Run,
         out: &mut Vec<Arrival>,
     ) -> SearchOutcome {
         let steps = &self.scene.paths()[path].steps;
-        let rays = sloped_rays_cached(&self.scene, steps, medium, source, receiver);
-        for r in &rays {
-            let shape = sloped_shape_of(&self.scene, steps, r);
-            out.push(Arrival {
-                status: r.status,
-                time: r.time,
-                points: r.points.clone(),
-                parameters: r.parameters.clone(),
-                segments: r.segments.clone(),
-                media: vec![medium; steps.len() + 1],
-                iterations: r.iterations,
-                reason: r.reason,
-                kink: None,
-                residual: r.residual,
-                amplitude: self.sloped_amplitude(steps, medium, r),
-                turns: Some(shape.turns),
-                caustics: Some(shape.caustics),
-                launch_angle: Some(shape.launch_angle),
-            });
-        }
+        let rays = sloped_rays_cached(&self.scene, steps, medium, [source, receiver], Some(run));
+        out.extend(rays.iter().map(|r| self.sloped_arrival(steps, medium, r)));
         SearchOutcome {
             complete: false,
             solves: SHOTS,
             work: rays.len(),
             ..SearchOutcome::new()
+        }
+    }
+
+    /// The arrival of one ray of the sloped route (of `steps`, through `medium`), with its
+    /// amplitude, turns, caustics and launch angle.
+    pub(crate) fn sloped_arrival(&self, steps: &[Step], medium: usize, r: &SlopedRay) -> Arrival {
+        let shape = sloped_shape_of(&self.scene, steps, r);
+        Arrival {
+            status: r.status,
+            time: r.time,
+            points: r.points.clone(),
+            parameters: r.parameters.clone(),
+            segments: r.segments.clone(),
+            media: vec![medium; steps.len() + 1],
+            iterations: r.iterations,
+            reason: r.reason,
+            kink: None,
+            residual: r.residual,
+            amplitude: self.sloped_amplitude(steps, medium, r),
+            turns: Some(shape.turns),
+            caustics: Some(shape.caustics),
+            launch_angle: Some(shape.launch_angle),
         }
     }
 
@@ -693,7 +854,7 @@ fn sloped_ray_of(
     let m = *media.first()?;
     scene.media().get(m)?.profile.as_ref()?;
     let (s, r) = (points[0], points[points.len() - 1]);
-    sloped_rays_cached(scene, steps, m, s, r)
+    sloped_rays_cached(scene, steps, m, [s, r], None)
         .into_iter()
         .find(|w| w.points == points)
         .map(|w| (m, w))
@@ -764,7 +925,8 @@ mod tests {
             .flat_map(|r| scene.paths().iter().map(move |p| (r, p)))
         {
             let steps = &path.steps;
-            let general = sloped_rays(&scene, steps, 0, s, r);
+            let budget = ShotBudget::new(u64::MAX, None);
+            let general = sloped_rays(&scene, steps, 0, [s, r], &budget);
             let bounds = Bounds {
                 reflections: steps.len() as u32,
                 time: f64::INFINITY,
@@ -785,5 +947,151 @@ mod tests {
             }
         }
         assert!(compared >= 8, "{compared}");
+    }
+
+    /// Flat walls: the search off sloping walls (one fan, brackets, the path route's Newton)
+    /// lists what the flat waveguide's search lists: the same arrivals within `max_steps`
+    /// (steps, times to 1e-12, points to 1e-6, status), obstructed ones included.
+    #[test]
+    fn flat_walls_search_agrees_with_the_waveguide_search() {
+        let scene = Scene::from_json(
+            r#"{ "media": { "water": { "profile": [[0, 1500], [-20, 1495], [-50, 1490],
+                                                   [-80, 1492], [-150, 1496]], "at": [0, -50] } },
+                 "interfaces": {
+                   "surface": { "points": [[-500, 0], [6000, 0]], "reflection": "pressure-release" },
+                   "bottom": { "points": [[-500, -100], [6000, -100]], "reflection": "rigid" } },
+                 "sources": [[0, -30]], "receivers": [[3000, -60]] }"#,
+        )
+        .unwrap();
+        let profile = scene.media()[0].profile_model().unwrap();
+        let s = Point::new(0.0, -30.0);
+        let mut compared = 0;
+        for r in [
+            Point::new(3000.0, -60.0),
+            Point::new(900.0, -60.0),
+            Point::new(-500.0, -80.0),
+            Point::new(5000.0, -5.0),
+        ] {
+            let budget = ShotBudget::new(u64::MAX, None);
+            let general = sloped_search(
+                &scene,
+                0,
+                [s, r],
+                (&[0, 1], 3, f64::INFINITY),
+                SHOTS,
+                &budget,
+            );
+            let bounds = Bounds {
+                reflections: 3,
+                time: f64::INFINITY,
+            };
+            let (flat, _) = super::super::profile::walled_rays(&scene, &profile, s, r, bounds);
+            assert_eq!(
+                general.rays.len(),
+                flat.len(),
+                "{r:?}: {general:?} {flat:?}"
+            );
+            for ((steps, g), f) in general.rays.iter().zip(&flat) {
+                let t = f.ray.sums.t;
+                assert_eq!(*steps, f.steps, "{r:?}");
+                assert!((g.time - t).abs() <= 1e-12 * t, "{r:?}: {} {t}", g.time);
+                for (p, q) in g.points.iter().zip(&f.points) {
+                    assert!(p.distance(*q) <= 1e-6, "{p:?} {q:?}");
+                }
+                assert_eq!(g.status, f.status);
+                compared += 1;
+            }
+        }
+        eprintln!("{compared} arrivals the same");
+        assert!(compared >= 15, "{compared}");
+    }
+
+    /// A Munk profile over a bottom sloping 4000 → 4300 → 3800 m, 10 km, up to two walls:
+    /// the fan of 8192 rays lists the same arrivals as fans of 16384 and 32768 (the same
+    /// walls, turns, times to 1e-9 relative), every one off walls is an arrival of its
+    /// steps as the path route (its own shooting through those walls) finds it, and the
+    /// direct ones are the profile's free rays that no interface crosses (times to 1e-12).
+    #[test]
+    fn munk_over_a_slope_is_stable_as_the_fan_densifies() {
+        let knots: Vec<String> = (0..=5000)
+            .step_by(100)
+            .map(|z| {
+                let e = 2.0 * (z as f64 - 1300.0) / 1300.0;
+                let c = 1500.0 * (1.0 + 0.00737 * (e - 1.0 + (-e).exp()));
+                format!("[{}, {c}]", -(z as f64))
+            })
+            .collect();
+        let scene = Scene::from_json(&format!(
+            r#"{{ "media": {{ "water": {{ "profile": [{}], "at": [0, -1000] }} }},
+                 "interfaces": {{
+                   "surface": {{ "points": [[-500, 0], [12000, 0]], "reflection": "pressure-release" }},
+                   "bottom": {{ "points": [[-500, -4000], [5000, -4300], [12000, -3800]],
+                                "reflection": "rigid" }} }},
+                 "sources": [[0, -1000]], "receivers": [[10000, -1500]] }}"#,
+            knots.join(", ")
+        ))
+        .unwrap();
+        let (s, r) = (Point::new(0.0, -1000.0), Point::new(10000.0, -1500.0));
+        let fans: Vec<SlopedSearch> = [SHOTS, 2 * SHOTS, 4 * SHOTS]
+            .iter()
+            .map(|&shots| {
+                let budget = ShotBudget::new(u64::MAX, None);
+                sloped_search(
+                    &scene,
+                    0,
+                    [s, r],
+                    (&[0, 1], 2, f64::INFINITY),
+                    shots,
+                    &budget,
+                )
+            })
+            .collect();
+        let key =
+            |x: &(Vec<Step>, SlopedRay)| (x.0.clone(), x.1.turns(), x.1.legs[0].branch().first);
+        assert!(fans[0].rays.len() >= 6, "{:?}", fans[0].rays);
+        for fan in &fans[1..] {
+            assert_eq!(fan.rays.len(), fans[0].rays.len());
+            for (a, b) in fans[0].rays.iter().zip(&fan.rays) {
+                assert_eq!(key(a), key(b));
+                assert!(
+                    (a.1.time - b.1.time).abs() <= 1e-9 * a.1.time,
+                    "{} {}",
+                    a.1.time,
+                    b.1.time
+                );
+            }
+        }
+        let mut walls = 0;
+        for (steps, ray) in fans[0].rays.iter().filter(|x| !x.0.is_empty()) {
+            let budget = ShotBudget::new(u64::MAX, None);
+            let path = sloped_rays(&scene, steps, 0, [s, r], &budget);
+            assert!(
+                path.iter()
+                    .any(|p| (p.time - ray.time).abs() <= 1e-12 * ray.time),
+                "{steps:?} {}: {path:?}",
+                ray.time
+            );
+            walls += 1;
+        }
+        // The direct rays: the free rays of the profile (`Profile::arrivals`) that no
+        // interface crosses.
+        let tracer = Tracer::new(&scene).unwrap();
+        let profile = scene.media()[0].profile_model().unwrap();
+        let (free, _) = tracer.profile_rays(&profile, s, r);
+        let free: Vec<f64> = (free.iter())
+            .filter(|f| f.status == Status::Converged)
+            .map(|f| f.ray.sums.t)
+            .collect();
+        let direct: Vec<f64> = (fans[0].rays.iter())
+            .filter(|x| x.0.is_empty() && x.1.status == Status::Converged)
+            .map(|x| x.1.time)
+            .collect();
+        assert!(!free.is_empty());
+        assert_eq!(direct.len(), free.len(), "{direct:?} {free:?}");
+        for (a, b) in direct.iter().zip(&free) {
+            assert!((a - b).abs() <= 1e-12 * b, "{a} {b}");
+        }
+        let times: Vec<f64> = fans[0].rays.iter().map(|x| x.1.time).collect();
+        eprintln!("{} arrivals ({walls} off walls): {times:?}", times.len());
     }
 }

@@ -39,7 +39,7 @@ pub(crate) fn sloped_ray_found(
         .iter()
         .fold(0.0f64, |m, p| m.max((*p - s).length()))
         .max(1.0);
-    let rays: Vec<SlopedRay> = sloped_rays_cached(scene, steps, medium, s, r)
+    let rays: Vec<SlopedRay> = sloped_rays_cached(scene, steps, medium, [s, r], None)
         .into_iter()
         .filter(|w| {
             w.points

@@ -113,7 +113,7 @@ impl Tracer {
             return Ok(self.profile_stationary_paths(m, &profile, source, receiver, out));
         }
         if let Some(m) = self.profile_sloped_medium(path, source, None) {
-            return Ok(self.sloped_stationary_paths(path, m, source, receiver, out));
+            return Ok(self.sloped_stationary_paths(path, m, [source, receiver], run, out));
         }
         if let Some((m, profile)) = self.profile_walled_medium(path, source, None) {
             return Ok(self.walled_stationary_paths(path, m, &profile, source, receiver, out));
