@@ -43,7 +43,7 @@ fn close_walls_stop_at_the_memory_limit_under_a_cap() {
         );
         assert_eq!(run.code, Some(0), "{search}: {}", run.stderr);
         assert!(
-            run.stderr.contains("1 pairs stopped at a limit"),
+            run.stderr.contains("1 pair stopped at a limit"),
             "{search}: {}",
             run.stderr
         );

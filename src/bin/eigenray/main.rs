@@ -830,10 +830,11 @@ fn search(tracer: &Tracer) -> Result<eigenray::search::SearchReport, Failure> {
     );
     search_bounds(&mut line, report.work, scene.curved(), options);
     if report.incomplete_pairs > 0 {
+        let n = report.incomplete_pairs;
         let _ = write!(
             line,
-            "; {} pairs {} (their arrivals say complete: false)",
-            report.incomplete_pairs,
+            "; {n} {} {} (their arrivals say complete: false)",
+            if n == 1 { "pair" } else { "pairs" },
             short_pairs(scene)
         );
     }
@@ -843,10 +844,10 @@ fn search(tracer: &Tracer) -> Result<eigenray::search::SearchReport, Failure> {
 }
 
 /// What the summary line says of a search's short pairs: a limit stopped them, or, through
-/// curved legs, the search (from a grid of starts) is no proof.
+/// curved legs, the search (by shooting) is no proof, or a limit stopped it.
 fn short_pairs(scene: &eigenray::Scene) -> &'static str {
     if scene.curved() {
-        "searched through curved legs from a grid of starts (no proof)"
+        "searched through curved legs by shooting (no proof), or stopped at a limit"
     } else {
         "stopped at a limit"
     }
@@ -903,10 +904,11 @@ fn search_streamed(
     );
     search_bounds(&mut line, report.work, scene.curved(), options);
     if report.incomplete_pairs > 0 {
+        let n = report.incomplete_pairs;
         let _ = write!(
             line,
-            "; {} pairs {} (their sums may miss arrivals)",
-            report.incomplete_pairs,
+            "; {n} {} {} (their sums may miss arrivals)",
+            if n == 1 { "pair" } else { "pairs" },
             short_pairs(scene)
         );
     }
