@@ -635,7 +635,8 @@ fn write_parameters_file(
 /// `q` (below 2^51, the sum with 1.5 · 2^52 rounds it there, ties to even, and the sum's
 /// last bits are `q` modulo 4) and a rest `f = y − q`, `|f| ≤ 1/2` (a difference of two
 /// numbers within a half of each other: no rounding); the sine and cosine of `π/2 · f` (at
-/// most π/4) are fdlibm's kernels (within an ulp), turned by `q` quarter turns, exactly.
+/// most π/4) are fdlibm's kernels (within an ulp), turned by `q` quarter turns, exactly
+/// (and without a branch).
 /// So each component is within about 2e-16 of the true phase factor of `2π · frac(turns)`
 /// (`tests::the_phase_kernel_is_within_an_ulp_or_two_of_libm`).
 #[inline]
@@ -655,12 +656,11 @@ fn unit_phase(turns: f64) -> Complex64 {
     };
     let t = std::f64::consts::FRAC_PI_2 * f;
     let (s, c) = (sin_kernel(t), cos_kernel(t));
-    match q & 3 {
-        0 => Complex64::new(c, s),
-        1 => Complex64::new(-s, c),
-        2 => Complex64::new(-c, -s),
-        _ => Complex64::new(s, -c),
-    }
+    // Turned by `q` quarter turns: (c, s), (−s, c), (−c, −s), (s, −c), picked (not branched
+    // on: the quarter is as good as random from one echo to the next).
+    let turned = [c, -s, -c, s];
+    let q = q as usize;
+    Complex64::new(turned[q & 3], turned[q.wrapping_add(3) & 3])
 }
 
 /// `sin t` for `|t| ≤ π/4`: fdlibm's `__kernel_sin` (its tail `y` zero), within one ulp.
