@@ -222,6 +222,30 @@ struct AngledGroup {
     scaled_b: f64,
 }
 
+impl AngledGroup {
+    /// The group of `g`'s bounces with its wall's `weights` and `ratio`, and whether its
+    /// weights are positive, finite and scaled ([`TreeLaws::merged`] may take it).
+    fn new(g: &BounceGroup, weights: Weights, ratio: f64) -> (AngledGroup, bool) {
+        let big = weights.a.max(weights.b);
+        let positive = |w: f64| w > 0.0 && w.is_finite();
+        let scaled = positive(weights.a) && positive(weights.b) && big.is_normal();
+        let scale = if big.is_normal() {
+            inverse_binade(big)
+        } else {
+            1.0
+        };
+        let group = AngledGroup {
+            normal: g.normal,
+            count: g.count,
+            weights,
+            ratio,
+            scaled_a: weights.a * scale,
+            scaled_b: weights.b * scale,
+        };
+        (group, scaled)
+    }
+}
+
 /// The most bounces a node's merged coefficient ([`TreeLaws::merged`]) takes.
 const MERGED_BOUNCES: u32 = 50;
 
@@ -347,23 +371,10 @@ impl<'a> TreeLaws<'a> {
                 }
                 Some(Law::Fixed(r)) => fixed *= power(Complex64::new(r, 0.0), u64::from(g.count)),
                 Some(Law::Media { weights, ratio }) => {
-                    let big = weights.a.max(weights.b);
-                    let normal = |w: f64| w > 0.0 && w.is_finite();
-                    weighed &= normal(weights.a) && normal(weights.b) && big.is_normal();
-                    let scale = if big.is_normal() {
-                        inverse_binade(big)
-                    } else {
-                        1.0
-                    };
+                    let (group, scaled) = AngledGroup::new(g, weights, ratio);
+                    weighed &= scaled;
                     bounces += u64::from(g.count);
-                    out.angled.push(AngledGroup {
-                        normal: g.normal,
-                        count: g.count,
-                        weights,
-                        ratio,
-                        scaled_a: weights.a * scale,
-                        scaled_b: weights.b * scale,
-                    });
+                    out.angled.push(group);
                 }
             }
         }
@@ -375,7 +386,7 @@ impl<'a> TreeLaws<'a> {
     /// receiver, `length` long) of the node whose bounce groups `node` holds
     /// ([`prepare`](Self::prepare)). `axisymmetric`: for an axisymmetric source, the
     /// receiver's `|x|` and the first leg's run along x over the unfolded line's, `|A₀ · d|`
-    /// ([`TreePath`](crate::trace::mirrors::grid)'s axes), whose out-of-plane width is
+    /// (the streamed tree's `TreePath::axes`), whose out-of-plane width is
     /// `|x| L / |A₀ · d|`. The angled groups' coefficients are merged into one quotient
     /// ([`merged`](Self::merged)), or, where that declines, each taken once and powered;
     /// the angle-free ones' product multiplies them. `None` where a bounce lies within
@@ -391,10 +402,10 @@ impl<'a> TreeLaws<'a> {
     ) -> Option<Amplitude> {
         let fixed = node.fixed?;
         let inv = 1.0 / length;
-        let angled = match node.merge.then(|| self.merged(node, d, inv)) {
+        let angled = match node.merge.then(|| Self::merged(node, d, inv)) {
             Some(Merged::Coefficient(c)) => c,
             Some(Merged::NearCritical) => return None,
-            Some(Merged::Apart) | None => self.groups_apart(node, d, inv)?,
+            Some(Merged::Apart) | None => Self::groups_apart(node, d, inv)?,
         };
         // The tube `1 / (L · w)`, `w` the out-of-plane width: `L` for a point source, and
         // for an axisymmetric one `|x| L / |A₀ · d|`, i.e. `|A₀ · d| / (L² |x|)` (its
@@ -428,7 +439,7 @@ impl<'a> TreeLaws<'a> {
     /// bounce, `tests::the_merged_coefficient_is_the_groups_product`). [`Merged::Apart`]
     /// where a bounce's `a + b` leaves [`MERGED_FACTOR`].
     #[inline]
-    fn merged(&self, node: &NodeBounces, d: Vec2, inv: f64) -> Merged {
+    fn merged(node: &NodeBounces, d: Vec2, inv: f64) -> Merged {
         let (mut num, mut den, mut p) = (1.0, 1.0, Complex64::new(1.0, 0.0));
         for g in &node.angled {
             let (c, s) = (d.dot(g.normal) * inv, d.cross(g.normal) * inv);
@@ -463,7 +474,7 @@ impl<'a> TreeLaws<'a> {
     /// The angled groups' coefficients' product, each group's coefficient taken once and
     /// powered: the real ones' product first, then the complex ones'. `None` where a bounce
     /// lies within [`NEAR_CRITICAL`] of a critical angle.
-    fn groups_apart(&self, node: &NodeBounces, d: Vec2, inv: f64) -> Option<Complex64> {
+    fn groups_apart(node: &NodeBounces, d: Vec2, inv: f64) -> Option<Complex64> {
         let mut coefficient = Complex64::new(1.0, 0.0);
         let mut real = 1.0;
         for g in &node.angled {
@@ -489,5 +500,83 @@ impl<'a> TreeLaws<'a> {
     /// interface that is no wall).
     pub(crate) fn angled(&self, interface: usize) -> bool {
         matches!(self.laws.get(interface), Some(Some(Law::Media { .. })))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The merged quotient against the groups' product, each group's coefficient taken and
+    /// powered on its own, on random nodes: one to six groups (up to 50 bounces), random
+    /// normals, lines and weights (their ratio up to 1e6 either way, so that some bounce's
+    /// `a + b` leaves [`MERGED_FACTOR`] and the merged form declines: the groups are then
+    /// taken apart), slownesses' ratios on both sides of 1 (bounces beyond the critical
+    /// angle: complex coefficients). Where both give a number, they agree to a few ulps a
+    /// bounce of the coefficient's size (the inputs `a ± b` are the same numbers, scaled by
+    /// powers of two); where one declines near a critical angle, so does the other.
+    #[test]
+    fn the_merged_coefficient_is_the_groups_product() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut compared, mut complex, mut apart, mut critical) = (0, 0, 0, 0);
+        for _ in 0..200_000 {
+            let groups = 1 + (next() * 6.0) as usize;
+            let mut node = NodeBounces {
+                fixed: Some(Complex64::new(1.0, 0.0)),
+                angled: Vec::new(),
+                merge: true,
+            };
+            let mut bounces = 0u32;
+            for _ in 0..groups {
+                let t = next() * std::f64::consts::TAU;
+                let count = 1 + (next() * 12.0) as u32;
+                let g = BounceGroup {
+                    interface: 0,
+                    count,
+                    normal: Vec2::new(t.cos(), t.sin()),
+                };
+                let scale = 10f64.powf(next() * 8.0 - 4.0);
+                let weights = Weights {
+                    a: scale * 10f64.powf(next() * 6.0 - 3.0),
+                    b: scale * 10f64.powf(next() * 6.0 - 3.0),
+                    n: 1.0,
+                };
+                let (group, scaled) = AngledGroup::new(&g, weights, 0.6 + next() * 0.8);
+                assert!(scaled);
+                // At most `MERGED_BOUNCES`, as `prepare` has it.
+                if bounces + count <= MERGED_BOUNCES {
+                    bounces += count;
+                    node.angled.push(group);
+                }
+            }
+            let t = next() * std::f64::consts::TAU;
+            let length = 10f64.powf(next() * 4.0);
+            let d = Vec2::new(t.cos(), t.sin()) * length;
+            let inv = 1.0 / d.dot(d).sqrt();
+            let want = TreeLaws::groups_apart(&node, d, inv);
+            match (TreeLaws::merged(&node, d, inv), want) {
+                (Merged::Coefficient(got), Some(want)) => {
+                    let n: u32 = node.angled.iter().map(|g| g.count).sum();
+                    let tol = 4.0 * f64::from(n + 2) * f64::EPSILON * want.norm().max(1e-290);
+                    assert!((got - want).norm() <= tol, "{got} vs {want} ({n} bounces)");
+                    compared += 1;
+                    complex += usize::from(want.im != 0.0);
+                }
+                (Merged::NearCritical, None) => critical += 1,
+                (Merged::Apart, _) => apart += 1,
+                (m, w) => panic!("{:?} vs {w:?}", matches!(m, Merged::NearCritical)),
+            }
+        }
+        assert!(
+            compared > 100_000 && complex > 10_000,
+            "{compared} {complex}"
+        );
+        assert!(apart > 100 && critical > 20, "{apart} {critical}");
     }
 }
