@@ -635,8 +635,7 @@ fn write_parameters_file(
 /// `q` (below 2^51, the sum with 1.5 · 2^52 rounds it there, ties to even, and the sum's
 /// last bits are `q` modulo 4) and a rest `f = y − q`, `|f| ≤ 1/2` (a difference of two
 /// numbers within a half of each other: no rounding); the sine and cosine of `π/2 · f` (at
-/// most π/4) are fdlibm's kernels (within an ulp), turned by `q` quarter turns, exactly
-/// (and without a branch).
+/// most π/4) are fdlibm's kernels (within an ulp), turned by `q` quarter turns, exactly.
 /// So each component is within about 2e-16 of the true phase factor of `2π · frac(turns)`
 /// (`tests::the_phase_kernel_is_within_an_ulp_or_two_of_libm`).
 #[inline]
