@@ -30,9 +30,9 @@ pub use num_complex::Complex64;
 
 pub(crate) use diffraction::of_diffracted;
 pub(crate) use ray::{
-    BounceGroup, Incidence, NodeBounces, OnSegment, PathGeometry, ProfileReflection, TreeLaws,
-    UnfoldedLaws, caustics_of_path, caustics_of_profile_legs, of_one, of_path, of_profile,
-    of_profile_legs, of_straight_path,
+    AxisymmetricRun, BounceGroup, Incidence, NodeBounces, OnSegment, PathGeometry,
+    ProfileReflection, TreeLaws, UnfoldedLaws, caustics_of_path, caustics_of_profile_legs, of_one,
+    of_path, of_profile, of_profile_legs, of_straight_path,
 };
 
 /// The amplitude of one timed ray or arrival (the contract's `amplitude`, `spreading`,

@@ -15,7 +15,9 @@ use crate::regions::Regions;
 use crate::scene::{Amplitudes, Reflection, Scene, SourceModel, Step, StepKind};
 
 mod unfolded;
-pub(crate) use unfolded::{BounceGroup, Incidence, NodeBounces, TreeLaws, UnfoldedLaws};
+pub(crate) use unfolded::{
+    AxisymmetricRun, BounceGroup, Incidence, NodeBounces, TreeLaws, UnfoldedLaws,
+};
 
 /// A solved path as the amplitude reads it.
 #[derive(Clone, Copy, Debug)]

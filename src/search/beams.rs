@@ -6,7 +6,7 @@
 
 use rayon::prelude::*;
 
-use crate::amplitude::{Incidence, NodeBounces, TreeLaws, UnfoldedLaws};
+use crate::amplitude::{AxisymmetricRun, Incidence, NodeBounces, TreeLaws, UnfoldedLaws};
 use crate::scene::SourceModel;
 use crate::scene::{SearchOptions, Step, StepKind};
 use crate::trace::{
@@ -388,7 +388,10 @@ impl TreeStream<'_> {
                     if self.search.source.x != 0.0 {
                         return None;
                     }
-                    Some(p.axisymmetric_width(self.search.receivers[p.receiver].x)?)
+                    Some(AxisymmetricRun {
+                        receiver_x: self.search.receivers[p.receiver].x.abs(),
+                        along: p.axisymmetric_run()?,
+                    })
                 } else {
                     None
                 };

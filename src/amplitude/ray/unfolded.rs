@@ -202,16 +202,75 @@ pub(crate) struct NodeBounces {
     /// wall, and the closed form declines).
     fixed: Option<Complex64>,
     angled: Vec<AngledGroup>,
+    /// Whether the angled groups' coefficients may be merged into one quotient
+    /// ([`TreeLaws::merged`]): at most [`MERGED_BOUNCES`] bounces, every group's weights
+    /// positive and finite.
+    merge: bool,
 }
 
 /// A group of bounces whose coefficient depends on the angle: its mirrored normal, its
-/// number of bounces, its wall's weights and ratio of slownesses.
+/// number of bounces, its wall's weights and ratio of slownesses; for the merged form
+/// ([`TreeLaws::merged`]) the weights scaled by one power of two so that the larger lies in
+/// `[1, 2)`.
 #[derive(Clone, Copy, Debug)]
 struct AngledGroup {
     normal: Vec2,
     count: u32,
     weights: Weights,
     ratio: f64,
+    scaled_a: f64,
+    scaled_b: f64,
+}
+
+impl AngledGroup {
+    /// The group of `g`'s bounces with its wall's `weights` and `ratio`, and whether its
+    /// weights are positive, finite and scaled ([`TreeLaws::merged`] may take it).
+    fn new(g: &BounceGroup, weights: Weights, ratio: f64) -> (AngledGroup, bool) {
+        let big = weights.a.max(weights.b);
+        let positive = |w: f64| w > 0.0 && w.is_finite();
+        let scaled = positive(weights.a) && positive(weights.b) && big.is_normal();
+        let scale = if big.is_normal() {
+            inverse_binade(big)
+        } else {
+            1.0
+        };
+        let group = AngledGroup {
+            normal: g.normal,
+            count: g.count,
+            weights,
+            ratio,
+            scaled_a: weights.a * scale,
+            scaled_b: weights.b * scale,
+        };
+        (group, scaled)
+    }
+}
+
+/// The most bounces a node's merged coefficient ([`TreeLaws::merged`]) takes.
+const MERGED_BOUNCES: u32 = 50;
+
+/// The range of each bounce's `a + b` in the merged coefficient ([`TreeLaws::merged`]; the
+/// weights scaled to `[1, 2)`): outside it the path's groups are
+/// taken one by one. With at most [`MERGED_BOUNCES`] bounces, every partial product of the
+/// merged form's denominator then lies within `2^±850` and its numerator below it in size:
+/// nothing overflows, nothing the quotient keeps underflows.
+const MERGED_FACTOR: std::ops::RangeInclusive<f64> = (1.0 / 256.0)..=256.0;
+
+/// What [`TreeLaws::merged`] finds.
+enum Merged {
+    /// The angled groups' coefficients' product.
+    Coefficient(Complex64),
+    /// A bounce within [`NEAR_CRITICAL`] of a critical angle: the path is walked.
+    NearCritical,
+    /// A bounce's factor outside [`MERGED_FACTOR`]: the groups are taken one by one.
+    Apart,
+}
+
+/// `2^-e` for the power of two `2^e ≤ x < 2^(e+1)` of a positive normal `x`, exactly.
+#[inline(always)]
+fn inverse_binade(x: f64) -> f64 {
+    let e = (x.to_bits() >> 52) as i64 - 1023;
+    f64::from_bits(((1023 - e) as u64) << 52)
 }
 
 /// `x^n` of a real `x` by squaring, as `powi` computes it (the same products, in line).
@@ -227,6 +286,33 @@ fn real_power(x: f64, n: u32) -> f64 {
             return out;
         }
         base *= base;
+    }
+}
+
+/// An axisymmetric source's path in closed form: the receiver's `|x|` and the first leg's
+/// run along x over the unfolded line's (`|A₀ · d|`), whose out-of-plane width is
+/// `|x| L / |A₀ · d|`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct AxisymmetricRun {
+    pub receiver_x: f64,
+    pub along: f64,
+}
+
+/// `(xⁿ, yⁿ)` of two reals, each as [`real_power`] takes it, in one loop.
+#[inline(always)]
+fn real_powers(x: f64, y: f64, n: u32) -> (f64, f64) {
+    let (mut bx, mut by, mut n, mut ox, mut oy) = (x, y, n, 1.0, 1.0);
+    loop {
+        if n & 1 == 1 {
+            ox *= bx;
+            oy *= by;
+        }
+        n >>= 1;
+        if n == 0 {
+            return (ox, oy);
+        }
+        bx *= bx;
+        by *= by;
     }
 }
 
@@ -276,6 +362,7 @@ impl<'a> TreeLaws<'a> {
     pub(crate) fn prepare(&self, groups: &[BounceGroup], out: &mut NodeBounces) {
         out.angled.clear();
         let mut fixed = Complex64::new(1.0, 0.0);
+        let (mut bounces, mut weighed) = (0u64, true);
         for g in groups {
             match self.laws.get(g.interface as usize).copied().flatten() {
                 None => {
@@ -283,22 +370,26 @@ impl<'a> TreeLaws<'a> {
                     return;
                 }
                 Some(Law::Fixed(r)) => fixed *= power(Complex64::new(r, 0.0), u64::from(g.count)),
-                Some(Law::Media { weights, ratio }) => out.angled.push(AngledGroup {
-                    normal: g.normal,
-                    count: g.count,
-                    weights,
-                    ratio,
-                }),
+                Some(Law::Media { weights, ratio }) => {
+                    let (group, scaled) = AngledGroup::new(g, weights, ratio);
+                    weighed &= scaled;
+                    bounces += u64::from(g.count);
+                    out.angled.push(group);
+                }
             }
         }
         out.fixed = Some(fixed);
+        out.merge = weighed && bounces <= u64::from(MERGED_BOUNCES);
     }
 
     /// The amplitude of the image path along `d` (the unfolded line, from the image to the
     /// receiver, `length` long) of the node whose bounce groups `node` holds
-    /// ([`prepare`](Self::prepare)); `axisymmetric` as in [`UnfoldedLaws::amplitude`]. Each
-    /// group's coefficient is taken once and powered; the angle-free ones' product comes
-    /// first, then the real ones', then the complex ones'. `None` where a bounce lies within
+    /// ([`prepare`](Self::prepare)). `axisymmetric`: for an axisymmetric source, the
+    /// receiver's `|x|` and the first leg's run along x over the unfolded line's, `|A₀ · d|`
+    /// (the streamed tree's `TreePath::axes`), whose out-of-plane width is
+    /// `|x| L / |A₀ · d|`. The angled groups' coefficients are merged into one quotient
+    /// ([`merged`](Self::merged)), or, where that declines, each taken once and powered;
+    /// the angle-free ones' product multiplies them. `None` where a bounce lies within
     /// [`NEAR_CRITICAL`] of a critical angle, or a group's interface is no wall: the caller
     /// then walks the path's points.
     #[inline]
@@ -307,10 +398,84 @@ impl<'a> TreeLaws<'a> {
         node: &NodeBounces,
         d: Vec2,
         length: f64,
-        axisymmetric: Option<f64>,
+        axisymmetric: Option<AxisymmetricRun>,
     ) -> Option<Amplitude> {
+        let fixed = node.fixed?;
         let inv = 1.0 / length;
-        let mut coefficient = node.fixed?;
+        let angled = match node.merge.then(|| Self::merged(node, d, inv)) {
+            Some(Merged::Coefficient(c)) => c,
+            Some(Merged::NearCritical) => return None,
+            Some(Merged::Apart) | None => Self::groups_apart(node, d, inv)?,
+        };
+        // The tube `1 / (L · w)`, `w` the out-of-plane width: `L` for a point source, and
+        // for an axisymmetric one `|x| L / |A₀ · d|`, i.e. `|A₀ · d| / (L² |x|)` (its
+        // division, and `finish_with`'s, one).
+        let (tube_num, tube_den, out) = match axisymmetric {
+            Some(run) => (run.along, length * length, Some(run.receiver_x)),
+            None => (1.0, length, None),
+        };
+        let walk = Walk {
+            coefficient: fixed * angled,
+            tube_num,
+            tube_den,
+            out_of_plane: length,
+            attenuation_db: self.alpha * length,
+            l0: length,
+            w0: self.w0,
+            converted: None,
+        };
+        Some(finish_with(self.settings, &walk, || Ok(out)))
+    }
+
+    /// The angled groups' coefficients' product as one quotient, for `d` the unfolded line
+    /// (`inv` the inverse of its length): with `a = A |cos θ₁|` and `b = B √(1 − q²)` (`q`
+    /// the ratio of the slownesses times `sin θ₁`; the weights `A`, `B`), a real group's
+    /// coefficient is `(a − b) / (a + b)`, and a complex one's (beyond the critical angle,
+    /// `b = B √(q² − 1)`) `z̄ / z` with `z = a + ib`, so that the product is
+    /// `Π (a − b)ⁿ · conj(P)² / (Π (a + b)ⁿ · |P|²)` with `P = Π zⁿ`: one division for the
+    /// path. The cosines and `q²` are [`groups_apart`](Self::groups_apart)'s, each group's
+    /// weights scaled by a power of two so that the larger lies in `[1, 2)` (exactly:
+    /// `a` and `b` alike); so the same quotient as its product to round-off (a few ulps a
+    /// bounce, `tests::the_merged_coefficient_is_the_groups_product`). [`Merged::Apart`]
+    /// where a bounce's `a + b` leaves [`MERGED_FACTOR`].
+    #[inline]
+    fn merged(node: &NodeBounces, d: Vec2, inv: f64) -> Merged {
+        let (mut num, mut den, mut p) = (1.0, 1.0, Complex64::new(1.0, 0.0));
+        for g in &node.angled {
+            let (c, s) = (d.dot(g.normal) * inv, d.cross(g.normal) * inv);
+            let q2 = g.ratio * g.ratio * (s * s);
+            if (q2 - 1.0).abs() < NEAR_CRITICAL {
+                return Merged::NearCritical;
+            }
+            let a = g.scaled_a * c.abs();
+            if q2 <= 1.0 {
+                let b = (1.0 - q2).sqrt() * g.scaled_b;
+                if !MERGED_FACTOR.contains(&(a + b)) {
+                    return Merged::Apart;
+                }
+                let (top, bottom) = real_powers(a - b, a + b, g.count);
+                num *= top;
+                den *= bottom;
+            } else {
+                // `cos_across`'s `√(q² − 1)` where `q²` is finite.
+                let b = (q2 - 1.0).sqrt() * g.scaled_b;
+                if !MERGED_FACTOR.contains(&(a + b)) {
+                    return Merged::Apart;
+                }
+                p *= power(Complex64::new(a, b), u64::from(g.count));
+            }
+        }
+        let conj = Complex64::new(p.re, -p.im);
+        let top = conj * conj * num;
+        let bottom = den * p.norm_sqr();
+        Merged::Coefficient(Complex64::new(top.re / bottom, top.im / bottom))
+    }
+
+    /// The angled groups' coefficients' product, each group's coefficient taken once and
+    /// powered: the real ones' product first, then the complex ones'. `None` where a bounce
+    /// lies within [`NEAR_CRITICAL`] of a critical angle.
+    fn groups_apart(node: &NodeBounces, d: Vec2, inv: f64) -> Option<Complex64> {
+        let mut coefficient = Complex64::new(1.0, 0.0);
         let mut real = 1.0;
         for g in &node.angled {
             let (c, s) = (d.dot(g.normal) * inv, d.cross(g.normal) * inv);
@@ -328,22 +493,90 @@ impl<'a> TreeLaws<'a> {
                 coefficient *= power(r, u64::from(g.count));
             }
         }
-        let walk = Walk {
-            coefficient: coefficient * real,
-            tube_num: 1.0,
-            tube_den: length,
-            out_of_plane: length,
-            attenuation_db: self.alpha * length,
-            l0: length,
-            w0: self.w0,
-            converted: None,
-        };
-        Some(finish_with(self.settings, &walk, || Ok(axisymmetric)))
+        Some(coefficient * real)
     }
 
     /// Whether the coefficient of `interface` depends on the angle (`false` also for an
     /// interface that is no wall).
     pub(crate) fn angled(&self, interface: usize) -> bool {
         matches!(self.laws.get(interface), Some(Some(Law::Media { .. })))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The merged quotient against the groups' product, each group's coefficient taken and
+    /// powered on its own, on random nodes: one to six groups (up to 50 bounces), random
+    /// normals, lines and weights (their ratio up to 1e6 either way, so that some bounce's
+    /// `a + b` leaves [`MERGED_FACTOR`] and the merged form declines: the groups are then
+    /// taken apart), slownesses' ratios on both sides of 1 (bounces beyond the critical
+    /// angle: complex coefficients). Where both give a number, they agree to a few ulps a
+    /// bounce of the coefficient's size (the inputs `a ± b` are the same numbers, scaled by
+    /// powers of two); where one declines near a critical angle, so does the other.
+    #[test]
+    fn the_merged_coefficient_is_the_groups_product() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut compared, mut complex, mut apart, mut critical) = (0, 0, 0, 0);
+        for _ in 0..200_000 {
+            let groups = 1 + (next() * 6.0) as usize;
+            let mut node = NodeBounces {
+                fixed: Some(Complex64::new(1.0, 0.0)),
+                angled: Vec::new(),
+                merge: true,
+            };
+            let mut bounces = 0u32;
+            for _ in 0..groups {
+                let t = next() * std::f64::consts::TAU;
+                let count = 1 + (next() * 12.0) as u32;
+                let g = BounceGroup {
+                    interface: 0,
+                    count,
+                    normal: Vec2::new(t.cos(), t.sin()),
+                };
+                let scale = 10f64.powf(next() * 8.0 - 4.0);
+                let weights = Weights {
+                    a: scale * 10f64.powf(next() * 6.0 - 3.0),
+                    b: scale * 10f64.powf(next() * 6.0 - 3.0),
+                    n: 1.0,
+                };
+                let (group, scaled) = AngledGroup::new(&g, weights, 0.6 + next() * 0.8);
+                assert!(scaled);
+                // At most `MERGED_BOUNCES`, as `prepare` has it.
+                if bounces + count <= MERGED_BOUNCES {
+                    bounces += count;
+                    node.angled.push(group);
+                }
+            }
+            let t = next() * std::f64::consts::TAU;
+            let length = 10f64.powf(next() * 4.0);
+            let d = Vec2::new(t.cos(), t.sin()) * length;
+            let inv = 1.0 / d.dot(d).sqrt();
+            let want = TreeLaws::groups_apart(&node, d, inv);
+            match (TreeLaws::merged(&node, d, inv), want) {
+                (Merged::Coefficient(got), Some(want)) => {
+                    let n: u32 = node.angled.iter().map(|g| g.count).sum();
+                    let tol = 4.0 * f64::from(n + 2) * f64::EPSILON * want.norm().max(1e-290);
+                    assert!((got - want).norm() <= tol, "{got} vs {want} ({n} bounces)");
+                    compared += 1;
+                    complex += usize::from(want.im != 0.0);
+                }
+                (Merged::NearCritical, None) => critical += 1,
+                (Merged::Apart, _) => apart += 1,
+                (m, w) => panic!("{:?} vs {w:?}", matches!(m, Merged::NearCritical)),
+            }
+        }
+        assert!(
+            compared > 100_000 && complex > 10_000,
+            "{compared} {complex}"
+        );
+        assert!(apart > 100 && critical > 20, "{apart} {critical}");
     }
 }

@@ -630,38 +630,36 @@ fn write_parameters_file(
 
 /// `e^(2πi · frac(turns))`, the phase factor of an echo at `turns = f · T` cycles: what
 /// `Complex64::from_polar(1, 2π frac(turns))` gives, without its general range reduction
-/// (nor the library calls of `fract` and `round` on a CPU without SSE4.1). The fraction
-/// `x` (exactly `fract`'s) is split exactly into quarter turns `q` and a rest `f = 4x − q`,
-/// `|f| ≤ 1/2` (integer parts and differences of numbers below 4: no rounding); the sine and
-/// cosine of `π/2 · f` (at most π/4) are fdlibm's kernels (within an ulp), turned by `q`
-/// quarter turns, exactly. So each component is within about 2e-16 of the true phase
-/// factor of `2π · frac(turns)` (`tests::the_phase_kernel_is_within_an_ulp_or_two_of_libm`).
+/// (nor the library calls of `fract` and `round` on a CPU without SSE4.1), and without a
+/// branch on the quarter. `y = 4 · turns` (exact) is split exactly into its nearest integer
+/// `q` (below 2^51, the sum with 1.5 · 2^52 rounds it there, ties to even, and the sum's
+/// last bits are `q` modulo 4) and a rest `f = y − q`, `|f| ≤ 1/2` (a difference of two
+/// numbers within a half of each other: no rounding); the sine and cosine of `π/2 · f` (at
+/// most π/4) are fdlibm's kernels (within an ulp), turned by `q` quarter turns, exactly.
+/// So each component is within about 2e-16 of the true phase factor of `2π · frac(turns)`
+/// (`tests::the_phase_kernel_is_within_an_ulp_or_two_of_libm`).
 #[inline]
 fn unit_phase(turns: f64) -> Complex64 {
-    // Below 2^52 the integer part is the truncating conversion's, exactly.
-    let x = if turns.abs() < 4_503_599_627_370_496.0 {
-        turns - (turns as i64) as f64
+    /// 1.5 · 2^52: a sum with it below 2^51 in size is rounded to an integer.
+    const ROUND: f64 = 6_755_399_441_055_744.0;
+    let y = 4.0 * turns;
+    let (q, f) = if y.abs() < 2_251_799_813_685_248.0 {
+        let shifted = y + ROUND;
+        (shifted.to_bits(), y - (shifted - ROUND))
     } else {
-        turns.fract()
+        // Beyond 2^51 quarter turns `y` is a multiple of 1/4 (of 2 above 2^53): `fract`
+        // takes the fraction of the turns, exactly.
+        let y = 4.0 * turns.fract();
+        let r = y.round();
+        (r as i64 as u64, y - r)
     };
-    let y = 4.0 * x;
-    let mut q = y as i64;
-    let mut f = y - q as f64;
-    if f > 0.5 {
-        q += 1;
-        f -= 1.0;
-    } else if f < -0.5 {
-        q -= 1;
-        f += 1.0;
-    }
     let t = std::f64::consts::FRAC_PI_2 * f;
     let (s, c) = (sin_kernel(t), cos_kernel(t));
-    match q & 3 {
-        0 => Complex64::new(c, s),
-        1 => Complex64::new(-s, c),
-        2 => Complex64::new(-c, -s),
-        _ => Complex64::new(s, -c),
-    }
+    // Turned by `q` quarter turns: (c, s), (−s, c), (−c, −s), (s, −c), picked (not branched
+    // on: the quarter is as good as random from one echo to the next).
+    let turned = [c, -s, -c, s];
+    let q = q as usize;
+    Complex64::new(turned[q & 3], turned[q.wrapping_add(3) & 3])
 }
 
 /// `sin t` for `|t| ≤ π/4`: fdlibm's `__kernel_sin` (its tail `y` zero), within one ulp.
@@ -736,6 +734,12 @@ mod tests {
             let at = f64::from(k) / 8.0;
             for t in [at, at.next_up(), at.next_down(), 300.0 + at, -2.0 + at] {
                 check(t);
+            }
+            // Four times the turns at and beyond 2^51 (the reduction's other way), and below.
+            for big in [562_949_953_421_312.0, 1e15, 4_503_599_627_370_496.0] {
+                for t in [big + at, big.next_down() + at, -big + at] {
+                    check(t);
+                }
             }
         }
         assert!(kernel <= 2.3e-16, "{kernel:e}");

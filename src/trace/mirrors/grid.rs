@@ -123,14 +123,18 @@ impl ReceiverGrid {
 
     /// Every receiver that may lie in `beam` (of the node of image `image` on `wall`; a
     /// superset of those [`Beam::holds`] keeps with the margin `delta`) to `visit`, row by
-    /// row (or column by column, whichever are fewer); `false` where `visit` stops.
+    /// row (or column by column, whichever are fewer); `false` where `visit` stops. With
+    /// `inner` (a sure node's certain beam), `visit` is also told which receivers certainly
+    /// lie inside it by [`INNER`] margins (its part of each row, shrunk far beyond the
+    /// round-off of its ends and of [`Beam::gauge`]: each such receiver passes the gauge's
+    /// test, which need not be taken; the others may pass it too).
     fn scan(
         &self,
-        beam: &Beam,
+        (beam, inner): (&Beam, Option<&Beam>),
         wall: &Wall,
         image: Point,
         delta: f64,
-        visit: &mut impl FnMut(usize) -> bool,
+        visit: &mut impl FnMut(usize, bool) -> bool,
     ) -> bool {
         let b = self.bounds;
         let corners = [
@@ -139,6 +143,8 @@ impl ReceiverGrid {
             Point::new(b.min.x, b.max.y),
             Point::new(b.max.x, b.min.y),
         ];
+        // The receivers' largest `|x − image|₁` (a convex function: at a corner), which
+        // bounds the gauge's margins over them.
         let reach = corners
             .iter()
             .map(|&c| (c.x - image.x).abs() + (c.y - image.y).abs())
@@ -147,12 +153,79 @@ impl ReceiverGrid {
             .iter()
             .map(|c| c.x.abs() + c.y.abs())
             .fold(image.x.abs() + image.y.abs(), f64::max);
-        // Each constraint `a · x + c ≥ −margin`, widened far beyond its round-off.
+        let near = BeamSide {
+            wall,
+            image,
+            delta,
+            reach,
+            size,
+        };
+        // The beam's constraints, widened far beyond their round-off; the certain beam's,
+        // by `INNER` times their largest margins and far beyond their round-off inward.
+        let outer = near.constraints(beam, |margin, slack| -(2.0 * margin + slack));
+        let deep = inner.map(|inner| {
+            near.constraints(inner, |margin, slack| {
+                INNER * margin * (1.0 + 1e-12) + slack
+            })
+        });
+        let by_rows = self.ys.len() <= self.xs.len();
+        let (lines, along) = if by_rows {
+            (&self.ys, &self.xs)
+        } else {
+            (&self.xs, &self.ys)
+        };
+        let ny = self.ys.len();
+        let slack = 1e-9 * size;
+        for (li, &v) in lines.iter().enumerate() {
+            let Some((lo, hi)) = row_interval(&outer, by_rows, v) else {
+                continue;
+            };
+            let first = along.partition_point(|&u| u < lo - slack);
+            let last = along.partition_point(|&u| u <= hi + slack);
+            let (deep_first, deep_last) =
+                match deep.as_ref().and_then(|d| row_interval(d, by_rows, v)) {
+                    Some((lo, hi)) => (
+                        along.partition_point(|&u| u < lo + slack).max(first),
+                        along.partition_point(|&u| u <= hi - slack).min(last),
+                    ),
+                    None => (last, last),
+                };
+            for ai in first..last {
+                let (i, j) = if by_rows { (ai, li) } else { (li, ai) };
+                let certain = (deep_first..deep_last).contains(&ai);
+                if !visit(self.index[i * ny + j] as usize, certain) {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+}
+
+/// A node's beams against the receivers' grid: its wall and image, the margin on
+/// positions, the receivers' largest `|x − image|₁` and the scale of the coordinates.
+struct BeamSide<'w> {
+    wall: &'w Wall,
+    image: Point,
+    delta: f64,
+    reach: f64,
+    size: f64,
+}
+
+/// A beam's three constraints on a point `x` of the plane as `(a, c, bound)`: `a · x + c ≥
+/// bound`, `a · x + c` the value [`Beam::gauge`] takes.
+type Constraints = [(Vec2, f64, f64); 3];
+
+impl BeamSide<'_> {
+    /// `beam`'s constraints, each bound `bound(margin, slack)` of its largest margin over
+    /// the receivers and a slack far above the round-off of its value.
+    fn constraints(&self, beam: &Beam, bound: impl Fn(f64, f64) -> f64) -> Constraints {
+        let (wall, image, delta, reach) = (self.wall, self.image, self.delta, self.reach);
         let o = -beam.side;
         let normal = wall.n * beam.side;
         let edge_a = Vec2::new(-beam.to_a.y, beam.to_a.x) * o;
         let edge_b = Vec2::new(beam.to_b.y, -beam.to_b.x) * o;
-        let constraints = [
+        [
             (
                 normal,
                 -normal.dot(wall.p - Point::new(0.0, 0.0)),
@@ -170,45 +243,30 @@ impl ReceiverGrid {
             ),
         ]
         .map(|(a, c, margin)| {
-            let slack = 1e-9 * (a.x.abs() + a.y.abs()) * size;
-            (a, c, 2.0 * margin + slack)
-        });
-        let by_rows = self.ys.len() <= self.xs.len();
-        let (lines, along) = if by_rows {
-            (&self.ys, &self.xs)
-        } else {
-            (&self.xs, &self.ys)
-        };
-        let ny = self.ys.len();
-        'lines: for (li, &v) in lines.iter().enumerate() {
-            let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
-            for (a, c, margin) in constraints {
-                let (a_along, a_line) = if by_rows { (a.x, a.y) } else { (a.y, a.x) };
-                // a_along · u ≥ rhs.
-                let rhs = -margin - c - a_line * v;
-                if a_along > 0.0 {
-                    lo = lo.max(rhs / a_along);
-                } else if a_along < 0.0 {
-                    hi = hi.min(rhs / a_along);
-                } else if !matches!(rhs.partial_cmp(&0.0), Some(Less | Equal)) {
-                    continue 'lines;
-                }
-            }
-            if !matches!(lo.partial_cmp(&hi), Some(Less | Equal)) {
-                continue;
-            }
-            let slack = 1e-9 * size;
-            let first = along.partition_point(|&u| u < lo - slack);
-            let last = along.partition_point(|&u| u <= hi + slack);
-            for ai in first..last {
-                let (i, j) = if by_rows { (ai, li) } else { (li, ai) };
-                if !visit(self.index[i * ny + j] as usize) {
-                    return false;
-                }
-            }
-        }
-        true
+            let slack = 1e-9 * (a.x.abs() + a.y.abs()) * self.size;
+            (a, c, bound(margin, slack))
+        })
     }
+}
+
+/// The part `[lo, hi]` of the row (or column) at `v` where every constraint holds (`None`:
+/// none; the ends as computed, to be widened or shrunk by the caller).
+#[inline]
+fn row_interval(constraints: &Constraints, by_rows: bool, v: f64) -> Option<(f64, f64)> {
+    let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+    for &(a, c, bound) in constraints {
+        let (a_along, a_line) = if by_rows { (a.x, a.y) } else { (a.y, a.x) };
+        // a_along · u ≥ rhs.
+        let rhs = bound - c - a_line * v;
+        if a_along > 0.0 {
+            lo = lo.max(rhs / a_along);
+        } else if a_along < 0.0 {
+            hi = hi.min(rhs / a_along);
+        } else if !matches!(rhs.partial_cmp(&0.0), Some(Less | Equal)) {
+            return None;
+        }
+    }
+    matches!(lo.partial_cmp(&hi), Some(Less | Equal)).then_some((lo, hi))
 }
 
 /// One arrival of the streamed tree in closed form (valid during the call that reports it).
@@ -233,25 +291,71 @@ pub(crate) struct TreePath<'a> {
     /// the first leg's (`j = 0`) is `axis`.
     pub axis: Vec2,
     pub axes: &'a [Vec2],
+    /// Whether every leg of the path certainly runs one way along x by far more than
+    /// [`axisymmetric_run`](Self::axisymmetric_run)'s threshold (found once for the node's
+    /// certain beam, which holds the path: [`one_way`]).
+    pub one_way: bool,
 }
 
 impl TreePath<'_> {
-    /// The out-of-plane width of an axisymmetric source on the axis (`x = 0`): `|x_R| ℓ₀ /
-    /// |x₁ − x₀|`, `|x_R| L / |A₀ · d|`, where every leg certainly runs one way along x (each
-    /// `|Aⱼ · d|` above 1e-12 of `L`, all of one sign), so that every point of the path but
-    /// the source lies strictly on one side of the axis; `None` where that is not certain.
+    /// For an axisymmetric source on the axis (`x = 0`), the first leg's run along x over
+    /// the unfolded line's, `|A₀ · d|` (its out-of-plane width is then `|x_R| ℓ₀ / |x₁ − x₀|
+    /// = |x_R| L / |A₀ · d|`), where every leg certainly runs one way along x (each `|Aⱼ ·
+    /// d|` above 1e-12 of `L`, all of one sign), so that every point of the path but the
+    /// source lies strictly on one side of the axis; `None` where that is not certain.
     #[inline]
-    pub(crate) fn axisymmetric_width(&self, receiver_x: f64) -> Option<f64> {
+    pub(crate) fn axisymmetric_run(&self) -> Option<f64> {
         let d = self.direction;
         let tiny = 1e-12 * self.length;
         let first = self.axis.dot(d);
+        if self.one_way {
+            return Some(first.abs());
+        }
         let sign = first.signum();
         let one_way = self.axes.iter().all(|a| {
             let v = a.dot(d);
             v.abs() > tiny && v.signum() == sign
         });
-        (one_way && first.abs() > tiny).then(|| receiver_x.abs() * self.length / first.abs())
+        (one_way && first.abs() > tiny).then(|| first.abs())
     }
+}
+
+/// What the closed-form paths of a node share: its bounce groups, its mirrored x axes
+/// ([`TreePath::axes`]), and whether every leg of each certainly runs one way along x
+/// ([`TreePath::one_way`]).
+#[derive(Clone, Copy, Debug)]
+struct NodeOwn<'a> {
+    groups: &'a [BounceGroup],
+    axes: &'a [Vec2],
+    one_way: bool,
+}
+
+/// Whether every direction `d` inside the wedge of the certain beam `inner` (from its
+/// image between its edges `to_a` and `to_b`, an angle below π: `d = α to_a + β to_b`,
+/// `α, β ≥ 0`) has each `A · d` (`A` the first leg's mirrored x axis `axis` and every one
+/// of `axes`) of one sign and above `1e-9 |A| |d|` in size: `A · d ≥ min(A · to_a / |to_a|,
+/// A · to_b / |to_b|) (α |to_a| + β |to_b|)`, the latter at least `|d|`. So the closed form's
+/// own test ([`TreePath::axisymmetric_run`]: each above 1e-12 of `|d|`, of the first's
+/// sign) holds for every receiver of the certain beam, far beyond its round-off.
+fn one_way(inner: &Beam, axis: Vec2, axes: &[Vec2]) -> bool {
+    let (la, lb) = (inner.to_a.length(), inner.to_b.length());
+    if !(la > 0.0 && lb > 0.0 && la.is_finite() && lb.is_finite()) {
+        return false;
+    }
+    let run = |a: Vec2| {
+        let size = a.length();
+        let (u, v) = (a.dot(inner.to_a) / la, a.dot(inner.to_b) / lb);
+        let least = 1e-9 * size;
+        if u > least && v > least {
+            1
+        } else if u < -least && v < -least {
+            -1
+        } else {
+            0
+        }
+    };
+    let sign = run(axis);
+    sign != 0 && axes.iter().all(|&a| run(a) == sign)
 }
 
 /// What a node of the tree certainly holds (beside its [`Node`] on the stack).
@@ -549,14 +653,16 @@ where
     /// [`Validation::node`] takes it, but in closed form where the node's certain beam holds
     /// it; `false` where `found` or `unfolded` stops the search. `crossings`: whether the
     /// node's last legs may cross a segment, found at the first receiver that asks.
+    /// `known_deep`: whether the grid's scan found `r` inside the certain beam by [`INNER`]
+    /// margins ([`ReceiverGrid::scan`]), so that neither beam's test is taken for it.
     fn receiver(
         &mut self,
         stack: &[Node],
         walls: &[usize],
         certain: &Certain,
-        own: (&[BounceGroup], &[Vec2]),
+        own: NodeOwn<'_>,
         crossings: &mut Option<bool>,
-        r: usize,
+        (r, known_deep): (usize, bool),
     ) -> bool {
         let search = self.validation.search;
         let top = &stack[stack.len() - 1];
@@ -565,14 +671,20 @@ where
         // Inside the certain beam by `INNER` margins (a sure node's): inside the beam, whose
         // test is then not needed (the certain beam lies in it, its margins far above the
         // round-off of either test).
-        let deep = certain.sure
-            && match (&top.beam, &certain.inner) {
-                (Some(_), Some(inner)) => {
-                    let g = inner.gauge(&self.walls.walls[top.wall], top.image, receiver, delta);
-                    (0..3).all(|c| g.values[c] >= INNER * g.margins[c])
-                }
-                _ => false,
-            };
+        #[cfg(test)]
+        if known_deep {
+            tests::check_known_deep(self.walls, top, certain, receiver, delta);
+        }
+        let deep = known_deep
+            || (certain.sure
+                && match (&top.beam, &certain.inner) {
+                    (Some(_), Some(inner)) => {
+                        let g =
+                            inner.gauge(&self.walls.walls[top.wall], top.image, receiver, delta);
+                        (0..3).all(|c| g.values[c] >= INNER * g.margins[c])
+                    }
+                    _ => false,
+                });
         let inside = deep
             || match &top.beam {
                 Some(beam) => beam.holds(&self.walls.walls[top.wall], top.image, receiver, delta),
@@ -616,7 +728,7 @@ where
         &mut self,
         stack: &[Node],
         certain: &Certain,
-        (groups, axes): (&[BounceGroup], &[Vec2]),
+        own: NodeOwn<'_>,
         crossings: &mut Option<bool>,
         (r, deep): (usize, bool),
     ) -> Option<bool> {
@@ -687,9 +799,10 @@ where
             length,
             time,
             direction: d,
-            groups,
+            groups: own.groups,
             axis: certain.axis,
-            axes,
+            axes: own.axes,
+            one_way: own.one_way,
         })
     }
 }
@@ -841,17 +954,119 @@ where
     ) -> bool {
         let top = stack[stack.len() - 1];
         let c = certain[certain.len() - 1];
-        let own = (&bounces.groups[c.groups..], &bounces.axes[c.axes..]);
+        let axes = &bounces.axes[c.axes..];
+        let own = NodeOwn {
+            groups: &bounces.groups[c.groups..],
+            axes,
+            one_way: c.sure && c.inner.is_some_and(|inner| one_way(&inner, c.axis, axes)),
+        };
         let (mirrors, delta) = (self.walls, self.bounds.delta);
         let count = self.validation.search.receivers.len();
         let mut crossings = None;
-        let mut each = |r: usize| self.receiver(stack, walls, &c, own, &mut crossings, r);
+        let mut each = |r: usize, known_deep: bool| {
+            self.receiver(stack, walls, &c, own, &mut crossings, (r, known_deep))
+        };
         match (grid, &top.beam) {
             (Some(grid), Some(beam)) => {
                 let wall = &mirrors.walls[top.wall];
-                grid.scan(beam, wall, top.image, delta, &mut each)
+                let inner = c.inner.as_ref().filter(|_| c.sure);
+                grid.scan((beam, inner), wall, top.image, delta, &mut each)
             }
-            _ => (0..count).all(each),
+            _ => (0..count).all(|r| each(r, false)),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+
+    use super::*;
+    use crate::options::Run;
+    use crate::{Scene, Tracer};
+
+    /// Receivers the grid's scan took as inside their node's certain beam by [`INNER`]
+    /// margins, and of those, the ones the gauge's own test does not find so.
+    static KNOWN_DEEP: AtomicU64 = AtomicU64::new(0);
+    static NOT_DEEP: AtomicU64 = AtomicU64::new(0);
+
+    /// The test [`NodeReceivers::receiver`] takes where the scan did not find `receiver`
+    /// deep, counted for a receiver the scan found deep.
+    pub(super) fn check_known_deep(
+        walls: &MirrorWalls,
+        top: &Node,
+        certain: &Certain,
+        receiver: Point,
+        delta: f64,
+    ) {
+        KNOWN_DEEP.fetch_add(1, Relaxed);
+        let deep = certain.sure
+            && match (&top.beam, &certain.inner) {
+                (Some(_), Some(inner)) => {
+                    let g = inner.gauge(&walls.walls[top.wall], top.image, receiver, delta);
+                    (0..3).all(|c| g.values[c] >= INNER * g.margins[c])
+                }
+                _ => false,
+            };
+        if !deep {
+            NOT_DEEP.fetch_add(1, Relaxed);
+        }
+    }
+
+    /// Every receiver the grid's scan finds inside a certain beam by `INNER` margins (and so
+    /// takes without a test) passes the certain beam's own test, which the other receivers
+    /// take: the same receivers in closed form, the same arrivals. Random sloping waveguides
+    /// (one to four bottom segments, a tilted surface, grids of receivers of random size and
+    /// spacing, in rows or in columns), the scan's receivers checked one by one.
+    #[test]
+    fn receivers_the_scan_finds_deep_pass_the_certain_beams_test() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = |lo: f64, hi: f64| {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            lo + (hi - lo) * ((state >> 11) as f64 / (1u64 << 53) as f64)
+        };
+        for case in 0..16 {
+            let length = next(500.0, 3000.0);
+            let pieces = 1 + case % 4;
+            let mut bottom = vec![[-10.0, -next(40.0, 150.0)]];
+            for k in 1..=pieces {
+                let x = if k == pieces {
+                    length + 10.0
+                } else {
+                    length * k as f64 / pieces as f64 + next(-20.0, 20.0)
+                };
+                bottom.push([x, -next(40.0, 150.0)]);
+            }
+            let tilt = next(-3.0, 3.0) * f64::from(case % 2);
+            let (nx, ny) = if case % 3 == 0 {
+                (5 + case, 40)
+            } else {
+                (40 + 3 * case, 7 + case)
+            };
+            let doc = serde_json::json!({
+                "media": { "water": { "speed": 1500, "density": 1 },
+                           "sediment": { "speed": 1700, "density": 1.8, "at": [10, -300] } },
+                "background": "water",
+                "domain": [[-10, -400], [length + 10.0, 20]],
+                "interfaces": {
+                    "surface": { "points": [[-10, 0], [length + 10.0, tilt]],
+                                 "reflection": "pressure-release" },
+                    "bottom": { "points": bottom, "reflection": "media" }
+                },
+                "sources": [[0, -next(5.0, 35.0)]],
+                "receivers": { "grid": { "x": [next(20.0, 80.0), length - next(5.0, 50.0), nx],
+                                         "y": [-next(0.5, 2.0), -next(30.0, 38.0), ny] } },
+                "search": { "max_steps": 14, "refract": false },
+                "amplitudes": { "source": "axisymmetric", "frequency": 100 }
+            });
+            let scene = Scene::from_json(&doc.to_string()).unwrap();
+            let tracer = Tracer::new(&scene).unwrap();
+            tracer.search_into(&Run::new(), &|_| {}).unwrap();
+        }
+        let (known, not) = (KNOWN_DEEP.load(Relaxed), NOT_DEEP.load(Relaxed));
+        assert_eq!(not, 0, "{not} of {known}");
+        assert!(known > 100_000, "{known}");
     }
 }
