@@ -26,7 +26,7 @@ range (`fan_depths`). BELLHOP's files are left in a temporary directory.
 
 How to run:
   cargo build --profile test-opt --bin eigenray
-  python3 benches/bellhop_slope.py /path/to/bellhop.exe [path/to/eigenray]
+  python3 benches/bellhop_slope.py /path/to/bellhop.exe [path/to/eigenray] [--receiver-depth M]
 """
 
 import json
@@ -155,6 +155,26 @@ def ray_fan_loss(bellhop, root, range_m, launch, half_step=0.0005):
         / (speed(SOURCE_DEPTH) * range_m * abs(dz_dtheta) * math.cos(arrival))
     )
     return -10 * math.log10(pressure_sq)
+
+
+def fan_roots(bellhop, root, range_m, launch, walls, half_width=0.1, count=201):
+    """The launch angles (degrees, positive down) within half_width of `launch` at which
+    BELLHOP's own rays reflecting `walls` pass the receiver: sign changes of the depth miss
+    between neighbouring rays (0.001 degrees apart), jumps of more than 1 m (a reflection
+    crossing a bottom vertex) left out. Where BELLHOP's beams merge two eigenrays, these
+    show both."""
+    rays = bellhop_rays(bellhop, root, launch - half_width, launch + half_width, count)
+    roots, last = [], None
+    for angle, points in rays:
+        hit = crossing(points, range_m)
+        if hit is None or hit[2] != walls:
+            last = None
+            continue
+        miss = hit[0] - RECEIVER_DEPTH
+        if last is not None and (last[1] > 0) != (miss > 0) and abs(miss - last[1]) < 1:
+            roots.append(last[0] + (angle - last[0]) * last[1] / (last[1] - miss))
+        last = (angle, miss)
+    return roots
 
 
 def fan_depths(bellhop, root, range_m, launch, walls, half_width=0.01, count=201):
@@ -294,16 +314,23 @@ def phase_difference(a, b):
 
 
 def main():
-    bellhop = os.path.abspath(sys.argv[1])
+    global RECEIVER_DEPTH
+    args = sys.argv[1:]
+    if "--receiver-depth" in args:
+        i = args.index("--receiver-depth")
+        RECEIVER_DEPTH = float(args[i + 1])
+        del args[i : i + 2]
+    bellhop = os.path.abspath(args[0])
     here = os.path.dirname(os.path.abspath(__file__))
     default = os.path.join(here, "..", "target", "test-opt", "eigenray")
-    binary = sys.argv[2] if len(sys.argv) > 2 else default
+    binary = args[1] if len(args) > 1 else default
     work = tempfile.mkdtemp(prefix="bellhop_slope_")
     root = os.path.join(work, "slope")
     bellhop_files(root)
     subprocess.run([bellhop, "slope"], cwd=work, capture_output=True, check=True)
     bh_all = read_arrivals(root + ".arr")
-    er_all = [merge_as_bellhop(er) for er in eigenray_arrivals(binary, root)]
+    er_raw = eigenray_arrivals(binary, root)
+    er_all = [merge_as_bellhop(er) for er in er_raw]
     print(
         "| range | eigenray time (s) | BELLHOP delay − eigenray (µs) "
         "| launch eigenray / BELLHOP | reflections | eigenray TL (dB) "
@@ -345,6 +372,15 @@ def main():
                 print(
                     f"{r / 1000:g} km {e['name']} {e['launch']:+.3f}°: eigenray TL {e['tl']:.2f}, "
                     f"BELLHOP's beams {e['tl'] + dtl:.2f}, BELLHOP's ray fan {fan:.2f} dB"
+                )
+                walls = "" if e["name"] == "-" else e["name"]
+                roots = fan_roots(bellhop, root, r, a["launch"], walls, half_width=0.2, count=401)
+                listed = [x["launch"] for x in er_raw[RANGES.index(r)] if x["name"] == e["name"]]
+                missed = [x for x in roots if min(abs(x - y) for y in listed) > 0.002]
+                print(
+                    f"  BELLHOP's {walls} rays within 0.2° pass the receiver at "
+                    + (", ".join(f"{x:+.4f}°" for x in roots) or "none (over 1 m per 0.001°)")
+                    + (f"; {len(missed)} of them eigenray does not list" if missed else "")
                 )
     print()
     for r, n_er, n_bh, rows, only_er, only_bh in summary:
