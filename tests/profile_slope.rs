@@ -443,3 +443,50 @@ fn the_search_over_a_slope_keeps_to_its_limits() {
     assert!(!arrivals(&unlimited, 0).is_empty());
     assert!(arrivals(&small, 0).is_empty());
 }
+
+/// Where a reflection point crosses a vertex of the bottom, the ray's depth at the receiver
+/// jumps, so one depth is reached once from each segment, within one step of the shooting's
+/// grid of launch angles. BELLHOP (A-New-BellHope, `benches/bellhop_slope.py`) traced both
+/// rays of each pair below through `examples/scenes/profile_slope.json`'s water and bottom:
+/// at (3000, −20) the `sb` rays launched 4.9947° and 4.8960° above the horizontal (its
+/// −4.9947° and −4.8960°: its angles are positive down), at (3000, −95) the `sbsbsbsb`
+/// rays 17.2253° and 17.0435° above it, the second of each reflecting off
+/// the bottom just past its vertex at 2 km. Both are found, converged, at BELLHOP's launch
+/// angles to its printed digits.
+///
+/// Mutant caught: neighbouring shots off different segments left unbracketed (one of each
+/// pair found).
+#[test]
+fn rays_reflecting_past_a_vertex_of_the_bottom_are_found() {
+    let example: serde_json::Value =
+        serde_json::from_str(include_str!("../examples/scenes/profile_slope.json")).unwrap();
+    for (receiver, path, degrees) in [
+        ([3000.0, -20.0], "sb", [4.9947, 4.8960]),
+        ([3000.0, -95.0], "sbsbsbsb", [17.2253, 17.0435]),
+    ] {
+        let mut scene = example.clone();
+        scene["receivers"] = serde_json::json!([receiver]);
+        let steps: Vec<_> = path
+            .chars()
+            .map(|c| {
+                let wall = if c == 's' { "surface" } else { "bottom" };
+                serde_json::json!({ "reflect": wall })
+            })
+            .collect();
+        scene["paths"] = serde_json::json!([{ "name": path, "steps": steps }]);
+        let scene = Scene::from_json(&scene.to_string()).unwrap();
+        let found = arrivals(&scene, 0);
+        assert_eq!(found.len(), 2, "{path} at {receiver:?}: {found:?}");
+        let mut angles: Vec<f64> = found
+            .iter()
+            .map(|a| a.launch_angle.expect("a launch angle").to_degrees())
+            .collect();
+        angles.sort_by(|a, b| b.total_cmp(a));
+        for (got, want) in angles.iter().zip(degrees) {
+            assert!(
+                (got - want).abs() < 1e-4,
+                "{path}: {got}° against BELLHOP's {want}°"
+            );
+        }
+    }
+}

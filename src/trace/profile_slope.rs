@@ -124,12 +124,19 @@ impl Shot {
     /// Whether two shots met the same segments with the same turns, and both passed the
     /// receiver's height a `j`-th time after the same turns.
     fn same_family(&self, o: &Shot, j: usize) -> bool {
-        let seg = |s: &Shot| s.hits.iter().map(|h| h.1).collect::<Vec<_>>();
-        seg(self) == seg(o)
+        self.same_walls(o) && self.passes.get(j).map(|p| p.1) == o.passes.get(j).map(|p| p.1)
+    }
+
+    /// Whether two shots met the same segments with the same turns before each.
+    fn same_walls(&self, o: &Shot) -> bool {
+        self.hits.len() == o.hits.len()
+            && self.hits.iter().zip(&o.hits).all(|(a, b)| a.1 == b.1)
             && self.turns == o.turns
-            && self.passes.get(j).map(|p| p.1) == o.passes.get(j).map(|p| p.1)
     }
 }
+
+/// The most walls' boundaries [`Shooting::across`] follows between two neighbouring shots.
+const MAX_BOUNDARIES: u32 = 4;
 
 /// The signed distance of `q` from the line of `a–b` (left positive).
 fn side(a: Point, b: Point, q: Point) -> f64 {
@@ -378,8 +385,75 @@ impl Shooting<'_> {
                     out.push(found);
                 }
             }
+            if !s0.same_walls(s1) {
+                self.across([angle(i), angle(i + 1)], [s0, s1], MAX_BOUNDARIES, &mut out);
+            }
         }
         out
+    }
+
+    /// The starts between two neighbouring shots that met different segments (or turned
+    /// differently): where a reflection point crosses a vertex, the miss at the receiver
+    /// jumps, so a root of one side's family may lie between its last shot and the
+    /// boundary, out of reach of the neighbours' sign test. The boundary is found by
+    /// bisection on the launch angle; each side's family is then bracketed between its
+    /// neighbour and its shot nearest the boundary, and what lies beyond a second boundary
+    /// likewise (up to `depth` boundaries).
+    fn across(
+        &self,
+        [lo, hi]: [f64; 2],
+        [s_lo, s_hi]: [&Shot; 2],
+        depth: u32,
+        out: &mut Vec<(f64, Shot, usize)>,
+    ) {
+        if depth == 0 {
+            return;
+        }
+        // The boundary: `a` the last angle of `s_lo`'s walls, `b` the first past them.
+        let (mut a, mut b) = (lo, hi);
+        let (mut shot_a, mut shot_b): (Option<Shot>, Option<Shot>) = (None, None);
+        for _ in 0..64 {
+            let mid = 0.5 * (a + b);
+            if mid <= a || mid >= b {
+                break;
+            }
+            let Some(shot) = self.shoot(mid) else {
+                // No shot (a wall missed, or the budget spent): the boundary is that.
+                b = mid;
+                shot_b = None;
+                continue;
+            };
+            if shot.same_walls(s_lo) {
+                (a, shot_a) = (mid, Some(shot));
+            } else {
+                (b, shot_b) = (mid, Some(shot));
+            }
+        }
+        let mut bracket = |[x, y]: [f64; 2], [sx, sy]: [&Shot; 2]| {
+            for j in 0..sx.passes.len().min(sy.passes.len()) {
+                let (Some(vx), Some(vy)) = (self.miss(sx, j), self.miss(sy, j)) else {
+                    continue;
+                };
+                if (vx > 0.0) != (vy > 0.0)
+                    && sx.same_family(sy, j)
+                    && let Some(found) = self.bisect([x, y], vx, sx, j)
+                {
+                    out.push(found);
+                }
+            }
+        };
+        if let Some(near) = &shot_a {
+            bracket([lo, a], [s_lo, near]);
+        }
+        // Past the boundary: `s_hi`'s family, or another boundary before it.
+        let start = shot_b.as_ref().unwrap_or(s_hi);
+        if start.same_walls(s_hi) {
+            if let Some(near) = &shot_b {
+                bracket([b, hi], [near, s_hi]);
+            }
+        } else if let Some(near) = &shot_b {
+            self.across([b, hi], [near, s_hi], depth - 1, out);
+        }
     }
 
     /// Bisection on the launch angle between `lo` (miss `v_lo`) and `hi` for the `j`-th pass
