@@ -221,7 +221,8 @@ fn chord_hit(
     leaving: bool,
     work: &mut u64,
 ) -> Option<WallHit> {
-    let at = |f: f64| piece.at(f).to_point();
+    let angles = piece.angles();
+    let at = |f: f64| piece.at_angles(f, angles).to_point();
     let mut found: Option<WallHit> = None;
     let mut prev = at(0.0);
     for j in 1..=CHORDS {
