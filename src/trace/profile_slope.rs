@@ -43,12 +43,14 @@ const MAX_PIECES: usize = 20_000;
 const MAX_PASSES: usize = 256;
 /// Points per piece of a leg for its obstruction test.
 const PIECE_POINTS: usize = 16;
-/// The work of one chord of a piece (its point on the arc; a unit is about 35 ns).
-const CHORD_WORK: u64 = 2;
+/// The work of one chord of a piece (its point on the arc, its end angles shared by the
+/// piece; a unit is about 220 instructions, as elsewhere: see docs/performance.md).
+const CHORD_WORK: u64 = 1;
 /// Segment boxes weighed against a chord per unit of work.
 const SEGMENTS_PER_UNIT: usize = 8;
-/// The work of one crossing of a chord and a segment refined on the piece (64 points).
-const REFINE_WORK: u64 = 128;
+/// The work of one crossing of a chord and a segment refined on the piece (64 points, the
+/// piece's end angles shared).
+const REFINE_WORK: u64 = 48;
 /// The work of one Newton solve per leg (its legs' roots at each iteration).
 const NEWTON_WORK: u64 = 2000;
 
