@@ -1213,6 +1213,21 @@ impl RayPiece {
     /// `φ₁ + f (φ₂ − φ₁)`, and its `x` the closed-form range from the start to that height:
     /// the point lies on the ray whatever the rounding of its height.
     pub fn at(&self, f: f64) -> Vec2 {
+        if f <= 0.0 || f >= 1.0 {
+            return self.at_angles(f, [0.0; 2]);
+        }
+        self.at_angles(f, self.angles())
+    }
+
+    /// The ray's angles with the horizontal at its ends (`φ₁`, `φ₂` of [`RayPiece::at`]).
+    pub fn angles(&self) -> [f64; 2] {
+        let ([c1, c2], [s1, s2], p) = (self.speeds, self.sines, self.p);
+        [s1.atan2(p * c1), s2.atan2(p * c2)]
+    }
+
+    /// [`RayPiece::at`] given the piece's [`RayPiece::angles`] `[phi1, phi2]` (the same
+    /// point, for many fractions of one piece without their arctangents each time).
+    pub fn at_angles(&self, f: f64, [phi1, phi2]: [f64; 2]) -> Vec2 {
         if f <= 0.0 {
             return self.start;
         }
@@ -1220,7 +1235,6 @@ impl RayPiece {
             return self.end;
         }
         let ([c1, c2], [s1, s2], p) = (self.speeds, self.sines, self.p);
-        let (phi1, phi2) = (s1.atan2(p * c1), s2.atan2(p * c2));
         let turn = phi2 - phi1;
         // The fraction of the height: (cos φ − cos φ₁) / (cos φ₂ − cos φ₁), in products of
         // sines (no cancellation); a straight piece (a uniform layer, a vertical ray, or one
