@@ -452,10 +452,10 @@ fn the_search_over_a_slope_keeps_to_its_limits() {
 /// −4.9947° and −4.8960°: its angles are positive down), at (3000, −95) the `sbsbsbsb`
 /// rays 17.2253° and 17.0435° above it, the second of each reflecting off
 /// the bottom just past its vertex at 2 km. Both are found, converged, at BELLHOP's launch
-/// angles to its printed digits.
+/// angles to its printed digits, by the path's shooting and by the search's fan.
 ///
-/// Mutant caught: neighbouring shots off different segments left unbracketed (one of each
-/// pair found).
+/// Mutants caught: neighbouring shots off different segments left unbracketed, in the
+/// path's shooting and in the fan (one of each pair found).
 #[test]
 fn rays_reflecting_past_a_vertex_of_the_bottom_are_found() {
     let example: serde_json::Value =
@@ -464,8 +464,8 @@ fn rays_reflecting_past_a_vertex_of_the_bottom_are_found() {
         ([3000.0, -20.0], "sb", [4.9947, 4.8960]),
         ([3000.0, -95.0], "sbsbsbsb", [17.2253, 17.0435]),
     ] {
-        let mut scene = example.clone();
-        scene["receivers"] = serde_json::json!([receiver]);
+        let mut json = example.clone();
+        json["receivers"] = serde_json::json!([receiver]);
         let steps: Vec<_> = path
             .chars()
             .map(|c| {
@@ -473,8 +473,8 @@ fn rays_reflecting_past_a_vertex_of_the_bottom_are_found() {
                 serde_json::json!({ "reflect": wall })
             })
             .collect();
-        scene["paths"] = serde_json::json!([{ "name": path, "steps": steps }]);
-        let scene = Scene::from_json(&scene.to_string()).unwrap();
+        json["paths"] = serde_json::json!([{ "name": path, "steps": steps }]);
+        let scene = Scene::from_json(&json.to_string()).unwrap();
         let found = arrivals(&scene, 0);
         assert_eq!(found.len(), 2, "{path} at {receiver:?}: {found:?}");
         let mut angles: Vec<f64> = found
@@ -488,5 +488,21 @@ fn rays_reflecting_past_a_vertex_of_the_bottom_are_found() {
                 "{path}: {got}° against BELLHOP's {want}°"
             );
         }
+        // The search's fan (every sequence up to the path's length) finds both as well.
+        json.as_object_mut().unwrap().remove("paths");
+        json["solver"].as_object_mut().unwrap().remove("stationary");
+        json["search"] = serde_json::json!({ "max_steps": path.len() });
+        let search = Scene::from_json(&json.to_string()).unwrap();
+        let report = Tracer::new(&search).unwrap().search(&Run::new()).unwrap();
+        let surface = search.interface_index("surface").unwrap();
+        let listed = (report.arrivals.iter())
+            .filter(|a| {
+                let walls: String = (a.steps.iter())
+                    .map(|s| if s.interface == surface { 's' } else { 'b' })
+                    .collect();
+                walls == path
+            })
+            .count();
+        assert_eq!(listed, 2, "the search's {path} arrivals at {receiver:?}");
     }
 }

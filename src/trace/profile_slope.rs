@@ -426,22 +426,34 @@ impl Shooting<'_> {
             let (Some(s0), Some(s1)) = (&shots[i], &shots[i + 1]) else {
                 continue;
             };
-            for j in 0..s0.passes.len().min(s1.passes.len()) {
-                let (Some(v0), Some(v1)) = (self.miss(s0, j), self.miss(s1, j)) else {
-                    continue;
-                };
-                if (v0 > 0.0) == (v1 > 0.0) || !s0.same_family(s1, j) {
-                    continue;
-                }
-                if let Some(found) = self.bisect([angle(i), angle(i + 1)], v0, s0, j) {
-                    out.push(found);
-                }
-            }
-            if !s0.same_walls(s1) {
-                self.across([angle(i), angle(i + 1)], [s0, s1], MAX_BOUNDARIES, &mut out);
-            }
+            self.starts_between([angle(i), angle(i + 1)], [s0, s1], &mut out);
         }
         out
+    }
+
+    /// The starts between two neighbouring shots `s0` (at `lo`) and `s1` (at `hi`): each
+    /// sign change of a pass's miss within one family, refined by bisection, and where the
+    /// two met different segments, [`across`](Self::across) their boundaries.
+    pub(super) fn starts_between(
+        &self,
+        [lo, hi]: [f64; 2],
+        [s0, s1]: [&Shot; 2],
+        out: &mut Vec<(f64, Shot, usize)>,
+    ) {
+        for j in 0..s0.passes.len().min(s1.passes.len()) {
+            let (Some(v0), Some(v1)) = (self.miss(s0, j), self.miss(s1, j)) else {
+                continue;
+            };
+            if (v0 > 0.0) == (v1 > 0.0) || !s0.same_family(s1, j) {
+                continue;
+            }
+            if let Some(found) = self.bisect([lo, hi], v0, s0, j) {
+                out.push(found);
+            }
+        }
+        if !s0.same_walls(s1) {
+            self.across([lo, hi], [s0, s1], MAX_BOUNDARIES, out);
+        }
     }
 
     /// The starts between two neighbouring shots that met different segments (or turned

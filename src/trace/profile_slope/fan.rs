@@ -160,6 +160,36 @@ fn brackets<'r>(r0: &'r FanRay, r1: &'r FanRay, xr: f64) -> impl Iterator<Item =
     })
 }
 
+/// The sequences of walls after which either of two neighbouring rays passes the receiver's
+/// height past the first wall where the two parted (a different segment, or other turns
+/// before it); none where they met the same walls.
+fn parted_sequences(r0: &FanRay, r1: &FanRay) -> Vec<Vec<Step>> {
+    let common = r0
+        .hits
+        .iter()
+        .zip(&r1.hits)
+        .take_while(|(a, b)| a == b)
+        .count();
+    if common == r0.hits.len() && common == r1.hits.len() {
+        return Vec::new();
+    }
+    let mut out: Vec<Vec<Step>> = Vec::new();
+    for ray in [r0, r1] {
+        for pass in ray.passes.iter().filter(|p| p.walls > common) {
+            let steps: Vec<Step> = (ray.hits[..pass.walls].iter())
+                .map(|h| Step {
+                    kind: StepKind::Reflect,
+                    interface: h.interface,
+                })
+                .collect();
+            if !out.contains(&steps) {
+                out.push(steps);
+            }
+        }
+    }
+    out
+}
+
 /// The search of one pair (see the module) through the profile medium `medium`: walls
 /// `walls`, at most `max_walls` of them, arrivals by `max_time`, within `budget`.
 pub(crate) fn sloped_search(
@@ -223,6 +253,35 @@ pub(crate) fn sloped_search(
             match found.iter_mut().find(|(s, _)| *s == steps) {
                 Some((_, list)) => keep_new(list, ray, bounds),
                 None => found.push((steps, vec![ray])),
+            }
+        }
+        // Where the two parted (a reflection point crossed a vertex, the miss jumping
+        // there), every sequence either passes the receiver after: its own shots between
+        // them, bracketed on each side of the boundary.
+        let lo_hi = [angle(i), angle(i + 1)];
+        for steps in parted_sequences(r0, r1) {
+            let shooting = Shooting {
+                scene,
+                profile: &profile,
+                steps: &steps,
+                source,
+                receiver,
+                bounds,
+                budget,
+            };
+            let (Some(s0), Some(s1)) = (shooting.shoot(lo_hi[0]), shooting.shoot(lo_hi[1])) else {
+                continue;
+            };
+            let mut starts = Vec::new();
+            shooting.starts_between(lo_hi, [&s0, &s1], &mut starts);
+            for start in starts {
+                let Some(ray) = shooting.ray_of_start(&start).filter(|r| r.time <= max_time) else {
+                    continue;
+                };
+                match found.iter_mut().find(|(s, _)| *s == steps) {
+                    Some((_, list)) => keep_new(list, ray, bounds),
+                    None => found.push((steps.clone(), vec![ray])),
+                }
             }
         }
     }
