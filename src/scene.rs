@@ -1849,20 +1849,9 @@ impl Scene {
         candidates: &[u32],
         own: [SegmentRef; 2],
     ) -> Option<SegmentRef> {
-        let mut sbox = None;
-        for &i in candidates {
-            let r = self.segments[i as usize];
-            if r == own[0] || r == own[1] {
-                continue;
-            }
-            let sbox = *sbox.get_or_insert_with(|| middle_box(a, b, margin));
-            let Segment { start: p, end: q } = self.segment_ends[i as usize];
-            if Aabb::from_finite(p, q).overlaps(sbox) && self.crosses_on_line(i, a, b, line, margin)
-            {
-                return Some(r);
-            }
-        }
-        None
+        self.first_crossing_among_by(a, b, margin, candidates, own, |i| {
+            self.crosses_on_line(i, a, b, line, margin)
+        })
     }
 
     /// Whether scene segment `i` meets leg `a–b` at a fraction `t ∈ (margin, 1 − margin)` of
@@ -1891,6 +1880,22 @@ impl Scene {
         candidates: &[u32],
         own: [SegmentRef; 2],
     ) -> Option<SegmentRef> {
+        self.first_crossing_among_by(a, b, margin, candidates, own, |i| {
+            self.crosses(i, a, b, margin)
+        })
+    }
+
+    /// The first of `candidates` (not one of `own`) whose box meets the middle of `a–b` and
+    /// that `crosses` says the leg crosses: the hierarchy's leaf test over a list.
+    fn first_crossing_among_by(
+        &self,
+        a: Point,
+        b: Point,
+        margin: f64,
+        candidates: &[u32],
+        own: [SegmentRef; 2],
+        crosses: impl Fn(u32) -> bool,
+    ) -> Option<SegmentRef> {
         // Most legs have no candidate but their own segments: no box to build for them.
         let mut sbox = None;
         for &i in candidates {
@@ -1901,7 +1906,7 @@ impl Scene {
             let sbox = *sbox.get_or_insert_with(|| middle_box(a, b, margin));
             let Segment { start: p, end: q } = self.segment_ends[i as usize];
             // Scene vertices are finite.
-            if Aabb::from_finite(p, q).overlaps(sbox) && self.crosses(i, a, b, margin) {
+            if Aabb::from_finite(p, q).overlaps(sbox) && crosses(i) {
                 return Some(r);
             }
         }
