@@ -193,17 +193,7 @@ impl<'a> ProblemRef<'a> {
     /// `frames` (the fast path of the solver: no polyline lookups), Hessian included. Gives the
     /// same numbers as `evaluate` on those segments.
     pub fn evaluate_framed(&self, s: &[f64], frames: &[Frame], e: &mut Eval, curvature: bool) {
-        let k = self.k();
-        let (s, frames) = (&s[..k], &frames[..k]);
-        {
-            let (rel, tan) = (&mut e.rel[..k + 2], &mut e.tan[..k]);
-            rel[0] = Vec2::default();
-            for i in 0..k {
-                rel[i + 1] = frames[i].offset(s[i]);
-                tan[i] = frames[i].t;
-            }
-            rel[k + 1] = self.receiver - self.source;
-        }
+        self.place_framed(s, frames, e);
         self.derive(
             e,
             |_| Pin::Free,
@@ -212,21 +202,26 @@ impl<'a> ProblemRef<'a> {
         );
     }
 
+    /// The points' offsets from the source and the segments' tangents at `s` on `frames`
+    /// into `e` (the first part of [`evaluate_framed`](Self::evaluate_framed)).
+    #[inline]
+    fn place_framed(&self, s: &[f64], frames: &[Frame], e: &mut Eval) {
+        let k = self.k();
+        let (s, frames) = (&s[..k], &frames[..k]);
+        let (rel, tan) = (&mut e.rel[..k + 2], &mut e.tan[..k]);
+        rel[0] = Vec2::default();
+        for i in 0..k {
+            rel[i + 1] = frames[i].offset(s[i]);
+            tan[i] = frames[i].t;
+        }
+        rel[k + 1] = self.receiver - self.source;
+    }
+
     /// [`evaluate_framed`](Self::evaluate_framed) without the Hessian (`e.diag`, `e.off` left
     /// alone): positions, legs, time, residuals and merit, the same numbers. For a caller that
     /// has the Hessian at the points from elsewhere (`solver::confirm_start`).
     pub fn evaluate_framed_first(&self, s: &[f64], frames: &[Frame], e: &mut Eval) {
-        let k = self.k();
-        let (s, frames) = (&s[..k], &frames[..k]);
-        {
-            let (rel, tan) = (&mut e.rel[..k + 2], &mut e.tan[..k]);
-            rel[0] = Vec2::default();
-            for i in 0..k {
-                rel[i + 1] = frames[i].offset(s[i]);
-                tan[i] = frames[i].t;
-            }
-            rel[k + 1] = self.receiver - self.source;
-        }
+        self.place_framed(s, frames, e);
         self.derive(e, |_| Pin::Free, false, None::<fn(usize) -> f64>);
     }
 

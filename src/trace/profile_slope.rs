@@ -440,6 +440,20 @@ impl Shooting<'_> {
         [s0, s1]: [&Shot; 2],
         out: &mut Vec<(f64, Shot, usize)>,
     ) {
+        self.sign_changes([lo, hi], [s0, s1], out);
+        if !s0.same_walls(s1) {
+            self.across([lo, hi], [s0, s1], MAX_BOUNDARIES, out);
+        }
+    }
+
+    /// Each pass whose miss changes sign between shots `s0` (at `lo`) and `s1` (at `hi`) of
+    /// one family, refined by bisection.
+    fn sign_changes(
+        &self,
+        [lo, hi]: [f64; 2],
+        [s0, s1]: [&Shot; 2],
+        out: &mut Vec<(f64, Shot, usize)>,
+    ) {
         for j in 0..s0.passes.len().min(s1.passes.len()) {
             let (Some(v0), Some(v1)) = (self.miss(s0, j), self.miss(s1, j)) else {
                 continue;
@@ -450,9 +464,6 @@ impl Shooting<'_> {
             if let Some(found) = self.bisect([lo, hi], v0, s0, j) {
                 out.push(found);
             }
-        }
-        if !s0.same_walls(s1) {
-            self.across([lo, hi], [s0, s1], MAX_BOUNDARIES, out);
         }
     }
 
@@ -493,27 +504,14 @@ impl Shooting<'_> {
                 (b, shot_b) = (mid, Some(shot));
             }
         }
-        let mut bracket = |[x, y]: [f64; 2], [sx, sy]: [&Shot; 2]| {
-            for j in 0..sx.passes.len().min(sy.passes.len()) {
-                let (Some(vx), Some(vy)) = (self.miss(sx, j), self.miss(sy, j)) else {
-                    continue;
-                };
-                if (vx > 0.0) != (vy > 0.0)
-                    && sx.same_family(sy, j)
-                    && let Some(found) = self.bisect([x, y], vx, sx, j)
-                {
-                    out.push(found);
-                }
-            }
-        };
         if let Some(near) = &shot_a {
-            bracket([lo, a], [s_lo, near]);
+            self.sign_changes([lo, a], [s_lo, near], out);
         }
         // Past the boundary: `s_hi`'s family, or another boundary before it.
         let start = shot_b.as_ref().unwrap_or(s_hi);
         if start.same_walls(s_hi) {
             if let Some(near) = &shot_b {
-                bracket([b, hi], [near, s_hi]);
+                self.sign_changes([b, hi], [near, s_hi], out);
             }
         } else if let Some(near) = &shot_b {
             self.across([b, hi], [near, s_hi], depth - 1, out);
@@ -1087,24 +1085,33 @@ mod tests {
         assert!(hits > 1000 && pieces > 2 * near, "{pieces} {near} {hits}");
     }
 
+    /// A five-knot summer profile between a flat pressure-release surface at 0 and a flat
+    /// rigid bottom at −100 m, a source at (0, −30) and a receiver at (3000, −60), with the
+    /// further keys `more` (`""`, or `"paths": …`).
+    fn flat_waveguide(more: &str) -> Scene {
+        let comma = if more.is_empty() { "" } else { "," };
+        Scene::from_json(&format!(
+            r#"{{ "media": {{ "water": {{ "profile": [[0, 1500], [-20, 1495], [-50, 1490],
+                                                   [-80, 1492], [-150, 1496]], "at": [0, -50] }} }},
+                 "interfaces": {{
+                   "surface": {{ "points": [[-500, 0], [6000, 0]], "reflection": "pressure-release" }},
+                   "bottom": {{ "points": [[-500, -100], [6000, -100]], "reflection": "rigid" }} }},
+                 "sources": [[0, -30]], "receivers": [[3000, -60]]{comma} {more} }}"#
+        ))
+        .unwrap()
+    }
+
     /// Flat walls: the general route (shooting, Newton on the legs) finds what the flat
     /// waveguide's route finds (its reflections as turning points at the walls), the same
     /// arrivals of each path, times to 1e-12, points to 1e-6, turns and caustics the same.
     #[test]
     fn flat_walls_agree_with_the_waveguide_route() {
-        let scene = Scene::from_json(
-            r#"{ "media": { "water": { "profile": [[0, 1500], [-20, 1495], [-50, 1490],
-                                                   [-80, 1492], [-150, 1496]], "at": [0, -50] } },
-                 "interfaces": {
-                   "surface": { "points": [[-500, 0], [6000, 0]], "reflection": "pressure-release" },
-                   "bottom": { "points": [[-500, -100], [6000, -100]], "reflection": "rigid" } },
-                 "sources": [[0, -30]], "receivers": [[3000, -60]],
-                 "paths": [{ "steps": [{ "reflect": "bottom" }] },
-                           { "steps": [{ "reflect": "surface" }, { "reflect": "bottom" }] },
-                           { "steps": [{ "reflect": "bottom" }, { "reflect": "surface" },
-                                       { "reflect": "bottom" }] }] }"#,
-        )
-        .unwrap();
+        let scene = flat_waveguide(
+            r#""paths": [{ "steps": [{ "reflect": "bottom" }] },
+                         { "steps": [{ "reflect": "surface" }, { "reflect": "bottom" }] },
+                         { "steps": [{ "reflect": "bottom" }, { "reflect": "surface" },
+                                     { "reflect": "bottom" }] }]"#,
+        );
         let profile = scene.media()[0].profile_model().unwrap();
         let s = Point::new(0.0, -30.0);
         let mut compared = 0;
@@ -1147,15 +1154,7 @@ mod tests {
     /// (steps, times to 1e-12, points to 1e-6, status), obstructed ones included.
     #[test]
     fn flat_walls_search_agrees_with_the_waveguide_search() {
-        let scene = Scene::from_json(
-            r#"{ "media": { "water": { "profile": [[0, 1500], [-20, 1495], [-50, 1490],
-                                                   [-80, 1492], [-150, 1496]], "at": [0, -50] } },
-                 "interfaces": {
-                   "surface": { "points": [[-500, 0], [6000, 0]], "reflection": "pressure-release" },
-                   "bottom": { "points": [[-500, -100], [6000, -100]], "reflection": "rigid" } },
-                 "sources": [[0, -30]], "receivers": [[3000, -60]] }"#,
-        )
-        .unwrap();
+        let scene = flat_waveguide("");
         let profile = scene.media()[0].profile_model().unwrap();
         let s = Point::new(0.0, -30.0);
         let mut compared = 0;

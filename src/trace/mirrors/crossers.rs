@@ -116,14 +116,11 @@ impl Hull {
         }
         let turn = |o: Point, a: Point, b: Point| (a - o).cross(b - o);
         let mut hull: Vec<Point> = Vec::with_capacity(2 * p.len());
+        // The lower chain left to right, then the upper right to left.
         for pass in 0..2 {
             let start = hull.len();
-            let iter: Box<dyn Iterator<Item = &Point>> = if pass == 0 {
-                Box::new(p.iter())
-            } else {
-                Box::new(p.iter().rev())
-            };
-            for &x in iter {
+            for k in 0..p.len() {
+                let x = if pass == 0 { p[k] } else { p[p.len() - 1 - k] };
                 while hull.len() >= start + 2
                     && turn(hull[hull.len() - 2], hull[hull.len() - 1], x) <= 0.0
                 {

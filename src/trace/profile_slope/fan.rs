@@ -160,6 +160,32 @@ fn brackets<'r>(r0: &'r FanRay, r1: &'r FanRay, xr: f64) -> impl Iterator<Item =
     })
 }
 
+impl FanRay {
+    /// The steps of its first `walls` reflections.
+    fn steps(&self, walls: usize) -> Vec<Step> {
+        (self.hits[..walls].iter())
+            .map(|h| Step {
+                kind: StepKind::Reflect,
+                interface: h.interface,
+            })
+            .collect()
+    }
+}
+
+/// Adds `ray` (of sequence `steps`) to the arrivals `found` by sequence, unless its
+/// sequence's list holds it already ([`keep_new`]).
+fn keep_found(
+    found: &mut Vec<(Vec<Step>, Vec<SlopedRay>)>,
+    steps: Vec<Step>,
+    ray: SlopedRay,
+    bounds: crate::geom::Aabb,
+) {
+    match found.iter_mut().find(|(s, _)| *s == steps) {
+        Some((_, list)) => keep_new(list, ray, bounds),
+        None => found.push((steps, vec![ray])),
+    }
+}
+
 /// The sequences of walls after which either of two neighbouring rays passes the receiver's
 /// height past the first wall where the two parted (a different segment, or other turns
 /// before it); none where they met the same walls.
@@ -176,12 +202,7 @@ fn parted_sequences(r0: &FanRay, r1: &FanRay) -> Vec<Vec<Step>> {
     let mut out: Vec<Vec<Step>> = Vec::new();
     for ray in [r0, r1] {
         for pass in ray.passes.iter().filter(|p| p.walls > common) {
-            let steps: Vec<Step> = (ray.hits[..pass.walls].iter())
-                .map(|h| Step {
-                    kind: StepKind::Reflect,
-                    interface: h.interface,
-                })
-                .collect();
+            let steps = ray.steps(pass.walls);
             if !out.contains(&steps) {
                 out.push(steps);
             }
@@ -227,13 +248,7 @@ pub(crate) fn sloped_search(
     for (i, pair) in rays.windows(2).enumerate() {
         let (r0, r1) = (&pair[0], &pair[1]);
         for pass in brackets(r0, r1, receiver.x) {
-            let steps: Vec<Step> = r0.hits[..pass.walls]
-                .iter()
-                .map(|h| Step {
-                    kind: StepKind::Reflect,
-                    interface: h.interface,
-                })
-                .collect();
+            let steps = r0.steps(pass.walls);
             let shooting = Shooting {
                 scene,
                 profile: &profile,
@@ -250,10 +265,7 @@ pub(crate) fn sloped_search(
             else {
                 continue;
             };
-            match found.iter_mut().find(|(s, _)| *s == steps) {
-                Some((_, list)) => keep_new(list, ray, bounds),
-                None => found.push((steps, vec![ray])),
-            }
+            keep_found(&mut found, steps, ray, bounds);
         }
         // Where the two parted (a reflection point crossed a vertex, the miss jumping
         // there), every sequence either passes the receiver after: its own shots between
@@ -278,10 +290,7 @@ pub(crate) fn sloped_search(
                 let Some(ray) = shooting.ray_of_start(&start).filter(|r| r.time <= max_time) else {
                     continue;
                 };
-                match found.iter_mut().find(|(s, _)| *s == steps) {
-                    Some((_, list)) => keep_new(list, ray, bounds),
-                    None => found.push((steps.clone(), vec![ray])),
-                }
+                keep_found(&mut found, steps.clone(), ray, bounds);
             }
         }
     }
