@@ -559,23 +559,11 @@ fn profile_parts(
     let found = crate::trace::profile_ray_of(scene, steps, points, medium, launch)
         .ok_or(DerivativeError::NoProfileRay)?;
     let (r, [ya, yb]) = (&found.ray, [points[0].y, points[points.len() - 1].y]);
-    let mut knots = found.profile.knot_derivatives(r, ya, yb);
-    // The profile's knots run up; the scene's down.
-    knots.reverse();
-    let c0 = 1.0 / scene.media()[medium].slowness;
-    slowness[medium] = -c0 * c0 * knots.iter().sum::<f64>();
-    if let Some(ps) = profile_speed {
-        ps[medium].clear();
-        ps[medium].extend_from_slice(&knots);
-    }
-    for (i, (step, &(direction, _, speed))) in steps.iter().zip(&found.at_walls).enumerate() {
-        let arrival = direction * (1.0 / speed);
-        let g = Vec2::new(0.0, 2.0 * arrival.y);
-        let line = &scene.interfaces()[step.interface].polyline;
-        let c =
-            locate(line, points[i + 1], None).ok_or(DerivativeError::OffInterface { step: i })?;
-        c.share(step.interface, g, &mut put);
-    }
+    let knots = found.profile.knot_derivatives(r, ya, yb);
+    // Each reflection's jump: the vertical slowness reversed.
+    let jumps = (found.at_walls.iter())
+        .map(|&(direction, _, speed)| Vec2::new(0.0, 2.0 * (direction * (1.0 / speed)).y));
+    put_knots_and_walls(scene, ray, knots, jumps, slowness, profile_speed, &mut put)?;
     let [ca, cb] = r.speeds;
     Ok(EndGradients {
         source: r.direction_at_start() * (-1.0 / ca),
@@ -604,8 +592,41 @@ fn sloped_parts(
     } = ray;
     let found = crate::trace::sloped_derivatives(scene, steps, points, medium, launch)
         .ok_or(DerivativeError::NoProfileRay)?;
-    let mut knots = found.knots;
-    // The profile's knots run up; the scene's down.
+    let walls = found.walls.iter().copied();
+    put_knots_and_walls(
+        scene,
+        ray,
+        found.knots,
+        walls,
+        slowness,
+        profile_speed,
+        &mut put,
+    )?;
+    Ok(EndGradients {
+        source: found.source,
+        receiver: found.receiver,
+    })
+}
+
+/// The knots' `dT/dc` of a profile ray `ray` (`knots`, the profile's order: up) into
+/// `profile_speed` (when given; the scene's order: down) and the medium's `slowness` entry
+/// from them; each reflection's jump of the slowness vector (`jumps`, in order) shared by its
+/// segment's vertices.
+fn put_knots_and_walls(
+    scene: &Scene,
+    ray: ProfileLegs<'_>,
+    mut knots: Vec<f64>,
+    jumps: impl Iterator<Item = Vec2>,
+    slowness: &mut [f64],
+    profile_speed: Option<&mut [Vec<f64>]>,
+    put: &mut impl FnMut(VertexGradient),
+) -> Result<(), DerivativeError> {
+    let ProfileLegs {
+        steps,
+        points,
+        medium,
+        ..
+    } = ray;
     knots.reverse();
     let c0 = 1.0 / scene.media()[medium].slowness;
     slowness[medium] = -c0 * c0 * knots.iter().sum::<f64>();
@@ -613,16 +634,13 @@ fn sloped_parts(
         ps[medium].clear();
         ps[medium].extend_from_slice(&knots);
     }
-    for (i, (step, &g)) in steps.iter().zip(&found.walls).enumerate() {
+    for (i, (step, g)) in steps.iter().zip(jumps).enumerate() {
         let line = &scene.interfaces()[step.interface].polyline;
         let c =
             locate(line, points[i + 1], None).ok_or(DerivativeError::OffInterface { step: i })?;
-        c.share(step.interface, g, &mut put);
+        c.share(step.interface, g, &mut *put);
     }
-    Ok(EndGradients {
-        source: found.source,
-        receiver: found.receiver,
-    })
+    Ok(())
 }
 
 /// The slownesses of the two legs' media `media`.
