@@ -30,7 +30,7 @@ pub use num_complex::Complex64;
 
 pub(crate) use diffraction::of_diffracted;
 pub(crate) use ray::{
-    AxisymmetricRun, BounceGroup, Incidence, NodeBounces, OnSegment, PathGeometry,
+    AxisymmetricRun, BounceGroup, Incidence, LANES, NodeBounces, OnSegment, PathGeometry,
     ProfileReflection, TreeLaws, UnfoldedLaws, caustics_of_path, caustics_of_profile_legs, of_one,
     of_path, of_profile, of_profile_legs, of_straight_path,
 };

@@ -16,7 +16,7 @@ use crate::scene::{Amplitudes, Reflection, Scene, SourceModel, Step, StepKind};
 
 mod unfolded;
 pub(crate) use unfolded::{
-    AxisymmetricRun, BounceGroup, Incidence, NodeBounces, TreeLaws, UnfoldedLaws,
+    AxisymmetricRun, BounceGroup, Incidence, LANES, NodeBounces, TreeLaws, UnfoldedLaws,
 };
 
 /// A solved path as the amplitude reads it.

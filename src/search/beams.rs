@@ -6,12 +6,14 @@
 
 use rayon::prelude::*;
 
-use crate::amplitude::{AxisymmetricRun, Incidence, NodeBounces, TreeLaws, UnfoldedLaws};
+use crate::amplitude::{
+    Amplitude, AxisymmetricRun, Incidence, LANES, NodeBounces, TreeLaws, UnfoldedLaws,
+};
 use crate::scene::SourceModel;
 use crate::scene::{SearchOptions, Step, StepKind};
 use crate::trace::{
     Arrival, GuidePath, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls,
-    RoomPath, Status, Tracer, TreePath, Waveguide,
+    RoomPath, Status, Tracer, TreeRun, Waveguide,
 };
 
 use super::{ArrivalCount, ArrivalSink, Control, SearchArrival, StreamedArrival};
@@ -315,21 +317,21 @@ impl Tracer {
             axisymmetric: scene
                 .amplitudes()
                 .is_some_and(|a| a.source == SourceModel::Axisymmetric),
+            arch: pulp::Arch::new(),
         };
         let angled: Vec<bool> = (0..scene.interfaces().len())
             .map(|i| laws.as_ref().is_some_and(|l| l.angled(i)))
             .collect();
         let mut batch = SinkBatch::new(sink, control.listed);
         let (mut node, mut prepared) = (NodeBounces::default(), None);
-        let unfolded = &mut |p: &TreePath<'_>| {
-            if prepared != Some(p.node) {
+        let unfolded = &mut |run: &TreeRun<'_>| {
+            if prepared != Some(run.node) {
                 if let Some(laws) = tree.laws {
-                    laws.prepare(p.groups, &mut node);
+                    laws.prepare(run.groups, &mut node);
                 }
-                prepared = Some(p.node);
+                prepared = Some(run.node);
             }
-            batch.push(tree.arrival(p, &node)?);
-            Some(true)
+            tree.take(run, &node, &mut batch)
         };
         walls.arrivals_streamed(search, scratch, &angled, found, unfolded, progress)
     }
@@ -372,42 +374,112 @@ struct TreeStream<'a> {
     search: &'a MirrorSearch<'a>,
     laws: Option<&'a TreeLaws<'a>>,
     axisymmetric: bool,
+    /// The processor's vector instructions ([`take`](Self::take)).
+    arch: pulp::Arch,
 }
 
 impl TreeStream<'_> {
-    /// The arrival of `p` with its amplitude in closed form; `None` where the closed form
-    /// declines (a bounce near a critical angle; for an axisymmetric source, one off the
-    /// axis or a path not certainly on one side of it): the path is then walked. `node`:
-    /// the bounces of `p`'s node, prepared (once a node).
+    /// The arrivals of `run` with their amplitudes in closed form into `batch`, in order,
+    /// up to the first whose closed form declines (a bounce near a critical angle; for an
+    /// axisymmetric source, a source off the axis or a path not certainly on one side of
+    /// it), which the caller walks: how many it took. `node`: the bounces of the run's node,
+    /// prepared (once a node). The amplitudes [`LANES`] at a time
+    /// ([`TreeLaws::node_amplitudes`]).
     #[inline]
-    fn arrival(&self, p: &TreePath<'_>, node: &NodeBounces) -> Option<StreamedArrival> {
-        let amplitude = match self.laws {
-            None => None,
-            Some(laws) => {
-                let width = if self.axisymmetric {
-                    if self.search.source.x != 0.0 {
-                        return None;
-                    }
-                    Some(AxisymmetricRun {
-                        receiver_x: self.search.receivers[p.receiver].x.abs(),
-                        along: p.axisymmetric_run()?,
-                    })
-                } else {
-                    None
-                };
-                Some(laws.node_amplitude(node, p.direction, p.length, width)?)
-            }
-        };
-        Some(StreamedArrival {
+    fn take(&self, run: &TreeRun<'_>, node: &NodeBounces, batch: &mut SinkBatch<'_>) -> usize {
+        // Compiled for the processor's vector instructions where it has them (AVX2,
+        // AVX-512): the same operations on each path, so the same numbers (Rust contracts
+        // no multiply-adds).
+        self.arch.dispatch(TakeRun {
+            tree: self,
+            run,
+            node,
+            batch,
+        })
+    }
+
+    #[inline(always)]
+    fn take_compiled(
+        &self,
+        run: &TreeRun<'_>,
+        node: &NodeBounces,
+        batch: &mut SinkBatch<'_>,
+    ) -> usize {
+        let n = run.receivers.len();
+        let arrival = |k: usize, amplitude: Option<Amplitude>| StreamedArrival {
             source: self.source,
-            receiver: p.receiver,
-            steps: p.steps,
+            receiver: run.receivers[k],
+            steps: run.steps,
             diffractions: 0,
             vertical_reflections: 0,
             status: Status::Converged,
-            time: p.time,
+            time: run.times[k],
             amplitude,
-        })
+        };
+        let Some(laws) = self.laws else {
+            for k in 0..n {
+                batch.push(arrival(k, None));
+            }
+            return n;
+        };
+        if self.axisymmetric && self.search.source.x != 0.0 {
+            return 0;
+        }
+        let mut start = 0;
+        while start < n {
+            let full = (start + LANES).min(n);
+            let mut end = full;
+            let mut widths = [AxisymmetricRun {
+                receiver_x: 0.0,
+                along: 0.0,
+            }; LANES];
+            if self.axisymmetric {
+                for k in start..full {
+                    let Some(along) = run.axisymmetric_run(k) else {
+                        end = k;
+                        break;
+                    };
+                    widths[k - start] = AxisymmetricRun {
+                        receiver_x: self.search.receivers[run.receivers[k]].x.abs(),
+                        along,
+                    };
+                }
+            }
+            let lanes = start..end;
+            let declined = laws.node_amplitudes(
+                node,
+                &run.directions[lanes.clone()],
+                &run.lengths[lanes.clone()],
+                self.axisymmetric.then_some(&widths[..lanes.len()]),
+                |k, amplitude| batch.push(arrival(start + k, Some(amplitude))),
+            );
+            if let Some(k) = declined {
+                return start + k;
+            }
+            if end < full {
+                return end;
+            }
+            start = end;
+        }
+        n
+    }
+}
+
+/// [`TreeStream::take`]'s work, as [`pulp::Arch::dispatch`] compiles it for each set of
+/// vector instructions (everything it calls inlined, so compiled with them).
+struct TakeRun<'t, 'r, 'b, 's> {
+    tree: &'t TreeStream<'t>,
+    run: &'r TreeRun<'r>,
+    node: &'r NodeBounces,
+    batch: &'b mut SinkBatch<'s>,
+}
+
+impl pulp::WithSimd for TakeRun<'_, '_, '_, '_> {
+    type Output = usize;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) -> usize {
+        self.tree.take_compiled(self.run, self.node, self.batch)
     }
 }
 

@@ -70,7 +70,7 @@ mod shoebox;
 use crossers::Crossers;
 use shoebox::Shoebox;
 mod waveguide;
-pub(crate) use grid::TreePath;
+pub(crate) use grid::TreeRun;
 pub(crate) use shoebox::RoomPath;
 pub(crate) use waveguide::{GuidePath, Waveguide};
 

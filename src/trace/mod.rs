@@ -53,7 +53,7 @@ pub use curve::{CurveError, ray_curve};
 pub(crate) use flat::SegmentFrame;
 pub(crate) use mirrors::{
     GuidePath, MirrorPath, MirrorScratch, MirrorSearch, MirrorStats, MirrorWalls, RoomPath,
-    TreePath, Waveguide,
+    TreeRun, Waveguide,
 };
 pub use plan::Kernels;
 pub use result::{Ray, RayRecord, Reason, Status, Threshold};

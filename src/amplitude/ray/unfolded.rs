@@ -266,6 +266,18 @@ enum Merged {
     Apart,
 }
 
+/// How many paths [`TreeLaws::node_amplitudes`] takes at once.
+pub(crate) const LANES: usize = 8;
+
+/// What [`TreeLaws::merged_lanes`] finds for each of its paths: the merged coefficient, and
+/// whether [`TreeLaws::merged`] finds the path [`Merged::NearCritical`] or [`Merged::Apart`].
+struct MergedLanes {
+    re: [f64; LANES],
+    im: [f64; LANES],
+    near: [bool; LANES],
+    apart: [bool; LANES],
+}
+
 /// `2^-e` for the power of two `2^e ≤ x < 2^(e+1)` of a positive normal `x`, exactly.
 #[inline(always)]
 fn inverse_binade(x: f64) -> f64 {
@@ -286,6 +298,61 @@ fn real_power(x: f64, n: u32) -> f64 {
             return out;
         }
         base *= base;
+    }
+}
+
+/// [`real_powers`] of each lane's `(x, y)`: `(xⁿ, yⁿ)`.
+#[inline(always)]
+fn lane_powers_real(
+    mut x: [f64; LANES],
+    mut y: [f64; LANES],
+    mut n: u32,
+) -> ([f64; LANES], [f64; LANES]) {
+    let (mut ox, mut oy) = ([1.0; LANES], [1.0; LANES]);
+    loop {
+        if n & 1 == 1 {
+            for k in 0..LANES {
+                ox[k] *= x[k];
+                oy[k] *= y[k];
+            }
+        }
+        n >>= 1;
+        if n == 0 {
+            return (ox, oy);
+        }
+        for k in 0..LANES {
+            x[k] *= x[k];
+            y[k] *= y[k];
+        }
+    }
+}
+
+/// [`power`] of each lane's `zr + i zi` (the same products, as `Complex64`'s
+/// multiplication takes them): its real and imaginary parts.
+#[inline(always)]
+fn lane_powers_complex(
+    mut zr: [f64; LANES],
+    mut zi: [f64; LANES],
+    mut n: u32,
+) -> ([f64; LANES], [f64; LANES]) {
+    let (mut or, mut oi) = ([1.0; LANES], [0.0; LANES]);
+    loop {
+        if n & 1 == 1 {
+            for k in 0..LANES {
+                let re = or[k] * zr[k] - oi[k] * zi[k];
+                oi[k] = oi[k] * zr[k] + or[k] * zi[k];
+                or[k] = re;
+            }
+        }
+        n >>= 1;
+        if n == 0 {
+            return (or, oi);
+        }
+        for k in 0..LANES {
+            let re = zr[k] * zr[k] - zi[k] * zi[k];
+            zi[k] = zi[k] * zr[k] + zr[k] * zi[k];
+            zr[k] = re;
+        }
     }
 }
 
@@ -407,6 +474,18 @@ impl<'a> TreeLaws<'a> {
             Some(Merged::NearCritical) => return None,
             Some(Merged::Apart) | None => Self::groups_apart(node, d, inv)?,
         };
+        Some(self.finished(fixed * angled, length, axisymmetric))
+    }
+
+    /// The amplitude of a path `length` long whose coefficients' product is `coefficient`
+    /// ([`node_amplitude`](Self::node_amplitude)'s last step).
+    #[inline(always)]
+    fn finished(
+        &self,
+        coefficient: Complex64,
+        length: f64,
+        axisymmetric: Option<AxisymmetricRun>,
+    ) -> Amplitude {
         // The tube `1 / (L · w)`, `w` the out-of-plane width: `L` for a point source, and
         // for an axisymmetric one `|x| L / |A₀ · d|`, i.e. `|A₀ · d| / (L² |x|)` (its
         // division, and `finish_with`'s, one).
@@ -415,7 +494,7 @@ impl<'a> TreeLaws<'a> {
             None => (1.0, length, None),
         };
         let walk = Walk {
-            coefficient: fixed * angled,
+            coefficient,
             tube_num,
             tube_den,
             out_of_plane: length,
@@ -424,7 +503,135 @@ impl<'a> TreeLaws<'a> {
             w0: self.w0,
             converted: None,
         };
-        Some(finish_with(self.settings, &walk, || Ok(out)))
+        finish_with(self.settings, &walk, || Ok(out))
+    }
+
+    /// [`node_amplitude`](Self::node_amplitude) of up to [`LANES`] paths of one node at
+    /// once, bit for bit: path `k` along `directions[k]`, `lengths[k]` long, with
+    /// `axisymmetric[k]` for an axisymmetric source, its amplitude to `take(k, amplitude)`,
+    /// in order, up to the first that has none (`node_amplitude`'s `None`), whose index it
+    /// returns. The merged coefficients are taken for all of them together
+    /// ([`merged_lanes`](Self::merged_lanes), the same operations on each path's numbers,
+    /// in loops the compiler vectorises); a path whose merged form declines is taken on its
+    /// own.
+    #[inline(always)]
+    pub(crate) fn node_amplitudes(
+        &self,
+        node: &NodeBounces,
+        directions: &[Vec2],
+        lengths: &[f64],
+        axisymmetric: Option<&[AxisymmetricRun]>,
+        mut take: impl FnMut(usize, Amplitude),
+    ) -> Option<usize> {
+        let n = directions.len().min(LANES);
+        let run = |k: usize| axisymmetric.map(|runs| runs[k]);
+        let (Some(fixed), true) = (node.fixed, node.merge) else {
+            for k in 0..n {
+                match self.node_amplitude(node, directions[k], lengths[k], run(k)) {
+                    Some(amplitude) => take(k, amplitude),
+                    None => return Some(k),
+                }
+            }
+            return None;
+        };
+        if n == 0 {
+            return None;
+        }
+        // The lanes past `n` repeat the first path (and are left out).
+        let (mut dx, mut dy) = ([directions[0].x; LANES], [directions[0].y; LANES]);
+        let mut inv = [1.0 / lengths[0]; LANES];
+        for k in 0..n {
+            dx[k] = directions[k].x;
+            dy[k] = directions[k].y;
+            inv[k] = 1.0 / lengths[k];
+        }
+        let merged = Self::merged_lanes(node, &dx, &dy, &inv);
+        for k in 0..n {
+            let amplitude = if merged.near[k] {
+                None
+            } else if merged.apart[k] {
+                self.node_amplitude(node, directions[k], lengths[k], run(k))
+            } else {
+                let angled = Complex64::new(merged.re[k], merged.im[k]);
+                Some(self.finished(fixed * angled, lengths[k], run(k)))
+            };
+            match amplitude {
+                Some(amplitude) => take(k, amplitude),
+                None => return Some(k),
+            }
+        }
+        None
+    }
+
+    /// [`merged`](Self::merged) for [`LANES`] paths at once (`dx`, `dy`: their unfolded
+    /// lines; `inv`: the inverses of their lengths): each group's bounce taken on every
+    /// path, both forms (real and complex) with the other's factor 1 (exact: the same
+    /// products as `merged` takes), powered in one loop over the count's bits. Per path
+    /// the coefficient, and whether `merged` finds it [`Merged::NearCritical`] (`near`,
+    /// whatever else) or [`Merged::Apart`] (`apart`).
+    #[inline(always)]
+    fn merged_lanes(
+        node: &NodeBounces,
+        dx: &[f64; LANES],
+        dy: &[f64; LANES],
+        inv: &[f64; LANES],
+    ) -> MergedLanes {
+        let (mut num, mut den) = ([1.0; LANES], [1.0; LANES]);
+        let (mut pr, mut pi) = ([1.0; LANES], [0.0; LANES]);
+        let (mut near, mut apart) = ([false; LANES], [false; LANES]);
+        for g in &node.angled {
+            // Each path's real factors `a ∓ b` (1 where complex) and complex `a + ib`
+            // (1 where real).
+            let (mut x, mut y) = ([1.0; LANES], [1.0; LANES]);
+            let (mut zr, mut zi) = ([1.0; LANES], [0.0; LANES]);
+            for k in 0..LANES {
+                let d = Vec2::new(dx[k], dy[k]);
+                let (c, s) = (d.dot(g.normal) * inv[k], d.cross(g.normal) * inv[k]);
+                let q2 = g.ratio * g.ratio * (s * s);
+                near[k] |= (q2 - 1.0).abs() < NEAR_CRITICAL;
+                let a = g.scaled_a * c.abs();
+                // `√(1 − q²)` or `√(q² − 1)`: the one difference up to its sign, exactly.
+                let b = (1.0 - q2).abs().sqrt() * g.scaled_b;
+                apart[k] |= !MERGED_FACTOR.contains(&(a + b));
+                let real = q2 <= 1.0;
+                x[k] = if real { a - b } else { 1.0 };
+                y[k] = if real { a + b } else { 1.0 };
+                zr[k] = if real { 1.0 } else { a };
+                zi[k] = if real { 0.0 } else { b };
+            }
+            // `real_powers` and `power`, lane by lane; either left out where no path
+            // needs it (its factors all 1: the same numbers).
+            if x.iter().chain(&y).any(|&v| v != 1.0) {
+                let (ox, oy) = lane_powers_real(x, y, g.count);
+                for k in 0..LANES {
+                    num[k] *= ox[k];
+                    den[k] *= oy[k];
+                }
+            }
+            if zr.iter().any(|&v| v != 1.0) || zi.iter().any(|&v| v != 0.0) {
+                let (or, oi) = lane_powers_complex(zr, zi, g.count);
+                for k in 0..LANES {
+                    let re = pr[k] * or[k] - pi[k] * oi[k];
+                    pi[k] = pi[k] * or[k] + pr[k] * oi[k];
+                    pr[k] = re;
+                }
+            }
+        }
+        let (mut re, mut im) = ([0.0; LANES], [0.0; LANES]);
+        for k in 0..LANES {
+            // `conj(P)² · num / (den |P|²)` as `merged` takes it.
+            let (cr, ci) = (pr[k], -pi[k]);
+            let (tr, ti) = (cr * cr - ci * ci, cr * ci + ci * cr);
+            let bottom = den[k] * (pr[k] * pr[k] + pi[k] * pi[k]);
+            re[k] = tr * num[k] / bottom;
+            im[k] = ti * num[k] / bottom;
+        }
+        MergedLanes {
+            re,
+            im,
+            near,
+            apart,
+        }
     }
 
     /// The angled groups' coefficients' product as one quotient, for `d` the unfolded line
@@ -506,6 +713,160 @@ impl<'a> TreeLaws<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::amplitude::NoAmplitude;
+    use crate::scene::{Polarization, SourceModel, Waves};
+
+    /// A random node of one to six angled groups (at most [`MERGED_BOUNCES`] bounces, as
+    /// `prepare` has it): random normals, counts up to 12, weights whose ratio goes up to
+    /// 1e6 either way, slownesses' ratios on both sides of 1.
+    fn random_node(next: &mut impl FnMut() -> f64) -> NodeBounces {
+        let groups = 1 + (next() * 6.0) as usize;
+        let mut node = NodeBounces {
+            fixed: Some(Complex64::new(1.0, 0.0)),
+            angled: Vec::new(),
+            merge: true,
+        };
+        let mut bounces = 0u32;
+        for _ in 0..groups {
+            let t = next() * std::f64::consts::TAU;
+            let count = 1 + (next() * 12.0) as u32;
+            let g = BounceGroup {
+                interface: 0,
+                count,
+                normal: Vec2::new(t.cos(), t.sin()),
+            };
+            let scale = 10f64.powf(next() * 8.0 - 4.0);
+            let weights = Weights {
+                a: scale * 10f64.powf(next() * 6.0 - 3.0),
+                b: scale * 10f64.powf(next() * 6.0 - 3.0),
+                n: 1.0,
+            };
+            let (group, scaled) = AngledGroup::new(&g, weights, 0.6 + next() * 0.8);
+            assert!(scaled);
+            if bounces + count <= MERGED_BOUNCES {
+                bounces += count;
+                node.angled.push(group);
+            }
+        }
+        node
+    }
+
+    /// The bits of an amplitude (every number, and the reason).
+    fn bits(a: &Amplitude) -> ([u64; 6], Option<NoAmplitude>) {
+        let numbers = [
+            a.value.re,
+            a.value.im,
+            a.spreading,
+            a.coefficient.re,
+            a.coefficient.im,
+            a.attenuation_db,
+        ];
+        (numbers.map(f64::to_bits), a.reason)
+    }
+
+    /// [`TreeLaws::node_amplitudes`] against [`TreeLaws::node_amplitude`] path by path, bit
+    /// for bit: random nodes ([`random_node`]; some whose fixed factor is not 1, some not
+    /// merged, some whose interface is no wall), one to eight paths each along random lines
+    /// (some sharing an angle, so that a run declines part way), every source model, with
+    /// and without attenuation. The same amplitudes, and the same first path without one.
+    #[test]
+    fn the_lanes_are_each_paths_amplitude_bit_for_bit() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut taken, mut declined, mut apart, mut complex) = (0, 0, 0, 0);
+        for source in [
+            SourceModel::Point,
+            SourceModel::Axisymmetric,
+            SourceModel::Line,
+        ] {
+            for alpha in [0.0, 3e-3] {
+                let settings = Amplitudes {
+                    source,
+                    frequency: Some(100.0),
+                    polarization: Polarization::S,
+                    waves: Waves::Fluid,
+                    density: vec![1.0],
+                    attenuation: vec![alpha],
+                    attenuation_per_wavelength: vec![None],
+                    attenuates: alpha > 0.0,
+                    reflection: Vec::new(),
+                };
+                let laws = TreeLaws {
+                    settings: &settings,
+                    laws: Vec::new(),
+                    w0: 1.0 / 1500.0,
+                    alpha,
+                };
+                for _ in 0..8_000 {
+                    let mut node = random_node(&mut next);
+                    match (next() * 8.0) as u32 {
+                        0 => node.merge = false,
+                        1 => node.fixed = None,
+                        2 => node.fixed = Some(Complex64::new(-0.7, 0.2)),
+                        _ => {}
+                    }
+                    let n = 1 + (next() * LANES as f64) as usize;
+                    let shared = next() * std::f64::consts::TAU;
+                    let (mut directions, mut lengths, mut runs) = (vec![], vec![], vec![]);
+                    for _ in 0..n {
+                        let t = if next() < 0.3 {
+                            shared
+                        } else {
+                            next() * std::f64::consts::TAU
+                        };
+                        let length = 10f64.powf(next() * 4.0);
+                        directions.push(Vec2::new(t.cos(), t.sin()) * length);
+                        lengths.push(length);
+                        runs.push(AxisymmetricRun {
+                            receiver_x: 10f64.powf(next() * 4.0),
+                            along: next() * length,
+                        });
+                    }
+                    let axisymmetric =
+                        (source == SourceModel::Axisymmetric).then_some(runs.as_slice());
+                    let run = |k: usize| axisymmetric.map(|r| r[k]);
+                    let mut got = Vec::new();
+                    let first_none =
+                        laws.node_amplitudes(&node, &directions, &lengths, axisymmetric, |k, a| {
+                            got.push((k, bits(&a)))
+                        });
+                    let mut want = Vec::new();
+                    let mut want_none = None;
+                    for k in 0..n {
+                        let (d, l) = (directions[k], lengths[k]);
+                        match laws.node_amplitude(&node, d, l, run(k)) {
+                            Some(a) => {
+                                complex += usize::from(a.coefficient.im != 0.0);
+                                want.push((k, bits(&a)));
+                            }
+                            None => {
+                                want_none = Some(k);
+                                break;
+                            }
+                        }
+                        if node.merge
+                            && matches!(TreeLaws::merged(&node, d, 1.0 / l), Merged::Apart)
+                        {
+                            apart += 1;
+                        }
+                    }
+                    assert_eq!(got, want);
+                    assert_eq!(first_none, want_none);
+                    taken += got.len();
+                    declined += usize::from(first_none.is_some());
+                }
+            }
+        }
+        assert!(
+            taken > 50_000 && declined > 2_000 && apart > 100 && complex > 5_000,
+            "{taken} {declined} {apart} {complex}"
+        );
+    }
 
     /// The merged quotient against the groups' product, each group's coefficient taken and
     /// powered on its own, on random nodes: one to six groups (up to 50 bounces), random
@@ -526,35 +887,7 @@ mod tests {
         };
         let (mut compared, mut complex, mut apart, mut critical) = (0, 0, 0, 0);
         for _ in 0..200_000 {
-            let groups = 1 + (next() * 6.0) as usize;
-            let mut node = NodeBounces {
-                fixed: Some(Complex64::new(1.0, 0.0)),
-                angled: Vec::new(),
-                merge: true,
-            };
-            let mut bounces = 0u32;
-            for _ in 0..groups {
-                let t = next() * std::f64::consts::TAU;
-                let count = 1 + (next() * 12.0) as u32;
-                let g = BounceGroup {
-                    interface: 0,
-                    count,
-                    normal: Vec2::new(t.cos(), t.sin()),
-                };
-                let scale = 10f64.powf(next() * 8.0 - 4.0);
-                let weights = Weights {
-                    a: scale * 10f64.powf(next() * 6.0 - 3.0),
-                    b: scale * 10f64.powf(next() * 6.0 - 3.0),
-                    n: 1.0,
-                };
-                let (group, scaled) = AngledGroup::new(&g, weights, 0.6 + next() * 0.8);
-                assert!(scaled);
-                // At most `MERGED_BOUNCES`, as `prepare` has it.
-                if bounces + count <= MERGED_BOUNCES {
-                    bounces += count;
-                    node.angled.push(group);
-                }
-            }
+            let node = random_node(&mut next);
             let t = next() * std::f64::consts::TAU;
             let length = 10f64.powf(next() * 4.0);
             let d = Vec2::new(t.cos(), t.sin()) * length;

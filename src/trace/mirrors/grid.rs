@@ -269,48 +269,52 @@ fn row_interval(constraints: &Constraints, by_rows: bool, v: f64) -> Option<(f64
     matches!(lo.partial_cmp(&hi), Some(Less | Equal)).then_some((lo, hi))
 }
 
-/// One arrival of the streamed tree in closed form (valid during the call that reports it).
+/// How many receivers a [`TreeRun`] holds at most.
+pub(crate) const RUN: usize = 64;
+
+/// Arrivals of one node of the streamed tree in closed form, one receiver after another
+/// (valid during the call that reports them): what the node's paths share, and per path
+/// its receiver, unfolded line, length and time.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct TreePath<'a> {
-    /// Which node of the walk it comes from (the number of beams before it): the paths of
+pub(crate) struct TreeRun<'a> {
+    /// Which node of the walk they come from (the number of beams before it): the paths of
     /// one node, which share its bounce groups and axes, come one after another.
     pub node: u64,
-    /// The receiver's index in the receivers given.
-    pub receiver: usize,
-    /// Its reflections.
+    /// Their reflections.
     pub steps: usize,
-    /// The unfolded length `|I − r|` and the travel time.
-    pub length: f64,
-    pub time: f64,
-    /// The unfolded line, from the image to the receiver (`length` long).
-    pub direction: Vec2,
-    /// Its bounces, grouped by angle.
+    /// Their bounces, grouped by angle.
     pub groups: &'a [BounceGroup],
     /// The x axis mirrored into the last leg's frame: `Lₖ ⋯ Lⱼ₊₁ eₓ` for each leg `j`
     /// (distinct to 1e-13), so that leg `j`'s x component is `axes[j] · direction / length`;
     /// the first leg's (`j = 0`) is `axis`.
     pub axis: Vec2,
     pub axes: &'a [Vec2],
-    /// Whether every leg of the path certainly runs one way along x by far more than
+    /// Whether every leg of each path certainly runs one way along x by far more than
     /// [`axisymmetric_run`](Self::axisymmetric_run)'s threshold (found once for the node's
-    /// certain beam, which holds the path: [`one_way`]).
+    /// certain beam, which holds the paths: [`one_way`]).
     pub one_way: bool,
+    /// Per path: the receiver's index in the receivers given; the unfolded line, from the
+    /// image to the receiver; its length `|I − r|`; the travel time.
+    pub receivers: &'a [usize],
+    pub directions: &'a [Vec2],
+    pub lengths: &'a [f64],
+    pub times: &'a [f64],
 }
 
-impl TreePath<'_> {
-    /// For an axisymmetric source on the axis (`x = 0`), the first leg's run along x over
-    /// the unfolded line's, `|A₀ · d|` (its out-of-plane width is then `|x_R| ℓ₀ / |x₁ − x₀|
-    /// = |x_R| L / |A₀ · d|`), where every leg certainly runs one way along x (each `|Aⱼ ·
-    /// d|` above 1e-12 of `L`, all of one sign), so that every point of the path but the
-    /// source lies strictly on one side of the axis; `None` where that is not certain.
+impl TreeRun<'_> {
+    /// For an axisymmetric source on the axis (`x = 0`), path `k`'s first leg's run along x
+    /// over the unfolded line's, `|A₀ · d|` (its out-of-plane width is then `|x_R| ℓ₀ /
+    /// |x₁ − x₀| = |x_R| L / |A₀ · d|`), where every leg certainly runs one way along x (each
+    /// `|Aⱼ · d|` above 1e-12 of `L`, all of one sign), so that every point of the path but
+    /// the source lies strictly on one side of the axis; `None` where that is not certain.
     #[inline]
-    pub(crate) fn axisymmetric_run(&self) -> Option<f64> {
-        let d = self.direction;
-        let tiny = 1e-12 * self.length;
+    pub(crate) fn axisymmetric_run(&self, k: usize) -> Option<f64> {
+        let d = self.directions[k];
         let first = self.axis.dot(d);
         if self.one_way {
             return Some(first.abs());
         }
+        let tiny = 1e-12 * self.lengths[k];
         let sign = first.signum();
         let one_way = self.axes.iter().all(|a| {
             let v = a.dot(d);
@@ -320,9 +324,30 @@ impl TreePath<'_> {
     }
 }
 
+/// The closed-form paths of one node gathered for a [`TreeRun`], up to [`RUN`] of them.
+struct RunBuffer {
+    len: usize,
+    receivers: [usize; RUN],
+    directions: [Vec2; RUN],
+    lengths: [f64; RUN],
+    times: [f64; RUN],
+}
+
+impl RunBuffer {
+    fn new() -> RunBuffer {
+        RunBuffer {
+            len: 0,
+            receivers: [0; RUN],
+            directions: [Vec2::new(0.0, 0.0); RUN],
+            lengths: [0.0; RUN],
+            times: [0.0; RUN],
+        }
+    }
+}
+
 /// What the closed-form paths of a node share: its bounce groups, its mirrored x axes
-/// ([`TreePath::axes`]), and whether every leg of each certainly runs one way along x
-/// ([`TreePath::one_way`]).
+/// ([`TreeRun::axes`]), and whether every leg of each certainly runs one way along x
+/// ([`TreeRun::one_way`]).
 #[derive(Clone, Copy, Debug)]
 struct NodeOwn<'a> {
     groups: &'a [BounceGroup],
@@ -335,7 +360,7 @@ struct NodeOwn<'a> {
 /// `α, β ≥ 0`) has each `A · d` (`A` the first leg's mirrored x axis `axis` and every one
 /// of `axes`) of one sign and above `1e-9 |A| |d|` in size: `A · d ≥ min(A · to_a / |to_a|,
 /// A · to_b / |to_b|) (α |to_a| + β |to_b|)`, the latter at least `|d|`. So the closed form's
-/// own test ([`TreePath::axisymmetric_run`]: each above 1e-12 of `|d|`, of the first's
+/// own test ([`TreeRun::axisymmetric_run`]: each above 1e-12 of `|d|`, of the first's
 /// sign) holds for every receiver of the certain beam, far beyond its round-off.
 fn one_way(inner: &Beam, axis: Vec2, axes: &[Vec2]) -> bool {
     let (la, lb) = (inner.to_a.length(), inner.to_b.length());
@@ -368,7 +393,7 @@ pub(super) struct Certain {
     sure: bool,
     /// `Lₖ ⋯ L₁ eₓ`.
     axis: Vec2,
-    /// Where the node's bounce groups, and its mirrored x axes ([`TreePath::axes`]), start
+    /// Where the node's bounce groups, and its mirrored x axes ([`TreeRun::axes`]), start
     /// in the scratch's.
     groups: usize,
     axes: usize,
@@ -641,8 +666,25 @@ struct NodeReceivers<'v, 'a, 's, F> {
     bounds: &'a Bounds,
     validation: Validation<'v, 's>,
     found: &'v mut F,
-    unfolded: &'v mut dyn FnMut(&TreePath<'_>) -> Option<bool>,
+    unfolded: &'v mut dyn FnMut(&TreeRun<'_>) -> usize,
     stats: &'v mut MirrorStats,
+    /// The node's closed-form paths not yet given to `unfolded`.
+    run: RunBuffer,
+}
+
+/// What [`NodeReceivers::closed`] finds for a receiver.
+enum ClosedForm {
+    /// Its path in closed form: the unfolded line (from the image to the receiver), its
+    /// length and the travel time.
+    Path {
+        direction: Vec2,
+        length: f64,
+        time: f64,
+    },
+    /// Certainly no path: too late, or obstructed where obstructed paths are not listed.
+    NoPath,
+    /// Its path must be validated on its points.
+    Validate,
 }
 
 impl<F> NodeReceivers<'_, '_, '_, F>
@@ -651,7 +693,9 @@ where
 {
     /// Receiver `r` at the node on top of `stack` (its walls `walls`): as
     /// [`Validation::node`] takes it, but in closed form where the node's certain beam holds
-    /// it; `false` where `found` or `unfolded` stops the search. `crossings`: whether the
+    /// it (gathered into [`run`](Self::run), [`flush`](Self::flush)ed to `unfolded` before
+    /// any receiver is validated, when full and at the node's end, so that the arrivals
+    /// keep their order); `false` where `found` stops the search. `crossings`: whether the
     /// node's last legs may cross a segment, found at the first receiver that asks.
     /// `known_deep`: whether the grid's scan found `r` inside the certain beam by [`INNER`]
     /// margins ([`ReceiverGrid::scan`]), so that neither beam's test is taken for it.
@@ -697,10 +741,33 @@ where
         }
         self.stats.leaves += 1;
         self.stats.work += stack.len() as u64;
-        if let Some(go) = self.closed(stack, certain, own, crossings, (r, deep)) {
-            return go;
+        match self.closed(stack, certain, crossings, (r, deep)) {
+            ClosedForm::NoPath => true,
+            ClosedForm::Validate => {
+                self.flush(stack, walls, certain, own) && self.validated(stack, walls, r)
+            }
+            ClosedForm::Path {
+                direction,
+                length,
+                time,
+            } => {
+                let run = &mut self.run;
+                let k = run.len;
+                run.receivers[k] = r;
+                run.directions[k] = direction;
+                run.lengths[k] = length;
+                run.times[k] = time;
+                run.len += 1;
+                run.len < RUN || self.flush(stack, walls, certain, own)
+            }
         }
-        let Some((length, reason)) = self.validation.path(stack, receiver) else {
+    }
+
+    /// Receiver `r`'s path validated on its points and given to `found` (nothing where it
+    /// has none or comes too late); `false` where `found` stops the search.
+    fn validated(&mut self, stack: &[Node], walls: &[usize], r: usize) -> bool {
+        let search = self.validation.search;
+        let Some((length, reason)) = self.validation.path(stack, search.receivers[r]) else {
             return true;
         };
         let time = search.medium().time_along(length);
@@ -721,39 +788,75 @@ where
         })
     }
 
-    /// Receiver `r`'s path in closed form (`Some(go)`, `go` what `unfolded` says; also
-    /// `Some(true)` where it certainly has no path), or `None` where it must be validated.
-    /// `deep`: whether it lies inside the node's certain beam by [`INNER`] margins.
+    /// The gathered closed-form paths ([`run`](Self::run)) to `unfolded`, in order; each
+    /// one it declines validated and given to `found` in its place. `false` where `found`
+    /// stops the search.
+    fn flush(
+        &mut self,
+        stack: &[Node],
+        walls: &[usize],
+        certain: &Certain,
+        own: NodeOwn<'_>,
+    ) -> bool {
+        let len = std::mem::replace(&mut self.run.len, 0);
+        let mut start = 0;
+        while start < len {
+            let run = &self.run;
+            start += (self.unfolded)(&TreeRun {
+                node: self.stats.beams,
+                steps: stack.len() - 1,
+                groups: own.groups,
+                axis: certain.axis,
+                axes: own.axes,
+                one_way: own.one_way,
+                receivers: &run.receivers[start..len],
+                directions: &run.directions[start..len],
+                lengths: &run.lengths[start..len],
+                times: &run.times[start..len],
+            });
+            if start < len {
+                let r = self.run.receivers[start];
+                start += 1;
+                if !self.validated(stack, walls, r) {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// Receiver `r`'s path in closed form, or that it certainly has none, or that it must
+    /// be validated. `deep`: whether it lies inside the node's certain beam by [`INNER`]
+    /// margins.
     fn closed(
         &mut self,
         stack: &[Node],
         certain: &Certain,
-        own: NodeOwn<'_>,
         crossings: &mut Option<bool>,
         (r, deep): (usize, bool),
-    ) -> Option<bool> {
+    ) -> ClosedForm {
         if !certain.sure {
-            return None;
+            return ClosedForm::Validate;
         }
         let search = self.validation.search;
         let top = &stack[stack.len() - 1];
         let receiver = search.receivers[r];
         let root = top.wall == usize::MAX;
         if !root && !deep {
-            return None;
+            return ClosedForm::Validate;
         }
         let d = receiver - top.image;
         let l2 = d.x * d.x + d.y * d.y;
         if !(f64::MIN_POSITIVE..1e300).contains(&l2) {
-            return None;
+            return ClosedForm::Validate;
         }
         let length = l2.sqrt();
         let time = search.medium().time_along(length);
         if search.max_time.is_finite() && (time - search.max_time).abs() <= 1e-9 * time {
-            return None;
+            return ClosedForm::Validate;
         }
         if time > search.max_time {
-            return Some(true);
+            return ClosedForm::NoPath;
         }
         let may_cross = *crossings.get_or_insert_with(|| {
             self.walls.last_legs_may_cross(
@@ -771,7 +874,7 @@ where
                 let wall = &self.walls.walls[top.wall];
                 let u = ((wall.p - top.image).cross(d) / d.cross(wall.e)).clamp(0.0, 1.0);
                 if u.is_nan() {
-                    return None;
+                    return ClosedForm::Validate;
                 }
                 (wall.at(u), wall.own)
             };
@@ -789,28 +892,26 @@ where
                     .is_some()
             {
                 // Obstructed (listed only where asked, and then never in closed form).
-                return if search.obstructed { None } else { Some(true) };
+                return if search.obstructed {
+                    ClosedForm::Validate
+                } else {
+                    ClosedForm::NoPath
+                };
             }
         }
-        (self.unfolded)(&TreePath {
-            node: self.stats.beams,
-            receiver: r,
-            steps: stack.len() - 1,
+        ClosedForm::Path {
+            direction: d,
             length,
             time,
-            direction: d,
-            groups: own.groups,
-            axis: certain.axis,
-            axes: own.axes,
-            one_way: own.one_way,
-        })
+        }
     }
 }
 
 impl MirrorWalls {
     /// [`MirrorWalls::arrivals`] for a streamed search: the paths of each node's certain
-    /// beam to `unfolded` in closed form ([`TreePath`]; it returns `None` to have the path
-    /// validated and given to `found` instead, `Some(go)` else), every other one to `found`
+    /// beam to `unfolded` in closed form ([`TreeRun`]; it returns how many of the run's
+    /// paths it takes, from the first: the next is validated and given to `found` instead),
+    /// every other one to `found`
     /// as [`arrivals`](Self::arrivals) gives it; each node's receivers located on their grid
     /// where they form one (see `mirrors/grid.rs`). `angled[i]`: whether interface `i`'s
     /// coefficient depends on the angle. The same paths, to round-off, in another order.
@@ -820,7 +921,7 @@ impl MirrorWalls {
         scratch: &mut MirrorScratch,
         angled: &[bool],
         found: &mut impl FnMut(MirrorPath<'_>) -> bool,
-        unfolded: &mut dyn FnMut(&TreePath<'_>) -> Option<bool>,
+        unfolded: &mut dyn FnMut(&TreeRun<'_>) -> usize,
         progress: &mut impl FnMut(u64) -> bool,
     ) -> MirrorStats {
         let bounds = self.bounds(search, search.max_steps.min(search.max_depth));
@@ -870,6 +971,7 @@ impl MirrorWalls {
             found,
             unfolded,
             stats: &mut stats,
+            run: RunBuffer::new(),
         };
         if !node.visit(stack, walls, certain, bounces, grid.as_ref()) {
             node.stats.stopped = true;
@@ -966,14 +1068,15 @@ where
         let mut each = |r: usize, known_deep: bool| {
             self.receiver(stack, walls, &c, own, &mut crossings, (r, known_deep))
         };
-        match (grid, &top.beam) {
+        let go = match (grid, &top.beam) {
             (Some(grid), Some(beam)) => {
                 let wall = &mirrors.walls[top.wall];
                 let inner = c.inner.as_ref().filter(|_| c.sure);
                 grid.scan((beam, inner), wall, top.image, delta, &mut each)
             }
             _ => (0..count).all(|r| each(r, false)),
-        }
+        };
+        go && self.flush(stack, walls, &c, own)
     }
 }
 
