@@ -4,6 +4,7 @@
 //! (also when some rays find no path), 2 for an invalid scene, an unreadable input or a usage
 //! error, 1 when the output cannot be written (a closed pipe exits 1 without a message).
 
+mod phase;
 mod response;
 mod svg;
 

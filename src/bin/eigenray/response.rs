@@ -19,6 +19,7 @@ use eigenray::response::{
 use eigenray::scene::TransmissionLossMode;
 use eigenray::search::{ArrivalSink, StreamedArrival};
 
+use super::phase::{unit_phase, unit_phases};
 use super::{Failure, available_memory, write_failure};
 
 /// The file formats of `--ir`, by the file's extension.
@@ -380,7 +381,108 @@ impl ArrivalSink for StreamedSums<'_, '_> {
     }
 
     fn arrivals(&self, batch: &[StreamedArrival]) {
-        self.0.add_all(batch.iter().map(Echo::of_streamed));
+        self.0.add_streamed(batch);
+    }
+}
+
+/// The lock of `m`, also when another thread panicked holding it (the sums are only added
+/// to: a sum left half added is still a sum).
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// How many echoes an [`EchoColumns`] holds: a batch of the search's sink (256 arrivals).
+const COLUMN_ECHOES: usize = 256;
+
+/// Multiplies each complex number `re[i] + i·im[i]` by `a[i] + i·b[i]` as `Complex64`'s
+/// product `(a + ib) × (re + i·im)` does, term for term: the pressures of a batch's phase
+/// factors. Slices of one length, apart (so the loop goes two at a time).
+fn times_amplitudes(re: &mut [f64], im: &mut [f64], a: &[f64], b: &[f64]) {
+    let n = re.len();
+    let (im, a, b) = (&mut im[..n], &a[..n], &b[..n]);
+    for i in 0..n {
+        let (c, s) = (re[i], im[i]);
+        (re[i], im[i]) = (a[i] * c - b[i] * s, a[i] * s + b[i] * c);
+    }
+}
+
+/// A batch of echoes column by column, for the sums that read only an echo's pair, time and
+/// amplitude (the loss's, coherent and incoherent): each sum a straight loop over columns,
+/// then one scatter into the pairs' sums. One a thread ([`COLUMNS`]), filled again for
+/// each batch: not zeroed each time (12 KB).
+struct EchoColumns {
+    /// Echoes held (the first `len` of each column).
+    len: usize,
+    /// The echo's pair, `source × receivers + receiver`.
+    pair: [usize; COLUMN_ECHOES],
+    /// The echo's travel time.
+    time: [f64; COLUMN_ECHOES],
+    /// The amplitude's real part.
+    re: [f64; COLUMN_ECHOES],
+    /// The amplitude's imaginary part.
+    im: [f64; COLUMN_ECHOES],
+    /// The real part of the phase factor, then of the pressure (scratch of
+    /// [`add_pressures`](Self::add_pressures)).
+    pressure_re: [f64; COLUMN_ECHOES],
+    /// The imaginary part of the phase factor, then of the pressure.
+    pressure_im: [f64; COLUMN_ECHOES],
+}
+
+thread_local! {
+    /// Each thread's columns, for [`Sums::add_streamed`].
+    static COLUMNS: std::cell::RefCell<EchoColumns> =
+        const { std::cell::RefCell::new(EchoColumns::new()) };
+}
+
+impl EchoColumns {
+    const fn new() -> EchoColumns {
+        EchoColumns {
+            len: 0,
+            pair: [0; COLUMN_ECHOES],
+            time: [0.0; COLUMN_ECHOES],
+            re: [0.0; COLUMN_ECHOES],
+            im: [0.0; COLUMN_ECHOES],
+            pressure_re: [0.0; COLUMN_ECHOES],
+            pressure_im: [0.0; COLUMN_ECHOES],
+        }
+    }
+
+    /// Holds the echoes of `arrivals` (at most [`COLUMN_ECHOES`] of them), in order: those
+    /// that [`Echo::of_streamed`] makes an echo of, the pairs of a scene of `receivers`.
+    fn fill(&mut self, arrivals: &[StreamedArrival], receivers: usize) {
+        let mut len = 0;
+        for a in &arrivals[..arrivals.len().min(COLUMN_ECHOES)] {
+            let Some(e) = Echo::of_streamed(a) else {
+                continue;
+            };
+            self.pair[len] = e.source * receivers + e.receiver;
+            self.time[len] = e.time;
+            (self.re[len], self.im[len]) = (e.amplitude.re, e.amplitude.im);
+            len += 1;
+        }
+        self.len = len;
+    }
+
+    /// Adds each echo's pressure at `frequency`, `amplitude × unit_phase(frequency × time)`,
+    /// to its pair's sum in `sums`: the phases and the products a straight loop each, then
+    /// the sums in order, bit for bit what one echo at a time adds.
+    fn add_pressures(&mut self, frequency: f64, sums: &mut [Complex64]) {
+        let n = self.len;
+        let (re, im) = (&mut self.pressure_re[..n], &mut self.pressure_im[..n]);
+        unit_phases(frequency, &self.time[..n], re, im);
+        times_amplitudes(re, im, &self.re[..n], &self.im[..n]);
+        for ((&k, &c), &s) in self.pair[..n].iter().zip(&*re).zip(&*im) {
+            sums[k] += Complex64::new(c, s);
+        }
+    }
+
+    /// Adds each echo's intensity, `|amplitude|²`, to its pair's sum in `sums`.
+    fn add_intensities(&self, sums: &mut [f64]) {
+        let n = self.len;
+        let amplitudes = self.re[..n].iter().zip(&self.im[..n]);
+        for (&k, (&a, &b)) in self.pair[..n].iter().zip(amplitudes) {
+            sums[k] += Complex64::new(a, b).norm_sqr();
+        }
     }
 }
 
@@ -461,9 +563,6 @@ impl<'a> Sums<'a> {
     /// counts each `None` (a timed arrival without an amplitude value) as
     /// [`skip`](Self::skip) does.
     pub(super) fn add_all(&self, echoes: impl IntoIterator<Item = Option<Echo>>) {
-        fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-            m.lock().unwrap_or_else(|e| e.into_inner())
-        }
         let mut ir = self.ir.as_ref().map(|r| {
             let first = r.first.as_ref().map(lock);
             (r.responses, lock(&r.data), first)
@@ -508,6 +607,41 @@ impl<'a> Sums<'a> {
         }
         if skipped > 0 {
             self.without_amplitude.fetch_add(skipped, Ordering::Relaxed);
+        }
+    }
+
+    /// Adds the echoes of a search's `arrivals` as [`add_all`](Self::add_all) adds them,
+    /// bit for bit, each output locked once: the loss's sums (and `--tl-map`'s) a batch of
+    /// [`EchoColumns`] at a time; with impulse responses or an echogram to fill, one echo at
+    /// a time.
+    pub(super) fn add_streamed(&self, arrivals: &[StreamedArrival]) {
+        if self.ir.is_some() || self.charts.is_some_and(|c| c.echogram.is_some()) {
+            self.add_all(arrivals.iter().map(Echo::of_streamed));
+            return;
+        }
+        let mut pressure = self.pressure.as_ref().map(|(f, p)| (*f, lock(p)));
+        let mut intensity = self.intensity.as_ref().map(lock);
+        let added = COLUMNS.with_borrow_mut(|columns| {
+            let mut added = 0;
+            for batch in arrivals.chunks(COLUMN_ECHOES) {
+                columns.fill(batch, self.receivers);
+                if let Some((f, p)) = &mut pressure {
+                    columns.add_pressures(*f, p);
+                }
+                if let Some(i) = &mut intensity {
+                    columns.add_intensities(i);
+                }
+                added += columns.len;
+            }
+            added
+        });
+        let skipped = arrivals.len() - added;
+        if added > 0 {
+            self.echoes.fetch_add(added as u64, Ordering::Relaxed);
+        }
+        if skipped > 0 {
+            self.without_amplitude
+                .fetch_add(skipped as u64, Ordering::Relaxed);
         }
     }
 
@@ -628,126 +762,118 @@ fn write_parameters_file(
     })
 }
 
-/// `e^(2πi · frac(turns))`, the phase factor of an echo at `turns = f · T` cycles: what
-/// `Complex64::from_polar(1, 2π frac(turns))` gives, without its general range reduction
-/// (nor the library calls of `fract` and `round` on a CPU without SSE4.1), and without a
-/// branch on the quarter. `y = 4 · turns` (exact) is split exactly into its nearest integer
-/// `q` (below 2^51, the sum with 1.5 · 2^52 rounds it there, ties to even, and the sum's
-/// last bits are `q` modulo 4) and a rest `f = y − q`, `|f| ≤ 1/2` (a difference of two
-/// numbers within a half of each other: no rounding); the sine and cosine of `π/2 · f` (at
-/// most π/4) are fdlibm's kernels (within an ulp), turned by `q` quarter turns, exactly.
-/// So each component is within about 2e-16 of the true phase factor of `2π · frac(turns)`
-/// (`tests::the_phase_kernel_is_within_an_ulp_or_two_of_libm`).
-#[inline]
-fn unit_phase(turns: f64) -> Complex64 {
-    /// 1.5 · 2^52: a sum with it below 2^51 in size is rounded to an integer.
-    const ROUND: f64 = 6_755_399_441_055_744.0;
-    let y = 4.0 * turns;
-    let (q, f) = if y.abs() < 2_251_799_813_685_248.0 {
-        let shifted = y + ROUND;
-        (shifted.to_bits(), y - (shifted - ROUND))
-    } else {
-        // Beyond 2^51 quarter turns `y` is a multiple of 1/4 (of 2 above 2^53): `fract`
-        // takes the fraction of the turns, exactly.
-        let y = 4.0 * turns.fract();
-        let r = y.round();
-        (r as i64 as u64, y - r)
-    };
-    let t = std::f64::consts::FRAC_PI_2 * f;
-    let (s, c) = (sin_kernel(t), cos_kernel(t));
-    // Turned by `q` quarter turns: (c, s), (−s, c), (−c, −s), (s, −c), picked (not branched
-    // on: the quarter is as good as random from one echo to the next).
-    let turned = [c, -s, -c, s];
-    let q = q as usize;
-    Complex64::new(turned[q & 3], turned[q.wrapping_add(3) & 3])
-}
-
-/// `sin t` for `|t| ≤ π/4`: fdlibm's `__kernel_sin` (its tail `y` zero), within one ulp.
-#[inline(always)]
-fn sin_kernel(t: f64) -> f64 {
-    const S1: f64 = -0.16666666666666632;
-    const S2: f64 = 0.00833333333332249;
-    const S3: f64 = -0.0001984126982985795;
-    const S4: f64 = 2.7557313707070068e-06;
-    const S5: f64 = -2.5050760253406863e-08;
-    const S6: f64 = 1.58969099521155e-10;
-    let z = t * t;
-    let w = z * z;
-    let r = S2 + z * (S3 + z * S4) + z * w * (S5 + z * S6);
-    t + z * t * (S1 + z * r)
-}
-
-/// `cos t` for `|t| ≤ π/4`: fdlibm's `__kernel_cos` (its tail `y` zero), within one ulp.
-#[inline(always)]
-fn cos_kernel(t: f64) -> f64 {
-    const C1: f64 = 0.0416666666666666;
-    const C2: f64 = -0.001388888888887411;
-    const C3: f64 = 2.480158728947673e-05;
-    const C4: f64 = -2.7557314351390663e-07;
-    const C5: f64 = 2.087572321298175e-09;
-    const C6: f64 = -1.1359647557788195e-11;
-    let z = t * t;
-    let w = z * z;
-    let r = z * (C1 + z * (C2 + z * C3)) + w * w * (C4 + z * (C5 + z * C6));
-    let hz = 0.5 * z;
-    let one_less = 1.0 - hz;
-    one_less + (((1.0 - one_less) - hz) + z * r)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use eigenray::Status;
+    use eigenray::amplitude::{Amplitude, NoAmplitude};
 
-    /// The kernel against libm's `sin` and `cos` of the same reduced argument `2π r` (within
-    /// 2.3e-16 a component: an ulp or two), and against `from_polar` of `2π frac(turns)`
-    /// (within 1e-15: that argument's own rounding, up to 4.4e-16 rad near a full turn),
-    /// over a million fractions spread over `[−3, 3000)` turns, the eighths of a turn and
-    /// their neighbours.
+    /// Sums of a scene of `pairs` (2 sources × `pairs / 2` receivers) with the coherent
+    /// pressures at `frequency` and the intensities, nothing else.
+    fn loss_sums(frequency: f64, pairs: usize) -> Sums<'static> {
+        Sums {
+            ir: None,
+            tl: None,
+            charts: None,
+            pressure: Some((frequency, Mutex::new(vec![Complex64::new(0.0, 0.0); pairs]))),
+            intensity: Some(Mutex::new(vec![0.0; pairs])),
+            pair: Mutex::new(Vec::new()),
+            receivers: pairs / 2,
+            echoes: AtomicU64::new(0),
+            without_amplitude: AtomicU64::new(0),
+        }
+    }
+
+    /// What [`loss_sums`] summed, the sums as their bits.
+    #[derive(Debug, PartialEq)]
+    struct SummedBits {
+        /// Each pair's pressure, real and imaginary part.
+        pressures: Vec<u64>,
+        intensities: Vec<u64>,
+        echoes: u64,
+        without_amplitude: u64,
+    }
+
+    fn bits(s: Sums<'_>) -> SummedBits {
+        let p = s.pressure.unwrap().1.into_inner().unwrap();
+        let i = s.intensity.unwrap().into_inner().unwrap();
+        SummedBits {
+            pressures: p
+                .iter()
+                .flat_map(|z| [z.re.to_bits(), z.im.to_bits()])
+                .collect(),
+            intensities: i.iter().map(|x| x.to_bits()).collect(),
+            echoes: s.echoes.into_inner(),
+            without_amplitude: s.without_amplitude.into_inner(),
+        }
+    }
+
+    /// A batch's sums ([`StreamedSums`] over [`EchoColumns`]) are bit for bit the sums of
+    /// one echo at a time ([`Sums::add_all`] of each arrival's echo, the way every echo went
+    /// before the batches), and so are the counts: ten thousand arrivals to 2 × 7 pairs, in
+    /// batches of 1 to 700 arrivals (so over several columns' worth), some `vertex` or
+    /// `obstructed`, some without an amplitude or without its value, some at times beyond the
+    /// phase's fast reduction (each way of [`unit_phases`]), zero and negative amplitudes.
     #[test]
-    fn the_phase_kernel_is_within_an_ulp_or_two_of_libm() {
-        let (mut kernel, mut polar) = (0.0f64, 0.0f64);
-        let mut check = |turns: f64| {
-            let got = unit_phase(turns);
-            let want = Complex64::from_polar(1.0, std::f64::consts::TAU * turns.fract());
-            polar = polar
-                .max((got.re - want.re).abs())
-                .max((got.im - want.im).abs());
-            let x = turns.fract();
-            let q = (4.0 * x).round();
-            let t = std::f64::consts::TAU * (x - 0.25 * q);
-            let quarter = Complex64::new(0.0, 1.0).powi((q as i32).rem_euclid(4));
-            let exact = Complex64::new(t.cos(), t.sin()) * quarter;
-            kernel = kernel
-                .max((got.re - exact.re).abs())
-                .max((got.im - exact.im).abs());
-        };
-        // A fixed linear congruential sequence: the same numbers every run.
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        for _ in 0..1_000_000 {
+    fn a_batch_sums_as_one_echo_at_a_time_does() {
+        let mut state = 0x0123_4567_89ab_cdefu64;
+        let mut next = || {
             state = state
                 .wrapping_mul(6_364_136_223_846_793_005)
                 .wrapping_add(1_442_695_040_888_963_407);
-            let u = (state >> 11) as f64 / (1u64 << 53) as f64;
-            check(u * 3003.0 - 3.0);
-        }
-        for k in -8..=8 {
-            let at = f64::from(k) / 8.0;
-            for t in [at, at.next_up(), at.next_down(), 300.0 + at, -2.0 + at] {
-                check(t);
-            }
-            // Four times the turns at and beyond 2^51 (the reduction's other way), and below.
-            for big in [562_949_953_421_312.0, 1e15, 4_503_599_627_370_496.0] {
-                for t in [big + at, big.next_down() + at, -big + at] {
-                    check(t);
+            state >> 11
+        };
+        let unit = |u: u64| (u >> 11) as f64 / (1u64 << 42) as f64;
+        let arrivals: Vec<StreamedArrival> = (0..10_000)
+            .map(|_| {
+                let u = next();
+                let time = match u % 16 {
+                    0 => 1e13 * (1.0 + unit(next())),
+                    1 => (next() % 8_000) as f64 / 800.0,
+                    _ => 30.0 * unit(next()),
+                };
+                let value = match u % 13 {
+                    0 => Complex64::new(0.0, -0.0),
+                    _ => Complex64::new(unit(next()) - 0.5, unit(next()) - 0.5) * 1e-3,
+                };
+                let amplitude = match u % 11 {
+                    0 => None,
+                    1 => Some(Amplitude::none(NoAmplitude::Vertex)),
+                    _ => Some(Amplitude {
+                        value,
+                        spreading: 1.0,
+                        coefficient: Complex64::new(1.0, 0.0),
+                        attenuation_db: 0.0,
+                        reason: None,
+                    }),
+                };
+                StreamedArrival {
+                    source: (u >> 8) as usize % 2,
+                    receiver: (u >> 12) as usize % 7,
+                    steps: 3,
+                    diffractions: 0,
+                    vertical_reflections: 0,
+                    status: [Status::Converged, Status::Vertex, Status::Obstructed]
+                        [usize::from(u % 17 == 0) + usize::from(u % 19 == 0)],
+                    time,
+                    amplitude,
                 }
-            }
+            })
+            .collect();
+        let (batched, one_at_a_time) = (loss_sums(37.5, 14), loss_sums(37.5, 14));
+        let mut rest = &arrivals[..];
+        while !rest.is_empty() {
+            let (batch, after) = rest.split_at((next() as usize % 700 + 1).min(rest.len()));
+            StreamedSums(&batched).arrivals(batch);
+            rest = after;
         }
-        assert!(kernel <= 2.3e-16, "{kernel:e}");
-        assert!(polar <= 1e-15, "{polar:e}");
-        // Exact at the quarter turns, as `from_polar`'s multiples of π/2 are not.
-        assert_eq!(unit_phase(0.25), Complex64::new(0.0, 1.0));
-        assert_eq!(unit_phase(2.5), Complex64::new(-1.0, 0.0));
-        assert_eq!(unit_phase(-0.75), Complex64::new(0.0, 1.0));
-        assert!(unit_phase(f64::NAN).re.is_nan());
+        for a in &arrivals {
+            one_at_a_time.add_all([Echo::of_streamed(a)]);
+        }
+        let (want, got) = (bits(one_at_a_time), bits(batched));
+        assert_eq!(got, want);
+        // Not a test that cannot fail: echoes were summed and others skipped.
+        let (echoes, skipped) = (want.echoes, want.without_amplitude);
+        assert!(echoes > 7_000 && skipped > 1_000, "{echoes} {skipped}");
     }
 }
