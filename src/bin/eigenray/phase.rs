@@ -48,6 +48,7 @@ pub(super) fn unit_phase(turns: f64) -> Complex64 {
 /// bits (as [`unit_phase`] picks them from a table), and the times beyond `NEAR / 4` quarter
 /// turns (or not a number) are redone one at a time, after the batch. `cos` and `sin` are as
 /// long as `times`.
+#[inline(always)]
 pub(super) fn unit_phases(frequency: f64, times: &[f64], cos: &mut [f64], sin: &mut [f64]) {
     let (cos, sin) = (&mut cos[..times.len()], &mut sin[..times.len()]);
     let mut far = false;

@@ -365,6 +365,8 @@ pub(super) struct Sums<'a> {
     intensity: Option<Mutex<Vec<f64>>>,
     pair: Mutex<Vec<Echo>>,
     receivers: usize,
+    /// The processor's vector instructions ([`AddColumns`]).
+    arch: pulp::Arch,
     /// Echoes summed.
     pub(super) echoes: AtomicU64,
     /// Timed arrivals and rays without an amplitude value: they add nothing.
@@ -385,6 +387,45 @@ impl ArrivalSink for StreamedSums<'_, '_> {
     }
 }
 
+/// A streamed batch's loss sums ([`Sums::add_streamed`]) as [`pulp::Arch::dispatch`]
+/// compiles them for each set of vector instructions (everything inlined, so compiled with
+/// them): the echoes of `arrivals` a column batch at a time into the coherent `pressure`
+/// (its frequency and sums) and the `intensity`; the echoes added.
+struct AddColumns<'c, 'a, 'p> {
+    columns: &'c mut EchoColumns,
+    arrivals: &'a [StreamedArrival],
+    receivers: usize,
+    pressure: Option<(f64, &'p mut [Complex64])>,
+    intensity: Option<&'p mut [f64]>,
+}
+
+impl pulp::WithSimd for AddColumns<'_, '_, '_> {
+    type Output = usize;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) -> usize {
+        let AddColumns {
+            columns,
+            arrivals,
+            receivers,
+            mut pressure,
+            mut intensity,
+        } = self;
+        let mut added = 0;
+        for batch in arrivals.chunks(COLUMN_ECHOES) {
+            columns.fill(batch, receivers);
+            if let Some((f, p)) = &mut pressure {
+                columns.add_pressures(*f, p);
+            }
+            if let Some(i) = &mut intensity {
+                columns.add_intensities(i);
+            }
+            added += columns.len;
+        }
+        added
+    }
+}
+
 /// The lock of `m`, also when another thread panicked holding it (the sums are only added
 /// to: a sum left half added is still a sum).
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
@@ -397,6 +438,7 @@ const COLUMN_ECHOES: usize = 256;
 /// Multiplies each complex number `re[i] + i·im[i]` by `a[i] + i·b[i]` as `Complex64`'s
 /// product `(a + ib) × (re + i·im)` does, term for term: the pressures of a batch's phase
 /// factors. Slices of one length, apart (so the loop goes two at a time).
+#[inline(always)]
 fn times_amplitudes(re: &mut [f64], im: &mut [f64], a: &[f64], b: &[f64]) {
     let n = re.len();
     let (im, a, b) = (&mut im[..n], &a[..n], &b[..n]);
@@ -449,6 +491,7 @@ impl EchoColumns {
 
     /// Holds the echoes of `arrivals` (at most [`COLUMN_ECHOES`] of them), in order: those
     /// that [`Echo::of_streamed`] makes an echo of, the pairs of a scene of `receivers`.
+    #[inline(always)]
     fn fill(&mut self, arrivals: &[StreamedArrival], receivers: usize) {
         let mut len = 0;
         for a in &arrivals[..arrivals.len().min(COLUMN_ECHOES)] {
@@ -466,6 +509,7 @@ impl EchoColumns {
     /// Adds each echo's pressure at `frequency`, `amplitude × unit_phase(frequency × time)`,
     /// to its pair's sum in `sums`: the phases and the products a straight loop each, then
     /// the sums in order, bit for bit what one echo at a time adds.
+    #[inline(always)]
     fn add_pressures(&mut self, frequency: f64, sums: &mut [Complex64]) {
         let n = self.len;
         let (re, im) = (&mut self.pressure_re[..n], &mut self.pressure_im[..n]);
@@ -477,6 +521,7 @@ impl EchoColumns {
     }
 
     /// Adds each echo's intensity, `|amplitude|²`, to its pair's sum in `sums`.
+    #[inline(always)]
     fn add_intensities(&self, sums: &mut [f64]) {
         let n = self.len;
         let amplitudes = self.re[..n].iter().zip(&self.im[..n]);
@@ -549,6 +594,7 @@ impl<'a> Sums<'a> {
             intensity,
             pair: Mutex::new(Vec::new()),
             receivers: scene.receivers().len(),
+            arch: pulp::Arch::new(),
             echoes: AtomicU64::new(0),
             without_amplitude: AtomicU64::new(0),
         }))
@@ -622,18 +668,15 @@ impl<'a> Sums<'a> {
         let mut pressure = self.pressure.as_ref().map(|(f, p)| (*f, lock(p)));
         let mut intensity = self.intensity.as_ref().map(lock);
         let added = COLUMNS.with_borrow_mut(|columns| {
-            let mut added = 0;
-            for batch in arrivals.chunks(COLUMN_ECHOES) {
-                columns.fill(batch, self.receivers);
-                if let Some((f, p)) = &mut pressure {
-                    columns.add_pressures(*f, p);
-                }
-                if let Some(i) = &mut intensity {
-                    columns.add_intensities(i);
-                }
-                added += columns.len;
-            }
-            added
+            // Compiled for the processor's vector instructions where it has them (AVX2,
+            // AVX-512): the same operations, so the same sums.
+            self.arch.dispatch(AddColumns {
+                columns,
+                arrivals,
+                receivers: self.receivers,
+                pressure: pressure.as_mut().map(|(f, p)| (*f, &mut p[..])),
+                intensity: intensity.as_mut().map(|i| &mut i[..]),
+            })
         });
         let skipped = arrivals.len() - added;
         if added > 0 {
@@ -779,6 +822,7 @@ mod tests {
             intensity: Some(Mutex::new(vec![0.0; pairs])),
             pair: Mutex::new(Vec::new()),
             receivers: pairs / 2,
+            arch: pulp::Arch::new(),
             echoes: AtomicU64::new(0),
             without_amplitude: AtomicU64::new(0),
         }
