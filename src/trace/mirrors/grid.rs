@@ -128,6 +128,7 @@ impl ReceiverGrid {
     /// lie inside it by [`INNER`] margins (its part of each row, shrunk far beyond the
     /// round-off of its ends and of [`Beam::gauge`]: each such receiver passes the gauge's
     /// test, which need not be taken; the others may pass it too).
+    #[inline(always)]
     fn scan(
         &self,
         (beam, inner): (&Beam, Option<&Beam>),
@@ -670,6 +671,39 @@ struct NodeReceivers<'v, 'a, 's, F> {
     stats: &'v mut MirrorStats,
     /// The node's closed-form paths not yet given to `unfolded`.
     run: RunBuffer,
+    /// The processor's vector instructions ([`visit`](Self::visit)).
+    arch: pulp::Arch,
+}
+
+/// [`NodeReceivers::visit`] as [`pulp::Arch::dispatch`] compiles it for each set of vector
+/// instructions (the receivers' tests and closed forms inlined, so compiled with them).
+struct VisitNode<'n, 'v, 'a, 's, 'x, F> {
+    receivers: &'n mut NodeReceivers<'v, 'a, 's, F>,
+    stack: &'x [Node],
+    walls: &'x [usize],
+    certain: &'x [Certain],
+    bounces: &'x Bounces,
+    grid: Option<&'x ReceiverGrid>,
+}
+
+impl<F> pulp::WithSimd for VisitNode<'_, '_, '_, '_, '_, F>
+where
+    F: FnMut(MirrorPath<'_>) -> bool,
+{
+    type Output = bool;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) -> bool {
+        let VisitNode {
+            receivers,
+            stack,
+            walls,
+            certain,
+            bounces,
+            grid,
+        } = self;
+        receivers.visit_compiled(stack, walls, certain, bounces, grid)
+    }
 }
 
 /// What [`NodeReceivers::closed`] finds for a receiver.
@@ -699,6 +733,7 @@ where
     /// node's last legs may cross a segment, found at the first receiver that asks.
     /// `known_deep`: whether the grid's scan found `r` inside the certain beam by [`INNER`]
     /// margins ([`ReceiverGrid::scan`]), so that neither beam's test is taken for it.
+    #[inline(always)]
     fn receiver(
         &mut self,
         stack: &[Node],
@@ -828,6 +863,7 @@ where
     /// Receiver `r`'s path in closed form, or that it certainly has none, or that it must
     /// be validated. `deep`: whether it lies inside the node's certain beam by [`INNER`]
     /// margins.
+    #[inline(always)]
     fn closed(
         &mut self,
         stack: &[Node],
@@ -972,6 +1008,7 @@ impl MirrorWalls {
             unfolded,
             stats: &mut stats,
             run: RunBuffer::new(),
+            arch: pulp::Arch::new(),
         };
         if !node.visit(stack, walls, certain, bounces, grid.as_ref()) {
             node.stats.stopped = true;
@@ -1045,8 +1082,30 @@ where
     F: FnMut(MirrorPath<'_>) -> bool,
 {
     /// Every receiver of the node on top of `stack`: those its beam may hold on `grid`,
-    /// else all; `false` where the search stops.
+    /// else all; `false` where the search stops. Compiled for the processor's vector
+    /// instructions where it has them (AVX2, AVX-512: fewer instructions for the same
+    /// operations, so the same numbers), as [`VisitNode`].
     fn visit(
+        &mut self,
+        stack: &[Node],
+        walls: &[usize],
+        certain: &[Certain],
+        bounces: &Bounces,
+        grid: Option<&ReceiverGrid>,
+    ) -> bool {
+        self.arch.dispatch(VisitNode {
+            receivers: self,
+            stack,
+            walls,
+            certain,
+            bounces,
+            grid,
+        })
+    }
+
+    /// [`visit`](Self::visit)'s work.
+    #[inline(always)]
+    fn visit_compiled(
         &mut self,
         stack: &[Node],
         walls: &[usize],
