@@ -122,9 +122,9 @@ impl ReceiverGrid {
     }
 
     /// Every receiver that may lie in `beam` (of the node of image `image` on `wall`; a
-    /// superset of those [`Beam::holds`] keeps with the margin `delta`) to `visit`, row by
-    /// row (or column by column, whichever are fewer); `false` where `visit` stops. With
-    /// `inner` (a sure node's certain beam), `visit` is also told which receivers certainly
+    /// superset of those [`Beam::holds`] keeps with the margin `delta`) into `out` (cleared
+    /// first), row by row (or column by column, whichever are fewer). With
+    /// `inner` (a sure node's certain beam), `out` also says which receivers certainly
     /// lie inside it by [`INNER`] margins (its part of each row, shrunk far beyond the
     /// round-off of its ends and of [`Beam::gauge`]: each such receiver passes the gauge's
     /// test, which need not be taken; the others may pass it too).
@@ -135,8 +135,9 @@ impl ReceiverGrid {
         wall: &Wall,
         image: Point,
         delta: f64,
-        visit: &mut impl FnMut(usize, bool) -> bool,
-    ) -> bool {
+        out: &mut Vec<(u32, bool)>,
+    ) {
+        out.clear();
         let b = self.bounds;
         let corners = [
             b.min,
@@ -194,12 +195,9 @@ impl ReceiverGrid {
             for ai in first..last {
                 let (i, j) = if by_rows { (ai, li) } else { (li, ai) };
                 let certain = (deep_first..deep_last).contains(&ai);
-                if !visit(self.index[i * ny + j] as usize, certain) {
-                    return false;
-                }
+                out.push((self.index[i * ny + j], certain));
             }
         }
-        true
     }
 }
 
@@ -673,6 +671,8 @@ struct NodeReceivers<'v, 'a, 's, F> {
     run: RunBuffer,
     /// The processor's vector instructions ([`visit`](Self::visit)).
     arch: pulp::Arch,
+    /// The receivers a node's scan found ([`ReceiverGrid::scan`]), kept for the next.
+    scanned: Vec<(u32, bool)>,
 }
 
 /// [`NodeReceivers::visit`] as [`pulp::Arch::dispatch`] compiles it for each set of vector
@@ -1009,6 +1009,7 @@ impl MirrorWalls {
             stats: &mut stats,
             run: RunBuffer::new(),
             arch: pulp::Arch::new(),
+            scanned: Vec::new(),
         };
         if !node.visit(stack, walls, certain, bounces, grid.as_ref()) {
             node.stats.stopped = true;
@@ -1124,16 +1125,28 @@ where
         let (mirrors, delta) = (self.walls, self.bounds.delta);
         let count = self.validation.search.receivers.len();
         let mut crossings = None;
-        let mut each = |r: usize, known_deep: bool| {
-            self.receiver(stack, walls, &c, own, &mut crossings, (r, known_deep))
-        };
         let go = match (grid, &top.beam) {
             (Some(grid), Some(beam)) => {
                 let wall = &mirrors.walls[top.wall];
                 let inner = c.inner.as_ref().filter(|_| c.sure);
-                grid.scan((beam, inner), wall, top.image, delta, &mut each)
+                let mut scanned = std::mem::take(&mut self.scanned);
+                grid.scan((beam, inner), wall, top.image, delta, &mut scanned);
+                // A loop, not `all`: its body stays inlined (and compiled for the vector
+                // instructions).
+                let mut go = true;
+                for &(r, known_deep) in &scanned {
+                    let at = (r as usize, known_deep);
+                    if !self.receiver(stack, walls, &c, own, &mut crossings, at) {
+                        go = false;
+                        break;
+                    }
+                }
+                self.scanned = scanned;
+                go
             }
-            _ => (0..count).all(|r| each(r, false)),
+            _ => {
+                (0..count).all(|r| self.receiver(stack, walls, &c, own, &mut crossings, (r, false)))
+            }
         };
         go && self.flush(stack, walls, &c, own)
     }
