@@ -713,7 +713,9 @@ impl Tracer {
         run: &Run,
         batch: &mut Batch,
     ) -> Result<(), SceneError> {
-        let spatial = self.solves_spatially(opts);
+        // Without rays there is no order to decide (its test and sort scan the receivers).
+        let has_rays = self.scene().num_rays() > 0;
+        let spatial = has_rays && self.solves_spatially(opts);
         let mut reserved = reserve(
             (&mut batch.records, &mut batch.points, &mut batch.media),
             self.scene(),
@@ -726,7 +728,11 @@ impl Tracer {
             return Err(self.too_large(1 + usize::from(spatial)));
         }
         // The order decided once (its test scans the receivers).
-        let order = self.order_of(spatial);
+        let order = if has_rays {
+            self.order_of(spatial)
+        } else {
+            Vec::new()
+        };
         self.solve_batch_into(opts, run, &order, batch);
         self.batch_amplitudes(batch, run);
         Ok(())
@@ -1193,6 +1199,52 @@ impl<S: BatchSink> ChainRays for UnitChain<'_, '_, S> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A scene without rays (paths dropped: a search alone) gives an empty batch, fresh or
+    /// reused after one with rays (receivers out of order, solved in a spatial order, with
+    /// amplitudes): no rays and no amplitudes, the receivers and offsets of the scene. Its
+    /// receivers' order is then neither tested nor sorted, nor its amplitudes' pass run.
+    #[test]
+    fn a_scene_without_rays_gives_an_empty_batch() {
+        let scene = |paths: &str| {
+            let receivers: Vec<String> = (0..40)
+                .map(|i| format!("[{}, {}]", (i * 17 % 40) as f64 * 0.5 - 9.0, -1 - i % 3))
+                .collect();
+            crate::Scene::from_json(&format!(
+                r#"{{ "media": {{ "water": {{ "speed": 1500, "density": 1 }} }},
+                     "interfaces": {{ "floor": {{ "points": [[-20, -5], [20, -6]] }} }},
+                     "sources": [[0, -0.5]], "receivers": [{}],
+                     "background": "water", "paths": {paths},
+                     "amplitudes": {{ "source": "point" }} }}"#,
+                receivers.join(", ")
+            ))
+            .unwrap()
+        };
+        let with_rays = scene(r#"[{ "steps": [{ "reflect": "floor" }] }]"#);
+        let without = scene("[]");
+        let opts = BatchOptions::default();
+        let run = Run::new();
+        let mut reused = Batch::default();
+        let tracer = Tracer::new(&with_rays).unwrap();
+        assert!(
+            tracer.solves_spatially(&opts),
+            "the receivers are out of order"
+        );
+        tracer.trace_batch_into(&opts, &run, &mut reused).unwrap();
+        assert_eq!((reused.len(), reused.amplitudes.len()), (40, 40));
+        let tracer = Tracer::new(&without).unwrap();
+        tracer.trace_batch_into(&opts, &run, &mut reused).unwrap();
+        let fresh = tracer.trace_batch(&opts, &run).unwrap();
+        for batch in [&reused, &fresh] {
+            assert!(batch.is_empty() && batch.amplitudes.is_empty());
+            assert!(batch.points.is_empty() && batch.media.is_empty());
+            assert_eq!((batch.receivers, batch.paths), (40, 0));
+            assert_eq!(
+                (&batch.point_offsets, &batch.media_offsets),
+                (&vec![0], &vec![0])
+            );
+        }
+    }
 
     #[test]
     fn morton_orders_quadrants() {

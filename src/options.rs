@@ -327,19 +327,42 @@ pub fn available_memory() -> Option<u64> {
         let line = text.lines().find(|l| l.starts_with(key))?;
         line[key.len()..].split_whitespace().next()?.parse().ok()
     };
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let info = read_proc_file("/proc/meminfo")?;
     let free = field(&info, "MemAvailable:")?.checked_mul(1024)?;
-    let limit = std::fs::read_to_string("/proc/self/limits")
-        .ok()
-        .and_then(|l| field(&l, "Max address space"));
-    let mapped = std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| field(&s, "VmSize:"))
-        .map_or(0, |kb| kb.saturating_mul(1024));
+    // "unlimited" is no number: no limit (and then what the process maps is not read).
+    let limit = read_proc_file("/proc/self/limits").and_then(|l| field(&l, "Max address space"));
     Some(match limit {
-        Some(limit) => free.min(limit.saturating_sub(mapped)),
+        Some(limit) => {
+            let mapped = read_proc_file("/proc/self/status")
+                .and_then(|s| field(&s, "VmSize:"))
+                .map_or(0, |kb| kb.saturating_mul(1024));
+            free.min(limit.saturating_sub(mapped))
+        }
         None => free,
     })
+}
+
+/// The text of a small file of `/proc` (a few KiB), if it reads: into one buffer of a page
+/// or two, a read or two, where `std::fs::read_to_string` asks for the size (`/proc` says 0)
+/// and then reads 32 bytes, 32, 64, ... (a dozen system calls). The command-line tool looks
+/// at the memory available several times a run.
+fn read_proc_file(path: &str) -> Option<String> {
+    let mut file = std::fs::File::open(path).ok()?;
+    let mut text = vec![0u8; 4096];
+    let mut len = 0;
+    loop {
+        if len == text.len() {
+            text.resize(2 * len, 0);
+        }
+        match file.read(&mut text[len..]) {
+            Ok(0) => break,
+            Ok(n) => len += n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(_) => return None,
+        }
+    }
+    text.truncate(len);
+    String::from_utf8(text).ok()
 }
 
 /// Whether `bytes` more would fit in the memory available ([`available_memory`]; where that is
@@ -413,6 +436,35 @@ mod tests {
     fn a_short_input_is_read_whole() {
         let small = read_limited(&mut &b"{}"[..]).unwrap();
         assert_eq!(small.as_deref(), Some(&b"{}"[..]));
+    }
+
+    /// A small file reads whole into its buffer, a file beyond the buffer's first page too
+    /// (the buffer grows), byte for byte as `std::fs::read_to_string` reads them; a file
+    /// that is not there, or not text, reads as nothing.
+    #[test]
+    fn a_proc_file_reads_as_the_standard_library_reads_it() {
+        let dir = std::env::temp_dir().join(format!("eigenray-proc-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for len in [0, 1, 4095, 4096, 4097, 10_000, 40_000] {
+            let path = dir.join(format!("f{len}"));
+            let text: String = (0..len).map(|i| (b'a' + (i % 26) as u8) as char).collect();
+            std::fs::write(&path, &text).unwrap();
+            let path = path.to_str().unwrap();
+            assert_eq!(
+                read_proc_file(path).as_deref(),
+                Some(text.as_str()),
+                "{len} bytes"
+            );
+        }
+        let binary = dir.join("binary");
+        std::fs::write(&binary, [0xff, 0xfe, 0x00]).unwrap();
+        assert_eq!(read_proc_file(binary.to_str().unwrap()), None);
+        assert_eq!(read_proc_file(dir.join("absent").to_str().unwrap()), None);
+        let _ = std::fs::remove_dir_all(&dir);
+        if cfg!(target_os = "linux") {
+            let limits = std::fs::read_to_string("/proc/self/limits").unwrap();
+            assert_eq!(read_proc_file("/proc/self/limits"), Some(limits));
+        }
     }
 
     /// On Linux the available memory is known and positive; a petabyte never fits.

@@ -42,7 +42,9 @@ impl Tracer {
     /// the rays solved keep their amplitudes.
     pub(super) fn batch_amplitudes(&self, batch: &mut Batch, run: &Run) {
         let scene = self.scene();
-        if scene.amplitudes().is_none() {
+        // Without amplitudes, or without rays (no work for the thread pool, which is then
+        // not started for nothing).
+        if scene.amplitudes().is_none() || batch.is_empty() {
             batch.amplitudes.clear();
             return;
         }

@@ -8,7 +8,7 @@ use serde::de::value::{MapAccessDeserializer, SeqAccessDeserializer};
 use serde::de::{MapAccess, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize};
 
-use super::{SceneError, point};
+use super::{MAX_COORDINATE, MIN_COORDINATE, SceneError, point};
 use crate::geom::Point;
 
 /// The `receivers` key of a scene document: a list of points, or a grid of them.
@@ -182,15 +182,34 @@ impl ReceiverGridSpec {
         let n = x.count.checked_mul(y.count).ok_or_else(too_many)?;
         let mut out = Vec::new();
         out.try_reserve_exact(n).map_err(|_| too_many())?;
+        // Each axis' coordinates once, each with whether it passes a point's checks: a
+        // point passes them when both its coordinates do (the checks are coordinate by
+        // coordinate), and only a point that may not is checked whole, for its error.
+        let ys: Vec<(f64, bool)> = (0..y.count)
+            .map(|iy| {
+                let v = y.at(iy);
+                (v, passes_point_checks(v))
+            })
+            .collect();
         for ix in 0..x.count {
             let px = x.at(ix);
-            for iy in 0..y.count {
-                let p = [px, y.at(iy)];
-                out.push(point("receivers.grid", p)?);
+            let x_passes = passes_point_checks(px);
+            for &(py, y_passes) in &ys {
+                out.push(if x_passes && y_passes {
+                    Point::new(px, py)
+                } else {
+                    point("receivers.grid", [px, py])?
+                });
             }
         }
         Ok(out)
     }
+}
+
+/// Whether a coordinate passes the checks [`point`] makes of each coordinate of a point:
+/// finite, within `MAX_COORDINATE`, and zero or at least `MIN_COORDINATE` in magnitude.
+fn passes_point_checks(v: f64) -> bool {
+    v.is_finite() && v.abs() <= MAX_COORDINATE && (v == 0.0 || v.abs() >= MIN_COORDINATE)
 }
 
 /// `{"grid": ...}`: the one key a grid's object holds.
@@ -282,6 +301,53 @@ mod tests {
             let e = ReceiversSpec::Grid { grid: g }.validate().unwrap_err();
             assert_eq!(e.key, key, "{e}");
         }
+    }
+
+    /// The grid's points are those of checking every point whole (each coordinate computed
+    /// by its axis, then `point`), value for value, and its errors the same error: the
+    /// coordinates checked once an axis, the points only where one may fail. The grids span
+    /// signs and magnitudes, interior coordinates below `MIN_COORDINATE` (not at the ends)
+    /// on either axis, and zeros.
+    #[test]
+    fn the_points_are_those_checked_one_by_one() {
+        let one_by_one = |g: &ReceiverGridSpec| -> Result<Vec<Point>, SceneError> {
+            let (x, y) = (GridAxis::of("x", g.x)?, GridAxis::of("y", g.y)?);
+            let mut out = Vec::new();
+            for ix in 0..x.count {
+                for iy in 0..y.count {
+                    out.push(point("receivers.grid", [x.at(ix), y.at(iy)])?);
+                }
+            }
+            Ok(out)
+        };
+        let tiny = -1.5 * MIN_COORDINATE;
+        let grids = [
+            grid([100.0, 5000.0, 197.0], [-1.0, -99.0, 50.0]),
+            grid([-1.0, 1.0, 21.0], [-0.3, 0.3, 7.0]),
+            grid([-0.7, 0.7, 8.0], [1e-90, -1e-90, 5.0]),
+            grid([tiny, MIN_COORDINATE, 3.0], [0.0, 1.0, 2.0]),
+            grid([0.0, 1.0, 2.0], [tiny, MIN_COORDINATE, 3.0]),
+            grid([tiny, MIN_COORDINATE, 3.0], [tiny, MIN_COORDINATE, 3.0]),
+            grid([-1e100, 1e100, 5.0], [0.0, 0.0, 1.0]),
+        ];
+        let mut failed = 0;
+        for g in &grids {
+            let (got, want) = (g.points(), one_by_one(g));
+            match (&got, &want) {
+                (Ok(a), Ok(b)) => {
+                    let bits = |v: &[Point]| -> Vec<[u64; 2]> {
+                        v.iter().map(|p| [p.x.to_bits(), p.y.to_bits()]).collect()
+                    };
+                    assert_eq!(bits(a), bits(b), "{g:?}");
+                }
+                (Err(a), Err(b)) => {
+                    assert_eq!((&a.key, &a.message), (&b.key, &b.message), "{g:?}");
+                    failed += 1;
+                }
+                _ => panic!("{g:?}: {got:?} against {want:?}"),
+            }
+        }
+        assert_eq!(failed, 3, "the grids with a tiny interior coordinate fail");
     }
 
     /// A list stays a list and a grid a grid when written and read back.

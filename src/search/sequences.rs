@@ -283,6 +283,11 @@ impl Tracer {
         let needed: Vec<usize> = (0..scene.sources().len() * nr)
             .filter(|&pair| media[pair / nr].is_some_and(|m| walk.needed(m)))
             .collect();
+        // No pair to walk (a reflect-only search, the beam trees' alone): no work for the
+        // thread pool, which is then not started for nothing.
+        if needed.is_empty() {
+            return Vec::new();
+        }
         needed
             .into_par_iter()
             .map(|pair| {

@@ -292,6 +292,10 @@ fn check_batch_memory(scene: &Scene, warm_start: bool) -> Result<(), Failure> {
     let need = size
         .bytes(per_ray, per_point, per_leg)
         .and_then(|b| b.checked_mul(copies));
+    // Nothing to hold (a scene without rays, its search alone): no look at the memory.
+    if need == Some(0) {
+        return Ok(());
+    }
     let have = available_memory();
     let too_much = match (need, have) {
         (None, _) => true,
@@ -971,11 +975,18 @@ fn trace_stationary(tracer: &Tracer) -> Result<StationaryRays, Failure> {
 /// Solves every ray; a progress bar on standard error when it is a terminal and the run is
 /// long.
 fn trace(tracer: &Tracer, warm_start: bool) -> Result<Batch, Failure> {
-    let bar = Bar::new(Some(tracer.scene().num_rays()), "rays");
     let opts = BatchOptions {
         warm_start,
         ..BatchOptions::default()
     };
+    // A scene without rays (its search alone): no progress to show, no thread to wait for
+    // the terminal's bar.
+    if tracer.scene().num_rays() == 0 {
+        return tracer
+            .trace_batch(&opts, &Run::new())
+            .map_err(Failure::scene);
+    }
+    let bar = Bar::new(Some(tracer.scene().num_rays()), "rays");
     // Where the memory check could not tell (no `MemAvailable`, or other processes took it
     // meanwhile), the allocation itself fails with a message instead of an abort.
     let batch = tracer
