@@ -40,6 +40,12 @@ impl Tracer {
         } else {
             MirrorWalls::new(scene, &[])
         };
+        // One source: its tree on this thread, without the parallel iterator (whose
+        // splitter asks for the number of threads, and so starts the thread pool).
+        if scene.sources().len() == 1 {
+            let mut scratch = MirrorScratch::default();
+            return vec![self.beam_tree(options, control, &walls, 0, &mut scratch)];
+        }
         (0..scene.sources().len())
             .into_par_iter()
             .map_init(MirrorScratch::default, |scratch, source| {

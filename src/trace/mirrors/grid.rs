@@ -91,13 +91,35 @@ impl ReceiverGrid {
         if n < 4 || u32::try_from(n).is_err() {
             return None;
         }
-        let axis = |f: fn(&Point) -> f64| {
-            let mut v: Vec<f64> = receivers.iter().map(f).collect();
+        let sorted = |mut v: Vec<f64>| {
             v.sort_by(f64::total_cmp);
             v.dedup_by(|a, b| a.to_bits() == b.to_bits());
             v
         };
-        let (xs, ys) = (axis(|p| p.x), axis(|p| p.y));
+        // Receivers listed row by row (a scene's `grid`: receiver `ix · ny + iy`): the axes
+        // of the first run of one x and of every `ny`-th receiver. Where every receiver
+        // then finds its own slot of the `nx · ny = n`, the receivers' x are all in these
+        // xs and every slot is filled, so these are the receivers' distinct x (and y):
+        // the axes the sorts of all of them give.
+        let ny = receivers
+            .iter()
+            .take_while(|p| p.x.to_bits() == receivers[0].x.to_bits())
+            .count();
+        if n.is_multiple_of(ny) {
+            let xs = sorted(receivers.iter().step_by(ny).map(|p| p.x).collect());
+            let ys = sorted(receivers[..ny].iter().map(|p| p.y).collect());
+            if let Some(grid) = Self::indexed(receivers, xs, ys) {
+                return Some(grid);
+            }
+        }
+        let axis = |f: fn(&Point) -> f64| sorted(receivers.iter().map(f).collect());
+        Self::indexed(receivers, axis(|p| p.x), axis(|p| p.y))
+    }
+
+    /// The grid of `receivers` over the axes `xs` and `ys` (sorted, distinct), when each
+    /// receiver has a slot of its own and there are as many slots as receivers.
+    fn indexed(receivers: &[Point], xs: Vec<f64>, ys: Vec<f64>) -> Option<ReceiverGrid> {
+        let n = receivers.len();
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
         if xs.len() < 2 || ys.len() < 2 || xs.len() * ys.len() != n || !finite(&xs) || !finite(&ys)
         {
@@ -1186,6 +1208,84 @@ mod tests {
         if !deep {
             NOT_DEEP.fetch_add(1, Relaxed);
         }
+    }
+
+    /// The axes from the first row and column, where they index every receiver, are those
+    /// of sorting all the receivers' coordinates: the same grid (axes, index and box, bit
+    /// for bit) or none, for grids listed by rows, by columns and shuffled, with a receiver
+    /// moved off the grid, repeated, or missing, and for lists whose first run of one x is
+    /// no row.
+    #[test]
+    fn the_first_row_and_column_give_the_sorted_axes() {
+        let full = |r: &[Point]| {
+            let axis = |f: fn(&Point) -> f64| {
+                let mut v: Vec<f64> = r.iter().map(f).collect();
+                v.sort_by(f64::total_cmp);
+                v.dedup_by(|a, b| a.to_bits() == b.to_bits());
+                v
+            };
+            ReceiverGrid::indexed(r, axis(|p| p.x), axis(|p| p.y))
+        };
+        let bits = |g: &Option<ReceiverGrid>| {
+            g.as_ref().map(|g| {
+                let b = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                let corners = [
+                    g.bounds.min.x,
+                    g.bounds.min.y,
+                    g.bounds.max.x,
+                    g.bounds.max.y,
+                ];
+                (b(&g.xs), b(&g.ys), g.index.clone(), b(&corners))
+            })
+        };
+        let grid = |nx: usize, ny: usize, by_rows: bool| -> Vec<Point> {
+            let point =
+                |i: usize, j: usize| Point::new(100.0 + 25.0 * i as f64, -1.0 - 2.0 * j as f64);
+            if by_rows {
+                (0..nx)
+                    .flat_map(|i| (0..ny).map(move |j| point(i, j)))
+                    .collect()
+            } else {
+                (0..ny)
+                    .flat_map(|j| (0..nx).map(move |i| point(i, j)))
+                    .collect()
+            }
+        };
+        let mut cases: Vec<Vec<Point>> = Vec::new();
+        for (nx, ny) in [(197, 50), (2, 2), (3, 7), (7, 3), (1, 5), (5, 1)] {
+            for by_rows in [true, false] {
+                cases.push(grid(nx, ny, by_rows));
+            }
+        }
+        let mut shuffled = grid(9, 4, true);
+        let mut state = 7u64;
+        for i in (1..shuffled.len()).rev() {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            shuffled.swap(i, (state >> 33) as usize % (i + 1));
+        }
+        cases.push(shuffled);
+        let mut off = grid(9, 4, true);
+        off[13].x += 1.0;
+        cases.push(off);
+        let mut repeated = grid(9, 4, true);
+        repeated[13] = repeated[12];
+        cases.push(repeated);
+        let mut missing = grid(9, 4, true);
+        missing.pop();
+        cases.push(missing);
+        // A first run of two that is no row: the grid is by columns of four.
+        let mut runs = grid(4, 4, false);
+        runs.swap(1, 4);
+        cases.push(runs);
+        let mut found = 0;
+        for (k, r) in cases.iter().enumerate() {
+            let (got, want) = (ReceiverGrid::of(r), full(r));
+            assert_eq!(bits(&got), bits(&want), "case {k}");
+            found += usize::from(got.is_some());
+        }
+        assert_eq!(found, 10, "the grids of two or more x and y are found");
     }
 
     /// Every receiver the grid's scan finds inside a certain beam by `INNER` margins (and so
