@@ -13,11 +13,11 @@ use std::time::Instant;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    if let [flag, name] = args.as_slice() {
-        if flag == "--dump" {
-            println!("{}", cases::by_name(name).json);
-            return;
-        }
+    if let [flag, name] = args.as_slice()
+        && flag == "--dump"
+    {
+        println!("{}", cases::by_name(name).json);
+        return;
     }
     let start = Instant::now();
     println!("{}", cases::TABLE_HEADER);

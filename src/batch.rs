@@ -1102,7 +1102,7 @@ impl<S: BatchSink> Unit<'_, S> {
     /// Whether block `b` is the first of its source (the warm-start chain breaks there).
     #[inline]
     fn new_source(&self, b: usize) -> bool {
-        (self.first + b) % self.nr == 0
+        (self.first + b).is_multiple_of(self.nr)
     }
 }
 

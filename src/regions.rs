@@ -191,16 +191,16 @@ impl Regions {
             };
             return Err(SceneError::new(key, message));
         }
-        if let Some(b) = scene.background() {
-            if !self.region_medium.contains(&Some(b)) {
-                return Err(SceneError::new(
-                    "background",
-                    format!(
-                        "`{}` fills no region: the `at` points claim every region{no_domain_hint}",
-                        scene.media()[b].name
-                    ),
-                ));
-            }
+        if let Some(b) = scene.background()
+            && !self.region_medium.contains(&Some(b))
+        {
+            return Err(SceneError::new(
+                "background",
+                format!(
+                    "`{}` fills no region: the `at` points claim every region{no_domain_hint}",
+                    scene.media()[b].name
+                ),
+            ));
         }
         let mut named = vec![false; scene.media().len()];
         for p in scene.paths() {

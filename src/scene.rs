@@ -1281,13 +1281,13 @@ fn paths_of(
     let mut paths = Vec::with_capacity(specs.len());
     let mut path_names: HashMap<&str, usize> = HashMap::new();
     for (k, p) in specs.iter().enumerate() {
-        if let Some(name) = &p.name {
-            if let Some(first) = path_names.insert(name, k) {
-                return Err(SceneError::new(
-                    format!("paths[{k}].name"),
-                    format!("`{name}` is also the name of paths[{first}] (names must differ)"),
-                ));
-            }
+        if let Some(name) = &p.name
+            && let Some(first) = path_names.insert(name, k)
+        {
+            return Err(SceneError::new(
+                format!("paths[{k}].name"),
+                format!("`{name}` is also the name of paths[{first}] (names must differ)"),
+            ));
         }
         paths.push(path_of(k, p, interfaces, media)?);
     }

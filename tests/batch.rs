@@ -203,7 +203,11 @@ fn one_interaction_rays_of_a_batch_are_one_by_one_rays() {
                 "ray {i}: {t_ray} vs {time}"
             );
             let seg = ((x.x + 4.0) / 0.5).floor().clamp(0.0, 15.0);
-            let rising = if seg as usize % 2 == 0 { -0.06 } else { 0.06 };
+            let rising = if (seg as usize).is_multiple_of(2) {
+                -0.06
+            } else {
+                0.06
+            };
             let t = eigenray::Vec2::new(0.5, rising) * (1.0 / 0.5f64.hypot(rising));
             let snell = w[0] * u0.dot(t) / u0.length() - w[1] * u1.dot(t) / u1.length();
             assert!(snell.abs() <= 1e-9, "ray {i}: Snell residual {snell}");

@@ -575,10 +575,10 @@ fn check_ray(scene: &Scene, tracer: &Tracer, ray: &Ray) -> Result<(), String> {
     if ray.media.len() != k + 1 {
         return Err(format!("{} leg media for {k} steps", ray.media.len()));
     }
-    if let Some(m) = &path.media {
-        if &ray.media != m {
-            return Err(format!("leg media {:?}, path gives {m:?}", ray.media));
-        }
+    if let Some(m) = &path.media
+        && &ray.media != m
+    {
+        return Err(format!("leg media {:?}, path gives {m:?}", ray.media));
     }
     let w: Vec<f64> = ray
         .media

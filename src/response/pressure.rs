@@ -29,7 +29,7 @@ pub fn pressure_into(
     out: &mut [Complex64],
 ) {
     assert!(
-        sources > 0 && out.len() % sources == 0,
+        sources > 0 && out.len().is_multiple_of(sources),
         "pressure buffer of the wrong size"
     );
     let receivers = out.len() / sources;

@@ -103,7 +103,7 @@ impl FractionalDelay {
         let (weights, offsets) = (&self.window[lo..hi], &self.offsets[lo..hi]);
         let slots = &mut out[start..start + (hi - lo)];
         let numerator = |k: usize| {
-            if (lo + k + self.window.len() / 2) % 2 == 0 {
+            if (lo + k + self.window.len() / 2).is_multiple_of(2) {
                 [at_even, at_odd]
             } else {
                 [at_odd, at_even]

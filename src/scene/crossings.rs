@@ -138,10 +138,10 @@ pub(super) fn check(interfaces: &[Interface], refs: &[SegmentRef]) -> Result<(),
         here.extend(new.iter().map(|&i| (i, false)));
         // Two segments with `p` inside both cross or overlap there.
         let inside: Vec<u32> = here.iter().filter(|h| h.1).map(|h| h.0).take(2).collect();
-        if let [i, j] = inside[..] {
-            if let Some(e) = problem(i, j) {
-                return Err(e);
-            }
+        if let [i, j] = inside[..]
+            && let Some(e) = problem(i, j)
+        {
+            return Err(e);
         }
         // Segments of one interface through `p`: at most two, neighbours, meeting at a vertex.
         here.sort_unstable_by_key(|&(i, _)| (refs[i as usize].interface, refs[i as usize].segment));
@@ -175,10 +175,10 @@ pub(super) fn check(interfaces: &[Interface], refs: &[SegmentRef]) -> Result<(),
         let above = active.range(hi..).next().map(|k| k.id);
         let mut last = below;
         for id in active.range(lo..hi).map(|k| k.id).chain(above) {
-            if let Some(prev) = last {
-                if let Some(e) = problem(prev, id) {
-                    return Err(e);
-                }
+            if let Some(prev) = last
+                && let Some(e) = problem(prev, id)
+            {
+                return Err(e);
             }
             last = Some(id);
         }

@@ -87,7 +87,7 @@ impl ImpulseResponseOptions {
                 format!("gives {samples} samples at this rate: give 1 to {MAX_SAMPLES}"),
             ));
         }
-        if taps % 2 == 0 || taps > MAX_TAPS {
+        if taps.is_multiple_of(2) || taps > MAX_TAPS {
             return Err(SceneError::new(
                 format!("{key}.taps"),
                 format!("must be odd and at most {MAX_TAPS} (the pulse is centred on its arrival)"),

@@ -350,7 +350,7 @@ impl<'a> Expansion<'a> {
     /// whose first is off `first`: the faces alternate from the first.
     #[inline]
     fn flat_coefficient(&self, first: Face, flat: usize) -> f64 {
-        if (first == Face::Floor) == (flat % 2 == 0) {
+        if (first == Face::Floor) == flat.is_multiple_of(2) {
             self.extrusion.floor
         } else {
             self.extrusion.ceiling

@@ -615,12 +615,13 @@ fn vertex_met(
         // Likewise an end point of the ray lying on a point's segment: T has a kink
         // where the point reaches it; put the point there.
         for i in 0..k {
-            if ws.pin[i] == Pin::Free && ws.seg_try[i] == ws.seg[i] {
-                if let Some(sp) = end_point_between(g, ws, i, ws.seg[i]) {
-                    ws.s[i] = sp;
-                    pinned = true;
-                    break;
-                }
+            if ws.pin[i] == Pin::Free
+                && ws.seg_try[i] == ws.seg[i]
+                && let Some(sp) = end_point_between(g, ws, i, ws.seg[i])
+            {
+                ws.s[i] = sp;
+                pinned = true;
+                break;
             }
         }
     }

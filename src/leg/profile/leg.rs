@@ -251,7 +251,11 @@ impl Profile {
         let mut caustics = 0;
         let sums =
             self.branch::<true>(p, sa, [a.y, b.y], first, turns, Some(&mut caustics), None)?;
-        let last = if turns % 2 == 0 { first } else { -first };
+        let last = if turns.is_multiple_of(2) {
+            first
+        } else {
+            -first
+        };
         let sign_x = if b.x < a.x { -1.0 } else { 1.0 };
         Some(ProfileRay {
             p: sign_x * p,
