@@ -54,25 +54,34 @@ impl Law {
     }
 }
 
-/// `z^n` by squaring (a real `z` by `powi`).
+/// `z^n` by squaring (a real `z` as [`real_power`] takes it).
 #[inline]
 fn power(z: Complex64, n: u64) -> Complex64 {
     if z.im == 0.0
-        && let Ok(k) = i32::try_from(n)
+        && let Ok(k) = u32::try_from(n)
     {
-        return Complex64::new(z.re.powi(k), 0.0);
+        return Complex64::new(real_power(z.re, k), 0.0);
     }
-    let (mut base, mut n, mut out) = (z, n, Complex64::new(1.0, 0.0));
-    while n > 0 {
+    by_squaring(z, Complex64::new(1.0, 0.0), n, |a, b| a * b)
+}
+
+/// `xⁿ` by squaring under the product `times` (`one` its unit): `out × x` where a bit of
+/// `n` is set, `x × x` between bits, the products `powi` takes (compiler-builtins'
+/// `__powidf2`), in line. Every power of this module is one: [`power`], [`real_power`],
+/// [`real_powers`], and the lanes' ([`TreeLaws::merged_lanes`]).
+#[inline(always)]
+fn by_squaring<T: Copy>(mut x: T, one: T, mut n: u64, times: impl Fn(T, T) -> T) -> T {
+    let mut out = one;
+    loop {
         if n & 1 == 1 {
-            out *= base;
+            out = times(out, x);
         }
         n >>= 1;
-        if n > 0 {
-            base *= base;
+        if n == 0 {
+            return out;
         }
+        x = times(x, x);
     }
-    out
 }
 
 /// The incidence on one wall: `|cos θ|` and `sin² θ`.
@@ -288,72 +297,34 @@ fn inverse_binade(x: f64) -> f64 {
 /// `x^n` of a real `x` by squaring, as `powi` computes it (the same products, in line).
 #[inline(always)]
 fn real_power(x: f64, n: u32) -> f64 {
-    let (mut base, mut n, mut out) = (x, n, 1.0);
-    loop {
-        if n & 1 == 1 {
-            out *= base;
-        }
-        n >>= 1;
-        if n == 0 {
-            return out;
-        }
-        base *= base;
-    }
+    by_squaring(x, 1.0, u64::from(n), |a, b| a * b)
 }
 
-/// [`real_powers`] of each lane's `(x, y)`: `(xⁿ, yⁿ)`.
+/// Eight lanes of reals, and of complex numbers (real and imaginary parts).
+type Lanes = [f64; LANES];
+type ComplexLanes = (Lanes, Lanes);
+
+/// Each lane's product, as `Complex64`'s multiplication takes it: `(a.re b.re − a.im b.im,
+/// a.re b.im + a.im b.re)`.
 #[inline(always)]
-fn lane_powers_real(
-    mut x: [f64; LANES],
-    mut y: [f64; LANES],
-    mut n: u32,
-) -> ([f64; LANES], [f64; LANES]) {
-    let (mut ox, mut oy) = ([1.0; LANES], [1.0; LANES]);
-    loop {
-        if n & 1 == 1 {
-            for k in 0..LANES {
-                ox[k] *= x[k];
-                oy[k] *= y[k];
-            }
-        }
-        n >>= 1;
-        if n == 0 {
-            return (ox, oy);
-        }
-        for k in 0..LANES {
-            x[k] *= x[k];
-            y[k] *= y[k];
-        }
+fn lanes_times((ar, ai): ComplexLanes, (br, bi): ComplexLanes) -> ComplexLanes {
+    let (mut re, mut im) = ([0.0; LANES], [0.0; LANES]);
+    for k in 0..LANES {
+        re[k] = ar[k] * br[k] - ai[k] * bi[k];
+        im[k] = ar[k] * bi[k] + ai[k] * br[k];
     }
+    (re, im)
 }
 
-/// [`power`] of each lane's `zr + i zi` (the same products, as `Complex64`'s
-/// multiplication takes them): its real and imaginary parts.
+/// Each lane's two reals' products: `(a.0 b.0, a.1 b.1)`.
 #[inline(always)]
-fn lane_powers_complex(
-    mut zr: [f64; LANES],
-    mut zi: [f64; LANES],
-    mut n: u32,
-) -> ([f64; LANES], [f64; LANES]) {
-    let (mut or, mut oi) = ([1.0; LANES], [0.0; LANES]);
-    loop {
-        if n & 1 == 1 {
-            for k in 0..LANES {
-                let re = or[k] * zr[k] - oi[k] * zi[k];
-                oi[k] = oi[k] * zr[k] + or[k] * zi[k];
-                or[k] = re;
-            }
-        }
-        n >>= 1;
-        if n == 0 {
-            return (or, oi);
-        }
-        for k in 0..LANES {
-            let re = zr[k] * zr[k] - zi[k] * zi[k];
-            zi[k] = zi[k] * zr[k] + zr[k] * zi[k];
-            zr[k] = re;
-        }
+fn lanes_both_times((a0, a1): ComplexLanes, (b0, b1): ComplexLanes) -> ComplexLanes {
+    let (mut x, mut y) = ([0.0; LANES], [0.0; LANES]);
+    for k in 0..LANES {
+        x[k] = a0[k] * b0[k];
+        y[k] = a1[k] * b1[k];
     }
+    (x, y)
 }
 
 /// An axisymmetric source's path in closed form: the receiver's `|x|` and the first leg's
@@ -368,19 +339,9 @@ pub(crate) struct AxisymmetricRun {
 /// `(xⁿ, yⁿ)` of two reals, each as [`real_power`] takes it, in one loop.
 #[inline(always)]
 fn real_powers(x: f64, y: f64, n: u32) -> (f64, f64) {
-    let (mut bx, mut by, mut n, mut ox, mut oy) = (x, y, n, 1.0, 1.0);
-    loop {
-        if n & 1 == 1 {
-            ox *= bx;
-            oy *= by;
-        }
-        n >>= 1;
-        if n == 0 {
-            return (ox, oy);
-        }
-        bx *= bx;
-        by *= by;
-    }
+    by_squaring((x, y), (1.0, 1.0), u64::from(n), |a, b| {
+        (a.0 * b.0, a.1 * b.1)
+    })
 }
 
 /// What the amplitudes of one source's image paths off any walls share (the beam tree's
@@ -601,20 +562,15 @@ impl<'a> TreeLaws<'a> {
             }
             // `real_powers` and `power`, lane by lane; either left out where no path
             // needs it (its factors all 1: the same numbers).
+            let n = u64::from(g.count);
             if x.iter().chain(&y).any(|&v| v != 1.0) {
-                let (ox, oy) = lane_powers_real(x, y, g.count);
-                for k in 0..LANES {
-                    num[k] *= ox[k];
-                    den[k] *= oy[k];
-                }
+                let ones = ([1.0; LANES], [1.0; LANES]);
+                let powers = by_squaring((x, y), ones, n, lanes_both_times);
+                (num, den) = lanes_both_times((num, den), powers);
             }
             if zr.iter().any(|&v| v != 1.0) || zi.iter().any(|&v| v != 0.0) {
-                let (or, oi) = lane_powers_complex(zr, zi, g.count);
-                for k in 0..LANES {
-                    let re = pr[k] * or[k] - pi[k] * oi[k];
-                    pi[k] = pi[k] * or[k] + pr[k] * oi[k];
-                    pr[k] = re;
-                }
+                let one = ([1.0; LANES], [0.0; LANES]);
+                (pr, pi) = lanes_times((pr, pi), by_squaring((zr, zi), one, n, lanes_times));
             }
         }
         let (mut re, mut im) = ([0.0; LANES], [0.0; LANES]);
