@@ -672,6 +672,16 @@ mod tests {
     use crate::amplitude::NoAmplitude;
     use crate::scene::{Polarization, SourceModel, Waves};
 
+    /// Uniform numbers in `[0, 1)` from a linear congruential generator seeded `state`.
+    fn uniform(mut state: u64) -> impl FnMut() -> f64 {
+        move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
     /// A random node of one to six angled groups (at most [`MERGED_BOUNCES`] bounces, as
     /// `prepare` has it): random normals, counts up to 12, weights whose ratio goes up to
     /// 1e6 either way, slownesses' ratios on both sides of 1.
@@ -727,13 +737,7 @@ mod tests {
     /// and without attenuation. The same amplitudes, and the same first path without one.
     #[test]
     fn the_lanes_are_each_paths_amplitude_bit_for_bit() {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = uniform(0x9e37_79b9_7f4a_7c15);
         let (mut taken, mut declined, mut apart, mut complex) = (0, 0, 0, 0);
         for source in [
             SourceModel::Point,
@@ -834,13 +838,7 @@ mod tests {
     /// powers of two); where one declines near a critical angle, so does the other.
     #[test]
     fn the_merged_coefficient_is_the_groups_product() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = uniform(0x2545_f491_4f6c_dd1d);
         let (mut compared, mut complex, mut apart, mut critical) = (0, 0, 0, 0);
         for _ in 0..200_000 {
             let node = random_node(&mut next);
