@@ -404,6 +404,7 @@ impl TreeStream<'_> {
         })
     }
 
+    /// [`take`](Self::take)'s work.
     #[inline(always)]
     fn take_compiled(
         &self,
