@@ -773,11 +773,7 @@ impl Profile {
                 Some(&mut events),
             )?;
             let reflections = events.iter().filter(|e| e.wall).count() as u32;
-            let last = if turns.is_multiple_of(2) {
-                first
-            } else {
-                -first
-            };
+            let last = if turns & 1 == 0 { first } else { -first };
             Some(ProfileRay {
                 p: sign_x * p,
                 first,
