@@ -484,6 +484,7 @@ impl<'a> TreeLaws<'a> {
         axisymmetric: Option<&[AxisymmetricRun]>,
         mut take: impl FnMut(usize, Amplitude),
     ) -> Option<usize> {
+        debug_assert!(directions.len() <= LANES && lengths.len() == directions.len());
         let n = directions.len().min(LANES);
         let run = |k: usize| axisymmetric.map(|runs| runs[k]);
         let (Some(fixed), true) = (node.fixed, node.merge) else {

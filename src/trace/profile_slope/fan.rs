@@ -79,7 +79,23 @@ struct Fan<'a> {
     budget: &'a ShotBudget<'a>,
 }
 
-impl Fan<'_> {
+impl<'a> Fan<'a> {
+    /// The path shooting of `steps` between the fan's pair, within its bounds and budget.
+    fn shooting<'s>(&'s self, steps: &'s [Step]) -> Shooting<'s>
+    where
+        'a: 's,
+    {
+        Shooting {
+            scene: self.scene,
+            profile: self.profile,
+            steps,
+            source: self.source,
+            receiver: self.receiver,
+            bounds: self.bounds,
+            budget: self.budget,
+        }
+    }
+
     /// The ray at launch angle `theta` (radians from +x); `None` when the budget refuses it.
     fn shoot(&self, theta: f64) -> Option<FanRay> {
         if !self.budget.shot() {
@@ -249,15 +265,7 @@ pub(crate) fn sloped_search(
         let (r0, r1) = (&pair[0], &pair[1]);
         for pass in brackets(r0, r1, receiver.x) {
             let steps = r0.steps(pass.walls);
-            let shooting = Shooting {
-                scene,
-                profile: &profile,
-                steps: &steps,
-                source,
-                receiver,
-                bounds,
-                budget,
-            };
+            let shooting = fan.shooting(&steps);
             let Some(ray) = shooting
                 .bracket([angle(i), angle(i + 1)], pass.turns)
                 .and_then(|start| shooting.ray_of_start(&start))
@@ -272,15 +280,7 @@ pub(crate) fn sloped_search(
         // them, bracketed on each side of the boundary.
         let lo_hi = [angle(i), angle(i + 1)];
         for steps in parted_sequences(r0, r1) {
-            let shooting = Shooting {
-                scene,
-                profile: &profile,
-                steps: &steps,
-                source,
-                receiver,
-                bounds,
-                budget,
-            };
+            let shooting = fan.shooting(&steps);
             let (Some(s0), Some(s1)) = (shooting.shoot(lo_hi[0]), shooting.shoot(lo_hi[1])) else {
                 continue;
             };
